@@ -1,0 +1,21 @@
+//! # mp-geom — the shared vocabulary of motion programs
+//!
+//! * [`Track`]: `T × J × D` joint positions (pixels or metres) with per-joint
+//!   confidence, a frame rate and a [`Skeleton`].
+//! * [`skeleton`]: COCO-17, BlazePose-33, Penn Action-13, MSR Action3D-20 and
+//!   BVH hierarchies as data, with bones and the mapping to COCO-17.
+//! * [`io`]: readers for the data sets and common keypoint formats, writers
+//!   for the project's own npz + JSON formats.
+//! * [`fit`]: primitive fitting (stationary, line, circle, cubic spline) in 2D
+//!   and 3D; each fit reports its error and executes at fractional time.
+//! * [`metrics`]: KD, PCK, MPJPE, PA-MPJPE, DTW, max adjacent-frame jump.
+
+pub mod error;
+pub mod primitive;
+pub mod skeleton;
+pub mod track;
+
+pub use error::{GeomError, Result};
+pub use primitive::{Primitive, PrimitiveKind};
+pub use skeleton::Skeleton;
+pub use track::{Track, Units};
