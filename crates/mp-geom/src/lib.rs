@@ -11,6 +11,7 @@
 //! * [`metrics`]: KD, PCK, MPJPE, PA-MPJPE, DTW, max adjacent-frame jump.
 
 pub mod error;
+pub mod paths;
 pub mod primitive;
 pub mod skeleton;
 pub mod track;
