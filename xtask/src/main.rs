@@ -1,5 +1,7 @@
 //! Project tasks: `cargo xtask eval …`, `bench`, `models`, `setup`, `train-…`.
 
+mod eval_concrete;
+
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
@@ -17,12 +19,17 @@ enum Command {
 }
 
 #[derive(Subcommand)]
-enum Eval {}
+enum Eval {
+    /// Concrete programs on Penn Action: primitives, parameters, KD, jumps, interpolation.
+    Concrete(eval_concrete::EvalConcreteArgs),
+}
 
 fn main() {
     let cli = Cli::parse();
     let result: anyhow::Result<()> = match cli.command {
-        Command::Eval(e) => match e {},
+        Command::Eval(e) => match e {
+            Eval::Concrete(a) => eval_concrete::run(&a),
+        },
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

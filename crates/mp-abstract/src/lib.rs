@@ -1,1 +1,23 @@
-//! mp-abstract
+//! # mp-abstract — abstract motion programs (level 3)
+//!
+//! Concrete primitives become deterministic `{start, mid, end, duration}`
+//! primitives ([`synth::translate`]); repeated patterns are found by
+//! [`loops::detect_loops`] and rolled up into `for` loops of probabilistic
+//! primitives ([`model`]); programs print and parse in the paper's notation
+//! ([`dsl`]), execute deterministically or stochastically with a seed
+//! ([`exec`]), can be edited ([`edit`]), report repetitive intervals and
+//! counts ([`repetition`]) and predict the future by unrolling loops.
+
+pub mod dsl;
+pub mod edit;
+pub mod error;
+pub mod exec;
+pub mod loops;
+pub mod model;
+pub mod repetition;
+pub mod synth;
+
+pub use error::{AbstractError, Result};
+pub use loops::{detect_loops, DetectedLoop, LoopParams};
+pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
+pub use repetition::RepetitiveInterval;

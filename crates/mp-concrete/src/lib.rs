@@ -1,1 +1,49 @@
-//! mp-concrete
+//! # mp-concrete — concrete motion programs
+//!
+//! A concrete program (paper §3.1, Table 1) describes a track as a sequence
+//! of segments shared by all joints; in each segment every joint follows one
+//! parametric primitive (stationary, linear, circular or cubic spline motion).
+//!
+//! * [`Program`], [`Segment`]: the data type, with JSON via serde and the
+//!   text DSL ([`dsl::print`], [`dsl::parse`]; `docs/DSL.md`).
+//! * [`synthesize`]: the program of a track by dynamic-programming
+//!   segmentation ([`dp`]) over primitive fits from [`mp_geom::fit`].
+//! * [`Program::execute`] and friends: rendering at any time resolution.
+//! * [`program_stats`], [`interpolation_experiment`]: the measurements of
+//!   the paper's §4.1 and §4.2.
+//!
+//! ```
+//! use mp_concrete::{synthesize, SynthParams};
+//! use mp_geom::{Skeleton, Track, Units};
+//! use ndarray::Array3;
+//!
+//! // One joint moving right for 10 frames, then resting for 10.
+//! let mut pos = Array3::zeros((20, 1, 2));
+//! for t in 0..20 {
+//!     pos[[t, 0, 0]] = 100.0 + 8.0 * (t.min(9) as f64);
+//!     pos[[t, 0, 1]] = 50.0;
+//! }
+//! let track = Track::new(pos, None, 30.0, Units::Pixels, Skeleton::generic(1)).unwrap();
+//! let program = synthesize(&track, &SynthParams::default()).unwrap();
+//! let text = program.to_dsl();
+//! assert_eq!(mp_concrete::Program::from_dsl(&text).unwrap(), program);
+//! ```
+
+pub mod dp;
+pub mod dsl;
+pub mod error;
+pub mod exec;
+pub mod interp;
+pub mod program;
+pub mod stats;
+pub mod synth;
+
+pub use dp::{segment_brute_force, segment_dp, CostTable, Segmentation};
+pub use error::{ConcreteError, ParseError, Result};
+pub use exec::{ExecParams, Transition};
+pub use interp::{interpolation_experiment, InterpolationResult};
+pub use program::{Program, Segment};
+pub use stats::{program_stats, ProgramStats};
+pub use synth::{
+    synthesize, synthesize_detailed, Lambda, Scale, SynthParams, Synthesis, UnobservedJoints,
+};

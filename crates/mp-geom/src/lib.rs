@@ -11,7 +11,11 @@
 //! * [`metrics`]: KD, PCK, MPJPE, PA-MPJPE, DTW, max adjacent-frame jump.
 
 pub mod error;
+pub mod fit;
+pub mod io;
+pub mod metrics;
 pub mod paths;
+pub mod performer;
 pub mod primitive;
 pub mod skeleton;
 pub mod track;

@@ -1,1 +1,45 @@
-//! mp-pose
+//! # mp-pose — video to keypoints
+//!
+//! * [`video`]: frames from videos through the `ffmpeg`/`ffprobe` programs
+//!   (streamed, one frame in memory) and from still images.
+//! * [`blazepose`]: MediaPipe's BlazePose (person detector + GHUM landmark
+//!   model, 33 keypoints, world coordinates in metres) with the same crop,
+//!   tracking and filtering steps as MediaPipe's legacy Pose solution.
+//! * [`movenet`]: MoveNet SinglePose Lightning (COCO-17, whole frame).
+//! * [`pose::PoseEstimator`]: the trait both implement.
+//! * [`extract()`]: a whole video to an `mp_geom::Track` (pixels, and metres for
+//!   BlazePose), frames without a person marked with confidence 0.
+//! * [`draw`]: skeletons drawn on frames, contact sheets.
+//!
+//! ONNX Runtime is loaded at run time (`cargo xtask setup` installs it; see
+//! [`runtime`]); the models come from `cargo xtask models`.
+//!
+//! ```no_run
+//! use mp_pose::{extract_file, ExtractOptions, ModelChoice};
+//! let out = extract_file("swing.mp4", ModelChoice::Full, &ExtractOptions::default(), |_, _| {})?;
+//! println!("{} frames, {:.0}% with a pose", out.track.n_frames(), 100.0 * out.found_fraction());
+//! # Ok::<(), mp_pose::PoseError>(())
+//! ```
+
+pub mod blazepose;
+pub mod draw;
+pub mod error;
+pub mod extract;
+pub mod filter;
+pub mod imageops;
+pub mod movenet;
+pub mod pose;
+pub mod runtime;
+pub mod video;
+
+pub use blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
+pub use error::{PoseError, Result};
+pub use extract::{
+    extract, extract_file, open_estimator, ExtractOptions, Extraction, ModelChoice, PoseSmoother,
+    SmoothingParams,
+};
+pub use imageops::Roi;
+pub use movenet::{MoveNet, MoveNetParams};
+pub use pose::{Pose, PoseEstimator};
+pub use runtime::{ModelFile, SessionParams};
+pub use video::{open_source, probe, read_image, Frame, FrameSource, VideoInfo, VideoReader};

@@ -1,0 +1,609 @@
+//! Text form of abstract programs (paper Table 2), and its parser.
+//!
+//! ```text
+//! abstract_program(fps=30, units=px, dims=2, unit_scale=1)
+//! joints(head, left_wrist)
+//! motion(duration=14) {
+//!   head: start=(243.2, 171), mid=(213, 131), end=(251, 98.3)
+//!   left_wrist: start=(…), mid=(…), end=(…)
+//! }
+//! for i in range(24) {
+//!   motion(duration=sample({14: 3, 15: 1})) {
+//!     head: Gaussian(mean=<(…), (…), (…)>, cov=[36 numbers, row-major])
+//!     …
+//!   }
+//!   observed {            # optional: the recorded iterations
+//!     iteration {
+//!       motion(duration=14) { … }
+//!     }
+//!   }
+//! }
+//! ```
+//!
+//! Numbers are printed with the shortest representation that reads back to
+//! the same `f64`, so `parse(print(p)) == p`. `#` starts a comment.
+
+use std::fmt::Write;
+
+use crate::error::{AbstractError, Result};
+use crate::model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
+
+/// Printing options.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PrintOptions {
+    /// Decimal places; `None` prints exact (round-trip) numbers.
+    pub precision: Option<usize>,
+    /// Print covariance matrices (otherwise only their Frobenius norm as a comment).
+    pub covariances: bool,
+    /// Print the recorded iterations of loops.
+    pub observed: bool,
+}
+
+impl Default for PrintOptions {
+    fn default() -> Self {
+        PrintOptions {
+            precision: None,
+            covariances: true,
+            observed: true,
+        }
+    }
+}
+
+impl PrintOptions {
+    /// A readable summary (2 decimals, no covariances, no recorded iterations); not for parsing back exactly.
+    pub fn summary() -> Self {
+        PrintOptions {
+            precision: Some(2),
+            covariances: false,
+            observed: false,
+        }
+    }
+}
+
+fn num(x: f64, o: &PrintOptions) -> String {
+    match o.precision {
+        Some(p) => format!("{x:.p$}"),
+        None => format!("{x:?}"),
+    }
+}
+
+fn point(v: &[f64], o: &PrintOptions) -> String {
+    let parts: Vec<String> = v.iter().map(|x| num(*x, o)).collect();
+    format!("({})", parts.join(", "))
+}
+
+fn write_det(
+    out: &mut String,
+    p: &DetPrim,
+    joints: &[String],
+    dims: usize,
+    indent: &str,
+    o: &PrintOptions,
+) {
+    let _ = writeln!(out, "{indent}motion(duration={}) {{", p.duration);
+    for (name, v) in joints.iter().zip(&p.points) {
+        let _ = writeln!(
+            out,
+            "{indent}  {name}: start={}, mid={}, end={}",
+            point(&v[..dims], o),
+            point(&v[dims..2 * dims], o),
+            point(&v[2 * dims..], o)
+        );
+    }
+    let _ = writeln!(out, "{indent}}}");
+}
+
+fn write_prob(
+    out: &mut String,
+    p: &ProbPrim,
+    joints: &[String],
+    dims: usize,
+    indent: &str,
+    o: &PrintOptions,
+) {
+    let dist: Vec<String> = p
+        .duration
+        .counts
+        .iter()
+        .map(|(v, c)| format!("{v}: {c}"))
+        .collect();
+    let _ = writeln!(
+        out,
+        "{indent}motion(duration=sample({{{}}})) {{",
+        dist.join(", ")
+    );
+    for (name, g) in joints.iter().zip(&p.joints) {
+        let m = &g.mean;
+        let mean = format!(
+            "<{}, {}, {}>",
+            point(&m[..dims], o),
+            point(&m[dims..2 * dims], o),
+            point(&m[2 * dims..], o)
+        );
+        if o.covariances {
+            let cov: Vec<String> = g.cov.iter().map(|x| num(*x, o)).collect();
+            let _ = writeln!(
+                out,
+                "{indent}  {name}: Gaussian(mean={mean}, cov=[{}])",
+                cov.join(", ")
+            );
+        } else {
+            let _ = writeln!(
+                out,
+                "{indent}  {name}: Gaussian(mean={mean})  # |cov| = {}",
+                num(g.cov_norm(), o)
+            );
+        }
+    }
+    let _ = writeln!(out, "{indent}}}");
+}
+
+/// Prints a program with the given options.
+pub fn print_with(p: &AbstractProgram, o: &PrintOptions) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "abstract_program(fps={}, units={}, dims={}, unit_scale={})",
+        num(p.fps, &PrintOptions::default()),
+        p.units,
+        p.dims,
+        num(p.unit_scale, &PrintOptions::default())
+    );
+    let _ = writeln!(out, "joints({})", p.joints.join(", "));
+    for s in &p.stmts {
+        match s {
+            Stmt::Prim(d) => write_det(&mut out, d, &p.joints, p.dims, "", o),
+            Stmt::Loop(l) => {
+                let _ = writeln!(out, "for i in range({}) {{", l.iterations);
+                for b in &l.body {
+                    write_prob(&mut out, b, &p.joints, p.dims, "  ", o);
+                }
+                if o.observed && !l.observed.is_empty() {
+                    let _ = writeln!(out, "  observed {{");
+                    for it in &l.observed {
+                        let _ = writeln!(out, "    iteration {{");
+                        for d in it {
+                            write_det(&mut out, d, &p.joints, p.dims, "      ", o);
+                        }
+                        let _ = writeln!(out, "    }}");
+                    }
+                    let _ = writeln!(out, "  }}");
+                }
+                let _ = writeln!(out, "}}");
+            }
+        }
+    }
+    out
+}
+
+/// Prints a program losslessly.
+pub fn print(p: &AbstractProgram) -> String {
+    print_with(p, &PrintOptions::default())
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Tok {
+    Num(f64),
+    Ident(String),
+    Punct(char),
+}
+
+struct Lexer {
+    toks: Vec<(Tok, usize, usize)>,
+    pos: usize,
+    end: (usize, usize),
+}
+
+fn lex(src: &str) -> Result<Lexer> {
+    let mut toks = Vec::new();
+    let (mut line, mut col) = (1usize, 1usize);
+    let chars: Vec<char> = src.chars().collect();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c == '\n' {
+            line += 1;
+            col = 1;
+            i += 1;
+            continue;
+        }
+        if c.is_whitespace() {
+            i += 1;
+            col += 1;
+            continue;
+        }
+        if c == '#' {
+            while i < chars.len() && chars[i] != '\n' {
+                i += 1;
+            }
+            continue;
+        }
+        let start_col = col;
+        if "(){}<>[],:=".contains(c) {
+            toks.push((Tok::Punct(c), line, start_col));
+            i += 1;
+            col += 1;
+            continue;
+        }
+        let is_num_start = c.is_ascii_digit()
+            || ((c == '-' || c == '+' || c == '.')
+                && chars
+                    .get(i + 1)
+                    .is_some_and(|n| n.is_ascii_digit() || *n == '.'));
+        if is_num_start {
+            let s = i;
+            i += 1;
+            while i < chars.len() {
+                let d = chars[i];
+                let prev = chars[i - 1];
+                if d.is_ascii_digit()
+                    || d == '.'
+                    || d == 'e'
+                    || d == 'E'
+                    || ((d == '-' || d == '+') && (prev == 'e' || prev == 'E'))
+                {
+                    i += 1;
+                } else {
+                    break;
+                }
+            }
+            let text: String = chars[s..i].iter().collect();
+            let v: f64 = text.parse().map_err(|_| AbstractError::Parse {
+                line,
+                column: start_col,
+                message: format!("`{text}` is not a number"),
+            })?;
+            col += i - s;
+            toks.push((Tok::Num(v), line, start_col));
+            continue;
+        }
+        if c.is_alphanumeric() || c == '_' || c == '-' || c == '.' || c == '|' {
+            let s = i;
+            while i < chars.len() && (chars[i].is_alphanumeric() || "_-.|".contains(chars[i])) {
+                i += 1;
+            }
+            let text: String = chars[s..i].iter().collect();
+            col += i - s;
+            toks.push((Tok::Ident(text), line, start_col));
+            continue;
+        }
+        return Err(AbstractError::Parse {
+            line,
+            column: col,
+            message: format!("unexpected character `{c}`"),
+        });
+    }
+    Ok(Lexer {
+        toks,
+        pos: 0,
+        end: (line, col),
+    })
+}
+
+impl Lexer {
+    fn here(&self) -> (usize, usize) {
+        self.toks
+            .get(self.pos)
+            .map(|t| (t.1, t.2))
+            .unwrap_or(self.end)
+    }
+    fn err<T>(&self, message: impl Into<String>) -> Result<T> {
+        let (line, column) = self.here();
+        Err(AbstractError::Parse {
+            line,
+            column,
+            message: message.into(),
+        })
+    }
+    fn peek(&self) -> Option<&Tok> {
+        self.toks.get(self.pos).map(|t| &t.0)
+    }
+    fn describe(&self) -> String {
+        match self.peek() {
+            Some(Tok::Num(v)) => format!("number {v}"),
+            Some(Tok::Ident(s)) => format!("`{s}`"),
+            Some(Tok::Punct(c)) => format!("`{c}`"),
+            None => "end of input".into(),
+        }
+    }
+    fn punct(&mut self, c: char) -> Result<()> {
+        if self.peek() == Some(&Tok::Punct(c)) {
+            self.pos += 1;
+            Ok(())
+        } else {
+            self.err(format!("expected `{c}`, found {}", self.describe()))
+        }
+    }
+    fn is_punct(&self, c: char) -> bool {
+        self.peek() == Some(&Tok::Punct(c))
+    }
+    fn ident(&mut self) -> Result<String> {
+        match self.peek() {
+            Some(Tok::Ident(s)) => {
+                let s = s.clone();
+                self.pos += 1;
+                Ok(s)
+            }
+            _ => self.err(format!("expected a name, found {}", self.describe())),
+        }
+    }
+    fn keyword(&mut self, k: &str) -> Result<()> {
+        match self.peek() {
+            Some(Tok::Ident(s)) if s == k => {
+                self.pos += 1;
+                Ok(())
+            }
+            _ => self.err(format!("expected `{k}`, found {}", self.describe())),
+        }
+    }
+    fn is_keyword(&self, k: &str) -> bool {
+        matches!(self.peek(), Some(Tok::Ident(s)) if s == k)
+    }
+    fn number(&mut self) -> Result<f64> {
+        match self.peek() {
+            Some(Tok::Num(v)) => {
+                let v = *v;
+                self.pos += 1;
+                Ok(v)
+            }
+            Some(Tok::Ident(s)) if matches!(s.as_str(), "inf" | "NaN" | "nan") => {
+                self.err(format!("non-finite number `{s}` is not allowed"))
+            }
+            _ => self.err(format!("expected a number, found {}", self.describe())),
+        }
+    }
+    fn integer(&mut self, what: &str) -> Result<usize> {
+        let at = self.pos;
+        let v = self.number()?;
+        if v < 0.0 || v.fract() != 0.0 || v > 1e12 {
+            self.pos = at;
+            return self.err(format!("{what} must be a non-negative integer, found {v}"));
+        }
+        Ok(v as usize)
+    }
+    fn kv_number(&mut self, key: &str) -> Result<f64> {
+        self.keyword(key)?;
+        self.punct('=')?;
+        self.number()
+    }
+    fn point(&mut self, dims: usize) -> Result<Vec<f64>> {
+        self.punct('(')?;
+        let mut v = Vec::with_capacity(dims);
+        loop {
+            v.push(self.number()?);
+            if self.is_punct(',') {
+                self.pos += 1;
+            } else {
+                break;
+            }
+        }
+        if v.len() != dims {
+            return self.err(format!(
+                "point has {} coordinates, the program has dims={dims}",
+                v.len()
+            ));
+        }
+        self.punct(')')?;
+        Ok(v)
+    }
+}
+
+fn parse_det(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<DetPrim> {
+    lx.keyword("motion")?;
+    lx.punct('(')?;
+    lx.keyword("duration")?;
+    lx.punct('=')?;
+    let duration = lx.integer("duration")?;
+    if duration == 0 {
+        return lx.err("duration must be ≥ 1");
+    }
+    lx.punct(')')?;
+    lx.punct('{')?;
+    let mut points = Vec::with_capacity(joints.len());
+    for name in joints {
+        let got = lx.ident()?;
+        if &got != name {
+            lx.pos -= 1;
+            return lx.err(format!("expected joint `{name}`, found `{got}`"));
+        }
+        lx.punct(':')?;
+        let mut v = Vec::with_capacity(3 * dims);
+        for (i, key) in ["start", "mid", "end"].iter().enumerate() {
+            if i > 0 {
+                lx.punct(',')?;
+            }
+            lx.keyword(key)?;
+            lx.punct('=')?;
+            v.extend(lx.point(dims)?);
+        }
+        points.push(v);
+    }
+    lx.punct('}')?;
+    Ok(DetPrim { duration, points })
+}
+
+fn parse_prob(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<ProbPrim> {
+    lx.keyword("motion")?;
+    lx.punct('(')?;
+    lx.keyword("duration")?;
+    lx.punct('=')?;
+    lx.keyword("sample")?;
+    lx.punct('(')?;
+    lx.punct('{')?;
+    let mut dist = FreqDist::default();
+    while !lx.is_punct('}') {
+        let v = lx.integer("duration value")?;
+        if v == 0 {
+            return lx.err("durations must be ≥ 1");
+        }
+        lx.punct(':')?;
+        let c = lx.integer("count")?;
+        *dist.counts.entry(v).or_insert(0) += c;
+        if lx.is_punct(',') {
+            lx.pos += 1;
+        }
+    }
+    lx.punct('}')?;
+    if dist.total() == 0 {
+        return lx.err("empty duration distribution");
+    }
+    lx.punct(')')?;
+    lx.punct(')')?;
+    lx.punct('{')?;
+    let n = 3 * dims;
+    let mut gs = Vec::with_capacity(joints.len());
+    for name in joints {
+        let got = lx.ident()?;
+        if &got != name {
+            lx.pos -= 1;
+            return lx.err(format!("expected joint `{name}`, found `{got}`"));
+        }
+        lx.punct(':')?;
+        lx.keyword("Gaussian")?;
+        lx.punct('(')?;
+        lx.keyword("mean")?;
+        lx.punct('=')?;
+        lx.punct('<')?;
+        let mut mean = lx.point(dims)?;
+        lx.punct(',')?;
+        mean.extend(lx.point(dims)?);
+        lx.punct(',')?;
+        mean.extend(lx.point(dims)?);
+        lx.punct('>')?;
+        lx.punct(',')?;
+        lx.keyword("cov")?;
+        lx.punct('=')?;
+        lx.punct('[')?;
+        let mut cov = Vec::with_capacity(n * n);
+        while !lx.is_punct(']') {
+            cov.push(lx.number()?);
+            if lx.is_punct(',') {
+                lx.pos += 1;
+            }
+        }
+        if cov.len() != n * n {
+            return lx.err(format!(
+                "covariance has {} values, expected {}",
+                cov.len(),
+                n * n
+            ));
+        }
+        lx.punct(']')?;
+        lx.punct(')')?;
+        gs.push(Gaussian { mean, cov });
+    }
+    lx.punct('}')?;
+    Ok(ProbPrim {
+        duration: dist,
+        joints: gs,
+    })
+}
+
+/// Parses the text form back into a program (and validates it).
+pub fn parse(src: &str) -> Result<AbstractProgram> {
+    let mut lx = lex(src)?;
+    lx.keyword("abstract_program")?;
+    lx.punct('(')?;
+    let fps = lx.kv_number("fps")?;
+    lx.punct(',')?;
+    lx.keyword("units")?;
+    lx.punct('=')?;
+    let units = match lx.peek() {
+        Some(Tok::Num(v)) if *v == 1.0 => {
+            lx.pos += 1;
+            "1".to_string()
+        }
+        _ => lx.ident()?,
+    };
+    if !matches!(units.as_str(), "px" | "m" | "1") {
+        lx.pos -= 1;
+        return lx.err(format!("units must be px, m or 1, found `{units}`"));
+    }
+    lx.punct(',')?;
+    lx.keyword("dims")?;
+    lx.punct('=')?;
+    let dims = lx.integer("dims")?;
+    if !(1..=3).contains(&dims) {
+        lx.pos -= 1;
+        return lx.err(format!("dims must be 1, 2 or 3, found {dims}"));
+    }
+    let unit_scale = if lx.is_punct(',') {
+        lx.pos += 1;
+        lx.kv_number("unit_scale")?
+    } else {
+        1.0
+    };
+    lx.punct(')')?;
+    lx.keyword("joints")?;
+    lx.punct('(')?;
+    let mut joints = Vec::new();
+    while !lx.is_punct(')') {
+        joints.push(lx.ident()?);
+        if lx.is_punct(',') {
+            lx.pos += 1;
+        }
+    }
+    lx.punct(')')?;
+    if joints.is_empty() {
+        return lx.err("a program needs at least one joint");
+    }
+    let mut stmts = Vec::new();
+    while lx.peek().is_some() {
+        if lx.is_keyword("motion") {
+            stmts.push(Stmt::Prim(parse_det(&mut lx, &joints, dims)?));
+        } else if lx.is_keyword("for") {
+            lx.keyword("for")?;
+            lx.ident()?;
+            lx.keyword("in")?;
+            lx.keyword("range")?;
+            lx.punct('(')?;
+            let iterations = lx.integer("iterations")?;
+            lx.punct(')')?;
+            lx.punct('{')?;
+            let mut body = Vec::new();
+            while lx.is_keyword("motion") {
+                body.push(parse_prob(&mut lx, &joints, dims)?);
+            }
+            if body.is_empty() {
+                return lx.err("a loop body needs at least one motion");
+            }
+            let mut observed = Vec::new();
+            if lx.is_keyword("observed") {
+                lx.keyword("observed")?;
+                lx.punct('{')?;
+                while lx.is_keyword("iteration") {
+                    lx.keyword("iteration")?;
+                    lx.punct('{')?;
+                    let mut it = Vec::new();
+                    while lx.is_keyword("motion") {
+                        it.push(parse_det(&mut lx, &joints, dims)?);
+                    }
+                    lx.punct('}')?;
+                    observed.push(it);
+                }
+                lx.punct('}')?;
+            }
+            lx.punct('}')?;
+            stmts.push(Stmt::Loop(Loop {
+                iterations,
+                body,
+                observed,
+            }));
+        } else {
+            return lx.err(format!(
+                "expected `motion` or `for`, found {}",
+                lx.describe()
+            ));
+        }
+    }
+    let prog = AbstractProgram {
+        fps,
+        units,
+        dims,
+        unit_scale,
+        joints,
+        stmts,
+    };
+    prog.validate()?;
+    Ok(prog)
+}

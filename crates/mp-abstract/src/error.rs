@@ -1,0 +1,46 @@
+//! Error type of `mp-abstract`.
+
+/// Everything that can go wrong in `mp-abstract`.
+#[derive(Debug, thiserror::Error)]
+pub enum AbstractError {
+    /// An error from the geometry layer.
+    #[error(transparent)]
+    Geom(#[from] mp_geom::GeomError),
+    /// The input holds no primitives.
+    #[error("no primitives: {0}")]
+    Empty(String),
+    /// Inconsistent shapes (joint counts, dimensions).
+    #[error("shape mismatch: {0}")]
+    Shape(String),
+    /// A parameter outside its valid range.
+    #[error("invalid parameter `{name}`: {reason}")]
+    InvalidParam { name: &'static str, reason: String },
+    /// A non-finite number where a finite one is required.
+    #[error("non-finite value: {0}")]
+    NonFinite(String),
+    /// A loop that cannot exist (fewer than two iterations, empty body).
+    #[error("invalid loop: {0}")]
+    InvalidLoop(String),
+    /// Malformed abstract-program text.
+    #[error("parse error at line {line}, column {column}: {message}")]
+    Parse {
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    /// A reference to something that does not exist (a loop index, an iteration).
+    #[error("not found: {0}")]
+    NotFound(String),
+}
+
+impl AbstractError {
+    pub(crate) fn param(name: &'static str, reason: impl Into<String>) -> Self {
+        AbstractError::InvalidParam {
+            name,
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Result alias for `mp-abstract`.
+pub type Result<T, E = AbstractError> = std::result::Result<T, E>;

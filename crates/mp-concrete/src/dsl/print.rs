@@ -1,0 +1,189 @@
+//! Printing programs in the paper's notation.
+
+use std::fmt::Write as _;
+
+use mp_geom::Primitive;
+
+use crate::program::Program;
+
+/// How numbers are printed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NumberFormat {
+    /// Shortest text that parses back to the same `f64` (lossless).
+    #[default]
+    Exact,
+    /// A fixed number of decimals, like the paper's figures (lossy).
+    Fixed(usize),
+}
+
+/// Formats one number.
+pub fn fmt_number(x: f64, nf: NumberFormat) -> String {
+    match nf {
+        NumberFormat::Fixed(p) => format!("{x:.p$}"),
+        NumberFormat::Exact => {
+            let a = x.abs();
+            if a == 0.0 || (1e-5..1e16).contains(&a) {
+                // `Display` is the shortest round-trip representation without exponent.
+                format!("{x}")
+            } else {
+                // `LowerExp` is also shortest round-trip; used to keep extreme values short.
+                format!("{x:e}")
+            }
+        }
+    }
+}
+
+/// Name of axis `k` of `d`: `x, y, z` for D ≤ 3, `x0, x1, …` otherwise.
+pub fn axis_name(k: usize, d: usize) -> String {
+    if d <= 3 {
+        ["x", "y", "z"][k].to_string()
+    } else {
+        format!("x{k}")
+    }
+}
+
+/// Polynomial `c[0]·t^(n-1) + … + c[n-1]` printed highest power first, with
+/// the paper's `+ -value` style for negative coefficients.
+fn poly(coeffs: &[f64], nf: NumberFormat) -> String {
+    let n = coeffs.len();
+    let mut s = String::new();
+    for (i, c) in coeffs.iter().enumerate() {
+        let pow = n - 1 - i;
+        if i > 0 {
+            s.push_str(" + ");
+        }
+        s.push_str(&fmt_number(*c, nf));
+        match pow {
+            0 => {}
+            1 => s.push_str("*t"),
+            p => {
+                let _ = write!(s, "*t^{p}");
+            }
+        }
+    }
+    s
+}
+
+fn tuple(v: &[f64], nf: NumberFormat) -> String {
+    let parts: Vec<String> = v.iter().map(|x| fmt_number(*x, nf)).collect();
+    format!("({})", parts.join(", "))
+}
+
+/// One statement, e.g. `linear_motion(x=1.2*t + 30, y=-0.5*t + 12, duration=8)`.
+pub fn statement(p: &Primitive, duration_frames: usize, nf: NumberFormat) -> String {
+    let d = p.dims();
+    let mut args: Vec<String> = Vec::new();
+    let name = match p {
+        Primitive::Stationary { point } => {
+            for (k, v) in point.iter().enumerate() {
+                args.push(format!("{}={}", axis_name(k, d), fmt_number(*v, nf)));
+            }
+            "stationary"
+        }
+        Primitive::Line { start, velocity } => {
+            for k in 0..d {
+                args.push(format!(
+                    "{}={}",
+                    axis_name(k, d),
+                    poly(&[velocity[k], start[k]], nf)
+                ));
+            }
+            "linear_motion"
+        }
+        Primitive::Circle {
+            center,
+            radius,
+            angle_start,
+            angle_vel,
+            angle_acc,
+            axes,
+        } => {
+            args.push(format!("center={}", tuple(center, nf)));
+            args.push(format!("radius={}", fmt_number(*radius, nf)));
+            let angle = if *angle_acc != 0.0 {
+                poly(&[*angle_acc, *angle_vel, *angle_start], nf)
+            } else {
+                poly(&[*angle_vel, *angle_start], nf)
+            };
+            args.push(format!("angle={angle}"));
+            if axes.len() == 2 {
+                args.push(format!("u={}", tuple(&axes[0], nf)));
+                args.push(format!("v={}", tuple(&axes[1], nf)));
+            }
+            "circular_motion"
+        }
+        Primitive::Spline { coeffs } => {
+            for (k, c) in coeffs.iter().enumerate() {
+                args.push(format!("{}={}", axis_name(k, d), poly(c, nf)));
+            }
+            "spline_motion"
+        }
+    };
+    args.push(format!("duration={duration_frames}"));
+    format!("{name}({})", args.join(", "))
+}
+
+fn quote(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// The header line, e.g. `program(fps=30, units=px, dims=2, skeleton="penn13")`.
+pub fn header(p: &Program, nf: NumberFormat) -> String {
+    let units = match p.units {
+        mp_geom::Units::Pixels => "px",
+        mp_geom::Units::Metres => "m",
+        mp_geom::Units::Unitless => "unitless",
+    };
+    format!(
+        "program(fps={}, units={units}, dims={}, skeleton={})",
+        fmt_number(p.fps, nf),
+        p.dims,
+        quote(&p.skeleton)
+    )
+}
+
+/// The block of one joint: `joint "name" {` … `}`.
+pub fn joint_block(p: &Program, joint: usize, nf: NumberFormat) -> String {
+    let mut s = String::new();
+    let name = p.joints.get(joint).map(String::as_str).unwrap_or("?");
+    let _ = writeln!(s, "joint {} {{", quote(name));
+    for (prim, dur) in p.joint_statements(joint) {
+        let _ = writeln!(s, "    {}", statement(prim, dur, nf));
+    }
+    s.push_str("}\n");
+    s
+}
+
+/// The whole program with numbers formatted by `nf`.
+pub fn print_with(p: &Program, nf: NumberFormat) -> String {
+    let mut s = header(p, nf);
+    s.push('\n');
+    for j in 0..p.joints.len() {
+        s.push('\n');
+        s.push_str(&joint_block(p, j, nf));
+    }
+    s
+}
+
+/// Lossless text: `parse(&print(p)) == p` for every valid program.
+pub fn print(p: &Program) -> String {
+    print_with(p, NumberFormat::Exact)
+}
+
+/// Human-friendly text with `decimals` digits after the point (the paper uses 2).
+/// Not lossless.
+pub fn print_pretty(p: &Program, decimals: usize) -> String {
+    print_with(p, NumberFormat::Fixed(decimals))
+}

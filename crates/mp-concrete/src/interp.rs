@@ -1,0 +1,120 @@
+//! The interpolation experiment: keep every `step`-th frame, synthesise a
+//! program on the kept frames, execute it at the original rate and compare
+//! the dropped frames with the truth, against linear interpolation between
+//! the kept frames.
+//!
+//! Only dropped frames up to the last kept frame are scored (both methods
+//! interpolate there; neither extrapolates), and only observed
+//! (confidence > `min_confidence`) joints.
+
+use mp_geom::Track;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{ConcreteError, Result};
+use crate::exec::Transition;
+use crate::synth::{synthesize, SynthParams};
+
+/// Result of [`interpolation_experiment`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InterpolationResult {
+    /// Subsampling factor.
+    pub step: usize,
+    /// Number of (dropped frame, joint) entries scored.
+    pub n_scored: usize,
+    /// Segments of the program fitted on the kept frames.
+    pub n_segments: usize,
+    /// Mean distance of the program's positions to the truth (track units).
+    pub kd_program: f64,
+    /// Mean distance of linear interpolation to the truth (track units).
+    pub kd_linear: f64,
+}
+
+/// Runs the experiment for one track and one factor (`step ≥ 2`).
+///
+/// Errors when fewer than 2 frames are kept or nothing can be scored.
+pub fn interpolation_experiment(
+    track: &Track,
+    step: usize,
+    params: &SynthParams,
+    transition: Transition,
+) -> Result<InterpolationResult> {
+    if step < 2 {
+        return Err(ConcreteError::param(
+            "step",
+            format!("must be ≥ 2, got {step}"),
+        ));
+    }
+    let kept = track.subsample(step)?;
+    let n_kept = kept.n_frames();
+    if n_kept < 2 {
+        return Err(ConcreteError::Track(format!(
+            "{} frames subsampled ×{step} leave {n_kept} frame; need at least 2",
+            track.n_frames()
+        )));
+    }
+    let program = synthesize(&kept, params)?;
+    let last = (n_kept - 1) * step;
+    let dropped: Vec<usize> = (0..=last).filter(|f| f % step != 0).collect();
+    let frames: Vec<f64> = dropped.iter().map(|&f| f as f64 / step as f64).collect();
+    let exec = program.sample_frames(&frames, transition)?;
+
+    // Linear interpolation between kept frames where the joint is observed.
+    let (j, d) = (track.n_joints(), track.dims());
+    let pos = track.positions();
+    let conf = track.confidence();
+    let min_conf = params.min_confidence;
+    let (mut sum_p, mut sum_l, mut n) = (0.0, 0.0, 0usize);
+    for ji in 0..j {
+        let valid: Vec<usize> = (0..n_kept)
+            .map(|i| i * step)
+            .filter(|&f| conf[[f, ji]] > min_conf)
+            .collect();
+        if valid.is_empty() {
+            continue;
+        }
+        for (row, &f) in dropped.iter().enumerate() {
+            if conf[[f, ji]] <= min_conf {
+                continue;
+            }
+            let next = valid.partition_point(|&v| v < f);
+            let (a, b) = match (
+                next.checked_sub(1).map(|p| valid[p]),
+                valid.get(next).copied(),
+            ) {
+                (Some(a), Some(b)) => (a, b),
+                (Some(a), None) => (a, a),
+                (None, Some(b)) => (b, b),
+                (None, None) => continue,
+            };
+            let w = if a == b {
+                0.0
+            } else {
+                (f - a) as f64 / (b - a) as f64
+            };
+            let (mut ep, mut el) = (0.0, 0.0);
+            for k in 0..d {
+                let truth = pos[[f, ji, k]];
+                let lin = (1.0 - w) * pos[[a, ji, k]] + w * pos[[b, ji, k]];
+                let e1 = exec[[row, ji, k]] - truth;
+                let e2 = lin - truth;
+                ep += e1 * e1;
+                el += e2 * e2;
+            }
+            sum_p += ep.sqrt();
+            sum_l += el.sqrt();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return Err(ConcreteError::Track(format!(
+            "no observed keypoint among the frames dropped by ×{step} subsampling"
+        )));
+    }
+    Ok(InterpolationResult {
+        step,
+        n_scored: n,
+        n_segments: program.n_segments(),
+        kd_program: sum_p / n as f64,
+        kd_linear: sum_l / n as f64,
+    })
+}

@@ -1,0 +1,546 @@
+//! Synthesis of a concrete program from a track (paper §3.1): every
+//! candidate segment `k..n` (at most `W` frames) is fitted for every joint
+//! with [`mp_geom::fit::fit_best`] in parallel, the segment costs (sum over
+//! joints + λ) go into a [`CostTable`], [`segment_table`] finds the best
+//! shared segmentation and the chosen segments are fitted once more to get
+//! their primitives.
+//!
+//! # Scale
+//!
+//! Thresholds and λ are given at the reference scale of a 512-pixel frame
+//! (SPEC.md). `unit_scale` (track units per reference pixel) converts them:
+//!
+//! * [`Scale::FrameSize`]: `unit_scale = max(H, W) / 512` (pixels, frame size known);
+//! * [`Scale::Auto`] (default): `unit_scale = track.scale() / REFERENCE_EXTENT_PX`,
+//!   where `track.scale()` is the diagonal of the bounding box of all valid
+//!   positions and [`REFERENCE_EXTENT_PX`] = 256 is that diagonal for a typical
+//!   clip at 512 px (the median over the Penn Action training clips, rescaled
+//!   to a 512-px frame, is 257 px). Works for metres as well as pixels;
+//! * [`Scale::UnitScale`]: given explicitly.
+//!
+//! With the Euclidean norm (error in units·frames) λ scales by `unit_scale`;
+//! with the squared norm by `unit_scale²`.
+//!
+//! # λ
+//!
+//! * [`Lambda::Fixed`]: the same λ for every segment (reference 1600).
+//! * [`Lambda::Adaptive`]: per frame `f`, take the window of frames
+//!   `f − h ..= f + h` (`h = window_frames / 2`, clipped to the track); for
+//!   each joint with ≥ 2 valid frames there, the `D × D` population
+//!   covariance of its valid positions; `C(f)` = the mean of these over the
+//!   joints, expressed in reference pixels² (divided by `unit_scale²`);
+//!   `λ_ref(f) = clamp(‖C(f)‖_F, min_ref, max_ref)` (default [100, 1600]; a
+//!   window with no such joint gets `max_ref`). A segment `k..n` pays the λ
+//!   of its last frame `n − 1`.
+
+use mp_geom::fit::{fit_best, ErrorNorm, FitParams};
+use mp_geom::{Primitive, Track};
+use ndarray::{s, Array2};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::dp::{segment_table, CostTable, Segmentation};
+use crate::error::{ConcreteError, Result};
+use crate::program::{Program, Segment};
+
+/// Reference pixels of a 512-px frame.
+pub const REFERENCE_FRAME_PX: f64 = 512.0;
+/// Bounding-box diagonal of a typical clip's valid keypoints at the 512-px reference scale.
+pub const REFERENCE_EXTENT_PX: f64 = 256.0;
+
+/// How the segment penalty λ is chosen (values at the 512-px reference scale).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Lambda {
+    /// The same λ for every segment.
+    Fixed {
+        /// λ in reference px·frames (Euclidean norm). Default 1600.
+        lambda_ref: f64,
+    },
+    /// λ from the covariance of the keypoints around each frame (see the module docs).
+    Adaptive {
+        /// Window length in frames (centred on the frame). Default 31.
+        window_frames: usize,
+        /// Lower clamp (reference scale). Default 100.
+        min_ref: f64,
+        /// Upper clamp (reference scale). Default 1600.
+        max_ref: f64,
+    },
+}
+
+impl Lambda {
+    /// Default fixed λ: 1600.
+    pub const DEFAULT_FIXED: f64 = 1600.0;
+    /// The default adaptive setting: window 31, clamp [100, 1600].
+    pub fn adaptive() -> Self {
+        Lambda::Adaptive {
+            window_frames: 31,
+            min_ref: 100.0,
+            max_ref: 1600.0,
+        }
+    }
+    /// A fixed λ (reference scale).
+    pub fn fixed(lambda_ref: f64) -> Self {
+        Lambda::Fixed { lambda_ref }
+    }
+}
+
+impl Default for Lambda {
+    fn default() -> Self {
+        Lambda::fixed(Self::DEFAULT_FIXED)
+    }
+}
+
+/// How `unit_scale` (track units per reference pixel) is found.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Scale {
+    /// `track.scale() / REFERENCE_EXTENT_PX` (1 when the track has no extent).
+    #[default]
+    Auto,
+    /// `frame_px / 512`: the largest side of the video frame in pixels.
+    FrameSize {
+        /// max(H, W) of the frame, pixels.
+        frame_px: f64,
+    },
+    /// Given directly.
+    UnitScale {
+        /// Track units per reference pixel.
+        unit_scale: f64,
+    },
+}
+
+/// Parameters of synthesis. Defaults follow SPEC.md.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SynthParams {
+    /// Segment penalty. Default: fixed 1600.
+    pub lambda: Lambda,
+    /// Maximum segment length W in frames (the DP is O(T·W)). Default 60.
+    pub max_segment_frames: usize,
+    /// Primitive fitting and selection (its `unit_scale` is replaced by the one from `scale`).
+    pub fit: FitParams,
+    /// How to find `unit_scale`. Default: [`Scale::Auto`].
+    pub scale: Scale,
+    /// A joint counts as observed in a frame when its confidence is above this. Default 0.
+    pub min_confidence: f64,
+    /// What to do with a joint that is observed in no frame at all (e.g. an
+    /// all-NaN column, or a joint occluded for a whole clip). Default: error.
+    pub unobserved_joints: UnobservedJoints,
+}
+
+/// Policy for joints that are observed in no frame of the track.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UnobservedJoints {
+    /// Refuse the track, naming the joint ([`ConcreteError::Track`]).
+    #[default]
+    Error,
+    /// Keep the joint out of the segmentation cost and fit its primitives to
+    /// the positions stored in the track (which carry no evidence).
+    Ignore,
+}
+
+impl Default for SynthParams {
+    fn default() -> Self {
+        SynthParams {
+            lambda: Lambda::default(),
+            max_segment_frames: 60,
+            fit: FitParams::default(),
+            scale: Scale::Auto,
+            min_confidence: 0.0,
+            unobserved_joints: UnobservedJoints::Error,
+        }
+    }
+}
+
+fn finite_nonneg(name: &'static str, v: f64) -> Result<()> {
+    if !v.is_finite() || v < 0.0 {
+        return Err(ConcreteError::param(
+            name,
+            format!("must be finite and ≥ 0, got {v}"),
+        ));
+    }
+    Ok(())
+}
+
+impl SynthParams {
+    /// Checks every field: λ finite and ≥ 0 (min ≤ max, window ≥ 1 for adaptive),
+    /// W ≥ 1, scales finite and > 0, `min_confidence` in [0, 1), at least one primitive kind.
+    pub fn validate(&self) -> Result<()> {
+        match self.lambda {
+            Lambda::Fixed { lambda_ref } => finite_nonneg("lambda", lambda_ref)?,
+            Lambda::Adaptive {
+                window_frames,
+                min_ref,
+                max_ref,
+            } => {
+                finite_nonneg("lambda.min_ref", min_ref)?;
+                finite_nonneg("lambda.max_ref", max_ref)?;
+                if min_ref > max_ref {
+                    return Err(ConcreteError::param(
+                        "lambda.min_ref",
+                        format!("{min_ref} is above lambda.max_ref {max_ref}"),
+                    ));
+                }
+                if window_frames == 0 {
+                    return Err(ConcreteError::param("lambda.window_frames", "must be ≥ 1"));
+                }
+            }
+        }
+        if self.max_segment_frames == 0 {
+            return Err(ConcreteError::param("max_segment_frames", "must be ≥ 1"));
+        }
+        match self.scale {
+            Scale::Auto => {}
+            Scale::FrameSize { frame_px } => {
+                if !(frame_px.is_finite() && frame_px > 0.0) {
+                    return Err(ConcreteError::param(
+                        "scale.frame_px",
+                        format!("must be finite and > 0, got {frame_px}"),
+                    ));
+                }
+            }
+            Scale::UnitScale { unit_scale } => {
+                if !(unit_scale.is_finite() && unit_scale > 0.0) {
+                    return Err(ConcreteError::param(
+                        "scale.unit_scale",
+                        format!("must be finite and > 0, got {unit_scale}"),
+                    ));
+                }
+            }
+        }
+        if !(0.0..1.0).contains(&self.min_confidence) {
+            return Err(ConcreteError::param(
+                "min_confidence",
+                format!("must be in [0, 1), got {}", self.min_confidence),
+            ));
+        }
+        if self.fit.kinds.is_empty() {
+            return Err(ConcreteError::param(
+                "fit.kinds",
+                "no primitive kind allowed",
+            ));
+        }
+        Ok(())
+    }
+
+    /// `unit_scale` for a track (see the module docs).
+    pub fn unit_scale(&self, track: &Track) -> f64 {
+        match self.scale {
+            Scale::Auto => {
+                let e = track.scale();
+                if e.is_finite() && e > 0.0 {
+                    e / REFERENCE_EXTENT_PX
+                } else {
+                    1.0
+                }
+            }
+            Scale::FrameSize { frame_px } => frame_px / REFERENCE_FRAME_PX,
+            Scale::UnitScale { unit_scale } => unit_scale,
+        }
+    }
+}
+
+/// The result of [`synthesize_detailed`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Synthesis {
+    /// The program.
+    pub program: Program,
+    /// The segmentation and its total DP cost (fit errors + λ, track units).
+    pub segmentation: Segmentation,
+    /// Track units per reference pixel used for thresholds and λ.
+    pub unit_scale: f64,
+    /// λ per frame in track units (segment `k..n` pays `lambda[n − 1]`).
+    pub lambda: Vec<f64>,
+}
+
+/// Track data prepared for fitting: gap-filled trajectories and 0/1 weights per joint.
+struct Prepared {
+    /// Per joint `T × D` (missing frames filled by interpolation).
+    points: Vec<Array2<f64>>,
+    /// Per joint, weight per frame (1 observed, 0 missing).
+    weights: Vec<Vec<f64>>,
+    /// Per joint, prefix count of observed frames (length T + 1).
+    prefix_valid: Vec<Vec<usize>>,
+}
+
+fn prepare(track: &Track, min_conf: f64, unobserved: UnobservedJoints) -> Result<Prepared> {
+    let (t, j) = (track.n_frames(), track.n_joints());
+    if t == 0 {
+        return Err(ConcreteError::Track("the track has no frames".into()));
+    }
+    if t < 2 {
+        return Err(ConcreteError::Track(format!(
+            "the track has {t} frame; synthesis needs at least 2"
+        )));
+    }
+    if j == 0 {
+        return Err(ConcreteError::Track("the track has no joints".into()));
+    }
+    let conf = track.confidence();
+    if conf.iter().all(|&c| c <= min_conf) {
+        return Err(ConcreteError::Track(format!(
+            "every joint of every frame has confidence ≤ {min_conf} (nothing observed)"
+        )));
+    }
+    let names = &track.skeleton().joints;
+    let mut filled = track.clone();
+    // Mark low-confidence entries missing before filling.
+    {
+        let mut c = filled.confidence_mut();
+        c.mapv_inplace(|v| if v > min_conf { v } else { 0.0 });
+    }
+    filled.fill_missing();
+    let mut points = Vec::with_capacity(j);
+    let mut weights = Vec::with_capacity(j);
+    let mut prefix_valid = Vec::with_capacity(j);
+    for ji in 0..j {
+        let w: Vec<f64> = (0..t)
+            .map(|ti| if conf[[ti, ji]] > min_conf { 1.0 } else { 0.0 })
+            .collect();
+        if w.iter().all(|&x| x == 0.0) && unobserved == UnobservedJoints::Error {
+            let name = names.get(ji).map(String::as_str).unwrap_or("?");
+            return Err(ConcreteError::Track(format!(
+                "joint {ji} (`{name}`) is missing in every frame (confidence ≤ {min_conf} or non-finite positions); set `unobserved_joints` to ignore it"
+            )));
+        }
+        let mut pre = vec![0usize; t + 1];
+        for ti in 0..t {
+            pre[ti + 1] = pre[ti] + usize::from(w[ti] > 0.0);
+        }
+        points.push(filled.joint(ji).to_owned());
+        weights.push(w);
+        prefix_valid.push(pre);
+    }
+    Ok(Prepared {
+        points,
+        weights,
+        prefix_valid,
+    })
+}
+
+/// Per-frame λ in track units (see the module docs).
+pub fn lambda_per_frame(track: &Track, params: &SynthParams, unit_scale: f64) -> Vec<f64> {
+    let t = track.n_frames();
+    let factor = match params.fit.norm {
+        ErrorNorm::Euclidean => unit_scale,
+        ErrorNorm::Squared => unit_scale * unit_scale,
+    };
+    match params.lambda {
+        Lambda::Fixed { lambda_ref } => vec![lambda_ref * factor; t],
+        Lambda::Adaptive {
+            window_frames,
+            min_ref,
+            max_ref,
+        } => adaptive_lambda_ref(track, params.min_confidence, window_frames, unit_scale)
+            .into_iter()
+            .map(|c| c.map_or(max_ref, |c| c.clamp(min_ref, max_ref)) * factor)
+            .collect(),
+    }
+}
+
+/// ‖mean-over-joints covariance‖_F per frame in reference px² (`None` where no joint has 2 valid frames).
+fn adaptive_lambda_ref(
+    track: &Track,
+    min_conf: f64,
+    window: usize,
+    unit_scale: f64,
+) -> Vec<Option<f64>> {
+    let (t, j, d) = (track.n_frames(), track.n_joints(), track.dims());
+    let pos = track.positions();
+    let conf = track.confidence();
+    let half = window / 2;
+    let mut cov_sum = vec![0.0; t * d * d];
+    let mut n_joints = vec![0usize; t];
+    // Prefix sums for one joint at a time: count, Σx (D), Σxxᵀ (D×D).
+    let stride = 1 + d + d * d;
+    let mut pre = vec![0.0; (t + 1) * stride];
+    for ji in 0..j {
+        for ti in 0..t {
+            let (a, b) = pre.split_at_mut((ti + 1) * stride);
+            let prev = &a[ti * stride..];
+            let cur = &mut b[..stride];
+            cur.copy_from_slice(&prev[..stride]);
+            if conf[[ti, ji]] > min_conf {
+                cur[0] += 1.0;
+                for k in 0..d {
+                    let xk = pos[[ti, ji, k]];
+                    cur[1 + k] += xk;
+                    for l in 0..d {
+                        cur[1 + d + k * d + l] += xk * pos[[ti, ji, l]];
+                    }
+                }
+            }
+        }
+        for f in 0..t {
+            let lo = f.saturating_sub(half);
+            let hi = (f + half + 1).min(t);
+            let n = pre[hi * stride] - pre[lo * stride];
+            if n < 2.0 {
+                continue;
+            }
+            n_joints[f] += 1;
+            let m: Vec<f64> = (0..d)
+                .map(|k| (pre[hi * stride + 1 + k] - pre[lo * stride + 1 + k]) / n)
+                .collect();
+            for k in 0..d {
+                for l in 0..d {
+                    let sxx =
+                        pre[hi * stride + 1 + d + k * d + l] - pre[lo * stride + 1 + d + k * d + l];
+                    cov_sum[f * d * d + k * d + l] += sxx / n - m[k] * m[l];
+                }
+            }
+        }
+    }
+    let s2 = unit_scale * unit_scale;
+    (0..t)
+        .map(|f| {
+            if n_joints[f] == 0 {
+                return None;
+            }
+            let nj = n_joints[f] as f64;
+            let fro = cov_sum[f * d * d..(f + 1) * d * d]
+                .iter()
+                .map(|c| {
+                    let c = c / nj / s2;
+                    c * c
+                })
+                .sum::<f64>()
+                .sqrt();
+            Some(fro)
+        })
+        .collect()
+}
+
+fn joint_name(track: &Track, j: usize) -> String {
+    track
+        .skeleton()
+        .joints
+        .get(j)
+        .cloned()
+        .unwrap_or_else(|| format!("{j}"))
+}
+
+fn segment_cost(
+    prep: &Prepared,
+    fit: &FitParams,
+    track: &Track,
+    k: usize,
+    n: usize,
+) -> Result<f64> {
+    let mut total = 0.0;
+    for (ji, pts) in prep.points.iter().enumerate() {
+        if prep.prefix_valid[ji][n] == prep.prefix_valid[ji][k] {
+            continue; // joint unobserved in this segment: no evidence, no cost
+        }
+        let f =
+            fit_best(pts.slice(s![k..n, ..]), Some(&prep.weights[ji][k..n]), fit).map_err(|e| {
+                ConcreteError::Track(format!(
+                    "fitting joint `{}` on frames {k}..{n}: {e}",
+                    joint_name(track, ji)
+                ))
+            })?;
+        total += f.error;
+    }
+    Ok(total)
+}
+
+/// Fills the cost table (fit errors summed over joints + λ of the segment's last frame) in parallel.
+fn cost_table(
+    prep: &Prepared,
+    fit: &FitParams,
+    track: &Track,
+    lambda: &[f64],
+    window: usize,
+) -> Result<CostTable> {
+    let t = track.n_frames();
+    let mut table = CostTable::new(t, window);
+    table
+        .rows_mut()
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .enumerate()
+        .try_for_each(|(row, cells)| -> Result<()> {
+            let n = row + 1;
+            for len in 1..=window.min(n) {
+                let k = n - len;
+                cells[len - 1] = segment_cost(prep, fit, track, k, n)? + lambda[n - 1];
+            }
+            Ok(())
+        })?;
+    Ok(table)
+}
+
+/// Fits the primitives of one segment for every joint. A joint unobserved in
+/// the whole segment gets the best fit to its gap-filled trajectory.
+fn fit_segment(
+    prep: &Prepared,
+    fit: &FitParams,
+    track: &Track,
+    k: usize,
+    n: usize,
+) -> Result<Vec<Primitive>> {
+    prep.points
+        .iter()
+        .enumerate()
+        .map(|(ji, pts)| {
+            let observed = prep.prefix_valid[ji][n] > prep.prefix_valid[ji][k];
+            let w = observed.then(|| &prep.weights[ji][k..n]);
+            fit_best(pts.slice(s![k..n, ..]), w, fit)
+                .map(|f| f.primitive)
+                .map_err(|e| {
+                    ConcreteError::Track(format!(
+                        "fitting joint `{}` on frames {k}..{n}: {e}",
+                        joint_name(track, ji)
+                    ))
+                })
+        })
+        .collect()
+}
+
+/// Synthesises a concrete program with all details (segmentation cost, scale, λ).
+pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthesis> {
+    params.validate()?;
+    let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
+    let unit_scale = params.unit_scale(track);
+    let mut fit = params.fit.clone();
+    fit.unit_scale = unit_scale;
+    let lambda = lambda_per_frame(track, params, unit_scale);
+    let table = cost_table(&prep, &fit, track, &lambda, params.max_segment_frames)?;
+    let segmentation = segment_table(&table)?;
+    let segments = segmentation
+        .boundaries
+        .windows(2)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|w| {
+            Ok(Segment {
+                duration_frames: w[1] - w[0],
+                primitives: fit_segment(&prep, &fit, track, w[0], w[1])?,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let program = Program {
+        fps: track.fps(),
+        units: track.units(),
+        dims: track.dims(),
+        skeleton: track.skeleton().name.clone(),
+        joints: track.skeleton().joints.clone(),
+        segments,
+    };
+    Ok(Synthesis {
+        program,
+        segmentation,
+        unit_scale,
+        lambda,
+    })
+}
+
+/// Synthesises a concrete program from a track.
+///
+/// Errors: invalid parameters; a track with fewer than 2 frames or no
+/// joints; nothing observed at all; a joint missing in every frame (named in
+/// the message) unless [`SynthParams::unobserved_joints`] says to ignore it.
+pub fn synthesize(track: &Track, params: &SynthParams) -> Result<Program> {
+    synthesize_detailed(track, params).map(|s| s.program)
+}

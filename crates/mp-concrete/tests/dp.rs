@@ -1,0 +1,79 @@
+//! The DP segmentation equals exhaustive search.
+
+use mp_concrete::dp::{segment_brute_force, segment_dp, segment_table, CostTable};
+use mp_concrete::ConcreteError;
+use proptest::prelude::*;
+
+/// Random segment costs for T ≤ 10 frames, with a penalty λ.
+fn costs() -> impl Strategy<Value = (usize, usize, f64, Vec<f64>)> {
+    (1usize..=10, 1usize..=10, 0.0..50.0f64).prop_flat_map(|(t, w, lambda)| {
+        (
+            Just(t),
+            Just(w),
+            Just(lambda),
+            prop::collection::vec(0.0..100.0f64, t * t),
+        )
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    #[test]
+    fn dp_equals_brute_force((t, w, lambda, c) in costs()) {
+        let cost = |k: usize, n: usize| c[k * t + (n - 1)] + lambda;
+        let dp = segment_dp(t, w, cost).unwrap();
+        let bf = segment_brute_force(t, w, cost).unwrap();
+        prop_assert!((dp.cost - bf.cost).abs() <= 1e-9 * (1.0 + bf.cost.abs()), "dp {} bf {}", dp.cost, bf.cost);
+        // The DP's segmentation really has the cost it claims, and respects W.
+        let recomputed: f64 = dp.boundaries.windows(2).map(|s| cost(s[0], s[1])).sum();
+        prop_assert!((recomputed - dp.cost).abs() <= 1e-9 * (1.0 + dp.cost.abs()));
+        prop_assert!(dp.durations().iter().all(|&d| d >= 1 && d <= w));
+        prop_assert_eq!(dp.boundaries.first().copied(), Some(0));
+        prop_assert_eq!(dp.boundaries.last().copied(), Some(t));
+        // Random real costs have a unique optimum: the same boundaries.
+        prop_assert_eq!(&dp.boundaries, &bf.boundaries);
+        // The table version agrees.
+        let table = CostTable::from_fn(t, w, cost);
+        prop_assert_eq!(segment_table(&table).unwrap(), dp);
+    }
+}
+
+#[test]
+fn lambda_controls_granularity() {
+    // Cost of a segment = its squared length deviation from 3 frames: λ = 0
+    // gives single frames when single frames are free.
+    let free = |k: usize, n: usize| if n - k == 1 { 0.0 } else { 1.0 };
+    let s = segment_dp(6, 6, free).unwrap();
+    assert_eq!(s.n_segments(), 6);
+    // A large λ gives one segment when a segment costs the same at any length.
+    let s = segment_dp(6, 6, |_, _| 1000.0).unwrap();
+    assert_eq!(s.boundaries, vec![0, 6]);
+    // …unless the window forbids it.
+    let s = segment_dp(6, 4, |_, _| 1000.0).unwrap();
+    assert_eq!(s.n_segments(), 2);
+}
+
+#[test]
+fn bad_inputs_are_typed_errors() {
+    assert!(matches!(
+        segment_dp(0, 5, |_, _| 0.0),
+        Err(ConcreteError::Track(_))
+    ));
+    assert!(matches!(
+        segment_dp(5, 0, |_, _| 0.0),
+        Err(ConcreteError::InvalidParam {
+            name: "max_segment_frames",
+            ..
+        })
+    ));
+    assert!(matches!(
+        segment_dp(3, 3, |_, _| f64::NAN),
+        Err(ConcreteError::Track(_))
+    ));
+    assert!(matches!(
+        segment_dp(3, 3, |_, _| f64::INFINITY),
+        Err(ConcreteError::Track(_))
+    ));
+    assert!(segment_brute_force(21, 3, |_, _| 0.0).is_err());
+}

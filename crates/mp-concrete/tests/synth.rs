@@ -1,0 +1,375 @@
+//! Synthesis: recovering known programs, invariances, execution, and bad input.
+
+use mp_concrete::{
+    interpolation_experiment, program_stats, synthesize, synthesize_detailed, ConcreteError,
+    ExecParams, Lambda, Program, Scale, Segment, SynthParams, Transition, UnobservedJoints,
+};
+use mp_geom::{Primitive, Skeleton, Track, Units};
+use ndarray::{Array2, Array3};
+
+fn line(x: f64, y: f64, vx: f64, vy: f64) -> Primitive {
+    Primitive::Line {
+        start: vec![x, y],
+        velocity: vec![vx, vy],
+    }
+}
+fn still(x: f64, y: f64) -> Primitive {
+    Primitive::Stationary { point: vec![x, y] }
+}
+fn arc(cx: f64, cy: f64, r: f64, start: f64, vel: f64) -> Primitive {
+    Primitive::Circle {
+        center: vec![cx, cy],
+        radius: r,
+        angle_start: start,
+        angle_vel: vel,
+        angle_acc: 0.0,
+        axes: vec![],
+    }
+}
+
+/// A 3-joint program with segments of 15, 12 and 20 frames; the motion jumps
+/// at each boundary so that every boundary is unambiguous.
+fn known_program() -> Program {
+    Program {
+        fps: 30.0,
+        units: Units::Pixels,
+        dims: 2,
+        skeleton: "generic".into(),
+        joints: vec!["j0".into(), "j1".into(), "j2".into()],
+        segments: vec![
+            Segment {
+                duration_frames: 15,
+                primitives: vec![
+                    line(100.0, 100.0, 6.0, 2.0),
+                    still(300.0, 200.0),
+                    arc(250.0, 250.0, 60.0, 0.0, 6.0),
+                ],
+            },
+            Segment {
+                duration_frames: 12,
+                primitives: vec![
+                    still(250.0, 180.0),
+                    line(300.0, 150.0, -5.0, 7.0),
+                    arc(250.0, 250.0, 60.0, 200.0, -8.0),
+                ],
+            },
+            Segment {
+                duration_frames: 20,
+                primitives: vec![
+                    arc(150.0, 300.0, 80.0, 90.0, 5.0),
+                    line(180.0, 260.0, 4.0, -4.0),
+                    still(320.0, 330.0),
+                ],
+            },
+        ],
+    }
+}
+
+/// Pixels at the reference scale; λ = 300 suits 3 joints (the default 1600
+/// is meant for whole skeletons, where the cost sums over 13–17 joints).
+fn params_px() -> SynthParams {
+    SynthParams {
+        scale: Scale::UnitScale { unit_scale: 1.0 },
+        lambda: Lambda::fixed(300.0),
+        ..SynthParams::default()
+    }
+}
+
+#[test]
+fn recovers_boundaries_of_a_known_program() {
+    let truth = known_program();
+    let track = truth.execute().unwrap();
+    let syn = synthesize_detailed(&track, &params_px()).unwrap();
+    assert_eq!(syn.program.boundaries(), vec![0, 15, 27, 47]);
+    assert_eq!(syn.unit_scale, 1.0);
+    // The kinds are recovered too, and the program reproduces the track.
+    for (s, t) in syn.program.segments.iter().zip(&truth.segments) {
+        let got: Vec<_> = s.primitives.iter().map(Primitive::kind).collect();
+        let want: Vec<_> = t.primitives.iter().map(Primitive::kind).collect();
+        assert_eq!(got, want);
+    }
+    let st = program_stats(&syn.program, &track).unwrap();
+    assert!(st.kd < 1e-6, "kd {}", st.kd);
+    assert_eq!(st.n_segments, 3);
+    assert_eq!(st.params_raw, 47 * 3 * 2);
+    assert_eq!(st.params_program, truth.n_params());
+    assert_eq!(st.kinds["circle"], 3);
+}
+
+#[test]
+fn recovers_boundaries_with_noise_and_gaps() {
+    let truth = known_program();
+    let clean = truth.execute().unwrap();
+    let (mut pos, _, fps, units, skel) = clean.into_parts();
+    // Deterministic ±1 px noise and a few missing entries.
+    let mut conf = Array2::ones((47, 3));
+    for t in 0..47 {
+        for j in 0..3 {
+            for k in 0..2 {
+                let h = ((t * 31 + j * 17 + k * 7) % 13) as f64 / 6.0 - 1.0;
+                pos[[t, j, k]] += h;
+            }
+        }
+    }
+    for (t, j) in [(3, 0), (20, 1), (21, 1), (40, 2)] {
+        conf[[t, j]] = 0.0;
+        pos[[t, j, 0]] = 9999.0; // garbage where missing: must be ignored
+    }
+    let track = Track::new(pos, Some(conf), fps, units, skel).unwrap();
+    let p = synthesize(&track, &params_px()).unwrap();
+    assert_eq!(p.boundaries(), vec![0, 15, 27, 47]);
+    let st = program_stats(&p, &track).unwrap();
+    assert!(st.kd < 1.5, "kd {}", st.kd);
+}
+
+#[test]
+fn scaling_the_track_scales_nothing_else() {
+    // With Scale::Auto thresholds and λ follow the track's size: a track
+    // scaled by 3 gets the same segmentation.
+    let track = known_program().execute().unwrap();
+    let p1 = synthesize(&track, &SynthParams::default()).unwrap();
+    let (pos, conf, fps, units, skel) = track.clone().into_parts();
+    let big = Track::new(pos.mapv(|v| v * 3.0), Some(conf), fps, units, skel).unwrap();
+    let p3 = synthesize(&big, &SynthParams::default()).unwrap();
+    assert_eq!(p1.boundaries(), p3.boundaries());
+}
+
+#[test]
+fn lambda_controls_the_number_of_segments() {
+    let track = known_program().execute().unwrap();
+    let few = synthesize(
+        &track,
+        &SynthParams {
+            lambda: Lambda::fixed(1e7),
+            max_segment_frames: 100,
+            ..params_px()
+        },
+    )
+    .unwrap();
+    assert_eq!(few.n_segments(), 1);
+    let many = synthesize(
+        &track,
+        &SynthParams {
+            lambda: Lambda::fixed(0.0),
+            ..params_px()
+        },
+    )
+    .unwrap();
+    assert!(many.n_segments() >= 3);
+    // The window caps segment length.
+    let capped = synthesize(
+        &track,
+        &SynthParams {
+            max_segment_frames: 10,
+            ..params_px()
+        },
+    )
+    .unwrap();
+    assert!(capped.segments.iter().all(|s| s.duration_frames <= 10));
+}
+
+#[test]
+fn adaptive_lambda_is_clamped_and_works() {
+    let track = known_program().execute().unwrap();
+    let syn = synthesize_detailed(
+        &track,
+        &SynthParams {
+            lambda: Lambda::Adaptive {
+                window_frames: 31,
+                min_ref: 50.0,
+                max_ref: 300.0,
+            },
+            ..params_px()
+        },
+    )
+    .unwrap();
+    assert!(syn.lambda.iter().all(|&l| (50.0..=300.0).contains(&l)));
+    // Big circles and lines move a lot: λ reaches the top of the range somewhere.
+    assert!(syn.lambda.iter().any(|&l| l == 300.0));
+    assert_eq!(syn.program.boundaries(), vec![0, 15, 27, 47]);
+}
+
+#[test]
+fn execution_at_other_rates() {
+    let p = known_program();
+    let native = p.execute().unwrap();
+    assert_eq!(native.n_frames(), 47);
+    assert_eq!(native.point(15, 1).to_vec(), vec![300.0, 150.0]);
+    let double = p
+        .execute_with(&ExecParams {
+            fps_out: Some(60.0),
+            transition: Transition::Blend,
+        })
+        .unwrap();
+    assert_eq!(double.n_frames(), 93);
+    assert_eq!(double.fps(), 60.0);
+    for t in 0..47 {
+        assert_eq!(double.point(2 * t, 0), native.point(t, 0));
+    }
+    // Between segments the default blends the two ends…
+    let mid = double.point(29, 0).to_vec(); // program frame 14.5
+    let a = native.point(14, 0);
+    let b = native.point(15, 0);
+    assert!((mid[0] - 0.5 * (a[0] + b[0])).abs() < 1e-9);
+    // …and extrapolation continues the first primitive.
+    let ex = p.sample_frames(&[14.5], Transition::Extrapolate).unwrap();
+    assert!((ex[[0, 0, 0]] - (100.0 + 6.0 * 14.5)).abs() < 1e-9);
+    // Inside a segment, fractional times follow the primitive.
+    let f = p.sample_frames(&[3.25], Transition::Blend).unwrap();
+    assert!((f[[0, 0, 1]] - (100.0 + 2.0 * 3.25)).abs() < 1e-9);
+    // Outside the program: a typed error.
+    assert!(matches!(
+        p.sample_frames(&[46.5], Transition::Blend),
+        Err(ConcreteError::InvalidParam { .. })
+    ));
+    assert!(p
+        .execute_with(&ExecParams {
+            fps_out: Some(0.0),
+            ..Default::default()
+        })
+        .is_err());
+    // Times in seconds.
+    let s = p.sample_times_s(&[0.5], Transition::Blend).unwrap();
+    assert_eq!(
+        s.slice(ndarray::s![0, .., ..]),
+        native.positions().slice(ndarray::s![15, .., ..])
+    );
+}
+
+#[test]
+fn interpolation_beats_linear_on_circles() {
+    // A joint going round a circle: the program interpolates along the arc.
+    let p = Program {
+        fps: 30.0,
+        units: Units::Pixels,
+        dims: 2,
+        skeleton: "generic".into(),
+        joints: vec!["a".into()],
+        segments: vec![Segment {
+            duration_frames: 41,
+            primitives: vec![arc(200.0, 200.0, 80.0, 0.0, 4.0)],
+        }],
+    };
+    let track = p.execute().unwrap();
+    for step in [2, 4, 8] {
+        let r = interpolation_experiment(&track, step, &params_px(), Transition::Blend).unwrap();
+        assert_eq!(r.n_scored, 40 - 40 / step);
+        assert!(r.kd_program < 1e-6, "×{step}: {r:?}");
+        assert!(r.kd_linear > 0.01, "×{step}: {r:?}");
+    }
+    assert!(interpolation_experiment(&track, 1, &params_px(), Transition::Blend).is_err());
+    assert!(interpolation_experiment(&track, 41, &params_px(), Transition::Blend).is_err());
+}
+
+fn track_of(t: usize, j: usize) -> Track {
+    let mut pos = Array3::zeros((t, j, 2));
+    for ti in 0..t {
+        for ji in 0..j {
+            pos[[ti, ji, 0]] = ti as f64 * 3.0 + ji as f64;
+            pos[[ti, ji, 1]] = 50.0;
+        }
+    }
+    Track::new(pos, None, 30.0, Units::Pixels, Skeleton::generic(j)).unwrap()
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let ok = SynthParams::default();
+    // Empty track and a single frame.
+    assert!(matches!(
+        synthesize(&track_of(0, 2), &ok),
+        Err(ConcreteError::Track(_))
+    ));
+    assert!(matches!(
+        synthesize(&track_of(1, 2), &ok),
+        Err(ConcreteError::Track(_))
+    ));
+    // Two frames are enough.
+    assert_eq!(synthesize(&track_of(2, 2), &ok).unwrap().n_frames(), 2);
+    // An all-NaN joint is named.
+    let (mut pos, _, fps, units, skel) = track_of(10, 3).into_parts();
+    pos.slice_mut(ndarray::s![.., 1, ..]).fill(f64::NAN);
+    let nan = Track::new(pos, None, fps, units, skel).unwrap();
+    match synthesize(&nan, &ok) {
+        Err(ConcreteError::Track(m)) => assert!(m.contains("j1"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    // …unless asked to ignore it.
+    let ign = SynthParams {
+        unobserved_joints: UnobservedJoints::Ignore,
+        ..SynthParams::default()
+    };
+    assert_eq!(synthesize(&nan, &ign).unwrap().n_joints(), 3);
+    // Zero confidence everywhere.
+    let (pos, _, fps, units, skel) = track_of(10, 3).into_parts();
+    let zero = Track::new(pos, Some(Array2::zeros((10, 3))), fps, units, skel).unwrap();
+    match synthesize(&zero, &ign) {
+        Err(ConcreteError::Track(m)) => assert!(m.contains("every joint of every frame"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    // Parameters.
+    let tr = track_of(10, 2);
+    let bad = |p: SynthParams, name: &str| match synthesize(&tr, &p) {
+        Err(ConcreteError::InvalidParam { name: n, .. }) => assert_eq!(n, name),
+        other => panic!("{name}: {other:?}"),
+    };
+    bad(
+        SynthParams {
+            lambda: Lambda::fixed(-1.0),
+            ..SynthParams::default()
+        },
+        "lambda",
+    );
+    bad(
+        SynthParams {
+            lambda: Lambda::fixed(f64::NAN),
+            ..SynthParams::default()
+        },
+        "lambda",
+    );
+    bad(
+        SynthParams {
+            max_segment_frames: 0,
+            ..SynthParams::default()
+        },
+        "max_segment_frames",
+    );
+    bad(
+        SynthParams {
+            lambda: Lambda::Adaptive {
+                window_frames: 31,
+                min_ref: 2000.0,
+                max_ref: 100.0,
+            },
+            ..SynthParams::default()
+        },
+        "lambda.min_ref",
+    );
+    bad(
+        SynthParams {
+            scale: Scale::FrameSize { frame_px: f64::NAN },
+            ..SynthParams::default()
+        },
+        "scale.frame_px",
+    );
+    bad(
+        SynthParams {
+            min_confidence: 1.5,
+            ..SynthParams::default()
+        },
+        "min_confidence",
+    );
+    let mut no_kinds = SynthParams::default();
+    no_kinds.fit.kinds.clear();
+    bad(no_kinds, "fit.kinds");
+}
+
+#[test]
+fn stats_require_matching_shapes() {
+    let p = known_program();
+    let tr = track_of(10, 3);
+    assert!(matches!(
+        program_stats(&p, &tr),
+        Err(ConcreteError::Program(_))
+    ));
+}

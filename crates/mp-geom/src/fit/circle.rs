@@ -1,0 +1,251 @@
+//! Circle fitting: Bullock's algebraic least squares on centred points, in the
+//! best-fit plane for 3D points, then the unwrapped angle against time.
+//!
+//! Bullock (2006), "Least-squares circle fit": with centred coordinates
+//! `(u, v)` and moments `S_uu = Σ w u² / W` etc., the centre `(u_c, v_c)`
+//! solves
+//!
+//! ```text
+//! | S_uu  S_uv | |u_c|   1 | S_uuu + S_uvv |
+//! | S_uv  S_vv | |v_c| = - | S_vvv + S_vuu |
+//!                        2
+//! ```
+//!
+//! and `r² = u_c² + v_c² + S_uu + S_vv`.
+
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use ndarray::ArrayView2;
+
+use super::input::{self, wt, Summary};
+use super::FitParams;
+use crate::error::{GeomError, Result};
+use crate::primitive::Primitive;
+
+/// Relative threshold on `det / trace²` of the 2 × 2 scatter matrix (and on
+/// the eigenvalue ratio of the 3 × 3 one) below which points count as
+/// collinear.
+const COLLINEAR_EPS: f64 = 1e-12;
+
+/// The fitted circle in a 2D frame: centre in the local coordinates, radius.
+struct Circle2 {
+    uc: f64,
+    vc: f64,
+    r: f64,
+}
+
+/// Bullock's fit on already centred local coordinates given by `coord(i)`.
+fn bullock(
+    n: usize,
+    weights: Option<&[f64]>,
+    w_sum: f64,
+    coord: impl Fn(usize) -> (f64, f64),
+) -> Result<Circle2> {
+    let (mut suu, mut suv, mut svv) = (0.0, 0.0, 0.0);
+    let (mut suuu, mut suvv, mut svvv, mut svuu) = (0.0, 0.0, 0.0, 0.0);
+    for i in 0..n {
+        let w = wt(weights, i);
+        if w == 0.0 {
+            continue;
+        }
+        let (u, v) = coord(i);
+        let (uu, vv) = (u * u, v * v);
+        suu += w * uu;
+        suv += w * u * v;
+        svv += w * vv;
+        suuu += w * uu * u;
+        suvv += w * u * vv;
+        svvv += w * vv * v;
+        svuu += w * v * uu;
+    }
+    let inv = 1.0 / w_sum;
+    let (suu, suv, svv) = (suu * inv, suv * inv, svv * inv);
+    let b1 = 0.5 * (suuu + suvv) * inv;
+    let b2 = 0.5 * (svvv + svuu) * inv;
+    let det = suu * svv - suv * suv;
+    let tr = suu + svv;
+    if !(tr > 0.0) || det <= COLLINEAR_EPS * tr * tr {
+        return Err(GeomError::NoData(
+            "circle fit: the valid points are collinear or coincident".into(),
+        ));
+    }
+    let uc = (b1 * svv - b2 * suv) / det;
+    let vc = (suu * b2 - suv * b1) / det;
+    let r = (uc * uc + vc * vc + tr).sqrt();
+    if !(uc.is_finite() && vc.is_finite() && r.is_finite() && r > 0.0) {
+        return Err(GeomError::NoData(
+            "circle fit: the valid points are collinear or coincident".into(),
+        ));
+    }
+    Ok(Circle2 { uc, vc, r })
+}
+
+/// Calls `f(i, θᵢ)` for every valid frame with the angle of point `i` around
+/// the centre, in degrees, unwrapped frame to frame.
+fn unwrapped_angles(
+    n: usize,
+    weights: Option<&[f64]>,
+    local: impl Fn(usize) -> (f64, f64),
+    mut f: impl FnMut(usize, f64, f64),
+) {
+    let mut prev: Option<f64> = None;
+    for i in 0..n {
+        let w = wt(weights, i);
+        if w == 0.0 {
+            continue;
+        }
+        let (a, b) = local(i);
+        let mut th = b.atan2(a).to_degrees();
+        if let Some(p) = prev {
+            th += 360.0 * ((p - th) / 360.0).round();
+        }
+        prev = Some(th);
+        f(i, w, th);
+    }
+}
+
+/// Fits `θ(t) = acc·t² + vel·t + start` to the unwrapped angles.
+fn fit_angle(
+    n: usize,
+    weights: Option<&[f64]>,
+    s: &Summary,
+    params: &FitParams,
+    local: impl Fn(usize) -> (f64, f64) + Copy,
+) -> Result<(f64, f64, f64)> {
+    let deg = if params.quadratic_angle { 2 } else { 1 };
+    let ls = input::PolyLs::new("circle fit (angle)", n, weights, s, deg)?;
+    let mut rhs = [0.0; 4];
+    unwrapped_angles(n, weights, local, |i, w, th| {
+        ls.accumulate(&mut rhs, i, w, th)
+    });
+    let c = ls.solve(&rhs);
+    let (mut start, mut vel, mut acc) = (c[0], c[1], c[2]);
+    if ls.degree() >= 2 && acc.abs() > params.max_angle_acc_deg {
+        acc = params.max_angle_acc_deg.copysign(acc);
+        let ls1 = input::PolyLs::new("circle fit (angle)", n, weights, s, 1)?;
+        let mut rhs = [0.0; 4];
+        unwrapped_angles(n, weights, local, |i, w, th| {
+            let t = i as f64;
+            ls1.accumulate(&mut rhs, i, w, th - acc * t * t)
+        });
+        let c = ls1.solve(&rhs);
+        start = c[0];
+        vel = c[1];
+    }
+    start -= 360.0 * (start / 360.0).round();
+    if start <= -180.0 {
+        start += 360.0;
+    }
+    Ok((start, vel, acc))
+}
+
+/// Fits a circle to checked input (see [`super::fit_circle`]).
+pub(crate) fn fit(
+    points: ArrayView2<'_, f64>,
+    weights: Option<&[f64]>,
+    s: &Summary,
+    params: &FitParams,
+) -> Result<Primitive> {
+    if s.d != 2 && s.d != 3 {
+        return Err(GeomError::Shape(format!(
+            "circle fit: points need 2 or 3 dimensions, got {}",
+            s.d
+        )));
+    }
+    if s.n_valid < 3 {
+        return Err(GeomError::TooShort {
+            what: "circle fit (valid frames)",
+            needed: 3,
+            got: s.n_valid,
+        });
+    }
+    let n = s.n;
+    // weighted mean
+    let mut mu = [0.0f64; 3];
+    for i in 0..n {
+        let w = wt(weights, i);
+        if w == 0.0 {
+            continue;
+        }
+        for (k, m) in mu.iter_mut().enumerate().take(s.d) {
+            *m += w * points[[i, k]];
+        }
+    }
+    for m in &mut mu {
+        *m /= s.w_sum;
+    }
+
+    if s.d == 2 {
+        let centred = |i: usize| (points[[i, 0]] - mu[0], points[[i, 1]] - mu[1]);
+        let c = bullock(n, weights, s.w_sum, centred)?;
+        let local = |i: usize| {
+            let (u, v) = centred(i);
+            (u - c.uc, v - c.vc)
+        };
+        let (angle_start, angle_vel, angle_acc) = fit_angle(n, weights, s, params, local)?;
+        return Ok(Primitive::Circle {
+            center: vec![mu[0] + c.uc, mu[1] + c.vc],
+            radius: c.r,
+            angle_start,
+            angle_vel,
+            angle_acc,
+            axes: vec![],
+        });
+    }
+
+    // 3D: the plane of largest spread (weighted PCA).
+    let mut cov = Matrix3::<f64>::zeros();
+    for i in 0..n {
+        let w = wt(weights, i);
+        if w == 0.0 {
+            continue;
+        }
+        let p = Vector3::new(
+            points[[i, 0]] - mu[0],
+            points[[i, 1]] - mu[1],
+            points[[i, 2]] - mu[2],
+        );
+        cov += (w / s.w_sum) * p * p.transpose();
+    }
+    let eig = SymmetricEigen::new(cov);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    let (l_max, l_mid) = (eig.eigenvalues[order[0]], eig.eigenvalues[order[1]]);
+    if !(l_max > 0.0) || l_mid <= COLLINEAR_EPS.sqrt() * l_max {
+        return Err(GeomError::NoData(
+            "circle fit: the valid points are collinear or coincident".into(),
+        ));
+    }
+    let u: Vector3<f64> = eig.eigenvectors.column(order[0]).normalize();
+    let normal: Vector3<f64> = eig.eigenvectors.column(order[2]).into_owned();
+    let v = normal.cross(&u);
+    let v_norm = v.norm();
+    if !(v_norm > 0.5) {
+        return Err(GeomError::NoData(
+            "circle fit: could not build an orthonormal plane basis".into(),
+        ));
+    }
+    let v = v / v_norm;
+    let centred = |i: usize| {
+        let p = Vector3::new(
+            points[[i, 0]] - mu[0],
+            points[[i, 1]] - mu[1],
+            points[[i, 2]] - mu[2],
+        );
+        (p.dot(&u), p.dot(&v))
+    };
+    let c = bullock(n, weights, s.w_sum, centred)?;
+    let local = |i: usize| {
+        let (a, b) = centred(i);
+        (a - c.uc, b - c.vc)
+    };
+    let (angle_start, angle_vel, angle_acc) = fit_angle(n, weights, s, params, local)?;
+    let center: Vec<f64> = (0..3).map(|k| mu[k] + c.uc * u[k] + c.vc * v[k]).collect();
+    Ok(Primitive::Circle {
+        center,
+        radius: c.r,
+        angle_start,
+        angle_vel,
+        angle_acc,
+        axes: vec![u.iter().copied().collect(), v.iter().copied().collect()],
+    })
+}

@@ -1,0 +1,268 @@
+//! Reading and writing tracks.
+//!
+//! * [`npz`]: `.npy`/`.npz` of any numeric, boolean or unicode dtype.
+//! * [`datasets`]: the shared data sets (Penn Action, AIST++, MSR Action3D,
+//!   CMU mocap features, MediaPipe reference keypoints).
+//! * [`native`]: the project's own track formats (`.npz` and `.json`), which
+//!   read back identically.
+//! * [`csv`]: long (`frame,joint,x,y[,z][,confidence]`) and wide
+//!   (`j0_x,j0_y,…`) CSV tables.
+//! * [`openpose`]: OpenPose per-frame JSON folders (BODY_25, COCO-18) and
+//!   AlphaPose result files (COCO-17).
+//! * [`bvh`]: BVH motion capture (hierarchy + channels, forward kinematics,
+//!   slicing, concatenation, writing).
+//! * [`read_track`] / [`write_track`]: one entry point that picks the format
+//!   from the extension and the content.
+//!
+//! Every write goes to a temporary file in the destination folder that is
+//! renamed into place, so a crash never leaves a half-written file.
+
+pub mod bvh;
+pub mod csv;
+pub mod datasets;
+pub mod native;
+pub mod npz;
+pub mod openpose;
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::error::{GeomError, Result};
+use crate::skeleton::Skeleton;
+use crate::track::{Track, Units};
+
+/// What a reader cannot find in a file, supplied by the caller.
+///
+/// Formats that store these themselves (the project's npz/JSON, the data
+/// sets, BVH) ignore the options they already know.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadOptions {
+    /// Frame rate for formats without one (CSV, `.npy`, OpenPose, AlphaPose).
+    /// Default 30 fps.
+    pub fps: f64,
+    /// Units; `None` = pixels for D = 2, metres for D = 3.
+    pub units: Option<Units>,
+    /// Skeleton; `None` = inferred from the joint names or count
+    /// (17 → COCO-17, 33 → BlazePose-33, otherwise generic).
+    pub skeleton: Option<Skeleton>,
+    /// BVH: factor applied to offsets and root translations (default 1).
+    pub length_scale: f64,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            fps: 30.0,
+            units: None,
+            skeleton: None,
+            length_scale: 1.0,
+        }
+    }
+}
+
+impl ReadOptions {
+    /// Checks the options once.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            return Err(GeomError::param(
+                "fps",
+                format!("must be finite and > 0, got {}", self.fps),
+            ));
+        }
+        if !(self.length_scale.is_finite() && self.length_scale > 0.0) {
+            return Err(GeomError::param(
+                "length_scale",
+                format!("must be finite and > 0, got {}", self.length_scale),
+            ));
+        }
+        Ok(())
+    }
+
+    pub(crate) fn units_for(&self, dims: usize) -> Units {
+        self.units.unwrap_or(if dims == 3 {
+            Units::Metres
+        } else {
+            Units::Pixels
+        })
+    }
+}
+
+/// Picks a skeleton for `n` joints: the caller's, else a built-in one by count.
+pub(crate) fn infer_skeleton(opts: &ReadOptions, n: usize, path: &Path) -> Result<Skeleton> {
+    match &opts.skeleton {
+        Some(s) if s.len() == n => Ok(s.clone()),
+        Some(s) => Err(GeomError::format(
+            path,
+            format!(
+                "file has {n} joints but the given skeleton `{}` has {}",
+                s.name,
+                s.len()
+            ),
+        )),
+        None => Ok(match n {
+            17 => Skeleton::coco17(),
+            33 => Skeleton::blazepose33(),
+            _ => Skeleton::generic(n),
+        }),
+    }
+}
+
+/// Picks a skeleton from joint names: a built-in one when the names match it
+/// exactly, else a custom skeleton with those names (generic when the names
+/// are `j0`, `j1`, …).
+pub fn skeleton_from_names(names: &[String]) -> Skeleton {
+    for s in [
+        Skeleton::coco17(),
+        Skeleton::blazepose33(),
+        Skeleton::penn13(),
+        Skeleton::msr20(),
+        openpose::body25_skeleton(),
+        openpose::coco18_skeleton(),
+    ] {
+        if s.joints == names {
+            return s;
+        }
+    }
+    let generic = Skeleton::generic(names.len());
+    if generic.joints == names {
+        return generic;
+    }
+    Skeleton::custom("custom", names.to_vec(), Vec::new(), None)
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder that
+/// is renamed into place.
+pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
+    let path = path.as_ref();
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".mp-tmp-")
+        .tempfile_in(&dir)
+        .map_err(|e| GeomError::io(&dir, e))?;
+    tmp.write_all(bytes).map_err(|e| GeomError::io(path, e))?;
+    tmp.as_file()
+        .sync_all()
+        .map_err(|e| GeomError::io(path, e))?;
+    tmp.persist(path)
+        .map_err(|e| GeomError::io(path, e.error))?;
+    Ok(())
+}
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// Reads a track with default [`ReadOptions`]. See [`read_track_with`].
+pub fn read_track(path: impl AsRef<Path>) -> Result<Track> {
+    read_track_with(path, &ReadOptions::default())
+}
+
+/// Reads one track, choosing the format from the extension and content:
+///
+/// * a folder: OpenPose `*_keypoints.json` files;
+/// * `.npz`: the project's format (has `positions`), the MediaPipe reference
+///   (`landmarks_px`) or the CMU features (`X` + `labels`); multi-clip data
+///   sets (Penn Action, MSR, AIST++) are refused with a pointer to
+///   [`datasets`];
+/// * `.npy`: a `(T, J, D)` array;
+/// * `.json`: the project's format, an AlphaPose result list, or a single
+///   OpenPose frame;
+/// * `.csv`: long or wide CSV;
+/// * `.bvh`: BVH, forward kinematics to joint positions.
+pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
+    let path = path.as_ref();
+    opts.validate()?;
+    if path.is_dir() {
+        return openpose::read_openpose_dir(path, opts);
+    }
+    if !path.exists() {
+        return Err(GeomError::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or folder"),
+        ));
+    }
+    match extension(path).as_str() {
+        "npz" => {
+            let z = npz::Npz::open(path)?;
+            if z.contains("positions") {
+                native::track_from_npz(&z)
+            } else if z.contains("landmarks_px") {
+                Ok(datasets::MediaPipeReference::from_npz(&z, false)?.image)
+            } else if z.contains("X") && z.contains("labels") {
+                Ok(datasets::CmuFeatures::from_npz(&z)?.track)
+            } else if z.contains("keypoints2d") {
+                Err(GeomError::format(
+                    path,
+                    "AIST++ file with several camera views: use io::datasets::AistPlusPlus",
+                ))
+            } else if z.contains("offsets") {
+                Err(GeomError::format(
+                    path,
+                    "multi-clip data set: use io::datasets::PennAction or MsrAction3D",
+                ))
+            } else {
+                Err(GeomError::format(
+                    path,
+                    format!(
+                        "npz holds no known track layout (arrays: {})",
+                        z.names().join(", ")
+                    ),
+                ))
+            }
+        }
+        "npy" => native::read_track_npy(path, opts),
+        "json" => {
+            let text = std::fs::read_to_string(path).map_err(|e| GeomError::io(path, e))?;
+            let value: serde_json::Value = serde_json::from_str(&text)
+                .map_err(|e| GeomError::format(path, format!("invalid JSON: {e}")))?;
+            if value.get("format").and_then(|f| f.as_str()) == Some(native::JSON_FORMAT) {
+                native::track_from_json_value(value, path)
+            } else if value.is_array() {
+                openpose::alphapose_from_value(&value, path, opts)
+            } else if value.get("people").is_some() {
+                openpose::openpose_from_frames(&[(path.to_path_buf(), value)], opts)
+            } else {
+                Err(GeomError::format(
+                    path,
+                    "JSON is neither an mp track, an AlphaPose result list nor an OpenPose frame",
+                ))
+            }
+        }
+        "csv" => csv::read_csv(path, opts),
+        "bvh" => {
+            let b = bvh::Bvh::read(path)?;
+            b.to_track(&bvh::BvhTrackParams {
+                length_scale: opts.length_scale,
+                units: opts.units.unwrap_or(Units::Metres),
+                include_end_sites: false,
+            })
+        }
+        other => Err(GeomError::format(
+            path,
+            format!(
+                "unknown track file extension `{other}` (npz, npy, json, csv, bvh or a folder)"
+            ),
+        )),
+    }
+}
+
+/// Writes a track in the project's format chosen by extension: `.npz`
+/// (compressed), `.json`, or `.csv` (wide). Atomic (temporary file + rename).
+pub fn write_track(path: impl AsRef<Path>, track: &Track) -> Result<()> {
+    let path = path.as_ref();
+    match extension(path).as_str() {
+        "npz" => native::write_track_npz(path, track),
+        "json" => native::write_track_json(path, track),
+        "csv" => csv::write_csv(path, track, csv::CsvLayout::Wide),
+        other => Err(GeomError::format(
+            path,
+            format!("cannot write tracks as `{other}` (use .npz, .json or .csv)"),
+        )),
+    }
+}

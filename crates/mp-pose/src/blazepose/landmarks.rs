@@ -1,0 +1,390 @@
+//! The BlazePose GHUM landmark model (`pose_landmark_{lite,full,heavy}.onnx`):
+//! 39 landmarks (33 body + 2 auxiliary + 4 unused) from a rotated 256×256
+//! crop, heatmap refinement, and the mapping back to the image.
+
+use std::path::Path;
+
+use ort::session::Session;
+use ort::value::TensorRef;
+
+use crate::error::{PoseError, Result};
+use crate::imageops::{crop_u8, to_f32, Border, RgbView, Roi};
+use crate::runtime::{self, SessionParams};
+
+/// Input side of the landmark model (pixels).
+pub const LANDMARK_INPUT: usize = 256;
+/// Landmarks in the model's output (33 body, 2 auxiliary, 4 more).
+pub const NUM_LANDMARKS_ALL: usize = 39;
+/// Body landmarks (BlazePose-33).
+pub const NUM_BODY: usize = 33;
+/// Heatmap side.
+pub const HEATMAP_SIZE: usize = 64;
+/// Input tensor name.
+pub const INPUT_NAME: &str = "input_1";
+/// Landmarks output (`[1, 195]`).
+pub const LANDMARKS_NAME: &str = "Identity";
+/// Pose presence output (`[1, 1]`, a probability).
+pub const PRESENCE_NAME: &str = "Identity_1";
+/// Segmentation logits output (`[1, 256, 256, 1]`).
+pub const SEGMENTATION_NAME: &str = "Identity_2";
+/// Heatmap output (`[1, 64, 64, 39]`).
+pub const HEATMAP_NAME: &str = "Identity_3";
+/// World landmarks output (`[1, 117]`).
+pub const WORLD_NAME: &str = "Identity_4";
+
+/// Which landmark model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LandmarkModelKind {
+    /// `pose_landmark_lite.onnx`
+    Lite,
+    /// `pose_landmark_full.onnx` (MediaPipe's `model_complexity=1`, the default)
+    Full,
+    /// `pose_landmark_heavy.onnx` (not shipped by `cargo xtask models`)
+    Heavy,
+}
+
+impl LandmarkModelKind {
+    /// The model file.
+    pub fn file(self) -> runtime::ModelFile {
+        match self {
+            LandmarkModelKind::Lite => runtime::ModelFile::LandmarkLite,
+            LandmarkModelKind::Full => runtime::ModelFile::LandmarkFull,
+            LandmarkModelKind::Heavy => runtime::ModelFile::LandmarkHeavy,
+        }
+    }
+    /// Short name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            LandmarkModelKind::Lite => "lite",
+            LandmarkModelKind::Full => "full",
+            LandmarkModelKind::Heavy => "heavy",
+        }
+    }
+}
+
+/// Parameters of the heatmap refinement of landmark positions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RefineParams {
+    /// Whether to refine at all. Default true (MediaPipe does).
+    pub enabled: bool,
+    /// Odd window side in heatmap cells. Default 7.
+    pub kernel_size: usize,
+    /// Refine only where the window's maximum sigmoid reaches this. Default 0.5.
+    pub min_confidence: f32,
+}
+
+impl Default for RefineParams {
+    fn default() -> Self {
+        RefineParams {
+            enabled: true,
+            kernel_size: 7,
+            min_confidence: 0.5,
+        }
+    }
+}
+
+impl RefineParams {
+    /// Checks the values.
+    pub fn validate(&self) -> Result<()> {
+        if self.kernel_size == 0 || self.kernel_size % 2 == 0 || self.kernel_size > HEATMAP_SIZE {
+            return Err(PoseError::param(
+                "heatmap_kernel_size",
+                format!(
+                    "must be odd and in 1..={HEATMAP_SIZE}, got {}",
+                    self.kernel_size
+                ),
+            ));
+        }
+        if !(self.min_confidence.is_finite() && (0.0..=1.0).contains(&self.min_confidence)) {
+            return Err(PoseError::param(
+                "heatmap_min_confidence",
+                format!("must be in [0, 1], got {}", self.min_confidence),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One landmark in the crop's normalised coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CropLandmark {
+    /// x / 256.
+    pub x: f32,
+    /// y / 256.
+    pub y: f32,
+    /// z / 256 (same scale as x).
+    pub z: f32,
+    /// Sigmoid of the visibility logit.
+    pub visibility: f32,
+    /// Sigmoid of the presence logit.
+    pub presence: f32,
+}
+
+/// Decoded output of one landmark-model run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LandmarkOutput {
+    /// Pose presence probability.
+    pub pose_presence: f32,
+    /// All 39 landmarks, crop-normalised (refined when enabled).
+    pub landmarks: Vec<CropLandmark>,
+    /// 39 world points (metres, hip-centred, in the crop's rotation).
+    pub world: Vec<[f32; 3]>,
+}
+
+fn sigmoid(x: f32) -> f32 {
+    1.0 / (1.0 + (-x).exp())
+}
+
+/// Decodes the raw `[195]` landmark tensor (39 × x, y, z, visibility logit,
+/// presence logit; pixels of the 256 input).
+pub fn decode_landmarks(raw: &[f32]) -> Vec<CropLandmark> {
+    let s = LANDMARK_INPUT as f32;
+    raw.chunks_exact(5)
+        .take(NUM_LANDMARKS_ALL)
+        .map(|c| CropLandmark {
+            x: c[0] / s,
+            y: c[1] / s,
+            z: c[2] / s,
+            visibility: sigmoid(c[3]),
+            presence: sigmoid(c[4]),
+        })
+        .collect()
+}
+
+/// Refines landmark positions with the heatmaps (`64 × 64 × 39`, HWC, logits):
+/// in a `kernel × kernel` window around each landmark's cell, the
+/// sigmoid-weighted mean of the cell indices replaces the position when the
+/// window's maximum reaches `min_confidence`. Landmarks outside the heatmap
+/// are left alone. (Cell indices are used as they are, as MediaPipe does.)
+pub fn refine_with_heatmap(landmarks: &mut [CropLandmark], heatmap: &[f32], params: &RefineParams) {
+    let (hw, hh, ch) = (HEATMAP_SIZE as i64, HEATMAP_SIZE as i64, NUM_LANDMARKS_ALL);
+    if heatmap.len() != (hw * hh) as usize * ch {
+        return;
+    }
+    let offset = (params.kernel_size as i64 - 1) / 2;
+    let lim: usize = std::env::var("REFN")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(ch);
+    for (k, lm) in landmarks.iter_mut().enumerate().take(lim) {
+        // Truncation toward zero, as in a C++ float-to-int conversion.
+        let center_col = (lm.x * hw as f32) as i64;
+        let center_row = (lm.y * hh as f32) as i64;
+        if center_col < 0 || center_col >= hw || center_row < 0 || center_row >= hh {
+            continue;
+        }
+        let (c0, c1) = (
+            (center_col - offset).max(0),
+            (center_col + offset + 1).min(hw),
+        );
+        let (r0, r1) = (
+            (center_row - offset).max(0),
+            (center_row + offset + 1).min(hh),
+        );
+        let mut sum = 0.0f32;
+        let mut wc = 0.0f32;
+        let mut wr = 0.0f32;
+        let mut max_conf = 0.0f32;
+        for row in r0..r1 {
+            for col in c0..c1 {
+                let idx = (row * hw + col) as usize * ch + k;
+                let conf = sigmoid(heatmap[idx]);
+                sum += conf;
+                max_conf = max_conf.max(conf);
+                wc += col as f32 * conf;
+                wr += row as f32 * conf;
+            }
+        }
+        if max_conf >= params.min_confidence && sum > 0.0 {
+            lm.x = wc / hw as f32 / sum;
+            lm.y = wr / hh as f32 / sum;
+        }
+    }
+}
+
+/// The landmark model: an ONNX session plus pre- and post-processing.
+pub struct LandmarkModel {
+    session: Session,
+    name: String,
+    kind: LandmarkModelKind,
+    refine: RefineParams,
+    crop: Vec<u8>,
+    input: Vec<f32>,
+}
+
+impl LandmarkModel {
+    /// Opens a landmark model and checks its tensor contract.
+    pub fn open(
+        path: &Path,
+        kind: LandmarkModelKind,
+        refine: RefineParams,
+        session: &SessionParams,
+    ) -> Result<Self> {
+        refine.validate()?;
+        let session = runtime::open_session(path, session)?;
+        let name = path.display().to_string();
+        let ins = runtime::inputs_of(&session);
+        let outs = runtime::outputs_of(&session);
+        runtime::check_tensor(&name, &ins, INPUT_NAME, "f32", &[1, 256, 256, 3])?;
+        runtime::check_tensor(&name, &outs, LANDMARKS_NAME, "f32", &[1, 195])?;
+        runtime::check_tensor(&name, &outs, PRESENCE_NAME, "f32", &[1, 1])?;
+        runtime::check_tensor(&name, &outs, HEATMAP_NAME, "f32", &[1, 64, 64, 39])?;
+        runtime::check_tensor(&name, &outs, WORLD_NAME, "f32", &[1, 117])?;
+        Ok(LandmarkModel {
+            session,
+            name,
+            kind,
+            refine,
+            crop: Vec::new(),
+            input: Vec::new(),
+        })
+    }
+
+    /// Which model this is.
+    pub fn kind(&self) -> LandmarkModelKind {
+        self.kind
+    }
+
+    /// Runs the model on a prepared `[1, 256, 256, 3]` input in [0, 1].
+    pub fn run_tensor(&mut self, input: &[f32]) -> Result<LandmarkOutput> {
+        let n = LANDMARK_INPUT;
+        if input.len() != n * n * 3 {
+            return Err(PoseError::param(
+                "input",
+                format!(
+                    "landmark input needs {} values, got {}",
+                    n * n * 3,
+                    input.len()
+                ),
+            ));
+        }
+        let tensor = TensorRef::from_array_view(([1usize, n, n, 3], input))
+            .map_err(|e| PoseError::model(&self.name, e))?;
+        let outputs = self
+            .session
+            .run(ort::inputs![INPUT_NAME => tensor])
+            .map_err(|e| PoseError::model(&self.name, e))?;
+        let raw = runtime::output_f32(&outputs, &self.name, LANDMARKS_NAME, 195)?;
+        let presence = runtime::output_f32(&outputs, &self.name, PRESENCE_NAME, 1)?;
+        let world = runtime::output_f32(&outputs, &self.name, WORLD_NAME, 117)?;
+        let heatmap = runtime::output_f32(
+            &outputs,
+            &self.name,
+            HEATMAP_NAME,
+            HEATMAP_SIZE * HEATMAP_SIZE * NUM_LANDMARKS_ALL,
+        )?;
+        let mut landmarks = decode_landmarks(raw);
+        if self.refine.enabled {
+            refine_with_heatmap(&mut landmarks, heatmap, &self.refine);
+        }
+        Ok(LandmarkOutput {
+            pose_presence: presence[0],
+            landmarks,
+            world: world.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        })
+    }
+
+    /// Crops `roi` from the image (border replicate) and runs the model.
+    pub fn run(&mut self, image: RgbView<'_>, roi: &Roi) -> Result<LandmarkOutput> {
+        let n = LANDMARK_INPUT;
+        crop_u8(image, roi, n, n, Border::Replicate, &mut self.crop);
+        let mut input = std::mem::take(&mut self.input);
+        to_f32(&self.crop, 1.0 / 255.0, 0.0, &mut input);
+        let result = self.run_tensor(&input);
+        self.input = input;
+        result
+    }
+}
+
+/// Image position `(x, y)` and depth (pixels) of a crop landmark.
+pub fn project(roi: &Roi, lm: &CropLandmark) -> ([f64; 2], f64) {
+    let (x, y) = roi.to_image(lm.x as f64, lm.y as f64);
+    ([x, y], lm.z as f64 * roi.width_px)
+}
+
+/// World point rotated by the crop's rotation (the model predicts in the crop's frame).
+pub fn rotate_world(roi: &Roi, w: &[f32; 3]) -> [f64; 3] {
+    let (s, c) = roi.rotation_rad.sin_cos();
+    let (x, y) = (w[0] as f64, w[1] as f64);
+    [c * x - s * y, s * x + c * y, w[2] as f64]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decode_scales_and_applies_sigmoid() {
+        let mut raw = vec![0.0f32; 195];
+        raw[0] = 128.0;
+        raw[1] = 64.0;
+        raw[2] = -25.6;
+        raw[3] = 0.0;
+        raw[4] = 100.0;
+        let lms = decode_landmarks(&raw);
+        assert_eq!(lms.len(), 39);
+        assert_eq!(lms[0].x, 0.5);
+        assert_eq!(lms[0].y, 0.25);
+        assert!((lms[0].z + 0.1).abs() < 1e-7);
+        assert_eq!(lms[0].visibility, 0.5);
+        assert!(lms[0].presence > 0.999);
+    }
+
+    #[test]
+    fn refinement_moves_to_the_heatmap_peak() {
+        let mut hm = vec![-20.0f32; 64 * 64 * 39];
+        // Landmark 2 has a confident peak at column 10, row 20.
+        hm[(20 * 64 + 10) * 39 + 2] = 20.0;
+        let mut lms = vec![CropLandmark::default(); 39];
+        lms[2].x = 12.0 / 64.0;
+        lms[2].y = 21.5 / 64.0;
+        // Landmark 3 has no confident cell: stays.
+        lms[3].x = 0.3;
+        lms[3].y = 0.3;
+        refine_with_heatmap(&mut lms, &hm, &RefineParams::default());
+        assert!((lms[2].x - 10.0 / 64.0).abs() < 1e-4, "{}", lms[2].x);
+        assert!((lms[2].y - 20.0 / 64.0).abs() < 1e-4);
+        assert_eq!((lms[3].x, lms[3].y), (0.3, 0.3));
+    }
+
+    #[test]
+    fn refine_params_are_validated() {
+        assert!(RefineParams {
+            kernel_size: 4,
+            ..Default::default()
+        }
+        .validate()
+        .is_err());
+        assert!(RefineParams {
+            min_confidence: 2.0,
+            ..Default::default()
+        }
+        .validate()
+        .is_err());
+        assert!(RefineParams::default().validate().is_ok());
+    }
+
+    #[test]
+    fn projection_rotates_about_the_centre() {
+        let roi = Roi {
+            center_x_px: 100.0,
+            center_y_px: 50.0,
+            width_px: 200.0,
+            height_px: 200.0,
+            rotation_rad: std::f64::consts::FRAC_PI_2,
+        };
+        let lm = CropLandmark {
+            x: 0.5,
+            y: 0.0,
+            z: 0.1,
+            ..Default::default()
+        };
+        let (p, z) = project(&roi, &lm);
+        // Crop "up" (−y) points to image +x after a quarter turn.
+        assert!(
+            (p[0] - 200.0).abs() < 1e-9 && (p[1] - 50.0).abs() < 1e-9,
+            "{p:?}"
+        );
+        assert!((z - 20.0).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,326 @@
+//! BlazePose: person detector + GHUM landmark model with tracking, as in
+//! MediaPipe's legacy Pose solution.
+//!
+//! Per frame: when no crop region is carried over from the previous frame,
+//! the detector runs and the best detection's keypoints 0/1 give the region
+//! (centre = hip centre, side = 2·|kp1 − kp0|·1.25, rotated so the body points
+//! up). The landmark model runs on that rotated 256×256 crop; a pose presence
+//! below 0.5 means no person (and the detector runs on the next frame).
+//! Otherwise the two auxiliary landmarks (33, 34), smoothed by a One-Euro
+//! filter (min_cutoff 0.01, beta 10, derivate_cutoff 1, scaled by the size of
+//! the person), give the next frame's region.
+
+pub mod detector;
+pub mod landmarks;
+
+use std::path::PathBuf;
+
+use mp_geom::Skeleton;
+
+use crate::error::{PoseError, Result};
+use crate::filter::{OneEuroParams, PointsFilter};
+use crate::imageops::Roi;
+use crate::pose::{Pose, PoseEstimator};
+use crate::runtime::{self, ModelFile, SessionParams};
+use crate::video::Frame;
+
+pub use detector::{DetectorParams, ImageDetection, PoseDetector};
+pub use landmarks::{LandmarkModel, LandmarkModelKind, LandmarkOutput, RefineParams};
+
+/// Index of the first auxiliary landmark (crop centre for tracking).
+pub const AUX_CENTER: usize = 33;
+/// Index of the second auxiliary landmark (crop scale/rotation point).
+pub const AUX_SCALE: usize = 34;
+
+/// Parameters of the BlazePose pipeline; defaults are MediaPipe's
+/// (`model_complexity=1`, `min_detection_confidence=0.5`,
+/// `min_tracking_confidence=0.5`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlazePoseParams {
+    /// Landmark model. Default [`LandmarkModelKind::Full`].
+    pub model: LandmarkModelKind,
+    /// Detector decoding (score 0.5, NMS IoU 0.3).
+    pub detector: DetectorParams,
+    /// Pose presence below which a frame has no person. Default 0.5.
+    pub min_presence: f32,
+    /// Scale of the crop around the body (side = 2·|kp1 − kp0|·scale). Default 1.25.
+    pub roi_scale: f64,
+    /// Heatmap refinement (on, 7×7, 0.5).
+    pub refine: RefineParams,
+    /// Carry the crop region from frame to frame (video). Default true;
+    /// false runs the detector on every frame (still images).
+    pub tracking: bool,
+    /// One-Euro filter of the auxiliary landmarks that place the next crop.
+    pub aux_filter: OneEuroParams,
+    /// Time between frames for the filters: `None` (default) uses each
+    /// frame's timestamp; `Some(dt)` uses `index · dt` (MediaPipe's Python
+    /// API always assumes 1/30 s).
+    pub fixed_frame_interval_s: Option<f64>,
+    /// ONNX Runtime session settings.
+    pub session: SessionParams,
+    /// Folder of the ONNX files; `None` = the usual search (see [`runtime::model_dirs`]).
+    pub model_dir: Option<PathBuf>,
+}
+
+impl Default for BlazePoseParams {
+    fn default() -> Self {
+        BlazePoseParams {
+            model: LandmarkModelKind::Full,
+            detector: DetectorParams::default(),
+            min_presence: 0.5,
+            roi_scale: 1.25,
+            refine: RefineParams::default(),
+            tracking: true,
+            aux_filter: OneEuroParams::AUX_LANDMARKS,
+            fixed_frame_interval_s: None,
+            session: SessionParams::default(),
+            model_dir: None,
+        }
+    }
+}
+
+impl BlazePoseParams {
+    /// Checks every value.
+    pub fn validate(&self) -> Result<()> {
+        self.detector.validate()?;
+        self.refine.validate()?;
+        self.session.validate()?;
+        self.aux_filter.validate("aux_filter")?;
+        if !(self.min_presence.is_finite() && (0.0..=1.0).contains(&self.min_presence)) {
+            return Err(PoseError::param(
+                "min_presence",
+                format!("must be in [0, 1], got {}", self.min_presence),
+            ));
+        }
+        if !(self.roi_scale.is_finite() && self.roi_scale > 0.0) {
+            return Err(PoseError::param(
+                "roi_scale",
+                format!("must be > 0, got {}", self.roi_scale),
+            ));
+        }
+        if let Some(dt) = self.fixed_frame_interval_s {
+            if !(dt.is_finite() && dt > 0.0) {
+                return Err(PoseError::param(
+                    "fixed_frame_interval_s",
+                    format!("must be > 0, got {dt}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn model_path(&self, file: ModelFile) -> Result<PathBuf> {
+        match &self.model_dir {
+            Some(d) => {
+                let p = d.join(file.file_name());
+                if p.is_file() {
+                    Ok(p)
+                } else {
+                    Err(PoseError::ModelMissing {
+                        file: file.file_name().into(),
+                        searched: d.display().to_string(),
+                    })
+                }
+            }
+            None => runtime::model_path(file),
+        }
+    }
+}
+
+/// The BlazePose estimator (detector + landmarks + tracking).
+pub struct BlazePose {
+    params: BlazePoseParams,
+    detector: PoseDetector,
+    landmarks: LandmarkModel,
+    name: String,
+    next_roi: Option<Roi>,
+    aux_filter: PointsFilter,
+    frame_size: Option<(usize, usize)>,
+}
+
+/// Diagnostics of the last processed frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FrameDiagnostics {
+    /// Whether the detector ran.
+    pub detector_ran: bool,
+    /// Best detection score when it ran and found someone.
+    pub detection_score: Option<f64>,
+    /// Crop region used for the landmark model.
+    pub roi: Option<Roi>,
+    /// Pose presence from the landmark model.
+    pub presence: Option<f32>,
+    /// Region carried to the next frame.
+    pub next_roi: Option<Roi>,
+}
+
+impl BlazePose {
+    /// Opens the detector and landmark models.
+    pub fn new(params: BlazePoseParams) -> Result<Self> {
+        params.validate()?;
+        let det_path = params.model_path(ModelFile::PoseDetection)?;
+        let lm_path = params.model_path(params.model.file())?;
+        let detector = PoseDetector::open(&det_path, params.detector, &params.session)?;
+        let landmarks =
+            LandmarkModel::open(&lm_path, params.model, params.refine, &params.session)?;
+        Ok(BlazePose {
+            name: format!("blazepose-{}", params.model.as_str()),
+            aux_filter: PointsFilter::new(params.aux_filter),
+            params,
+            detector,
+            landmarks,
+            next_roi: None,
+            frame_size: None,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &BlazePoseParams {
+        &self.params
+    }
+
+    /// The detector, for running it alone.
+    pub fn detector_mut(&mut self) -> &mut PoseDetector {
+        &mut self.detector
+    }
+
+    /// The landmark model, for running it alone.
+    pub fn landmarks_mut(&mut self) -> &mut LandmarkModel {
+        &mut self.landmarks
+    }
+
+    fn time_ns(&self, frame: &Frame) -> i64 {
+        let t = match self.params.fixed_frame_interval_s {
+            // MediaPipe's first packet is one interval after zero.
+            Some(dt) => (frame.index as f64 + 1.0) * dt,
+            None => frame.timestamp_s,
+        };
+        (t * 1e9).round() as i64
+    }
+
+    fn lose(&mut self) {
+        self.next_roi = None;
+        self.aux_filter.reset();
+    }
+
+    /// Processes one frame; also returns what happened (detector, regions).
+    pub fn process(&mut self, frame: &Frame) -> Result<(Option<Pose>, FrameDiagnostics)> {
+        frame.validate()?;
+        let size = (frame.width, frame.height);
+        if self.frame_size != Some(size) {
+            self.lose();
+            self.frame_size = Some(size);
+        }
+        let mut diag = FrameDiagnostics::default();
+        let image = frame.view();
+        let carried = if self.params.tracking {
+            self.next_roi.take()
+        } else {
+            None
+        };
+        let roi = match carried {
+            Some(r) => r,
+            None => {
+                diag.detector_ran = true;
+                let dets = self.detector.detect(image)?;
+                let Some(best) = dets.first() else {
+                    self.lose();
+                    return Ok((None, diag));
+                };
+                diag.detection_score = Some(best.score);
+                detector::roi_from_points(
+                    best.keypoints_px[0],
+                    best.keypoints_px[1],
+                    self.params.roi_scale,
+                )
+            }
+        };
+        diag.roi = Some(roi);
+        if !roi.is_valid() {
+            self.lose();
+            return Ok((None, diag));
+        }
+        let out = self.landmarks.run(image, &roi)?;
+        diag.presence = Some(out.pose_presence);
+        if !(out.pose_presence >= self.params.min_presence) {
+            self.lose();
+            return Ok((None, diag));
+        }
+        let mut keypoints = Vec::with_capacity(landmarks::NUM_BODY);
+        let mut depth = Vec::with_capacity(landmarks::NUM_BODY);
+        let mut visibility = Vec::with_capacity(landmarks::NUM_BODY);
+        let mut presence = Vec::with_capacity(landmarks::NUM_BODY);
+        let mut world = Vec::with_capacity(landmarks::NUM_BODY);
+        for k in 0..landmarks::NUM_BODY {
+            let (Some(lm), Some(w)) = (out.landmarks.get(k), out.world.get(k)) else {
+                return Err(PoseError::Contract {
+                    model: self.name.clone(),
+                    reason: format!("landmark {k} missing from the model output"),
+                });
+            };
+            let (p, z) = landmarks::project(&roi, lm);
+            keypoints.push(p);
+            depth.push(z);
+            visibility.push(lm.visibility as f64);
+            presence.push(lm.presence as f64);
+            world.push(landmarks::rotate_world(&roi, w));
+        }
+        // Auxiliary landmarks -> next crop.
+        let aux = |k: usize| -> Result<[f64; 3]> {
+            let lm = out.landmarks.get(k).ok_or_else(|| PoseError::Contract {
+                model: self.name.clone(),
+                reason: format!("auxiliary landmark {k} missing from the model output"),
+            })?;
+            let (p, z) = landmarks::project(&roi, lm);
+            Ok([p[0], p[1], z])
+        };
+        let mut aux_pts = [aux(AUX_CENTER)?, aux(AUX_SCALE)?];
+        let dx = aux_pts[1][0] - aux_pts[0][0];
+        let dy = aux_pts[1][1] - aux_pts[0][1];
+        // Size of the unscaled region from the raw auxiliary points: (width + height) / 2.
+        let object_scale = 2.0 * (dx * dx + dy * dy).sqrt();
+        let t = self.time_ns(frame);
+        self.aux_filter.apply(t, object_scale, &mut aux_pts);
+        let next = detector::roi_from_points(
+            [aux_pts[0][0], aux_pts[0][1]],
+            [aux_pts[1][0], aux_pts[1][1]],
+            self.params.roi_scale,
+        );
+        if self.params.tracking && next.is_valid() {
+            self.next_roi = Some(next);
+            diag.next_roi = Some(next);
+        } else {
+            self.next_roi = None;
+        }
+        let pose = Pose {
+            keypoints_px: keypoints,
+            depth_px: Some(depth),
+            visibility,
+            presence,
+            world_m: Some(world),
+            score: out.pose_presence as f64,
+            object_scale_px: object_scale,
+            roi: Some(roi),
+            detector_ran: diag.detector_ran,
+        };
+        Ok((Some(pose), diag))
+    }
+}
+
+impl PoseEstimator for BlazePose {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn skeleton(&self) -> Skeleton {
+        Skeleton::blazepose33()
+    }
+    fn has_world(&self) -> bool {
+        true
+    }
+    fn estimate(&mut self, frame: &Frame) -> Result<Option<Pose>> {
+        self.process(frame).map(|(p, _)| p)
+    }
+    fn reset(&mut self) {
+        self.lose();
+        self.frame_size = None;
+    }
+}

@@ -1,0 +1,307 @@
+//! `cargo xtask eval concrete`: concrete programs on Penn Action (paper §4.1, §4.2).
+//!
+//! For every clip: synthesise a program (scale from the frame size), then
+//! measure segments ("primitives per clip"), program parameters vs raw
+//! (`T·J·D`), KD against the observed keypoints, the largest adjacent-frame
+//! jump of raw and program poses, and the interpolation experiment (×2, ×4,
+//! ×8: program vs linear interpolation on the dropped frames). Distances are
+//! reported in pixels of a 512-px frame: `px · 512 / max(H, W)` of the clip.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use mp_concrete::{
+    interpolation_experiment, program_stats, synthesize, Lambda, Scale, SynthParams, Transition,
+    UnobservedJoints,
+};
+use mp_geom::io::datasets::PennAction;
+use rayon::prelude::*;
+use serde_json::{json, Value};
+
+/// Arguments of `cargo xtask eval concrete`.
+#[derive(Args, Debug)]
+pub struct EvalConcreteArgs {
+    /// Penn Action npz (default: the shared train split).
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Output JSON report.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Fixed λ at the 512-px reference scale.
+    #[arg(long, default_value_t = Lambda::DEFAULT_FIXED, conflicts_with = "adaptive")]
+    pub lambda: f64,
+    /// Adaptive λ instead of a fixed one.
+    #[arg(long)]
+    pub adaptive: bool,
+    /// Maximum segment length in frames.
+    #[arg(long, default_value_t = 60)]
+    pub window: usize,
+    /// Only these action classes (repeatable).
+    #[arg(long)]
+    pub action: Vec<String>,
+    /// At most this many clips per action (the first ones in the file).
+    #[arg(long)]
+    pub max_clips_per_action: Option<usize>,
+    /// Subsampling factors of the interpolation experiment.
+    #[arg(long, value_delimiter = ',', default_value = "2,4,8")]
+    pub steps: Vec<usize>,
+    /// Also write a Markdown table to this file.
+    #[arg(long)]
+    pub markdown: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, Default)]
+struct ClipResult {
+    action: String,
+    frames: usize,
+    segments: usize,
+    params_program: usize,
+    params_raw: usize,
+    kd_512: f64,
+    jump_raw_512: f64,
+    jump_program_512: f64,
+    /// step → (program, linear) KD at 512 px, when the clip is long enough.
+    interp: BTreeMap<usize, (f64, f64)>,
+    seconds: f64,
+}
+
+fn run_clip(
+    pa: &PennAction,
+    i: usize,
+    base: &SynthParams,
+    steps: &[usize],
+) -> anyhow::Result<ClipResult> {
+    let info = pa.clip_info(i)?;
+    let track = pa.clip(i)?;
+    let frame_px = info.height_px.max(info.width_px) as f64;
+    let to512 = 512.0 / frame_px;
+    let params = SynthParams {
+        scale: Scale::FrameSize { frame_px },
+        ..base.clone()
+    };
+    let t0 = Instant::now();
+    let program = synthesize(&track, &params)?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let st = program_stats(&program, &track)?;
+    let mut interp = BTreeMap::new();
+    for &s in steps {
+        // Short clips (fewer than 2 kept frames or nothing to score) are skipped for that factor.
+        if let Ok(r) = interpolation_experiment(&track, s, &params, Transition::Blend) {
+            interp.insert(s, (r.kd_program * to512, r.kd_linear * to512));
+        }
+    }
+    Ok(ClipResult {
+        action: info.action.clone(),
+        frames: st.n_frames,
+        segments: st.n_segments,
+        params_program: st.params_program,
+        params_raw: st.params_raw,
+        kd_512: st.kd * to512,
+        jump_raw_512: st.max_jump_raw * to512,
+        jump_program_512: st.max_jump_program * to512,
+        interp,
+        seconds,
+    })
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    if n == 0 {
+        f64::NAN
+    } else {
+        s / n as f64
+    }
+}
+
+fn summary(rs: &[&ClipResult], steps: &[usize]) -> Value {
+    let sum_prog: usize = rs.iter().map(|r| r.params_program).sum();
+    let sum_raw: usize = rs.iter().map(|r| r.params_raw).sum();
+    let mut interp = serde_json::Map::new();
+    for &s in steps {
+        let v: Vec<(f64, f64)> = rs
+            .iter()
+            .filter_map(|r| r.interp.get(&s).copied())
+            .collect();
+        interp.insert(
+            format!("x{s}"),
+            json!({
+                "clips": v.len(),
+                "kd_program_px_512": mean(v.iter().map(|p| p.0)),
+                "kd_linear_px_512": mean(v.iter().map(|p| p.1)),
+            }),
+        );
+    }
+    json!({
+        "clips": rs.len(),
+        "frames_per_clip": mean(rs.iter().map(|r| r.frames as f64)),
+        "primitives_per_clip": mean(rs.iter().map(|r| r.segments as f64)),
+        "params_program": mean(rs.iter().map(|r| r.params_program as f64)),
+        "params_raw": mean(rs.iter().map(|r| r.params_raw as f64)),
+        "params_ratio": if sum_raw > 0 { sum_prog as f64 / sum_raw as f64 } else { f64::NAN },
+        "kd_px_512": mean(rs.iter().map(|r| r.kd_512)),
+        "max_jump_raw_px_512": mean(rs.iter().map(|r| r.jump_raw_512)),
+        "max_jump_program_px_512": mean(rs.iter().map(|r| r.jump_program_512)),
+        "interpolation": interp,
+        "synthesis_seconds_per_clip": mean(rs.iter().map(|r| r.seconds)),
+    })
+}
+
+fn num(v: &Value, path: &[&str]) -> f64 {
+    let mut cur = v;
+    for p in path {
+        cur = &cur[*p];
+    }
+    cur.as_f64().unwrap_or(f64::NAN)
+}
+
+fn markdown(report: &Value, steps: &[usize]) -> String {
+    let mut s = String::new();
+    let interp_head: Vec<String> = steps
+        .iter()
+        .map(|k| format!("interp ×{k} prog / lin"))
+        .collect();
+    s.push_str(&format!(
+        "| action | clips | frames | primitives | params prog / raw (ratio) | KD px@512 | max jump raw / prog | {} |\n",
+        interp_head.join(" | ")
+    ));
+    s.push_str(&format!(
+        "|---|---:|---:|---:|---:|---:|---:|{}\n",
+        "---:|".repeat(steps.len())
+    ));
+    let mut rows: Vec<(String, &Value)> = Vec::new();
+    if let Some(m) = report["by_action"].as_object() {
+        for (k, v) in m {
+            rows.push((k.clone(), v));
+        }
+    }
+    rows.push(("**overall**".into(), &report["overall"]));
+    for (name, v) in rows {
+        let interp: Vec<String> = steps
+            .iter()
+            .map(|k| {
+                let key = format!("x{k}");
+                format!(
+                    "{:.2} / {:.2}",
+                    num(v, &["interpolation", &key, "kd_program_px_512"]),
+                    num(v, &["interpolation", &key, "kd_linear_px_512"])
+                )
+            })
+            .collect();
+        s.push_str(&format!(
+            "| {name} | {} | {:.1} | {:.2} | {:.0} / {:.0} ({:.3}) | {:.2} | {:.1} / {:.1} | {} |\n",
+            num(v, &["clips"]),
+            num(v, &["frames_per_clip"]),
+            num(v, &["primitives_per_clip"]),
+            num(v, &["params_program"]),
+            num(v, &["params_raw"]),
+            num(v, &["params_ratio"]),
+            num(v, &["kd_px_512"]),
+            num(v, &["max_jump_raw_px_512"]),
+            num(v, &["max_jump_program_px_512"]),
+            interp.join(" | ")
+        ));
+    }
+    s
+}
+
+/// Runs the evaluation and writes the report.
+pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
+    let path = match &a.data {
+        Some(p) => p.clone(),
+        None => mp_geom::paths::data_file(PennAction::TRAIN_FILE)
+            .context("Penn Action not found: pass --data or set MP_DATA_DIR")?,
+    };
+    let pa = PennAction::open(&path).with_context(|| format!("opening {}", path.display()))?;
+    let base = SynthParams {
+        lambda: if a.adaptive {
+            Lambda::adaptive()
+        } else {
+            Lambda::fixed(a.lambda)
+        },
+        max_segment_frames: a.window,
+        unobserved_joints: UnobservedJoints::Ignore,
+        ..SynthParams::default()
+    };
+    base.validate()?;
+    let mut per_action: BTreeMap<&str, usize> = BTreeMap::new();
+    let clips: Vec<usize> = pa
+        .clips()
+        .iter()
+        .filter(|c| a.action.is_empty() || a.action.contains(&c.action))
+        .filter(|c| {
+            let n = per_action.entry(c.action.as_str()).or_insert(0);
+            *n += 1;
+            a.max_clips_per_action.is_none_or(|m| *n <= m)
+        })
+        .map(|c| c.index)
+        .collect();
+    let bar = ProgressBar::new(clips.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} clips [{elapsed_precise} < {eta_precise}] {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let t0 = Instant::now();
+    let results: Vec<(usize, anyhow::Result<ClipResult>)> = clips
+        .par_iter()
+        .map(|&i| {
+            let r = run_clip(&pa, i, &base, &a.steps);
+            bar.inc(1);
+            (i, r)
+        })
+        .collect();
+    bar.finish_with_message("done");
+    let wall = t0.elapsed().as_secs_f64();
+    let mut ok: Vec<ClipResult> = Vec::new();
+    let mut failed = Vec::new();
+    for (i, r) in results {
+        match r {
+            Ok(c) => ok.push(c),
+            Err(e) => {
+                let id = pa
+                    .clip_info(i)
+                    .map(|c| c.clip_id.clone())
+                    .unwrap_or_default();
+                failed.push(json!({ "clip": i, "clip_id": id, "error": format!("{e:#}") }));
+            }
+        }
+    }
+    let all: Vec<&ClipResult> = ok.iter().collect();
+    let mut by_action = serde_json::Map::new();
+    let mut names: Vec<&str> = ok.iter().map(|c| c.action.as_str()).collect();
+    names.sort();
+    names.dedup();
+    for name in names {
+        let rs: Vec<&ClipResult> = ok.iter().filter(|c| c.action == name).collect();
+        by_action.insert(name.to_string(), summary(&rs, &a.steps));
+    }
+    let report = json!({
+        "data": path.display().to_string(),
+        "params": serde_json::to_value(&base)?,
+        "distances": "pixels of a 512-px frame (px · 512 / max(H, W) of each clip); means over clips",
+        "wall_seconds": wall,
+        "threads": rayon::current_num_threads(),
+        "overall": summary(&all, &a.steps),
+        "by_action": by_action,
+        "failed": failed,
+    });
+    std::fs::write(&a.out, serde_json::to_string_pretty(&report)?)
+        .with_context(|| format!("writing {}", a.out.display()))?;
+    let md = markdown(&report, &a.steps);
+    println!("{md}");
+    if let Some(m) = &a.markdown {
+        std::fs::write(m, &md).with_context(|| format!("writing {}", m.display()))?;
+    }
+    eprintln!(
+        "{} clips ({} failed) in {wall:.1} s → {}",
+        ok.len(),
+        report["failed"].as_array().map_or(0, Vec::len),
+        a.out.display()
+    );
+    Ok(())
+}
