@@ -15,7 +15,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_concrete::{
-    interpolation_experiment, program_stats, synthesize, Lambda, Scale, SynthParams, Transition,
+    interpolation_experiment, program_stats, InterpParams, synthesize, Lambda, Scale, SynthParams, Transition,
     UnobservedJoints,
 };
 use mp_geom::io::datasets::PennAction;
@@ -49,6 +49,12 @@ pub struct EvalConcreteArgs {
     /// Subsampling factors of the interpolation experiment.
     #[arg(long, value_delimiter = ',', default_value = "2,4,8")]
     pub steps: Vec<usize>,
+    /// Interpolation: keep λ as is on the subsampled track (default: divide it by the factor).
+    #[arg(long)]
+    pub interp_same_lambda: bool,
+    /// Interpolation: continue primitives between segments instead of blending.
+    #[arg(long)]
+    pub interp_extrapolate: bool,
     /// Also write a Markdown table to this file.
     #[arg(long)]
     pub markdown: Option<PathBuf>,
@@ -73,7 +79,7 @@ fn run_clip(
     pa: &PennAction,
     i: usize,
     base: &SynthParams,
-    steps: &[usize],
+    a: &EvalConcreteArgs,
 ) -> anyhow::Result<ClipResult> {
     let info = pa.clip_info(i)?;
     let track = pa.clip(i)?;
@@ -88,9 +94,19 @@ fn run_clip(
     let seconds = t0.elapsed().as_secs_f64();
     let st = program_stats(&program, &track)?;
     let mut interp = BTreeMap::new();
-    for &s in steps {
+    for &s in &a.steps {
+        let ip = InterpParams {
+            step: s,
+            synth: params.clone(),
+            transition: if a.interp_extrapolate {
+                Transition::Extrapolate
+            } else {
+                Transition::Blend
+            },
+            lambda_per_time: !a.interp_same_lambda,
+        };
         // Short clips (fewer than 2 kept frames or nothing to score) are skipped for that factor.
-        if let Ok(r) = interpolation_experiment(&track, s, &params, Transition::Blend) {
+        if let Ok(r) = interpolation_experiment(&track, &ip) {
             interp.insert(s, (r.kd_program * to512, r.kd_linear * to512));
         }
     }
@@ -250,7 +266,7 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
     let results: Vec<(usize, anyhow::Result<ClipResult>)> = clips
         .par_iter()
         .map(|&i| {
-            let r = run_clip(&pa, i, &base, &a.steps);
+            let r = run_clip(&pa, i, &base, a);
             bar.inc(1);
             (i, r)
         })
@@ -283,6 +299,11 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
     let report = json!({
         "data": path.display().to_string(),
         "params": serde_json::to_value(&base)?,
+        "interpolation": {
+            "steps": a.steps,
+            "lambda_per_time": !a.interp_same_lambda,
+            "transition": if a.interp_extrapolate { "extrapolate" } else { "blend" },
+        },
         "distances": "pixels of a 512-px frame (px · 512 / max(H, W) of each clip); means over clips",
         "wall_seconds": wall,
         "threads": rayon::current_num_threads(),

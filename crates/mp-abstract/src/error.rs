@@ -6,6 +6,23 @@ pub enum AbstractError {
     /// An error from the geometry layer.
     #[error(transparent)]
     Geom(#[from] mp_geom::GeomError),
+    /// An error from concrete-program synthesis or execution.
+    #[error(transparent)]
+    Concrete(#[from] mp_concrete::ConcreteError),
+    /// An I/O error on a named file.
+    #[error("{path}: {source}")]
+    Io {
+        path: std::path::PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// JSON that does not deserialize to an abstract program.
+    #[error("{path}: JSON: {source}")]
+    Json {
+        path: std::path::PathBuf,
+        #[source]
+        source: serde_json::Error,
+    },
     /// The input holds no primitives.
     #[error("no primitives: {0}")]
     Empty(String),

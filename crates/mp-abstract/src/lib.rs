@@ -14,10 +14,12 @@ pub mod error;
 pub mod exec;
 pub mod loops;
 pub mod model;
+pub mod pipeline;
 pub mod repetition;
 pub mod synth;
 
 pub use error::{AbstractError, Result};
 pub use loops::{detect_loops, DetectedLoop, LoopParams};
 pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
+pub use pipeline::{analyze, predict, read_program, write_program, AbstractParams, Analysis, PredictParams, Prediction};
 pub use repetition::RepetitiveInterval;

@@ -13,6 +13,8 @@
 //! (`Σ_{i,j}` the sample covariance of group `i`, joint `j`, over the joint's
 //! `[start, mid, end]` vector; `J` joints; `unit_scale` the track's units per
 //! reference pixel of a 512-px frame, which makes the threshold unit-free).
+//! Windows start at the table size `W_k` and, for short bouts, also at two
+//! iterations (`LoopParams::short_window_iterations`).
 //! A window whose score is below `threshold` is a loop; it grows one primitive
 //! at a time while the score holds. Candidates of all body sizes are then
 //! ranked by the number of primitives they cover (ties: smaller body first)
@@ -44,6 +46,11 @@ pub struct LoopParams {
     /// Minimum path length (reference px) of the mean loop body for its most
     /// moving joint (default 10); loops that do not move are dropped.
     pub min_body_motion_px: f64,
+    /// The window table suits long recordings; short bouts (a few repetitions)
+    /// never fill it. When set, a second pass slides windows of this many
+    /// iterations (`k·n` primitives) as well; candidates of both passes compete
+    /// in the selection. Default `Some(2)`; `None` keeps only the table.
+    pub short_window_iterations: Option<usize>,
 }
 
 impl Default for LoopParams {
@@ -55,6 +62,7 @@ impl Default for LoopParams {
             unit_scale: 1.0,
             min_iterations: 2,
             min_body_motion_px: 10.0,
+            short_window_iterations: Some(2),
         }
     }
 }
@@ -276,12 +284,12 @@ fn body_motion(prims: &[DetPrim], start: usize, end: usize, k: usize) -> f64 {
 fn candidates_for(
     prims: &[DetPrim],
     k: usize,
+    w: usize,
     params: &LoopParams,
     joints: usize,
     dim: usize,
 ) -> Vec<DetectedLoop> {
     let n = prims.len();
-    let w = params.window(k);
     let mut out = Vec::new();
     let mut i = 0;
     while i + w <= n {
@@ -330,7 +338,16 @@ pub fn detect_loops(prims: &[DetPrim], params: &LoopParams) -> Result<Vec<Detect
         )));
     }
     let mut cands: Vec<DetectedLoop> = (1..=params.max_body)
-        .flat_map(|k| candidates_for(prims, k, params, joints, dim))
+        .flat_map(|k| {
+            let mut c = candidates_for(prims, k, params.window(k), params, joints, dim);
+            if let Some(n) = params.short_window_iterations {
+                let w = (k * n).min(params.window(k));
+                if w < params.window(k) {
+                    c.extend(candidates_for(prims, k, w, params, joints, dim));
+                }
+            }
+            c
+        })
         .collect();
     cands.sort_by(|a, b| {
         (b.end - b.start)

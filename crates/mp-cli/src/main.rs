@@ -3,7 +3,10 @@
 //! A thin layer: each subcommand parses its arguments, calls library crates
 //! and prints or writes the result. Subcommands live in their own modules.
 
+mod cmd_abstract;
 mod cmd_concrete;
+mod cmd_demo;
+mod cmd_pose;
 
 use clap::{Parser, Subcommand};
 
@@ -17,20 +20,47 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Extract keypoints from a video (BlazePose or MoveNet) into a track.
+    Extract(cmd_pose::ExtractArgs),
+    /// Draw a track's skeleton on its video: contact sheet (.png) or video (.mp4).
+    Overlay(cmd_pose::OverlayArgs),
     /// Fit a concrete program to a track (DP segmentation over primitives).
     Fit(cmd_concrete::FitArgs),
     /// Render a concrete program as a track, at any frame rate.
     Execute(cmd_concrete::ExecuteArgs),
     /// Size and accuracy of a program against its track.
     Stats(cmd_concrete::StatsArgs),
+    /// Abstract program of a track: loops of probabilistic primitives.
+    Abstract(cmd_abstract::AbstractArgs),
+    /// Repetitive intervals of a track, with iterations and counts.
+    Loops(cmd_abstract::LoopsArgs),
+    /// Change a loop's iteration count and execute (or write) the edited program.
+    Extend(cmd_abstract::ExtendArgs),
+    /// Stochastic execution of an abstract program with a seed.
+    Sample(cmd_abstract::SampleArgs),
+    /// Predict future frames of a track.
+    Predict(cmd_abstract::PredictArgs),
+    /// Write the procedural performer (jumping jacks, squats, arm circles, a swing) as a track.
+    Performer(cmd_demo::PerformerArgs),
+    /// The whole pipeline on the procedural performer (the embedded default).
+    Demo(cmd_demo::DemoArgs),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result: anyhow::Result<()> = match cli.command {
+        Command::Extract(a) => cmd_pose::extract_cmd(&a),
+        Command::Overlay(a) => cmd_pose::overlay_cmd(&a),
         Command::Fit(a) => cmd_concrete::fit(&a),
         Command::Execute(a) => cmd_concrete::execute(&a),
         Command::Stats(a) => cmd_concrete::stats(&a),
+        Command::Abstract(a) => cmd_abstract::abstract_cmd(&a),
+        Command::Loops(a) => cmd_abstract::loops_cmd(&a),
+        Command::Extend(a) => cmd_abstract::extend_cmd(&a),
+        Command::Sample(a) => cmd_abstract::sample_cmd(&a),
+        Command::Predict(a) => cmd_abstract::predict_cmd(&a),
+        Command::Performer(a) => cmd_demo::performer_cmd(&a),
+        Command::Demo(a) => cmd_demo::demo_cmd(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -6,13 +6,44 @@
 //! Only dropped frames up to the last kept frame are scored (both methods
 //! interpolate there; neither extrapolates), and only observed
 //! (confidence > `min_confidence`) joints.
+//!
+//! The fit error of a segment is a sum over its frames, so on a track kept
+//! every `step` frames the same λ would buy `step` times longer segments.
+//! With [`InterpParams::lambda_per_time`] (default) λ (fixed, or the
+//! adaptive clamps) is divided by `step`, which keeps the trade-off between
+//! error and number of segments per second of motion.
 
 use mp_geom::Track;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{ConcreteError, Result};
 use crate::exec::Transition;
-use crate::synth::{synthesize, SynthParams};
+use crate::synth::{synthesize, Lambda, SynthParams};
+
+/// Parameters of [`interpolation_experiment`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InterpParams {
+    /// Keep every `step`-th frame (≥ 2).
+    pub step: usize,
+    /// Synthesis on the kept frames.
+    pub synth: SynthParams,
+    /// Between-segment behaviour when executing.
+    pub transition: Transition,
+    /// Divide λ by `step` (see the module docs). Default true.
+    pub lambda_per_time: bool,
+}
+
+impl InterpParams {
+    /// Defaults for one factor: default synthesis, blend, λ per time.
+    pub fn new(step: usize) -> Self {
+        InterpParams {
+            step,
+            synth: SynthParams::default(),
+            transition: Transition::Blend,
+            lambda_per_time: true,
+        }
+    }
+}
 
 /// Result of [`interpolation_experiment`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -32,12 +63,9 @@ pub struct InterpolationResult {
 /// Runs the experiment for one track and one factor (`step ≥ 2`).
 ///
 /// Errors when fewer than 2 frames are kept or nothing can be scored.
-pub fn interpolation_experiment(
-    track: &Track,
-    step: usize,
-    params: &SynthParams,
-    transition: Transition,
-) -> Result<InterpolationResult> {
+pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<InterpolationResult> {
+    let step = ip.step;
+    let transition = ip.transition;
     if step < 2 {
         return Err(ConcreteError::param(
             "step",
@@ -52,7 +80,25 @@ pub fn interpolation_experiment(
             track.n_frames()
         )));
     }
-    let program = synthesize(&kept, params)?;
+    let mut params = ip.synth.clone();
+    if ip.lambda_per_time {
+        let k = step as f64;
+        params.lambda = match params.lambda {
+            Lambda::Fixed { lambda_ref } => Lambda::Fixed {
+                lambda_ref: lambda_ref / k,
+            },
+            Lambda::Adaptive {
+                window_frames,
+                min_ref,
+                max_ref,
+            } => Lambda::Adaptive {
+                window_frames: window_frames.div_ceil(step).max(1),
+                min_ref: min_ref / k,
+                max_ref: max_ref / k,
+            },
+        };
+    }
+    let program = synthesize(&kept, &params)?;
     let last = (n_kept - 1) * step;
     let dropped: Vec<usize> = (0..=last).filter(|f| f % step != 0).collect();
     let frames: Vec<f64> = dropped.iter().map(|&f| f as f64 / step as f64).collect();

@@ -37,11 +37,12 @@ pub mod interp;
 pub mod program;
 pub mod stats;
 pub mod synth;
+pub mod synthetic;
 
 pub use dp::{segment_brute_force, segment_dp, CostTable, Segmentation};
 pub use error::{ConcreteError, ParseError, Result};
 pub use exec::{ExecParams, Transition};
-pub use interp::{interpolation_experiment, InterpolationResult};
+pub use interp::{interpolation_experiment, InterpParams, InterpolationResult};
 pub use program::{Program, Segment};
 pub use stats::{program_stats, ProgramStats};
 pub use synth::{

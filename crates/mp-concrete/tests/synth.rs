@@ -2,7 +2,7 @@
 
 use mp_concrete::{
     interpolation_experiment, program_stats, synthesize, synthesize_detailed, ConcreteError,
-    ExecParams, Lambda, Program, Scale, Segment, SynthParams, Transition, UnobservedJoints,
+    ExecParams, InterpParams, Lambda, Program, Scale, Segment, SynthParams, Transition, UnobservedJoints,
 };
 use mp_geom::{Primitive, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
@@ -252,13 +252,17 @@ fn interpolation_beats_linear_on_circles() {
     };
     let track = p.execute().unwrap();
     for step in [2, 4, 8] {
-        let r = interpolation_experiment(&track, step, &params_px(), Transition::Blend).unwrap();
+        let ip = InterpParams {
+            synth: params_px(),
+            ..InterpParams::new(step)
+        };
+        let r = interpolation_experiment(&track, &ip).unwrap();
         assert_eq!(r.n_scored, 40 - 40 / step);
         assert!(r.kd_program < 1e-6, "×{step}: {r:?}");
         assert!(r.kd_linear > 0.01, "×{step}: {r:?}");
     }
-    assert!(interpolation_experiment(&track, 1, &params_px(), Transition::Blend).is_err());
-    assert!(interpolation_experiment(&track, 41, &params_px(), Transition::Blend).is_err());
+    assert!(interpolation_experiment(&track, &InterpParams::new(1)).is_err());
+    assert!(interpolation_experiment(&track, &InterpParams::new(41)).is_err());
 }
 
 fn track_of(t: usize, j: usize) -> Track {

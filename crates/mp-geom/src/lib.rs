@@ -9,6 +9,8 @@
 //! * [`fit`]: primitive fitting (stationary, line, circle, cubic spline) in 2D
 //!   and 3D; each fit reports its error and executes at fractional time.
 //! * [`metrics`]: KD, PCK, MPJPE, PA-MPJPE, DTW, max adjacent-frame jump.
+//! * [`performer`]: a procedurally generated performer (jumping jacks,
+//!   squats, arm circles, golf swing) with ground-truth repetitions.
 
 pub mod error;
 pub mod fit;

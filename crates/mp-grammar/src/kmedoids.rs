@@ -33,7 +33,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{GrammarError, Result};
 
-/// A symmetric dissimilarity matrix with zero diagonal.
+/// A symmetric dissimilarity matrix with zero diagonal (only `get(i, j)` with
+/// the candidate medoid first is read in the inner loops, which lets row-major
+/// storage be read row by row).
 pub trait Dissimilarity {
     /// Number of objects.
     fn len(&self) -> usize;
@@ -42,6 +44,10 @@ pub trait Dissimilarity {
     /// True when there is no object.
     fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+    /// Row `i` as a contiguous slice, when the storage has one (fast path).
+    fn row(&self, _i: usize) -> Option<&[f64]> {
+        None
     }
 }
 
@@ -84,6 +90,10 @@ impl Dissimilarity for DenseMatrix {
     #[inline]
     fn get(&self, i: usize, j: usize) -> f64 {
         self.data[i * self.n + j]
+    }
+    #[inline]
+    fn row(&self, i: usize) -> Option<&[f64]> {
+        self.data.get(i * self.n..(i + 1) * self.n)
     }
 }
 
@@ -363,15 +373,20 @@ impl State {
         if k == 1 {
             let mut total = 0.0;
             for o in 0..n {
-                total += if o == j { 0.0 } else { d.get(o, j) };
+                total += if o == j { 0.0 } else { d.get(j, o) };
             }
             return (0, total - self.loss);
         }
         delta.clear();
         delta.extend_from_slice(removal);
         let mut acc = 0.0;
+        let row = d.row(j);
         for o in 0..n {
-            let doj = if o == j { 0.0 } else { d.get(o, j) };
+            let doj = match row {
+                Some(r) => r[o],
+                None if o == j => 0.0,
+                None => d.get(j, o),
+            };
             let nr = self.near[o];
             if doj < nr.dist {
                 acc += doj - nr.dist;
@@ -398,8 +413,13 @@ impl State {
         self.is_med[j] = true;
         self.medoids[slot] = j;
         let n = self.near.len();
+        let row = d.row(j);
         for o in 0..n {
-            let doj = if o == j { 0.0 } else { d.get(o, j) };
+            let doj = match row {
+                Some(r) => r[o],
+                None if o == j => 0.0,
+                None => d.get(j, o),
+            };
             let nr = self.near[o];
             let sr = self.second[o];
             if nr.slot == slot {

@@ -7,6 +7,7 @@
 //! * [`distance`]: pose distance and segment distance (eq. 1).
 //! * [`kmedoids`]: PAM and FasterPAM from given initial medoids.
 
+pub mod data;
 pub mod distance;
 pub mod error;
 pub mod kmedoids;
@@ -18,3 +19,10 @@ pub mod symbols;
 
 pub use objective::ClusterQuality;
 pub use symbols::{identify_symbols, symbol_name, SymbolParams, SymbolSegment, SymbolString};
+pub mod abl;
+pub mod grammar;
+pub mod sequitur;
+pub mod strings;
+
+pub use abl::{AblParams, AblResult, Alignment, Corpus, Selection};
+pub use grammar::{DescriptionLength, Grammar, Rule, Sym, Tree};

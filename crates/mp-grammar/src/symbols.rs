@@ -40,7 +40,7 @@
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
@@ -72,6 +72,13 @@ pub struct GaParams {
     pub elite: usize,
     /// Probability that a bit is set in the initial population. Default 0.5.
     pub init_cut_probability: f64,
+    /// Run one GA per chunk of this many candidate intervals (at least
+    /// `2 K`), in parallel, and join the results: the paper's hierarchical
+    /// scheme ("split each motion into several subsequences, run the genetic
+    /// algorithm for initial segmentation of each subsequence"); the SA then
+    /// refines the whole motion. `None` = one GA over the whole motion.
+    /// Default `Some(64)` (1,920 frames at the default step).
+    pub chunk_candidates: Option<usize>,
 }
 
 impl Default for GaParams {
@@ -84,6 +91,7 @@ impl Default for GaParams {
             mutation_rate: None,
             elite: 2,
             init_cut_probability: 0.5,
+            chunk_candidates: Some(64),
         }
     }
 }
@@ -100,7 +108,7 @@ pub struct SaParams {
     /// After `iterations`, continue until this many iterations pass without
     /// improvement. Default 200.
     pub patience: usize,
-    /// Hard cap on iterations. Default 20 000.
+    /// Hard cap on iterations. Default 5 000.
     pub max_iterations: usize,
     /// Initial temperature τ (relative change of F); 0 = accept only
     /// improvements (paper). Default 0.
@@ -114,7 +122,7 @@ impl Default for SaParams {
             initial_step_frames: None,
             min_step_frames: 1,
             patience: 200,
-            max_iterations: 20_000,
+            max_iterations: 5_000,
             initial_temperature: 0.0,
         }
     }
@@ -400,15 +408,17 @@ struct Grid {
 }
 
 impl Grid {
-    fn new(t: usize, p: &SymbolParams) -> Self {
+    /// Candidate cuts every `step` frames from `start`, keeping the last
+    /// segment at least `min_segment_frames` long, then `end`.
+    fn new(start: usize, end: usize, p: &SymbolParams) -> Self {
         let step = p.candidate_step_frames;
-        let mut points = vec![0];
-        let mut c = step;
-        while c + p.min_segment_frames <= t {
+        let mut points = vec![start];
+        let mut c = start + step;
+        while c + p.min_segment_frames <= end {
             points.push(c);
             c += step;
         }
-        points.push(t);
+        points.push(end);
         let mut width = 1;
         for a in 0..points.len() {
             let mut b = a + 1;
@@ -427,17 +437,18 @@ impl Grid {
     }
 }
 
-/// Segment-pair distance cache for grid segments.
+/// Segment-pair distance cache for grid segments (values rounded to `f32`,
+/// which halves the memory traffic of the GA's inner loop).
 enum PairCache {
     Dense {
-        cells: Vec<AtomicU64>,
+        cells: Vec<AtomicU32>,
     },
     Sparse {
         shards: Vec<std::sync::Mutex<HashMap<u64, f64, FxBuild>>>,
     },
 }
 
-const SET: u64 = 1 << 63;
+const SET: u32 = 1 << 31;
 const DENSE_LIMIT: usize = 1 << 26;
 
 impl PairCache {
@@ -445,7 +456,7 @@ impl PairCache {
         let cells = n_ids.saturating_mul(n_ids.saturating_sub(1)) / 2;
         if cells <= DENSE_LIMIT {
             PairCache::Dense {
-                cells: (0..cells).map(|_| AtomicU64::new(0)).collect(),
+                cells: (0..cells).map(|_| AtomicU32::new(0)).collect(),
             }
         } else {
             PairCache::Sparse {
@@ -464,11 +475,11 @@ impl PairCache {
             PairCache::Dense { cells } => {
                 let v = cells[idx].load(Ordering::Relaxed);
                 if v & SET != 0 {
-                    return f64::from_bits(v & !SET);
+                    return f32::from_bits(v & !SET) as f64;
                 }
-                let d = f();
+                let d = f() as f32;
                 cells[idx].store(d.to_bits() | SET, Ordering::Relaxed);
-                d
+                d as f64
             }
             PairCache::Sparse { shards } => {
                 let key = idx as u64;
@@ -481,7 +492,7 @@ impl PairCache {
                 {
                     return d;
                 }
-                let d = f();
+                let d = f() as f32 as f64;
                 if let Ok(mut m) = shard.lock() {
                     m.insert(key, d);
                 }
@@ -494,6 +505,8 @@ impl PairCache {
 /// Everything a fitness evaluation needs (shared by all threads).
 struct Problem<'a> {
     feat: &'a PoseFeatures,
+    /// Frames covered by the grid (the `T` of the objective).
+    span_frames: usize,
     params: &'a SymbolParams,
     grid: Grid,
     cache: PairCache,
@@ -504,7 +517,6 @@ struct Problem<'a> {
 struct Scored {
     f: f64,
     bounds: Vec<usize>,
-    clustering: Clustering,
 }
 
 impl Problem<'_> {
@@ -540,16 +552,12 @@ impl Problem<'_> {
             &clustering.medoids,
             &clustering.assignment,
             |i, j| crate::kmedoids::Dissimilarity::get(&m, i, j),
-            self.feat.n_frames(),
+            self.span_frames,
             self.d_max,
             self.params.omega,
         );
         let bounds = gb.iter().map(|&g| pts[g]).collect();
-        Ok(Scored {
-            f: q.f,
-            bounds,
-            clustering,
-        })
+        Ok(Scored { f: q.f, bounds })
     }
 
     /// Makes a genome satisfy the length and count constraints.
@@ -641,25 +649,7 @@ pub fn score_segmentation(
             n,
         ));
     }
-    let segs: Vec<Segment> = bounds
-        .windows(2)
-        .map(|w| Segment::new(w[0], w[1]))
-        .collect();
-    let m = DenseMatrix::from_fn(n, |i, j| {
-        features.segment_distance_unchecked(segs[i], segs[j])
-    });
-    let c = params.kmedoids.fit(&m, &first_k(params.k))?;
-    let lengths: Vec<usize> = segs.iter().map(|s| s.len()).collect();
-    let q = evaluate(
-        &lengths,
-        &c.medoids,
-        &c.assignment,
-        |i, j| crate::kmedoids::Dissimilarity::get(&m, i, j),
-        t,
-        features.max_pose_distance(),
-        params.omega,
-    );
-    Ok((c, q))
+    cluster_bounds(features, bounds, params, features.max_pose_distance())
 }
 
 /// Identifies `K` terminal symbols in a motion (GA then SA; see the module
@@ -682,7 +672,7 @@ pub fn identify_symbols(features: &PoseFeatures, params: &SymbolParams) -> Resul
             t,
         ));
     }
-    let grid = Grid::new(t, p);
+    let grid = Grid::new(0, t, p);
     if grid.n_candidates() + 1 < p.k {
         return Err(GrammarError::too_short(
             format!(
@@ -697,28 +687,95 @@ pub fn identify_symbols(features: &PoseFeatures, params: &SymbolParams) -> Resul
     let t0 = Instant::now();
     let d_max = features.max_pose_distance();
     stats.seconds_dmax = t0.elapsed().as_secs_f64();
-    let n_ids = grid.points.len() * grid.width;
-    let problem = Problem {
-        feat: features,
-        params: p,
-        cache: PairCache::new(n_ids),
-        grid,
-        d_max,
-    };
-    let mut rng = ChaCha8Rng::seed_from_u64(p.seed);
 
-    // ---- GA
+    // ---- GA, per chunk of the candidate grid (the paper's hierarchical scheme)
     let t1 = Instant::now();
-    let best = run_ga(&problem, &mut rng, &mut stats)?;
+    let intervals = grid.points.len() - 1;
+    let per_chunk = p.ga.chunk_candidates.map_or(intervals, |c| c.max(2 * p.k));
+    let n_chunks = (intervals / per_chunk.max(1)).max(1);
+    let edges: Vec<usize> = (0..=n_chunks)
+        .map(|j| grid.points[j * intervals / n_chunks])
+        .collect();
+    let chunk_results: Vec<Result<(Scored, SearchStats)>> = (0..n_chunks)
+        .into_par_iter()
+        .map(|ci| {
+            let g = Grid::new(edges[ci], edges[ci + 1], p);
+            let n_ids = g.points.len() * g.width;
+            let problem = Problem {
+                feat: features,
+                span_frames: edges[ci + 1] - edges[ci],
+                params: p,
+                cache: PairCache::new(n_ids),
+                grid: g,
+                d_max,
+            };
+            let mut rng = ChaCha8Rng::seed_from_u64(p.seed);
+            rng.set_stream(ci as u64 + 1);
+            let mut st = SearchStats::default();
+            let best = run_ga(&problem, &mut rng, &mut st)?;
+            Ok((best, st))
+        })
+        .collect();
+    let mut bounds = vec![0usize];
+    for r in chunk_results {
+        let (best, st) = r?;
+        stats.ga_generations = stats.ga_generations.max(st.ga_generations);
+        stats.ga_evaluations += st.ga_evaluations;
+        bounds.extend_from_slice(&best.bounds[1..]);
+    }
+    let (clustering, quality) = cluster_bounds(features, &bounds, p, d_max)?;
+    stats.ga_best_f = quality.f;
     stats.seconds_ga = t1.elapsed().as_secs_f64();
-    stats.ga_best_f = best.f;
 
-    // ---- SA
+    // ---- SA over the whole motion
     let t2 = Instant::now();
-    let mut sa = Annealer::new(features, p, d_max, &best.bounds, &best.clustering);
+    let mut rng = ChaCha8Rng::seed_from_u64(p.seed);
+    let mut sa = Annealer::new(features, p, d_max, &bounds, &clustering);
     sa.run(&p.sa, p.candidate_step_frames, &mut rng, &mut stats);
     stats.seconds_sa = t2.elapsed().as_secs_f64();
     Ok(sa.into_symbols(features, p, d_max, stats))
+}
+
+/// Clusters a segmentation from its first `K` segments (distances computed
+/// in parallel) and evaluates `F`.
+fn cluster_bounds(
+    features: &PoseFeatures,
+    bounds: &[usize],
+    p: &SymbolParams,
+    d_max: f64,
+) -> Result<(Clustering, ClusterQuality)> {
+    let n = bounds.len() - 1;
+    let segs: Vec<Segment> = bounds
+        .windows(2)
+        .map(|w| Segment::new(w[0], w[1]))
+        .collect();
+    let rows: Vec<Vec<f64>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            (0..n)
+                .map(|j| {
+                    if j > i {
+                        features.segment_distance_unchecked(segs[i], segs[j])
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let m = DenseMatrix::from_fn(n, |i, j| rows[i][j]);
+    let c = p.kmedoids.fit(&m, &first_k(p.k))?;
+    let lengths: Vec<usize> = segs.iter().map(|s| s.len()).collect();
+    let q = evaluate(
+        &lengths,
+        &c.medoids,
+        &c.assignment,
+        |i, j| crate::kmedoids::Dissimilarity::get(&m, i, j),
+        features.n_frames(),
+        d_max,
+        p.omega,
+    );
+    Ok((c, q))
 }
 
 fn run_ga(problem: &Problem<'_>, rng: &mut ChaCha8Rng, stats: &mut SearchStats) -> Result<Scored> {

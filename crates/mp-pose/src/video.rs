@@ -489,6 +489,139 @@ pub fn open_source(path: impl AsRef<Path>) -> Result<FrameSource> {
     })
 }
 
+/// Encodes RGB frames into a video file through an `ffmpeg` pipe (H.264,
+/// yuv420p; odd sizes are padded by one pixel).
+pub struct VideoWriter {
+    path: PathBuf,
+    width: usize,
+    height: usize,
+    child: Option<Child>,
+    stderr: Option<JoinHandle<String>>,
+    frames: usize,
+}
+
+impl VideoWriter {
+    /// Starts `ffmpeg` writing `path` at `fps`.
+    pub fn create(path: impl AsRef<Path>, width: usize, height: usize, fps: f64) -> Result<Self> {
+        let path = path.as_ref().to_path_buf();
+        if width == 0 || height == 0 {
+            return Err(PoseError::param("size", format!("empty frame size {width}×{height}")));
+        }
+        if !(fps.is_finite() && fps > 0.0) {
+            return Err(PoseError::param("fps", format!("must be > 0, got {fps}")));
+        }
+        let mut child = Command::new("ffmpeg")
+            .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s"])
+            .arg(format!("{width}x{height}"))
+            .arg("-r")
+            .arg(format!("{fps}"))
+            .args([
+                "-i",
+                "-",
+                "-vf",
+                "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                "-c:v",
+                "libx264",
+                "-pix_fmt",
+                "yuv420p",
+                "-movflags",
+                "+faststart",
+            ])
+            .arg(&path)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| spawn_error("ffmpeg", &path, e))?;
+        let stderr = child.stderr.take().map(|mut s| {
+            std::thread::spawn(move || {
+                let mut buf = String::new();
+                let _ = s.read_to_string(&mut buf);
+                buf
+            })
+        });
+        Ok(VideoWriter {
+            path,
+            width,
+            height,
+            child: Some(child),
+            stderr,
+            frames: 0,
+        })
+    }
+
+    /// Appends one frame (`height × width × 3` bytes).
+    pub fn write(&mut self, rgb: &[u8]) -> Result<()> {
+        use std::io::Write;
+        if rgb.len() != self.width * self.height * 3 {
+            return Err(PoseError::BadFrame {
+                frame: self.frames,
+                reason: format!(
+                    "{} bytes, the video is {}×{} RGB",
+                    rgb.len(),
+                    self.width,
+                    self.height
+                ),
+            });
+        }
+        let stdin = self
+            .child
+            .as_mut()
+            .and_then(|c| c.stdin.as_mut())
+            .ok_or_else(|| PoseError::Video {
+                path: self.path.clone(),
+                reason: "encoder already closed".into(),
+            })?;
+        if let Err(e) = stdin.write_all(rgb) {
+            let (_, msg) = self.close_inner();
+            return Err(PoseError::Video {
+                path: self.path.clone(),
+                reason: if msg.is_empty() { e.to_string() } else { msg },
+            });
+        }
+        self.frames += 1;
+        Ok(())
+    }
+
+    fn close_inner(&mut self) -> (bool, String) {
+        let ok = match self.child.take() {
+            Some(mut c) => {
+                drop(c.stdin.take());
+                c.wait().map(|s| s.success()).unwrap_or(false)
+            }
+            None => false,
+        };
+        let msg = self
+            .stderr
+            .take()
+            .and_then(|h| h.join().ok())
+            .unwrap_or_default();
+        (ok, msg.trim().to_string())
+    }
+
+    /// Finishes the file; returns the number of frames written.
+    pub fn finish(mut self) -> Result<usize> {
+        let (ok, msg) = self.close_inner();
+        if !ok {
+            return Err(PoseError::Video {
+                path: self.path.clone(),
+                reason: if msg.is_empty() {
+                    "ffmpeg failed to encode".into()
+                } else {
+                    msg
+                },
+            });
+        }
+        Ok(self.frames)
+    }
+}
+
+impl Drop for VideoWriter {
+    fn drop(&mut self) {
+        let _ = self.close_inner();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -115,9 +115,10 @@ pub(crate) fn check(
 /// shared by line, spline and the angle of circles.
 ///
 /// The normal equations are built in the centred, scaled variable
-/// `τ = (t − t_c) / h` (t_c = weighted mean time, h = largest |t − t_c|), which
+/// `τ = (t − t_c) / h`, which
 /// keeps the 4 × 4 system well conditioned for long segments; the solution is
-/// converted back to powers of `t`.
+/// converted back to powers of `t`. (`t_c` is the middle of the valid time
+/// range and `h` its half-width, so `|τ| ≤ 1`.)
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PolyLs {
     deg: usize,
@@ -156,13 +157,9 @@ impl PolyLs {
         s: &Summary,
         deg: usize,
     ) -> Result<Self> {
-        // weighted mean time and half-width
-        let mut tw = 0.0;
-        for i in 0..n {
-            tw += wt(weights, i) * i as f64;
-        }
-        let tc = tw / s.w_sum;
-        let h = (s.first as f64 - tc).abs().max((s.last as f64 - tc).abs());
+        // centre and half-width of the valid time range: |τ| ≤ 1
+        let tc = 0.5 * (s.first as f64 + s.last as f64);
+        let h = 0.5 * (s.last as f64 - s.first as f64);
         let h = if h > 0.0 { h } else { 1.0 };
         // moments Σ w τ^k, k = 0..2 deg
         let mut mom = [0.0f64; 7];
@@ -288,15 +285,37 @@ impl PolyLs {
         weights: Option<&[f64]>,
         mut f: impl FnMut(usize, [f64; 4]),
     ) {
-        let (n, d) = points.dim();
-        for k in 0..d {
-            let mut rhs = [0.0f64; 4];
-            for i in 0..n {
+        let d = points.ncols();
+        if d <= 4 {
+            // one pass over the rows for all axes
+            let mut rhs = [[0.0f64; 4]; 4];
+            for (i, row) in points.outer_iter().enumerate() {
                 let w = wt(weights, i);
                 if w == 0.0 {
                     continue;
                 }
-                self.accumulate(&mut rhs, i, w, points[[i, k]]);
+                let tau = self.tau(i);
+                for (r, &y) in rhs.iter_mut().zip(row.iter()) {
+                    let mut p = w * y;
+                    for v in r.iter_mut().take(self.deg + 1) {
+                        *v += p;
+                        p *= tau;
+                    }
+                }
+            }
+            for (k, r) in rhs.iter().enumerate().take(d) {
+                f(k, self.solve(r));
+            }
+            return;
+        }
+        for k in 0..d {
+            let mut rhs = [0.0f64; 4];
+            for (i, &y) in points.column(k).iter().enumerate() {
+                let w = wt(weights, i);
+                if w == 0.0 {
+                    continue;
+                }
+                self.accumulate(&mut rhs, i, w, y);
             }
             f(k, self.solve(&rhs));
         }

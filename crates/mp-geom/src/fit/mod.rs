@@ -219,30 +219,69 @@ pub(crate) fn residual_sums(
     if !shape_matches(primitive, d) || weights.is_some_and(|w| w.len() != n) {
         return None;
     }
-    let mut stack = [0.0f64; 8];
-    let mut heap = Vec::new();
-    let buf: &mut [f64] = if d <= stack.len() {
-        &mut stack[..d]
-    } else {
-        heap.resize(d, 0.0);
-        &mut heap
-    };
-    let mut sum = 0.0;
-    let mut sum2 = 0.0;
-    for (i, row) in points.outer_iter().enumerate() {
-        let w = input::wt(weights, i);
-        if w == 0.0 {
-            continue;
+    // One loop per kind, so that the per-frame evaluation is inlined.
+    #[inline(always)]
+    fn run(
+        points: ArrayView2<'_, f64>,
+        weights: Option<&[f64]>,
+        mut sq_dist: impl FnMut(f64, ndarray::ArrayView1<'_, f64>) -> f64,
+    ) -> (f64, f64) {
+        let mut sum = 0.0;
+        let mut sum2 = 0.0;
+        for (i, row) in points.outer_iter().enumerate() {
+            let w = input::wt(weights, i);
+            if w == 0.0 {
+                continue;
+            }
+            let dd = sq_dist(i as f64, row);
+            sum += w * dd.sqrt();
+            sum2 += w * dd;
         }
-        primitive.eval_into(i as f64, buf);
-        let mut dd = 0.0;
-        for (a, b) in buf.iter().zip(row.iter()) {
-            dd += (a - b) * (a - b);
-        }
-        sum += w * dd.sqrt();
-        sum2 += w * dd;
+        (sum, sum2)
     }
-    Some((sum, sum2))
+    let sums = match primitive {
+        Primitive::Stationary { point } => run(points, weights, |_, row| {
+            point
+                .iter()
+                .zip(row.iter())
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum()
+        }),
+        Primitive::Line { start, velocity } => run(points, weights, |t, row| {
+            let mut dd = 0.0;
+            for ((s0, v), x) in start.iter().zip(velocity).zip(row.iter()) {
+                let e = s0 + v * t - x;
+                dd += e * e;
+            }
+            dd
+        }),
+        Primitive::Spline { coeffs } => run(points, weights, |t, row| {
+            let mut dd = 0.0;
+            for ([a, b, c, e], x) in coeffs.iter().zip(row.iter()) {
+                let r = ((a * t + b) * t + c) * t + e - x;
+                dd += r * r;
+            }
+            dd
+        }),
+        Primitive::Circle { .. } => {
+            let mut stack = [0.0f64; 8];
+            let mut heap = Vec::new();
+            let buf: &mut [f64] = if d <= stack.len() {
+                &mut stack[..d]
+            } else {
+                heap.resize(d, 0.0);
+                &mut heap
+            };
+            run(points, weights, |t, row| {
+                primitive.eval_into(t, buf);
+                buf.iter()
+                    .zip(row.iter())
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum()
+            })
+        }
+    };
+    Some(sums)
 }
 
 /// Error of `primitive` executed at t = 0..n against `points` (`n × D`),
@@ -443,21 +482,39 @@ pub fn fit_kind(
 /// Diagonal of the bounding box of the valid points.
 fn bbox_diag(points: ArrayView2<'_, f64>, weights: Option<&[f64]>) -> f64 {
     let d = points.ncols();
-    let mut acc = 0.0;
-    for k in 0..d {
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for (i, v) in points.column(k).iter().enumerate() {
-            if input::wt(weights, i) > 0.0 {
-                lo = lo.min(*v);
-                hi = hi.max(*v);
+    if d > 8 {
+        let mut acc = 0.0;
+        for col in points.columns() {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for (i, v) in col.iter().enumerate() {
+                if input::wt(weights, i) > 0.0 {
+                    lo = lo.min(*v);
+                    hi = hi.max(*v);
+                }
+            }
+            if hi >= lo {
+                acc += (hi - lo) * (hi - lo);
             }
         }
-        if hi >= lo {
-            acc += (hi - lo) * (hi - lo);
+        return acc.sqrt();
+    }
+    let mut lo = [f64::INFINITY; 8];
+    let mut hi = [f64::NEG_INFINITY; 8];
+    for (i, row) in points.outer_iter().enumerate() {
+        if input::wt(weights, i) > 0.0 {
+            for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(row.iter()) {
+                *l = l.min(*v);
+                *h = h.max(*v);
+            }
         }
     }
-    acc.sqrt()
+    lo.iter()
+        .zip(&hi)
+        .take(d)
+        .filter(|(l, h)| h >= l)
+        .map(|(l, h)| (h - l) * (h - l))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// Fits every kind in `params.kinds` and returns the best by the selection

@@ -529,9 +529,13 @@ impl Bvh {
         self.joints.iter().position(|j| j.name == name)
     }
 
-    /// Root translation channels of frame `f` (x, y, z; 0 for absent channels).
+    /// Root translation channels of frame `f` (x, y, z; 0 for absent channels);
+    /// None when `f` is outside the motion.
     pub fn root_channels(&self, f: usize) -> Option<[f64; 3]> {
         let root = self.joints.first()?;
+        if f >= self.n_frames() {
+            return None;
+        }
         let row = self.motion.row(f);
         let mut p = [0.0; 3];
         for (k, ch) in root.channels.iter().enumerate() {

@@ -163,6 +163,17 @@ fn read_long(
     if entries.is_empty() {
         return Err(GeomError::format(path, "CSV has a header but no rows"));
     }
+    // Guard against absurd indices that would allocate huge, almost empty arrays.
+    let limit = 100 * entries.len() + 100_000;
+    if max_frame > limit || max_joint > limit {
+        return Err(GeomError::format(
+            path,
+            format!(
+                "frame index {max_frame} / joint index {max_joint} is implausibly large for {} rows",
+                entries.len()
+            ),
+        ));
+    }
     let t = max_frame + 1;
     let j = if numeric {
         match &opts.skeleton {
@@ -245,16 +256,12 @@ fn read_wide(
         return Err(GeomError::format(path, "wide CSV has no joint columns"));
     }
     let d = if has_z { 3 } else { 2 };
-    for ji in 0..names.len() {
-        for axis in 0..d {
+    for (ji, name) in names.iter().enumerate() {
+        for (axis, axis_name) in ["x", "y", "z"].iter().enumerate().take(d) {
             if !roles.contains(&Some((ji, axis))) {
                 return Err(GeomError::format(
                     path,
-                    format!(
-                        "joint `{}` lacks its `_{}` column",
-                        names[ji],
-                        ["x", "y", "z"][axis]
-                    ),
+                    format!("joint `{name}` lacks its `_{axis_name}` column"),
                 ));
             }
         }

@@ -121,7 +121,7 @@ pub fn track_from_npz(z: &Npz) -> Result<Track> {
         let mut bones = Vec::new();
         if z.contains("bones") {
             let b = z.array("bones")?;
-            if b.len() > 0 {
+            if !b.is_empty() {
                 b.expect_shape("bones", &[None, Some(2)])?;
             }
             let b = b.to_i64()?;

@@ -471,7 +471,7 @@ impl Npz {
         let mut file = zip
             .by_name(&member)
             .map_err(|e| GeomError::format(&source, format!("cannot open member: {e}")))?;
-        let mut bytes = Vec::with_capacity(usize::try_from(file.size()).unwrap_or(0).min(1 << 30));
+        let mut bytes = Vec::with_capacity(usize::try_from(file.size()).unwrap_or(0).min(1 << 28));
         file.read_to_end(&mut bytes)
             .map_err(|e| GeomError::format(&source, format!("corrupt or truncated member: {e}")))?;
         NpyArray::from_bytes(&bytes, &source)

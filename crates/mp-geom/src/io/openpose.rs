@@ -177,7 +177,7 @@ pub fn openpose_from_frames(
             if kp.is_empty() {
                 continue;
             }
-            if kp.len() % 3 != 0 {
+            if kp.len() / 3 * 3 != kp.len() {
                 return Err(GeomError::format(
                     path,
                     format!("people[{pi}]: {} values is not a multiple of 3", kp.len()),
@@ -304,7 +304,7 @@ pub fn alphapose_from_value(
                     format!("entry {i} (`{id}`) has no numeric `keypoints`"),
                 )
             })?;
-        if kp.len() % 3 != 0 || kp.len() / 3 < 17 {
+        if kp.len() / 3 * 3 != kp.len() || kp.len() / 3 < 17 {
             return Err(GeomError::format(
                 path,
                 format!(

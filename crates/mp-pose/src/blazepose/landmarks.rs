@@ -162,11 +162,7 @@ pub fn refine_with_heatmap(landmarks: &mut [CropLandmark], heatmap: &[f32], para
         return;
     }
     let offset = (params.kernel_size as i64 - 1) / 2;
-    let lim: usize = std::env::var("REFN")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(ch);
-    for (k, lm) in landmarks.iter_mut().enumerate().take(lim) {
+    for (k, lm) in landmarks.iter_mut().enumerate().take(ch) {
         // Truncation toward zero, as in a C++ float-to-int conversion.
         let center_col = (lm.x * hw as f32) as i64;
         let center_row = (lm.y * hh as f32) as i64;

@@ -1,0 +1,46 @@
+//! Detects the repetitions of the procedural performer and prints them next to the ground truth.
+//!
+//! `cargo run --release -p mp-abstract --example performer_loops`
+
+use mp_abstract::{analyze, AbstractParams};
+use mp_geom::performer::{perform, PerformerParams};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let perf = perform(&PerformerParams::default())?;
+    println!("ground truth:");
+    for s in &perf.segments {
+        println!("  {:<12} frames {:>4}..{:<4} reps {}", s.kind.name(), s.frames.start, s.frames.end, s.reps.len());
+    }
+    let a = analyze(&perf.track_2d, &AbstractParams::default())?;
+    println!(
+        "{} frames, {} primitives, unit_scale {:.3}",
+        perf.track_2d.n_frames(),
+        a.prims.len(),
+        a.unit_scale
+    );
+    for i in &a.intervals {
+        println!(
+            "  loop frames {:>4}..{:<4} body {} iterations {} score {:.2}",
+            i.start_frame, i.end_frame, i.body_size, i.iterations, i.score
+        );
+    }
+    if std::env::var("MP_DEBUG").is_ok() {
+        let mut t = 0;
+        for (i, p) in a.prims.iter().enumerate() {
+            println!("  prim {i:>3} frame {t:>4} dur {}", p.duration);
+            t += p.duration;
+        }
+        for k in 1..=4 {
+            for w in [2 * k, 3 * k] {
+                let s: Vec<String> = (0..a.prims.len().saturating_sub(w))
+                    .map(|i| format!("{:.0}", mp_abstract::loops::window_score(&a.prims, i, i + w, k, a.unit_scale).unwrap()))
+                    .collect();
+                println!("k={k} w={w}: {}", s.join(" "));
+            }
+        }
+    }
+    Ok(())
+}
+
+#[allow(dead_code)]
+fn unused() {}

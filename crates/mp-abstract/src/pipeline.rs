@@ -1,0 +1,337 @@
+//! From a track to an abstract program in one call, reading and writing
+//! abstract programs, and prediction by unrolling loops.
+
+use std::path::Path;
+
+use mp_concrete::{synthesize_detailed, Program, SynthParams};
+use mp_geom::{Track, Units};
+use ndarray::Array3;
+use serde::{Deserialize, Serialize};
+
+use crate::dsl;
+use crate::error::{AbstractError, Result};
+use crate::exec::{render, unroll_loop, LoopReplay};
+use crate::loops::{DetectedLoop, LoopParams};
+use crate::model::{AbstractProgram, DetPrim, Stmt};
+use crate::repetition::{intervals, RepetitiveInterval};
+use crate::synth::{synthesize, translate};
+
+/// Parameters of the whole track → abstract-program analysis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct AbstractParams {
+    /// Concrete synthesis (segmentation, fitting, scale rule).
+    pub synth: SynthParams,
+    /// Loop detection; its `unit_scale` is replaced by the one synthesis found for the track.
+    pub loops: LoopParams,
+}
+
+/// Everything the analysis of one track produces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Analysis {
+    /// The concrete program.
+    pub concrete: Program,
+    /// Its deterministic abstract primitives (one per segment).
+    pub prims: Vec<DetPrim>,
+    /// The abstract program (loops rolled up).
+    pub program: AbstractProgram,
+    /// Detected loops (in primitive indices).
+    pub loops: Vec<DetectedLoop>,
+    /// Detected loops as frame intervals with counts.
+    pub intervals: Vec<RepetitiveInterval>,
+    /// Track units per reference pixel used throughout.
+    pub unit_scale: f64,
+}
+
+/// Abstract program from a concrete program (loop detection at the given `unit_scale`).
+pub fn from_concrete(program: &Program, loops: &LoopParams) -> Result<(AbstractProgram, Vec<DetectedLoop>, Vec<DetPrim>)> {
+    let segs: Vec<(usize, Vec<mp_geom::Primitive>)> = program
+        .segments
+        .iter()
+        .map(|s| (s.duration_frames, s.primitives.clone()))
+        .collect();
+    let prims = translate(&segs)?;
+    let (prog, found) = synthesize(&prims, loops, program.fps, program.units.as_str(), program.joints.clone())?;
+    Ok((prog, found, prims))
+}
+
+/// Track → concrete program → abstract program, loops and repetition intervals.
+pub fn analyze(track: &Track, params: &AbstractParams) -> Result<Analysis> {
+    let syn = synthesize_detailed(track, &params.synth)?;
+    let loops = LoopParams {
+        unit_scale: syn.unit_scale,
+        ..params.loops.clone()
+    };
+    let (program, found, prims) = from_concrete(&syn.program, &loops)?;
+    let intervals = intervals(&prims, &found, 0);
+    Ok(Analysis {
+        concrete: syn.program,
+        prims,
+        program,
+        loops: found,
+        intervals,
+        unit_scale: syn.unit_scale,
+    })
+}
+
+/// Reads an abstract program from `.json` or the text form (any other extension).
+pub fn read_program(path: impl AsRef<Path>) -> Result<AbstractProgram> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|source| AbstractError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let prog: AbstractProgram = if path.extension().is_some_and(|e| e == "json") {
+        serde_json::from_str(&text).map_err(|source| AbstractError::Json {
+            path: path.to_path_buf(),
+            source,
+        })?
+    } else {
+        dsl::parse(&text).map_err(|e| match e {
+            AbstractError::Parse { line, column, message } => AbstractError::Parse {
+                line,
+                column,
+                message: format!("{}: {message}", path.display()),
+            },
+            other => other,
+        })?
+    };
+    prog.validate()?;
+    Ok(prog)
+}
+
+/// Writes an abstract program as `.json` or the text form, through a temporary file and a rename.
+pub fn write_program(prog: &AbstractProgram, path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
+    let text = if path.extension().is_some_and(|e| e == "json") {
+        serde_json::to_string_pretty(prog).map_err(|source| AbstractError::Json {
+            path: path.to_path_buf(),
+            source,
+        })?
+    } else {
+        dsl::print(prog)
+    };
+    let tmp = path.with_extension(format!(
+        "{}.tmp",
+        path.extension().and_then(|e| e.to_str()).unwrap_or("out")
+    ));
+    let io = |source| AbstractError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    std::fs::write(&tmp, text).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(io)
+}
+
+/// Parameters of prediction by unrolling loops.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PredictParams {
+    /// Analysis of the observed frames.
+    pub analysis: AbstractParams,
+    /// A loop is used only when the frames observed after its end amount to at
+    /// most this many iteration periods (otherwise the motion has moved on). Default 1.5.
+    pub max_tail_periods: f64,
+    /// The offset between the last observed pose and the unrolled loop decays
+    /// to zero over this many periods. Default 1.
+    pub offset_decay_periods: f64,
+    /// What an unrolled iteration executes. Default [`UnrollSource::LastIteration`].
+    pub source: UnrollSource,
+}
+
+/// What each unrolled iteration of a loop executes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum UnrollSource {
+    /// The concrete primitives of the last observed iteration, repeated.
+    #[default]
+    LastIteration,
+    /// The loop body's mean start/mid/end primitives (the abstract program's deterministic execution).
+    Mean,
+}
+
+impl Default for PredictParams {
+    fn default() -> Self {
+        PredictParams {
+            analysis: AbstractParams::default(),
+            max_tail_periods: 1.5,
+            offset_decay_periods: 1.0,
+            source: UnrollSource::LastIteration,
+        }
+    }
+}
+
+/// The result of [`predict`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prediction {
+    /// The predicted frames (`horizon` frames after the observed ones).
+    pub track: Track,
+    /// The loop that was unrolled, or `None` when no usable loop was found
+    /// (the prediction then holds the last observed pose).
+    pub used: Option<RepetitiveInterval>,
+}
+
+fn prims_start_frame(prims: &[DetPrim], i: usize) -> usize {
+    prims.iter().take(i).map(|p| p.duration).sum()
+}
+
+/// Holds the last observed pose of every joint for `horizon` frames.
+pub fn predict_constant(observed: &Track, horizon: usize) -> Result<Track> {
+    observed.require_frames("prediction", 1)?;
+    let (_, j, d) = observed.positions().dim();
+    let last = observed.n_frames() - 1;
+    let mut pos = Array3::zeros((horizon.max(1), j, d));
+    let mut conf = ndarray::Array2::zeros((horizon.max(1), j));
+    // Last valid position of each joint.
+    for ji in 0..j {
+        let t = (0..=last).rev().find(|&t| observed.confidence()[[t, ji]] > 0.0).unwrap_or(last);
+        for h in 0..horizon.max(1) {
+            for k in 0..d {
+                pos[[h, ji, k]] = observed.positions()[[t, ji, k]];
+            }
+            conf[[h, ji]] = observed.confidence()[[t, ji]];
+        }
+    }
+    let pos = pos.slice_move(ndarray::s![..horizon, .., ..]);
+    let conf = conf.slice_move(ndarray::s![..horizon, ..]);
+    Ok(Track::new(pos, Some(conf), observed.fps(), observed.units(), observed.skeleton().clone())?)
+}
+
+/// Predicts the `horizon` frames after the first `observe` frames of `track`
+/// by unrolling the last detected loop (paper §4.4): the loop body is executed
+/// at its means, in phase with the partial iteration observed after the loop,
+/// and the offset between the last observed pose and the unrolled motion fades
+/// out over `offset_decay_periods`. Without a usable loop the last pose is held.
+pub fn predict(track: &Track, observe: usize, horizon: usize, params: &PredictParams) -> Result<Prediction> {
+    if horizon == 0 {
+        return Err(AbstractError::param("horizon", "must be ≥ 1"));
+    }
+    if observe < 2 || observe > track.n_frames() {
+        return Err(AbstractError::param(
+            "observe",
+            format!("must be in 2..={} (the track's length), got {observe}", track.n_frames()),
+        ));
+    }
+    let obs = track.slice_frames(0, observe)?;
+    let constant = || -> Result<Prediction> {
+        Ok(Prediction {
+            track: predict_constant(&obs, horizon)?,
+            used: None,
+        })
+    };
+    let analysis = match analyze(&obs, &params.analysis) {
+        Ok(a) => a,
+        Err(AbstractError::Empty(_)) => return constant(),
+        Err(e) => return Err(e),
+    };
+    let Some((li, interval)) = analysis
+        .program
+        .stmts
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| matches!(s, Stmt::Loop(_)))
+        .map(|(i, _)| i)
+        .zip(analysis.intervals.iter())
+        .last()
+    else {
+        return constant();
+    };
+    let Stmt::Loop(l) = &analysis.program.stmts[li] else {
+        return constant();
+    };
+    let period = (interval.end_frame - interval.start_frame) as f64 / interval.iterations.max(1) as f64;
+    let tail = observe.saturating_sub(interval.end_frame) as f64;
+    if period <= 0.0 || tail > params.max_tail_periods * period {
+        return constant();
+    }
+    // Unroll enough iterations from the loop's end to cover the tail and the horizon.
+    let needed = tail + horizon as f64;
+    let iters = ((needed / period).ceil() as usize + 1).max(1);
+    let future = match params.source {
+        UnrollSource::Mean => {
+            let mut unrolled = l.clone();
+            unrolled.iterations = iters;
+            unrolled.observed.clear();
+            let prims = unroll_loop(&unrolled, LoopReplay::Mean)?;
+            let fit = mp_geom::fit::FitParams {
+                unit_scale: analysis.unit_scale,
+                ..params.analysis.synth.fit.clone()
+            };
+            render(&prims, &analysis.program, &fit)?
+        }
+        UnrollSource::LastIteration => {
+            let k = interval.body_size;
+            let det = analysis
+                .loops
+                .iter()
+                .find(|d| d.body == k && prims_start_frame(&analysis.prims, d.start) == interval.start_frame)
+                .ok_or_else(|| AbstractError::NotFound("the unrolled loop's primitives".into()))?;
+            // The latest iteration whose length is typical (within 15 % of the median):
+            // the last one often absorbs the frames after the loop.
+            let lens: Vec<usize> = interval.boundaries.windows(2).map(|w| w[1] - w[0]).collect();
+            let mut sorted = lens.clone();
+            sorted.sort_unstable();
+            let median = sorted[sorted.len() / 2] as f64;
+            let it = (0..lens.len())
+                .rev()
+                .find(|&i| (lens[i] as f64 - median).abs() <= 0.15 * median)
+                .unwrap_or(lens.len() - 1);
+            let seg0 = det.start + it * k;
+            let one = &analysis.concrete.segments[seg0..seg0 + k];
+            let mut prog = analysis.concrete.clone();
+            prog.segments = (0..iters + 2).flat_map(|_| one.iter().cloned()).collect();
+            prog.execute()?
+        }
+    };
+    // Phase: the offset into the unrolled motion whose recent frames best match
+    // the last observed frames (mean joint distance over a window of a third of a period).
+    let period_frames = (period.round() as usize).max(1);
+    let m = (period_frames / 3).clamp(1, observe);
+    let (_, j, d) = obs.positions().dim();
+    let mut best = (f64::INFINITY, m);
+    for s0 in m..(m + period_frames).min(future.n_frames().saturating_sub(horizon) + 1) {
+        let mut cost = 0.0;
+        let mut n = 0usize;
+        for q in 0..m {
+            let (fo, fu) = (observe - m + q, s0 - m + q);
+            for ji in 0..j {
+                if obs.confidence()[[fo, ji]] <= 0.0 {
+                    continue;
+                }
+                let mut e = 0.0;
+                for kk in 0..d {
+                    e += (obs.positions()[[fo, ji, kk]] - future.positions()[[fu, ji, kk]]).powi(2);
+                }
+                cost += e.sqrt();
+                n += 1;
+            }
+        }
+        let cost = if n > 0 { cost / n as f64 } else { f64::INFINITY };
+        if cost < best.0 {
+            best = (cost, s0);
+        }
+    }
+    let start = best.1;
+    if future.n_frames() < start + horizon {
+        return constant();
+    }
+    let mut pos = Array3::zeros((horizon, j, d));
+    // Offset between the last observed pose and the unrolled motion at that frame.
+    let last = observe - 1;
+    let anchor = start - 1;
+    let decay = (params.offset_decay_periods * period).max(1.0);
+    for ji in 0..j {
+        let valid = obs.confidence()[[last, ji]] > 0.0;
+        for h in 0..horizon {
+            let w = if valid { (1.0 - (h + 1) as f64 / decay).max(0.0) } else { 0.0 };
+            for kk in 0..d {
+                let off = obs.positions()[[last, ji, kk]] - future.positions()[[anchor, ji, kk]];
+                pos[[h, ji, kk]] = future.positions()[[start + h, ji, kk]] + w * off;
+            }
+        }
+    }
+    let units = obs.units();
+    let track = Track::new(pos, None, obs.fps(), units, obs.skeleton().clone())?;
+    debug_assert!(units != Units::Unitless || d >= 1);
+    Ok(Prediction {
+        track,
+        used: Some(interval.clone()),
+    })
+}

@@ -1,0 +1,231 @@
+//! `mp abstract`, `mp loops`, `mp extend`, `mp sample`, `mp predict`: abstract programs from the command line.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use mp_abstract::dsl::{print_with, PrintOptions};
+use mp_abstract::edit::set_iterations;
+use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};
+use mp_abstract::pipeline::predict_constant;
+use mp_abstract::{analyze, predict, read_program, write_program, AbstractParams, PredictParams};
+use mp_concrete::Scale;
+use mp_geom::io::{read_track, write_track};
+
+/// Options shared by the commands that analyse a track.
+#[derive(Args, Debug, Clone)]
+pub struct AnalysisOpts {
+    /// Largest side of the video frame in pixels (scale = frame / 512); default: from the track's extent.
+    #[arg(long)]
+    pub frame_size: Option<f64>,
+    /// Loop score threshold at the 512-px reference scale.
+    #[arg(long, default_value_t = 8.0)]
+    pub threshold: f64,
+    /// Largest loop-body size tried.
+    #[arg(long, default_value_t = 10)]
+    pub max_body: usize,
+}
+
+impl AnalysisOpts {
+    fn params(&self) -> AbstractParams {
+        let mut p = AbstractParams::default();
+        if let Some(f) = self.frame_size {
+            p.synth.scale = Scale::FrameSize { frame_px: f };
+        }
+        p.loops.threshold = self.threshold;
+        p.loops.max_body = self.max_body;
+        p
+    }
+}
+
+/// Arguments of `mp abstract`.
+#[derive(Args, Debug)]
+pub struct AbstractArgs {
+    /// Input track.
+    pub track: PathBuf,
+    /// Output abstract program: `.json`, or the text form for any other extension.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub opts: AnalysisOpts,
+    /// Do not print the program summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Arguments of `mp loops`.
+#[derive(Args, Debug)]
+pub struct LoopsArgs {
+    /// Input track.
+    pub track: PathBuf,
+    #[command(flatten)]
+    pub opts: AnalysisOpts,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `mp extend`.
+#[derive(Args, Debug)]
+pub struct ExtendArgs {
+    /// Input abstract program.
+    pub program: PathBuf,
+    /// Which loop (0-based, in program order).
+    #[arg(long = "loop", default_value_t = 0)]
+    pub loop_index: usize,
+    /// New number of iterations.
+    #[arg(long)]
+    pub iters: usize,
+    /// Output track; a `.txt`/`.json` name writes the edited program instead.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Arguments of `mp sample`.
+#[derive(Args, Debug)]
+pub struct SampleArgs {
+    /// Input abstract program.
+    pub program: PathBuf,
+    /// Random seed (the same seed gives the same motion).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output track.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Prediction methods.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Hold the last observed pose.
+    Constant,
+    /// Unroll the last detected loop.
+    Loop,
+}
+
+/// Arguments of `mp predict`.
+#[derive(Args, Debug)]
+pub struct PredictArgs {
+    /// Input track.
+    pub track: PathBuf,
+    /// Number of observed frames (from the start).
+    #[arg(long)]
+    pub observe: usize,
+    /// Number of frames to predict.
+    #[arg(long)]
+    pub horizon: usize,
+    /// Method.
+    #[arg(long, value_enum, default_value_t = Method::Loop)]
+    pub method: Method,
+    /// Output track of the predicted frames.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub opts: AnalysisOpts,
+}
+
+pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
+    let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
+    let an = analyze(&track, &a.opts.params())?;
+    write_program(&an.program, &a.output)?;
+    if !a.quiet {
+        print!("{}", print_with(&an.program, &PrintOptions::summary()));
+    }
+    eprintln!(
+        "{} frames → {} primitives → {} statements, {} loops; written to {}",
+        track.n_frames(),
+        an.prims.len(),
+        an.program.stmts.len(),
+        an.loops.len(),
+        a.output.display()
+    );
+    Ok(())
+}
+
+pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
+    let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
+    let an = analyze(&track, &a.opts.params())?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&an.intervals)?);
+        return Ok(());
+    }
+    let fps = track.fps();
+    println!("{:>4} {:>8} {:>8} {:>9} {:>9} {:>5} {:>10} {:>6}", "#", "start", "end", "start_s", "end_s", "body", "iterations", "count");
+    for (i, r) in an.intervals.iter().enumerate() {
+        println!(
+            "{:>4} {:>8} {:>8} {:>9.2} {:>9.2} {:>5} {:>10} {:>6}",
+            i,
+            r.start_frame,
+            r.end_frame,
+            r.start_frame as f64 / fps,
+            r.end_frame as f64 / fps,
+            r.body_size,
+            r.iterations,
+            r.count
+        );
+    }
+    if an.intervals.is_empty() {
+        println!("(no repetitive interval found in {} frames)", track.n_frames());
+    }
+    Ok(())
+}
+
+fn is_program_path(p: &std::path::Path) -> bool {
+    p.extension().is_some_and(|e| e == "txt" || e == "json" || e == "mp")
+}
+
+pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
+    let mut prog = read_program(&a.program)?;
+    set_iterations(&mut prog, a.loop_index, a.iters)?;
+    if is_program_path(&a.output) {
+        write_program(&prog, &a.output)?;
+    } else {
+        let params = ExecParams { replay: LoopReplay::Observed, ..ExecParams::default() };
+        let t = execute(&prog, &params)?;
+        write_track(&a.output, &t)?;
+        eprintln!("{} frames written to {}", t.n_frames(), a.output.display());
+    }
+    Ok(())
+}
+
+pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
+    let prog = read_program(&a.program)?;
+    let t = sample(&prog, a.seed, &ExecParams::default())?;
+    write_track(&a.output, &t)?;
+    eprintln!("{} frames (seed {}) written to {}", t.n_frames(), a.seed, a.output.display());
+    Ok(())
+}
+
+pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
+    let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
+    let pred = match a.method {
+        Method::Constant => {
+            if a.observe == 0 || a.observe > track.n_frames() {
+                anyhow::bail!("--observe must be in 1..={} (the track's length)", track.n_frames());
+            }
+            predict_constant(&track.slice_frames(0, a.observe)?, a.horizon)?
+        }
+        Method::Loop => {
+            let params = PredictParams { analysis: a.opts.params(), ..PredictParams::default() };
+            let p = predict(&track, a.observe, a.horizon, &params)?;
+            match &p.used {
+                Some(i) => eprintln!(
+                    "unrolling the loop of frames {}..{} ({} iterations of body {})",
+                    i.start_frame, i.end_frame, i.iterations, i.body_size
+                ),
+                None => eprintln!("no loop in the observed frames: holding the last pose"),
+            }
+            p.track
+        }
+    };
+    if let Some(out) = &a.output {
+        write_track(out, &pred)?;
+        eprintln!("{} predicted frames written to {}", pred.n_frames(), out.display());
+    }
+    if a.observe + a.horizon <= track.n_frames() {
+        let truth = track.slice_frames(a.observe, a.observe + a.horizon)?;
+        let kd = mp_geom::metrics::kd(&pred, &truth)?;
+        println!("KD to the actual frames: {kd:.3} {}", track.units().as_str());
+    }
+    Ok(())
+}

@@ -1,0 +1,237 @@
+//! `mp extract` (video → keypoint track) and `mp overlay` (skeleton drawn on
+//! the video: a contact sheet PNG or an MP4).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use mp_geom::{Track, Units};
+use mp_pose::draw::{contact_sheet, draw_pose, resize, Canvas, DrawStyle};
+use mp_pose::extract::{extract, open_estimator, ExtractOptions, ModelChoice, SmoothingParams};
+use mp_pose::video::{open_source, VideoWriter};
+use mp_pose::SessionParams;
+
+#[derive(clap::Args, Debug)]
+pub struct ExtractArgs {
+    /// Input video (anything FFmpeg decodes) or still image (.png, .jpg).
+    pub video: PathBuf,
+    /// Output track (.npz, .json or .csv).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Pose model: full, lite (BlazePose-33) or movenet (COCO-17).
+    #[arg(long, default_value = "full")]
+    pub model: String,
+    /// Write BlazePose's world coordinates (metres, hip-centred, 3D) instead of pixels.
+    #[arg(long)]
+    pub world: bool,
+    /// One-Euro smoothing of the keypoints (MediaPipe's `smooth_landmarks`).
+    #[arg(long)]
+    pub smooth: bool,
+    /// Write COCO-17 joints instead of the model's own skeleton.
+    #[arg(long)]
+    pub coco17: bool,
+    /// ONNX Runtime threads.
+    #[arg(long, default_value_t = 2)]
+    pub threads: usize,
+    /// Only the first N frames.
+    #[arg(long)]
+    pub max_frames: Option<usize>,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+fn pose_err(e: mp_pose::PoseError) -> anyhow::Error {
+    anyhow::anyhow!("{e}")
+}
+
+fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let pb = match total {
+        Some(n) => ProgressBar::new(n as u64),
+        None => ProgressBar::new_spinner(),
+    };
+    if let Ok(style) = ProgressStyle::with_template(
+        "{spinner} {msg} [{bar:40}] {pos}/{len} frames ({per_sec}, eta {eta})",
+    ) {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    pb
+}
+
+pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
+    let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
+    if a.world && model == ModelChoice::MoveNet {
+        bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
+    }
+    let source = open_source(&a.video).map_err(pose_err)?;
+    let mut est = open_estimator(
+        model,
+        SessionParams {
+            intra_threads: a.threads,
+            ..Default::default()
+        },
+    )
+    .map_err(pose_err)?;
+    let total = match (source.frame_count, a.max_frames) {
+        (Some(n), Some(m)) => Some(n.min(m)),
+        (n, None) => n,
+        (None, m) => m,
+    };
+    let pb = progress_bar(total, a.quiet);
+    pb.set_message(est.name().to_string());
+    let opts = ExtractOptions {
+        smoothing: a.smooth.then(SmoothingParams::default),
+        max_frames: a.max_frames,
+        fixed_frame_interval_s: None,
+    };
+    let ex = extract(source, est.as_mut(), &opts, |done, _| pb.set_position(done as u64))
+        .map_err(pose_err)
+        .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
+    pb.finish_and_clear();
+    let mut track: Track = if a.world {
+        ex.world.clone().context("the model gave no world coordinates")?
+    } else {
+        ex.track.clone()
+    };
+    if a.coco17 && track.skeleton().name != "coco17" {
+        track = track.to_coco17().context("mapping to COCO-17")?;
+    }
+    mp_geom::io::write_track(&a.output, &track)
+        .with_context(|| format!("writing {}", a.output.display()))?;
+    if !a.quiet {
+        println!(
+            "{}: {} frames at {:.3} fps, pose in {:.1}% ({} joints, {}), {:.1} frames/s → {}",
+            a.video.display(),
+            track.n_frames(),
+            track.fps(),
+            100.0 * ex.found_fraction(),
+            track.n_joints(),
+            track.units().as_str(),
+            ex.estimator_fps(),
+            a.output.display()
+        );
+    }
+    Ok(())
+}
+
+#[derive(clap::Args, Debug)]
+pub struct OverlayArgs {
+    /// The video the track was extracted from.
+    pub video: PathBuf,
+    /// Keypoint track in pixels (any format `mp_geom::io::read_track` reads).
+    pub track: PathBuf,
+    /// Output: .png (contact sheet of evenly spaced frames) or .mp4 (every frame).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Frames on the contact sheet.
+    #[arg(long, default_value_t = 12)]
+    pub frames: usize,
+    /// Columns of the contact sheet.
+    #[arg(long, default_value_t = 4)]
+    pub cols: usize,
+    /// Width of each contact-sheet tile in pixels.
+    #[arg(long, default_value_t = 320)]
+    pub tile_width: usize,
+    /// Joints with confidence at or below this are not drawn.
+    #[arg(long, default_value_t = 0.5)]
+    pub min_confidence: f64,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+fn draw_frame(rgb: &mut [u8], w: usize, h: usize, track: &Track, t: usize, style: &DrawStyle) {
+    if t >= track.n_frames() {
+        return;
+    }
+    let j = track.n_joints();
+    let pos = track.positions();
+    let conf = track.confidence();
+    let kps: Vec<[f64; 2]> = (0..j).map(|k| [pos[[t, k, 0]], pos[[t, k, 1]]]).collect();
+    let c: Vec<f64> = (0..j).map(|k| conf[[t, k]]).collect();
+    let mut canvas = Canvas { width: w, height: h, data: rgb };
+    draw_pose(&mut canvas, track.skeleton(), &kps, &c, style);
+}
+
+pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
+    let track = mp_geom::io::read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
+    if track.units() != Units::Pixels || track.dims() != 2 {
+        bail!(
+            "{}: overlay needs a 2D track in pixels, this one is {}D in {}",
+            a.track.display(),
+            track.dims(),
+            track.units().as_str()
+        );
+    }
+    let mut source = open_source(&a.video).map_err(pose_err)?;
+    let (w, h) = (source.width, source.height);
+    let style = DrawStyle {
+        min_confidence: a.min_confidence,
+        thickness_px: (w.max(h) as f64 / 300.0).max(2.0),
+        radius_px: (w.max(h) as f64 / 200.0).max(3.0),
+        ..Default::default()
+    };
+    let ext = extension(&a.output);
+    match ext.as_str() {
+        "png" => {
+            if a.frames == 0 || a.tile_width == 0 {
+                bail!("--frames and --tile-width must be ≥ 1");
+            }
+            let n = source.frame_count.unwrap_or(track.n_frames()).min(track.n_frames()).max(1);
+            let k = a.frames.min(n);
+            let wanted: Vec<usize> = (0..k)
+                .map(|i| if k == 1 { 0 } else { i * (n - 1) / (k - 1) })
+                .collect();
+            let tile_h = ((a.tile_width as f64) * h as f64 / w as f64).round().max(1.0) as usize;
+            let mut tiles = Vec::new();
+            for frame in source.frames.by_ref() {
+                let mut f = frame.map_err(pose_err)?;
+                if !wanted.contains(&f.index) {
+                    if f.index > *wanted.last().unwrap_or(&0) {
+                        break;
+                    }
+                    continue;
+                }
+                draw_frame(&mut f.rgb, w, h, &track, f.index, &style);
+                tiles.push(resize(f.view(), a.tile_width, tile_h));
+            }
+            if tiles.is_empty() {
+                bail!("{}: no frames decoded", a.video.display());
+            }
+            let (px, sw, sh) = contact_sheet(&tiles, a.tile_width, tile_h, a.cols, 4);
+            image::save_buffer(&a.output, &px, sw as u32, sh as u32, image::ExtendedColorType::Rgb8)
+                .with_context(|| format!("writing {}", a.output.display()))?;
+            if !a.quiet {
+                println!("{}: contact sheet of {} frames ({sw}×{sh})", a.output.display(), tiles.len());
+            }
+        }
+        "mp4" | "mkv" | "mov" => {
+            let mut writer = VideoWriter::create(&a.output, w, h, source.fps).map_err(pose_err)?;
+            let pb = progress_bar(source.frame_count, a.quiet);
+            for frame in source.frames.by_ref() {
+                let mut f = frame.map_err(pose_err)?;
+                draw_frame(&mut f.rgb, w, h, &track, f.index, &style);
+                writer.write(&f.rgb).map_err(pose_err)?;
+                pb.inc(1);
+            }
+            pb.finish_and_clear();
+            let n = writer.finish().map_err(pose_err)?;
+            if !a.quiet {
+                println!("{}: {n} frames", a.output.display());
+            }
+        }
+        other => bail!("{}: output must be .png or .mp4, not `.{other}`", a.output.display()),
+    }
+    Ok(())
+}
+
+fn extension(p: &Path) -> String {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}

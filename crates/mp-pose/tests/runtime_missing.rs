@@ -1,0 +1,20 @@
+//! A missing ONNX Runtime library is a clear error, not a panic. (Own test
+//! binary: the library, once loaded, stays loaded for the process.)
+
+use mp_pose::{BlazePose, BlazePoseParams, PoseError};
+
+#[test]
+fn missing_library_says_run_setup() {
+    // SAFETY: this test binary has a single test, so no other thread reads the environment.
+    unsafe { std::env::set_var("ORT_DYLIB_PATH", "/nonexistent/libonnxruntime.so") };
+    let err = mp_pose::runtime::environment().err().expect("must fail");
+    assert!(matches!(err, PoseError::RuntimeMissing { .. }), "{err:?}");
+    let msg = err.to_string();
+    assert!(msg.contains("cargo xtask setup") && msg.contains("/nonexistent/libonnxruntime.so"), "{msg}");
+    // Opening a model goes through the same check (after finding the model files).
+    match BlazePose::new(BlazePoseParams::default()) {
+        Err(PoseError::RuntimeMissing { .. }) | Err(PoseError::ModelMissing { .. }) => {}
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(_) => panic!("must fail without the library"),
+    }
+}
