@@ -82,27 +82,8 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn criterion(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
-    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-    cmd.current_dir(workspace_root()).arg("bench");
-    for p in &a.packages {
-        cmd.arg("-p").arg(p);
-    }
-    eprintln!("running {cmd:?}");
-    let out = cmd.output().context("running cargo bench")?;
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    if !out.status.success() {
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        anyhow::bail!("cargo bench failed:\n{stderr}");
-    }
-    writeln!(
-        md,
-        "\n## Criterion benches\n\n`cargo bench -p {}` (criterion; time is [lower, estimate, upper] of the mean).\n",
-        a.packages.join(" -p ")
-    )?;
-    writeln!(md, "| bench | time |")?;
-    writeln!(md, "|---|---|")?;
-    // Criterion prints `name\n   time:   [a b c]` or `name   time:   [a b c]`.
+/// Parses criterion's report (`name\n   time:   [a b c]` or `name   time:   [a b c]`) into rows.
+fn parse_criterion(stdout: &str, md: &mut String) -> std::fmt::Result {
     let mut last_name = String::new();
     for line in stdout.lines() {
         let trimmed = line.trim();
@@ -112,16 +93,45 @@ fn criterion(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
             let value = trimmed[pos + 5..].trim();
             writeln!(md, "| `{name}` | {value} |")?;
         } else if !trimmed.is_empty()
+            && !line.starts_with(' ')
             && !trimmed.starts_with("Benchmarking")
             && !trimmed.starts_with("Found")
-            && !trimmed.starts_with("change")
-            && !trimmed.starts_with("thrpt")
-            && !line.starts_with(' ')
+            && !trimmed.starts_with("Running")
+            && !trimmed.starts_with("Gnuplot")
         {
             last_name = trimmed.to_string();
         }
     }
     Ok(())
+}
+
+fn criterion(a: &BenchArgs, md: &mut String) -> anyhow::Result<bool> {
+    writeln!(
+        md,
+        "\n## Criterion benches\n\n`cargo bench -p <package>` (criterion; time is [lower bound, estimate, upper bound] of the mean).\n"
+    )?;
+    let mut all_ok = true;
+    for p in &a.packages {
+        let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+        cmd.current_dir(workspace_root()).args(["bench", "-p", p]);
+        eprintln!("running {cmd:?}");
+        let out = cmd.output().context("running cargo bench")?;
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        writeln!(md, "### `{p}`\n")?;
+        if !out.status.success() {
+            all_ok = false;
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            let tail: Vec<&str> = stderr.lines().rev().take(15).collect();
+            let tail: Vec<&str> = tail.into_iter().rev().collect();
+            writeln!(md, "`cargo bench -p {p}` failed:\n\n```text\n{}\n```\n", tail.join("\n"))?;
+            continue;
+        }
+        writeln!(md, "| bench | time |")?;
+        writeln!(md, "|---|---|")?;
+        parse_criterion(&stdout, md)?;
+        writeln!(md)?;
+    }
+    Ok(all_ok)
 }
 
 /// Runs the benches and writes the Markdown report.
@@ -131,9 +141,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
          (2 cores, no GPU) unless stated otherwise.\n\n",
     );
     harness(a, &mut md)?;
-    if !a.no_criterion {
-        criterion(a, &mut md)?;
-    }
+    let ok = a.no_criterion || criterion(a, &mut md)?;
     let out = if a.out.is_absolute() {
         a.out.clone()
     } else {
@@ -142,5 +150,8 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
     std::fs::write(&out, &md).with_context(|| format!("writing {}", out.display()))?;
     println!("{md}");
     eprintln!("wrote {}", out.display());
+    if !ok {
+        anyhow::bail!("some criterion benches failed (see {})", out.display());
+    }
     Ok(())
 }

@@ -18,7 +18,7 @@ use ndarray_npy::NpzReader;
 use serde_json::{json, Value};
 
 use mp_geom::skeleton::BLAZEPOSE_TO_COCO17;
-use mp_pose::extract::{extract, ExtractOptions, ModelChoice};
+use mp_pose::extract::{extract, ExtractOptions, ModelChoice, SmoothingParams};
 use mp_pose::video::{open_source, read_image};
 use mp_pose::{BlazePose, BlazePoseParams, LandmarkModelKind, MoveNet, MoveNetParams, PoseEstimator, SessionParams};
 
@@ -48,6 +48,10 @@ pub struct EvalPoseArgs {
     /// Only videos whose stem contains this.
     #[arg(long)]
     pub only: Option<String>,
+    /// Smooth the keypoints (One-Euro, as MediaPipe's `smooth_landmarks=True`)
+    /// and compare with the reference's `*_smooth` arrays.
+    #[arg(long)]
+    pub smooth: bool,
 }
 
 struct Reference {
@@ -57,15 +61,22 @@ struct Reference {
     process_ms: Array1<f32>,
 }
 
-fn read_reference(path: &Path) -> Result<Reference> {
+fn read_reference(path: &Path, smooth: bool) -> Result<Reference> {
+    let sfx = if smooth { "_smooth" } else { "" };
     let f = File::open(path).with_context(|| format!("opening {}", path.display()))?;
     let mut npz = NpzReader::new(f).with_context(|| format!("reading {}", path.display()))?;
     let get = |e: ndarray_npy::ReadNpzError, k: &str| anyhow::anyhow!("{}: array `{k}`: {e}", path.display());
     Ok(Reference {
-        landmarks_px: npz.by_name("landmarks_px").map_err(|e| get(e, "landmarks_px"))?,
-        visibility: npz.by_name("visibility").map_err(|e| get(e, "visibility"))?,
-        found: npz.by_name("found").map_err(|e| get(e, "found"))?,
-        process_ms: npz.by_name("process_ms").map_err(|e| get(e, "process_ms"))?,
+        landmarks_px: npz
+            .by_name(&format!("landmarks_px{sfx}"))
+            .map_err(|e| get(e, "landmarks_px"))?,
+        visibility: npz
+            .by_name(&format!("visibility{sfx}"))
+            .map_err(|e| get(e, "visibility"))?,
+        found: npz.by_name(&format!("found{sfx}")).map_err(|e| get(e, "found"))?,
+        process_ms: npz
+            .by_name(&format!("process_ms{sfx}"))
+            .map_err(|e| get(e, "process_ms"))?,
     })
 }
 
@@ -179,11 +190,13 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
             eprintln!("eval pose: no reference for {} (skipped)", video.display());
             continue;
         }
-        let r = read_reference(&ref_path)?;
+        let r = read_reference(&ref_path, args.smooth)?;
         let source = open_source(video).map_err(|e| anyhow::anyhow!("{e}"))?;
         let opts = ExtractOptions {
             max_frames: args.max_frames,
-            ..Default::default()
+            smoothing: args.smooth.then(SmoothingParams::default),
+            // MediaPipe's Python API stamps frames 1/30 s apart.
+            fixed_frame_interval_s: Some(1.0 / 30.0),
         };
         let ex = extract(source, estimator.as_mut(), &opts, |_, _| {}).map_err(|e| anyhow::anyhow!("{e}"))?;
         let t = ex.track.n_frames();
@@ -312,6 +325,7 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
     let report = json!({
         "model": model.as_str(),
         "threads": args.threads,
+        "smooth": args.smooth,
         "overall": overall,
         "by_video": Value::Object(by_video),
         "coco_sample": coco,

@@ -2,6 +2,7 @@
 
 mod bench;
 mod eval_concrete;
+mod eval_loops;
 mod eval_pose;
 mod models;
 mod setup;
@@ -30,6 +31,8 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Eval {
+    /// Repetition detection, counting and prediction by unrolling (CMU mocap6, AIST++, Penn Action, QUVA).
+    Loops(eval_loops::EvalLoopsArgs),
     /// Concrete programs on Penn Action: primitives, parameters, KD, jumps, interpolation.
     Concrete(eval_concrete::EvalConcreteArgs),
     /// Keypoints (BlazePose / MoveNet) against MediaPipe's reference, PCK on the COCO sample, speed.
@@ -41,6 +44,7 @@ fn main() {
     let result: anyhow::Result<()> = match cli.command {
         Command::Eval(e) => match e {
             Eval::Concrete(a) => eval_concrete::run(&a),
+            Eval::Loops(a) => eval_loops::run(&a),
             Eval::Pose(a) => eval_pose::run(&a),
         },
         Command::Setup(a) => setup::run(&a),

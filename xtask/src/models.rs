@@ -128,23 +128,23 @@ pub fn run(args: &ModelsArgs) -> Result<()> {
         .collect();
     let mut want_movenet = true;
 
-    if !args.convert {
-        let dirs = existing_model_dirs(&out);
-        let take = |name: &str| -> Result<bool> {
-            if out.join(name).is_file() {
-                println!("models: {name} already in {}", out.display());
+    let dirs = existing_model_dirs(&out);
+    let take = |name: &str| -> Result<bool> {
+        if out.join(name).is_file() {
+            println!("models: {name} already in {}", out.display());
+            return Ok(true);
+        }
+        for d in &dirs {
+            let src = d.join(name);
+            if src.is_file() {
+                link_or_copy(&src, &out.join(name))?;
+                println!("models: {name} taken from {}", d.display());
                 return Ok(true);
             }
-            for d in &dirs {
-                let src = d.join(name);
-                if src.is_file() {
-                    link_or_copy(&src, &out.join(name))?;
-                    println!("models: {name} taken from {}", d.display());
-                    return Ok(true);
-                }
-            }
-            Ok(false)
-        };
+        }
+        Ok(false)
+    };
+    if !args.convert {
         let mut still = Vec::new();
         for c in wanted {
             if !take(c.onnx)? {
@@ -152,9 +152,10 @@ pub fn run(args: &ModelsArgs) -> Result<()> {
             }
         }
         wanted = still;
-        if args.movenet_tflite.is_none() && take(MOVENET_ONNX)? {
-            want_movenet = false;
-        }
+    }
+    // MoveNet has no registry source: without a .tflite to convert, use an existing file.
+    if args.movenet_tflite.is_none() && take(MOVENET_ONNX)? {
+        want_movenet = false;
     }
 
     if !wanted.is_empty() || (want_movenet && args.movenet_tflite.is_some()) {

@@ -1,15 +1,17 @@
 //! `mp performer` (the procedural performer as a track) and `mp demo` (the
-//! whole pipeline on it, the embedded default of the README).
+//! whole `mp run` pipeline on it, the embedded default of the README: programs,
+//! loops, pictures and the report).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
 use mp_abstract::dsl::{print_with, PrintOptions};
-use mp_abstract::{analyze, write_program, AbstractParams};
-use mp_geom::io::{write_atomic, write_track};
+use mp_geom::io::write_track;
 use mp_geom::performer::{perform, PerformerParams};
 use mp_geom::Track;
+
+use crate::cmd_run;
 
 /// Arguments of `mp performer`.
 #[derive(Args, Debug)]
@@ -34,6 +36,9 @@ pub struct DemoArgs {
     /// Random seed of the performer.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// No progress bars or timings.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 pub fn performer_cmd(a: &PerformerArgs) -> anyhow::Result<()> {
@@ -47,27 +52,45 @@ pub fn performer_cmd(a: &PerformerArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Writes the programs, loops and track of `track` into `out`.
+/// Writes the programs, loops and track of `track` into `out` (`track.npz`,
+/// `program.txt`/`.json`, `abstract.txt`/`.json`, `loops.json`), each file
+/// through a temporary name.
 pub fn analyse_into(track: &Track, out: &Path) -> anyhow::Result<mp_abstract::Analysis> {
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    write_track(out.join("track.npz"), track)?;
-    let an = analyze(track, &AbstractParams::default())?;
-    an.concrete.write(out.join("program.txt"))?;
-    an.concrete.write(out.join("program.json"))?;
-    write_program(&an.program, out.join("abstract.txt"))?;
-    write_program(&an.program, out.join("abstract.json"))?;
-    let loops = serde_json::json!({
-        "fps": track.fps(),
-        "frames": track.n_frames(),
-        "intervals": an.intervals,
-    });
-    write_atomic(out.join("loops.json"), serde_json::to_string_pretty(&loops)?.as_bytes())?;
+    let dir = mp_report::OutputDir::create(out).with_context(|| format!("creating {}", out.display()))?;
+    let mut stages = Vec::new();
+    let an = cmd_run::analyse_timed(track, None, true, &mut stages)?;
+    cmd_run::write_analysis(&dir, track, &an)?;
     Ok(an)
 }
 
 pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
-    let perf = perform(&PerformerParams { seed: a.seed, ..PerformerParams::default() })?;
-    let an = analyse_into(&perf.track_2d, &a.out)?;
+    let params = PerformerParams { seed: a.seed, ..PerformerParams::default() };
+    let perf = perform(&params)?;
+    let (w, h) = params.frame_size_px;
+    let track = perf.track_2d.clone();
+    let source = cmd_run::Source::Track {
+        description: format!(
+            "procedural performer (seed {}) · {} frames × {} joints (COCO-17, px) at {} fps · {}×{} frame · {}",
+            a.seed,
+            track.n_frames(),
+            track.n_joints(),
+            track.fps(),
+            w,
+            h,
+            perf.segments
+                .iter()
+                .map(|s| format!("{} × {}", s.reps.len(), s.kind.name()))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        title: "procedural performer".into(),
+        track,
+        frame_size: Some((w, h)),
+        frame_px: Some(w.max(h) as f64),
+    };
+    let opts = cmd_run::RunOptions { quiet: a.quiet, overlay_video: false };
+    let summary = cmd_run::run_or_exit(source, &a.out, &opts)?;
+    let an = &summary.analysis;
     print!("{}", print_with(&an.program, &PrintOptions::summary()));
     println!();
     println!("Repetitions found (ground truth of the performer in brackets):");
@@ -86,6 +109,13 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
         );
     }
     println!();
-    println!("Results written to {}/ (track.npz, program.txt/.json, abstract.txt/.json, loops.json)", a.out.display());
+    if !a.quiet {
+        println!("{}", cmd_run::stage_table(&summary));
+    }
+    println!(
+        "Results written to {}/ (track.npz, program.txt/.json, abstract.txt/.json, loops.json, plots/, timeline.svg/.png, contact_sheet.png)",
+        a.out.display()
+    );
+    println!("Open the report: {}", summary.report.display());
     Ok(())
 }

@@ -7,6 +7,7 @@ mod cmd_abstract;
 mod cmd_concrete;
 mod cmd_demo;
 mod cmd_pose;
+mod cmd_run;
 
 use clap::{Parser, Subcommand};
 
@@ -44,6 +45,8 @@ enum Command {
     Performer(cmd_demo::PerformerArgs),
     /// The whole pipeline on the procedural performer (the embedded default).
     Demo(cmd_demo::DemoArgs),
+    /// Video or track → programs, loops, pictures and an HTML report in one folder.
+    Run(cmd_run::RunArgs),
 }
 
 fn main() {
@@ -61,6 +64,7 @@ fn main() {
         Command::Predict(a) => cmd_abstract::predict_cmd(&a),
         Command::Performer(a) => cmd_demo::performer_cmd(&a),
         Command::Demo(a) => cmd_demo::demo_cmd(&a),
+        Command::Run(a) => cmd_run::run_cmd(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

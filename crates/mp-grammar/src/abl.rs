@@ -196,8 +196,8 @@ fn edit_alignment(s: &[u32], t: &[u32], biased: bool) -> Vec<Op> {
     for i in 0..=n {
         d[i * w] = i as f64;
     }
-    for j in 0..=m {
-        d[j] = j as f64;
+    for (j, v) in d.iter_mut().take(m + 1).enumerate() {
+        *v = j as f64;
     }
     for i in 1..=n {
         for j in 1..=m {

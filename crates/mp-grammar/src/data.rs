@@ -88,6 +88,9 @@ pub fn concat_tracks(tracks: &[Track]) -> Result<Track> {
     )?)
 }
 
+/// Frame range of each take in a joined track.
+pub type TakeRanges = Vec<(PathBuf, Range<usize>)>;
+
 /// The `.bvh` files of a folder, sorted by name.
 pub fn bvh_files(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
     let dir = dir.as_ref();
@@ -113,10 +116,7 @@ pub fn bvh_files(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
 /// forward kinematics) into one track of at most `max_frames` frames
 /// (`usize::MAX` = all). Returns the track and the frame range of each take
 /// used.
-pub fn bvh_folder_track(
-    dir: impl AsRef<Path>,
-    max_frames: usize,
-) -> Result<(Track, Vec<(PathBuf, Range<usize>)>)> {
+pub fn bvh_folder_track(dir: impl AsRef<Path>, max_frames: usize) -> Result<(Track, TakeRanges)> {
     let mut tracks = Vec::new();
     let mut ranges = Vec::new();
     let mut total = 0;

@@ -21,6 +21,7 @@ pub use objective::ClusterQuality;
 pub use symbols::{identify_symbols, symbol_name, SymbolParams, SymbolSegment, SymbolString};
 pub mod abl;
 pub mod grammar;
+pub mod sentences;
 pub mod sequitur;
 pub mod strings;
 

@@ -28,7 +28,7 @@ pub fn suffix_array(s: &[u32]) -> Vec<usize> {
         let key = |i: usize, rank: &[i64]| -> (i64, i64) {
             (rank[i], if i + k < n { rank[i + k] } else { -1 })
         };
-        sa.sort_by(|&a, &b| key(a, &rank).cmp(&key(b, &rank)));
+        sa.sort_by_key(|&a| key(a, &rank));
         tmp[sa[0]] = 0;
         for w in 1..n {
             tmp[sa[w]] = tmp[sa[w - 1]] + i64::from(key(sa[w - 1], &rank) < key(sa[w], &rank));

@@ -1,1 +1,69 @@
-fn main() {}
+//! Per-frame latency of the pose models (ONNX Runtime, 2 intra-op threads):
+//! detector, landmark full / lite, MoveNet, and a BlazePose tracking frame
+//! (crop from the previous frame's landmarks + landmark model + refinement).
+//!
+//! Needs `cargo xtask setup`; uses frame 0 of the shared golf video (a grey
+//! frame when the shared data is absent).
+//!
+//! `cargo bench -p mp-pose --bench pose_latency`
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use std::hint::black_box;
+use std::time::Duration;
+
+use mp_pose::blazepose::detector::roi_from_points;
+use mp_pose::blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
+use mp_pose::video::{Frame, VideoReader};
+use mp_pose::{MoveNet, MoveNetParams, PoseEstimator};
+
+fn frame() -> Frame {
+    mp_geom::paths::data_file("golfdb/golf_swing.mp4")
+        .and_then(|p| VideoReader::open(p).ok())
+        .and_then(|mut r| r.next())
+        .and_then(|f| f.ok())
+        .unwrap_or_else(|| Frame::new(0, 0.0, 354, 492, vec![128; 354 * 492 * 3]).expect("frame"))
+}
+
+fn bench(c: &mut Criterion) {
+    let frame = frame();
+    let mut g = c.benchmark_group("pose_per_frame");
+    g.sample_size(40).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(2));
+
+    let mut full = BlazePose::new(BlazePoseParams::default()).expect("BlazePose full (run `cargo xtask setup`)");
+    g.bench_function("detector", |b| {
+        b.iter(|| black_box(full.detector_mut().detect(frame.view()).expect("detect")))
+    });
+    let det = full.detector_mut().detect(frame.view()).expect("detect");
+    let roi = det
+        .first()
+        .map(|d| roi_from_points(d.keypoints_px[0], d.keypoints_px[1], 1.25))
+        .unwrap_or(mp_pose::Roi::letterbox(frame.width, frame.height));
+    g.bench_function("landmark_full", |b| {
+        b.iter(|| black_box(full.landmarks_mut().run(frame.view(), &roi).expect("landmarks")))
+    });
+    // Tracking: after the first frame the crop comes from the previous landmarks.
+    full.estimate(&frame).expect("first frame");
+    let mut idx = 1usize;
+    g.bench_function("tracking_frame_full", |b| {
+        b.iter(|| {
+            let f = Frame { index: idx, timestamp_s: idx as f64 / 30.0, ..frame.clone() };
+            idx += 1;
+            black_box(full.estimate(&f).expect("tracking"))
+        })
+    });
+    drop(full);
+
+    let mut lite = BlazePose::new(BlazePoseParams { model: LandmarkModelKind::Lite, ..Default::default() })
+        .expect("BlazePose lite");
+    g.bench_function("landmark_lite", |b| {
+        b.iter(|| black_box(lite.landmarks_mut().run(frame.view(), &roi).expect("landmarks")))
+    });
+    drop(lite);
+
+    let mut mv = MoveNet::new(MoveNetParams::default()).expect("MoveNet");
+    g.bench_function("movenet", |b| b.iter(|| black_box(mv.estimate(&frame).expect("movenet"))));
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -63,7 +63,7 @@ fn bullock(
     let b2 = 0.5 * (svvv + svuu) * inv;
     let det = suu * svv - suv * suv;
     let tr = suu + svv;
-    if !(tr > 0.0) || det <= COLLINEAR_EPS * tr * tr {
+    if tr.is_nan() || tr <= 0.0 || det <= COLLINEAR_EPS * tr * tr {
         return Err(GeomError::NoData(
             "circle fit: the valid points are collinear or coincident".into(),
         ));
@@ -210,7 +210,7 @@ pub(crate) fn fit(
     let mut order = [0usize, 1, 2];
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     let (l_max, l_mid) = (eig.eigenvalues[order[0]], eig.eigenvalues[order[1]]);
-    if !(l_max > 0.0) || l_mid <= COLLINEAR_EPS.sqrt() * l_max {
+    if l_max.is_nan() || l_max <= 0.0 || l_mid <= COLLINEAR_EPS.sqrt() * l_max {
         return Err(GeomError::NoData(
             "circle fit: the valid points are collinear or coincident".into(),
         ));
@@ -219,7 +219,7 @@ pub(crate) fn fit(
     let normal: Vector3<f64> = eig.eigenvectors.column(order[2]).into_owned();
     let v = normal.cross(&u);
     let v_norm = v.norm();
-    if !(v_norm > 0.5) {
+    if v_norm.is_nan() || v_norm <= 0.5 {
         return Err(GeomError::NoData(
             "circle fit: could not build an orthonormal plane basis".into(),
         ));

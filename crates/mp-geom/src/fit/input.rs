@@ -200,10 +200,12 @@ impl PolyLs {
             a.swap(col, piv);
             perm.swap(col, piv);
             for r in col + 1..m {
-                let f = a[r][col] / a[col][col];
-                a[r][col] = f;
-                for c in col + 1..m {
-                    a[r][c] -= f * a[col][c];
+                let (top, bottom) = a.split_at_mut(r);
+                let (pivot, row) = (&top[col], &mut bottom[0]);
+                let f = row[col] / pivot[col];
+                row[col] = f;
+                for (x, p) in row[col + 1..m].iter_mut().zip(&pivot[col + 1..m]) {
+                    *x -= f * p;
                 }
             }
         }

@@ -1,0 +1,538 @@
+//! The learned forecasters, run with ONNX Runtime.
+//!
+//! A model folder (`models/forecast/<dataset>/`, written by
+//! `cargo xtask train-forecast`) holds:
+//!
+//! | file | input | outputs |
+//! |---|---|---|
+//! | `encoder.onnx` | `frames (B, T, F)` | `latent (B, T, C)`, `pose (B, T, P)` |
+//! | `ar_step.onnx` | `latents (B, 13, C)` | `next_latent (B, C)`, `next_pose (B, P)` |
+//! | `pose_ar_step.onnx` | `frames (B, 13, F)` | `next_pose (B, P)` |
+//! | `manifest.json` | joints, dims, channels, context, training record | |
+//!
+//! `F = J·D + J` (normalised coordinates then masks, see [`crate::normalize`]),
+//! `P = J·D`, `C` latent channels. Every network is causal with a receptive
+//! field of 13 frames, so a step model sees exactly the last 13 frames.
+//!
+//! **AR on Φ** ([`ArSpace::Latent`]): encode the context, then repeat
+//! `next = step(last 13 latents)`, reading the pose out of each predicted
+//! latent. **AR on Θ** ([`ArSpace::Pose`]): repeat `next = step(last 13 frames)`
+//! directly on poses; a predicted pose re-enters as a frame with every joint valid.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use mp_geom::Track;
+use mp_pose::runtime::{open_session, SessionParams};
+use ndarray::{Array2, Array3};
+use ort::session::Session;
+use ort::value::TensorRef;
+use serde::Deserialize;
+
+use crate::error::{ForecastError, Result};
+use crate::forecaster::{check_horizon, predicted_track, Forecaster};
+use crate::normalize::{push_features, BodyJoints, Normalizer};
+
+/// Environment variable naming a model folder (holding `manifest.json`) or a
+/// folder of per-dataset model folders.
+pub const MODEL_DIR_ENV: &str = "MP_FORECAST_MODELS";
+/// Where the committed models live, relative to the workspace root.
+pub const MODEL_DIR_IN_WORKSPACE: &str = "models/forecast";
+
+/// The parts of `manifest.json` that inference needs.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+pub struct Manifest {
+    /// `penn_action` or `msr_action3d`.
+    pub dataset: String,
+    /// Joint names, in order.
+    pub joints: Vec<String>,
+    /// Dimensions per joint.
+    pub dims: usize,
+    /// Features per frame (`J·D + J`).
+    pub features: usize,
+    /// Pose values per frame (`J·D`).
+    pub pose_values: usize,
+    /// Latent channels.
+    pub channels: usize,
+    /// Frames the models were trained to condition on (15).
+    pub context_frames: usize,
+    /// Receptive field of every causal network (13).
+    pub receptive_field_frames: usize,
+    /// Training seed.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+impl Manifest {
+    /// Reads and checks a manifest.
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| ForecastError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let m: Manifest = serde_json::from_str(&text).map_err(|e| ForecastError::Format {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        let j = m.joints.len();
+        if j == 0
+            || m.dims == 0
+            || m.pose_values != j * m.dims
+            || m.features != j * m.dims + j
+            || m.receptive_field_frames == 0
+            || m.context_frames < m.receptive_field_frames
+            || m.channels == 0
+        {
+            return Err(ForecastError::Format {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "inconsistent sizes: {j} joints × {} dims, {} pose values, {} features, {} channels, \
+                     context {} frames, receptive field {} frames",
+                    m.dims, m.pose_values, m.features, m.channels, m.context_frames, m.receptive_field_frames
+                ),
+            });
+        }
+        Ok(m)
+    }
+}
+
+/// Candidate model folders for a data set, in search order: `MP_FORECAST_MODELS`
+/// (itself or its `<dataset>` subfolder), `<workspace>/models/forecast/<dataset>`,
+/// and `models/forecast/<dataset>` above the current directory.
+pub fn model_dir_candidates(dataset: &str) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(p) = std::env::var(MODEL_DIR_ENV) {
+        if !p.is_empty() {
+            let p = PathBuf::from(p);
+            out.push(p.clone());
+            out.push(p.join(dataset));
+        }
+    }
+    if let Some(root) = mp_geom::paths::workspace_root() {
+        out.push(root.join(MODEL_DIR_IN_WORKSPACE).join(dataset));
+    }
+    if let Ok(cwd) = std::env::current_dir() {
+        for anc in cwd.ancestors() {
+            let d = anc.join(MODEL_DIR_IN_WORKSPACE).join(dataset);
+            if !out.contains(&d) {
+                out.push(d);
+            }
+        }
+    }
+    out
+}
+
+/// The first candidate folder with a `manifest.json` for `dataset`.
+pub fn find_model_dir(dataset: &str) -> Result<PathBuf> {
+    let cands = model_dir_candidates(dataset);
+    for c in &cands {
+        if c.join("manifest.json").is_file() {
+            return Ok(c.clone());
+        }
+    }
+    Err(ForecastError::ModelMissing {
+        file: format!("{dataset}/manifest.json"),
+        searched: cands
+            .iter()
+            .take(4)
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+    })
+}
+
+/// The data set whose models suit a skeleton (`penn13` → `penn_action`, `msr20` → `msr_action3d`).
+pub fn dataset_for_skeleton(skeleton_name: &str) -> Option<&'static str> {
+    match skeleton_name {
+        "penn13" => Some("penn_action"),
+        "msr20" => Some("msr_action3d"),
+        _ => None,
+    }
+}
+
+struct Net {
+    name: String,
+    session: Mutex<Session>,
+}
+
+impl Net {
+    fn open(dir: &Path, file: &str, params: &SessionParams) -> Result<Self> {
+        let path = dir.join(file);
+        if !path.is_file() {
+            return Err(ForecastError::ModelMissing {
+                file: file.to_string(),
+                searched: dir.display().to_string(),
+            });
+        }
+        let session = open_session(&path, params)?;
+        Ok(Net {
+            name: path.display().to_string(),
+            session: Mutex::new(session),
+        })
+    }
+
+    /// Runs the model on one f32 input; returns the named outputs as flat vectors.
+    fn run(&self, input: &str, shape: [usize; 3], data: &[f32], outputs: &[&str]) -> Result<Vec<Vec<f32>>> {
+        let tensor = TensorRef::from_array_view((shape, data))
+            .map_err(|e| ForecastError::model(&self.name, e))?;
+        let mut session = self.session.lock().unwrap_or_else(|e| e.into_inner());
+        let out = session
+            .run(ort::inputs![input => tensor])
+            .map_err(|e| ForecastError::model(&self.name, e))?;
+        outputs
+            .iter()
+            .map(|name| {
+                let v = out.get(name).ok_or_else(|| {
+                    ForecastError::model(&self.name, format!("run produced no output `{name}`"))
+                })?;
+                let (_, d) = v
+                    .try_extract_tensor::<f32>()
+                    .map_err(|e| ForecastError::model(&self.name, e))?;
+                Ok(d.to_vec())
+            })
+            .collect()
+    }
+}
+
+/// The three networks of one model folder, loaded once and shared.
+pub struct ForecastModels {
+    dir: PathBuf,
+    manifest: Manifest,
+    encoder: Net,
+    step: Net,
+    pose_step: Net,
+}
+
+impl std::fmt::Debug for ForecastModels {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ForecastModels")
+            .field("dir", &self.dir)
+            .field("manifest", &self.manifest)
+            .finish()
+    }
+}
+
+impl ForecastModels {
+    /// Loads a model folder (`manifest.json`, `encoder.onnx`, `ar_step.onnx`, `pose_ar_step.onnx`).
+    pub fn load(dir: impl AsRef<Path>, session: &SessionParams) -> Result<Self> {
+        let dir = dir.as_ref().to_path_buf();
+        let manifest = Manifest::read(&dir.join("manifest.json"))?;
+        Ok(ForecastModels {
+            encoder: Net::open(&dir, "encoder.onnx", session)?,
+            step: Net::open(&dir, "ar_step.onnx", session)?,
+            pose_step: Net::open(&dir, "pose_ar_step.onnx", session)?,
+            dir,
+            manifest,
+        })
+    }
+
+    /// Loads the models of a data set from [`find_model_dir`] with default session settings
+    /// (2 intra-op threads, no spinning).
+    pub fn load_default(dataset: &str) -> Result<Self> {
+        Self::load(find_model_dir(dataset)?, &SessionParams::default())
+    }
+
+    /// The manifest.
+    pub fn manifest(&self) -> &Manifest {
+        &self.manifest
+    }
+
+    /// The folder the models came from.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Encoder on a batch of normalised feature windows `(B, T, F)`: returns latents `(B·T·C)` and poses `(B·T·P)`.
+    pub fn encode(&self, batch: usize, frames: usize, features: &[f32]) -> Result<(Vec<f32>, Vec<f32>)> {
+        let m = &self.manifest;
+        self.check_len("encoder input", features.len(), batch * frames * m.features)?;
+        let mut o = self.encoder.run(
+            "frames",
+            [batch, frames, m.features],
+            features,
+            &["latent", "pose"],
+        )?;
+        let pose = o.pop().unwrap_or_default();
+        let lat = o.pop().unwrap_or_default();
+        self.check_len("encoder latent", lat.len(), batch * frames * m.channels)?;
+        self.check_len("encoder pose", pose.len(), batch * frames * m.pose_values)?;
+        Ok((lat, pose))
+    }
+
+    /// One latent AR step on `(B, 13, C)` latents: next latents `(B·C)` and their poses `(B·P)`.
+    pub fn latent_step(&self, batch: usize, latents: &[f32]) -> Result<(Vec<f32>, Vec<f32>)> {
+        let m = &self.manifest;
+        let rf = m.receptive_field_frames;
+        self.check_len("latent step input", latents.len(), batch * rf * m.channels)?;
+        let mut o = self.step.run(
+            "latents",
+            [batch, rf, m.channels],
+            latents,
+            &["next_latent", "next_pose"],
+        )?;
+        let pose = o.pop().unwrap_or_default();
+        let lat = o.pop().unwrap_or_default();
+        self.check_len("latent step output", lat.len(), batch * m.channels)?;
+        self.check_len("latent step pose", pose.len(), batch * m.pose_values)?;
+        Ok((lat, pose))
+    }
+
+    /// One pose AR step on `(B, 13, F)` feature frames: next poses `(B·P)`.
+    pub fn pose_step(&self, batch: usize, frames: &[f32]) -> Result<Vec<f32>> {
+        let m = &self.manifest;
+        let rf = m.receptive_field_frames;
+        self.check_len("pose step input", frames.len(), batch * rf * m.features)?;
+        let mut o = self
+            .pose_step
+            .run("frames", [batch, rf, m.features], frames, &["next_pose"])?;
+        let pose = o.pop().unwrap_or_default();
+        self.check_len("pose step output", pose.len(), batch * m.pose_values)?;
+        Ok(pose)
+    }
+
+    fn check_len(&self, what: &str, got: usize, expected: usize) -> Result<()> {
+        if got != expected {
+            return Err(ForecastError::model(
+                self.dir.display().to_string(),
+                format!("{what} has {got} values, expected {expected}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Autoregressive rollout on already-normalised feature windows `(B, T, F)`
+    /// (`T` ≥ the receptive field): `horizon` predicted poses per window, `(B, H, P)`
+    /// flattened, in normalised units.
+    pub fn rollout_normalised(
+        &self,
+        space: ArSpace,
+        batch: usize,
+        frames: usize,
+        features: &[f32],
+        horizon: usize,
+    ) -> Result<Vec<f32>> {
+        let m = &self.manifest;
+        let rf = m.receptive_field_frames;
+        if frames < rf {
+            return Err(ForecastError::TooShort {
+                what: "the learned forecaster (receptive field)",
+                needed: rf,
+                got: frames,
+            });
+        }
+        let (p, f, c) = (m.pose_values, m.features, m.channels);
+        let mut out = vec![0f32; batch * horizon * p];
+        match space {
+            ArSpace::Latent => {
+                let (lat, _) = self.encode(batch, frames, features)?;
+                // window of the last rf latents per batch item
+                let mut win = vec![0f32; batch * rf * c];
+                for b in 0..batch {
+                    let src = &lat[(b * frames + frames - rf) * c..(b * frames + frames) * c];
+                    win[b * rf * c..(b + 1) * rf * c].copy_from_slice(src);
+                }
+                for h in 0..horizon {
+                    let (next, pose) = self.latent_step(batch, &win)?;
+                    for b in 0..batch {
+                        let w = &mut win[b * rf * c..(b + 1) * rf * c];
+                        w.copy_within(c.., 0);
+                        w[(rf - 1) * c..].copy_from_slice(&next[b * c..(b + 1) * c]);
+                        out[(b * horizon + h) * p..(b * horizon + h + 1) * p]
+                            .copy_from_slice(&pose[b * p..(b + 1) * p]);
+                    }
+                }
+            }
+            ArSpace::Pose => {
+                let mut win = vec![0f32; batch * rf * f];
+                for b in 0..batch {
+                    let src = &features[(b * frames + frames - rf) * f..(b * frames + frames) * f];
+                    win[b * rf * f..(b + 1) * rf * f].copy_from_slice(src);
+                }
+                for h in 0..horizon {
+                    let pose = self.pose_step(batch, &win)?;
+                    for b in 0..batch {
+                        let w = &mut win[b * rf * f..(b + 1) * rf * f];
+                        w.copy_within(f.., 0);
+                        let last = &mut w[(rf - 1) * f..];
+                        last[..p].copy_from_slice(&pose[b * p..(b + 1) * p]);
+                        last[p..].fill(1.0);
+                        out[(b * horizon + h) * p..(b * horizon + h + 1) * p]
+                            .copy_from_slice(&pose[b * p..(b + 1) * p]);
+                    }
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Where the autoregressive model runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArSpace {
+    /// AR on the latent "movie strip" Φ (the paper's model).
+    Latent,
+    /// AR directly on poses Θ (the paper's ablation).
+    Pose,
+}
+
+/// Parameters of [`ArForecaster`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ArParams {
+    /// Latest observed frames used as context. Default 15; at least the receptive field (13).
+    pub context_frames: usize,
+    /// Largest batch passed to ONNX Runtime at once. Default 256.
+    pub max_batch: usize,
+}
+
+impl Default for ArParams {
+    fn default() -> Self {
+        ArParams {
+            context_frames: 15,
+            max_batch: 256,
+        }
+    }
+}
+
+/// The learned autoregressive forecaster (latent or pose space).
+#[derive(Debug, Clone)]
+pub struct ArForecaster {
+    models: Arc<ForecastModels>,
+    space: ArSpace,
+    params: ArParams,
+    body: BodyJoints,
+}
+
+impl ArForecaster {
+    /// A forecaster over loaded models; checks the parameters against the models.
+    pub fn new(models: Arc<ForecastModels>, space: ArSpace, params: ArParams) -> Result<Self> {
+        let rf = models.manifest.receptive_field_frames;
+        if params.context_frames < rf {
+            return Err(ForecastError::param(
+                "context_frames",
+                format!("must be ≥ the receptive field ({rf} frames), got {}", params.context_frames),
+            ));
+        }
+        if params.max_batch == 0 {
+            return Err(ForecastError::param("max_batch", "must be ≥ 1"));
+        }
+        let skeleton = mp_geom::Skeleton::custom(
+            "model",
+            models.manifest.joints.clone(),
+            Vec::new(),
+            None,
+        );
+        let body = BodyJoints::from_skeleton(&skeleton);
+        Ok(ArForecaster {
+            models,
+            space,
+            params,
+            body,
+        })
+    }
+
+    /// The models.
+    pub fn models(&self) -> &Arc<ForecastModels> {
+        &self.models
+    }
+
+    fn check_track(&self, past: &Track) -> Result<usize> {
+        let m = &self.models.manifest;
+        if past.n_joints() != m.joints.len() || past.dims() != m.dims {
+            return Err(ForecastError::mismatch(
+                format!("the {} forecasting model", m.dataset),
+                format!("{} joints × {} dims", m.joints.len(), m.dims),
+                format!("{} joints × {} dims", past.n_joints(), past.dims()),
+            ));
+        }
+        let rf = m.receptive_field_frames;
+        if past.n_frames() < rf {
+            return Err(ForecastError::TooShort {
+                what: "the learned forecaster (receptive field)",
+                needed: rf,
+                got: past.n_frames(),
+            });
+        }
+        Ok(past.n_frames().min(self.params.context_frames))
+    }
+
+    /// Predicts a group of tracks that share the same context length.
+    fn predict_group(&self, pasts: &[&Track], ctx: usize, horizon: usize) -> Result<Vec<Track>> {
+        let m = &self.models.manifest;
+        let (j, d, p) = (m.joints.len(), m.dims, m.pose_values);
+        let mut feats = Vec::with_capacity(pasts.len() * ctx * m.features);
+        let mut norms = Vec::with_capacity(pasts.len());
+        for past in pasts {
+            let t = past.n_frames();
+            let norm = Normalizer::from_track_tail(past, ctx, &self.body)?;
+            push_features(past, t - ctx, t, &norm, &mut feats);
+            norms.push(norm);
+        }
+        let out =
+            self.models
+                .rollout_normalised(self.space, pasts.len(), ctx, &feats, horizon)?;
+        let mut res = Vec::with_capacity(pasts.len());
+        for (b, (past, norm)) in pasts.iter().zip(&norms).enumerate() {
+            let mut pos = Array3::zeros((horizon, j, d));
+            for h in 0..horizon {
+                let row = &out[(b * horizon + h) * p..(b * horizon + h + 1) * p];
+                for jj in 0..j {
+                    for k in 0..d {
+                        let v = row[jj * d + k] as f64;
+                        if !v.is_finite() {
+                            return Err(ForecastError::model(
+                                self.models.dir.display().to_string(),
+                                format!("non-finite prediction at step {h}, joint {jj}"),
+                            ));
+                        }
+                        pos[[h, jj, k]] = norm.inverse(k, v);
+                    }
+                }
+            }
+            res.push(predicted_track(past, pos, Array2::ones((horizon, j)))?);
+        }
+        Ok(res)
+    }
+}
+
+impl Forecaster for ArForecaster {
+    fn name(&self) -> &str {
+        match self.space {
+            ArSpace::Latent => "ar",
+            ArSpace::Pose => "ar_pose",
+        }
+    }
+    fn context_frames(&self) -> Option<usize> {
+        Some(self.params.context_frames)
+    }
+    fn predict(&self, past: &Track, horizon: usize) -> Result<Track> {
+        check_horizon(horizon)?;
+        let ctx = self.check_track(past)?;
+        let mut v = self.predict_group(&[past], ctx, horizon)?;
+        v.pop()
+            .ok_or_else(|| ForecastError::model("rollout", "no prediction returned"))
+    }
+    fn predict_batch(&self, pasts: &[Track], horizon: usize) -> Result<Vec<Track>> {
+        check_horizon(horizon)?;
+        let ctxs = pasts
+            .iter()
+            .map(|p| self.check_track(p))
+            .collect::<Result<Vec<usize>>>()?;
+        let mut out: Vec<Option<Track>> = vec![None; pasts.len()];
+        let mut lens: Vec<usize> = ctxs.clone();
+        lens.sort_unstable();
+        lens.dedup();
+        for ctx in lens {
+            let idx: Vec<usize> = (0..pasts.len()).filter(|&i| ctxs[i] == ctx).collect();
+            for chunk in idx.chunks(self.params.max_batch) {
+                let group: Vec<&Track> = chunk.iter().map(|&i| &pasts[i]).collect();
+                let preds = self.predict_group(&group, ctx, horizon)?;
+                for (&i, p) in chunk.iter().zip(preds) {
+                    out[i] = Some(p);
+                }
+            }
+        }
+        out.into_iter()
+            .map(|o| o.ok_or_else(|| ForecastError::model("rollout", "a prediction is missing")))
+            .collect()
+    }
+}

@@ -1,0 +1,177 @@
+//! An output folder whose files appear complete or not at all.
+//!
+//! Every file is written into a hidden staging folder inside the output
+//! folder (`.mp-partial-<pid>`) and renamed into place when complete. An
+//! interrupted run (Ctrl-C) stops at the next check of [`check_interrupt`],
+//! and dropping the [`OutputDir`] removes the staging folder; if the
+//! program has to exit at once, [`emergency_cleanup`] removes every staging
+//! folder of the process while holding the lock that file writes take, so
+//! no write can be half done at that moment.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, MutexGuard};
+
+use crate::error::{ReportError, Result};
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+static STAGING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn registry() -> MutexGuard<'static, Vec<PathBuf>> {
+    STAGING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Marks the process as interrupted (call from a Ctrl-C handler).
+pub fn request_interrupt() {
+    INTERRUPTED.store(true, Ordering::SeqCst);
+}
+
+/// Whether an interrupt was requested.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
+/// `Err(ReportError::Interrupted)` once an interrupt was requested.
+pub fn check_interrupt() -> Result<()> {
+    if interrupted() {
+        Err(ReportError::Interrupted)
+    } else {
+        Ok(())
+    }
+}
+
+/// Removes every staging folder of this process and returns the lock that
+/// file writes take: hold it until the process exits so that no new file
+/// appears.
+pub fn emergency_cleanup() -> MutexGuard<'static, Vec<PathBuf>> {
+    let mut reg = registry();
+    for p in reg.drain(..) {
+        let _ = std::fs::remove_dir_all(&p);
+    }
+    reg
+}
+
+/// Name of the staging folder of this process inside an output folder.
+pub fn staging_name() -> String {
+    format!(".mp-partial-{}", std::process::id())
+}
+
+/// An output folder written through a staging folder (see the module docs).
+#[derive(Debug)]
+pub struct OutputDir {
+    dir: PathBuf,
+    staging: PathBuf,
+}
+
+impl OutputDir {
+    /// Creates `dir` (and its parents) and a fresh staging folder in it.
+    pub fn create(dir: impl AsRef<Path>) -> Result<Self> {
+        let dir = dir.as_ref().to_path_buf();
+        std::fs::create_dir_all(&dir).map_err(|e| ReportError::io(&dir, e))?;
+        let staging = dir.join(staging_name());
+        let mut reg = registry();
+        check_interrupt()?;
+        if staging.exists() {
+            std::fs::remove_dir_all(&staging).map_err(|e| ReportError::io(&staging, e))?;
+        }
+        std::fs::create_dir(&staging).map_err(|e| ReportError::io(&staging, e))?;
+        reg.push(staging.clone());
+        Ok(OutputDir { dir, staging })
+    }
+
+    /// The output folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Final path of `rel` inside the output folder.
+    pub fn path(&self, rel: &str) -> PathBuf {
+        self.dir.join(rel)
+    }
+
+    /// A path in the staging folder for a file that another program writes
+    /// (e.g. an encoder); move it into place with [`OutputDir::commit`].
+    pub fn staging_file(&self, name: &str) -> PathBuf {
+        self.staging.join(name.replace(['/', '\\'], "__"))
+    }
+
+    fn check_rel(rel: &str) -> Result<()> {
+        let p = Path::new(rel);
+        if rel.is_empty()
+            || p.is_absolute()
+            || p.components().any(|c| !matches!(c, std::path::Component::Normal(_)))
+        {
+            return Err(ReportError::param("file name", format!("`{rel}` is not a plain relative path")));
+        }
+        Ok(())
+    }
+
+    /// Writes `bytes` to `rel` (a relative path; folders are created) through
+    /// the staging folder. Returns the final path.
+    pub fn write(&self, rel: &str, bytes: &[u8]) -> Result<PathBuf> {
+        use std::io::Write;
+        Self::check_rel(rel)?;
+        let _lock = registry();
+        check_interrupt()?;
+        let tmp = self.staging_file(rel);
+        let mut f = std::fs::File::create(&tmp).map_err(|e| ReportError::io(&tmp, e))?;
+        f.write_all(bytes).map_err(|e| ReportError::io(&tmp, e))?;
+        f.sync_all().map_err(|e| ReportError::io(&tmp, e))?;
+        drop(f);
+        self.rename_into_place(&tmp, rel)
+    }
+
+    /// Moves a finished file from the staging folder to `rel`.
+    pub fn commit(&self, staged: &Path, rel: &str) -> Result<PathBuf> {
+        Self::check_rel(rel)?;
+        let _lock = registry();
+        check_interrupt()?;
+        self.rename_into_place(staged, rel)
+    }
+
+    fn rename_into_place(&self, tmp: &Path, rel: &str) -> Result<PathBuf> {
+        let dst = self.dir.join(rel);
+        if let Some(parent) = dst.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| ReportError::io(parent, e))?;
+        }
+        std::fs::rename(tmp, &dst).map_err(|e| ReportError::io(&dst, e))?;
+        Ok(dst)
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        let mut reg = registry();
+        let _ = std::fs::remove_dir_all(&self.staging);
+        reg.retain(|p| p != &self.staging);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_appear_complete_and_staging_goes_away() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("run");
+        {
+            let o = OutputDir::create(&out).unwrap();
+            let p = o.write("plots/a.svg", b"<svg/>").unwrap();
+            assert_eq!(std::fs::read(&p).unwrap(), b"<svg/>");
+            assert!(out.join(staging_name()).is_dir());
+            assert!(o.write("../escape.txt", b"x").is_err());
+            assert!(o.write("/abs.txt", b"x").is_err());
+            let staged = o.staging_file("video.mp4");
+            std::fs::write(&staged, b"v").unwrap();
+            o.commit(&staged, "video.mp4").unwrap();
+        }
+        assert!(!out.join(staging_name()).exists());
+        let mut names: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, vec!["plots", "video.mp4"]);
+    }
+}

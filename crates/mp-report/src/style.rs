@@ -1,0 +1,63 @@
+//! Colours shared by every picture and the HTML report.
+
+use mp_geom::PrimitiveKind;
+
+/// Fill/stroke colour of a primitive kind.
+pub fn kind_color(kind: PrimitiveKind) -> &'static str {
+    match kind {
+        PrimitiveKind::Stationary => "#94a3b8",
+        PrimitiveKind::Line => "#2563eb",
+        PrimitiveKind::Circle => "#ea580c",
+        PrimitiveKind::Spline => "#9333ea",
+    }
+}
+
+/// Colour of the detected keypoints (dots in plots).
+pub const KEYPOINT_DOT: &str = "#475569";
+/// Colour of loops in the timeline.
+pub const LOOP_FILL: &str = "#14b8a6";
+/// Darker loop colour (iteration boundaries, labels).
+pub const LOOP_DARK: &str = "#0f766e";
+/// Text colour.
+pub const INK: &str = "#0f172a";
+/// Secondary text colour.
+pub const MUTED: &str = "#64748b";
+/// Grid lines.
+pub const GRID: &str = "#e2e8f0";
+/// Picture background.
+pub const PAPER: &str = "#ffffff";
+
+/// Skeleton colours as RGB: left side, right side, centre, program.
+pub const SKELETON_LEFT: [u8; 3] = [255, 159, 28];
+/// Right side of the body.
+pub const SKELETON_RIGHT: [u8; 3] = [56, 189, 248];
+/// Bones in the middle and joint dots.
+pub const SKELETON_CENTER: [u8; 3] = [241, 245, 249];
+/// The skeleton of the executed program.
+pub const SKELETON_PROGRAM: [u8; 3] = [244, 63, 144];
+
+/// `#rrggbb` of an RGB triple.
+pub fn hex(rgb: [u8; 3]) -> String {
+    format!("#{:02x}{:02x}{:02x}", rgb[0], rgb[1], rgb[2])
+}
+
+/// Which side of the body a joint name is on: −1 left, 1 right, 0 centre.
+pub fn side(name: &str) -> i32 {
+    let n = name.to_ascii_lowercase();
+    if n.starts_with("left") || n.starts_with("l_") {
+        -1
+    } else if n.starts_with("right") || n.starts_with("r_") {
+        1
+    } else {
+        0
+    }
+}
+
+/// Colour of a bone between joints `a` and `b` (by the sides of their names).
+pub fn bone_rgb(a: &str, b: &str) -> [u8; 3] {
+    match (side(a) + side(b)).signum() {
+        -1 => SKELETON_LEFT,
+        1 => SKELETON_RIGHT,
+        _ => SKELETON_CENTER,
+    }
+}
