@@ -240,14 +240,27 @@ class Causal(nn.Module):
         nn.init.zeros_(self.out.bias)
 
 
+class Readout(nn.Module):
+    """Latent -> pose: a linear map plus a residual MLP (whose last layer starts at zero)."""
+
+    def __init__(self, channels, n_pose):
+        super().__init__()
+        self.lin = nn.Linear(channels, n_pose)
+        self.mlp = nn.Sequential(nn.Linear(channels, channels), nn.ReLU(), nn.Linear(channels, n_pose))
+        nn.init.zeros_(self.mlp[2].weight)
+        nn.init.zeros_(self.mlp[2].bias)
+
+    def forward(self, lat):
+        return self.lin(lat) + self.mlp(lat)
+
+
 class LatentModel(nn.Module):
     def __init__(self, n_feat, n_pose, channels, groups):
         super().__init__()
         self.encoder = Causal(n_feat, channels, channels, groups)
         self.ar = Causal(channels, channels, channels, groups)
         self.ar.zero_output()
-        self.readout = nn.Sequential(nn.Linear(channels, channels), nn.ReLU(),
-                                     nn.Linear(channels, n_pose))
+        self.readout = Readout(channels, n_pose)
 
     def encode(self, x):
         return self.encoder(x)
@@ -395,7 +408,15 @@ def train_one(kind, args, train, val, n_feat, n_pose, n_joints, dims, flip):
     model = cls(n_feat, n_pose, args.channels, args.groups)
     opt = torch.optim.Adam(model.parameters(), lr=args.lr)
     epochs = args.epochs if kind == "latent" else args.pose_epochs
-    total_steps = epochs * math.ceil(args.samples_per_epoch / args.batch)
+    pre = args.pretrain_epochs if kind == "latent" else 0
+    # curriculum: teacher forcing only (K = 0) while pre-training, then own-prediction
+    # steps K = 1 -> FUTURE over the first 70 % of the curriculum epochs
+    ramp = max(1, int(0.7 * epochs))
+    schedule = [0] * pre + [int(round(1 + min(1.0, e / max(1, ramp - 1)) * (FUTURE - 1)))
+                            for e in range(epochs)]
+    epochs = len(schedule)
+    total_steps = sum(math.ceil(min(args.samples_per_epoch * (args.pretrain_factor if k == 0 else 1),
+                                    train[0].shape[0]) / args.batch) for k in schedule)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, total_steps=total_steps,
                                                 pct_start=0.1)
     x_all, y_all, m_all = train
@@ -404,10 +425,9 @@ def train_one(kind, args, train, val, n_feat, n_pose, n_joints, dims, flip):
     best, best_state, history = -1.0, None, []
     t0 = time.time()
     for ep in range(epochs):
-        # curriculum: own-prediction steps 1 -> FUTURE over the first 70 % of the epochs
-        frac = ep / max(1, int(0.7 * epochs) - 1) if epochs > 1 else 1.0
-        k = int(round(1 + min(1.0, frac) * (FUTURE - 1)))
-        order = rng.permutation(n)[: args.samples_per_epoch]
+        k = schedule[ep]
+        per_epoch = args.samples_per_epoch * (args.pretrain_factor if k == 0 else 1)
+        order = rng.permutation(n)[:per_epoch]
         losses = []
         for bi in range(0, len(order), args.batch):
             idx = torch.from_numpy(order[bi:bi + args.batch])
@@ -433,7 +453,9 @@ def train_one(kind, args, train, val, n_feat, n_pose, n_joints, dims, flip):
                     roll = roll + masked_l1(model.readout(nl), y[:, CONTEXT + s], m[:, CONTEXT + s], dims)
                     roll_lat = roll_lat + (nl - lat[:, CONTEXT + s].detach()).abs().mean()
                     seq = torch.cat([seq, nl[:, None]], 1)
-                loss = rec + tf + args.latent_weight * tf_lat + (roll + args.latent_weight * roll_lat) / k
+                loss = rec + tf + args.latent_weight * tf_lat
+                if k > 0:
+                    loss = loss + (roll + args.latent_weight * roll_lat) / k
             else:
                 nxt = model.step_all(x)[:, :-1]
                 tf = masked_l1(nxt, y[:, 1:], m[:, 1:], dims)
@@ -443,13 +465,19 @@ def train_one(kind, args, train, val, n_feat, n_pose, n_joints, dims, flip):
                     npose = model.step(seq[:, -RF:])
                     roll = roll + masked_l1(npose, y[:, CONTEXT + s], m[:, CONTEXT + s], dims)
                     seq = torch.cat([seq, as_features(npose, n_joints)[:, None]], 1)
-                loss = tf + roll / k
+                loss = tf + (roll / k if k > 0 else 0.0)
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
             opt.step()
             sched.step()
-            losses.append(float(loss))
+            losses.append(float(loss.detach()))
+        if k == 0 and ep + 1 < len(schedule) and schedule[ep + 1] == 0:
+            print(f"[{kind}] epoch {ep + 1}/{epochs} K=0 loss {np.mean(losses):.4f} "
+                  f"({time.time() - t0:.0f} s)", flush=True)
+            history.append({"epoch": ep + 1, "rollout_steps": 0, "loss": float(np.mean(losses)),
+                            "seconds": round(time.time() - t0, 1)})
+            continue
         v = validate(kind, model, val, n_joints, dims, args.horizons)
         score = float(np.mean(list(v.values())))
         history.append({"epoch": ep + 1, "rollout_steps": k, "loss": float(np.mean(losses)),
@@ -464,7 +492,7 @@ def train_one(kind, args, train, val, n_feat, n_pose, n_joints, dims, flip):
                 best_state = {kk: vv.clone() for kk, vv in model.state_dict().items()}
     model.load_state_dict(best_state)
     model.eval()
-    best_ep = max((h for h in history if h["rollout_steps"] == FUTURE or h is history[-1]),
+    best_ep = max((h for h in history if "val_pck" in h and (h["rollout_steps"] == FUTURE or h is history[-1])),
                   key=lambda h: np.mean(list(h["val_pck"].values())))
     return model, history, best_ep
 
@@ -495,6 +523,10 @@ def main():
     ap.add_argument("--fixture-dir", help="write the ONNX parity fixture <dataset>_parity.json here")
     ap.add_argument("--epochs", type=int, default=8)
     ap.add_argument("--pose-epochs", type=int, default=None)
+    ap.add_argument("--pretrain-epochs", type=int, default=6,
+                    help="latent model: epochs of teacher forcing only before the curriculum")
+    ap.add_argument("--pretrain-factor", type=int, default=4,
+                    help="samples per teacher-forcing epoch = factor x samples per epoch")
     ap.add_argument("--samples-per-epoch", type=int, default=4096)
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--channels", type=int, default=64)
@@ -578,6 +610,8 @@ def main():
         "seed": args.seed,
         "epochs": args.epochs,
         "pose_epochs": args.pose_epochs,
+        "pretrain_epochs": args.pretrain_epochs,
+        "pretrain_factor": args.pretrain_factor,
         "samples_per_epoch": args.samples_per_epoch,
         "batch": args.batch,
         "lr": args.lr,

@@ -346,13 +346,12 @@ fn penn_clip(penn: &PennAction, i: usize) -> anyhow::Result<Value> {
     let scale512 = 512.0 / frame_px;
     let mut params = PredictParams::default();
     params.analysis.synth.scale = Scale::FrameSize { frame_px };
+    params.analysis.synth.unobserved_joints = mp_concrete::UnobservedJoints::Ignore;
     let truth_conf = track.confidence().to_owned();
     track.fill_missing();
     let n = track.n_frames();
     let full = {
-        let mut p = AbstractParams::default();
-        p.synth.scale = Scale::FrameSize { frame_px };
-        analyze(&track, &p).ok()
+        analyze(&track, &params.analysis).ok()
     };
     let loop_found = full.as_ref().is_some_and(|a| !a.intervals.is_empty());
     let observe = n / 2;

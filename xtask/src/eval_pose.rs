@@ -20,7 +20,10 @@ use serde_json::{json, Value};
 use mp_geom::skeleton::BLAZEPOSE_TO_COCO17;
 use mp_pose::extract::{extract, ExtractOptions, ModelChoice, SmoothingParams};
 use mp_pose::video::{open_source, read_image};
-use mp_pose::{BlazePose, BlazePoseParams, LandmarkModelKind, MoveNet, MoveNetParams, PoseEstimator, SessionParams};
+use mp_pose::{
+    BlazePose, BlazePoseParams, LandmarkModelKind, MoveNet, MoveNetParams, PoseEstimator,
+    SessionParams,
+};
 
 #[derive(clap::Args, Debug)]
 pub struct EvalPoseArgs {
@@ -65,7 +68,9 @@ fn read_reference(path: &Path, smooth: bool) -> Result<Reference> {
     let sfx = if smooth { "_smooth" } else { "" };
     let f = File::open(path).with_context(|| format!("opening {}", path.display()))?;
     let mut npz = NpzReader::new(f).with_context(|| format!("reading {}", path.display()))?;
-    let get = |e: ndarray_npy::ReadNpzError, k: &str| anyhow::anyhow!("{}: array `{k}`: {e}", path.display());
+    let get = |e: ndarray_npy::ReadNpzError, k: &str| {
+        anyhow::anyhow!("{}: array `{k}`: {e}", path.display())
+    };
     Ok(Reference {
         landmarks_px: npz
             .by_name(&format!("landmarks_px{sfx}"))
@@ -73,7 +78,9 @@ fn read_reference(path: &Path, smooth: bool) -> Result<Reference> {
         visibility: npz
             .by_name(&format!("visibility{sfx}"))
             .map_err(|e| get(e, "visibility"))?,
-        found: npz.by_name(&format!("found{sfx}")).map_err(|e| get(e, "found"))?,
+        found: npz
+            .by_name(&format!("found{sfx}"))
+            .map_err(|e| get(e, "found"))?,
         process_ms: npz
             .by_name(&format!("process_ms{sfx}"))
             .map_err(|e| get(e, "process_ms"))?,
@@ -112,7 +119,11 @@ fn open(model: ModelChoice, threads: usize, tracking: bool) -> Result<Box<dyn Po
         ModelChoice::Heavy => LandmarkModelKind::Heavy,
         ModelChoice::MoveNet => {
             return Ok(Box::new(
-                MoveNet::new(MoveNetParams { session, ..Default::default() }).map_err(|e| anyhow::anyhow!("{e}"))?,
+                MoveNet::new(MoveNetParams {
+                    session,
+                    ..Default::default()
+                })
+                .map_err(|e| anyhow::anyhow!("{e}"))?,
             ))
         }
     };
@@ -136,7 +147,11 @@ fn list_videos(dirs: &[PathBuf]) -> Result<Vec<PathBuf>> {
         let rd = std::fs::read_dir(d).with_context(|| format!("reading {}", d.display()))?;
         for e in rd {
             let p = e?.path();
-            let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+            let ext = p
+                .extension()
+                .and_then(|e| e.to_str())
+                .unwrap_or("")
+                .to_ascii_lowercase();
             if matches!(ext.as_str(), "mp4" | "avi" | "mov" | "mkv" | "webm") {
                 out.push(p);
             }
@@ -150,7 +165,9 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
     let model = ModelChoice::parse(&args.model).map_err(|e| anyhow::anyhow!("{e}"))?;
     let data = mp_geom::paths::data_dir();
     let need = |what: &str| {
-        anyhow::anyhow!("{what} not given and no shared data folder found (set MP_DATA_DIR or pass the folder)")
+        anyhow::anyhow!(
+            "{what} not given and no shared data folder found (set MP_DATA_DIR or pass the folder)"
+        )
     };
     let video_dirs = if args.videos.is_empty() {
         let d = data.clone().ok_or_else(|| need("--videos"))?;
@@ -160,7 +177,10 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
     };
     let ref_dir = match &args.reference {
         Some(r) => r.clone(),
-        None => data.clone().ok_or_else(|| need("--reference"))?.join("reference_keypoints"),
+        None => data
+            .clone()
+            .ok_or_else(|| need("--reference"))?
+            .join("reference_keypoints"),
     };
     let coco_dir = match &args.coco {
         Some(c) => Some(c.clone()),
@@ -170,7 +190,8 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
     let videos = list_videos(&video_dirs)?;
     let mut by_video = serde_json::Map::new();
     let mut pooled: Vec<f64> = Vec::new();
-    let (mut frames_all, mut est_ms_all, mut track_ms_all, mut track_frames_all) = (0usize, 0.0, 0.0, 0usize);
+    let (mut frames_all, mut est_ms_all, mut track_ms_all, mut track_frames_all) =
+        (0usize, 0.0, 0.0, 0usize);
     let (mut ref_ms_all, mut ref_frames_all) = (0.0f64, 0usize);
     let mut agree_all = 0usize;
     let mut found_all = 0usize;
@@ -179,7 +200,11 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
     let coco_map = estimator.skeleton().name == "coco17";
 
     for video in &videos {
-        let stem = video.file_stem().and_then(|s| s.to_str()).unwrap_or("").to_string();
+        let stem = video
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("")
+            .to_string();
         if let Some(o) = &args.only {
             if !stem.contains(o.as_str()) {
                 continue;
@@ -198,10 +223,15 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
             // MediaPipe's Python API stamps frames 1/30 s apart.
             fixed_frame_interval_s: Some(1.0 / 30.0),
         };
-        let ex = extract(source, estimator.as_mut(), &opts, |_, _| {}).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let ex = extract(source, estimator.as_mut(), &opts, |_, _| {})
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
         let t = ex.track.n_frames();
         if r.found.len() < t {
-            bail!("{}: reference has {} frames, decoding gave {t}", ref_path.display(), r.found.len());
+            bail!(
+                "{}: reference has {} frames, decoding gave {t}",
+                ref_path.display(),
+                r.found.len()
+            );
         }
         let pos = ex.track.positions();
         let mut errs = Vec::new();
@@ -214,7 +244,11 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
                 continue;
             }
             let joints: Vec<(usize, usize)> = if coco_map {
-                BLAZEPOSE_TO_COCO17.iter().enumerate().map(|(c, &b)| (c, b)).collect()
+                BLAZEPOSE_TO_COCO17
+                    .iter()
+                    .enumerate()
+                    .map(|(c, &b)| (c, b))
+                    .collect()
             } else {
                 (0..33).map(|k| (k, k)).collect()
             };
@@ -253,7 +287,11 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
         agree_all += agree;
         found_all += found_n;
         let fps = t as f64 * 1000.0 / est_ms;
-        let track_fps = if tr_n > 0 { tr_n as f64 * 1000.0 / tr_ms } else { f64::NAN };
+        let track_fps = if tr_n > 0 {
+            tr_n as f64 * 1000.0 / tr_ms
+        } else {
+            f64::NAN
+        };
         let ref_fps = t as f64 * 1000.0 / ref_ms;
         let entry = json!({
             "frames": t,
@@ -288,7 +326,11 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
         by_video.insert(stem, entry);
     }
     if frames_all == 0 {
-        bail!("no video with a reference found in {:?} / {}", video_dirs, ref_dir.display());
+        bail!(
+            "no video with a reference found in {:?} / {}",
+            video_dirs,
+            ref_dir.display()
+        );
     }
     pooled.sort_by(f64::total_cmp);
     let overall = json!({
@@ -353,15 +395,29 @@ fn print_markdown(model: ModelChoice, report: &Value, rows: &[(String, Value)]) 
     for (stem, e) in rows {
         println!(
             "| {stem} | {} | {} | {} | {} / {} | {} | {} / {} | {} |",
-            e["frames"], f(&e["median_px"]), f(&e["p90_px"]), e["found_frac"], e["reference_found_frac"],
-            e["found_agreement"], f(&e["fps"]), f(&e["fps_tracking"]), f(&e["reference_fps"])
+            e["frames"],
+            f(&e["median_px"]),
+            f(&e["p90_px"]),
+            e["found_frac"],
+            e["reference_found_frac"],
+            e["found_agreement"],
+            f(&e["fps"]),
+            f(&e["fps_tracking"]),
+            f(&e["reference_fps"])
         );
     }
     let o = &report["overall"];
     println!(
         "| **all ({})** | {} | **{}** | **{}** | {} | {} | **{} / {}** | {} |",
-        model.as_str(), o["frames"], f(&o["median_px"]), f(&o["p90_px"]), o["found_frac"], o["found_agreement"],
-        f(&o["fps"]), f(&o["fps_tracking"]), f(&o["reference_fps"])
+        model.as_str(),
+        o["frames"],
+        f(&o["median_px"]),
+        f(&o["p90_px"]),
+        o["found_frac"],
+        o["found_agreement"],
+        f(&o["fps"]),
+        f(&o["fps_tracking"]),
+        f(&o["reference_fps"])
     );
     if let Some(c) = report.get("coco_sample").filter(|c| !c.is_null()) {
         println!();
@@ -379,8 +435,12 @@ fn eval_coco(dir: &Path, model: ModelChoice, threads: usize) -> Result<Value> {
     let mp_ref: Option<Value> = std::fs::read_to_string(dir.join("mediapipe_reference.json"))
         .ok()
         .and_then(|s| serde_json::from_str(&s).ok());
-    let images = ann["images"].as_array().context("test_coco.json: no images")?;
-    let anns = ann["annotations"].as_array().context("test_coco.json: no annotations")?;
+    let images = ann["images"]
+        .as_array()
+        .context("test_coco.json: no images")?;
+    let anns = ann["annotations"]
+        .as_array()
+        .context("test_coco.json: no annotations")?;
     let mut estimator = open(model, threads, false)?;
     let coco_out = estimator.skeleton().name == "coco17";
     let (mut ok_t, mut ok_b, mut n_lab) = (0usize, 0usize, 0usize);
@@ -388,17 +448,24 @@ fn eval_coco(dir: &Path, model: ModelChoice, threads: usize) -> Result<Value> {
     let mut vs_mp = Vec::new();
     let mut per_image = Vec::new();
     for img in images {
-        let file = img["file_name"].as_str().context("image without file_name")?;
+        let file = img["file_name"]
+            .as_str()
+            .context("image without file_name")?;
         let id = img["id"].as_i64().context("image without id")?;
         let frame = read_image(dir.join(file)).map_err(|e| anyhow::anyhow!("{e}"))?;
         estimator.reset();
-        let pose = estimator.estimate(&frame).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let pose = estimator
+            .estimate(&frame)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
         // Our COCO-17 prediction.
         let pred: Option<Vec<[f64; 2]>> = pose.as_ref().map(|p| {
             if coco_out {
                 p.keypoints_px.clone()
             } else {
-                BLAZEPOSE_TO_COCO17.iter().map(|&b| p.keypoints_px[b]).collect()
+                BLAZEPOSE_TO_COCO17
+                    .iter()
+                    .map(|&b| p.keypoints_px[b])
+                    .collect()
             }
         });
         // MediaPipe's prediction for the same image.
@@ -406,16 +473,28 @@ fn eval_coco(dir: &Path, model: ModelChoice, threads: usize) -> Result<Value> {
             .as_ref()
             .and_then(|r| r["images"].as_array())
             .and_then(|a| a.iter().find(|i| i["file_name"].as_str() == Some(file)));
-        let mp_pred: Option<Vec<[f64; 2]>> = mp_img.and_then(|i| i["coco17_pred_px"].as_array()).map(|a| {
-            a.iter()
-                .map(|p| [p[0].as_f64().unwrap_or(f64::NAN), p[1].as_f64().unwrap_or(f64::NAN)])
-                .collect()
-        });
+        let mp_pred: Option<Vec<[f64; 2]>> = mp_img
+            .and_then(|i| i["coco17_pred_px"].as_array())
+            .map(|a| {
+                a.iter()
+                    .map(|p| {
+                        [
+                            p[0].as_f64().unwrap_or(f64::NAN),
+                            p[1].as_f64().unwrap_or(f64::NAN),
+                        ]
+                    })
+                    .collect()
+            });
         if let (Some(p), Some(lms)) = (&pose, mp_img.and_then(|i| i["landmarks"].as_array())) {
             if !coco_out {
                 for (k, l) in lms.iter().enumerate().take(33) {
-                    let (x, y) = (l[0].as_f64().unwrap_or(f64::NAN), l[1].as_f64().unwrap_or(f64::NAN));
-                    let d = ((p.keypoints_px[k][0] - x).powi(2) + (p.keypoints_px[k][1] - y).powi(2)).sqrt();
+                    let (x, y) = (
+                        l[0].as_f64().unwrap_or(f64::NAN),
+                        l[1].as_f64().unwrap_or(f64::NAN),
+                    );
+                    let d = ((p.keypoints_px[k][0] - x).powi(2)
+                        + (p.keypoints_px[k][1] - y).powi(2))
+                    .sqrt();
                     if d.is_finite() {
                         vs_mp.push(d);
                     }
@@ -425,9 +504,13 @@ fn eval_coco(dir: &Path, model: ModelChoice, threads: usize) -> Result<Value> {
         // The annotated person with the largest box.
         let best = anns
             .iter()
-            .filter(|a| a["image_id"].as_i64() == Some(id) && a["num_keypoints"].as_i64().unwrap_or(0) > 0)
+            .filter(|a| {
+                a["image_id"].as_i64() == Some(id) && a["num_keypoints"].as_i64().unwrap_or(0) > 0
+            })
             .max_by(|a, b| {
-                let area = |a: &Value| a["bbox"][2].as_f64().unwrap_or(0.0) * a["bbox"][3].as_f64().unwrap_or(0.0);
+                let area = |a: &Value| {
+                    a["bbox"][2].as_f64().unwrap_or(0.0) * a["bbox"][3].as_f64().unwrap_or(0.0)
+                };
                 area(a).total_cmp(&area(b))
             });
         let Some(best) = best else { continue };
@@ -485,9 +568,18 @@ fn eval_coco(dir: &Path, model: ModelChoice, threads: usize) -> Result<Value> {
             "mediapipe_correct_torso": mt,
             "torso_px": round(torso, 1),
         }));
-        println!("coco {file}: found {} PCK@0.2 torso {it}/{lab} (MediaPipe {mt}/{lab})", pose.is_some());
+        println!(
+            "coco {file}: found {} PCK@0.2 torso {it}/{lab} (MediaPipe {mt}/{lab})",
+            pose.is_some()
+        );
     }
-    let frac = |a: usize| if n_lab > 0 { a as f64 / n_lab as f64 } else { f64::NAN };
+    let frac = |a: usize| {
+        if n_lab > 0 {
+            a as f64 / n_lab as f64
+        } else {
+            f64::NAN
+        }
+    };
     Ok(json!({
         "images": per_image.len(),
         "labelled_keypoints": n_lab,

@@ -2,10 +2,12 @@
 
 mod bench;
 mod eval_concrete;
+mod eval_forecast;
 mod eval_loops;
 mod eval_pose;
 mod models;
 mod setup;
+mod train_forecast;
 
 use clap::{Parser, Subcommand};
 
@@ -27,6 +29,8 @@ enum Command {
     Models(models::ModelsArgs),
     /// Run the criterion benches and the synthesis timing harness; write docs/BENCH.md.
     Bench(bench::BenchArgs),
+    /// Train the forecasting models (PyTorch, CPU) and export them to ONNX under models/forecast/.
+    TrainForecast(train_forecast::TrainForecastArgs),
 }
 
 #[derive(Subcommand)]
@@ -37,6 +41,8 @@ enum Eval {
     Concrete(eval_concrete::EvalConcreteArgs),
     /// Keypoints (BlazePose / MoveNet) against MediaPipe's reference, PCK on the COCO sample, speed.
     Pose(eval_pose::EvalPoseArgs),
+    /// Forecasting (Constant, NN, Loop, AR on Φ / Θ): PCK or (PA-)MPJPE per horizon, with and without DTW.
+    Forecast(eval_forecast::EvalForecastArgs),
 }
 
 fn main() {
@@ -46,10 +52,12 @@ fn main() {
             Eval::Concrete(a) => eval_concrete::run(&a),
             Eval::Loops(a) => eval_loops::run(&a),
             Eval::Pose(a) => eval_pose::run(&a),
+            Eval::Forecast(a) => eval_forecast::run(&a),
         },
         Command::Setup(a) => setup::run(&a),
         Command::Models(a) => models::run(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::TrainForecast(a) => train_forecast::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

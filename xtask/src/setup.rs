@@ -53,7 +53,10 @@ pub fn install_onnxruntime(root: &Path, force: bool) -> Result<PathBuf> {
         .unwrap_or(false);
     if present && !force {
         link_stable_names(&lib_dir)?;
-        println!("setup: ONNX Runtime {ORT_VERSION} already installed at {}", stable.display());
+        println!(
+            "setup: ONNX Runtime {ORT_VERSION} already installed at {}",
+            stable.display()
+        );
         return Ok(stable);
     }
     let wheels = dir.join("wheels");
@@ -64,7 +67,10 @@ pub fn install_onnxruntime(root: &Path, force: bool) -> Result<PathBuf> {
             println!("setup: downloading onnxruntime=={ORT_VERSION} from PyPI (no dependencies)");
             pip_download(&wheels, &format!("onnxruntime=={ORT_VERSION}"))?;
             find_wheel(&wheels)?.with_context(|| {
-                format!("pip reported success but no onnxruntime wheel is in {}", wheels.display())
+                format!(
+                    "pip reported success but no onnxruntime wheel is in {}",
+                    wheels.display()
+                )
             })?
         }
     };
@@ -72,7 +78,11 @@ pub fn install_onnxruntime(root: &Path, force: bool) -> Result<PathBuf> {
     let member = format!("onnxruntime/capi/{}", lib_name());
     extract_zip_member(&wheel, &member, &versioned)?;
     link_stable_names(&lib_dir)?;
-    println!("setup: installed {} (from {})", versioned.display(), wheel.display());
+    println!(
+        "setup: installed {} (from {})",
+        versioned.display(),
+        wheel.display()
+    );
     Ok(stable)
 }
 
@@ -94,7 +104,14 @@ pub fn pip_download(dir: &Path, spec: &str) -> Result<()> {
     let mut last_err = String::new();
     for python in ["python3", "python"] {
         let out = Command::new(python)
-            .args(["-m", "pip", "download", "--no-deps", "--only-binary=:all:", "-d"])
+            .args([
+                "-m",
+                "pip",
+                "download",
+                "--no-deps",
+                "--only-binary=:all:",
+                "-d",
+            ])
             .arg(dir)
             .arg(spec)
             .output();
@@ -111,8 +128,10 @@ pub fn pip_download(dir: &Path, spec: &str) -> Result<()> {
 
 /// Extracts one member of a zip archive to `dest` (atomically, mode 0755).
 pub fn extract_zip_member(archive: &Path, member: &str, dest: &Path) -> Result<()> {
-    let f = std::fs::File::open(archive).with_context(|| format!("opening {}", archive.display()))?;
-    let mut zip = zip::ZipArchive::new(f).with_context(|| format!("reading zip {}", archive.display()))?;
+    let f =
+        std::fs::File::open(archive).with_context(|| format!("opening {}", archive.display()))?;
+    let mut zip =
+        zip::ZipArchive::new(f).with_context(|| format!("reading zip {}", archive.display()))?;
     let mut entry = zip
         .by_name(member)
         .with_context(|| format!("{} has no member {member}", archive.display()))?;
@@ -145,7 +164,8 @@ fn link_stable_names(lib_dir: &Path) -> Result<()> {
         std::os::unix::fs::symlink(lib_name(), &p)
             .with_context(|| format!("linking {}", p.display()))?;
         #[cfg(not(unix))]
-        std::fs::copy(lib_dir.join(lib_name()), &p).with_context(|| format!("copying {}", p.display()))?;
+        std::fs::copy(lib_dir.join(lib_name()), &p)
+            .with_context(|| format!("copying {}", p.display()))?;
     }
     Ok(())
 }

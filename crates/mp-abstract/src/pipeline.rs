@@ -17,12 +17,29 @@ use crate::repetition::{intervals, RepetitiveInterval};
 use crate::synth::{synthesize, translate};
 
 /// Parameters of the whole track → abstract-program analysis.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+///
+/// The default segmentation uses the adaptive λ (paper §3.1: "in practice, we
+/// adaptively choose λ at runtime to match the range of the keypoint motion"):
+/// with the fixed reference λ, short or small repetitions (a rope jump of a
+/// dozen frames) are swallowed by a single primitive and no loop can be seen.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AbstractParams {
     /// Concrete synthesis (segmentation, fitting, scale rule).
     pub synth: SynthParams,
     /// Loop detection; its `unit_scale` is replaced by the one synthesis found for the track.
     pub loops: LoopParams,
+}
+
+impl Default for AbstractParams {
+    fn default() -> Self {
+        AbstractParams {
+            synth: SynthParams {
+                lambda: mp_concrete::Lambda::adaptive(),
+                ..SynthParams::default()
+            },
+            loops: LoopParams::default(),
+        }
+    }
 }
 
 /// Everything the analysis of one track produces.

@@ -2,14 +2,12 @@
 //! whole `mp run` pipeline on it, the embedded default of the README: programs,
 //! loops, pictures and the report).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
 use mp_abstract::dsl::{print_with, PrintOptions};
 use mp_geom::io::write_track;
 use mp_geom::performer::{perform, PerformerParams};
-use mp_geom::Track;
 
 use crate::cmd_run;
 
@@ -50,17 +48,6 @@ pub fn performer_cmd(a: &PerformerArgs) -> anyhow::Result<()> {
         eprintln!("  {:<12} frames {:>4}..{:<4} {} repetitions", s.kind.name(), s.frames.start, s.frames.end, s.reps.len());
     }
     Ok(())
-}
-
-/// Writes the programs, loops and track of `track` into `out` (`track.npz`,
-/// `program.txt`/`.json`, `abstract.txt`/`.json`, `loops.json`), each file
-/// through a temporary name.
-pub fn analyse_into(track: &Track, out: &Path) -> anyhow::Result<mp_abstract::Analysis> {
-    let dir = mp_report::OutputDir::create(out).with_context(|| format!("creating {}", out.display()))?;
-    let mut stages = Vec::new();
-    let an = cmd_run::analyse_timed(track, None, true, &mut stages)?;
-    cmd_run::write_analysis(&dir, track, &an)?;
-    Ok(an)
 }
 
 pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {

@@ -88,12 +88,16 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         max_frames: a.max_frames,
         fixed_frame_interval_s: None,
     };
-    let ex = extract(source, est.as_mut(), &opts, |done, _| pb.set_position(done as u64))
-        .map_err(pose_err)
-        .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
+    let ex = extract(source, est.as_mut(), &opts, |done, _| {
+        pb.set_position(done as u64)
+    })
+    .map_err(pose_err)
+    .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
     pb.finish_and_clear();
     let mut track: Track = if a.world {
-        ex.world.clone().context("the model gave no world coordinates")?
+        ex.world
+            .clone()
+            .context("the model gave no world coordinates")?
     } else {
         ex.track.clone()
     };
@@ -153,12 +157,17 @@ fn draw_frame(rgb: &mut [u8], w: usize, h: usize, track: &Track, t: usize, style
     let conf = track.confidence();
     let kps: Vec<[f64; 2]> = (0..j).map(|k| [pos[[t, k, 0]], pos[[t, k, 1]]]).collect();
     let c: Vec<f64> = (0..j).map(|k| conf[[t, k]]).collect();
-    let mut canvas = Canvas { width: w, height: h, data: rgb };
+    let mut canvas = Canvas {
+        width: w,
+        height: h,
+        data: rgb,
+    };
     draw_pose(&mut canvas, track.skeleton(), &kps, &c, style);
 }
 
 pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
-    let track = mp_geom::io::read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
+    let track = mp_geom::io::read_track(&a.track)
+        .with_context(|| format!("reading {}", a.track.display()))?;
     if track.units() != Units::Pixels || track.dims() != 2 {
         bail!(
             "{}: overlay needs a 2D track in pixels, this one is {}D in {}",
@@ -181,12 +190,18 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
             if a.frames == 0 || a.tile_width == 0 {
                 bail!("--frames and --tile-width must be ≥ 1");
             }
-            let n = source.frame_count.unwrap_or(track.n_frames()).min(track.n_frames()).max(1);
+            let n = source
+                .frame_count
+                .unwrap_or(track.n_frames())
+                .min(track.n_frames())
+                .max(1);
             let k = a.frames.min(n);
             let wanted: Vec<usize> = (0..k)
                 .map(|i| if k == 1 { 0 } else { i * (n - 1) / (k - 1) })
                 .collect();
-            let tile_h = ((a.tile_width as f64) * h as f64 / w as f64).round().max(1.0) as usize;
+            let tile_h = ((a.tile_width as f64) * h as f64 / w as f64)
+                .round()
+                .max(1.0) as usize;
             let mut tiles = Vec::new();
             for frame in source.frames.by_ref() {
                 let mut f = frame.map_err(pose_err)?;
@@ -203,10 +218,20 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
                 bail!("{}: no frames decoded", a.video.display());
             }
             let (px, sw, sh) = contact_sheet(&tiles, a.tile_width, tile_h, a.cols, 4);
-            image::save_buffer(&a.output, &px, sw as u32, sh as u32, image::ExtendedColorType::Rgb8)
-                .with_context(|| format!("writing {}", a.output.display()))?;
+            image::save_buffer(
+                &a.output,
+                &px,
+                sw as u32,
+                sh as u32,
+                image::ExtendedColorType::Rgb8,
+            )
+            .with_context(|| format!("writing {}", a.output.display()))?;
             if !a.quiet {
-                println!("{}: contact sheet of {} frames ({sw}×{sh})", a.output.display(), tiles.len());
+                println!(
+                    "{}: contact sheet of {} frames ({sw}×{sh})",
+                    a.output.display(),
+                    tiles.len()
+                );
             }
         }
         "mp4" | "mkv" | "mov" => {
@@ -224,7 +249,10 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
                 println!("{}: {n} frames", a.output.display());
             }
         }
-        other => bail!("{}: output must be .png or .mp4, not `.{other}`", a.output.display()),
+        other => bail!(
+            "{}: output must be .png or .mp4, not `.{other}`",
+            a.output.display()
+        ),
     }
     Ok(())
 }

@@ -118,8 +118,6 @@ pub struct StageTime {
 pub struct RunSummary {
     /// The analysis.
     pub analysis: Analysis,
-    /// The keypoints analysed.
-    pub track: Track,
     /// The report page.
     pub report: PathBuf,
     /// Time per stage.
@@ -676,6 +674,14 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
     let mut cards = standard_cards(&track, &an.concrete, &executed, &an.intervals);
     cards.extend(kp.extra_cards.iter().cloned());
     let abstract_text = print_with(&an.program, &PrintOptions::summary());
+    let (tl_page, _) = timeline_svg(
+        &an.concrete,
+        &an.intervals,
+        &TimelineParams {
+            title: false,
+            ..TimelineParams::default()
+        },
+    )?;
     let mut linked = vec![
         "program.txt".to_string(),
         "program.json".into(),
@@ -699,7 +705,7 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
         abstract_text: &abstract_text,
         intervals: &an.intervals,
         frames: kp.frames.as_ref(),
-        timeline_svg: &tl_svg,
+        timeline_svg: &tl_page,
         cards: &cards,
         files: &linked,
     })?;
@@ -715,7 +721,6 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
     drop(out);
     Ok(RunSummary {
         analysis: an,
-        track,
         report,
         stages,
         total: start.elapsed(),

@@ -6,6 +6,7 @@
 mod cmd_abstract;
 mod cmd_concrete;
 mod cmd_demo;
+mod cmd_grammar;
 mod cmd_pose;
 mod cmd_run;
 
@@ -45,6 +46,8 @@ enum Command {
     Performer(cmd_demo::PerformerArgs),
     /// The whole pipeline on the procedural performer (the embedded default).
     Demo(cmd_demo::DemoArgs),
+    /// Motion grammars: terminal symbols, grammar learning (ABL), synthesis.
+    Grammar(cmd_grammar::GrammarArgs),
     /// Video or track → programs, loops, pictures and an HTML report in one folder.
     Run(cmd_run::RunArgs),
 }
@@ -64,6 +67,7 @@ fn main() {
         Command::Predict(a) => cmd_abstract::predict_cmd(&a),
         Command::Performer(a) => cmd_demo::performer_cmd(&a),
         Command::Demo(a) => cmd_demo::demo_cmd(&a),
+        Command::Grammar(a) => cmd_grammar::grammar_cmd(&a),
         Command::Run(a) => cmd_run::run_cmd(&a),
     };
     if let Err(e) = result {

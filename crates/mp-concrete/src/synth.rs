@@ -498,6 +498,20 @@ fn fit_segment(
         .collect()
 }
 
+/// The DP's cost table for a track: `cost(k, n)` = Σ over joints of the best
+/// fit error on frames `k..n` + λ of frame `n − 1` (track units), for every
+/// segment of at most `max_segment_frames` frames. [`synthesize`] segments
+/// with exactly this table.
+pub fn segment_costs(track: &Track, params: &SynthParams) -> Result<CostTable> {
+    params.validate()?;
+    let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
+    let unit_scale = params.unit_scale(track);
+    let mut fit = params.fit.clone();
+    fit.unit_scale = unit_scale;
+    let lambda = lambda_per_frame(track, params, unit_scale);
+    cost_table(&prep, &fit, track, &lambda, params.max_segment_frames)
+}
+
 /// Synthesises a concrete program with all details (segmentation cost, scale, λ).
 pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthesis> {
     params.validate()?;

@@ -77,3 +77,46 @@ fn bad_inputs_are_typed_errors() {
     ));
     assert!(segment_brute_force(21, 3, |_, _| 0.0).is_err());
 }
+
+mod on_real_costs {
+    use mp_concrete::dp::segment_brute_force;
+    use mp_concrete::{segment_costs, synthesize_detailed, Lambda, Scale, SynthParams};
+    use mp_geom::{Skeleton, Track, Units};
+    use ndarray::Array3;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// Synthesis (fit costs from mp-geom + λ) finds the same optimum as
+        /// exhaustive search over the same costs, on small random tracks.
+        #[test]
+        fn synthesis_equals_brute_force(
+            t in 2usize..=9,
+            w in 1usize..=9,
+            lambda in 0.0..400.0f64,
+            coords in prop::collection::vec(0.0..200.0f64, 9 * 2 * 2),
+        ) {
+            let mut pos = Array3::zeros((t, 2, 2));
+            for ti in 0..t {
+                for j in 0..2 {
+                    for k in 0..2 {
+                        pos[[ti, j, k]] = coords[(ti * 2 + j) * 2 + k];
+                    }
+                }
+            }
+            let track = Track::new(pos, None, 30.0, Units::Pixels, Skeleton::generic(2)).unwrap();
+            let params = SynthParams {
+                lambda: Lambda::fixed(lambda),
+                max_segment_frames: w,
+                scale: Scale::UnitScale { unit_scale: 1.0 },
+                ..SynthParams::default()
+            };
+            let table = segment_costs(&track, &params).unwrap();
+            let bf = segment_brute_force(t, w, |k, n| table.get(k, n)).unwrap();
+            let syn = synthesize_detailed(&track, &params).unwrap();
+            prop_assert!((syn.segmentation.cost - bf.cost).abs() <= 1e-9 * (1.0 + bf.cost));
+            prop_assert_eq!(syn.program.boundaries(), syn.segmentation.boundaries.clone());
+        }
+    }
+}

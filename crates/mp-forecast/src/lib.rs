@@ -1,1 +1,39 @@
-//! mp-forecast
+//! # mp-forecast — forecasting human motion from keypoints
+//!
+//! Condition on the latest 15 observed frames, predict the next 1–30 (SPEC
+//! "Forecasting", paper 002 "Predicting 3D Human Dynamics from Video").
+//!
+//! * [`Forecaster`]: the seam every method implements
+//!   (`predict(past, horizon) -> Track`).
+//! * Baselines: [`Constant`] (hold the last pose), [`NearestNeighbour`]
+//!   (closest normalised training window, its continuation), [`LoopUnroll`]
+//!   (unroll the last detected loop, `mp-abstract`).
+//! * The learned model ([`ArForecaster`], ONNX through `ort`): a causal
+//!   temporal encoder (residual GroupNorm–ReLU–Conv1d(k=3) blocks, edge
+//!   padding, receptive field 13) gives a latent per frame; an autoregressive
+//!   causal model of the same shape predicts the next latent; a read-out maps
+//!   latents to poses ([`ArSpace::Latent`], "AR on Φ"). The ablation
+//!   [`ArSpace::Pose`] ("AR on Θ") runs the same autoregressive network on
+//!   poses. Trained by `tools/forecast/train.py` (`cargo xtask train-forecast`).
+//! * [`normalize`]: the root-relative, torso-scaled keypoint normalisation
+//!   shared with the training code.
+//! * [`eval`]: the evaluation protocol — PCK@0.05 (2D), MPJPE and PA-MPJPE (3D),
+//!   with and without DTW, per horizon, overall and per action.
+//! * [`statue`]: the frame after which prediction accuracy improves most.
+//! * [`data`]: Penn Action / MSR Action3D clips and the validation split.
+
+pub mod data;
+pub mod error;
+pub mod eval;
+pub mod forecaster;
+pub mod model;
+pub mod nn;
+pub mod normalize;
+pub mod statue;
+
+pub use error::{ForecastError, Result};
+pub use eval::{evaluate, EvalClip, EvalParams, MethodReport};
+pub use forecaster::{Constant, Forecaster, LoopUnroll};
+pub use model::{ArForecaster, ArParams, ArSpace, ForecastModels};
+pub use nn::{NearestNeighbour, NnParams};
+pub use statue::{find_statue, Statue, StatueParams};

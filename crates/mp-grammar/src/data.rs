@@ -11,15 +11,18 @@ use ndarray::{concatenate, Axis};
 
 use crate::error::{GrammarError, Result};
 
-/// A motion read from a file: its track and, for BVH input, the BVH itself.
+/// A motion read from one or more files: its track and, for BVH input, the
+/// BVH itself (so that synthesis can write BVH).
 #[derive(Debug, Clone)]
 pub struct Motion {
     /// Joint positions (or features).
     pub track: Track,
-    /// The BVH, when the file was one.
+    /// The BVH, when the input is BVH.
     pub bvh: Option<Bvh>,
-    /// Where it was read from.
-    pub path: PathBuf,
+    /// The files it was read from, joined in this order.
+    pub paths: Vec<PathBuf>,
+    /// Every `frame_step`-th frame of the files was kept.
+    pub frame_step: usize,
 }
 
 fn is_bvh(path: &Path) -> bool {
@@ -28,23 +31,72 @@ fn is_bvh(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
 }
 
+/// Every `step`-th frame of a BVH, starting at frame 0 (frame time × step).
+pub fn subsample_bvh(bvh: &Bvh, step: usize) -> Result<Bvh> {
+    if step == 0 {
+        return Err(GrammarError::param("frame_step", "must be ≥ 1"));
+    }
+    if step == 1 {
+        return Ok(bvh.clone());
+    }
+    let motion = bvh.motion().slice(ndarray::s![..;step, ..]).to_owned();
+    Ok(Bvh::from_parts(
+        bvh.joints().to_vec(),
+        bvh.frame_time_s() * step as f64,
+        motion,
+    )?)
+}
+
 /// Reads a motion: BVH files keep their [`Bvh`]; everything else goes
 /// through [`mp_geom::io::read_track`].
 pub fn read_motion(path: impl AsRef<Path>) -> Result<Motion> {
-    let path = path.as_ref();
-    if is_bvh(path) {
-        let bvh = Bvh::read(path)?;
+    read_motions(&[path.as_ref().to_path_buf()], 1)
+}
+
+/// Reads files (or one folder of `.bvh` files, sorted by name), keeps every
+/// `frame_step`-th frame of each and joins them in time. BVH files must
+/// share one hierarchy (joint names, parents, channels; the offsets of the
+/// first are kept) and are joined at the channel level, so the result keeps
+/// its BVH; other tracks are joined with [`concat_tracks`].
+pub fn read_motions(paths: &[PathBuf], frame_step: usize) -> Result<Motion> {
+    if frame_step == 0 {
+        return Err(GrammarError::param("frame_step", "must be ≥ 1"));
+    }
+    let files: Vec<PathBuf> = match paths {
+        [one] if one.is_dir() => bvh_files(one)?,
+        [] => return Err(GrammarError::Empty("no motion file given".into())),
+        many => many.to_vec(),
+    };
+    if files.iter().all(|f| is_bvh(f)) {
+        let mut joined: Option<Bvh> = None;
+        for f in &files {
+            let b = subsample_bvh(&Bvh::read(f)?, frame_step)?;
+            joined = Some(match joined {
+                None => b,
+                Some(j) => j.concat(&b).map_err(|e| {
+                    GrammarError::Invalid(format!("{}: cannot follow {}: {e}", f.display(), files[0].display()))
+                })?,
+            });
+        }
+        let bvh = joined.ok_or_else(|| GrammarError::Empty("no motion file given".into()))?;
         let track = bvh.to_track(&BvhTrackParams::default())?;
         Ok(Motion {
             track,
             bvh: Some(bvh),
-            path: path.to_path_buf(),
+            paths: files,
+            frame_step,
         })
     } else {
+        let mut tracks = Vec::with_capacity(files.len());
+        for f in &files {
+            let t = mp_geom::io::read_track(f)?;
+            tracks.push(if frame_step > 1 { t.subsample(frame_step)? } else { t });
+        }
         Ok(Motion {
-            track: mp_geom::io::read_track(path)?,
+            track: concat_tracks(&tracks)?,
             bvh: None,
-            path: path.to_path_buf(),
+            paths: files,
+            frame_step,
         })
     }
 }

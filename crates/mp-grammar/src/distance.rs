@@ -131,6 +131,19 @@ impl PoseFeatures {
     /// Errors: an empty track, no valid joint, a joint index out of range,
     /// or a degenerate body size (every joint at the root).
     pub fn from_track(track: &Track, params: &PoseDistanceParams) -> Result<Self> {
+        Self::from_track_with_scale(track, params, None)
+    }
+
+    /// Like [`from_track`](Self::from_track), but with a given body size `s`
+    /// (in the track's units) instead of the one measured on this track, so
+    /// that distances on a derived track (e.g. a synthesised motion) are in
+    /// the units of its source. `None` measures it as `from_track` does.
+    /// Ignored for feature tracks.
+    pub fn from_track_with_scale(
+        track: &Track,
+        params: &PoseDistanceParams,
+        body_scale: Option<f64>,
+    ) -> Result<Self> {
         let t_len = track.n_frames();
         if t_len == 0 {
             return Err(GrammarError::Empty("track has no frame".into()));
@@ -224,7 +237,10 @@ impl PoseFeatures {
             }
         }
         let n_j_sel = joints.len() as f64;
-        let body_scale = (sum_sq / (t_len as f64 * n_j_sel)).sqrt();
+        let body_scale = match body_scale {
+            Some(s) => s,
+            None => (sum_sq / (t_len as f64 * n_j_sel)).sqrt(),
+        };
         let divisor = if params.scale_normalise {
             if !(body_scale.is_finite() && body_scale > 1e-12) {
                 return Err(GrammarError::Invalid(format!(

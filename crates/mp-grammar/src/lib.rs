@@ -6,6 +6,16 @@
 //!
 //! * [`distance`]: pose distance and segment distance (eq. 1).
 //! * [`kmedoids`]: PAM and FasterPAM from given initial medoids.
+//! * [`objective`], [`symbols`]: the segmentation objective and the GA + SA
+//!   search for terminal symbols (§4).
+//! * [`strings`], [`sentences`]: repeats (suffix array) and the MDL search
+//!   for a partition of the symbol string into sentences (§5).
+//! * [`abl`], [`grammar`], [`sequitur`]: grammar induction, grammars and
+//!   their description length, and the single-string baseline.
+//! * [`derive`], [`synth`]: random derivation, the finite-state-machine
+//!   baseline, greedy segment selection, stitching and subtree
+//!   regeneration (§6).
+//! * [`model`], [`data`]: the whole pipeline as JSON files, and motion input.
 
 pub mod data;
 pub mod distance;
@@ -27,3 +37,16 @@ pub mod strings;
 
 pub use abl::{AblParams, AblResult, Alignment, Corpus, Selection};
 pub use grammar::{DescriptionLength, Grammar, Rule, Sym, Tree};
+pub mod derive;
+pub mod model;
+pub mod synth;
+
+pub use derive::{
+    derive, derive_at_least, regenerate, Derivation, DeriveParams, Fsm, FsmWeighting,
+    RuleWeighting,
+};
+pub use model::{
+    find_symbols, learn_grammar, learn_model, GrammarModel, PipelineParams, SourceInfo,
+    SourceKind, SymbolsFile,
+};
+pub use synth::{RootAlignment, StitchParams, Stitcher, Synthesis};

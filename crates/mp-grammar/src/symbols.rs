@@ -276,6 +276,14 @@ impl SymbolSegment {
     pub fn segment(&self) -> Segment {
         Segment::new(self.start, self.end)
     }
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.end.saturating_sub(self.start)
+    }
+    /// True when the segment has no frame.
+    pub fn is_empty(&self) -> bool {
+        self.end <= self.start
+    }
 }
 
 /// Counters and timings of a search.

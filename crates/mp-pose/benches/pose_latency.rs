@@ -27,9 +27,12 @@ fn frame() -> Frame {
 fn bench(c: &mut Criterion) {
     let frame = frame();
     let mut g = c.benchmark_group("pose_per_frame");
-    g.sample_size(40).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(2));
+    g.sample_size(40)
+        .measurement_time(Duration::from_secs(6))
+        .warm_up_time(Duration::from_secs(2));
 
-    let mut full = BlazePose::new(BlazePoseParams::default()).expect("BlazePose full (run `cargo xtask setup`)");
+    let mut full = BlazePose::new(BlazePoseParams::default())
+        .expect("BlazePose full (run `cargo xtask setup`)");
     g.bench_function("detector", |b| {
         b.iter(|| black_box(full.detector_mut().detect(frame.view()).expect("detect")))
     });
@@ -39,29 +42,50 @@ fn bench(c: &mut Criterion) {
         .map(|d| roi_from_points(d.keypoints_px[0], d.keypoints_px[1], 1.25))
         .unwrap_or(mp_pose::Roi::letterbox(frame.width, frame.height));
     g.bench_function("landmark_full", |b| {
-        b.iter(|| black_box(full.landmarks_mut().run(frame.view(), &roi).expect("landmarks")))
+        b.iter(|| {
+            black_box(
+                full.landmarks_mut()
+                    .run(frame.view(), &roi)
+                    .expect("landmarks"),
+            )
+        })
     });
     // Tracking: after the first frame the crop comes from the previous landmarks.
     full.estimate(&frame).expect("first frame");
     let mut idx = 1usize;
     g.bench_function("tracking_frame_full", |b| {
         b.iter(|| {
-            let f = Frame { index: idx, timestamp_s: idx as f64 / 30.0, ..frame.clone() };
+            let f = Frame {
+                index: idx,
+                timestamp_s: idx as f64 / 30.0,
+                ..frame.clone()
+            };
             idx += 1;
             black_box(full.estimate(&f).expect("tracking"))
         })
     });
     drop(full);
 
-    let mut lite = BlazePose::new(BlazePoseParams { model: LandmarkModelKind::Lite, ..Default::default() })
-        .expect("BlazePose lite");
+    let mut lite = BlazePose::new(BlazePoseParams {
+        model: LandmarkModelKind::Lite,
+        ..Default::default()
+    })
+    .expect("BlazePose lite");
     g.bench_function("landmark_lite", |b| {
-        b.iter(|| black_box(lite.landmarks_mut().run(frame.view(), &roi).expect("landmarks")))
+        b.iter(|| {
+            black_box(
+                lite.landmarks_mut()
+                    .run(frame.view(), &roi)
+                    .expect("landmarks"),
+            )
+        })
     });
     drop(lite);
 
     let mut mv = MoveNet::new(MoveNetParams::default()).expect("MoveNet");
-    g.bench_function("movenet", |b| b.iter(|| black_box(mv.estimate(&frame).expect("movenet"))));
+    g.bench_function("movenet", |b| {
+        b.iter(|| black_box(mv.estimate(&frame).expect("movenet")))
+    });
     g.finish();
 }
 

@@ -124,14 +124,9 @@ pub fn draw_pose(
         };
         canvas.line(keypoints[a], keypoints[b], style.thickness_px, rgb);
     }
-    for k in 0..keypoints.len() {
+    for (k, p) in keypoints.iter().enumerate() {
         if ok(k) {
-            canvas.disc(
-                keypoints[k][0],
-                keypoints[k][1],
-                style.radius_px,
-                style.center_rgb,
-            );
+            canvas.disc(p[0], p[1], style.radius_px, style.center_rgb);
         }
     }
 }
@@ -216,7 +211,7 @@ mod tests {
         let (px, w, h) = contact_sheet(&tiles, 4, 3, 2, 1);
         assert_eq!((w, h), (2 * 4 + 3, 3 * 3 + 4));
         assert_eq!(px.len(), w * h * 3);
-        assert_eq!(px[((1) * w + 1) * 3], 255);
+        assert_eq!(px[(w + 1) * 3], 255);
     }
 
     #[test]

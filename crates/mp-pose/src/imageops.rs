@@ -88,13 +88,20 @@ pub enum Border {
 const INTER_BITS: i64 = 5;
 const INTER_TAB: i64 = 1 << INTER_BITS;
 
-/// Rounds to the nearest integer, halves up (|v| < 2^40). A float-to-int
-/// cast of a positive value truncates, so shift into the positive range
-/// first: this avoids a library call per pixel on targets without SSE4.1.
+/// Rounds to the nearest integer, ties to even (as OpenCV's `cvRound`), for
+/// |v| < 2^40. A float-to-int cast of a positive value truncates, so the value
+/// is shifted into the positive range first: this avoids a library call per
+/// pixel on targets without SSE4.1.
 #[inline(always)]
 fn round_fixed(v: f64) -> i64 {
-    const OFFSET: f64 = (1u64 << 40) as f64;
-    ((v + 0.5 + OFFSET) as i64) - (1i64 << 40)
+    const SHIFT: i64 = 1 << 40;
+    let t = v + 0.5 + SHIFT as f64;
+    let mut i = t as i64;
+    if i as f64 == t && i & 1 == 1 {
+        // Exactly halfway: round to the even neighbour.
+        i -= 1;
+    }
+    i - SHIFT
 }
 
 /// Crops the rotated rectangle `roi` of `src` into an `out_w × out_h` RGB
@@ -292,6 +299,23 @@ mod tests {
                 let g = out[(i * w + j) * 3 + 1] as i32;
                 assert!(g >= g_prev, "green (source y) must grow along output rows");
             }
+        }
+    }
+
+    #[test]
+    fn rounding_is_to_nearest_with_ties_to_even() {
+        for (v, want) in [
+            (0.4, 0),
+            (0.5, 0),
+            (1.5, 2),
+            (2.5, 2),
+            (-0.5, 0),
+            (-1.5, -2),
+            (-2.6, -3),
+            (7.49, 7),
+        ] {
+            assert_eq!(round_fixed(v), want, "{v}");
+            assert_eq!(round_fixed(v), (v as f64).round_ties_even() as i64);
         }
     }
 

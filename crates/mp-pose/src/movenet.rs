@@ -161,7 +161,7 @@ impl PoseEstimator for MoveNet {
             return Ok(None);
         }
         let score = kps.iter().map(|k| k.1).sum::<f64>() / kps.len() as f64;
-        if !(score >= self.params.min_pose_score) {
+        if score.is_nan() || score < self.params.min_pose_score {
             return Ok(None);
         }
         // Object scale: diagonal of the box around the confident keypoints.

@@ -231,13 +231,18 @@ pub fn open_session(path: &Path, params: &SessionParams) -> Result<Session> {
     let name = path.display().to_string();
     let env = environment()?;
     let spin = if params.allow_spinning { "1" } else { "0" };
+    let err = |e: ort::Error<ort::session::builder::SessionBuilder>| PoseError::model(&name, e);
     let builder = Session::builder(&env).map_err(|e| PoseError::model(&name, e))?;
-    let mut builder = builder
+    let builder = builder
         .with_intra_threads(params.intra_threads)
-        .and_then(|b| b.with_inter_threads(1))
-        .and_then(|b| b.with_config_entry("session.intra_op.allow_spinning", spin))
-        .and_then(|b| b.with_config_entry("session.inter_op.allow_spinning", spin))
-        .map_err(|e| PoseError::model(&name, e))?;
+        .map_err(err)?;
+    let builder = builder.with_inter_threads(1).map_err(err)?;
+    let builder = builder
+        .with_config_entry("session.intra_op.allow_spinning", spin)
+        .map_err(err)?;
+    let mut builder = builder
+        .with_config_entry("session.inter_op.allow_spinning", spin)
+        .map_err(err)?;
     builder
         .commit_from_file(path)
         .map_err(|e| PoseError::model(&name, e))

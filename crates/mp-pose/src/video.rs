@@ -505,13 +505,18 @@ impl VideoWriter {
     pub fn create(path: impl AsRef<Path>, width: usize, height: usize, fps: f64) -> Result<Self> {
         let path = path.as_ref().to_path_buf();
         if width == 0 || height == 0 {
-            return Err(PoseError::param("size", format!("empty frame size {width}×{height}")));
+            return Err(PoseError::param(
+                "size",
+                format!("empty frame size {width}×{height}"),
+            ));
         }
         if !(fps.is_finite() && fps > 0.0) {
             return Err(PoseError::param("fps", format!("must be > 0, got {fps}")));
         }
         let mut child = Command::new("ffmpeg")
-            .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s"])
+            .args([
+                "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
+            ])
             .arg(format!("{width}x{height}"))
             .arg("-r")
             .arg(format!("{fps}"))

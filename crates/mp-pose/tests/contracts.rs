@@ -17,7 +17,11 @@ fn fixtures() -> Value {
 }
 
 fn floats(v: &Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }
 
 /// value(y, x, c) = (3x + 5y + 50c) mod 256, as in the fixture script.
@@ -37,12 +41,18 @@ fn assert_close(what: &str, got: &[f64], want: &[f64], tol: f64) {
     assert_eq!(got.len(), want.len(), "{what}: length");
     for (i, (g, w)) in got.iter().zip(want).enumerate() {
         let lim = tol * w.abs().max(1.0);
-        assert!((g - w).abs() <= lim, "{what}[{i}]: got {g}, Python onnxruntime gave {w}");
+        assert!(
+            (g - w).abs() <= lim,
+            "{what}[{i}]: got {g}, Python onnxruntime gave {w}"
+        );
     }
 }
 
 fn info<'a>(infos: &'a [TensorInfo], name: &str) -> &'a TensorInfo {
-    infos.iter().find(|i| i.name == name).unwrap_or_else(|| panic!("no tensor {name}: {infos:?}"))
+    infos
+        .iter()
+        .find(|i| i.name == name)
+        .unwrap_or_else(|| panic!("no tensor {name}: {infos:?}"))
 }
 
 fn session(file: ModelFile) -> ort::session::Session {
@@ -67,11 +77,18 @@ fn detector_contract_and_fixed_output() {
     let mut det = PoseDetector::open(
         &path,
         // Keep every anchor so that decoding can be compared with the raw fixture.
-        DetectorParams { min_score: 0.0, nms_iou: 1.0, ..Default::default() },
+        DetectorParams {
+            min_score: 0.0,
+            nms_iou: 1.0,
+            ..Default::default()
+        },
         &SessionParams::default(),
     )
     .unwrap();
-    let input: Vec<f32> = pattern(224).iter().map(|&v| v as f32 / 127.5 - 1.0).collect();
+    let input: Vec<f32> = pattern(224)
+        .iter()
+        .map(|&v| v as f32 / 127.5 - 1.0)
+        .collect();
     assert!(input.iter().all(|v| (-1.0..=1.0).contains(v)));
     let dets = det.run_tensor(&input).unwrap();
     // nms_iou = 1.0 merges only identical boxes, so (almost) every anchor survives;
@@ -80,8 +97,15 @@ fn detector_contract_and_fixed_output() {
     let bi = fx["best_index"].as_u64().unwrap() as usize;
     let anchors = detector::ssd_anchors();
     let raw = floats(&fx["best_boxes"]);
-    let want_kp0 = [raw[4] / 224.0 + anchors[bi][0] as f64, raw[5] / 224.0 + anchors[bi][1] as f64];
-    assert!((best.keypoints[0][0] as f64 - want_kp0[0]).abs() < 1e-3, "{:?} vs {want_kp0:?}", best.keypoints[0]);
+    let want_kp0 = [
+        raw[4] / 224.0 + anchors[bi][0] as f64,
+        raw[5] / 224.0 + anchors[bi][1] as f64,
+    ];
+    assert!(
+        (best.keypoints[0][0] as f64 - want_kp0[0]).abs() < 1e-3,
+        "{:?} vs {want_kp0:?}",
+        best.keypoints[0]
+    );
     assert!((best.keypoints[0][1] as f64 - want_kp0[1]).abs() < 1e-3);
     let best_logit = floats(&fx["scores"])[6];
     let want_score = 1.0 / (1.0 + (-best_logit).exp());
@@ -93,14 +117,23 @@ fn detector_contract_and_fixed_output() {
 fn detector_raw_outputs_match_python() {
     let fx = &fixtures()["detector"];
     let mut s = session(ModelFile::PoseDetection);
-    let input: Vec<f32> = pattern(224).iter().map(|&v| v as f32 / 127.5 - 1.0).collect();
-    let t = ort::value::TensorRef::from_array_view(([1usize, 224, 224, 3], input.as_slice())).unwrap();
+    let input: Vec<f32> = pattern(224)
+        .iter()
+        .map(|&v| v as f32 / 127.5 - 1.0)
+        .collect();
+    let t =
+        ort::value::TensorRef::from_array_view(([1usize, 224, 224, 3], input.as_slice())).unwrap();
     let out = s.run(ort::inputs!["input_1" => t]).unwrap();
     let (_, boxes) = out["Identity"].try_extract_tensor::<f32>().unwrap();
     let (_, scores) = out["Identity_1"].try_extract_tensor::<f32>().unwrap();
     let got: Vec<f64> = boxes[..36].iter().map(|&v| v as f64).collect();
     assert_close("detector boxes", &got, &floats(&fx["boxes_first_36"]), 1e-3);
-    let idx: Vec<usize> = fx["score_idx"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap() as usize).collect();
+    let idx: Vec<usize> = fx["score_idx"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
     let got: Vec<f64> = idx.iter().map(|&i| scores[i] as f64).collect();
     assert_close("detector scores", &got, &floats(&fx["scores"]), 1e-3);
 }
@@ -126,7 +159,10 @@ fn check_landmark(kind: LandmarkModelKind, file: ModelFile, key: &str) {
     let mut m = LandmarkModel::open(
         &path,
         kind,
-        RefineParams { enabled: false, ..Default::default() },
+        RefineParams {
+            enabled: false,
+            ..Default::default()
+        },
         &SessionParams::default(),
     )
     .unwrap();
@@ -142,25 +178,43 @@ fn check_landmark(kind: LandmarkModelKind, file: ModelFile, key: &str) {
     for (k, lm) in out.landmarks.iter().enumerate() {
         assert!((0.0..=1.0).contains(&lm.visibility) && (0.0..=1.0).contains(&lm.presence));
         // Coordinates in 256-pixel units against the raw fixture.
-        got.extend([lm.x as f64 * 256.0, lm.y as f64 * 256.0, lm.z as f64 * 256.0]);
+        got.extend([
+            lm.x as f64 * 256.0,
+            lm.y as f64 * 256.0,
+            lm.z as f64 * 256.0,
+        ]);
         want.extend([raw[5 * k], raw[5 * k + 1], raw[5 * k + 2]]);
         let v = 1.0 / (1.0 + (-raw[5 * k + 3]).exp());
-        assert!((lm.visibility as f64 - v).abs() < 1e-4, "{key} visibility {k}");
+        assert!(
+            (lm.visibility as f64 - v).abs() < 1e-4,
+            "{key} visibility {k}"
+        );
     }
     assert_close(&format!("{key} landmarks"), &got, &want, 1e-3);
     let world: Vec<f64> = out.world.iter().flat_map(|w| w.map(|v| v as f64)).collect();
     assert_close(&format!("{key} world"), &world, &floats(&fx["world"]), 1e-3);
-    assert!(world.iter().all(|v| v.abs() < 5.0), "world coordinates are metres");
+    assert!(
+        world.iter().all(|v| v.abs() < 5.0),
+        "world coordinates are metres"
+    );
 }
 
 #[test]
 fn landmark_full_contract_and_fixed_output() {
-    check_landmark(LandmarkModelKind::Full, ModelFile::LandmarkFull, "landmark_full");
+    check_landmark(
+        LandmarkModelKind::Full,
+        ModelFile::LandmarkFull,
+        "landmark_full",
+    );
 }
 
 #[test]
 fn landmark_lite_contract_and_fixed_output() {
-    check_landmark(LandmarkModelKind::Lite, ModelFile::LandmarkLite, "landmark_lite");
+    check_landmark(
+        LandmarkModelKind::Lite,
+        ModelFile::LandmarkLite,
+        "landmark_lite",
+    );
 }
 
 #[test]
@@ -168,28 +222,50 @@ fn movenet_contract_and_fixed_output() {
     let s = session(ModelFile::MoveNetLightning);
     let ins = runtime::inputs_of(&s);
     let outs = runtime::outputs_of(&s);
-    assert_eq!(info(&ins, "serving_default_input:0").shape, vec![1, 192, 192, 3]);
+    assert_eq!(
+        info(&ins, "serving_default_input:0").shape,
+        vec![1, 192, 192, 3]
+    );
     assert_eq!(info(&ins, "serving_default_input:0").dtype, "u8");
-    assert_eq!(info(&outs, "StatefulPartitionedCall:0").shape, vec![1, 1, 17, 3]);
+    assert_eq!(
+        info(&outs, "StatefulPartitionedCall:0").shape,
+        vec![1, 1, 17, 3]
+    );
     drop(s);
     let mut m = MoveNet::new(MoveNetParams::default()).unwrap();
     let kps = m.run_tensor(&pattern(192)).unwrap();
     assert_eq!(kps.len(), 17);
     let got: Vec<f64> = kps.iter().flat_map(|k| k.map(|v| v as f64)).collect();
     for k in &kps {
-        assert!(k.iter().all(|v| (0.0..=1.0).contains(v)), "(y, x, score) are normalised: {k:?}");
+        assert!(
+            k.iter().all(|v| (0.0..=1.0).contains(v)),
+            "(y, x, score) are normalised: {k:?}"
+        );
     }
     // Same library build, same int8 graph: the coordinates agree closely.
-    assert_close("movenet", &got, &floats(&fixtures()["movenet"]["keypoints"]), 1e-3);
+    assert_close(
+        "movenet",
+        &got,
+        &floats(&fixtures()["movenet"]["keypoints"]),
+        1e-3,
+    );
 }
 
 #[test]
 fn wrong_model_file_breaks_the_contract() {
     // Opening the MoveNet file as a landmark model must be refused with a clear message.
     let path = runtime::model_path(ModelFile::MoveNetLightning).unwrap();
-    let err = LandmarkModel::open(&path, LandmarkModelKind::Full, RefineParams::default(), &SessionParams::default())
-        .err()
-        .expect("must fail");
+    let err = LandmarkModel::open(
+        &path,
+        LandmarkModelKind::Full,
+        RefineParams::default(),
+        &SessionParams::default(),
+    )
+    .err()
+    .expect("must fail");
     let msg = err.to_string();
-    assert!(msg.contains("tensor contract") && msg.contains("input_1"), "{msg}");
+    assert!(
+        msg.contains("tensor contract") && msg.contains("input_1"),
+        "{msg}"
+    );
 }

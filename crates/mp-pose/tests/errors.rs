@@ -35,7 +35,11 @@ fn quva_video_frame_count_and_rate() {
     let info = probe(&path).unwrap();
     assert_eq!((info.width, info.height), (640, 360));
     assert!((info.fps - 29.0).abs() < 0.01, "{}", info.fps);
-    let n = VideoReader::open(&path).unwrap().map(|f| f.unwrap()).count();
+    let mut n = 0;
+    for f in VideoReader::open(&path).unwrap() {
+        assert_eq!(f.unwrap().rgb.len(), 640 * 360 * 3);
+        n += 1;
+    }
     assert_eq!(n, 152);
 }
 
@@ -64,9 +68,15 @@ fn corrupt_video_is_a_decoding_error() {
     drop(f);
     let err = match VideoReader::open(&path) {
         Err(e) => e,
-        Ok(mut r) => r.next().expect("an error item").err().expect("must not decode"),
+        Ok(mut r) => r
+            .next()
+            .expect("an error item")
+            .expect_err("must not decode"),
     };
-    assert!(matches!(err, PoseError::Video { .. } | PoseError::VideoFrame { .. }), "{err:?}");
+    assert!(
+        matches!(err, PoseError::Video { .. } | PoseError::VideoFrame { .. }),
+        "{err:?}"
+    );
     assert!(err.to_string().contains("random.mp4"), "{err}");
 }
 
@@ -120,25 +130,47 @@ fn missing_model_names_the_file_and_the_task() {
     .unwrap();
     let msg = err.to_string();
     assert!(matches!(err, PoseError::ModelMissing { .. }), "{err:?}");
-    assert!(msg.contains("pose_detection.onnx") && msg.contains("cargo xtask models"), "{msg}");
+    assert!(
+        msg.contains("pose_detection.onnx") && msg.contains("cargo xtask models"),
+        "{msg}"
+    );
     let err = MoveNet::new(MoveNetParams {
         model_dir: Some(dir.path().to_path_buf()),
         ..Default::default()
     })
     .err()
     .unwrap();
-    assert!(err.to_string().contains("movenet_singlepose_lightning_int8.onnx"));
+    assert!(err
+        .to_string()
+        .contains("movenet_singlepose_lightning_int8.onnx"));
 }
 
 #[test]
 fn invalid_parameters_are_rejected() {
-    let bad = BlazePoseParams { min_presence: 1.5, ..Default::default() };
-    assert!(matches!(bad.validate(), Err(PoseError::InvalidParam { name: "min_presence", .. })));
-    let bad = BlazePoseParams { roi_scale: f64::NAN, ..Default::default() };
+    let bad = BlazePoseParams {
+        min_presence: 1.5,
+        ..Default::default()
+    };
+    assert!(matches!(
+        bad.validate(),
+        Err(PoseError::InvalidParam {
+            name: "min_presence",
+            ..
+        })
+    ));
+    let bad = BlazePoseParams {
+        roi_scale: f64::NAN,
+        ..Default::default()
+    };
     assert!(bad.validate().is_err());
-    let bad = MoveNetParams { min_pose_score: -0.1, ..Default::default() };
+    let bad = MoveNetParams {
+        min_pose_score: -0.1,
+        ..Default::default()
+    };
     assert!(bad.validate().is_err());
-    let mut s = mp_pose::SessionParams::default();
-    s.intra_threads = 0;
+    let s = mp_pose::SessionParams {
+        intra_threads: 0,
+        ..Default::default()
+    };
     assert!(s.validate().is_err());
 }

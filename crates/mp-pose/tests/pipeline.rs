@@ -30,7 +30,10 @@ fn first_golf_frame_matches_mediapipe() {
     let roi = diag.roi.unwrap();
     let (w, h) = (frame.width as f64, frame.height as f64);
     let want = r.roi_from_detection.row(0);
-    assert!((roi.center_x_px / w - want[0] as f64).abs() < 1e-3, "{roi:?} vs {want:?}");
+    assert!(
+        (roi.center_x_px / w - want[0] as f64).abs() < 1e-3,
+        "{roi:?} vs {want:?}"
+    );
     assert!((roi.center_y_px / h - want[1] as f64).abs() < 1e-3);
     assert!((roi.width_px / w - want[2] as f64).abs() < 2e-3);
     assert!((roi.rotation_rad - want[4] as f64).abs() < 2e-3);
@@ -49,7 +52,10 @@ fn first_golf_frame_matches_mediapipe() {
     assert!(worst < 6.0, "worst {worst} px");
     // World coordinates: metres, hip-centred (hips within a few cm of the origin, body < 2.5 m).
     let world = pose.world_m.unwrap();
-    let hip = [(world[23][0] + world[24][0]) / 2.0, (world[23][1] + world[24][1]) / 2.0];
+    let hip = [
+        (world[23][0] + world[24][0]) / 2.0,
+        (world[23][1] + world[24][1]) / 2.0,
+    ];
     assert!(hip[0].abs() < 0.05 && hip[1].abs() < 0.05, "{hip:?}");
     assert!(world.iter().all(|p| p.iter().all(|v| v.abs() < 1.5)));
 }
@@ -64,10 +70,23 @@ fn tracking_follows_mediapipe_on_golf() {
     })
     .unwrap();
     let source = open_source(golf()).unwrap();
-    let ex = extract(source, &mut bp, &ExtractOptions { max_frames: Some(40), ..Default::default() }, |_, _| {}).unwrap();
+    let ex = extract(
+        source,
+        &mut bp,
+        &ExtractOptions {
+            max_frames: Some(40),
+            ..Default::default()
+        },
+        |_, _| {},
+    )
+    .unwrap();
     assert_eq!(ex.track.n_frames(), 40);
     assert!(ex.found.iter().all(|&f| f));
-    assert_eq!(ex.detector_ran.iter().filter(|&&d| d).count(), 1, "detector only on frame 0");
+    assert_eq!(
+        ex.detector_ran.iter().filter(|&&d| d).count(),
+        1,
+        "detector only on frame 0"
+    );
     assert!((ex.track.fps() - 29.97).abs() < 1e-6);
     let pos = ex.track.positions();
     let mut errs = Vec::new();
@@ -96,19 +115,37 @@ fn blank_frame_has_no_pose() {
     assert!(pose.is_none(), "no person in a grey frame");
     assert!(diag.detector_ran);
     let mut mv = MoveNet::new(MoveNetParams::default()).unwrap();
-    assert!(mv.estimate(&frame).unwrap().is_none(), "MoveNet must not invent a person");
+    assert!(
+        mv.estimate(&frame).unwrap().is_none(),
+        "MoveNet must not invent a person"
+    );
 }
 
 #[test]
 fn frames_without_a_person_are_marked_missing_in_the_track() {
     // A person, then blank frames, then the person again.
     let person = VideoReader::open(golf()).unwrap().next().unwrap().unwrap();
-    let blank = Frame::new(1, 1.0 / 30.0, person.width, person.height, vec![0u8; person.rgb.len()]).unwrap();
+    let blank = Frame::new(
+        1,
+        1.0 / 30.0,
+        person.width,
+        person.height,
+        vec![0u8; person.rgb.len()],
+    )
+    .unwrap();
     let frames = vec![
         Ok(person.clone()),
         Ok(blank.clone()),
-        Ok(Frame { index: 2, timestamp_s: 2.0 / 30.0, ..blank }),
-        Ok(Frame { index: 3, timestamp_s: 3.0 / 30.0, ..person }),
+        Ok(Frame {
+            index: 2,
+            timestamp_s: 2.0 / 30.0,
+            ..blank
+        }),
+        Ok(Frame {
+            index: 3,
+            timestamp_s: 3.0 / 30.0,
+            ..person
+        }),
     ];
     let source = mp_pose::FrameSource {
         width: 354,
@@ -122,7 +159,10 @@ fn frames_without_a_person_are_marked_missing_in_the_track() {
     assert_eq!(ex.found, vec![true, false, false, true]);
     let conf = ex.track.confidence();
     for t in [1, 2] {
-        assert!(conf.row(t).iter().all(|&c| c == 0.0), "frame {t} must be all missing");
+        assert!(
+            conf.row(t).iter().all(|&c| c == 0.0),
+            "frame {t} must be all missing"
+        );
     }
     assert!(conf.row(3).iter().filter(|&&c| c > 0.5).count() > 20);
     // Re-detected after losing the person.
@@ -136,14 +176,20 @@ fn coco_image_blazepose_and_movenet_agree_with_annotation() {
     let frame = read_image(dir.join("000000000785.jpg")).unwrap();
     assert_eq!((frame.width, frame.height), (640, 425));
     let ann: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("test_coco.json")).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.join("test_coco.json")).unwrap())
+            .unwrap();
     let a = ann["annotations"]
         .as_array()
         .unwrap()
         .iter()
         .find(|a| a["image_id"] == 785)
         .unwrap();
-    let kp: Vec<f64> = a["keypoints"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let kp: Vec<f64> = a["keypoints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
     let torso = ((kp[15] - kp[36]).powi(2) + (kp[16] - kp[37]).powi(2)).sqrt();
     let pck = |pred: &[[f64; 2]]| {
         let mut ok = 0;
@@ -151,7 +197,8 @@ fn coco_image_blazepose_and_movenet_agree_with_annotation() {
         for j in 0..17 {
             if kp[3 * j + 2] > 0.0 {
                 n += 1;
-                let d = ((pred[j][0] - kp[3 * j]).powi(2) + (pred[j][1] - kp[3 * j + 1]).powi(2)).sqrt();
+                let d = ((pred[j][0] - kp[3 * j]).powi(2) + (pred[j][1] - kp[3 * j + 1]).powi(2))
+                    .sqrt();
                 if d <= 0.2 * torso {
                     ok += 1;
                 }
@@ -159,11 +206,25 @@ fn coco_image_blazepose_and_movenet_agree_with_annotation() {
         }
         ok as f64 / n as f64
     };
-    let mut bp = BlazePose::new(BlazePoseParams { tracking: false, ..Default::default() }).unwrap();
+    let mut bp = BlazePose::new(BlazePoseParams {
+        tracking: false,
+        ..Default::default()
+    })
+    .unwrap();
     let pose = bp.estimate(&frame).unwrap().unwrap();
-    let coco: Vec<[f64; 2]> = mp_geom::skeleton::BLAZEPOSE_TO_COCO17.iter().map(|&b| pose.keypoints_px[b]).collect();
+    let coco: Vec<[f64; 2]> = mp_geom::skeleton::BLAZEPOSE_TO_COCO17
+        .iter()
+        .map(|&b| pose.keypoints_px[b])
+        .collect();
     assert!(pck(&coco) >= 0.9, "BlazePose PCK {}", pck(&coco));
     let mut mv = MoveNet::new(MoveNetParams::default()).unwrap();
-    let mpose = mv.estimate(&frame).unwrap().expect("MoveNet finds the skier");
-    assert!(pck(&mpose.keypoints_px) >= 0.8, "MoveNet PCK {}", pck(&mpose.keypoints_px));
+    let mpose = mv
+        .estimate(&frame)
+        .unwrap()
+        .expect("MoveNet finds the skier");
+    assert!(
+        pck(&mpose.keypoints_px) >= 0.8,
+        "MoveNet PCK {}",
+        pck(&mpose.keypoints_px)
+    );
 }

@@ -7,10 +7,13 @@ use mp_pose::{BlazePose, BlazePoseParams, PoseError};
 fn missing_library_says_run_setup() {
     // SAFETY: this test binary has a single test, so no other thread reads the environment.
     unsafe { std::env::set_var("ORT_DYLIB_PATH", "/nonexistent/libonnxruntime.so") };
-    let err = mp_pose::runtime::environment().err().expect("must fail");
+    let err = mp_pose::runtime::environment().expect_err("must fail");
     assert!(matches!(err, PoseError::RuntimeMissing { .. }), "{err:?}");
     let msg = err.to_string();
-    assert!(msg.contains("cargo xtask setup") && msg.contains("/nonexistent/libonnxruntime.so"), "{msg}");
+    assert!(
+        msg.contains("cargo xtask setup") && msg.contains("/nonexistent/libonnxruntime.so"),
+        "{msg}"
+    );
     // Opening a model goes through the same check (after finding the model files).
     match BlazePose::new(BlazePoseParams::default()) {
         Err(PoseError::RuntimeMissing { .. }) | Err(PoseError::ModelMissing { .. }) => {}

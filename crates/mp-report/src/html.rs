@@ -96,7 +96,11 @@ fn round_to(v: f64, step: f64) -> f64 {
 pub fn standard_cards(track: &Track, program: &Program, executed: &Track, intervals: &[RepetitiveInterval]) -> Vec<Card> {
     let t = program.n_frames();
     let mut cards = vec![
-        Card::new("frames", t.to_string(), format!("{:.2} s at {:.4} fps", t as f64 / program.fps, program.fps).replace(".0000 fps", " fps")),
+        Card::new(
+            "frames",
+            t.to_string(),
+            format!("{:.2} s at {} fps", t as f64 / program.fps, crate::svg::tick_label(program.fps)),
+        ),
         Card::new("joints", program.n_joints().to_string(), format!("skeleton {}, {}D", program.skeleton, program.dims)),
         Card::new(
             "segments",
@@ -427,7 +431,7 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
 </section>
 <div class="grid2">
 <section class="panel" id="trajectory">
-<h2>Trajectory of <span class="jn"></span> <span class="hint">keypoints as dots, the program coloured by primitive kind, loops shaded · click to jump</span></h2>
+<h2><span>Trajectory of <span class="jn"></span></span> <span class="hint">keypoints as dots, the program coloured by primitive kind, loops shaded · click to jump</span></h2>
 <div class="plot-wrap"><canvas id="plot"></canvas></div>
 <div class="legend" style="margin-top:6px"><span><span class="sw dot" style="background:#475569"></span>keypoints</span>{legend}<span><span class="sw" style="background:rgba(20,184,166,.3)"></span>loop</span></div>
 </section>

@@ -17,6 +17,8 @@ pub struct TimelineParams {
     pub width_px: f64,
     /// Height of one joint's row in pixels. Default 12.
     pub row_height_px: f64,
+    /// Draw the title and the summary line at the top. Default true.
+    pub title: bool,
 }
 
 impl Default for TimelineParams {
@@ -24,6 +26,7 @@ impl Default for TimelineParams {
         TimelineParams {
             width_px: 1000.0,
             row_height_px: 12.0,
+            title: true,
         }
     }
 }
@@ -68,7 +71,7 @@ pub fn timeline_svg(
     let label_w = 118.0;
     let (x0, x1) = (label_w + 12.0, params.width_px - 18.0);
     let fx = |f: f64| x0 + f / t_total as f64 * (x1 - x0);
-    let title_h = 50.0;
+    let title_h = if params.title { 50.0 } else { 34.0 };
     let mix_top = title_h;
     let mix_h = 30.0;
     let loops_top = mix_top + mix_h + 10.0;
@@ -79,11 +82,13 @@ pub fn timeline_svg(
     let bounds = program.boundaries();
 
     let mut svg = Svg::new(params.width_px, h, style::PAPER);
-    svg.text(18.0, 24.0, "Timeline", 17.0, style::INK, Anchor::Start, r#"font-weight="bold""#);
     let reps: usize = intervals.iter().map(|i| i.count).sum();
+    if params.title {
+        svg.text(18.0, 24.0, "Timeline", 17.0, style::INK, Anchor::Start, r#"font-weight="bold""#);
+    }
     svg.text(
         18.0,
-        42.0,
+        if params.title { 42.0 } else { 24.0 },
         &format!(
             "{} segments × {} joints · {} loop{} · {} repetitions",
             program.n_segments(),

@@ -132,7 +132,7 @@ pub fn decode(
     for i in 0..n {
         let logit = scores[i].clamp(-params.score_clip, params.score_clip);
         let score = sigmoid(logit);
-        if !(score >= params.min_score) {
+        if score.is_nan() || score < params.min_score {
             continue;
         }
         let r = &boxes[i * NUM_COORDS..(i + 1) * NUM_COORDS];

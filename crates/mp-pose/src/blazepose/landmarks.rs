@@ -86,7 +86,7 @@ impl Default for RefineParams {
 impl RefineParams {
     /// Checks the values.
     pub fn validate(&self) -> Result<()> {
-        if self.kernel_size == 0 || self.kernel_size % 2 == 0 || self.kernel_size > HEATMAP_SIZE {
+        if self.kernel_size == 0 || self.kernel_size & 1 == 0 || self.kernel_size > HEATMAP_SIZE {
             return Err(PoseError::param(
                 "heatmap_kernel_size",
                 format!(

@@ -241,7 +241,7 @@ impl BlazePose {
         }
         let out = self.landmarks.run(image, &roi)?;
         diag.presence = Some(out.pose_presence);
-        if !(out.pose_presence >= self.params.min_presence) {
+        if out.pose_presence.is_nan() || out.pose_presence < self.params.min_presence {
             self.lose();
             return Ok((None, diag));
         }

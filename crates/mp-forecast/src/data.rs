@@ -1,0 +1,98 @@
+//! Data sets for forecasting: Penn Action (2D) and MSR Action3D (3D) clips,
+//! and the validation split.
+//!
+//! **Split.** Only the official Penn Action *train* split is available here, so
+//! a validation set is carved out of it **by clip**: clip `i` (0-based position
+//! in the file) is a validation clip when `i % 10 == 0` (126 of 1,258 clips,
+//! every action represented because the file is ordered by action). The other
+//! clips train the learned models and form the nearest-neighbour index. The
+//! same rule splits MSR Action3D. `tools/forecast/train.py` uses the same rule.
+
+use std::path::Path;
+
+use mp_geom::io::datasets::{MsrAction3D, PennAction};
+use mp_geom::io::npz::Npz;
+
+use crate::error::{ForecastError, Result};
+use crate::eval::EvalClip;
+
+/// Every `VALIDATION_EVERY`-th clip (index % 10 == 0) is a validation clip.
+pub const VALIDATION_EVERY: usize = 10;
+
+/// Whether clip `index` belongs to the validation split.
+pub fn is_validation_clip(index: usize) -> bool {
+    index % VALIDATION_EVERY == 0
+}
+
+/// A forecasting data set read from one npz.
+#[derive(Debug, Clone)]
+pub struct ForecastDataset {
+    /// `penn_action` or `msr_action3d` (the model-folder name).
+    pub kind: &'static str,
+    /// Every clip, in file order.
+    pub clips: Vec<EvalClip>,
+}
+
+impl ForecastDataset {
+    /// Reads a Penn Action npz (`keypoints`) or an MSR Action3D npz (`joints`).
+    pub fn open(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let z = Npz::open(path)?;
+        if z.contains("keypoints") {
+            drop(z);
+            let d = PennAction::open(path)?;
+            let clips = d
+                .clips()
+                .iter()
+                .map(|c| {
+                    Ok(EvalClip {
+                        name: c.clip_id.clone(),
+                        action: c.action.clone(),
+                        track: d.clip(c.index)?,
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Ok(ForecastDataset {
+                kind: "penn_action",
+                clips,
+            })
+        } else if z.contains("joints") {
+            drop(z);
+            let d = MsrAction3D::open(path)?;
+            let clips = d
+                .clips()
+                .iter()
+                .map(|c| {
+                    Ok(EvalClip {
+                        name: c.name.clone(),
+                        action: c.action_name.to_string(),
+                        track: d.clip(c.index)?,
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Ok(ForecastDataset {
+                kind: "msr_action3d",
+                clips,
+            })
+        } else {
+            Err(ForecastError::Format {
+                path: path.to_path_buf(),
+                reason: "neither `keypoints` (Penn Action) nor `joints` (MSR Action3D) is in the file"
+                    .into(),
+            })
+        }
+    }
+
+    /// (training clips, validation clips) by [`is_validation_clip`].
+    pub fn split(&self) -> (Vec<&EvalClip>, Vec<&EvalClip>) {
+        let (mut tr, mut va) = (Vec::new(), Vec::new());
+        for (i, c) in self.clips.iter().enumerate() {
+            if is_validation_clip(i) {
+                va.push(c);
+            } else {
+                tr.push(c);
+            }
+        }
+        (tr, va)
+    }
+}
