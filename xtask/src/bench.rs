@@ -22,7 +22,11 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 3)]
     pub runs: usize,
     /// Packages whose criterion benches run (`cargo bench -p …`).
-    #[arg(long, value_delimiter = ',', default_value = "mp-geom,mp-concrete")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "mp-geom,mp-concrete,mp-abstract"
+    )]
     pub packages: Vec<String>,
     /// Skip the criterion benches (harness only).
     #[arg(long)]
@@ -52,7 +56,10 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
          (`mp_concrete::synthetic::synthetic_track(T, 7)`), release build, {} rayon threads.\n",
         rayon::current_num_threads()
     )?;
-    writeln!(md, "| frames T | runs | median time (s) | frames / s | segments |")?;
+    writeln!(
+        md,
+        "| frames T | runs | median time (s) | frames / s | segments |"
+    )?;
     writeln!(md, "|---:|---:|---:|---:|---:|")?;
     let mut times: Vec<(usize, f64)> = Vec::new();
     for &n in &a.sizes {
@@ -69,12 +76,20 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
         ts.sort_by(f64::total_cmp);
         let med = ts[ts.len() / 2];
         eprintln!("T = {n}: {med:.3} s ({runs} runs), {segs} segments");
-        writeln!(md, "| {n} | {runs} | {med:.3} | {:.0} | {segs} |", n as f64 / med)?;
+        writeln!(
+            md,
+            "| {n} | {runs} | {med:.3} | {:.0} | {segs} |",
+            n as f64 / med
+        )?;
         times.push((n, med));
     }
     let get = |n: usize| times.iter().find(|(m, _)| *m == n).map(|(_, t)| *t);
     if let (Some(a10), Some(a100)) = (get(10_000), get(100_000)) {
-        writeln!(md, "\nScaling time(100k) / time(10k) = **{:.2}** (linear = 10).", a100 / a10)?;
+        writeln!(
+            md,
+            "\nScaling time(100k) / time(10k) = **{:.2}** (linear = 10).",
+            a100 / a10
+        )?;
     }
     if let (Some(a1), Some(a10)) = (get(1_000), get(10_000)) {
         writeln!(md, "Scaling time(10k) / time(1k) = **{:.2}**.", a10 / a1)?;
@@ -89,7 +104,11 @@ fn parse_criterion(stdout: &str, md: &mut String) -> std::fmt::Result {
         let trimmed = line.trim();
         if let Some(pos) = trimmed.find("time:") {
             let name = trimmed[..pos].trim();
-            let name = if name.is_empty() { last_name.clone() } else { name.to_string() };
+            let name = if name.is_empty() {
+                last_name.clone()
+            } else {
+                name.to_string()
+            };
             let value = trimmed[pos + 5..].trim();
             writeln!(md, "| `{name}` | {value} |")?;
         } else if !trimmed.is_empty()
@@ -123,7 +142,11 @@ fn criterion(a: &BenchArgs, md: &mut String) -> anyhow::Result<bool> {
             let stderr = String::from_utf8_lossy(&out.stderr);
             let tail: Vec<&str> = stderr.lines().rev().take(15).collect();
             let tail: Vec<&str> = tail.into_iter().rev().collect();
-            writeln!(md, "`cargo bench -p {p}` failed:\n\n```text\n{}\n```\n", tail.join("\n"))?;
+            writeln!(
+                md,
+                "`cargo bench -p {p}` failed:\n\n```text\n{}\n```\n",
+                tail.join("\n")
+            )?;
             continue;
         }
         writeln!(md, "| bench | time |")?;

@@ -15,8 +15,8 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_concrete::{
-    interpolation_experiment, program_stats, InterpParams, synthesize, Lambda, Scale, SynthParams, Transition,
-    UnobservedJoints,
+    interpolation_experiment, program_stats, synthesize, InterpParams, Lambda, Scale, SynthParams,
+    Transition, UnobservedJoints,
 };
 use mp_geom::io::datasets::PennAction;
 use rayon::prelude::*;

@@ -196,6 +196,7 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
     let mut agree_all = 0usize;
     let mut found_all = 0usize;
     let mut rows = Vec::new();
+    let (mut all_ms, mut all_ref_ms): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
     let mut estimator = open(model, args.threads, true)?;
     let coco_map = estimator.skeleton().name == "coco17";
 
@@ -275,6 +276,12 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
             }
         }
         let ref_ms: f64 = r.process_ms.iter().take(t).map(|&v| v as f64).sum();
+        let mut ms_sorted = ex.estimate_ms.clone();
+        ms_sorted.sort_by(f64::total_cmp);
+        let mut ref_sorted: Vec<f64> = r.process_ms.iter().take(t).map(|&v| v as f64).collect();
+        ref_sorted.sort_by(f64::total_cmp);
+        all_ms.extend(&ex.estimate_ms);
+        all_ref_ms.extend(&ref_sorted);
         let found_n = ex.found.iter().filter(|&&f| f).count();
         let ref_found_n = r.found.iter().take(t).filter(|&&f| f).count();
         let det_n = ex.detector_ran.iter().filter(|&&d| d).count();
@@ -310,6 +317,8 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
             "fps_tracking": round(track_fps, 1),
             "fps_with_decoding": round(t as f64 * 1000.0 / ex.total_ms, 1),
             "reference_fps": round(ref_fps, 1),
+            "ms_per_frame_median": round(quantile(&ms_sorted, 0.5), 2),
+            "reference_ms_per_frame_median": round(quantile(&ref_sorted, 0.5), 2),
         });
         println!(
             "{stem:<22} frames {t:>4}  median {:>6.2} px  p90 {:>6.2} px  found {:.3} (ref {:.3}, agree {:.3})  {:>5.1} fps (tracking {:>5.1}; ref {:>5.1})",
@@ -333,7 +342,11 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
         );
     }
     pooled.sort_by(f64::total_cmp);
+    all_ms.sort_by(f64::total_cmp);
+    all_ref_ms.sort_by(f64::total_cmp);
     let overall = json!({
+        "ms_per_frame_median": round(quantile(&all_ms, 0.5), 2),
+        "reference_ms_per_frame_median": round(quantile(&all_ref_ms, 0.5), 2),
         "videos": by_video.len(),
         "frames": frames_all,
         "median_px": round(quantile(&pooled, 0.5), 3),
@@ -386,15 +399,15 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
 
 fn print_markdown(model: ModelChoice, report: &Value, rows: &[(String, Value)]) {
     println!();
-    println!("| video | frames | median px | p90 px | found (ours / MediaPipe) | agree | fps (all / tracking) | MediaPipe fps |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("| video | frames | median px | p90 px | found (ours / MediaPipe) | agree | fps (all / tracking) | MediaPipe fps | ms/frame median (ours / MediaPipe) |");
+    println!("|---|---|---|---|---|---|---|---|---|");
     let f = |v: &Value| match v {
         Value::Null => "–".to_string(),
         other => other.to_string(),
     };
     for (stem, e) in rows {
         println!(
-            "| {stem} | {} | {} | {} | {} / {} | {} | {} / {} | {} |",
+            "| {stem} | {} | {} | {} | {} / {} | {} | {} / {} | {} | {} / {} |",
             e["frames"],
             f(&e["median_px"]),
             f(&e["p90_px"]),
@@ -403,12 +416,14 @@ fn print_markdown(model: ModelChoice, report: &Value, rows: &[(String, Value)]) 
             e["found_agreement"],
             f(&e["fps"]),
             f(&e["fps_tracking"]),
-            f(&e["reference_fps"])
+            f(&e["reference_fps"]),
+            f(&e["ms_per_frame_median"]),
+            f(&e["reference_ms_per_frame_median"])
         );
     }
     let o = &report["overall"];
     println!(
-        "| **all ({})** | {} | **{}** | **{}** | {} | {} | **{} / {}** | {} |",
+        "| **all ({})** | {} | **{}** | **{}** | {} | {} | **{} / {}** | {} | {} / {} |",
         model.as_str(),
         o["frames"],
         f(&o["median_px"]),
@@ -417,7 +432,9 @@ fn print_markdown(model: ModelChoice, report: &Value, rows: &[(String, Value)]) 
         o["found_agreement"],
         f(&o["fps"]),
         f(&o["fps_tracking"]),
-        f(&o["reference_fps"])
+        f(&o["reference_fps"]),
+        f(&o["ms_per_frame_median"]),
+        f(&o["reference_ms_per_frame_median"])
     );
     if let Some(c) = report.get("coco_sample").filter(|c| !c.is_null()) {
         println!();
@@ -587,7 +604,10 @@ fn eval_coco(dir: &Path, model: ModelChoice, threads: usize) -> Result<Value> {
         "pck_bbox": round(frac(ok_b), 3),
         "mediapipe_pck_torso": round(frac(mp_ok_t), 3),
         "mediapipe_pck_bbox": round(frac(mp_ok_b), 3),
-        "mean_px_vs_mediapipe": round(vs_mp.iter().sum::<f64>() / vs_mp.len().max(1) as f64, 2),
+        "mean_px_vs_mediapipe": round(
+            if vs_mp.is_empty() { f64::NAN } else { vs_mp.iter().sum::<f64>() / vs_mp.len() as f64 },
+            2
+        ),
         "per_image": per_image,
     }))
 }

@@ -3,6 +3,7 @@
 mod bench;
 mod eval_concrete;
 mod eval_forecast;
+mod eval_grammar;
 mod eval_loops;
 mod eval_pose;
 mod models;
@@ -37,6 +38,8 @@ enum Command {
 enum Eval {
     /// Repetition detection, counting and prediction by unrolling (CMU mocap6, AIST++, Penn Action, QUVA).
     Loops(eval_loops::EvalLoopsArgs),
+    /// Motion grammars: symbols (purity, NMI), grammars (rules, DL), synthesis vs the FSM baseline.
+    Grammar(eval_grammar::EvalGrammarArgs),
     /// Concrete programs on Penn Action: primitives, parameters, KD, jumps, interpolation.
     Concrete(eval_concrete::EvalConcreteArgs),
     /// Keypoints (BlazePose / MoveNet) against MediaPipe's reference, PCK on the COCO sample, speed.
@@ -51,6 +54,7 @@ fn main() {
         Command::Eval(e) => match e {
             Eval::Concrete(a) => eval_concrete::run(&a),
             Eval::Loops(a) => eval_loops::run(&a),
+            Eval::Grammar(a) => eval_grammar::run(&a),
             Eval::Pose(a) => eval_pose::run(&a),
             Eval::Forecast(a) => eval_forecast::run(&a),
         },

@@ -280,16 +280,18 @@ pub fn predict(track: &Track, observe: usize, horizon: usize, params: &PredictPa
                 .iter()
                 .find(|d| d.body == k && prims_start_frame(&analysis.prims, d.start) == interval.start_frame)
                 .ok_or_else(|| AbstractError::NotFound("the unrolled loop's primitives".into()))?;
-            // The latest iteration whose length is typical (within 15 % of the median):
-            // the last one often absorbs the frames after the loop.
+            // The latest iteration whose length is typical (within 15 % of the median
+            // of the complete ones). The last iteration often absorbs the frames
+            // observed after the loop, so with three or more it is not a candidate.
             let lens: Vec<usize> = interval.boundaries.windows(2).map(|w| w[1] - w[0]).collect();
-            let mut sorted = lens.clone();
+            let candidates = if lens.len() >= 3 { lens.len() - 1 } else { lens.len() };
+            let mut sorted = lens[..candidates].to_vec();
             sorted.sort_unstable();
-            let median = sorted[sorted.len() / 2] as f64;
-            let it = (0..lens.len())
+            let median = sorted[(sorted.len() - 1) / 2] as f64;
+            let it = (0..candidates)
                 .rev()
                 .find(|&i| (lens[i] as f64 - median).abs() <= 0.15 * median)
-                .unwrap_or(lens.len() - 1);
+                .unwrap_or(candidates - 1);
             let seg0 = det.start + it * k;
             let one = &analysis.concrete.segments[seg0..seg0 + k];
             let mut prog = analysis.concrete.clone();

@@ -65,3 +65,21 @@ fn prediction_rejects_bad_arguments() {
     assert!(predict(&perf.track_2d, 100, 0, &PredictParams::default()).is_err());
     assert!(predict(&perf.track_2d, 10_000, 10, &PredictParams::default()).is_err());
 }
+
+#[test]
+fn period_counter_counts_performer_repetitions() {
+    use mp_abstract::repetition::{estimate_period, PeriodParams};
+    for (mv, reps) in [(Move::JumpingJack, 8), (Move::Squat, 6)] {
+        let params = PerformerParams { moves: vec![(mv, reps)], transition_seconds: 0.0, ..PerformerParams::default() };
+        let perf = perform(&params).unwrap();
+        let t = &perf.track_2d;
+        let p = estimate_period(t, 0, t.n_frames(), &PeriodParams::default()).unwrap().expect("a period");
+        assert!((p.count - reps as f64).abs() <= 1.0, "{mv:?}: {p:?}");
+        assert!(p.strength > 0.3, "{mv:?}: {p:?}");
+    }
+    // A still track has no period.
+    let perf = perform(&PerformerParams { noise_px: 0.0, ..PerformerParams::default() }).unwrap();
+    let still = perf.track_2d.slice_frames(0, 1).unwrap();
+    assert!(estimate_period(&still, 0, 1, &PeriodParams::default()).unwrap().is_none());
+    assert!(estimate_period(&perf.track_2d, 5, 3, &PeriodParams::default()).is_err());
+}

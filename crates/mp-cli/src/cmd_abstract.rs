@@ -101,6 +101,12 @@ pub enum Method {
     Constant,
     /// Unroll the last detected loop.
     Loop,
+    /// Nearest neighbour in a training set (`--train`).
+    Nn,
+    /// Learned autoregressive model on latents (AR on Φ).
+    Ar,
+    /// Learned autoregressive model on poses (AR on Θ).
+    ArPose,
 }
 
 /// Arguments of `mp predict`.
@@ -122,6 +128,8 @@ pub struct PredictArgs {
     pub output: Option<PathBuf>,
     #[command(flatten)]
     pub opts: AnalysisOpts,
+    #[command(flatten)]
+    pub forecast: crate::cmd_forecast::ForecastOpts,
 }
 
 pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
@@ -199,6 +207,9 @@ pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
 pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
     let pred = match a.method {
+        Method::Nn => crate::cmd_forecast::predict_with("nn", &track, a.observe, a.horizon, &a.forecast)?,
+        Method::Ar => crate::cmd_forecast::predict_with("ar", &track, a.observe, a.horizon, &a.forecast)?,
+        Method::ArPose => crate::cmd_forecast::predict_with("ar-pose", &track, a.observe, a.horizon, &a.forecast)?,
         Method::Constant => {
             if a.observe == 0 || a.observe > track.n_frames() {
                 anyhow::bail!("--observe must be in 1..={} (the track's length)", track.n_frames());

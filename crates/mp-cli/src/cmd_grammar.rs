@@ -151,6 +151,9 @@ pub struct LearnArgs {
     /// Preferred longest sentence, symbols.
     #[arg(long, default_value_t = 12)]
     pub max_sentence_len: usize,
+    /// Also score the whole string as one sentence (a grammar that can only reproduce it).
+    #[arg(long)]
+    pub include_whole_string: bool,
     /// Seed of the partition search.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -263,6 +266,7 @@ fn learn_cmd(a: &LearnArgs) -> anyhow::Result<()> {
         candidates: a.candidates,
         min_sentence_len: a.min_sentence_len,
         max_sentence_len: a.max_sentence_len,
+        include_whole_string: a.include_whole_string,
         abl: a.abl.params(a.seed)?,
         seed: a.seed,
         ..Default::default()

@@ -551,7 +551,6 @@ fn loop_caption(an: &Analysis, f: usize) -> Option<String> {
 /// The whole pipeline into `out_dir`.
 pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result<RunSummary> {
     let start = Instant::now();
-    let out = OutputDir::create(out_dir).with_context(|| format!("creating the output folder {}", out_dir.display()))?;
     let mut stages: Vec<StageTime> = Vec::new();
 
     // 1. Keypoints.
@@ -585,8 +584,9 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
         bail!("the motion has {} frame(s); at least 2 are needed", track.n_frames());
     }
 
-    // 2–3. Programs and loops.
+    // 2–3. Programs and loops; the output folder is created once there is something to write.
     let an = analyse_timed(&track, kp.frame_px, opts.quiet, &mut stages)?;
+    let out = OutputDir::create(out_dir).with_context(|| format!("creating the output folder {}", out_dir.display()))?;
     let mut files = write_analysis(&out, &track, &an)?;
 
     // 4. Pictures.

@@ -6,6 +6,7 @@
 mod cmd_abstract;
 mod cmd_concrete;
 mod cmd_demo;
+mod cmd_forecast;
 mod cmd_grammar;
 mod cmd_pose;
 mod cmd_run;
@@ -42,6 +43,8 @@ enum Command {
     Sample(cmd_abstract::SampleArgs),
     /// Predict future frames of a track.
     Predict(cmd_abstract::PredictArgs),
+    /// The "statue" frame: after which the learned forecaster's accuracy improves most.
+    Statue(cmd_forecast::StatueArgs),
     /// Write the procedural performer (jumping jacks, squats, arm circles, a swing) as a track.
     Performer(cmd_demo::PerformerArgs),
     /// The whole pipeline on the procedural performer (the embedded default).
@@ -65,6 +68,7 @@ fn main() {
         Command::Extend(a) => cmd_abstract::extend_cmd(&a),
         Command::Sample(a) => cmd_abstract::sample_cmd(&a),
         Command::Predict(a) => cmd_abstract::predict_cmd(&a),
+        Command::Statue(a) => cmd_forecast::statue_cmd(&a),
         Command::Performer(a) => cmd_demo::performer_cmd(&a),
         Command::Demo(a) => cmd_demo::demo_cmd(&a),
         Command::Grammar(a) => cmd_grammar::grammar_cmd(&a),

@@ -9,7 +9,11 @@ use mp_concrete::{dsl, program_stats, synthesize, Scale, SynthParams, Unobserved
 use mp_geom::io::datasets::PennAction;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let nth: usize = std::env::args().nth(1).map(|s| s.parse()).transpose()?.unwrap_or(0);
+    let nth: usize = std::env::args()
+        .nth(1)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(0);
     let pa = PennAction::open_default()?;
     let golf = pa.clips_of_action("golf_swing");
     let &i = golf.get(nth).ok_or("no such golf swing")?;
@@ -23,8 +27,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let program = synthesize(&track, &params)?;
     let wrist = program.joint_index("right_wrist").ok_or("no right wrist")?;
-    println!("clip {} ({} frames, {}×{} px)", info.clip_id, info.n_frames, info.width_px, info.height_px);
-    print!("{}", dsl::joint_block(&program, wrist, dsl::NumberFormat::Fixed(2)));
+    println!(
+        "clip {} ({} frames, {}×{} px)",
+        info.clip_id, info.n_frames, info.width_px, info.height_px
+    );
+    print!(
+        "{}",
+        dsl::joint_block(&program, wrist, dsl::NumberFormat::Fixed(2))
+    );
     let st = program_stats(&program, &track)?;
     println!(
         "{} segments, {} parameters (raw {}), KD {:.2} px ({:.2} px at 512 px)",

@@ -46,5 +46,6 @@ pub use interp::{interpolation_experiment, InterpParams, InterpolationResult};
 pub use program::{Program, Segment};
 pub use stats::{program_stats, ProgramStats};
 pub use synth::{
-    synthesize, synthesize_detailed, Lambda, Scale, SynthParams, Synthesis, UnobservedJoints,
+    segment_costs, synthesize, synthesize_detailed, Lambda, Scale, SynthParams, Synthesis,
+    UnobservedJoints,
 };

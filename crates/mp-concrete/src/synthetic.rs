@@ -20,10 +20,10 @@ pub fn synthetic_track(n_frames: usize, seed: u64) -> Result<Track> {
     let params: Vec<(f64, f64, f64, f64, f64)> = (0..j)
         .map(|_| {
             (
-                rng.random_range(150.0..350.0),     // base x
-                rng.random_range(150.0..350.0),     // base y
-                rng.random_range(10.0..60.0),       // amplitude
-                rng.random_range(20.0..90.0),       // period, frames
+                rng.random_range(150.0..350.0),               // base x
+                rng.random_range(150.0..350.0),               // base y
+                rng.random_range(10.0..60.0),                 // amplitude
+                rng.random_range(20.0..90.0),                 // period, frames
                 rng.random_range(0.0..std::f64::consts::TAU), // phase
             )
         })
@@ -49,6 +49,11 @@ pub fn synthetic_track(n_frames: usize, seed: u64) -> Result<Track> {
             pos[[t, ji, 1]] = by + walk[1] + a * th.sin() + rng.random_range(-0.5..0.5);
         }
     }
-    Ok(Track::new(pos, None, 30.0, Units::Pixels, Skeleton::penn13())?)
+    Ok(Track::new(
+        pos,
+        None,
+        30.0,
+        Units::Pixels,
+        Skeleton::penn13(),
+    )?)
 }
-

@@ -17,7 +17,11 @@ fn penn() -> PennAction {
 #[test]
 fn golf_swings_are_compact_and_accurate() {
     let pa = penn();
-    let clips: Vec<usize> = pa.clips_of_action("golf_swing").into_iter().take(6).collect();
+    let clips: Vec<usize> = pa
+        .clips_of_action("golf_swing")
+        .into_iter()
+        .take(6)
+        .collect();
     assert_eq!(clips.len(), 6);
     let (mut kd_sum, mut prog, mut raw, mut segs) = (0.0, 0usize, 0usize, 0usize);
     for &i in &clips {

@@ -2,7 +2,8 @@
 
 use mp_concrete::{
     interpolation_experiment, program_stats, synthesize, synthesize_detailed, ConcreteError,
-    ExecParams, InterpParams, Lambda, Program, Scale, Segment, SynthParams, Transition, UnobservedJoints,
+    ExecParams, InterpParams, Lambda, Program, Scale, Segment, SynthParams, Transition,
+    UnobservedJoints,
 };
 use mp_geom::{Primitive, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};

@@ -77,8 +77,9 @@ impl ForecastDataset {
         } else {
             Err(ForecastError::Format {
                 path: path.to_path_buf(),
-                reason: "neither `keypoints` (Penn Action) nor `joints` (MSR Action3D) is in the file"
-                    .into(),
+                reason:
+                    "neither `keypoints` (Penn Action) nor `joints` (MSR Action3D) is in the file"
+                        .into(),
             })
         }
     }

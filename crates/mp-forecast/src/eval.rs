@@ -112,7 +112,10 @@ impl EvalParams {
             ));
         }
         if !(self.error_scale.is_finite() && self.error_scale > 0.0) {
-            return Err(ForecastError::param("error_scale", "must be finite and > 0"));
+            return Err(ForecastError::param(
+                "error_scale",
+                "must be finite and > 0",
+            ));
         }
         self.pck.validate()?;
         Ok(())
@@ -213,7 +216,10 @@ fn score_prediction(
     };
     let nan = vec![f64::NAN; params.horizons.len()];
     if dims == 2 {
-        out.insert("pck", at(&per_frame((&pred).into(), truth, 2, false, params)?));
+        out.insert(
+            "pck",
+            at(&per_frame((&pred).into(), truth, 2, false, params)?),
+        );
         out.insert(
             "pck_dtw",
             match &aligned {
@@ -226,7 +232,10 @@ fn score_prediction(
             ("mpjpe", "mpjpe_dtw", false),
             ("pa_mpjpe", "pa_mpjpe_dtw", true),
         ] {
-            out.insert(name, at(&per_frame((&pred).into(), truth, dims, pa, params)?));
+            out.insert(
+                name,
+                at(&per_frame((&pred).into(), truth, dims, pa, params)?),
+            );
             out.insert(
                 name_dtw,
                 match &aligned {
@@ -318,7 +327,11 @@ pub fn evaluate(
             return Err(ForecastError::mismatch(
                 format!("clip `{}`", clip.name),
                 format!("{} joints × {dims} dims", first.track.n_joints()),
-                format!("{} joints × {} dims", clip.track.n_joints(), clip.track.dims()),
+                format!(
+                    "{} joints × {} dims",
+                    clip.track.n_joints(),
+                    clip.track.dims()
+                ),
             ));
         }
         let (scores, n) = evaluate_clip(method, &clip.track, params)?;

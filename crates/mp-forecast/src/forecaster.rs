@@ -26,10 +26,7 @@ pub trait Forecaster: Send + Sync {
 
     /// [`Forecaster::predict`] for many observed tracks (in parallel or batched where the method can).
     fn predict_batch(&self, pasts: &[Track], horizon: usize) -> Result<Vec<Track>> {
-        pasts
-            .par_iter()
-            .map(|p| self.predict(p, horizon))
-            .collect()
+        pasts.par_iter().map(|p| self.predict(p, horizon)).collect()
     }
 }
 

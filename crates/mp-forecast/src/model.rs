@@ -172,7 +172,13 @@ impl Net {
     }
 
     /// Runs the model on one f32 input; returns the named outputs as flat vectors.
-    fn run(&self, input: &str, shape: [usize; 3], data: &[f32], outputs: &[&str]) -> Result<Vec<Vec<f32>>> {
+    fn run(
+        &self,
+        input: &str,
+        shape: [usize; 3],
+        data: &[f32],
+        outputs: &[&str],
+    ) -> Result<Vec<Vec<f32>>> {
         let tensor = TensorRef::from_array_view((shape, data))
             .map_err(|e| ForecastError::model(&self.name, e))?;
         let mut session = self.session.lock().unwrap_or_else(|e| e.into_inner());
@@ -243,7 +249,12 @@ impl ForecastModels {
     }
 
     /// Encoder on a batch of normalised feature windows `(B, T, F)`: returns latents `(B·T·C)` and poses `(B·T·P)`.
-    pub fn encode(&self, batch: usize, frames: usize, features: &[f32]) -> Result<(Vec<f32>, Vec<f32>)> {
+    pub fn encode(
+        &self,
+        batch: usize,
+        frames: usize,
+        features: &[f32],
+    ) -> Result<(Vec<f32>, Vec<f32>)> {
         let m = &self.manifest;
         self.check_len("encoder input", features.len(), batch * frames * m.features)?;
         let mut o = self.encoder.run(
@@ -282,9 +293,9 @@ impl ForecastModels {
         let m = &self.manifest;
         let rf = m.receptive_field_frames;
         self.check_len("pose step input", frames.len(), batch * rf * m.features)?;
-        let mut o = self
-            .pose_step
-            .run("frames", [batch, rf, m.features], frames, &["next_pose"])?;
+        let mut o =
+            self.pose_step
+                .run("frames", [batch, rf, m.features], frames, &["next_pose"])?;
         let pose = o.pop().unwrap_or_default();
         self.check_len("pose step output", pose.len(), batch * m.pose_values)?;
         Ok(pose)
@@ -409,18 +420,17 @@ impl ArForecaster {
         if params.context_frames < rf {
             return Err(ForecastError::param(
                 "context_frames",
-                format!("must be ≥ the receptive field ({rf} frames), got {}", params.context_frames),
+                format!(
+                    "must be ≥ the receptive field ({rf} frames), got {}",
+                    params.context_frames
+                ),
             ));
         }
         if params.max_batch == 0 {
             return Err(ForecastError::param("max_batch", "must be ≥ 1"));
         }
-        let skeleton = mp_geom::Skeleton::custom(
-            "model",
-            models.manifest.joints.clone(),
-            Vec::new(),
-            None,
-        );
+        let skeleton =
+            mp_geom::Skeleton::custom("model", models.manifest.joints.clone(), Vec::new(), None);
         let body = BodyJoints::from_skeleton(&skeleton);
         Ok(ArForecaster {
             models,
@@ -467,9 +477,9 @@ impl ArForecaster {
             push_features(past, t - ctx, t, &norm, &mut feats);
             norms.push(norm);
         }
-        let out =
-            self.models
-                .rollout_normalised(self.space, pasts.len(), ctx, &feats, horizon)?;
+        let out = self
+            .models
+            .rollout_normalised(self.space, pasts.len(), ctx, &feats, horizon)?;
         let mut res = Vec::with_capacity(pasts.len());
         for (b, (past, norm)) in pasts.iter().zip(&norms).enumerate() {
             let mut pos = Array3::zeros((horizon, j, d));

@@ -95,7 +95,9 @@ impl NearestNeighbour {
     pub fn build(train: &[Track], params: NnParams) -> Result<Self> {
         params.validate()?;
         let first = train.first().ok_or_else(|| {
-            ForecastError::NoTrainingData("the nearest-neighbour baseline got no training track".into())
+            ForecastError::NoTrainingData(
+                "the nearest-neighbour baseline got no training track".into(),
+            )
         })?;
         let (n_joints, dims) = (first.n_joints(), first.dims());
         let body = BodyJoints::from_skeleton(first.skeleton());
@@ -182,7 +184,9 @@ impl NearestNeighbour {
     fn search(&self, q: &[f32], qm: &[u8]) -> Option<(usize, f64)> {
         let per = q.len();
         let d = self.dims;
-        let need = (qm.iter().filter(|&&m| m > 0).count() * d).div_ceil(2).max(1);
+        let need = (qm.iter().filter(|&&m| m > 0).count() * d)
+            .div_ceil(2)
+            .max(1);
         let chunk = 256;
         self.coords
             .par_chunks(per * chunk)

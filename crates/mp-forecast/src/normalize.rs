@@ -113,19 +113,15 @@ impl Normalizer {
                 format!("{:?}", conf.dim()),
             ));
         }
-        if let Some(&bad) = body
-            .hips
-            .iter()
-            .chain(&body.shoulders)
-            .find(|&&x| x >= j)
-        {
+        if let Some(&bad) = body.hips.iter().chain(&body.shoulders).find(|&&x| x >= j) {
             return Err(ForecastError::param(
                 "body joints",
                 format!("joint {bad} is outside 0..{j}"),
             ));
         }
-        let roots: Vec<Option<Vec<f64>>> =
-            (0..t).map(|f| mean_valid(&pos, &conf, f, &body.hips)).collect();
+        let roots: Vec<Option<Vec<f64>>> = (0..t)
+            .map(|f| mean_valid(&pos, &conf, f, &body.hips))
+            .collect();
         let mut anchor = roots.iter().rev().find_map(|r| r.clone());
         if anchor.is_none() {
             let all: Vec<usize> = (0..j).collect();
@@ -163,12 +159,7 @@ impl Normalizer {
                     }
                 }
             }
-            scale = lo
-                .iter()
-                .zip(&hi)
-                .map(|(a, b)| b - a)
-                .fold(0.0, f64::max)
-                / 3.0;
+            scale = lo.iter().zip(&hi).map(|(a, b)| b - a).fold(0.0, f64::max) / 3.0;
         }
         if !(scale.is_finite() && scale > 1e-9) {
             return Err(ForecastError::NoValidJoints(format!(

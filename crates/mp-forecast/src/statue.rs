@@ -75,7 +75,11 @@ pub struct Statue {
 }
 
 /// Finds the statue frame of `track` under `forecaster` (see the module docs).
-pub fn find_statue(forecaster: &dyn Forecaster, track: &Track, params: &StatueParams) -> Result<Statue> {
+pub fn find_statue(
+    forecaster: &dyn Forecaster,
+    track: &Track,
+    params: &StatueParams,
+) -> Result<Statue> {
     params.validate()?;
     let (c, f) = (params.context_frames, params.future_frames);
     let t = track.n_frames();
@@ -107,7 +111,9 @@ pub fn find_statue(forecaster: &dyn Forecaster, track: &Track, params: &StatuePa
             for j in 0..track.n_joints() {
                 if track.confidence()[[tt, j]] > 0.0 && pred.confidence()[[h, j]] > 0.0 {
                     let d: f64 = (0..track.dims())
-                        .map(|k| (track.positions()[[tt, j, k]] - pred.positions()[[h, j, k]]).powi(2))
+                        .map(|k| {
+                            (track.positions()[[tt, j, k]] - pred.positions()[[h, j, k]]).powi(2)
+                        })
                         .sum::<f64>()
                         .sqrt();
                     fs += d;
@@ -119,7 +125,11 @@ pub fn find_statue(forecaster: &dyn Forecaster, track: &Track, params: &StatuePa
                 n += 1;
             }
         }
-        errors.push(if n > 0 { sum / n as f64 / scale } else { f64::NAN });
+        errors.push(if n > 0 {
+            sum / n as f64 / scale
+        } else {
+            f64::NAN
+        });
     }
     let w = params.filter_frames;
     let mean_range = |a: isize, b: isize| -> f64 {

@@ -8,8 +8,12 @@
 //! cuts in `[p + min_sentence_len, p + max_sentence_len]` that leave at least
 //! `min_sentence_len` symbols after them; when there is none, the nearest
 //! allowed cut beyond that window is used, and when there is no allowed cut
-//! left the rest is one sentence. The whole string (no cut) is always a
-//! candidate too. Each candidate's grammar is learned with ABL and scored by
+//! left the rest is one sentence. The whole string as one sentence is a
+//! candidate only when `include_whole_string` is set: on real symbol strings
+//! it usually has the lowest description length (one rule, nothing to
+//! encode) and yields a grammar that can only reproduce its input, which is
+//! why the paper draws candidates with cuts only. Each candidate's grammar
+//! is learned with ABL and scored by
 //! `DL = B(G) + B(Z | G)` (§5.1, with the learned derivation trees); the
 //! lowest wins (ties: the earlier candidate). Candidates are scored in
 //! parallel; the result depends only on the seed.
@@ -37,6 +41,9 @@ pub struct PartitionParams {
     /// Shortest repeated substring that may not be split; 0 disables the
     /// constraint. Default 2.
     pub min_repeat_len: usize,
+    /// Also score the whole string as one sentence. Default false.
+    #[serde(default)]
+    pub include_whole_string: bool,
     /// Grammar induction.
     pub abl: AblParams,
     /// Seed. Default 0.
@@ -50,6 +57,7 @@ impl Default for PartitionParams {
             min_sentence_len: 3,
             max_sentence_len: 12,
             min_repeat_len: 2,
+            include_whole_string: false,
             abl: AblParams::default(),
             seed: 0,
         }
@@ -172,12 +180,19 @@ pub fn search_partition(
     };
     let ok = allowed_cuts(s.len(), &protected);
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
-    let mut cands: Vec<Vec<usize>> = vec![Vec::new()];
+    let mut cands: Vec<Vec<usize>> = Vec::new();
+    if params.include_whole_string {
+        cands.push(Vec::new());
+    }
     for _ in 0..params.candidates {
         let c = draw(&ok, s.len(), params, &mut rng);
         if !cands.contains(&c) {
             cands.push(c);
         }
+    }
+    if cands.is_empty() {
+        // No allowed cut (or no candidate asked for): one sentence.
+        cands.push(Vec::new());
     }
     let scored: Vec<Result<Partition>> = cands
         .par_iter()

@@ -315,7 +315,7 @@ mod tests {
             (7.49, 7),
         ] {
             assert_eq!(round_fixed(v), want, "{v}");
-            assert_eq!(round_fixed(v), (v as f64).round_ties_even() as i64);
+            assert_eq!(round_fixed(v), v.round_ties_even() as i64);
         }
     }
 

@@ -33,7 +33,7 @@
     if (!imgs) return null;
     if (!imgs[p]) {
       var im = new Image();
-      im.onload = function () { if (nearest(cur) === p) drawStage(); measureCanvas(); };
+      im.onload = function () { if (nearest(cur) === p) { drawStage(); measureCanvas(); } };
       im.src = FR[p];
       imgs[p] = im;
     }
@@ -48,7 +48,7 @@
   if (imgs) { for (var p = 0; p < FR.length; p++) img(p); }
 
   // ---- stage ----------------------------------------------------------------
-  var stage = $('stage'), ctx = stage.getContext('2d');
+  var stage = $('stage'), ctx = stage.getContext('2d', { willReadFrequently: false });
   var dpr = Math.min(window.devicePixelRatio || 1, 2);
   var CW = D.canvas.w, CH = D.canvas.h;
   var ds = Math.min(540 / CH, 720 / CW);

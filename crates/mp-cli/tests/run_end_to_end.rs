@@ -1,0 +1,348 @@
+//! End-to-end checks of `mp run` through the built binary: a real video clip
+//! (the first 60 frames of the GolfDB swing), a real keypoint track file,
+//! bad input, Ctrl-C, and the report opened in headless Chromium.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use mp_concrete::Program;
+use mp_geom::io::read_track;
+use mp_geom::Track;
+
+const GOLF_FRAMES: usize = 60;
+
+fn mp() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mp"))
+}
+
+fn data(rel: &str) -> PathBuf {
+    mp_geom::paths::data_file(rel).unwrap_or_else(|| {
+        panic!(
+            "shared data file `{rel}` not found: these tests need ../shared/data (or MP_DATA_DIR) with {rel}"
+        )
+    })
+}
+
+fn run_ok(cmd: &mut Command) -> Output {
+    let out = cmd.output().expect("cannot start the mp binary");
+    assert!(
+        out.status.success(),
+        "mp failed ({}):\nstdout:\n{}\nstderr:\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// One run of `mp run` on the first 60 frames of the golf swing, shared by the tests below.
+fn golf_run() -> &'static Path {
+    static RUN: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    let (_, dir) = RUN.get_or_init(|| {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("golf");
+        run_ok(
+            mp().arg("run")
+                .arg(data("golfdb/golf_swing.mp4"))
+                .arg("--out")
+                .arg(&dir)
+                .args(["--max-frames", &GOLF_FRAMES.to_string(), "--quiet"]),
+        );
+        (tmp, dir)
+    });
+    dir
+}
+
+/// Names left in a folder that look like temporary or partial files.
+fn leftovers(dir: &Path) -> Vec<String> {
+    let mut bad = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let Ok(rd) = std::fs::read_dir(&d) else { continue };
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.starts_with(".mp-") || name.ends_with(".tmp") || name.starts_with('.') {
+                bad.push(e.path().display().to_string());
+            }
+            if e.path().is_dir() {
+                stack.push(e.path());
+            }
+        }
+    }
+    bad
+}
+
+/// The JSON data block of a report page.
+fn report_data(html: &str) -> serde_json::Value {
+    let key = "id=\"mp-data\">";
+    let start = html.find(key).expect("report has no data block") + key.len();
+    let end = start + html[start..].find("</script>").expect("unterminated data block");
+    serde_json::from_str(&html[start..end]).expect("report data block is not JSON")
+}
+
+fn png_luma_variance(bytes: &[u8]) -> (u32, u32, f64) {
+    let img = image::load_from_memory(bytes).expect("not a PNG").to_luma8();
+    let (w, h) = img.dimensions();
+    let n = img.as_raw().len() as f64;
+    let mean = img.as_raw().iter().map(|&v| v as f64).sum::<f64>() / n;
+    let var = img.as_raw().iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>() / n;
+    (w, h, var)
+}
+
+fn check_outputs(dir: &Path, frames: usize, joints: usize, video: bool) -> (Track, Program) {
+    for f in [
+        "track.npz",
+        "program.txt",
+        "program.json",
+        "abstract.txt",
+        "abstract.json",
+        "loops.json",
+        "timeline.svg",
+        "timeline.png",
+        "contact_sheet.png",
+        "report.html",
+    ] {
+        assert!(dir.join(f).is_file(), "{f} missing in {}", dir.display());
+    }
+    assert_eq!(dir.join("overlay.mp4").is_file(), video, "overlay.mp4 only for video input");
+    assert!(leftovers(dir).is_empty(), "temporary files left: {:?}", leftovers(dir));
+
+    // Frame counts agree across the track, the program, the loops and the report.
+    let track = read_track(dir.join("track.npz")).unwrap();
+    assert_eq!(track.n_frames(), frames);
+    assert_eq!(track.n_joints(), joints);
+    let program = Program::read(dir.join("program.json")).unwrap();
+    assert_eq!(program.n_frames(), frames);
+    assert_eq!(program.joints, track.skeleton().joints);
+    let text = Program::read(dir.join("program.txt")).unwrap();
+    assert_eq!(text, program, "program.txt and program.json differ");
+    let abs = mp_abstract::read_program(dir.join("abstract.json")).unwrap();
+    let abs_txt = mp_abstract::read_program(dir.join("abstract.txt")).unwrap();
+    assert_eq!(abs.stmts.len(), abs_txt.stmts.len());
+    let loops: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("loops.json")).unwrap()).unwrap();
+    assert_eq!(loops["frames"], frames);
+    let intervals = loops["intervals"].as_array().unwrap();
+    let counts = loops["counts"].as_array().unwrap();
+    assert_eq!(intervals.len(), counts.len());
+    for iv in intervals {
+        let end = iv["end_frame"].as_u64().unwrap() as usize;
+        assert!(end <= frames);
+        assert_eq!(iv["boundaries"].as_array().unwrap().len(), iv["iterations"].as_u64().unwrap() as usize + 1);
+    }
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let d = report_data(&html);
+    assert_eq!(d["frames"], frames);
+    assert_eq!(d["joints"].as_array().unwrap().len(), joints);
+    assert_eq!(d["bounds"].as_array().unwrap().last().unwrap(), frames);
+    assert_eq!(d["intervals"].as_array().unwrap().len(), intervals.len());
+    assert_eq!(
+        html.matches("<li class=\"st k-").count(),
+        program.n_segments() * program.n_joints(),
+        "the listing shows every statement of every joint"
+    );
+    assert!(!html.contains("https://"), "the report must not load anything from the network");
+    assert!(!html.contains("<script src"), "the report must be self-contained");
+
+    // The program reproduces the keypoints.
+    let exec = program.execute().unwrap();
+    let kd = mp_geom::metrics::kd(&track, &exec).unwrap();
+    assert!(kd < 10.0, "KD between program and keypoints is {kd:.2} px");
+
+    // One plot per joint, SVG and PNG, and pictures that are not blank.
+    let plots: Vec<_> = std::fs::read_dir(dir.join("plots")).unwrap().flatten().collect();
+    assert_eq!(plots.iter().filter(|e| e.path().extension().is_some_and(|x| x == "svg")).count(), joints);
+    assert_eq!(plots.iter().filter(|e| e.path().extension().is_some_and(|x| x == "png")).count(), joints);
+    for f in ["timeline.png", "contact_sheet.png"] {
+        let (w, h, var) = png_luma_variance(&std::fs::read(dir.join(f)).unwrap());
+        assert!(w > 200 && h > 150 && var > 50.0, "{f}: {w}×{h}, variance {var:.1}");
+    }
+    (track, program)
+}
+
+#[test]
+fn run_on_golf_clip_writes_consistent_outputs() {
+    let dir = golf_run();
+    let (track, _) = check_outputs(dir, GOLF_FRAMES, 17, true);
+    assert_eq!(track.skeleton().name, "coco17");
+    assert!((track.fps() - 29.97).abs() < 0.01);
+    // The overlay video has one frame per analysed frame, at the video's size.
+    let out = Command::new("ffprobe")
+        .args(["-v", "error", "-count_frames", "-select_streams", "v:0"])
+        .args(["-show_entries", "stream=width,height,nb_read_frames", "-of", "csv=p=0"])
+        .arg(dir.join("overlay.mp4"))
+        .output()
+        .expect("ffprobe missing (scripts/setup.sh installs FFmpeg)");
+    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), format!("354,492,{GOLF_FRAMES}"));
+    // Frames are embedded in the report, one per analysed frame.
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert_eq!(html.matches("data:image/jpeg;base64,").count(), GOLF_FRAMES);
+}
+
+#[test]
+fn run_on_track_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let input = data("reference_keypoints/027_fitness.npz");
+    let out = run_ok(mp().arg("run").arg(&input).arg("--out").arg(&dir).args([
+        "--max-frames",
+        "90",
+        "--frame-size",
+        "640",
+    ]));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("report.html"), "{stdout}");
+    assert!(stdout.contains("concrete") && stdout.contains("total"), "stage timings missing:\n{stdout}");
+    check_outputs(&dir, 90, 33, false);
+}
+
+#[test]
+fn corrupt_and_missing_inputs_fail_clearly() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Random bytes named .mp4.
+    let bad = tmp.path().join("noise.mp4");
+    let bytes: Vec<u8> = (0..20_000u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8).collect();
+    std::fs::write(&bad, bytes).unwrap();
+    let out = mp().arg("run").arg(&bad).arg("--out").arg(tmp.path().join("o1")).output().unwrap();
+    assert!(!out.status.success());
+    assert_ne!(out.status.code(), Some(0));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("error:") && err.contains("noise.mp4"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    // A missing file.
+    let out = mp().arg("run").arg(tmp.path().join("absent.mp4")).arg("--out").arg(tmp.path().join("o2")).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("absent.mp4") && err.contains("does not exist"), "{err}");
+    assert!(!tmp.path().join("o2").exists());
+    assert!(!tmp.path().join("o1").exists(), "no output folder for an unreadable input");
+    // A track file that is not a track.
+    let txt = tmp.path().join("notes.csv");
+    std::fs::write(&txt, "hello\nworld\n").unwrap();
+    let out = mp().arg("run").arg(&txt).arg("--out").arg(tmp.path().join("o3")).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("notes.csv"), "{err}");
+}
+
+#[test]
+fn interrupted_run_leaves_no_partial_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let mut child = mp()
+        .arg("run")
+        .arg(data("golfdb/golf_swing.mp4"))
+        .arg("--out")
+        .arg(&dir)
+        .arg("--quiet")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until the run is writing its files (the programs come first, then
+    // the pictures and the overlay video), then interrupt it.
+    let t0 = Instant::now();
+    while !dir.join("loops.json").exists() {
+        assert!(t0.elapsed() < Duration::from_secs(600), "mp run wrote nothing in 10 minutes");
+        assert!(child.try_wait().unwrap().is_none(), "mp run ended before it could be interrupted");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    let t1 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(t1.elapsed() < Duration::from_secs(30), "mp did not stop after Ctrl-C");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let mut err = String::new();
+    use std::io::Read;
+    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    assert_eq!(status.code(), Some(130), "stderr: {err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(leftovers(&dir).is_empty(), "left after Ctrl-C: {:?}", leftovers(&dir));
+    // What is there is complete; the report, written last, is not.
+    assert!(!dir.join("report.html").exists());
+    Program::read(dir.join("program.json")).unwrap();
+    read_track(dir.join("track.npz")).unwrap();
+    for e in std::fs::read_dir(dir.join("plots")).into_iter().flatten().flatten() {
+        if e.path().extension().is_some_and(|x| x == "png") {
+            image::open(e.path()).unwrap_or_else(|err| panic!("{}: {err}", e.path().display()));
+        }
+    }
+}
+
+/// Runs headless Chromium on a page with the given extra arguments.
+fn chromium(page: &Path, profile: &Path, extra: &[&str]) -> Output {
+    let exe = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .into_iter()
+        .find(|p| Path::new(p).exists())
+        .expect("Chromium not found at /usr/bin/chromium (scripts/setup.sh installs the Debian package)");
+    let url = format!("file://{}", page.canonicalize().unwrap().display());
+    Command::new(exe)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--no-first-run",
+            "--hide-scrollbars",
+            "--window-size=1280,900",
+            "--virtual-time-budget=2000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(url)
+        .output()
+        .expect("cannot start Chromium")
+}
+
+#[test]
+fn report_renders_in_headless_chromium() {
+    let dir = golf_run();
+    let page = dir.join("report.html");
+    let tmp = tempfile::tempdir().unwrap();
+
+    // Screenshot: not blank.
+    let shot = tmp.path().join("shot.png");
+    let out = chromium(&page, &tmp.path().join("p1"), &[&format!("--screenshot={}", shot.display())]);
+    assert!(shot.is_file(), "no screenshot; stderr: {}", String::from_utf8_lossy(&out.stderr));
+    let (w, h, var) = png_luma_variance(&std::fs::read(&shot).unwrap());
+    assert_eq!((w, h), (1280, 900));
+    assert!(var > 300.0, "screenshot looks blank (luma variance {var:.1})");
+
+    // DOM after the script ran, with the console on stderr.
+    let out = chromium(&page, &tmp.path().join("p2"), &["--dump-dom", "--enable-logging=stderr", "--v=0"]);
+    let dom = String::from_utf8_lossy(&out.stdout);
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(!log.contains("Uncaught"), "script errors:\n{log}");
+    let status = dom
+        .split("<div id=\"mp-status\"")
+        .nth(1)
+        .and_then(|s| s.split("</div>").next())
+        .unwrap_or_else(|| panic!("status element missing from the DOM:\n{}", &dom[..dom.len().min(2000)]));
+    assert!(status.contains("data-errors=\"0\""), "{status}");
+    assert!(status.contains("data-ready=\"1\""), "{status}");
+    assert!(status.trim_end().ends_with(">ok"), "{status}");
+    // The listing is there and the running statement is highlighted.
+    assert!(dom.contains("class=\"listing\""));
+    assert!(dom.matches(" active\"").count() >= 1, "no highlighted statement");
+    // The stage canvas was drawn with the frame and the skeleton (not uniform).
+    let canvas = dom.split("<canvas id=\"stage\"").nth(1).and_then(|s| s.split('>').next()).unwrap();
+    let var: f64 = canvas
+        .split("data-variance=\"")
+        .nth(1)
+        .and_then(|s| s.split('"').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("canvas not measured: {canvas}"));
+    assert!(var > 100.0, "stage canvas looks blank (variance {var})");
+    // The timeline SVG is inline and got its cursor.
+    assert!(dom.contains("class=\"mp-timeline\""));
+    assert!(dom.contains("fill=\"#facc15\""), "timeline cursor missing");
+}

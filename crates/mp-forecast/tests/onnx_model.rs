@@ -1,0 +1,259 @@
+//! The learned forecaster through ONNX Runtime (needs `cargo xtask setup` for the
+//! library and the committed models in models/forecast/penn_action).
+
+mod common;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use common::*;
+use mp_forecast::model::{find_model_dir, ArSpace, ForecastModels};
+use mp_forecast::{
+    evaluate, find_statue, ArForecaster, ArParams, Constant, EvalClip, EvalParams, ForecastError,
+    Forecaster, StatueParams,
+};
+use mp_geom::{Skeleton, Track, Units};
+use mp_pose::SessionParams;
+use ndarray::{Array2, Array3};
+use serde_json::Value;
+
+fn models() -> Arc<ForecastModels> {
+    let dir = find_model_dir("penn_action")
+        .expect("models/forecast/penn_action is part of the repository");
+    Arc::new(
+        ForecastModels::load(dir, &SessionParams::default())
+            .expect("ONNX Runtime: run `cargo xtask setup`"),
+    )
+}
+
+fn fixture() -> Value {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../testdata/forecast/penn_action_parity.json");
+    serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap()
+}
+
+fn flat(v: &Value) -> Vec<f32> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| {
+            r.as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap() as f32)
+        })
+        .collect()
+}
+
+fn max_diff(a: &[f32], b: &[f32]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn onnx_matches_the_pytorch_export_within_1e4() {
+    let m = models();
+    let fx = fixture();
+    let input = flat(&fx["input"]);
+    let frames = fx["context_frames"].as_u64().unwrap() as usize;
+    let horizon = fx["horizon"].as_u64().unwrap() as usize;
+    let (_, pose) = m.encode(1, frames, &input).unwrap();
+    let d = max_diff(&pose, &flat(&fx["encoder_pose"]));
+    assert!(d < 1e-4, "encoder pose differs by {d}");
+    let roll = m
+        .rollout_normalised(ArSpace::Latent, 1, frames, &input, horizon)
+        .unwrap();
+    let d = max_diff(&roll, &flat(&fx["latent_rollout"]));
+    assert!(d < 1e-4, "latent rollout differs by {d}");
+    let roll = m
+        .rollout_normalised(ArSpace::Pose, 1, frames, &input, horizon)
+        .unwrap();
+    let d = max_diff(&roll, &flat(&fx["pose_rollout"]));
+    assert!(d < 1e-4, "pose rollout differs by {d}");
+}
+
+#[test]
+fn batched_and_single_predictions_agree() {
+    let f = ArForecaster::new(models(), ArSpace::Latent, ArParams::default()).unwrap();
+    let pasts: Vec<Track> = (0..5).map(|i| periodic(15 + i, 12.0)).collect();
+    let batch = f.predict_batch(&pasts, 12).unwrap();
+    for (p, b) in pasts.iter().zip(&batch) {
+        let s = f.predict(p, 12).unwrap();
+        let d = s
+            .positions()
+            .iter()
+            .zip(b.positions().iter())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(d < 1e-3, "batch vs single: {d} px");
+        assert_eq!(s.n_frames(), 12);
+    }
+}
+
+#[test]
+fn predictions_follow_the_track_position_and_scale() {
+    // normalisation: predicting a shifted, scaled copy gives the shifted, scaled prediction
+    let f = ArForecaster::new(models(), ArSpace::Pose, ArParams::default()).unwrap();
+    let past = periodic(15, 12.0);
+    let moved = map_positions(&past, |_, p| vec![2.0 * p[0] + 300.0, 2.0 * p[1] + 50.0]);
+    let a = f.predict(&past, 10).unwrap();
+    let b = f.predict(&moved, 10).unwrap();
+    let a2 = map_positions(&a, |_, p| vec![2.0 * p[0] + 300.0, 2.0 * p[1] + 50.0]);
+    let d = mp_geom::metrics::kd(&a2, &b).unwrap();
+    assert!(d < 1e-2, "{d} px");
+}
+
+#[test]
+fn bad_input_to_the_model_gives_typed_errors() {
+    let f = ArForecaster::new(models(), ArSpace::Latent, ArParams::default()).unwrap();
+    // fewer frames than the receptive field (13)
+    assert!(matches!(
+        f.predict(&periodic(12, 9.0), 5),
+        Err(ForecastError::TooShort {
+            needed: 13,
+            got: 12,
+            ..
+        })
+    ));
+    // wrong joint count for the model
+    let coco = Track::new(
+        Array3::zeros((20, 17, 2)),
+        None,
+        30.0,
+        Units::Pixels,
+        Skeleton::coco17(),
+    )
+    .unwrap();
+    assert!(matches!(
+        f.predict(&coco, 5),
+        Err(ForecastError::Mismatch { .. })
+    ));
+    // 3D track for a 2D model
+    let msr = Track::new(
+        Array3::zeros((20, 20, 3)),
+        None,
+        15.0,
+        Units::Metres,
+        Skeleton::msr20(),
+    )
+    .unwrap();
+    assert!(matches!(
+        f.predict(&msr, 5),
+        Err(ForecastError::Mismatch { .. })
+    ));
+    // every joint missing
+    let (p, _, fps, u, sk) = periodic(15, 9.0).into_parts();
+    let empty = Track::new(p, Some(Array2::zeros((15, 13))), fps, u, sk).unwrap();
+    assert!(matches!(
+        f.predict(&empty, 5),
+        Err(ForecastError::NoValidJoints(_))
+    ));
+    // context shorter than the receptive field
+    assert!(matches!(
+        ArForecaster::new(
+            models(),
+            ArSpace::Latent,
+            ArParams {
+                context_frames: 10,
+                ..ArParams::default()
+            }
+        ),
+        Err(ForecastError::InvalidParam { .. })
+    ));
+}
+
+#[test]
+fn missing_joints_are_masked_not_fatal() {
+    let f = ArForecaster::new(models(), ArSpace::Latent, ArParams::default()).unwrap();
+    let t = periodic(15, 9.0);
+    let mut conf = t.confidence().to_owned();
+    for fr in 0..15 {
+        conf[[fr, 11]] = 0.0;
+        conf[[fr, 3]] = 0.0;
+    }
+    let (p, _, fps, u, sk) = t.into_parts();
+    let t = Track::new(p, Some(conf), fps, u, sk).unwrap();
+    let pred = f.predict(&t, 20).unwrap();
+    assert!(pred.positions().iter().all(|v| v.is_finite()));
+    assert_eq!(pred.n_frames(), 20);
+}
+
+#[test]
+fn learned_model_beats_constant_on_real_penn_action_clips() {
+    // a small subset of the validation split (clips 0, 10, …, 190): AR on Φ vs Constant, PCK with DTW
+    let ds = mp_forecast::data::ForecastDataset::open(
+        mp_geom::paths::data_file("penn_action/penn_action_train.npz")
+            .expect("shared data: penn_action/penn_action_train.npz (set MP_DATA_DIR)"),
+    )
+    .unwrap();
+    let (_, val) = ds.split();
+    let clips: Vec<EvalClip> = val.iter().take(20).map(|c| (*c).clone()).collect();
+    let params = EvalParams {
+        start_stride_frames: 5,
+        ..EvalParams::default()
+    };
+    let ar = ArForecaster::new(models(), ArSpace::Latent, ArParams::default()).unwrap();
+    let a = evaluate(&ar, &clips, &params, |_, _| {}).unwrap();
+    let c = evaluate(&Constant, &clips, &params, |_, _| {}).unwrap();
+    let h30 = |r: &mp_forecast::MethodReport| r.metrics["pck_dtw"].overall["h30"];
+    assert!(
+        h30(&a) > h30(&c),
+        "AR {:.1} vs constant {:.1}",
+        h30(&a),
+        h30(&c)
+    );
+}
+
+#[test]
+fn statue_frame_is_where_the_error_drops_most() {
+    // a forecaster that is right only once frame 25 has been observed
+    struct Late(Track);
+    impl Forecaster for Late {
+        fn name(&self) -> &str {
+            "late"
+        }
+        fn context_frames(&self) -> Option<usize> {
+            None
+        }
+        fn predict(&self, past: &Track, h: usize) -> mp_forecast::Result<Track> {
+            // past = 15 frames ending at frame e; find e by matching the last frame
+            let last = past.n_frames() - 1;
+            let e = (0..self.0.n_frames())
+                .find(|&f| {
+                    self.0.point(f, 0) == past.point(last, 0)
+                        && self.0.point(f, 5) == past.point(last, 5)
+                })
+                .unwrap();
+            if e >= 25 {
+                Ok(self.0.slice_frames(e + 1, e + 1 + h)?)
+            } else {
+                Constant.predict(past, h)
+            }
+        }
+    }
+    let t = penn_track(60, |f| 0.05 * f as f64 + 0.002 * (f * f) as f64, 0.5);
+    let params = StatueParams {
+        filter_frames: 1,
+        ..StatueParams::default()
+    };
+    let s = find_statue(&Late(t.clone()), &t, &params).unwrap();
+    assert_eq!(s.frame, 25);
+    assert!(s.improvement > 0.0);
+    assert_eq!(s.window_end_frames.len(), 60 - 15 - 15 + 1);
+    // too short
+    assert!(matches!(
+        find_statue(
+            &Constant,
+            &t.slice_frames(0, 30).unwrap(),
+            &StatueParams::default()
+        ),
+        Err(ForecastError::TooShort { .. })
+    ));
+    // and the learned model runs on a real-sized track
+    let f = ArForecaster::new(models(), ArSpace::Latent, ArParams::default()).unwrap();
+    let s = find_statue(&f, &t, &StatueParams::default()).unwrap();
+    assert!(s.frame >= 15 && s.frame < 45);
+}
