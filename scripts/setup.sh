@@ -19,6 +19,5 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-if grep -q '^\s*Setup' xtask/src/main.rs 2>/dev/null; then
-  cargo xtask setup
-fi
+# ONNX Runtime (from PyPI's onnxruntime wheel) and the pose models, into .cache/
+cargo xtask setup

@@ -7,6 +7,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Ok(l) = std::env::var("LAMBDA") {
         p.synth.lambda = if l == "adaptive" { mp_concrete::Lambda::adaptive() } else { mp_concrete::Lambda::fixed(l.parse()?) };
     }
+    if let Ok(t) = std::env::var("REL") {
+        p.loops.relative_threshold = Some(t.parse()?);
+    }
     if let Ok(t) = std::env::var("THR") {
         p.loops.threshold = t.parse()?;
     }
@@ -19,5 +22,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t += s.duration_frames;
     }
     println!("{:?}", a.intervals);
+    for k in 1..=4 {
+        let w = 2 * k;
+        let sc: Vec<String> = (0..=a.prims.len().saturating_sub(w))
+            .map(|i| format!("{:.2}", mp_abstract::loops::window_score_with(&a.prims, i, i + w, k, &mp_abstract::LoopParams { unit_scale: a.unit_scale, ..p.loops.clone() }).map(|x| x.0).unwrap_or(f64::NAN)))
+            .collect();
+        println!("k={k} w={w}: {}", sc.join(" "));
+    }
     Ok(())
 }

@@ -51,6 +51,12 @@ pub struct LoopParams {
     /// iterations (`k·n` primitives) as well; candidates of both passes compete
     /// in the selection. Default `Some(2)`; `None` keeps only the table.
     pub short_window_iterations: Option<usize>,
+    /// Unit-free alternative for data without a pixel scale (e.g. joint-angle
+    /// features): when set, a window with body size `k ≥ 2` is scored by
+    /// `max_j mean_i ‖Σ_{i,j}‖_F / ‖Σ_j‖_F` — the within-position spread relative to
+    /// the spread of all the window's primitives — and is a loop below this value.
+    /// Body size 1 keeps the absolute score. Default `None` (absolute scores only).
+    pub relative_threshold: Option<f64>,
 }
 
 impl Default for LoopParams {
@@ -63,6 +69,7 @@ impl Default for LoopParams {
             min_iterations: 2,
             min_body_motion_px: 10.0,
             short_window_iterations: Some(2),
+            relative_threshold: None,
         }
     }
 }
@@ -191,6 +198,36 @@ impl Window {
         }
         self.len += 1;
     }
+    /// Score in the mode `params` selects for this body size, and the threshold it is compared with.
+    fn score_mode(&self, params: &LoopParams) -> (f64, f64) {
+        match params.relative_threshold {
+            Some(r) if self.k >= 2 => (self.relative_score(), r),
+            _ => (self.score(params.unit_scale), params.threshold),
+        }
+    }
+    fn relative_score(&self) -> f64 {
+        let mut worst: f64 = 0.0;
+        for j in 0..self.joints {
+            let dim = self.groups[j].sum.len();
+            let mut total = Moments::new(dim);
+            let mut acc = 0.0;
+            for i in 0..self.k {
+                let g = &self.groups[i * self.joints + j];
+                total.n += g.n;
+                for (a, b) in total.sum.iter_mut().zip(&g.sum) {
+                    *a += b;
+                }
+                for (a, b) in total.sum2.iter_mut().zip(&g.sum2) {
+                    *a += b;
+                }
+                acc += g.cov_norm();
+            }
+            let tn = total.cov_norm();
+            let rel = if tn > 1e-12 { acc / self.k as f64 / tn } else { f64::INFINITY };
+            worst = worst.max(rel);
+        }
+        worst
+    }
     fn score(&self, unit_scale: f64) -> f64 {
         let mut worst: f64 = 0.0;
         for j in 0..self.joints {
@@ -251,6 +288,20 @@ pub fn window_score(
     Ok(w.score(unit_scale))
 }
 
+/// Score of primitives `start..end` with body size `k` in the mode `params`
+/// selects (absolute or relative), with the threshold it is compared against.
+pub fn window_score_with(prims: &[DetPrim], start: usize, end: usize, k: usize, params: &LoopParams) -> Result<(f64, f64)> {
+    let (joints, dim) = check_prims(prims)?;
+    if k == 0 || start >= end || end > prims.len() {
+        return Err(AbstractError::param("window", format!("{start}..{end} with body {k} is invalid")));
+    }
+    let mut w = Window::new(k, joints, dim);
+    for p in &prims[start..end] {
+        w.push(p);
+    }
+    Ok(w.score_mode(params))
+}
+
 /// Path length of the mean loop body of the most moving joint, in track units.
 fn body_motion(prims: &[DetPrim], start: usize, end: usize, k: usize) -> f64 {
     let joints = prims[start].points.len();
@@ -297,14 +348,14 @@ fn candidates_for(
         for p in &prims[i..i + w] {
             win.push(p);
         }
-        let s = win.score(params.unit_scale);
-        if s < params.threshold {
+        let (s, thr) = win.score_mode(params);
+        if s < thr {
             let mut end = i + w;
             let mut score = s;
             while end < n {
                 win.push(&prims[end]);
-                let s2 = win.score(params.unit_scale);
-                if s2 < params.threshold {
+                let (s2, _) = win.score_mode(params);
+                if s2 < thr {
                     end += 1;
                     score = s2;
                 } else {
@@ -376,16 +427,12 @@ pub fn detect_loops(prims: &[DetPrim], params: &LoopParams) -> Result<Vec<Detect
             continue;
         }
         let (s, e) = (best_s, best_s + len);
-        let score = if (s, e) == (c.start, c.end) {
-            c.score
-        } else {
-            let mut win = Window::new(k, joints, dim);
-            for p in &prims[s..e] {
-                win.push(p);
-            }
-            win.score(params.unit_scale)
-        };
-        if score >= params.threshold {
+        let mut win = Window::new(k, joints, dim);
+        for p in &prims[s..e] {
+            win.push(p);
+        }
+        let (score, thr) = win.score_mode(params);
+        if score >= thr {
             continue;
         }
         if body_motion(prims, s, e, k) < params.min_body_motion_px * params.unit_scale {
