@@ -104,6 +104,15 @@ impl LoopParams {
                 "must be finite and ≥ 0",
             ));
         }
+        if self.short_window_iterations.is_some_and(|n| n < 2) {
+            return Err(AbstractError::param("short_window_iterations", "must be ≥ 2"));
+        }
+        if self
+            .relative_threshold
+            .is_some_and(|r| !(r.is_finite() && r > 0.0))
+        {
+            return Err(AbstractError::param("relative_threshold", "must be finite and > 0"));
+        }
         Ok(())
     }
 
