@@ -11,7 +11,6 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use mp_abstract::PredictParams;
 use mp_forecast::data::ForecastDataset;
 use mp_forecast::model::find_model_dir;
 use mp_forecast::{
@@ -31,7 +30,11 @@ pub struct EvalForecastArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Methods to run (comma separated): constant, nn, loop, loop_all, ar, ar_pose.
-    #[arg(long, value_delimiter = ',', default_value = "constant,nn,loop,ar,ar_pose")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "constant,nn,loop,ar,ar_pose"
+    )]
     pub methods: Vec<String>,
     /// At most this many validation clips (spread evenly over the split).
     #[arg(long)]
@@ -83,10 +86,18 @@ fn method(
             );
             Box::new(nn)
         }
-        "loop" => Box::new(LoopUnroll::new(PredictParams::default(), Some(15))?),
-        "loop_all" => Box::new(LoopUnroll::new(PredictParams::default(), None)?),
-        "ar" => Box::new(ArForecaster::new(load()?, ArSpace::Latent, ArParams::default())?),
-        "ar_pose" => Box::new(ArForecaster::new(load()?, ArSpace::Pose, ArParams::default())?),
+        "loop" => Box::new(LoopUnroll::new(LoopUnroll::default_params(), Some(15))?),
+        "loop_all" => Box::new(LoopUnroll::new(LoopUnroll::default_params(), None)?),
+        "ar" => Box::new(ArForecaster::new(
+            load()?,
+            ArSpace::Latent,
+            ArParams::default(),
+        )?),
+        "ar_pose" => Box::new(ArForecaster::new(
+            load()?,
+            ArSpace::Pose,
+            ArParams::default(),
+        )?),
         other => bail!("unknown method `{other}` (constant, nn, loop, loop_all, ar, ar_pose)"),
     })
 }
@@ -105,7 +116,10 @@ fn table_md(reports: &[MethodReport], metric: &str, horizons: &[usize]) -> Strin
         if let Some(t) = r.metrics.get(metric) {
             s += &format!("| {} |", r.method);
             for h in horizons {
-                s += &format!(" {:.1} |", t.overall.get(&format!("h{h}")).copied().unwrap_or(f64::NAN));
+                s += &format!(
+                    " {:.1} |",
+                    t.overall.get(&format!("h{h}")).copied().unwrap_or(f64::NAN)
+                );
             }
             s += "\n";
         }
@@ -166,7 +180,8 @@ pub fn run(a: &EvalForecastArgs) -> Result<()> {
     }
     let model_dir = match &a.models {
         Some(p) => p.clone(),
-        None => find_model_dir(ds.kind).unwrap_or_else(|_| PathBuf::from("models/forecast").join(ds.kind)),
+        None => find_model_dir(ds.kind)
+            .unwrap_or_else(|_| PathBuf::from("models/forecast").join(ds.kind)),
     };
     let clips: Vec<EvalClip> = val.iter().map(|c| (*c).clone()).collect();
     eprintln!(
@@ -194,14 +209,33 @@ pub fn run(a: &EvalForecastArgs) -> Result<()> {
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
         pb.set_message(name.clone());
-        let r = evaluate(m.as_ref(), &clips, &params, |i, _| pb.set_position(i as u64))?;
+        let r = evaluate(m.as_ref(), &clips, &params, |i, _| {
+            pb.set_position(i as u64)
+        })?;
         pb.finish_and_clear();
-        let main = if ds.kind == "penn_action" { "pck_dtw" } else { "pa_mpjpe_dtw" };
+        let main = if ds.kind == "penn_action" {
+            "pck_dtw"
+        } else {
+            "pa_mpjpe_dtw"
+        };
+        let shown: Vec<String> = params
+            .horizons
+            .iter()
+            .map(|h| {
+                let v = r
+                    .metrics
+                    .get(main)
+                    .and_then(|t| t.overall.get(&format!("h{h}")))
+                    .copied()
+                    .unwrap_or(f64::NAN);
+                format!("h{h} {v:.1}")
+            })
+            .collect();
         eprintln!(
-            "{name}: {} predictions in {:.1} s; {main} {:?}",
+            "{name}: {} predictions in {:.1} s; {main}: {}",
             r.predictions,
             r.seconds,
-            r.metrics.get(main).map(|t| t.overall.values().map(|v| (v * 10.0).round() / 10.0).collect::<Vec<_>>())
+            shown.join(", ")
         );
         reports.push(r);
     }

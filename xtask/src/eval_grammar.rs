@@ -41,9 +41,7 @@ use mp_grammar::data::{bvh_files, read_motions, Motion};
 use mp_grammar::model::{find_symbols, learn_grammar, GrammarModel};
 use mp_grammar::sentences::score_partition;
 use mp_grammar::synth::{mean_run_length, ngram_overlap, StitchParams, Synthesis};
-use mp_grammar::{
-    symbol_name, DeriveParams, Fsm, FsmWeighting, PoseDistanceParams, SymbolParams,
-};
+use mp_grammar::{symbol_name, DeriveParams, Fsm, FsmWeighting, PoseDistanceParams, SymbolParams};
 use serde_json::{json, Value};
 
 /// Arguments of `cargo xtask eval grammar`.
@@ -59,7 +57,7 @@ pub struct EvalGrammarArgs {
     #[arg(long)]
     pub markdown: Option<PathBuf>,
     /// Symbol counts K for BVH motions.
-    #[arg(long, value_delimiter = ',', default_value = "12,20")]
+    #[arg(long, value_delimiter = ',', default_value = "12,20,30")]
     pub k_bvh: Vec<usize>,
     /// Symbol counts K for CMU feature motions.
     #[arg(long, value_delimiter = ',', default_value = "6,12")]
@@ -68,7 +66,7 @@ pub struct EvalGrammarArgs {
     #[arg(long, default_value_t = 4)]
     pub frame_step: usize,
     /// Synthesis seeds per motion and K.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 10)]
     pub seeds: u64,
     /// Seed of symbol identification and of the partition search.
     #[arg(long, default_value_t = 0)]
@@ -180,9 +178,8 @@ fn purity_nmi(a: &[usize], b: &[i64]) -> (f64, f64) {
         *e = e.max(c);
     }
     let purity = best.values().sum::<f64>() / nf;
-    let h = |m: &dyn Fn() -> Vec<f64>| -> f64 {
-        m().iter().map(|&c| -(c / nf) * (c / nf).ln()).sum()
-    };
+    let h =
+        |m: &dyn Fn() -> Vec<f64>| -> f64 { m().iter().map(|&c| -(c / nf) * (c / nf).ln()).sum() };
     let ha = h(&|| pa.values().copied().collect());
     let hb = h(&|| pb.values().copied().collect());
     let mut mi = 0.0;
@@ -190,7 +187,11 @@ fn purity_nmi(a: &[usize], b: &[i64]) -> (f64, f64) {
         let pxy = c / nf;
         mi += pxy * (pxy / ((pa[&x] / nf) * (pb[&y] / nf))).ln();
     }
-    let nmi = if ha + hb > 0.0 { 2.0 * mi / (ha + hb) } else { 0.0 };
+    let nmi = if ha + hb > 0.0 {
+        2.0 * mi / (ha + hb)
+    } else {
+        0.0
+    };
     (purity, nmi)
 }
 
@@ -219,8 +220,8 @@ fn segment_labels(m: &GrammarModel, labels: &[i64]) -> Vec<i64> {
         .iter()
         .map(|s| {
             let mut c: HashMap<i64, usize> = HashMap::new();
-            for t in s.start..s.end.min(labels.len()) {
-                *c.entry(labels[t]).or_default() += 1;
+            for &l in labels.iter().take(s.end).skip(s.start) {
+                *c.entry(l).or_default() += 1;
             }
             c.into_iter()
                 .max_by_key(|&(l, n)| (n, -l))
@@ -339,7 +340,13 @@ fn eval_one(input: &Input, k: usize, a: &EvalGrammarArgs) -> anyhow::Result<Valu
     for seed in 0..a.seeds {
         let g = st.synthesize(&model.grammar, &derive, train.len(), seed)?;
         let gaps = st.gaps(&g.pieces.iter().map(|p| p.segment).collect::<Vec<_>>());
-        g_acc.add(&g, st.seam_distances(&g)?, gaps, &train, seg_labels.as_deref());
+        g_acc.add(
+            &g,
+            st.seam_distances(&g)?,
+            gaps,
+            &train,
+            seg_labels.as_deref(),
+        );
         if let Some(d) = &g.derivation {
             let novel = d
                 .sentences
@@ -351,7 +358,13 @@ fn eval_one(input: &Input, k: usize, a: &EvalGrammarArgs) -> anyhow::Result<Valu
         }
         let f = st.synthesize_fsm(&fsm, g.pieces.len(), seed)?;
         let gaps = st.gaps(&f.pieces.iter().map(|p| p.segment).collect::<Vec<_>>());
-        f_acc.add(&f, st.seam_distances(&f)?, gaps, &train, seg_labels.as_deref());
+        f_acc.add(
+            &f,
+            st.seam_distances(&f)?,
+            gaps,
+            &train,
+            seg_labels.as_deref(),
+        );
     }
     let t_synth = t2.elapsed().as_secs_f64();
     let feat = st.features();
@@ -427,13 +440,16 @@ fn markdown(rows: &[Value]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| motion | frames @ fps | K | segments | F | purity | NMI | sentences | NT | rules | DL bits (one sentence) | time sym / gram / synth s |"
+        "| motion | frames @ fps | K | segments | F | purity | NMI | sentences | NT | rules | DL bits (one sentence) | d(t, t+1) source | time sym / gram / synth s |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(
+        s,
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {} @ {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({}) | {:.1} / {:.1} / {:.1} |",
+            "| {} | {} @ {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({}) | {} | {:.1} / {:.1} / {:.1} |",
             r["name"].as_str().unwrap_or(""),
             r["frames"],
             f(&r["fps"]),
@@ -447,6 +463,7 @@ fn markdown(rows: &[Value]) -> String {
             r["grammar"]["rules"],
             f(&r["grammar"]["dl_bits"]),
             f(&r["grammar"]["dl_single_sentence_bits"]),
+            f(&r["synthesis"]["source_frame_step_distance_mean"]),
             r["seconds"]["symbols"].as_f64().unwrap_or(0.0),
             r["seconds"]["grammar"].as_f64().unwrap_or(0.0),
             r["seconds"]["synthesis"].as_f64().unwrap_or(0.0),
@@ -457,7 +474,10 @@ fn markdown(rows: &[Value]) -> String {
         s,
         "| motion | K | method | segments | seam mean | seam p90 | gap mean (unblended) | gap p90 | 2-gram | 3-gram | 4-gram | symbol run (source) | label run (source) | novel sentences |"
     );
-    let _ = writeln!(s, "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(
+        s,
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
     for r in rows {
         for m in ["grammar", "fsm"] {
             let x = &r["synthesis"][m];
@@ -492,7 +512,11 @@ pub fn run(a: &EvalGrammarArgs) -> anyhow::Result<()> {
     let mut rows = Vec::new();
     for d in &a.data {
         for input in inputs(d, a.frame_step)? {
-            let ks = if input.features { &a.k_features } else { &a.k_bvh };
+            let ks = if input.features {
+                &a.k_features
+            } else {
+                &a.k_bvh
+            };
             for &k in ks {
                 rows.push(eval_one(&input, k, a)?);
             }
@@ -536,6 +560,9 @@ mod tests {
         assert!((p - 1.0).abs() < 1e-12 && (n - 1.0).abs() < 1e-12);
         let (p, n) = purity_nmi(&[0, 1, 0, 1], &[5, 5, 7, 7]);
         assert!((p - 0.5).abs() < 1e-12 && n.abs() < 1e-12);
-        assert_eq!(p90(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]), 9.0);
+        assert_eq!(
+            p90(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]),
+            9.0
+        );
     }
 }

@@ -85,14 +85,22 @@ pub fn run(a: &TrainForecastArgs) -> Result<()> {
         bail!("{}: no such file", data.display());
     }
     let python = venv_python(&root)?;
-    let out = if a.out.is_absolute() { a.out.clone() } else { root.join(&a.out) };
+    let out = if a.out.is_absolute() {
+        a.out.clone()
+    } else {
+        root.join(&a.out)
+    };
     let command = format!(
         "cargo xtask train-forecast --data {} --epochs {} --seed {} --out {}{}",
         data.display(),
         a.epochs,
         a.seed,
         a.out.display(),
-        if a.extra.is_empty() { String::new() } else { format!(" -- {}", a.extra.join(" ")) }
+        if a.extra.is_empty() {
+            String::new()
+        } else {
+            format!(" -- {}", a.extra.join(" "))
+        }
     );
     println!("train-forecast: {command}");
     let st = Command::new(&python)
@@ -103,7 +111,12 @@ pub fn run(a: &TrainForecastArgs) -> Result<()> {
         .arg(&out)
         .arg("--fixture-dir")
         .arg(root.join("testdata/forecast"))
-        .args(["--epochs", &a.epochs.to_string(), "--seed", &a.seed.to_string()])
+        .args([
+            "--epochs",
+            &a.epochs.to_string(),
+            "--seed",
+            &a.seed.to_string(),
+        ])
         .args(["--command", &command])
         .args(&a.extra)
         .env("OMP_WAIT_POLICY", "PASSIVE")

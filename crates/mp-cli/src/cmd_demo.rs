@@ -40,18 +40,39 @@ pub struct DemoArgs {
 }
 
 pub fn performer_cmd(a: &PerformerArgs) -> anyhow::Result<()> {
-    let perf = perform(&PerformerParams { seed: a.seed, ..PerformerParams::default() })?;
-    let t = if a.three_d { &perf.track_3d } else { &perf.track_2d };
+    let perf = perform(&PerformerParams {
+        seed: a.seed,
+        ..PerformerParams::default()
+    })?;
+    let t = if a.three_d {
+        &perf.track_3d
+    } else {
+        &perf.track_2d
+    };
     write_track(&a.output, t)?;
-    eprintln!("{} frames × {} joints written to {}", t.n_frames(), t.n_joints(), a.output.display());
+    eprintln!(
+        "{} frames × {} joints written to {}",
+        t.n_frames(),
+        t.n_joints(),
+        a.output.display()
+    );
     for s in &perf.segments {
-        eprintln!("  {:<12} frames {:>4}..{:<4} {} repetitions", s.kind.name(), s.frames.start, s.frames.end, s.reps.len());
+        eprintln!(
+            "  {:<12} frames {:>4}..{:<4} {} repetitions",
+            s.kind.name(),
+            s.frames.start,
+            s.frames.end,
+            s.reps.len()
+        );
     }
     Ok(())
 }
 
 pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
-    let params = PerformerParams { seed: a.seed, ..PerformerParams::default() };
+    let params = PerformerParams {
+        seed: a.seed,
+        ..PerformerParams::default()
+    };
     let perf = perform(&params)?;
     let (w, h) = params.frame_size_px;
     let track = perf.track_2d.clone();
@@ -75,24 +96,30 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
         frame_size: Some((w, h)),
         frame_px: Some(w.max(h) as f64),
     };
-    let opts = cmd_run::RunOptions { quiet: a.quiet, overlay_video: false };
+    let opts = cmd_run::RunOptions {
+        quiet: a.quiet,
+        overlay_video: false,
+    };
     let summary = cmd_run::run_or_exit(source, &a.out, &opts)?;
     let an = &summary.analysis;
     print!("{}", print_with(&an.program, &PrintOptions::summary()));
     println!();
     println!("Repetitions found (ground truth of the performer in brackets):");
     for i in &an.intervals {
-        let gt = perf
-            .segments
-            .iter()
-            .find(|s| mp_abstract::repetition::iom((i.start_frame, i.end_frame), (s.frames.start, s.frames.end)) > 0.5);
+        let gt = perf.segments.iter().find(|s| {
+            mp_abstract::repetition::iom(
+                (i.start_frame, i.end_frame),
+                (s.frames.start, s.frames.end),
+            ) > 0.5
+        });
         println!(
             "  frames {:>4}..{:<4} {} × body of {} primitives  [{}]",
             i.start_frame,
             i.end_frame,
             i.count,
             i.body_size,
-            gt.map(|s| format!("{} × {}", s.reps.len(), s.kind.name())).unwrap_or_else(|| "no labelled move".into())
+            gt.map(|s| format!("{} × {}", s.reps.len(), s.kind.name()))
+                .unwrap_or_else(|| "no labelled move".into())
         );
     }
     println!();

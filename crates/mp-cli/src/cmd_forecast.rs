@@ -33,7 +33,7 @@ fn load_models(track: &Track, dir: Option<&Path>) -> anyhow::Result<Arc<Forecast
         None => {
             let name = &track.skeleton().name;
             let ds = dataset_for_skeleton(name).with_context(|| {
-                format!("no forecasting model for skeleton `{name}` (models exist for penn13, msr20); pass --models DIR")
+                format!("no forecasting model for skeleton `{name}` (model folders are per data set: penn13 → penn_action, msr20 → msr_action3d); pass --models DIR")
             })?;
             find_model_dir(ds)?
         }
@@ -51,7 +51,11 @@ pub fn ar_forecaster(
     latent: bool,
 ) -> anyhow::Result<ArForecaster> {
     let models = load_models(track, opts.models.as_deref())?;
-    let space = if latent { ArSpace::Latent } else { ArSpace::Pose };
+    let space = if latent {
+        ArSpace::Latent
+    } else {
+        ArSpace::Pose
+    };
     Ok(ArForecaster::new(models, space, ArParams::default())?)
 }
 
@@ -79,7 +83,10 @@ pub fn predict_with(
     opts: &ForecastOpts,
 ) -> anyhow::Result<Track> {
     if observe == 0 || observe > track.n_frames() {
-        bail!("--observe must be in 1..={} (the track's length)", track.n_frames());
+        bail!(
+            "--observe must be in 1..={} (the track's length)",
+            track.n_frames()
+        );
     }
     let past = track.slice_frames(0, observe)?;
     let f: Box<dyn Forecaster> = match method {

@@ -324,7 +324,11 @@ fn synth_cmd(a: &SynthArgs) -> anyhow::Result<()> {
     } else {
         st.synthesize(&m.grammar, &derive, a.segments, a.seed)?
     };
-    print_synthesis(if a.fsm { "fsm" } else { "grammar" }, &s, &st.seam_distances(&s)?);
+    print_synthesis(
+        if a.fsm { "fsm" } else { "grammar" },
+        &s,
+        &st.seam_distances(&s)?,
+    );
     if let Some(t) = a.regenerate {
         if a.fsm {
             bail!("--regenerate needs a grammar derivation (not --fsm)");

@@ -22,16 +22,20 @@ use mp_geom::Track;
 use mp_pose::extract::{extract, open_estimator, ExtractOptions, ModelChoice};
 use mp_pose::video::{Frame, FrameSource, VideoReader, VideoWriter};
 use mp_pose::SessionParams;
-use mp_report::draw::{blank_canvas, blit_scaled, contact_sheet, draw_skeleton, SkeletonStyle, Tile, View};
+use mp_report::draw::{
+    blank_canvas, blit_scaled, contact_sheet, draw_skeleton, SkeletonStyle, Tile, View,
+};
 use mp_report::outdir::{check_interrupt, emergency_cleanup, interrupted, request_interrupt};
 use mp_report::raster::{pixmap_to_rgb, rgb_to_pixmap, svg_to_png};
 use mp_report::{
-    joint_trajectory_svg, report_html, standard_cards, timeline_svg, Card, FrameStore, FrameStoreParams,
-    OutputDir, PlotParams, ReportError, ReportInput, TimelineParams,
+    joint_trajectory_svg, report_html, standard_cards, timeline_svg, Card, FrameStore,
+    FrameStoreParams, OutputDir, PlotParams, ReportError, ReportInput, TimelineParams,
 };
 
 /// File extensions read as videos; anything else is read as a keypoint track.
-pub const VIDEO_EXTENSIONS: [&str; 10] = ["mp4", "mov", "avi", "webm", "mkv", "m4v", "mpg", "mpeg", "wmv", "flv"];
+pub const VIDEO_EXTENSIONS: [&str; 10] = [
+    "mp4", "mov", "avi", "webm", "mkv", "m4v", "mpg", "mpeg", "wmv", "flv",
+];
 
 /// Arguments of `mp run`.
 #[derive(Args, Debug)]
@@ -218,7 +222,11 @@ pub fn run_cmd(a: &RunArgs) -> Result<()> {
                 track = track.slice_frames(0, n.max(1))?;
             }
         }
-        let name = a.input.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = a
+            .input
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         Source::Track {
             description: format!(
                 "keypoint track {} · {} frames × {} joints ({}, {}D, {}) at {} fps",
@@ -286,7 +294,16 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
     println!();
     println!("{}", stage_table(s));
     println!("Report: {}", s.report.display());
-    println!("All files in {}/: {}", out.display(), s.files.iter().filter(|f| !f.starts_with("plots/")).cloned().collect::<Vec<_>>().join(", "));
+    println!(
+        "All files in {}/: {}",
+        out.display(),
+        s.files
+            .iter()
+            .filter(|f| !f.starts_with("plots/"))
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
 }
 
 /// The stage-timing table.
@@ -294,7 +311,11 @@ pub fn stage_table(s: &RunSummary) -> String {
     let mut t = String::from("stage        time (s)   frames/s\n");
     for st in &s.stages {
         let secs = st.time.as_secs_f64();
-        let fps = if secs > 0.0 && st.frames > 0 { format!("{:9.1}", st.frames as f64 / secs) } else { format!("{:>9}", "–") };
+        let fps = if secs > 0.0 && st.frames > 0 {
+            format!("{:9.1}", st.frames as f64 / secs)
+        } else {
+            format!("{:>9}", "–")
+        };
         t.push_str(&format!("{:<12} {:>8.2}  {}\n", st.name, secs, fps));
     }
     let total = s.total.as_secs_f64();
@@ -327,7 +348,8 @@ impl Iterator for Tap {
         }
         let t0 = Instant::now();
         let f = self.inner.next();
-        self.decode_ns.fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        self.decode_ns
+            .fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
         if let Some(Ok(frame)) = &f {
             let t1 = Instant::now();
             if let Ok(mut st) = self.store.lock() {
@@ -337,7 +359,8 @@ impl Iterator for Tap {
                     }
                 }
             }
-            self.store_ns.fetch_add(t1.elapsed().as_nanos() as u64, Ordering::Relaxed);
+            self.store_ns
+                .fetch_add(t1.elapsed().as_nanos() as u64, Ordering::Relaxed);
         }
         f
     }
@@ -363,14 +386,21 @@ fn keypoints_from_video(
     opts: &RunOptions,
     stages: &mut Vec<StageTime>,
 ) -> Result<Keypoints> {
-    let reader = VideoReader::open(path).map_err(pose_err).with_context(|| format!("opening video {}", path.display()))?;
+    let reader = VideoReader::open(path)
+        .map_err(pose_err)
+        .with_context(|| format!("opening video {}", path.display()))?;
     let info = reader.info().clone();
     let expected = match (info.frame_count, max_frames) {
         (Some(n), Some(m)) => Some(n.min(m)),
         (n, None) => n,
         (None, m) => m,
     };
-    let store = Arc::new(Mutex::new(FrameStore::new(info.width, info.height, expected, &FrameStoreParams::default())?));
+    let store = Arc::new(Mutex::new(FrameStore::new(
+        info.width,
+        info.height,
+        expected,
+        &FrameStoreParams::default(),
+    )?));
     let decode_ns = Arc::new(AtomicU64::new(0));
     let store_ns = Arc::new(AtomicU64::new(0));
     let store_err = Arc::new(Mutex::new(None));
@@ -415,7 +445,11 @@ fn keypoints_from_video(
     let dec = Duration::from_nanos(decode_ns.load(Ordering::Relaxed));
     let sto = Duration::from_nanos(store_ns.load(Ordering::Relaxed));
     let n = ex.track.n_frames();
-    stages.push(StageTime { name: "decode", time: dec + sto, frames: n });
+    stages.push(StageTime {
+        name: "decode",
+        time: dec + sto,
+        frames: n,
+    });
     stages.push(StageTime {
         name: "pose",
         time: wall.saturating_sub(dec + sto),
@@ -426,18 +460,26 @@ fn keypoints_from_video(
     }
     let found = ex.found_fraction();
     if found == 0.0 {
-        bail!("no person was found in any of the {n} frames of {}", path.display());
+        bail!(
+            "no person was found in any of the {n} frames of {}",
+            path.display()
+        );
     }
     let model_name = est.name().to_string();
     let mut track = ex.track;
     if !all_joints && track.skeleton().name != "coco17" && track.skeleton().maps_to_coco17() {
-        track = track.to_coco17().context("mapping the keypoints to COCO-17")?;
+        track = track
+            .to_coco17()
+            .context("mapping the keypoints to COCO-17")?;
     }
     let frames = Arc::try_unwrap(store)
         .ok()
         .and_then(|m| m.into_inner().ok())
         .context("collecting the stored frames")?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     Ok(Keypoints {
         description: format!(
             "video {} · {}×{} at {:.2} fps · {} frames · {} ({} joints) · person found in {:.0}% of frames",
@@ -465,7 +507,12 @@ fn keypoints_from_video(
 }
 
 /// Concrete and abstract programs of a track, timed separately.
-pub fn analyse_timed(track: &Track, frame_px: Option<f64>, quiet: bool, stages: &mut Vec<StageTime>) -> Result<Analysis> {
+pub fn analyse_timed(
+    track: &Track,
+    frame_px: Option<f64>,
+    quiet: bool,
+    stages: &mut Vec<StageTime>,
+) -> Result<Analysis> {
     let synth = SynthParams {
         scale: match frame_px {
             Some(frame_px) => Scale::FrameSize { frame_px },
@@ -490,8 +537,8 @@ pub fn analyse_timed(track: &Track, frame_px: Option<f64>, quiet: bool, stages: 
         unit_scale: syn.unit_scale,
         ..LoopParams::default()
     };
-    let (program, found, prims) =
-        mp_abstract::pipeline::from_concrete(&syn.program, &loops).context("finding loops (abstract program)")?;
+    let (program, found, prims) = mp_abstract::pipeline::from_concrete(&syn.program, &loops)
+        .context("finding loops (abstract program)")?;
     let intervals = mp_abstract::repetition::intervals(&prims, &found, 0);
     stages.push(StageTime {
         name: "abstract",
@@ -515,15 +562,25 @@ pub fn analyse_timed(track: &Track, frame_px: Option<f64>, quiet: bool, stages: 
 pub fn write_analysis(out: &OutputDir, track: &Track, an: &Analysis) -> Result<Vec<String>> {
     let mut files = Vec::new();
     let mut put = |rel: &str, bytes: &[u8]| -> Result<()> {
-        out.write(rel, bytes).with_context(|| format!("writing {}", out.path(rel).display()))?;
+        out.write(rel, bytes)
+            .with_context(|| format!("writing {}", out.path(rel).display()))?;
         files.push(rel.to_string());
         Ok(())
     };
-    put("track.npz", &mp_geom::io::native::track_to_npz_bytes(track)?)?;
+    put(
+        "track.npz",
+        &mp_geom::io::native::track_to_npz_bytes(track)?,
+    )?;
     put("program.txt", an.concrete.to_dsl().as_bytes())?;
     put("program.json", an.concrete.to_json()?.as_bytes())?;
-    put("abstract.txt", mp_abstract::dsl::print(&an.program).as_bytes())?;
-    put("abstract.json", serde_json::to_string_pretty(&an.program)?.as_bytes())?;
+    put(
+        "abstract.txt",
+        mp_abstract::dsl::print(&an.program).as_bytes(),
+    )?;
+    put(
+        "abstract.json",
+        serde_json::to_string_pretty(&an.program)?.as_bytes(),
+    )?;
     let loops = serde_json::json!({
         "fps": track.fps(),
         "frames": track.n_frames(),
@@ -531,21 +588,37 @@ pub fn write_analysis(out: &OutputDir, track: &Track, an: &Analysis) -> Result<V
         "counts": an.intervals.iter().map(|i| i.count).collect::<Vec<_>>(),
         "total_repetitions": an.intervals.iter().map(|i| i.count).sum::<usize>(),
     });
-    put("loops.json", serde_json::to_string_pretty(&loops)?.as_bytes())?;
+    put(
+        "loops.json",
+        serde_json::to_string_pretty(&loops)?.as_bytes(),
+    )?;
     Ok(files)
 }
 
 fn file_stem_safe(name: &str) -> String {
     name.chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '_' || c == '-' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }
 
 fn loop_caption(an: &Analysis, f: usize) -> Option<String> {
-    an.intervals.iter().find(|iv| f >= iv.start_frame && f < iv.end_frame).map(|iv| {
-        let it = iv.boundaries.windows(2).position(|w| f >= w[0] && f < w[1]).unwrap_or(0);
-        format!("rep {}/{}", it + 1, iv.count)
-    })
+    an.intervals
+        .iter()
+        .find(|iv| f >= iv.start_frame && f < iv.end_frame)
+        .map(|iv| {
+            let it = iv
+                .boundaries
+                .windows(2)
+                .position(|w| f >= w[0] && f < w[1])
+                .unwrap_or(0);
+            format!("rep {}/{}", it + 1, iv.count)
+        })
 }
 
 /// The whole pipeline into `out_dir`.
@@ -561,7 +634,15 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
             max_frames,
             all_joints,
             threads,
-        } => keypoints_from_video(&path, model, max_frames, all_joints, threads, opts, &mut stages)?,
+        } => keypoints_from_video(
+            &path,
+            model,
+            max_frames,
+            all_joints,
+            threads,
+            opts,
+            &mut stages,
+        )?,
         Source::Track {
             track,
             title,
@@ -581,12 +662,16 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
     };
     let track = kp.track;
     if track.n_frames() < 2 {
-        bail!("the motion has {} frame(s); at least 2 are needed", track.n_frames());
+        bail!(
+            "the motion has {} frame(s); at least 2 are needed",
+            track.n_frames()
+        );
     }
 
     // 2–3. Programs and loops; the output folder is created once there is something to write.
     let an = analyse_timed(&track, kp.frame_px, opts.quiet, &mut stages)?;
-    let out = OutputDir::create(out_dir).with_context(|| format!("creating the output folder {}", out_dir.display()))?;
+    let out = OutputDir::create(out_dir)
+        .with_context(|| format!("creating the output folder {}", out_dir.display()))?;
     let mut files = write_analysis(&out, &track, &an)?;
 
     // 4. Pictures.
@@ -650,8 +735,14 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
         };
         tiles.push(Tile { pixmap, caption });
     }
-    let sheet = contact_sheet(&tiles, 4, &format!("{} — keypoints and program (pink)", kp.title))?;
-    let sheet_png = sheet.encode_png().map_err(|e| anyhow::anyhow!("encoding the contact sheet: {e}"))?;
+    let sheet = contact_sheet(
+        &tiles,
+        4,
+        &format!("{} — keypoints and program (pink)", kp.title),
+    )?;
+    let sheet_png = sheet
+        .encode_png()
+        .map_err(|e| anyhow::anyhow!("encoding the contact sheet: {e}"))?;
     out.write("contact_sheet.png", &sheet_png)?;
     files.push("contact_sheet.png".into());
     pb.inc(1);
@@ -695,7 +786,12 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
     if files.iter().any(|f| f == "overlay.mp4") {
         linked.push("overlay.mp4".into());
     }
-    linked.extend(files.iter().filter(|f| f.starts_with("plots/") && f.ends_with(".svg")).cloned());
+    linked.extend(
+        files
+            .iter()
+            .filter(|f| f.starts_with("plots/") && f.ends_with(".svg"))
+            .cloned(),
+    );
     let html = report_html(&ReportInput {
         title: &kp.title,
         subtitle: &kp.description,
@@ -731,11 +827,18 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
 
 /// Decodes the video again and encodes every analysed frame with the
 /// keypoints and the executed program drawn on it.
-fn write_overlay(out: &OutputDir, video: &Path, track: &Track, executed: &Track, quiet: bool) -> Result<()> {
+fn write_overlay(
+    out: &OutputDir,
+    video: &Path,
+    track: &Track,
+    executed: &Track,
+    quiet: bool,
+) -> Result<()> {
     let reader = VideoReader::open(video).map_err(pose_err)?;
     let info = reader.info().clone();
     let staged = out.staging_file("overlay.mp4");
-    let mut writer = VideoWriter::create(&staged, info.width, info.height, info.fps).map_err(pose_err)?;
+    let mut writer =
+        VideoWriter::create(&staged, info.width, info.height, info.fps).map_err(pose_err)?;
     let n = track.n_frames();
     let pb = bar(Some(n), "overlay", quiet);
     let s = (info.width.max(info.height) as f32 / 512.0).max(0.6);
@@ -752,7 +855,10 @@ fn write_overlay(out: &OutputDir, video: &Path, track: &Track, executed: &Track,
         pb.inc(1);
     }
     check_interrupt()?;
-    writer.finish().map_err(pose_err).context("encoding overlay.mp4")?;
+    writer
+        .finish()
+        .map_err(pose_err)
+        .context("encoding overlay.mp4")?;
     out.commit(&staged, "overlay.mp4")?;
     pb.finish_and_clear();
     Ok(())

@@ -33,12 +33,30 @@ fn symbols_learn_synth_round_trip() {
     // A 1,800-frame slice (15 s at 120 fps) as the input.
     let slice = dir.path().join("slice.bvh");
     let full = Bvh::read(&src).unwrap();
-    full.slice_frames(0, 1800).unwrap().write_bvh(&slice).unwrap();
+    full.slice_frames(0, 1800)
+        .unwrap()
+        .write_bvh(&slice)
+        .unwrap();
 
     let sym = dir.path().join("sym.json");
     let (stdout, _) = mp(&[
-        "grammar", "symbols", p(&slice), "--k", "5", "--frame-step", "4", "--population", "16",
-        "--generations", "10", "--sa-iterations", "100", "--seed", "2", "-o", p(&sym),
+        "grammar",
+        "symbols",
+        p(&slice),
+        "--k",
+        "5",
+        "--frame-step",
+        "4",
+        "--population",
+        "16",
+        "--generations",
+        "10",
+        "--sa-iterations",
+        "100",
+        "--seed",
+        "2",
+        "-o",
+        p(&sym),
     ]);
     let string: Vec<&str> = stdout.split_whitespace().collect();
     assert!(string.len() >= 5, "{stdout}");
@@ -53,15 +71,43 @@ fn symbols_learn_synth_round_trip() {
     assert_eq!(segs.last().unwrap()["end"], 450);
 
     let gram = dir.path().join("grammar.json");
-    let (rules, _) = mp(&["grammar", "learn", p(&sym), "-o", p(&gram), "--candidates", "20"]);
+    let (rules, _) = mp(&[
+        "grammar",
+        "learn",
+        p(&sym),
+        "-o",
+        p(&gram),
+        "--candidates",
+        "20",
+    ]);
     assert!(rules.contains("S -> "), "{rules}");
     assert!(rules.contains("nonterminals"), "{rules}");
 
     // BVH output with the input's hierarchy, seeded.
     let out1 = dir.path().join("a.bvh");
     let out2 = dir.path().join("b.bvh");
-    mp(&["grammar", "synth", p(&gram), "--seed", "4", "--segments", "8", "-o", p(&out1)]);
-    mp(&["grammar", "synth", p(&gram), "--seed", "4", "--segments", "8", "-o", p(&out2)]);
+    mp(&[
+        "grammar",
+        "synth",
+        p(&gram),
+        "--seed",
+        "4",
+        "--segments",
+        "8",
+        "-o",
+        p(&out1),
+    ]);
+    mp(&[
+        "grammar",
+        "synth",
+        p(&gram),
+        "--seed",
+        "4",
+        "--segments",
+        "8",
+        "-o",
+        p(&out2),
+    ]);
     let a = std::fs::read_to_string(&out1).unwrap();
     assert_eq!(a, std::fs::read_to_string(&out2).unwrap());
     let b = Bvh::parse(&a, &out1).unwrap();
@@ -72,15 +118,36 @@ fn symbols_learn_synth_round_trip() {
     // Track output, the FSM baseline, regeneration and an explicit source.
     let npz = dir.path().join("fsm.npz");
     let (fsm, _) = mp(&[
-        "grammar", "synth", p(&gram), "--fsm", "--segments", "8", "-o", p(&npz), "--source",
+        "grammar",
+        "synth",
+        p(&gram),
+        "--fsm",
+        "--segments",
+        "8",
+        "-o",
+        p(&npz),
+        "--source",
         p(&slice),
     ]);
-    assert_eq!(fsm.lines().next().unwrap().split_whitespace().count(), 9, "{fsm}");
+    assert_eq!(
+        fsm.lines().next().unwrap().split_whitespace().count(),
+        9,
+        "{fsm}"
+    );
     let t = mp_geom::io::read_track(&npz).unwrap();
     assert_eq!(t.n_joints(), full.joints().len());
     let regen = dir.path().join("regen.bvh");
     let (out, err) = mp(&[
-        "grammar", "synth", p(&gram), "--seed", "4", "--segments", "8", "--regenerate", "1", "-o",
+        "grammar",
+        "synth",
+        p(&gram),
+        "--seed",
+        "4",
+        "--segments",
+        "8",
+        "--regenerate",
+        "1",
+        "-o",
         p(&regen),
     ]);
     assert!(out.contains("regenerated:"), "{out}");
@@ -92,7 +159,11 @@ fn symbols_learn_synth_round_trip() {
 fn learn_strings_on_the_paper_example() {
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("basketball.txt");
-    std::fs::write(&f, "r f d p m\nr f d s m\nr d f s m\nr d p m\nr d s m\nr p m\n").unwrap();
+    std::fs::write(
+        &f,
+        "r f d p m\nr f d s m\nr d f s m\nr d p m\nr d s m\nr p m\n",
+    )
+    .unwrap();
     let json = dir.path().join("g.json");
     let (out, _) = mp(&["grammar", "learn-strings", p(&f), "-o", p(&json)]);
     assert!(out.contains("S -> "), "{out}");

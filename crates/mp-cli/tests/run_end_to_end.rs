@@ -60,7 +60,9 @@ fn leftovers(dir: &Path) -> Vec<String> {
     let mut bad = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
-        let Ok(rd) = std::fs::read_dir(&d) else { continue };
+        let Ok(rd) = std::fs::read_dir(&d) else {
+            continue;
+        };
         for e in rd.flatten() {
             let name = e.file_name().to_string_lossy().into_owned();
             if name.starts_with(".mp-") || name.ends_with(".tmp") || name.starts_with('.') {
@@ -78,16 +80,26 @@ fn leftovers(dir: &Path) -> Vec<String> {
 fn report_data(html: &str) -> serde_json::Value {
     let key = "id=\"mp-data\">";
     let start = html.find(key).expect("report has no data block") + key.len();
-    let end = start + html[start..].find("</script>").expect("unterminated data block");
+    let end = start
+        + html[start..]
+            .find("</script>")
+            .expect("unterminated data block");
     serde_json::from_str(&html[start..end]).expect("report data block is not JSON")
 }
 
 fn png_luma_variance(bytes: &[u8]) -> (u32, u32, f64) {
-    let img = image::load_from_memory(bytes).expect("not a PNG").to_luma8();
+    let img = image::load_from_memory(bytes)
+        .expect("not a PNG")
+        .to_luma8();
     let (w, h) = img.dimensions();
     let n = img.as_raw().len() as f64;
     let mean = img.as_raw().iter().map(|&v| v as f64).sum::<f64>() / n;
-    let var = img.as_raw().iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>() / n;
+    let var = img
+        .as_raw()
+        .iter()
+        .map(|&v| (v as f64 - mean).powi(2))
+        .sum::<f64>()
+        / n;
     (w, h, var)
 }
 
@@ -106,8 +118,16 @@ fn check_outputs(dir: &Path, frames: usize, joints: usize, video: bool) -> (Trac
     ] {
         assert!(dir.join(f).is_file(), "{f} missing in {}", dir.display());
     }
-    assert_eq!(dir.join("overlay.mp4").is_file(), video, "overlay.mp4 only for video input");
-    assert!(leftovers(dir).is_empty(), "temporary files left: {:?}", leftovers(dir));
+    assert_eq!(
+        dir.join("overlay.mp4").is_file(),
+        video,
+        "overlay.mp4 only for video input"
+    );
+    assert!(
+        leftovers(dir).is_empty(),
+        "temporary files left: {:?}",
+        leftovers(dir)
+    );
 
     // Frame counts agree across the track, the program, the loops and the report.
     let track = read_track(dir.join("track.npz")).unwrap();
@@ -130,7 +150,10 @@ fn check_outputs(dir: &Path, frames: usize, joints: usize, video: bool) -> (Trac
     for iv in intervals {
         let end = iv["end_frame"].as_u64().unwrap() as usize;
         assert!(end <= frames);
-        assert_eq!(iv["boundaries"].as_array().unwrap().len(), iv["iterations"].as_u64().unwrap() as usize + 1);
+        assert_eq!(
+            iv["boundaries"].as_array().unwrap().len(),
+            iv["iterations"].as_u64().unwrap() as usize + 1
+        );
     }
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
     let d = report_data(&html);
@@ -143,8 +166,14 @@ fn check_outputs(dir: &Path, frames: usize, joints: usize, video: bool) -> (Trac
         program.n_segments() * program.n_joints(),
         "the listing shows every statement of every joint"
     );
-    assert!(!html.contains("https://"), "the report must not load anything from the network");
-    assert!(!html.contains("<script src"), "the report must be self-contained");
+    assert!(
+        !html.contains("https://"),
+        "the report must not load anything from the network"
+    );
+    assert!(
+        !html.contains("<script src"),
+        "the report must be self-contained"
+    );
 
     // The program reproduces the keypoints.
     let exec = program.execute().unwrap();
@@ -152,12 +181,30 @@ fn check_outputs(dir: &Path, frames: usize, joints: usize, video: bool) -> (Trac
     assert!(kd < 10.0, "KD between program and keypoints is {kd:.2} px");
 
     // One plot per joint, SVG and PNG, and pictures that are not blank.
-    let plots: Vec<_> = std::fs::read_dir(dir.join("plots")).unwrap().flatten().collect();
-    assert_eq!(plots.iter().filter(|e| e.path().extension().is_some_and(|x| x == "svg")).count(), joints);
-    assert_eq!(plots.iter().filter(|e| e.path().extension().is_some_and(|x| x == "png")).count(), joints);
+    let plots: Vec<_> = std::fs::read_dir(dir.join("plots"))
+        .unwrap()
+        .flatten()
+        .collect();
+    assert_eq!(
+        plots
+            .iter()
+            .filter(|e| e.path().extension().is_some_and(|x| x == "svg"))
+            .count(),
+        joints
+    );
+    assert_eq!(
+        plots
+            .iter()
+            .filter(|e| e.path().extension().is_some_and(|x| x == "png"))
+            .count(),
+        joints
+    );
     for f in ["timeline.png", "contact_sheet.png"] {
         let (w, h, var) = png_luma_variance(&std::fs::read(dir.join(f)).unwrap());
-        assert!(w > 200 && h > 150 && var > 50.0, "{f}: {w}×{h}, variance {var:.1}");
+        assert!(
+            w > 200 && h > 150 && var > 50.0,
+            "{f}: {w}×{h}, variance {var:.1}"
+        );
     }
     (track, program)
 }
@@ -171,11 +218,19 @@ fn run_on_golf_clip_writes_consistent_outputs() {
     // The overlay video has one frame per analysed frame, at the video's size.
     let out = Command::new("ffprobe")
         .args(["-v", "error", "-count_frames", "-select_streams", "v:0"])
-        .args(["-show_entries", "stream=width,height,nb_read_frames", "-of", "csv=p=0"])
+        .args([
+            "-show_entries",
+            "stream=width,height,nb_read_frames",
+            "-of",
+            "csv=p=0",
+        ])
         .arg(dir.join("overlay.mp4"))
         .output()
         .expect("ffprobe missing (scripts/setup.sh installs FFmpeg)");
-    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), format!("354,492,{GOLF_FRAMES}"));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        format!("354,492,{GOLF_FRAMES}")
+    );
     // Frames are embedded in the report, one per analysed frame.
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
     assert_eq!(html.matches("data:image/jpeg;base64,").count(), GOLF_FRAMES);
@@ -194,7 +249,10 @@ fn run_on_track_file() {
     ]));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("report.html"), "{stdout}");
-    assert!(stdout.contains("concrete") && stdout.contains("total"), "stage timings missing:\n{stdout}");
+    assert!(
+        stdout.contains("concrete") && stdout.contains("total"),
+        "stage timings missing:\n{stdout}"
+    );
     check_outputs(&dir, 90, 33, false);
 }
 
@@ -203,25 +261,51 @@ fn corrupt_and_missing_inputs_fail_clearly() {
     let tmp = tempfile::tempdir().unwrap();
     // Random bytes named .mp4.
     let bad = tmp.path().join("noise.mp4");
-    let bytes: Vec<u8> = (0..20_000u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8).collect();
+    let bytes: Vec<u8> = (0..20_000u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .collect();
     std::fs::write(&bad, bytes).unwrap();
-    let out = mp().arg("run").arg(&bad).arg("--out").arg(tmp.path().join("o1")).output().unwrap();
+    let out = mp()
+        .arg("run")
+        .arg(&bad)
+        .arg("--out")
+        .arg(tmp.path().join("o1"))
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert_ne!(out.status.code(), Some(0));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("error:") && err.contains("noise.mp4"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     // A missing file.
-    let out = mp().arg("run").arg(tmp.path().join("absent.mp4")).arg("--out").arg(tmp.path().join("o2")).output().unwrap();
+    let out = mp()
+        .arg("run")
+        .arg(tmp.path().join("absent.mp4"))
+        .arg("--out")
+        .arg(tmp.path().join("o2"))
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("absent.mp4") && err.contains("does not exist"), "{err}");
+    assert!(
+        err.contains("absent.mp4") && err.contains("does not exist"),
+        "{err}"
+    );
     assert!(!tmp.path().join("o2").exists());
-    assert!(!tmp.path().join("o1").exists(), "no output folder for an unreadable input");
+    assert!(
+        !tmp.path().join("o1").exists(),
+        "no output folder for an unreadable input"
+    );
     // A track file that is not a track.
     let txt = tmp.path().join("notes.csv");
     std::fs::write(&txt, "hello\nworld\n").unwrap();
-    let out = mp().arg("run").arg(&txt).arg("--out").arg(tmp.path().join("o3")).output().unwrap();
+    let out = mp()
+        .arg("run")
+        .arg(&txt)
+        .arg("--out")
+        .arg(tmp.path().join("o3"))
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("notes.csv"), "{err}");
@@ -245,31 +329,56 @@ fn interrupted_run_leaves_no_partial_files() {
     // the pictures and the overlay video), then interrupt it.
     let t0 = Instant::now();
     while !dir.join("loops.json").exists() {
-        assert!(t0.elapsed() < Duration::from_secs(600), "mp run wrote nothing in 10 minutes");
-        assert!(child.try_wait().unwrap().is_none(), "mp run ended before it could be interrupted");
+        assert!(
+            t0.elapsed() < Duration::from_secs(600),
+            "mp run wrote nothing in 10 minutes"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "mp run ended before it could be interrupted"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
-    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
     assert!(status.success());
     let t1 = Instant::now();
     let status = loop {
         if let Some(s) = child.try_wait().unwrap() {
             break s;
         }
-        assert!(t1.elapsed() < Duration::from_secs(30), "mp did not stop after Ctrl-C");
+        assert!(
+            t1.elapsed() < Duration::from_secs(30),
+            "mp did not stop after Ctrl-C"
+        );
         std::thread::sleep(Duration::from_millis(50));
     };
     let mut err = String::new();
     use std::io::Read;
-    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
     assert_eq!(status.code(), Some(130), "stderr: {err}");
     assert!(err.contains("interrupted"), "{err}");
-    assert!(leftovers(&dir).is_empty(), "left after Ctrl-C: {:?}", leftovers(&dir));
+    assert!(
+        leftovers(&dir).is_empty(),
+        "left after Ctrl-C: {:?}",
+        leftovers(&dir)
+    );
     // What is there is complete; the report, written last, is not.
     assert!(!dir.join("report.html").exists());
     Program::read(dir.join("program.json")).unwrap();
     read_track(dir.join("track.npz")).unwrap();
-    for e in std::fs::read_dir(dir.join("plots")).into_iter().flatten().flatten() {
+    for e in std::fs::read_dir(dir.join("plots"))
+        .into_iter()
+        .flatten()
+        .flatten()
+    {
         if e.path().extension().is_some_and(|x| x == "png") {
             image::open(e.path()).unwrap_or_else(|err| panic!("{}: {err}", e.path().display()));
         }
@@ -311,14 +420,29 @@ fn report_renders_in_headless_chromium() {
 
     // Screenshot: not blank.
     let shot = tmp.path().join("shot.png");
-    let out = chromium(&page, &tmp.path().join("p1"), &[&format!("--screenshot={}", shot.display())]);
-    assert!(shot.is_file(), "no screenshot; stderr: {}", String::from_utf8_lossy(&out.stderr));
+    let out = chromium(
+        &page,
+        &tmp.path().join("p1"),
+        &[&format!("--screenshot={}", shot.display())],
+    );
+    assert!(
+        shot.is_file(),
+        "no screenshot; stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let (w, h, var) = png_luma_variance(&std::fs::read(&shot).unwrap());
     assert_eq!((w, h), (1280, 900));
-    assert!(var > 300.0, "screenshot looks blank (luma variance {var:.1})");
+    assert!(
+        var > 300.0,
+        "screenshot looks blank (luma variance {var:.1})"
+    );
 
     // DOM after the script ran, with the console on stderr.
-    let out = chromium(&page, &tmp.path().join("p2"), &["--dump-dom", "--enable-logging=stderr", "--v=0"]);
+    let out = chromium(
+        &page,
+        &tmp.path().join("p2"),
+        &["--dump-dom", "--enable-logging=stderr", "--v=0"],
+    );
     let dom = String::from_utf8_lossy(&out.stdout);
     let log = String::from_utf8_lossy(&out.stderr);
     assert!(!log.contains("Uncaught"), "script errors:\n{log}");
@@ -326,15 +450,27 @@ fn report_renders_in_headless_chromium() {
         .split("<div id=\"mp-status\"")
         .nth(1)
         .and_then(|s| s.split("</div>").next())
-        .unwrap_or_else(|| panic!("status element missing from the DOM:\n{}", &dom[..dom.len().min(2000)]));
+        .unwrap_or_else(|| {
+            panic!(
+                "status element missing from the DOM:\n{}",
+                &dom[..dom.len().min(2000)]
+            )
+        });
     assert!(status.contains("data-errors=\"0\""), "{status}");
     assert!(status.contains("data-ready=\"1\""), "{status}");
     assert!(status.trim_end().ends_with(">ok"), "{status}");
     // The listing is there and the running statement is highlighted.
     assert!(dom.contains("class=\"listing\""));
-    assert!(dom.matches(" active\"").count() >= 1, "no highlighted statement");
+    assert!(
+        dom.matches(" active\"").count() >= 1,
+        "no highlighted statement"
+    );
     // The stage canvas was drawn with the frame and the skeleton (not uniform).
-    let canvas = dom.split("<canvas id=\"stage\"").nth(1).and_then(|s| s.split('>').next()).unwrap();
+    let canvas = dom
+        .split("<canvas id=\"stage\"")
+        .nth(1)
+        .and_then(|s| s.split('>').next())
+        .unwrap();
     let var: f64 = canvas
         .split("data-variance=\"")
         .nth(1)

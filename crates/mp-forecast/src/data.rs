@@ -21,7 +21,7 @@ pub const VALIDATION_EVERY: usize = 10;
 
 /// Whether clip `index` belongs to the validation split.
 pub fn is_validation_clip(index: usize) -> bool {
-    index % VALIDATION_EVERY == 0
+    index.is_multiple_of(VALIDATION_EVERY)
 }
 
 /// A forecasting data set read from one npz.

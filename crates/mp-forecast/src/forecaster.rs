@@ -106,6 +106,15 @@ pub struct LoopUnroll {
 }
 
 impl LoopUnroll {
+    /// `mp-abstract`'s prediction defaults, except that joints missing in every
+    /// observed frame are left out of the segmentation instead of refusing the
+    /// track (short forecasting contexts often miss an occluded joint throughout).
+    pub fn default_params() -> PredictParams {
+        let mut p = PredictParams::default();
+        p.analysis.synth.unobserved_joints = mp_concrete::UnobservedJoints::Ignore;
+        p
+    }
+
     /// Loop unrolling on the latest `history_frames` observed frames (`None` = all).
     pub fn new(params: PredictParams, history_frames: Option<usize>) -> Result<Self> {
         if history_frames.is_some_and(|h| h < 2) {

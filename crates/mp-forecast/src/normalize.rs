@@ -146,7 +146,7 @@ impl Normalizer {
             })
             .collect();
         let mut scale = median(&mut torso).unwrap_or(0.0);
-        if !(scale > 1e-9) {
+        if scale.is_nan() || scale <= 1e-9 {
             let mut lo = vec![f64::INFINITY; d];
             let mut hi = vec![f64::NEG_INFINITY; d];
             for f in 0..t {

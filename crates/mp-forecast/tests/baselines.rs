@@ -145,7 +145,7 @@ fn bad_input_gives_typed_errors() {
 #[test]
 fn nn_with_missing_joints_in_the_query_still_predicts() {
     let train = periodic(100, 13.0);
-    let nn = NearestNeighbour::build(&[train.clone()], NnParams::default()).unwrap();
+    let nn = NearestNeighbour::build(std::slice::from_ref(&train), NnParams::default()).unwrap();
     let q = train.slice_frames(20, 35).unwrap();
     let mut conf = q.confidence().to_owned();
     for t in 0..15 {

@@ -17,7 +17,9 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use mp_grammar::data::read_motions;
 use mp_grammar::model::{find_symbols, learn_grammar};
 use mp_grammar::sentences::{search_partition, PartitionParams};
-use mp_grammar::{identify_symbols, symbol_name, DeriveParams, PoseFeatures, StitchParams, SymbolParams};
+use mp_grammar::{
+    identify_symbols, symbol_name, DeriveParams, PoseFeatures, StitchParams, SymbolParams,
+};
 
 fn salsa_dir() -> std::path::PathBuf {
     mp_geom::paths::data_file("cmu_salsa_bvh").expect("shared data cmu_salsa_bvh is missing")

@@ -74,7 +74,11 @@ pub fn read_motions(paths: &[PathBuf], frame_step: usize) -> Result<Motion> {
             joined = Some(match joined {
                 None => b,
                 Some(j) => j.concat(&b).map_err(|e| {
-                    GrammarError::Invalid(format!("{}: cannot follow {}: {e}", f.display(), files[0].display()))
+                    GrammarError::Invalid(format!(
+                        "{}: cannot follow {}: {e}",
+                        f.display(),
+                        files[0].display()
+                    ))
                 })?,
             });
         }
@@ -90,7 +94,11 @@ pub fn read_motions(paths: &[PathBuf], frame_step: usize) -> Result<Motion> {
         let mut tracks = Vec::with_capacity(files.len());
         for f in &files {
             let t = mp_geom::io::read_track(f)?;
-            tracks.push(if frame_step > 1 { t.subsample(frame_step)? } else { t });
+            tracks.push(if frame_step > 1 {
+                t.subsample(frame_step)?
+            } else {
+                t
+            });
         }
         Ok(Motion {
             track: concat_tracks(&tracks)?,

@@ -185,7 +185,7 @@ impl Derivation {
                         }
                     }
                 }
-                let idx = chain.len().checked_sub(1 + levels).unwrap_or(0);
+                let idx = chain.len().saturating_sub(1 + levels);
                 let (path, nt, b, e) = chain.get(idx)?.clone();
                 return Some(Ancestor {
                     sentence: si,
@@ -357,7 +357,7 @@ impl<'g> Deriver<'g> {
 
 fn pick_weighted(weights: &[f64], rng: &mut ChaCha8Rng) -> usize {
     let total: f64 = weights.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return 0;
     }
     let mut x = rng.random::<f64>() * total;

@@ -42,11 +42,10 @@ pub mod model;
 pub mod synth;
 
 pub use derive::{
-    derive, derive_at_least, regenerate, Derivation, DeriveParams, Fsm, FsmWeighting,
-    RuleWeighting,
+    derive, derive_at_least, regenerate, Derivation, DeriveParams, Fsm, FsmWeighting, RuleWeighting,
 };
 pub use model::{
-    find_symbols, learn_grammar, learn_model, GrammarModel, PipelineParams, SourceInfo,
-    SourceKind, SymbolsFile,
+    find_symbols, learn_grammar, learn_model, GrammarModel, PipelineParams, SourceInfo, SourceKind,
+    SymbolsFile,
 };
 pub use synth::{RootAlignment, StitchParams, Stitcher, Synthesis};

@@ -218,9 +218,8 @@ impl SymbolsFile {
     /// Reads a file written by [`save`](Self::save).
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let s: SymbolsFile = read_json(path.as_ref(), SYMBOLS_FORMAT)?;
-        s.check().map_err(|e| {
-            GrammarError::Invalid(format!("{}: {e}", path.as_ref().display()))
-        })?;
+        s.check()
+            .map_err(|e| GrammarError::Invalid(format!("{}: {e}", path.as_ref().display())))?;
         Ok(s)
     }
     /// Checks that the segments tile the motion with symbols in range.
@@ -247,7 +246,11 @@ impl SymbolsFile {
     }
     /// Symbol index of each segment.
     pub fn string(&self) -> Vec<u32> {
-        self.symbols.segments.iter().map(|s| s.symbol as u32).collect()
+        self.symbols
+            .segments
+            .iter()
+            .map(|s| s.symbol as u32)
+            .collect()
     }
 }
 
@@ -310,9 +313,9 @@ impl GrammarModel {
     /// Reads a model written by [`save`](Self::save).
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let m: GrammarModel = read_json(path.as_ref(), MODEL_FORMAT)?;
-        m.grammar.validate().map_err(|e| {
-            GrammarError::Invalid(format!("{}: {e}", path.as_ref().display()))
-        })?;
+        m.grammar
+            .validate()
+            .map_err(|e| GrammarError::Invalid(format!("{}: {e}", path.as_ref().display())))?;
         Ok(m)
     }
 

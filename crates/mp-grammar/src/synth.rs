@@ -57,7 +57,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::derive::{derive_at_least, regenerate, DeriveParams, Derivation, Fsm, Regeneration};
+use crate::derive::{derive_at_least, regenerate, Derivation, DeriveParams, Fsm, Regeneration};
 use crate::distance::{PoseDistanceParams, PoseFeatures, Segment};
 use crate::error::{GrammarError, Result};
 use crate::grammar::Grammar;
@@ -221,7 +221,13 @@ impl FrameSpace {
 
     /// Offset per aligned axis placing `next` (its first rows) after `prev`
     /// (its last rows).
-    fn placement(&self, prev: &Array2<f64>, prev_end: usize, next: &Array2<f64>, next_start: usize) -> Vec<f64> {
+    fn placement(
+        &self,
+        prev: &Array2<f64>,
+        prev_end: usize,
+        next: &Array2<f64>,
+        next_start: usize,
+    ) -> Vec<f64> {
         let mut out = Vec::with_capacity(self.axes.len());
         for ai in 0..self.axes.len() {
             let last = self.root(prev.row(prev_end - 1), ai);
@@ -508,7 +514,9 @@ impl Stitcher {
 
     fn check_symbols(&self, symbols: &[usize]) -> Result<()> {
         if symbols.is_empty() {
-            return Err(GrammarError::Empty("symbol string to synthesise is empty".into()));
+            return Err(GrammarError::Empty(
+                "symbol string to synthesise is empty".into(),
+            ));
         }
         for (i, &s) in symbols.iter().enumerate() {
             if self.members.get(s).is_none_or(|m| m.is_empty()) {
@@ -574,7 +582,13 @@ impl Stitcher {
 
     /// Appends segment `seg` to `out` (rows `0..len` in use), placed and
     /// head-blended after the rows already there. Returns the new length.
-    fn append(&self, out: &mut Array2<f64>, conf: &mut Array2<f64>, len: usize, seg: usize) -> usize {
+    fn append(
+        &self,
+        out: &mut Array2<f64>,
+        conf: &mut Array2<f64>,
+        len: usize,
+        seg: usize,
+    ) -> usize {
         let s = self.segments[seg];
         let l = s.len();
         let mut block = self.rows.slice(s![s.start..s.end, ..]).to_owned();
@@ -792,8 +806,14 @@ impl Stitcher {
         let new_segs = self.select_between(&new_syms, prev, next, &mut rng);
 
         let total_old = synth.n_frames();
-        let f_b = synth.pieces.get(old.start).map_or(total_old, |p| p.start_frame);
-        let f_e = synth.pieces.get(old.end).map_or(total_old, |p| p.start_frame);
+        let f_b = synth
+            .pieces
+            .get(old.start)
+            .map_or(total_old, |p| p.start_frame);
+        let f_e = synth
+            .pieces
+            .get(old.end)
+            .map_or(total_old, |p| p.start_frame);
         let span_len: usize = new_segs.iter().map(|&i| self.segments[i].len()).sum();
         let total = f_b + span_len + (total_old - f_e);
         if total == 0 {
@@ -848,13 +868,7 @@ impl Stitcher {
             pieces.push(q);
         }
         let symbols = pieces.iter().map(|p| p.symbol).collect();
-        let synthesis = self.build(
-            symbols,
-            pieces,
-            Some(regen.derivation.clone()),
-            rows,
-            conf,
-        )?;
+        let synthesis = self.build(symbols, pieces, Some(regen.derivation.clone()), rows, conf)?;
         Ok(Regenerated {
             synthesis,
             regeneration: regen,

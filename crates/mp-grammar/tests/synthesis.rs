@@ -159,8 +159,9 @@ fn blending_never_widens_seams() {
             let pos = b.track.positions();
             let src = f.track.positions();
             let step = |p: &ndarray::ArrayView3<f64>, t: usize| {
-                ((p[[t, 0, 0]] - p[[t - 1, 0, 0]]).powi(2) + (p[[t, 0, 2]] - p[[t - 1, 0, 2]]).powi(2))
-                    .sqrt()
+                ((p[[t, 0, 0]] - p[[t - 1, 0, 0]]).powi(2)
+                    + (p[[t, 0, 2]] - p[[t - 1, 0, 2]]).powi(2))
+                .sqrt()
             };
             let max_src = (1..src.dim().0).map(|t| step(&src, t)).fold(0.0, f64::max);
             for s in b.seam_frames() {
@@ -198,17 +199,26 @@ fn regeneration_changes_only_the_subtree() {
                 nt[(anc.terminals.end as isize + shift) as usize..]
             );
             // Pieces outside keep their source segments.
-            assert_eq!(old.pieces[..anc.terminals.start], new.pieces[..anc.terminals.start]);
+            assert_eq!(
+                old.pieces[..anc.terminals.start],
+                new.pieces[..anc.terminals.start]
+            );
             // Frames before the region are identical.
             let (op, np) = (old.track.positions(), new.track.positions());
             let fb = r.old_frames.start;
             assert_eq!(r.new_frames.start, fb);
-            assert_eq!(op.slice(ndarray::s![..fb, .., ..]), np.slice(ndarray::s![..fb, .., ..]));
+            assert_eq!(
+                op.slice(ndarray::s![..fb, .., ..]),
+                np.slice(ndarray::s![..fb, .., ..])
+            );
             // Frames after it are the old ones moved by one ground-plane offset.
             let (oe, ne) = (r.old_frames.end, r.new_frames.end);
             assert_eq!(op.dim().0 - oe, np.dim().0 - ne);
             if oe < op.dim().0 {
-                let off = [np[[ne, 0, 0]] - op[[oe, 0, 0]], np[[ne, 0, 2]] - op[[oe, 0, 2]]];
+                let off = [
+                    np[[ne, 0, 0]] - op[[oe, 0, 0]],
+                    np[[ne, 0, 2]] - op[[oe, 0, 2]],
+                ];
                 for t in 0..op.dim().0 - oe {
                     for j in 0..op.dim().1 {
                         let dx = np[[ne + t, j, 0]] - op[[oe + t, j, 0]];
@@ -233,7 +243,9 @@ fn regeneration_changes_only_the_subtree() {
 fn bvh_output_parses_back_with_the_input_hierarchy() {
     let f = fixture();
     let st = stitcher(&f, true, 8);
-    let s = st.synthesize(&grammar(), &DeriveParams::default(), 10, 5).unwrap();
+    let s = st
+        .synthesize(&grammar(), &DeriveParams::default(), 10, 5)
+        .unwrap();
     let text = s.bvh.as_ref().unwrap().to_bvh_string();
     let back = Bvh::parse(&text, "synth.bvh").unwrap();
     assert_eq!(back.joints(), f.bvh.joints());

@@ -416,6 +416,14 @@
     if (best >= 0 && bd < Math.pow(30 * dpr, 2)) selectJoint(best);
   });
 
+  // A link may pick the frame and the joint: report.html#frame=120&joint=right_wrist
+  var hash = {};
+  (window.location.hash || '').replace(/^#/, '').split('&').forEach(function (kv) {
+    var i = kv.indexOf('=');
+    if (i > 0) hash[decodeURIComponent(kv.slice(0, i))] = decodeURIComponent(kv.slice(i + 1));
+  });
+  if (hash.joint && D.joints.indexOf(hash.joint) >= 0) sel = D.joints.indexOf(hash.joint);
+  if (hash.frame && isFinite(+hash.frame)) cur = clamp(Math.round(+hash.frame), 0, T - 1);
   selectJoint(sel);
   measureCanvas();
   status.setAttribute('data-ready', '1');

@@ -15,8 +15,16 @@ pub fn encode(bytes: &[u8]) -> String {
         let idx = [(n >> 18) & 63, (n >> 12) & 63, (n >> 6) & 63, n & 63];
         out.push(ALPHABET[idx[0] as usize] as char);
         out.push(ALPHABET[idx[1] as usize] as char);
-        out.push(if chunk.len() > 1 { ALPHABET[idx[2] as usize] as char } else { '=' });
-        out.push(if chunk.len() > 2 { ALPHABET[idx[3] as usize] as char } else { '=' });
+        out.push(if chunk.len() > 1 {
+            ALPHABET[idx[2] as usize] as char
+        } else {
+            '='
+        });
+        out.push(if chunk.len() > 2 {
+            ALPHABET[idx[3] as usize] as char
+        } else {
+            '='
+        });
     }
     out
 }

@@ -59,18 +59,33 @@ impl View {
             return View::frame(1.0);
         }
         let (w, h) = ((hi[0] - lo[0]).max(1e-9), (hi[1] - lo[1]).max(1e-9));
-        let scale = ((width - 2.0 * margin_px) / w).min((height - 2.0 * margin_px) / h).max(1e-9);
+        let scale = ((width - 2.0 * margin_px) / w)
+            .min((height - 2.0 * margin_px) / h)
+            .max(1e-9);
         let cx = (lo[0] + hi[0]) / 2.0;
         let cy = (lo[1] + hi[1]) / 2.0;
         let dx = width / 2.0 - cx * scale;
-        let dy = if flip_y { height / 2.0 + cy * scale } else { height / 2.0 - cy * scale };
-        View { scale, dx, dy, flip_y }
+        let dy = if flip_y {
+            height / 2.0 + cy * scale
+        } else {
+            height / 2.0 - cy * scale
+        };
+        View {
+            scale,
+            dx,
+            dy,
+            flip_y,
+        }
     }
 
     /// Picture position of a track point.
     pub fn apply(&self, x: f64, y: f64) -> (f32, f32) {
         let px = x * self.scale + self.dx;
-        let py = if self.flip_y { -y * self.scale + self.dy } else { y * self.scale + self.dy };
+        let py = if self.flip_y {
+            -y * self.scale + self.dy
+        } else {
+            y * self.scale + self.dy
+        };
         (px as f32, py as f32)
     }
 
@@ -136,13 +151,24 @@ impl SkeletonStyle {
 
 fn paint(rgb: [u8; 3], opacity: f32) -> Paint<'static> {
     let mut p = Paint::default();
-    p.set_color(Color::from_rgba8(rgb[0], rgb[1], rgb[2], (opacity.clamp(0.0, 1.0) * 255.0) as u8));
+    p.set_color(Color::from_rgba8(
+        rgb[0],
+        rgb[1],
+        rgb[2],
+        (opacity.clamp(0.0, 1.0) * 255.0) as u8,
+    ));
     p.anti_alias = true;
     p
 }
 
 /// Draws frame `t` of `track` onto `pixmap` through `view`.
-pub fn draw_skeleton(pixmap: &mut Pixmap, track: &Track, t: usize, view: &View, st: &SkeletonStyle) {
+pub fn draw_skeleton(
+    pixmap: &mut Pixmap,
+    track: &Track,
+    t: usize,
+    view: &View,
+    st: &SkeletonStyle,
+) {
     if t >= track.n_frames() || track.dims() < 2 {
         return;
     }
@@ -194,11 +220,23 @@ pub fn draw_skeleton(pixmap: &mut Pixmap, track: &Track, t: usize, view: &View, 
             width: st.line_width_px + 2.0,
             ..stroke.clone()
         };
-        pixmap.stroke_path(&path, &paint([15, 23, 42], 0.55 * st.opacity), &s, Transform::identity(), None);
+        pixmap.stroke_path(
+            &path,
+            &paint([15, 23, 42], 0.55 * st.opacity),
+            &s,
+            Transform::identity(),
+            None,
+        );
     }
     for (rgb, pb) in by_colour {
         if let Some(path) = pb.finish() {
-            pixmap.stroke_path(&path, &paint(rgb, st.opacity), &stroke, Transform::identity(), None);
+            pixmap.stroke_path(
+                &path,
+                &paint(rgb, st.opacity),
+                &stroke,
+                Transform::identity(),
+                None,
+            );
         }
     }
     let dot_rgb = st.color.unwrap_or(style::SKELETON_CENTER);
@@ -210,19 +248,32 @@ pub fn draw_skeleton(pixmap: &mut Pixmap, track: &Track, t: usize, view: &View, 
         }
     }
     if let Some(path) = dots.finish() {
-        pixmap.fill_path(&path, &paint(dot_rgb, st.opacity), FillRule::Winding, Transform::identity(), None);
+        pixmap.fill_path(
+            &path,
+            &paint(dot_rgb, st.opacity),
+            FillRule::Winding,
+            Transform::identity(),
+            None,
+        );
         let s = Stroke {
             width: 1.0,
             ..Stroke::default()
         };
-        pixmap.stroke_path(&path, &paint([15, 23, 42], 0.6 * st.opacity), &s, Transform::identity(), None);
+        pixmap.stroke_path(
+            &path,
+            &paint([15, 23, 42], 0.6 * st.opacity),
+            &s,
+            Transform::identity(),
+            None,
+        );
     }
 }
 
 /// A blank dark canvas with a faint grid, for tracks without video.
 pub fn blank_canvas(width: u32, height: u32) -> Result<Pixmap> {
-    let mut p = Pixmap::new(width.max(1), height.max(1))
-        .ok_or_else(|| ReportError::Mismatch(format!("cannot allocate a {width}×{height} picture")))?;
+    let mut p = Pixmap::new(width.max(1), height.max(1)).ok_or_else(|| {
+        ReportError::Mismatch(format!("cannot allocate a {width}×{height} picture"))
+    })?;
     p.fill(Color::from_rgba8(15, 23, 42, 255));
     let mut grid = PathBuilder::new();
     let step = 40.0;
@@ -243,7 +294,13 @@ pub fn blank_canvas(width: u32, height: u32) -> Result<Pixmap> {
             width: 1.0,
             ..Stroke::default()
         };
-        p.stroke_path(&path, &paint([51, 65, 85], 0.6), &s, Transform::identity(), None);
+        p.stroke_path(
+            &path,
+            &paint([51, 65, 85], 0.6),
+            &s,
+            Transform::identity(),
+            None,
+        );
     }
     Ok(p)
 }
@@ -273,8 +330,13 @@ pub fn contact_sheet(tiles: &[Tile], cols: usize, title: &str) -> Result<Pixmap>
         .first()
         .ok_or_else(|| ReportError::Mismatch("a contact sheet needs at least one frame".into()))?;
     let (tw, th) = (first.pixmap.width(), first.pixmap.height());
-    if tiles.iter().any(|t| t.pixmap.width() != tw || t.pixmap.height() != th) {
-        return Err(ReportError::Mismatch("contact-sheet tiles differ in size".into()));
+    if tiles
+        .iter()
+        .any(|t| t.pixmap.width() != tw || t.pixmap.height() != th)
+    {
+        return Err(ReportError::Mismatch(
+            "contact-sheet tiles differ in size".into(),
+        ));
     }
     let cols = cols.clamp(1, tiles.len()) as u32;
     let rows = (tiles.len() as u32).div_ceil(cols);
@@ -286,15 +348,45 @@ pub fn contact_sheet(tiles: &[Tile], cols: usize, title: &str) -> Result<Pixmap>
         .ok_or_else(|| ReportError::Mismatch(format!("cannot allocate a {w}×{h} contact sheet")))?;
     sheet.fill(Color::from_rgba8(15, 23, 42, 255));
     let mut labels = Svg::new(w as f64, h as f64, "none");
-    labels.text(gap as f64 + 2.0, 27.0, title, 17.0, "#f8fafc", Anchor::Start, r#"font-weight="bold""#);
+    labels.text(
+        gap as f64 + 2.0,
+        27.0,
+        title,
+        17.0,
+        "#f8fafc",
+        Anchor::Start,
+        r#"font-weight="bold""#,
+    );
     for (i, t) in tiles.iter().enumerate() {
         let (r, c) = (i as u32 / cols, i as u32 % cols);
         let x = gap + c * (tw + gap);
         let y = head + gap + r * (th + gap);
-        sheet.draw_pixmap(x as i32, y as i32, t.pixmap.as_ref(), &PixmapPaint::default(), Transform::identity(), None);
+        sheet.draw_pixmap(
+            x as i32,
+            y as i32,
+            t.pixmap.as_ref(),
+            &PixmapPaint::default(),
+            Transform::identity(),
+            None,
+        );
         let cw = 7.2 * t.caption.chars().count() as f64 + 12.0;
-        labels.rect(x as f64 + 6.0, y as f64 + 6.0, cw, 20.0, "#0f172a", r#"fill-opacity="0.72" rx="4""#);
-        labels.text(x as f64 + 12.0, y as f64 + 20.5, &t.caption, 12.0, "#f8fafc", Anchor::Start, "");
+        labels.rect(
+            x as f64 + 6.0,
+            y as f64 + 6.0,
+            cw,
+            20.0,
+            "#0f172a",
+            r#"fill-opacity="0.72" rx="4""#,
+        );
+        labels.text(
+            x as f64 + 12.0,
+            y as f64 + 20.5,
+            &t.caption,
+            12.0,
+            "#f8fafc",
+            Anchor::Start,
+            "",
+        );
     }
     render_svg_onto("contact sheet labels", &labels.finish(), &mut sheet)?;
     Ok(sheet)
@@ -311,7 +403,12 @@ mod tests {
         pos[[0, 0, 1]] = 50.0;
         pos[[0, 1, 0]] = 90.0;
         pos[[0, 1, 1]] = 50.0;
-        let sk = Skeleton::custom("two", vec!["left_a".into(), "left_b".into()], vec![(0, 1)], None);
+        let sk = Skeleton::custom(
+            "two",
+            vec!["left_a".into(), "left_b".into()],
+            vec![(0, 1)],
+            None,
+        );
         Track::new(pos, Some(Array2::ones((1, 2))), 30.0, Units::Pixels, sk).unwrap()
     }
 
@@ -334,7 +431,10 @@ mod tests {
         let t = two_joint_track();
         let v = View::fit(&[&t], 200.0, 100.0, 10.0);
         let (a, b) = (v.apply(10.0, 50.0), v.apply(90.0, 50.0));
-        assert!((a.0 - 10.0).abs() < 1e-3 && (b.0 - 190.0).abs() < 1e-3, "{a:?} {b:?}");
+        assert!(
+            (a.0 - 10.0).abs() < 1e-3 && (b.0 - 190.0).abs() < 1e-3,
+            "{a:?} {b:?}"
+        );
         assert!((a.1 - 50.0).abs() < 1e-3);
     }
 
@@ -347,7 +447,10 @@ mod tests {
             })
             .collect();
         let s = contact_sheet(&tiles, 3, "t").unwrap();
-        assert_eq!((s.width(), s.height()), (3 * 40 + 4 * 8, 40 + 2 * 30 + 3 * 8));
+        assert_eq!(
+            (s.width(), s.height()),
+            (3 * 40 + 4 * 8, 40 + 2 * 30 + 3 * 8)
+        );
         assert!(contact_sheet(&[], 3, "t").is_err());
     }
 }

@@ -31,7 +31,10 @@ impl FrameStoreParams {
     /// Checks the values.
     pub fn validate(&self) -> Result<()> {
         if self.max_side_px < 16 {
-            return Err(ReportError::param("max_side_px", format!("must be ≥ 16, got {}", self.max_side_px)));
+            return Err(ReportError::param(
+                "max_side_px",
+                format!("must be ≥ 16, got {}", self.max_side_px),
+            ));
         }
         if !(1..=100).contains(&self.jpeg_quality) {
             return Err(ReportError::param(
@@ -63,13 +66,23 @@ pub struct FrameStore {
 impl FrameStore {
     /// A store for frames of `width × height`; `expected_frames` (when known)
     /// decides how many are kept.
-    pub fn new(width: usize, height: usize, expected_frames: Option<usize>, params: &FrameStoreParams) -> Result<Self> {
+    pub fn new(
+        width: usize,
+        height: usize,
+        expected_frames: Option<usize>,
+        params: &FrameStoreParams,
+    ) -> Result<Self> {
         params.validate()?;
         if width == 0 || height == 0 {
-            return Err(ReportError::Mismatch(format!("empty frame size {width}×{height}")));
+            return Err(ReportError::Mismatch(format!(
+                "empty frame size {width}×{height}"
+            )));
         }
         let s = (params.max_side_px as f64 / width.max(height) as f64).min(1.0);
-        let size = (((width as f64 * s).round() as usize).max(1), ((height as f64 * s).round() as usize).max(1));
+        let size = (
+            ((width as f64 * s).round() as usize).max(1),
+            ((height as f64 * s).round() as usize).max(1),
+        );
         let step = expected_frames.map_or(1, |n| n.div_ceil(params.max_frames).max(1));
         Ok(FrameStore {
             source_size: (width, height),
@@ -91,14 +104,21 @@ impl FrameStore {
             return Ok(());
         }
         let (w, h) = self.source_size;
-        let img = image::RgbImage::from_raw(w as u32, h as u32, rgb.to_vec()).ok_or_else(|| ReportError::Image {
-            what: format!("frame {index}"),
-            reason: format!("{} bytes for a {w}×{h} RGB frame", rgb.len()),
+        let img = image::RgbImage::from_raw(w as u32, h as u32, rgb.to_vec()).ok_or_else(|| {
+            ReportError::Image {
+                what: format!("frame {index}"),
+                reason: format!("{} bytes for a {w}×{h} RGB frame", rgb.len()),
+            }
         })?;
         let small = if self.size == self.source_size {
             img
         } else {
-            image::imageops::resize(&img, self.size.0 as u32, self.size.1 as u32, FilterType::Triangle)
+            image::imageops::resize(
+                &img,
+                self.size.0 as u32,
+                self.size.1 as u32,
+                FilterType::Triangle,
+            )
         };
         let jpg = encode_jpeg(small.as_raw(), self.size.0, self.size.1, self.quality)?;
         self.frames.push((index, jpg));

@@ -93,19 +93,35 @@ fn round_to(v: f64, step: f64) -> f64 {
 
 /// Summary cards every report shows: frames, joints, segments, primitives by
 /// kind, fit error, size, loops and repetitions.
-pub fn standard_cards(track: &Track, program: &Program, executed: &Track, intervals: &[RepetitiveInterval]) -> Vec<Card> {
+pub fn standard_cards(
+    track: &Track,
+    program: &Program,
+    executed: &Track,
+    intervals: &[RepetitiveInterval],
+) -> Vec<Card> {
     let t = program.n_frames();
     let mut cards = vec![
         Card::new(
             "frames",
             t.to_string(),
-            format!("{:.2} s at {} fps", t as f64 / program.fps, crate::svg::tick_label(program.fps)),
+            format!(
+                "{:.2} s at {} fps",
+                t as f64 / program.fps,
+                crate::svg::tick_label(program.fps)
+            ),
         ),
-        Card::new("joints", program.n_joints().to_string(), format!("skeleton {}, {}D", program.skeleton, program.dims)),
+        Card::new(
+            "joints",
+            program.n_joints().to_string(),
+            format!("skeleton {}, {}D", program.skeleton, program.dims),
+        ),
         Card::new(
             "segments",
             program.n_segments().to_string(),
-            format!("{:.1} frames each on average", t as f64 / program.n_segments().max(1) as f64),
+            format!(
+                "{:.1} frames each on average",
+                t as f64 / program.n_segments().max(1) as f64
+            ),
         ),
     ];
     let counts = program.kind_counts();
@@ -138,14 +154,21 @@ pub fn standard_cards(track: &Track, program: &Program, executed: &Track, interv
     cards.push(prim);
     let unit = track.units().as_str();
     if let Ok(kd) = mp_geom::metrics::kd(track, executed) {
-        cards.push(Card::new("fit error (KD)", format!("{kd:.2} {unit}"), "mean keypoint distance, program vs keypoints"));
+        cards.push(Card::new(
+            "fit error (KD)",
+            format!("{kd:.2} {unit}"),
+            "mean keypoint distance, program vs keypoints",
+        ));
     }
     let raw = t * program.n_joints() * program.dims;
     let np = program.n_params();
     cards.push(Card::new(
         "parameters",
         np.to_string(),
-        format!("{:.1}× fewer than the {raw} coordinates", raw as f64 / np.max(1) as f64),
+        format!(
+            "{:.1}× fewer than the {raw} coordinates",
+            raw as f64 / np.max(1) as f64
+        ),
     ));
     let reps: usize = intervals.iter().map(|i| i.count).sum();
     cards.push(Card::new(
@@ -156,7 +179,11 @@ pub fn standard_cards(track: &Track, program: &Program, executed: &Track, interv
         } else {
             format!(
                 "{reps} repetitions: {}",
-                intervals.iter().map(|i| format!("×{}", i.count)).collect::<Vec<_>>().join(", ")
+                intervals
+                    .iter()
+                    .map(|i| format!("×{}", i.count))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )
         },
     ));
@@ -206,7 +233,12 @@ fn loops_table(intervals: &[RepetitiveInterval], fps: f64) -> String {
                 iv.boundaries.get(k).copied().unwrap_or(0),
                 iv.boundaries.get(k + 1).copied().unwrap_or(0),
             );
-            let _ = write!(iters, r#"<span title="frames {a}–{}">{}</span>"#, b.saturating_sub(1), k + 1);
+            let _ = write!(
+                iters,
+                r#"<span title="frames {a}–{}">{}</span>"#,
+                b.saturating_sub(1),
+                k + 1
+            );
         }
         iters.push_str("</div>");
         let _ = write!(
@@ -288,7 +320,11 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
         )));
     }
     let (t, j, d) = track.positions().dim();
-    let step = if track.units() == Units::Pixels { 0.1 } else { 1e-4 };
+    let step = if track.units() == Units::Pixels {
+        0.1
+    } else {
+        1e-4
+    };
     let mut kp = Vec::with_capacity(t * j * d);
     let mut prog = Vec::with_capacity(t * j * d);
     let mut conf = Vec::with_capacity(t * j);
@@ -308,7 +344,11 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
                 .segments
                 .iter()
                 .map(|s| {
-                    let k = s.primitives.get(ji).map(|p| kind_index(p.kind())).unwrap_or(0);
+                    let k = s
+                        .primitives
+                        .get(ji)
+                        .map(|p| kind_index(p.kind()))
+                        .unwrap_or(0);
                     char::from(b'0' + k as u8)
                 })
                 .collect()
@@ -353,7 +393,12 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
     });
     let frames_json: Vec<String> = input
         .frames
-        .map(|f| f.frames.iter().map(|(_, jpg)| b64::data_uri("image/jpeg", jpg)).collect())
+        .map(|f| {
+            f.frames
+                .iter()
+                .map(|(_, jpg)| b64::data_uri("image/jpeg", jpg))
+                .collect()
+        })
         .unwrap_or_default();
 
     let mut cards = String::new();
@@ -369,11 +414,20 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
     }
     let mut joints = String::new();
     for (ji, name) in program.joints.iter().enumerate() {
-        let _ = write!(joints, r#"<button type="button" data-joint="{ji}">{}</button>"#, esc(name));
+        let _ = write!(
+            joints,
+            r#"<button type="button" data-joint="{ji}">{}</button>"#,
+            esc(name)
+        );
     }
     let mut legend = String::new();
     for k in PrimitiveKind::ALL {
-        let _ = write!(legend, r#"<span><span class="sw" style="background:{}"></span>{}</span>"#, kind_color(k), k.as_str());
+        let _ = write!(
+            legend,
+            r#"<span><span class="sw" style="background:{}"></span>{}</span>"#,
+            kind_color(k),
+            k.as_str()
+        );
     }
     let mut files = String::new();
     for f in input.files {
@@ -498,7 +552,11 @@ mod tests {
         assert!(html.contains("tiny &lt;test&gt;"));
         assert_eq!(html.matches("class=\"st k-").count(), 4);
         assert!(html.contains("circular_motion"));
-        assert!(!html.contains("http://") || html.matches("http://").count() == html.matches("http://www.w3.org/2000/svg").count());
+        assert!(
+            !html.contains("http://")
+                || html.matches("http://").count()
+                    == html.matches("http://www.w3.org/2000/svg").count()
+        );
         assert!(!html.contains("https://"));
         // The data block parses back.
         let start = html.find("id=\"mp-data\">").unwrap() + "id=\"mp-data\">".len();

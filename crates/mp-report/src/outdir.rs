@@ -99,9 +99,13 @@ impl OutputDir {
         let p = Path::new(rel);
         if rel.is_empty()
             || p.is_absolute()
-            || p.components().any(|c| !matches!(c, std::path::Component::Normal(_)))
+            || p.components()
+                .any(|c| !matches!(c, std::path::Component::Normal(_)))
         {
-            return Err(ReportError::param("file name", format!("`{rel}` is not a plain relative path")));
+            return Err(ReportError::param(
+                "file name",
+                format!("`{rel}` is not a plain relative path"),
+            ));
         }
         Ok(())
     }

@@ -35,7 +35,10 @@ impl PlotParams {
     /// Checks the sizes.
     pub fn validate(&self) -> Result<()> {
         if !(self.width_px.is_finite() && self.width_px >= 200.0) {
-            return Err(ReportError::param("width_px", format!("must be ≥ 200, got {}", self.width_px)));
+            return Err(ReportError::param(
+                "width_px",
+                format!("must be ≥ 200, got {}", self.width_px),
+            ));
         }
         if !(self.panel_height_px.is_finite() && self.panel_height_px >= 60.0) {
             return Err(ReportError::param(
@@ -101,10 +104,12 @@ pub fn joint_trajectory_svg(
 ) -> Result<String> {
     params.validate()?;
     check_agree(track, program)?;
-    let name = program
-        .joints
-        .get(joint)
-        .ok_or_else(|| ReportError::Mismatch(format!("joint {joint} is out of range (the program has {})", program.n_joints())))?;
+    let name = program.joints.get(joint).ok_or_else(|| {
+        ReportError::Mismatch(format!(
+            "joint {joint} is out of range (the program has {})",
+            program.n_joints()
+        ))
+    })?;
     let d = program.dims;
     let t_total = program.n_frames();
     let fps = program.fps;
@@ -120,7 +125,9 @@ pub fn joint_trajectory_svg(
     let bounds = program.boundaries();
     let mut curves: Vec<(PrimitiveKind, Vec<(f64, Vec<f64>)>)> = Vec::new();
     for (si, seg) in program.segments.iter().enumerate() {
-        let Some(p) = seg.primitives.get(joint) else { continue };
+        let Some(p) = seg.primitives.get(joint) else {
+            continue;
+        };
         let start = bounds.get(si).copied().unwrap_or(0) as f64;
         let n = (seg.duration_frames.saturating_sub(1)) * params.samples_per_frame;
         let pts: Vec<(f64, Vec<f64>)> = (0..=n)
@@ -134,7 +141,15 @@ pub fn joint_trajectory_svg(
 
     let mut svg = Svg::new(w, h, style::PAPER);
     // Title and legend.
-    svg.text(x0, 26.0, name, 17.0, style::INK, Anchor::Start, r#"font-weight="bold""#);
+    svg.text(
+        x0,
+        26.0,
+        name,
+        17.0,
+        style::INK,
+        Anchor::Start,
+        r#"font-weight="bold""#,
+    );
     let counts: Vec<String> = PrimitiveKind::ALL
         .iter()
         .filter_map(|k| {
@@ -171,7 +186,15 @@ pub fn joint_trajectory_svg(
         if dot {
             svg.circle(lx, 22.0, 3.5, colour, r#"fill-opacity="0.7""#);
         } else {
-            svg.line(lx - 7.0, 22.0, lx + 3.0, 22.0, colour, 3.5, r#"stroke-linecap="round""#);
+            svg.line(
+                lx - 7.0,
+                22.0,
+                lx + 3.0,
+                22.0,
+                colour,
+                3.5,
+                r#"stroke-linecap="round""#,
+            );
         }
         lx -= 20.0;
     }
@@ -218,21 +241,54 @@ pub fn joint_trajectory_svg(
                 py1 - a * ph
             }
         };
-        svg.rect(x0, py0, x1 - x0, ph, "#f8fafc", r##"stroke="#cbd5e1" stroke-width="1""##);
+        svg.rect(
+            x0,
+            py0,
+            x1 - x0,
+            ph,
+            "#f8fafc",
+            r##"stroke="#cbd5e1" stroke-width="1""##,
+        );
         // Loops behind everything.
         for iv in intervals {
-            let (a, b) = (fx(iv.start_frame as f64), fx(iv.end_frame.saturating_sub(1) as f64));
-            svg.rect(a, py0, b - a, ph, style::LOOP_FILL, r#"fill-opacity="0.10""#);
+            let (a, b) = (
+                fx(iv.start_frame as f64),
+                fx(iv.end_frame.saturating_sub(1) as f64),
+            );
+            svg.rect(
+                a,
+                py0,
+                b - a,
+                ph,
+                style::LOOP_FILL,
+                r#"fill-opacity="0.10""#,
+            );
             for &bf in iv.boundaries.iter() {
                 let x = fx((bf.min(t_total.saturating_sub(1))) as f64);
-                svg.line(x, py0, x, py1, style::LOOP_DARK, 1.0, r#"stroke-opacity="0.45" stroke-dasharray="4 3""#);
+                svg.line(
+                    x,
+                    py0,
+                    x,
+                    py1,
+                    style::LOOP_DARK,
+                    1.0,
+                    r#"stroke-opacity="0.45" stroke-dasharray="4 3""#,
+                );
             }
         }
         // Grid and value labels.
         for v in ticks(lo, hi, 4) {
             let y = fy(v);
             svg.line(x0, y, x1, y, style::GRID, 1.0, "");
-            svg.text(x0 - 8.0, y + 4.0, &tick_label(v), 11.0, style::MUTED, Anchor::End, "");
+            svg.text(
+                x0 - 8.0,
+                y + 4.0,
+                &tick_label(v),
+                11.0,
+                style::MUTED,
+                Anchor::End,
+                "",
+            );
         }
         // Segment boundaries.
         for &b in bounds.iter().skip(1).take(bounds.len().saturating_sub(2)) {
@@ -283,12 +339,24 @@ pub fn joint_trajectory_svg(
             for f in ticks(0.0, span, 10) {
                 let x = fx(f);
                 svg.line(x, py1, x, py1 + 5.0, style::MUTED, 1.0, "");
-                svg.text(x, py1 + 18.0, &tick_label(f), 11.0, style::MUTED, Anchor::Middle, "");
+                svg.text(
+                    x,
+                    py1 + 18.0,
+                    &tick_label(f),
+                    11.0,
+                    style::MUTED,
+                    Anchor::Middle,
+                    "",
+                );
             }
             svg.text(
                 (x0 + x1) / 2.0,
                 py1 + 38.0,
-                &format!("frame ({} fps; {} s in all)", tick_label(fps), tick_label(t_total as f64 / fps)),
+                &format!(
+                    "frame ({} fps; {} s in all)",
+                    tick_label(fps),
+                    tick_label(t_total as f64 / fps)
+                ),
                 12.0,
                 style::INK,
                 Anchor::Middle,
@@ -317,14 +385,21 @@ pub(crate) mod tests {
                 Segment {
                     duration_frames: 10,
                     primitives: vec![
-                        Primitive::Stationary { point: vec![5.0, 5.0] },
-                        Primitive::Line { start: vec![0.0, 0.0], velocity: vec![1.0, 2.0] },
+                        Primitive::Stationary {
+                            point: vec![5.0, 5.0],
+                        },
+                        Primitive::Line {
+                            start: vec![0.0, 0.0],
+                            velocity: vec![1.0, 2.0],
+                        },
                     ],
                 },
                 Segment {
                     duration_frames: 6,
                     primitives: vec![
-                        Primitive::Stationary { point: vec![5.0, 5.0] },
+                        Primitive::Stationary {
+                            point: vec![5.0, 5.0],
+                        },
                         Primitive::Circle {
                             center: vec![10.0, 20.0],
                             radius: 3.0,
@@ -339,7 +414,14 @@ pub(crate) mod tests {
         };
         let exec = program.execute().unwrap();
         let pos: Array3<f64> = exec.positions().to_owned();
-        let track = Track::new(pos, None, 30.0, Units::Pixels, Skeleton::custom("generic", program.joints.clone(), vec![(0, 1)], None)).unwrap();
+        let track = Track::new(
+            pos,
+            None,
+            30.0,
+            Units::Pixels,
+            Skeleton::custom("generic", program.joints.clone(), vec![(0, 1)], None),
+        )
+        .unwrap();
         (track, program)
     }
 

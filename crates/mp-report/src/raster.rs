@@ -38,7 +38,10 @@ fn parse(name: &str, svg: &str) -> Result<usvg::Tree> {
 /// Rasterises an SVG document at `scale` × its size into a new pixmap.
 pub fn svg_to_pixmap(name: &str, svg: &str, scale: f32) -> Result<Pixmap> {
     if !(scale.is_finite() && scale > 0.0) {
-        return Err(ReportError::param("scale", format!("must be > 0, got {scale}")));
+        return Err(ReportError::param(
+            "scale",
+            format!("must be > 0, got {scale}"),
+        ));
     }
     let tree = parse(name, svg)?;
     let size = tree.size();
@@ -50,7 +53,11 @@ pub fn svg_to_pixmap(name: &str, svg: &str, scale: f32) -> Result<Pixmap> {
         name: name.to_string(),
         reason: format!("cannot allocate a {w}×{h} picture"),
     })?;
-    resvg::render(&tree, Transform::from_scale(scale, scale), &mut pixmap.as_mut());
+    resvg::render(
+        &tree,
+        Transform::from_scale(scale, scale),
+        &mut pixmap.as_mut(),
+    );
     Ok(pixmap)
 }
 
@@ -133,13 +140,26 @@ pub fn decode_rgb(bytes: &[u8], what: &str) -> Result<(Vec<u8>, usize, usize)> {
 }
 
 trait WriteChecked {
-    fn write_image_checked(self, rgb: &[u8], width: usize, height: usize) -> std::result::Result<(), String>;
+    fn write_image_checked(
+        self,
+        rgb: &[u8],
+        width: usize,
+        height: usize,
+    ) -> std::result::Result<(), String>;
 }
 
 impl<E: image::ImageEncoder> WriteChecked for E {
-    fn write_image_checked(self, rgb: &[u8], width: usize, height: usize) -> std::result::Result<(), String> {
+    fn write_image_checked(
+        self,
+        rgb: &[u8],
+        width: usize,
+        height: usize,
+    ) -> std::result::Result<(), String> {
         if rgb.len() != width * height * 3 {
-            return Err(format!("{} bytes for a {width}×{height} RGB image", rgb.len()));
+            return Err(format!(
+                "{} bytes for a {width}×{height} RGB image",
+                rgb.len()
+            ));
         }
         let (w, h) = (
             u32::try_from(width).map_err(|e| e.to_string())?,

@@ -106,7 +106,16 @@ impl Svg {
     }
 
     /// A straight line.
-    pub fn line(&mut self, x1: f64, y1: f64, x2: f64, y2: f64, stroke: &str, width: f64, extra: &str) {
+    pub fn line(
+        &mut self,
+        x1: f64,
+        y1: f64,
+        x2: f64,
+        y2: f64,
+        stroke: &str,
+        width: f64,
+        extra: &str,
+    ) {
         let _ = writeln!(
             self.body,
             r#"<line x1="{}" y1="{}" x2="{}" y2="{}" stroke="{}" stroke-width="{}" {extra}/>"#,
@@ -126,7 +135,13 @@ impl Svg {
         }
         let mut d = String::with_capacity(points.len() * 12);
         for (i, (x, y)) in points.iter().enumerate() {
-            let _ = write!(d, "{}{},{}", if i == 0 { "M" } else { " L" }, num(*x), num(*y));
+            let _ = write!(
+                d,
+                "{}{},{}",
+                if i == 0 { "M" } else { " L" },
+                num(*x),
+                num(*y)
+            );
         }
         let _ = writeln!(
             self.body,
@@ -150,7 +165,16 @@ impl Svg {
 
     /// A line of text.
     #[allow(clippy::too_many_arguments)]
-    pub fn text(&mut self, x: f64, y: f64, text: &str, size: f64, fill: &str, anchor: Anchor, extra: &str) {
+    pub fn text(
+        &mut self,
+        x: f64,
+        y: f64,
+        text: &str,
+        size: f64,
+        fill: &str,
+        anchor: Anchor,
+        extra: &str,
+    ) {
         let _ = writeln!(
             self.body,
             r#"<text x="{}" y="{}" font-size="{}" fill="{}" text-anchor="{}" {extra}>{}</text>"#,

@@ -54,7 +54,10 @@ pub fn timeline_svg(
     params: &TimelineParams,
 ) -> Result<(String, TimeAxis)> {
     if !(params.width_px.is_finite() && params.width_px >= 300.0) {
-        return Err(ReportError::param("width_px", format!("must be ≥ 300, got {}", params.width_px)));
+        return Err(ReportError::param(
+            "width_px",
+            format!("must be ≥ 300, got {}", params.width_px),
+        ));
     }
     if !(params.row_height_px.is_finite() && params.row_height_px >= 4.0) {
         return Err(ReportError::param(
@@ -84,7 +87,15 @@ pub fn timeline_svg(
     let mut svg = Svg::new(params.width_px, h, style::PAPER);
     let reps: usize = intervals.iter().map(|i| i.count).sum();
     if params.title {
-        svg.text(18.0, 24.0, "Timeline", 17.0, style::INK, Anchor::Start, r#"font-weight="bold""#);
+        svg.text(
+            18.0,
+            24.0,
+            "Timeline",
+            17.0,
+            style::INK,
+            Anchor::Start,
+            r#"font-weight="bold""#,
+        );
     }
     svg.text(
         18.0,
@@ -116,7 +127,15 @@ pub fn timeline_svg(
     svg.rect(lx - 12.0, 15.0, 12.0, 11.0, style::LOOP_FILL, r#"rx="2""#);
 
     // Mix of kinds per segment.
-    svg.text(label_w, mix_top + mix_h / 2.0 + 4.0, "kinds per segment", 11.0, style::INK, Anchor::End, "");
+    svg.text(
+        label_w,
+        mix_top + mix_h / 2.0 + 4.0,
+        "kinds per segment",
+        11.0,
+        style::INK,
+        Anchor::End,
+        "",
+    );
     for (si, seg) in program.segments.iter().enumerate() {
         let (a, b) = (fx(bounds[si] as f64), fx(bounds[si + 1] as f64));
         let n = seg.primitives.len().max(1) as f64;
@@ -133,23 +152,62 @@ pub fn timeline_svg(
     }
 
     // Loops.
-    svg.text(label_w, loops_top + loop_h / 2.0 + 4.0, "loops", 11.0, style::INK, Anchor::End, "");
+    svg.text(
+        label_w,
+        loops_top + loop_h / 2.0 + 4.0,
+        "loops",
+        11.0,
+        style::INK,
+        Anchor::End,
+        "",
+    );
     svg.rect(x0, loops_top, x1 - x0, loop_h, "#f1f5f9", r#"rx="3""#);
     for (li, iv) in intervals.iter().enumerate() {
         let (a, b) = (fx(iv.start_frame as f64), fx(iv.end_frame as f64));
-        svg.rect(a, loops_top + 3.0, b - a, loop_h - 6.0, style::LOOP_FILL, r#"fill-opacity="0.85" rx="3""#);
+        svg.rect(
+            a,
+            loops_top + 3.0,
+            b - a,
+            loop_h - 6.0,
+            style::LOOP_FILL,
+            r#"fill-opacity="0.85" rx="3""#,
+        );
         let inner = iv.boundaries.len().saturating_sub(2);
         for &bf in iv.boundaries.iter().skip(1).take(inner) {
             let x = fx(bf as f64);
-            svg.line(x, loops_top + 3.0, x, loops_top + loop_h - 3.0, style::PAPER, 1.5, "");
+            svg.line(
+                x,
+                loops_top + 3.0,
+                x,
+                loops_top + loop_h - 3.0,
+                style::PAPER,
+                1.5,
+                "",
+            );
         }
         let label = format!("×{}", iv.count);
         let cx = (a + b) / 2.0;
         let lw = 10.0 + 8.0 * label.chars().count() as f64;
         if b - a >= lw {
-            svg.text(cx, loops_top + loop_h / 2.0 + 5.0, &label, 14.0, "#ffffff", Anchor::Middle, r#"font-weight="bold""#);
+            svg.text(
+                cx,
+                loops_top + loop_h / 2.0 + 5.0,
+                &label,
+                14.0,
+                "#ffffff",
+                Anchor::Middle,
+                r#"font-weight="bold""#,
+            );
         } else {
-            svg.text(cx, loops_top - 2.0, &label, 11.0, style::LOOP_DARK, Anchor::Middle, r#"font-weight="bold""#);
+            svg.text(
+                cx,
+                loops_top - 2.0,
+                &label,
+                11.0,
+                style::LOOP_DARK,
+                Anchor::Middle,
+                r#"font-weight="bold""#,
+            );
         }
         svg.raw(&format!(
             "<title>loop {}: frames {}..{}, {} iterations of {} primitives</title>\n",
@@ -161,18 +219,43 @@ pub fn timeline_svg(
         ));
     }
     if intervals.is_empty() {
-        svg.text((x0 + x1) / 2.0, loops_top + loop_h / 2.0 + 4.0, "no repetition detected", 11.0, style::MUTED, Anchor::Middle, "");
+        svg.text(
+            (x0 + x1) / 2.0,
+            loops_top + loop_h / 2.0 + 4.0,
+            "no repetition detected",
+            11.0,
+            style::MUTED,
+            Anchor::Middle,
+            "",
+        );
     }
 
     // One row per joint.
     for ji in 0..j {
         let y = rows_top + ji as f64 * rh;
         let name = program.joints.get(ji).map(String::as_str).unwrap_or("?");
-        svg.text(label_w, y + rh * 0.8, name, (rh * 0.78).min(11.0), style::INK, Anchor::End, "");
+        svg.text(
+            label_w,
+            y + rh * 0.8,
+            name,
+            (rh * 0.78).min(11.0),
+            style::INK,
+            Anchor::End,
+            "",
+        );
         for (si, seg) in program.segments.iter().enumerate() {
-            let Some(p) = seg.primitives.get(ji) else { continue };
+            let Some(p) = seg.primitives.get(ji) else {
+                continue;
+            };
             let (a, b) = (fx(bounds[si] as f64), fx(bounds[si + 1] as f64));
-            svg.rect(a, y + 0.5, (b - a).max(0.5), rh - 1.0, kind_color(p.kind()), "");
+            svg.rect(
+                a,
+                y + 0.5,
+                (b - a).max(0.5),
+                rh - 1.0,
+                kind_color(p.kind()),
+                "",
+            );
         }
     }
     // Segment boundaries over the rows.
@@ -184,7 +267,15 @@ pub fn timeline_svg(
     for iv in intervals {
         for &bf in &iv.boundaries {
             let x = fx(bf as f64);
-            svg.line(x, loops_top, x, rows_bottom, style::LOOP_DARK, 1.2, r#"stroke-dasharray="3 2" stroke-opacity="0.8""#);
+            svg.line(
+                x,
+                loops_top,
+                x,
+                rows_bottom,
+                style::LOOP_DARK,
+                1.2,
+                r#"stroke-dasharray="3 2" stroke-opacity="0.8""#,
+            );
         }
     }
     // Time axis.
@@ -193,7 +284,15 @@ pub fn timeline_svg(
     for s in ticks(0.0, secs, 10) {
         let x = fx(s * fps);
         svg.line(x, rows_bottom, x, rows_bottom + 5.0, style::MUTED, 1.0, "");
-        svg.text(x, rows_bottom + 18.0, &format!("{} s", tick_label(s)), 11.0, style::MUTED, Anchor::Middle, "");
+        svg.text(
+            x,
+            rows_bottom + 18.0,
+            &format!("{} s", tick_label(s)),
+            11.0,
+            style::MUTED,
+            Anchor::Middle,
+            "",
+        );
     }
     svg.text(
         (x0 + x1) / 2.0,
