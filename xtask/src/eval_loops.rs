@@ -45,7 +45,15 @@ pub struct EvalLoopsArgs {
     pub max_clips: usize,
 }
 
-const PENN_REPETITIVE: [&str; 7] = ["jumping_jacks", "squat", "pushup", "pullup", "situp", "jump_rope", "bench_press"];
+const PENN_REPETITIVE: [&str; 7] = [
+    "jumping_jacks",
+    "squat",
+    "pushup",
+    "pullup",
+    "situp",
+    "jump_rope",
+    "bench_press",
+];
 const HORIZONS: [usize; 4] = [5, 10, 20, 30];
 
 fn bar(n: usize, what: &str) -> ProgressBar {
@@ -108,13 +116,20 @@ pub fn run(a: &EvalLoopsArgs) -> anyhow::Result<()> {
         } else if npz.contains("keypoints") && npz.contains("offsets") && npz.contains("action") {
             eval_penn(&files[0], a.max_clips)?
         } else {
-            bail!("{}: not a recognised data set (keys: {})", files[0].display(), npz.names().join(", "))
+            bail!(
+                "{}: not a recognised data set (keys: {})",
+                files[0].display(),
+                npz.names().join(", ")
+            )
         }
     };
     if let Value::Object(m) = &mut report {
         m.insert("data".into(), json!(data.display().to_string()));
         m.insert("runtime_s".into(), json!(t0.elapsed().as_secs_f64()));
-        m.insert("params".into(), serde_json::to_value(AbstractParams::default())?);
+        m.insert(
+            "params".into(),
+            serde_json::to_value(AbstractParams::default())?,
+        );
     }
     write_json(&a.out, &report)?;
     println!("{}", serde_json::to_string_pretty(&summary(&report))?);
@@ -127,7 +142,12 @@ fn summary(v: &Value) -> Value {
     match v {
         Value::Object(m) => Value::Object(
             m.iter()
-                .filter(|(k, _)| !matches!(k.as_str(), "by_file" | "by_clip" | "by_video" | "params" | "by_view"))
+                .filter(|(k, _)| {
+                    !matches!(
+                        k.as_str(),
+                        "by_file" | "by_clip" | "by_video" | "params" | "by_view"
+                    )
+                })
                 .map(|(k, v)| (k.clone(), v.clone()))
                 .collect(),
         ),
@@ -151,15 +171,23 @@ fn blocks(labels: &[i64]) -> Vec<(i64, usize, usize)> {
 fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
     let mut by_file = Map::new();
     let (mut det, mut gt) = (0usize, 0usize);
-    let (mut tp_det_iom, mut tp_gt_iom, mut tp_det_iou, mut tp_gt_iou) = (0usize, 0usize, 0usize, 0usize);
+    let (mut tp_det_iom, mut tp_gt_iom, mut tp_det_iou, mut tp_gt_iou) =
+        (0usize, 0usize, 0usize, 0usize);
     for f in files {
         let c = CmuFeatures::open(f)?;
-        let an = analyze(&c.track, &AbstractParams::default()).with_context(|| format!("{}", f.display()))?;
+        let an = analyze(&c.track, &AbstractParams::default())
+            .with_context(|| format!("{}", f.display()))?;
         let gts = blocks(&c.labels);
-        let d: Vec<(usize, usize)> = an.intervals.iter().map(|i| (i.start_frame, i.end_frame)).collect();
+        let d: Vec<(usize, usize)> = an
+            .intervals
+            .iter()
+            .map(|i| (i.start_frame, i.end_frame))
+            .collect();
         let g: Vec<(usize, usize)> = gts.iter().map(|b| (b.1, b.2)).collect();
-        let m_iom = |x: &(usize, usize), ys: &[(usize, usize)]| ys.iter().any(|y| iom(*x, *y) > 0.5);
-        let m_iou = |x: &(usize, usize), ys: &[(usize, usize)]| ys.iter().any(|y| iou(*x, *y) >= 0.5);
+        let m_iom =
+            |x: &(usize, usize), ys: &[(usize, usize)]| ys.iter().any(|y| iom(*x, *y) > 0.5);
+        let m_iou =
+            |x: &(usize, usize), ys: &[(usize, usize)]| ys.iter().any(|y| iou(*x, *y) >= 0.5);
         let td_iom = d.iter().filter(|x| m_iom(x, &g)).count();
         let tg_iom = g.iter().filter(|x| m_iom(x, &d)).count();
         let td_iou = d.iter().filter(|x| m_iou(x, &g)).count();
@@ -170,7 +198,10 @@ fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
         tp_gt_iom += tg_iom;
         tp_det_iou += td_iou;
         tp_gt_iou += tg_iou;
-        let name = f.file_name().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+        let name = f
+            .file_name()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_default();
         by_file.insert(
             name,
             json!({
@@ -250,14 +281,29 @@ fn eval_aist(files: &[PathBuf]) -> anyhow::Result<Value> {
         let mut pair = Vec::new();
         for i in 0..masks.len() {
             for j in i + 1..masks.len() {
-                let inter = masks[i].iter().zip(&masks[j]).filter(|(a, b)| **a && **b).count();
-                let uni = masks[i].iter().zip(&masks[j]).filter(|(a, b)| **a || **b).count();
-                pair.push(if uni == 0 { 1.0 } else { inter as f64 / uni as f64 });
+                let inter = masks[i]
+                    .iter()
+                    .zip(&masks[j])
+                    .filter(|(a, b)| **a && **b)
+                    .count();
+                let uni = masks[i]
+                    .iter()
+                    .zip(&masks[j])
+                    .filter(|(a, b)| **a || **b)
+                    .count();
+                pair.push(if uni == 0 {
+                    1.0
+                } else {
+                    inter as f64 / uni as f64
+                });
             }
         }
         let agree = pair.iter().sum::<f64>() / pair.len().max(1) as f64;
         agreements.push(agree);
-        let name = f.file_name().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+        let name = f
+            .file_name()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_default();
         by_file.insert(name, json!({"view_agreement": agree, "by_view": views}));
     }
     Ok(json!({
@@ -295,14 +341,21 @@ fn eval_penn(path: &Path, max_clips: usize) -> anyhow::Result<Value> {
         match r {
             Ok(v) => {
                 all.push(v.clone());
-                by_action.entry(cls).or_insert_with(|| json!([])).as_array_mut().map(|a| a.push(v));
+                by_action
+                    .entry(cls)
+                    .or_insert_with(|| json!([]))
+                    .as_array_mut()
+                    .map(|a| a.push(v));
             }
             Err(e) => errors.push(format!("clip {i}: {e:#}")),
         }
     }
     let agg = |rows: &[Value]| -> Value {
         let n = rows.len().max(1) as f64;
-        let found = rows.iter().filter(|r| r["loop_found"].as_bool() == Some(true)).count() as f64;
+        let found = rows
+            .iter()
+            .filter(|r| r["loop_found"].as_bool() == Some(true))
+            .count() as f64;
         let mut m = Map::new();
         m.insert("clips".into(), json!(rows.len()));
         m.insert("loop_found_fraction".into(), json!(found / n));
@@ -315,10 +368,17 @@ fn eval_penn(path: &Path, max_clips: usize) -> anyhow::Result<Value> {
                         .filter_map(|r| r[method][metric][format!("h{h}")].as_f64())
                         .filter(|v| v.is_finite())
                         .collect();
-                    let mean = if vals.is_empty() { f64::NAN } else { vals.iter().sum::<f64>() / vals.len() as f64 };
+                    let mean = if vals.is_empty() {
+                        f64::NAN
+                    } else {
+                        vals.iter().sum::<f64>() / vals.len() as f64
+                    };
                     hm.insert(format!("h{h}"), json!(mean));
                 }
-                m.entry(method.to_string()).or_insert_with(|| json!({})).as_object_mut().map(|o| o.insert(metric.into(), Value::Object(hm)));
+                m.entry(method.to_string())
+                    .or_insert_with(|| json!({}))
+                    .as_object_mut()
+                    .map(|o| o.insert(metric.into(), Value::Object(hm)));
             }
         }
         Value::Object(m)
@@ -350,9 +410,7 @@ fn penn_clip(penn: &PennAction, i: usize) -> anyhow::Result<Value> {
     let truth_conf = track.confidence().to_owned();
     track.fill_missing();
     let n = track.n_frames();
-    let full = {
-        analyze(&track, &params.analysis).ok()
-    };
+    let full = { analyze(&track, &params.analysis).ok() };
     let loop_found = full.as_ref().is_some_and(|a| !a.intervals.is_empty());
     let observe = n / 2;
     let mut out = json!({"clip_id": info.clip_id, "frames": n, "loop_found": loop_found,
@@ -360,14 +418,20 @@ fn penn_clip(penn: &PennAction, i: usize) -> anyhow::Result<Value> {
     if observe < 8 {
         return Ok(out);
     }
-    let max_h = *HORIZONS.iter().filter(|&&h| observe + h <= n).max().unwrap_or(&0);
+    let max_h = *HORIZONS
+        .iter()
+        .filter(|&&h| observe + h <= n)
+        .max()
+        .unwrap_or(&0);
     if max_h == 0 {
         return Ok(out);
     }
     let pred_loop = predict(&track, observe, max_h, &params)?;
     let pred_const = predict_constant(&track.slice_frames(0, observe)?, max_h)?;
     let truth = track.slice_frames(observe, observe + max_h)?;
-    let tconf = truth_conf.slice(ndarray::s![observe..observe + max_h, ..]).to_owned();
+    let tconf = truth_conf
+        .slice(ndarray::s![observe..observe + max_h, ..])
+        .to_owned();
     let mut gt = truth.clone();
     gt.confidence_mut().assign(&tconf);
     for (name, pred) in [("loop", &pred_loop.track), ("constant", &pred_const)] {
@@ -379,7 +443,9 @@ fn penn_clip(penn: &PennAction, i: usize) -> anyhow::Result<Value> {
             }
             let p = pred.slice_frames(h - 1, h)?;
             let g = gt.slice_frames(h - 1, h)?;
-            let kd = mp_geom::metrics::kd(&p, &g).map(|v| v * scale512).unwrap_or(f64::NAN);
+            let kd = mp_geom::metrics::kd(&p, &g)
+                .map(|v| v * scale512)
+                .unwrap_or(f64::NAN);
             let pck = mp_geom::metrics::pck(&p, &g, 0.05).unwrap_or(f64::NAN);
             kdm.insert(format!("h{h}"), json!(kd));
             pckm.insert(format!("h{h}"), json!(pck));
@@ -410,7 +476,9 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
             continue;
         };
         let mut track: Track = mp_geom::io::read_track(&tp)?;
-        let valid_frames = (0..track.n_frames()).filter(|&t| (0..track.n_joints()).any(|j| track.confidence()[[t, j]] > 0.0)).count();
+        let valid_frames = (0..track.n_frames())
+            .filter(|&t| (0..track.n_joints()).any(|j| track.confidence()[[t, j]] > 0.0))
+            .count();
         if valid_frames < track.n_frames() / 2 {
             skipped.push(json!({"video": name, "reason": format!("a person in only {valid_frames} of {} frames", track.n_frames())}));
             continue;

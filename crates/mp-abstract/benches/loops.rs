@@ -10,17 +10,29 @@ use rand_chacha::ChaCha8Rng;
 fn prims(n: usize) -> Vec<DetPrim> {
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let body: Vec<Vec<Vec<f64>>> = (0..3)
-        .map(|_| (0..13).map(|_| (0..6).map(|_| rng.random_range(0.0..500.0)).collect()).collect())
+        .map(|_| {
+            (0..13)
+                .map(|_| (0..6).map(|_| rng.random_range(0.0..500.0)).collect())
+                .collect()
+        })
         .collect();
     (0..n)
         .map(|i| {
             let block = (i / 60) % 2 == 0;
             let points = if block {
-                body[i % 3].iter().map(|v| v.iter().map(|x| x + rng.random_range(-2.0..2.0)).collect()).collect()
+                body[i % 3]
+                    .iter()
+                    .map(|v| v.iter().map(|x| x + rng.random_range(-2.0..2.0)).collect())
+                    .collect()
             } else {
-                (0..13).map(|_| (0..6).map(|_| rng.random_range(0.0..500.0)).collect()).collect()
+                (0..13)
+                    .map(|_| (0..6).map(|_| rng.random_range(0.0..500.0)).collect())
+                    .collect()
             };
-            DetPrim { duration: 10, points }
+            DetPrim {
+                duration: 10,
+                points,
+            }
         })
         .collect()
 }
@@ -31,7 +43,11 @@ fn bench(c: &mut Criterion) {
     for n in [1_000, 10_000, 100_000] {
         let p = prims(n);
         g.bench_with_input(BenchmarkId::from_parameter(n), &p, |b, p| {
-            b.iter(|| detect_loops(p, &LoopParams::default()).map(|l| l.len()).unwrap_or(0))
+            b.iter(|| {
+                detect_loops(p, &LoopParams::default())
+                    .map(|l| l.len())
+                    .unwrap_or(0)
+            })
         });
     }
     g.finish();

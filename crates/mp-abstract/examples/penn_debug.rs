@@ -11,14 +11,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     t.fill_missing();
     let mut p = AbstractParams::default();
     if std::env::var("FRAME").is_ok() {
-        p.synth.scale = mp_concrete::Scale::FrameSize { frame_px: info.height_px.max(info.width_px) as f64 };
+        p.synth.scale = mp_concrete::Scale::FrameSize {
+            frame_px: info.height_px.max(info.width_px) as f64,
+        };
     }
     if let Ok(l) = std::env::var("LAMBDA") {
-        p.synth.lambda = if l == "adaptive" { mp_concrete::Lambda::adaptive() } else { mp_concrete::Lambda::fixed(l.parse()?) };
+        p.synth.lambda = if l == "adaptive" {
+            mp_concrete::Lambda::adaptive()
+        } else {
+            mp_concrete::Lambda::fixed(l.parse()?)
+        };
     }
     p.synth.unobserved_joints = mp_concrete::UnobservedJoints::Ignore;
     let a = analyze(&t, &p)?;
-    println!("{} {} frames {} unit_scale {:.3}", info.clip_id, info.action, t.n_frames(), a.unit_scale);
+    println!(
+        "{} {} frames {} unit_scale {:.3}",
+        info.clip_id,
+        info.action,
+        t.n_frames(),
+        a.unit_scale
+    );
     let mut f = 0;
     for s in &a.concrete.segments {
         print!("{f}+{} ", s.duration_frames);
@@ -31,11 +43,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             break;
         }
         let s: Vec<String> = (0..=a.prims.len().saturating_sub(w))
-            .map(|i| format!("{:.0}", mp_abstract::loops::window_score(&a.prims, i, i + w, k, a.unit_scale).unwrap()))
+            .map(|i| {
+                format!(
+                    "{:.0}",
+                    mp_abstract::loops::window_score(&a.prims, i, i + w, k, a.unit_scale).unwrap()
+                )
+            })
             .collect();
         println!("k={k} w={w}: {}", s.join(" "));
     }
-    let period = mp_abstract::repetition::estimate_period(&t, 0, t.n_frames(), &Default::default())?;
+    let period =
+        mp_abstract::repetition::estimate_period(&t, 0, t.n_frames(), &Default::default())?;
     println!("loops {:?}\nperiod {:?}", a.intervals, period);
     Ok(())
 }

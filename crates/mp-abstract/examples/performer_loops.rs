@@ -9,7 +9,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let perf = perform(&PerformerParams::default())?;
     println!("ground truth:");
     for s in &perf.segments {
-        println!("  {:<12} frames {:>4}..{:<4} reps {}", s.kind.name(), s.frames.start, s.frames.end, s.reps.len());
+        println!(
+            "  {:<12} frames {:>4}..{:<4} reps {}",
+            s.kind.name(),
+            s.frames.start,
+            s.frames.end,
+            s.reps.len()
+        );
     }
     let a = analyze(&perf.track_2d, &AbstractParams::default())?;
     println!(
@@ -33,7 +39,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for k in 1..=4 {
             for w in [2 * k, 3 * k] {
                 let s: Vec<String> = (0..a.prims.len().saturating_sub(w))
-                    .map(|i| format!("{:.0}", mp_abstract::loops::window_score(&a.prims, i, i + w, k, a.unit_scale).unwrap()))
+                    .map(|i| {
+                        format!(
+                            "{:.0}",
+                            mp_abstract::loops::window_score(&a.prims, i, i + w, k, a.unit_scale)
+                                .unwrap()
+                        )
+                    })
                     .collect();
                 println!("k={k} w={w}: {}", s.join(" "));
             }

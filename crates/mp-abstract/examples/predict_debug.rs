@@ -3,18 +3,29 @@ use mp_abstract::{analyze, predict, AbstractParams, PredictParams};
 use mp_geom::performer::{perform, Move, PerformerParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let params = PerformerParams { moves: vec![(Move::JumpingJack, 8)], transition_seconds: 0.0, ..PerformerParams::default() };
+    let params = PerformerParams {
+        moves: vec![(Move::JumpingJack, 8)],
+        transition_seconds: 0.0,
+        ..PerformerParams::default()
+    };
     let perf = perform(&params)?;
     let track = &perf.track_2d;
     let observe = track.n_frames() / 2 + 7;
-    println!("frames {} observe {observe} reps {:?}", track.n_frames(), perf.segments[0].reps);
+    println!(
+        "frames {} observe {observe} reps {:?}",
+        track.n_frames(),
+        perf.segments[0].reps
+    );
     let a = analyze(&track.slice_frames(0, observe)?, &AbstractParams::default())?;
     println!("intervals {:?}", a.intervals);
     let p = predict(track, observe, 30, &PredictParams::default())?;
     for h in [0, 5, 10, 20, 29] {
         let pr = p.track.point(h, 9);
         let gt = track.point(observe + h, 9);
-        println!("h={h} pred ({:.1},{:.1}) gt ({:.1},{:.1})", pr[0], pr[1], gt[0], gt[1]);
+        println!(
+            "h={h} pred ({:.1},{:.1}) gt ({:.1},{:.1})",
+            pr[0], pr[1], gt[0], gt[1]
+        );
     }
     Ok(())
 }

@@ -21,5 +21,8 @@ pub mod synth;
 pub use error::{AbstractError, Result};
 pub use loops::{detect_loops, DetectedLoop, LoopParams};
 pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-pub use pipeline::{analyze, predict, read_program, write_program, AbstractParams, Analysis, PredictParams, Prediction};
+pub use pipeline::{
+    analyze, predict, read_program, write_program, AbstractParams, Analysis, PredictParams,
+    Prediction,
+};
 pub use repetition::RepetitiveInterval;

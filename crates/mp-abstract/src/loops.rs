@@ -105,13 +105,19 @@ impl LoopParams {
             ));
         }
         if self.short_window_iterations.is_some_and(|n| n < 2) {
-            return Err(AbstractError::param("short_window_iterations", "must be ≥ 2"));
+            return Err(AbstractError::param(
+                "short_window_iterations",
+                "must be ≥ 2",
+            ));
         }
         if self
             .relative_threshold
             .is_some_and(|r| !(r.is_finite() && r > 0.0))
         {
-            return Err(AbstractError::param("relative_threshold", "must be finite and > 0"));
+            return Err(AbstractError::param(
+                "relative_threshold",
+                "must be finite and > 0",
+            ));
         }
         Ok(())
     }
@@ -232,7 +238,11 @@ impl Window {
                 acc += g.cov_norm();
             }
             let tn = total.cov_norm();
-            let rel = if tn > 1e-12 { acc / self.k as f64 / tn } else { f64::INFINITY };
+            let rel = if tn > 1e-12 {
+                acc / self.k as f64 / tn
+            } else {
+                f64::INFINITY
+            };
             worst = worst.max(rel);
         }
         worst
@@ -299,10 +309,19 @@ pub fn window_score(
 
 /// Score of primitives `start..end` with body size `k` in the mode `params`
 /// selects (absolute or relative), with the threshold it is compared against.
-pub fn window_score_with(prims: &[DetPrim], start: usize, end: usize, k: usize, params: &LoopParams) -> Result<(f64, f64)> {
+pub fn window_score_with(
+    prims: &[DetPrim],
+    start: usize,
+    end: usize,
+    k: usize,
+    params: &LoopParams,
+) -> Result<(f64, f64)> {
     let (joints, dim) = check_prims(prims)?;
     if k == 0 || start >= end || end > prims.len() {
-        return Err(AbstractError::param("window", format!("{start}..{end} with body {k} is invalid")));
+        return Err(AbstractError::param(
+            "window",
+            format!("{start}..{end} with body {k} is invalid"),
+        ));
     }
     let mut w = Window::new(k, joints, dim);
     for p in &prims[start..end] {

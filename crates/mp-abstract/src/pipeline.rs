@@ -60,14 +60,23 @@ pub struct Analysis {
 }
 
 /// Abstract program from a concrete program (loop detection at the given `unit_scale`).
-pub fn from_concrete(program: &Program, loops: &LoopParams) -> Result<(AbstractProgram, Vec<DetectedLoop>, Vec<DetPrim>)> {
+pub fn from_concrete(
+    program: &Program,
+    loops: &LoopParams,
+) -> Result<(AbstractProgram, Vec<DetectedLoop>, Vec<DetPrim>)> {
     let segs: Vec<(usize, Vec<mp_geom::Primitive>)> = program
         .segments
         .iter()
         .map(|s| (s.duration_frames, s.primitives.clone()))
         .collect();
     let prims = translate(&segs)?;
-    let (prog, found) = synthesize(&prims, loops, program.fps, program.units.as_str(), program.joints.clone())?;
+    let (prog, found) = synthesize(
+        &prims,
+        loops,
+        program.fps,
+        program.units.as_str(),
+        program.joints.clone(),
+    )?;
     Ok((prog, found, prims))
 }
 
@@ -104,7 +113,11 @@ pub fn read_program(path: impl AsRef<Path>) -> Result<AbstractProgram> {
         })?
     } else {
         dsl::parse(&text).map_err(|e| match e {
-            AbstractError::Parse { line, column, message } => AbstractError::Parse {
+            AbstractError::Parse {
+                line,
+                column,
+                message,
+            } => AbstractError::Parse {
                 line,
                 column,
                 message: format!("{}: {message}", path.display()),
@@ -198,7 +211,10 @@ pub fn predict_constant(observed: &Track, horizon: usize) -> Result<Track> {
     let mut conf = ndarray::Array2::zeros((horizon.max(1), j));
     // Last valid position of each joint.
     for ji in 0..j {
-        let t = (0..=last).rev().find(|&t| observed.confidence()[[t, ji]] > 0.0).unwrap_or(last);
+        let t = (0..=last)
+            .rev()
+            .find(|&t| observed.confidence()[[t, ji]] > 0.0)
+            .unwrap_or(last);
         for h in 0..horizon.max(1) {
             for k in 0..d {
                 pos[[h, ji, k]] = observed.positions()[[t, ji, k]];
@@ -208,7 +224,13 @@ pub fn predict_constant(observed: &Track, horizon: usize) -> Result<Track> {
     }
     let pos = pos.slice_move(ndarray::s![..horizon, .., ..]);
     let conf = conf.slice_move(ndarray::s![..horizon, ..]);
-    Ok(Track::new(pos, Some(conf), observed.fps(), observed.units(), observed.skeleton().clone())?)
+    Ok(Track::new(
+        pos,
+        Some(conf),
+        observed.fps(),
+        observed.units(),
+        observed.skeleton().clone(),
+    )?)
 }
 
 /// Predicts the `horizon` frames after the first `observe` frames of `track`
@@ -216,14 +238,22 @@ pub fn predict_constant(observed: &Track, horizon: usize) -> Result<Track> {
 /// at its means, in phase with the partial iteration observed after the loop,
 /// and the offset between the last observed pose and the unrolled motion fades
 /// out over `offset_decay_periods`. Without a usable loop the last pose is held.
-pub fn predict(track: &Track, observe: usize, horizon: usize, params: &PredictParams) -> Result<Prediction> {
+pub fn predict(
+    track: &Track,
+    observe: usize,
+    horizon: usize,
+    params: &PredictParams,
+) -> Result<Prediction> {
     if horizon == 0 {
         return Err(AbstractError::param("horizon", "must be ≥ 1"));
     }
     if observe < 2 || observe > track.n_frames() {
         return Err(AbstractError::param(
             "observe",
-            format!("must be in 2..={} (the track's length), got {observe}", track.n_frames()),
+            format!(
+                "must be in 2..={} (the track's length), got {observe}",
+                track.n_frames()
+            ),
         ));
     }
     let obs = track.slice_frames(0, observe)?;
@@ -253,7 +283,8 @@ pub fn predict(track: &Track, observe: usize, horizon: usize, params: &PredictPa
     let Stmt::Loop(l) = &analysis.program.stmts[li] else {
         return constant();
     };
-    let period = (interval.end_frame - interval.start_frame) as f64 / interval.iterations.max(1) as f64;
+    let period =
+        (interval.end_frame - interval.start_frame) as f64 / interval.iterations.max(1) as f64;
     let tail = observe.saturating_sub(interval.end_frame) as f64;
     if period <= 0.0 || tail > params.max_tail_periods * period {
         return constant();
@@ -278,13 +309,24 @@ pub fn predict(track: &Track, observe: usize, horizon: usize, params: &PredictPa
             let det = analysis
                 .loops
                 .iter()
-                .find(|d| d.body == k && prims_start_frame(&analysis.prims, d.start) == interval.start_frame)
+                .find(|d| {
+                    d.body == k
+                        && prims_start_frame(&analysis.prims, d.start) == interval.start_frame
+                })
                 .ok_or_else(|| AbstractError::NotFound("the unrolled loop's primitives".into()))?;
             // The latest iteration whose length is typical (within 15 % of the median
             // of the complete ones). The last iteration often absorbs the frames
             // observed after the loop, so with three or more it is not a candidate.
-            let lens: Vec<usize> = interval.boundaries.windows(2).map(|w| w[1] - w[0]).collect();
-            let candidates = if lens.len() >= 3 { lens.len() - 1 } else { lens.len() };
+            let lens: Vec<usize> = interval
+                .boundaries
+                .windows(2)
+                .map(|w| w[1] - w[0])
+                .collect();
+            let candidates = if lens.len() >= 3 {
+                lens.len() - 1
+            } else {
+                lens.len()
+            };
             let mut sorted = lens[..candidates].to_vec();
             sorted.sort_unstable();
             let median = sorted[(sorted.len() - 1) / 2] as f64;
@@ -322,7 +364,11 @@ pub fn predict(track: &Track, observe: usize, horizon: usize, params: &PredictPa
                 n += 1;
             }
         }
-        let cost = if n > 0 { cost / n as f64 } else { f64::INFINITY };
+        let cost = if n > 0 {
+            cost / n as f64
+        } else {
+            f64::INFINITY
+        };
         if cost < best.0 {
             best = (cost, s0);
         }
@@ -339,7 +385,11 @@ pub fn predict(track: &Track, observe: usize, horizon: usize, params: &PredictPa
     for ji in 0..j {
         let valid = obs.confidence()[[last, ji]] > 0.0;
         for h in 0..horizon {
-            let w = if valid { (1.0 - (h + 1) as f64 / decay).max(0.0) } else { 0.0 };
+            let w = if valid {
+                (1.0 - (h + 1) as f64 / decay).max(0.0)
+            } else {
+                0.0
+            };
             for kk in 0..d {
                 let off = obs.positions()[[last, ji, kk]] - future.positions()[[anchor, ji, kk]];
                 pos[[h, ji, kk]] = future.positions()[[start + h, ji, kk]] + w * off;

@@ -131,10 +131,16 @@ pub fn estimate_period(
         return Err(AbstractError::param("peak_ratio", "must be in (0, 1]"));
     }
     if !(params.min_period_s.is_finite() && params.min_period_s >= 0.0) {
-        return Err(AbstractError::param("min_period_s", "must be finite and ≥ 0"));
+        return Err(AbstractError::param(
+            "min_period_s",
+            "must be finite and ≥ 0",
+        ));
     }
     if start >= end || end > track.n_frames() {
-        return Err(AbstractError::param("frames", format!("{start}..{end} outside 0..{}", track.n_frames())));
+        return Err(AbstractError::param(
+            "frames",
+            format!("{start}..{end} outside 0..{}", track.n_frames()),
+        ));
     }
     let mut t = track.slice_frames(start, end)?;
     if t.valid_count() == 0 {
@@ -171,10 +177,17 @@ pub fn estimate_period(
     }
     for c in 0..dims {
         let mean = (0..m).map(|ti| v[ti * dims + c]).sum::<f64>() / m as f64;
-        let var = (0..m).map(|ti| (v[ti * dims + c] - mean).powi(2)).sum::<f64>() / m as f64;
+        let var = (0..m)
+            .map(|ti| (v[ti * dims + c] - mean).powi(2))
+            .sum::<f64>()
+            / m as f64;
         let sd = var.sqrt();
         for ti in 0..m {
-            v[ti * dims + c] = if sd > 1e-12 { (v[ti * dims + c] - mean) / sd } else { 0.0 };
+            v[ti * dims + c] = if sd > 1e-12 {
+                (v[ti * dims + c] - mean) / sd
+            } else {
+                0.0
+            };
         }
     }
     let max_lag = m / 2;
@@ -196,7 +209,9 @@ pub fn estimate_period(
         *x /= r0;
     }
     let zero = r.iter().position(|&x| x < 0.0).unwrap_or(r.len());
-    let min_lag = zero.max((params.min_period_s * track.fps()).round() as usize).max(1);
+    let min_lag = zero
+        .max((params.min_period_s * track.fps()).round() as usize)
+        .max(1);
     let peaks: Vec<usize> = (min_lag + 1..r.len().saturating_sub(1))
         .filter(|&l| r[l] >= r[l - 1] && r[l] >= r[l + 1] && r[l] > 0.0)
         .collect();

@@ -196,19 +196,48 @@ fn synthesis_rolls_up_the_loop() {
 #[test]
 fn relative_score_is_scale_free() {
     let (prims, lead) = synthetic(3, 8, 4, 2.0, 21);
-    let params = LoopParams { relative_threshold: Some(0.3), ..LoopParams::default() };
+    let params = LoopParams {
+        relative_threshold: Some(0.3),
+        ..LoopParams::default()
+    };
     let scaled: Vec<DetPrim> = prims
         .iter()
-        .map(|p| DetPrim { duration: p.duration, points: p.points.iter().map(|v| v.iter().map(|x| x * 1e-3).collect()).collect() })
+        .map(|p| DetPrim {
+            duration: p.duration,
+            points: p
+                .points
+                .iter()
+                .map(|v| v.iter().map(|x| x * 1e-3).collect())
+                .collect(),
+        })
         .collect();
     // The motion check stays in reference pixels: give the scaled data its unit scale.
     for (ps, unit_scale) in [(&prims, 1.0), (&scaled, 1e-3)] {
-        let loops = detect_loops(ps, &LoopParams { unit_scale, ..params.clone() }).unwrap();
+        let loops = detect_loops(
+            ps,
+            &LoopParams {
+                unit_scale,
+                ..params.clone()
+            },
+        )
+        .unwrap();
         assert_eq!(loops.len(), 1, "{loops:?}");
-        assert_eq!((loops[0].start, loops[0].body, loops[0].iterations), (lead, 3, 8));
+        assert_eq!(
+            (loops[0].start, loops[0].body, loops[0].iterations),
+            (lead, 3, 8)
+        );
     }
-    let (a, _) = mp_abstract::loops::window_score_with(&prims, lead, lead + 12, 3, &params).unwrap();
-    let (b, _) = mp_abstract::loops::window_score_with(&scaled, lead, lead + 12, 3, &params).unwrap();
+    let (a, _) =
+        mp_abstract::loops::window_score_with(&prims, lead, lead + 12, 3, &params).unwrap();
+    let (b, _) =
+        mp_abstract::loops::window_score_with(&scaled, lead, lead + 12, 3, &params).unwrap();
     assert!((a - b).abs() < 1e-9 && a < 0.3, "{a} {b}");
-    assert!(detect_loops(&prims, &LoopParams { relative_threshold: Some(f64::NAN), ..LoopParams::default() }).is_err());
+    assert!(detect_loops(
+        &prims,
+        &LoopParams {
+            relative_threshold: Some(f64::NAN),
+            ..LoopParams::default()
+        }
+    )
+    .is_err());
 }

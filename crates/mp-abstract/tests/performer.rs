@@ -28,7 +28,12 @@ fn finds_jumping_jacks_and_squats_with_their_counts() {
         let hit = a
             .intervals
             .iter()
-            .find(|i| mp_abstract::repetition::iom((i.start_frame, i.end_frame), (gt.frames.start, gt.frames.end)) > 0.5)
+            .find(|i| {
+                mp_abstract::repetition::iom(
+                    (i.start_frame, i.end_frame),
+                    (gt.frames.start, gt.frames.end),
+                ) > 0.5
+            })
             .unwrap_or_else(|| panic!("no loop for {mv:?}: {:?}", a.intervals));
         assert_eq!(hit.count, reps, "{mv:?}");
         assert_eq!(hit.boundaries.len(), reps + 1);
@@ -36,7 +41,10 @@ fn finds_jumping_jacks_and_squats_with_their_counts() {
     // The abstract program executes back to the same number of frames when loops replay as observed.
     let t = mp_abstract::exec::execute(
         &a.program,
-        &mp_abstract::exec::ExecParams { replay: mp_abstract::exec::LoopReplay::Observed, ..Default::default() },
+        &mp_abstract::exec::ExecParams {
+            replay: mp_abstract::exec::LoopReplay::Observed,
+            ..Default::default()
+        },
     )
     .unwrap();
     assert_eq!(t.n_frames(), perf.track_2d.n_frames());
@@ -44,7 +52,11 @@ fn finds_jumping_jacks_and_squats_with_their_counts() {
 
 #[test]
 fn unrolling_beats_constant_on_repetitive_motion() {
-    let params = PerformerParams { moves: vec![(Move::JumpingJack, 8)], transition_seconds: 0.0, ..PerformerParams::default() };
+    let params = PerformerParams {
+        moves: vec![(Move::JumpingJack, 8)],
+        transition_seconds: 0.0,
+        ..PerformerParams::default()
+    };
     let perf = perform(&params).unwrap();
     let track = &perf.track_2d;
     let observe = track.n_frames() / 2 + 7;
@@ -70,16 +82,28 @@ fn prediction_rejects_bad_arguments() {
 fn period_counter_counts_performer_repetitions() {
     use mp_abstract::repetition::{estimate_period, PeriodParams};
     for (mv, reps) in [(Move::JumpingJack, 8), (Move::Squat, 6)] {
-        let params = PerformerParams { moves: vec![(mv, reps)], transition_seconds: 0.0, ..PerformerParams::default() };
+        let params = PerformerParams {
+            moves: vec![(mv, reps)],
+            transition_seconds: 0.0,
+            ..PerformerParams::default()
+        };
         let perf = perform(&params).unwrap();
         let t = &perf.track_2d;
-        let p = estimate_period(t, 0, t.n_frames(), &PeriodParams::default()).unwrap().expect("a period");
+        let p = estimate_period(t, 0, t.n_frames(), &PeriodParams::default())
+            .unwrap()
+            .expect("a period");
         assert!((p.count - reps as f64).abs() <= 1.0, "{mv:?}: {p:?}");
         assert!(p.strength > 0.3, "{mv:?}: {p:?}");
     }
     // A still track has no period.
-    let perf = perform(&PerformerParams { noise_px: 0.0, ..PerformerParams::default() }).unwrap();
+    let perf = perform(&PerformerParams {
+        noise_px: 0.0,
+        ..PerformerParams::default()
+    })
+    .unwrap();
     let still = perf.track_2d.slice_frames(0, 1).unwrap();
-    assert!(estimate_period(&still, 0, 1, &PeriodParams::default()).unwrap().is_none());
+    assert!(estimate_period(&still, 0, 1, &PeriodParams::default())
+        .unwrap()
+        .is_none());
     assert!(estimate_period(&perf.track_2d, 5, 3, &PeriodParams::default()).is_err());
 }

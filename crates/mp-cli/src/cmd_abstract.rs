@@ -158,7 +158,10 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let fps = track.fps();
-    println!("{:>4} {:>8} {:>8} {:>9} {:>9} {:>5} {:>10} {:>6}", "#", "start", "end", "start_s", "end_s", "body", "iterations", "count");
+    println!(
+        "{:>4} {:>8} {:>8} {:>9} {:>9} {:>5} {:>10} {:>6}",
+        "#", "start", "end", "start_s", "end_s", "body", "iterations", "count"
+    );
     for (i, r) in an.intervals.iter().enumerate() {
         println!(
             "{:>4} {:>8} {:>8} {:>9.2} {:>9.2} {:>5} {:>10} {:>6}",
@@ -173,13 +176,17 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
         );
     }
     if an.intervals.is_empty() {
-        println!("(no repetitive interval found in {} frames)", track.n_frames());
+        println!(
+            "(no repetitive interval found in {} frames)",
+            track.n_frames()
+        );
     }
     Ok(())
 }
 
 fn is_program_path(p: &std::path::Path) -> bool {
-    p.extension().is_some_and(|e| e == "txt" || e == "json" || e == "mp")
+    p.extension()
+        .is_some_and(|e| e == "txt" || e == "json" || e == "mp")
 }
 
 pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
@@ -188,7 +195,10 @@ pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
     if is_program_path(&a.output) {
         write_program(&prog, &a.output)?;
     } else {
-        let params = ExecParams { replay: LoopReplay::Observed, ..ExecParams::default() };
+        let params = ExecParams {
+            replay: LoopReplay::Observed,
+            ..ExecParams::default()
+        };
         let t = execute(&prog, &params)?;
         write_track(&a.output, &t)?;
         eprintln!("{} frames written to {}", t.n_frames(), a.output.display());
@@ -200,24 +210,41 @@ pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
     let prog = read_program(&a.program)?;
     let t = sample(&prog, a.seed, &ExecParams::default())?;
     write_track(&a.output, &t)?;
-    eprintln!("{} frames (seed {}) written to {}", t.n_frames(), a.seed, a.output.display());
+    eprintln!(
+        "{} frames (seed {}) written to {}",
+        t.n_frames(),
+        a.seed,
+        a.output.display()
+    );
     Ok(())
 }
 
 pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
     let pred = match a.method {
-        Method::Nn => crate::cmd_forecast::predict_with("nn", &track, a.observe, a.horizon, &a.forecast)?,
-        Method::Ar => crate::cmd_forecast::predict_with("ar", &track, a.observe, a.horizon, &a.forecast)?,
-        Method::ArPose => crate::cmd_forecast::predict_with("ar-pose", &track, a.observe, a.horizon, &a.forecast)?,
+        Method::Nn => {
+            crate::cmd_forecast::predict_with("nn", &track, a.observe, a.horizon, &a.forecast)?
+        }
+        Method::Ar => {
+            crate::cmd_forecast::predict_with("ar", &track, a.observe, a.horizon, &a.forecast)?
+        }
+        Method::ArPose => {
+            crate::cmd_forecast::predict_with("ar-pose", &track, a.observe, a.horizon, &a.forecast)?
+        }
         Method::Constant => {
             if a.observe == 0 || a.observe > track.n_frames() {
-                anyhow::bail!("--observe must be in 1..={} (the track's length)", track.n_frames());
+                anyhow::bail!(
+                    "--observe must be in 1..={} (the track's length)",
+                    track.n_frames()
+                );
             }
             predict_constant(&track.slice_frames(0, a.observe)?, a.horizon)?
         }
         Method::Loop => {
-            let params = PredictParams { analysis: a.opts.params(), ..PredictParams::default() };
+            let params = PredictParams {
+                analysis: a.opts.params(),
+                ..PredictParams::default()
+            };
             let p = predict(&track, a.observe, a.horizon, &params)?;
             match &p.used {
                 Some(i) => eprintln!(
@@ -231,12 +258,19 @@ pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
     };
     if let Some(out) = &a.output {
         write_track(out, &pred)?;
-        eprintln!("{} predicted frames written to {}", pred.n_frames(), out.display());
+        eprintln!(
+            "{} predicted frames written to {}",
+            pred.n_frames(),
+            out.display()
+        );
     }
     if a.observe + a.horizon <= track.n_frames() {
         let truth = track.slice_frames(a.observe, a.observe + a.horizon)?;
         let kd = mp_geom::metrics::kd(&pred, &truth)?;
-        println!("KD to the actual frames: {kd:.3} {}", track.units().as_str());
+        println!(
+            "KD to the actual frames: {kd:.3} {}",
+            track.units().as_str()
+        );
     }
     Ok(())
 }

@@ -94,7 +94,8 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
         title: "procedural performer".into(),
         track,
         frame_size: Some((w, h)),
-        frame_px: Some(w.max(h) as f64),
+        // Scale from the performer's own extent (as for any track file), not the canvas size.
+        frame_px: None,
     };
     let opts = cmd_run::RunOptions {
         quiet: a.quiet,

@@ -16,7 +16,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_abstract::dsl::{print_with, PrintOptions};
-use mp_abstract::{Analysis, LoopParams};
+use mp_abstract::{AbstractParams, Analysis, LoopParams};
 use mp_concrete::{synthesize_detailed, Scale, SynthParams, UnobservedJoints};
 use mp_geom::Track;
 use mp_pose::extract::{extract, open_estimator, ExtractOptions, ModelChoice};
@@ -31,6 +31,7 @@ use mp_report::{
     joint_trajectory_svg, report_html, standard_cards, timeline_svg, Card, FrameStore,
     FrameStoreParams, OutputDir, PlotParams, ReportError, ReportInput, TimelineParams,
 };
+use rayon::prelude::*;
 
 /// File extensions read as videos; anything else is read as a keypoint track.
 pub const VIDEO_EXTENSIONS: [&str; 10] = [
@@ -68,7 +69,8 @@ pub struct RunArgs {
     pub quiet: bool,
 }
 
-/// Where the keypoints come from.
+/// Where the keypoints come from (built once per run, so its size does not matter).
+#[allow(clippy::large_enum_variant)]
 pub enum Source {
     /// A video, run through a pose model.
     Video {
@@ -261,7 +263,11 @@ pub fn run_or_exit(source: Source, out: &Path, opts: &RunOptions) -> Result<RunS
     let res = run_pipeline(source, out, opts);
     if interrupted() {
         // The output folder's staging area is gone (dropped inside run_pipeline).
-        eprintln!("\ninterrupted: {} holds only complete files", out.display());
+        if out.is_dir() {
+            eprintln!("\ninterrupted: {} holds only complete files", out.display());
+        } else {
+            eprintln!("\ninterrupted before anything was written");
+        }
         std::process::exit(130);
     }
     res
@@ -375,6 +381,8 @@ struct Keypoints {
     frame_size: Option<(usize, usize)>,
     frame_px: Option<f64>,
     extra_cards: Vec<Card>,
+    /// Time spent keeping reduced frames for the report (counted in the report stage).
+    keep_frames: Duration,
 }
 
 fn keypoints_from_video(
@@ -501,6 +509,7 @@ fn keypoints_from_video(
         track,
         frames: Some(frames),
         video: Some(path.to_path_buf()),
+        keep_frames: sto,
         frame_size: Some((info.width, info.height)),
         frame_px: Some(info.width.max(info.height) as f64),
     })
@@ -513,13 +522,15 @@ pub fn analyse_timed(
     quiet: bool,
     stages: &mut Vec<StageTime>,
 ) -> Result<Analysis> {
+    // The abstract analysis' defaults (adaptive λ), with the frame size as the scale when known.
+    let defaults = AbstractParams::default();
     let synth = SynthParams {
         scale: match frame_px {
             Some(frame_px) => Scale::FrameSize { frame_px },
             None => Scale::Auto,
         },
         unobserved_joints: UnobservedJoints::Ignore,
-        ..SynthParams::default()
+        ..defaults.synth
     };
     let pb = bar(None, "concrete", quiet);
     let t0 = Instant::now();
@@ -535,7 +546,7 @@ pub fn analyse_timed(
     let t1 = Instant::now();
     let loops = LoopParams {
         unit_scale: syn.unit_scale,
-        ..LoopParams::default()
+        ..defaults.loops
     };
     let (program, found, prims) = mp_abstract::pipeline::from_concrete(&syn.program, &loops)
         .context("finding loops (abstract program)")?;
@@ -658,6 +669,7 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
             frame_size,
             frame_px,
             extra_cards: Vec::new(),
+            keep_frames: Duration::ZERO,
         },
     };
     let track = kp.track;
@@ -680,15 +692,30 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
     let j = an.concrete.n_joints();
     let pb = bar(Some(j + 2), "pictures", opts.quiet);
     let plot_params = PlotParams::default();
-    for (ji, name) in an.concrete.joints.iter().enumerate() {
-        check_interrupt()?;
-        let svg = joint_trajectory_svg(&track, &an.concrete, &an.intervals, ji, &plot_params)?;
-        let stem = format!("plots/{:02}_{}", ji, file_stem_safe(name));
+    // Plots are drawn in parallel and written in joint order.
+    let rendered: Vec<Result<(String, String, Vec<u8>)>> = an
+        .concrete
+        .joints
+        .par_iter()
+        .enumerate()
+        .map(|(ji, name)| {
+            check_interrupt()?;
+            let svg = joint_trajectory_svg(&track, &an.concrete, &an.intervals, ji, &plot_params)?;
+            let png = svg_to_png(name, &svg, 1.0)?;
+            pb.inc(1);
+            Ok((
+                format!("plots/{:02}_{}", ji, file_stem_safe(name)),
+                svg,
+                png,
+            ))
+        })
+        .collect();
+    for r in rendered {
+        let (stem, svg, png) = r?;
         out.write(&format!("{stem}.svg"), svg.as_bytes())?;
-        out.write(&format!("{stem}.png"), &svg_to_png(name, &svg, 1.0)?)?;
+        out.write(&format!("{stem}.png"), &png)?;
         files.push(format!("{stem}.svg"));
         files.push(format!("{stem}.png"));
-        pb.inc(1);
     }
     let (tl_svg, _) = timeline_svg(&an.concrete, &an.intervals, &TimelineParams::default())?;
     out.write("timeline.svg", tl_svg.as_bytes())?;
@@ -810,7 +837,7 @@ pub fn run_pipeline(source: Source, out_dir: &Path, opts: &RunOptions) -> Result
     pb.finish_and_clear();
     stages.push(StageTime {
         name: "report",
-        time: t_rep.elapsed(),
+        time: t_rep.elapsed() + kp.keep_frames,
         frames: track.n_frames(),
     });
     let motion_s = track.n_frames() as f64 / track.fps();

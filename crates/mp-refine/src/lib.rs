@@ -1,1 +1,35 @@
-//! mp-refine
+//! # mp-refine — refining 3D motion with learned motion concepts
+//!
+//! Foundations of the refinement framework of paper 004 ("Refine synthesized
+//! action-conditioned 3D human motion with unsupervised learned motion
+//! concepts"):
+//!
+//! * [`segment`]: spline DP segmentation of a joint sequence into anchors
+//!   (junction frames, plus first and last) and transitions (one cubic spline
+//!   per joint and axis), and reconstruction from anchors + splines.
+//! * [`concepts`]: anchor concepts — anchor poses (root-relative, optionally
+//!   scale-normalised) clustered per action (k-means by default, DBSCAN as an
+//!   option) and a 2-component Gaussian mixture whose log-likelihood scores
+//!   anchor quality.
+//! * [`flaws`]: seeded injection of known flaws (wrong anchor pose, frozen
+//!   frames, jitter, temporal jump, foot sliding) into clean motion, with the
+//!   mask of the frames touched.
+//! * [`baseline`]: a non-learned refinement — detect flawed frames (frozen
+//!   runs, velocity/acceleration outliers, low-scoring anchors) and re-fit
+//!   splines between the neighbouring good frames — and
+//!   [`baseline::evaluate_injected`], MPJPE to the clean motion before and
+//!   after refinement on MSR Action3D with injected flaws.
+
+pub mod baseline;
+pub mod concepts;
+pub mod error;
+pub mod flaws;
+pub mod segment;
+
+pub use baseline::{evaluate_injected, refine, EvalParams, EvalReport, RefineParams, Refinement};
+pub use concepts::{learn_concepts, ActionConcepts, ClusterMethod, ConceptParams, Concepts, Gmm};
+pub use error::{RefineError, Result};
+pub use flaws::{inject, Flaw, Injected};
+pub use segment::{
+    mpjpe_abs, segment_track, segmentation_from_anchors, SegmentParams, Segmentation3d, Transition,
+};

@@ -78,7 +78,9 @@ impl FrameStore {
                 "empty frame size {width}×{height}"
             )));
         }
-        let s = (params.max_side_px as f64 / width.max(height) as f64).min(1.0);
+        let s = params.max_side_px as f64 / width.max(height) as f64;
+        // Frames within 10 % of the size are kept as they are (no resampling).
+        let s = if s >= 0.9 { 1.0 } else { s };
         let size = (
             ((width as f64 * s).round() as usize).max(1),
             ((height as f64 * s).round() as usize).max(1),
@@ -100,7 +102,7 @@ impl FrameStore {
 
     /// Keeps frame `index` (RGB, original size) when it falls on the step.
     pub fn push(&mut self, index: usize, rgb: &[u8]) -> Result<()> {
-        if index % self.step != 0 {
+        if !index.is_multiple_of(self.step) {
             return Ok(());
         }
         let (w, h) = self.source_size;

@@ -10,6 +10,9 @@ use crate::error::{ReportError, Result};
 use crate::style::{self, kind_color};
 use crate::svg::{num, tick_label, ticks, Anchor, Svg};
 
+/// One primitive of the plotted joint: its kind and (frame, position) samples.
+type Curve = (PrimitiveKind, Vec<(f64, Vec<f64>)>);
+
 /// Size of a trajectory plot.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlotParams {
@@ -123,7 +126,7 @@ pub fn joint_trajectory_svg(
 
     // Program samples per segment (frame, value per axis).
     let bounds = program.boundaries();
-    let mut curves: Vec<(PrimitiveKind, Vec<(f64, Vec<f64>)>)> = Vec::new();
+    let mut curves: Vec<Curve> = Vec::new();
     for (si, seg) in program.segments.iter().enumerate() {
         let Some(p) = seg.primitives.get(joint) else {
             continue;

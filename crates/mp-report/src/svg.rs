@@ -106,6 +106,7 @@ impl Svg {
     }
 
     /// A straight line.
+    #[allow(clippy::too_many_arguments)]
     pub fn line(
         &mut self,
         x1: f64,
@@ -271,7 +272,7 @@ mod tests {
     #[test]
     fn numbers_are_short() {
         assert_eq!(num(3.0), "3");
-        assert_eq!(num(3.14159), "3.14");
+        assert_eq!(num(1.23456), "1.23");
         assert_eq!(num(f64::NAN), "0");
     }
 }

@@ -185,15 +185,39 @@ pub fn timeline_svg(
                 "",
             );
         }
+        // Iteration numbers, where they fit.
+        for (k, w) in iv.boundaries.windows(2).enumerate() {
+            let (ia, ib) = (fx(w[0] as f64), fx(w[1] as f64));
+            if ib - ia >= 14.0 {
+                svg.text(
+                    (ia + ib) / 2.0,
+                    loops_top + loop_h - 7.0,
+                    &(k + 1).to_string(),
+                    9.5,
+                    "#ffffff",
+                    Anchor::Middle,
+                    r#"fill-opacity="0.85""#,
+                );
+            }
+        }
+        // The count in a dark label in the middle of the loop.
         let label = format!("×{}", iv.count);
         let cx = (a + b) / 2.0;
-        let lw = 10.0 + 8.0 * label.chars().count() as f64;
-        if b - a >= lw {
+        let lw = 12.0 + 8.5 * label.chars().count() as f64;
+        if b - a >= lw + 4.0 {
+            svg.rect(
+                cx - lw / 2.0,
+                loops_top + 6.0,
+                lw,
+                19.0,
+                style::LOOP_DARK,
+                r#"rx="9""#,
+            );
             svg.text(
                 cx,
-                loops_top + loop_h / 2.0 + 5.0,
+                loops_top + 20.0,
                 &label,
-                14.0,
+                13.0,
                 "#ffffff",
                 Anchor::Middle,
                 r#"font-weight="bold""#,
@@ -269,7 +293,7 @@ pub fn timeline_svg(
             let x = fx(bf as f64);
             svg.line(
                 x,
-                loops_top,
+                loops_top + loop_h,
                 x,
                 rows_bottom,
                 style::LOOP_DARK,

@@ -1,0 +1,503 @@
+//! Anchor concepts (paper 004, §3.1.2) and the anchor quality score (§3.2.1).
+//!
+//! Anchor poses are turned into features ([`anchor_feature`]: root-relative,
+//! optionally divided by the pose's RMS joint distance to the root) and
+//! clustered action by action. Each cluster centre is an *anchor concept*.
+//! K-means (L2, seeded) is the default, as in the paper; DBSCAN is an option.
+//! The paper's other two alternatives are not offered: linfa-clustering's
+//! OPTICS returns a reachability ordering rather than clusters, and
+//! hierarchical clustering lives in a separate crate (`linfa-hierarchical`)
+//! that is not a dependency here.
+//!
+//! A Gaussian mixture (2 components by default, full covariances, fitted by
+//! EM in linfa-clustering) over the anchor features of each action gives the
+//! quality score: the log-likelihood of a feature. The lowest
+//! [`ConceptParams::score_quantile`] of the training anchors' scores is
+//! stored as the threshold below which an anchor counts as flawed.
+//!
+//! linfa 0.8 is built on ndarray 0.16 and rand 0.8: features are passed as
+//! `ndarray016` views and the clustering generators are
+//! `Xoshiro256Plus::seed_from_u64(seed)` from `rand_xoshiro` 0.6.
+
+use std::collections::BTreeMap;
+
+use linfa::traits::{Fit, Predict, Transformer};
+use linfa::{DatasetBase, ParamGuard};
+use linfa_clustering::{Dbscan, GaussianMixtureModel, KMeans};
+use mp_geom::Track;
+use nalgebra::{DMatrix, DVector};
+use ndarray::ArrayView2;
+use rand_xoshiro06::rand_core::SeedableRng;
+use rand_xoshiro06::Xoshiro256Plus;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{RefineError, Result};
+use crate::segment::{segment_track, SegmentParams};
+
+/// Which clustering algorithm learns the anchor concepts.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum ClusterMethod {
+    /// K-means with L2 distance (paper default).
+    KMeans {
+        /// Number of concepts per action (fewer when an action has fewer anchors).
+        n_clusters: usize,
+        /// Restarts; the lowest inertia wins. Default 10.
+        n_runs: usize,
+        /// Iteration cap. Default 300.
+        max_iterations: u64,
+    },
+    /// DBSCAN; noise anchors belong to no concept.
+    Dbscan {
+        /// Neighbours (including the point) needed for a core point.
+        min_points: usize,
+        /// Neighbourhood radius in feature units.
+        tolerance: f64,
+    },
+}
+
+/// Parameters of concept learning.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConceptParams {
+    /// Clustering algorithm. Default k-means with 4 concepts per action.
+    pub method: ClusterMethod,
+    /// Root joint for root-relative features; `None` uses the skeleton's
+    /// root, or the mean of the joints when the skeleton has none.
+    pub root_joint: Option<usize>,
+    /// Divide each root-relative pose by its RMS joint distance to the root.
+    /// Default true.
+    pub scale_normalise: bool,
+    /// Mixture components of the quality model. Default 2 (paper).
+    pub gmm_components: usize,
+    /// Added to the mixture's covariance diagonals (feature units²). Default 1e-3.
+    pub gmm_reg_covariance: f64,
+    /// EM restarts. Default 3.
+    pub gmm_n_runs: u64,
+    /// Quantile of the training anchors' scores used as the flaw threshold. Default 0.05.
+    pub score_quantile: f64,
+    /// Seed of the clustering and mixture initialisations.
+    pub seed: u64,
+}
+
+impl Default for ConceptParams {
+    fn default() -> Self {
+        ConceptParams {
+            method: ClusterMethod::KMeans {
+                n_clusters: 4,
+                n_runs: 10,
+                max_iterations: 300,
+            },
+            root_joint: None,
+            scale_normalise: true,
+            gmm_components: 2,
+            gmm_reg_covariance: 1e-3,
+            gmm_n_runs: 3,
+            score_quantile: 0.05,
+            seed: 0,
+        }
+    }
+}
+
+impl ConceptParams {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        match &self.method {
+            ClusterMethod::KMeans {
+                n_clusters,
+                n_runs,
+                max_iterations,
+            } => {
+                if *n_clusters == 0 {
+                    return Err(RefineError::param("n_clusters", "must be ≥ 1"));
+                }
+                if *n_runs == 0 {
+                    return Err(RefineError::param("n_runs", "must be ≥ 1"));
+                }
+                if *max_iterations == 0 {
+                    return Err(RefineError::param("max_iterations", "must be ≥ 1"));
+                }
+            }
+            ClusterMethod::Dbscan {
+                min_points,
+                tolerance,
+            } => {
+                if *min_points < 2 {
+                    return Err(RefineError::param("min_points", "must be ≥ 2"));
+                }
+                if !(tolerance.is_finite() && *tolerance > 0.0) {
+                    return Err(RefineError::param(
+                        "tolerance",
+                        format!("must be finite and > 0, got {tolerance}"),
+                    ));
+                }
+            }
+        }
+        if self.gmm_components == 0 {
+            return Err(RefineError::param("gmm_components", "must be ≥ 1"));
+        }
+        if !(self.gmm_reg_covariance.is_finite() && self.gmm_reg_covariance > 0.0) {
+            return Err(RefineError::param(
+                "gmm_reg_covariance",
+                format!("must be finite and > 0, got {}", self.gmm_reg_covariance),
+            ));
+        }
+        if self.gmm_n_runs == 0 {
+            return Err(RefineError::param("gmm_n_runs", "must be ≥ 1"));
+        }
+        if !(0.0..=1.0).contains(&self.score_quantile) {
+            return Err(RefineError::param(
+                "score_quantile",
+                format!("must be in [0, 1], got {}", self.score_quantile),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The feature of one pose (`J × D`): root-relative coordinates, flattened
+/// joint-major, optionally divided by the RMS joint distance to the root.
+///
+/// `root = None` uses the mean of the joints as the root.
+pub fn anchor_feature(
+    pose: ArrayView2<'_, f64>,
+    root: Option<usize>,
+    scale_normalise: bool,
+) -> Result<Vec<f64>> {
+    let (j, d) = pose.dim();
+    if j == 0 || d == 0 {
+        return Err(RefineError::Shape("anchor_feature: empty pose".into()));
+    }
+    let origin: Vec<f64> = match root {
+        Some(r) => {
+            if r >= j {
+                return Err(RefineError::param(
+                    "root_joint",
+                    format!("joint {r} is outside 0..{j}"),
+                ));
+            }
+            pose.row(r).to_vec()
+        }
+        None => (0..d)
+            .map(|k| pose.column(k).mean().unwrap_or(0.0))
+            .collect(),
+    };
+    let mut f = Vec::with_capacity(j * d);
+    for row in pose.outer_iter() {
+        for (v, o) in row.iter().zip(&origin) {
+            f.push(v - o);
+        }
+    }
+    if f.iter().any(|v| !v.is_finite()) {
+        return Err(RefineError::NonFinite(
+            "anchor_feature: pose has a non-finite coordinate".into(),
+        ));
+    }
+    if scale_normalise {
+        let rms = (f.iter().map(|v| v * v).sum::<f64>() / j as f64).sqrt();
+        if rms > 0.0 {
+            f.iter_mut().for_each(|v| *v /= rms);
+        }
+    }
+    Ok(f)
+}
+
+/// One anchor pose of an action, as a feature.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AnchorSample {
+    /// Action label.
+    pub action: u32,
+    /// Feature ([`anchor_feature`]).
+    pub feature: Vec<f64>,
+}
+
+/// The root joint that `params` selects for `track`.
+pub fn root_of(track: &Track, params: &ConceptParams) -> Option<usize> {
+    params.root_joint.or(track.skeleton().root)
+}
+
+/// Segments `track` and returns the features of its anchors (first and last
+/// frame included) labelled `action`.
+pub fn collect_anchors(
+    track: &Track,
+    action: u32,
+    seg: &SegmentParams,
+    params: &ConceptParams,
+) -> Result<Vec<AnchorSample>> {
+    let s = segment_track(track, seg)?;
+    let root = root_of(track, params);
+    s.anchors
+        .iter()
+        .map(|&a| {
+            let pose = track.positions().index_axis_move(ndarray::Axis(0), a);
+            Ok(AnchorSample {
+                action,
+                feature: anchor_feature(pose, root, params.scale_normalise)?,
+            })
+        })
+        .collect()
+}
+
+/// A Gaussian mixture with full covariances, serialisable.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Gmm {
+    /// Feature dimension.
+    pub dim: usize,
+    /// Mixing weights (sum 1).
+    pub weights: Vec<f64>,
+    /// Component means (`dim` each).
+    pub means: Vec<Vec<f64>>,
+    /// Component covariances, row-major `dim × dim` each.
+    pub covariances: Vec<Vec<f64>>,
+}
+
+impl Gmm {
+    /// Log-likelihood `log Σ_c w_c N(x; μ_c, Σ_c)` of one feature.
+    pub fn log_likelihood(&self, x: &[f64]) -> Result<f64> {
+        if x.len() != self.dim {
+            return Err(RefineError::Shape(format!(
+                "GMM score: feature has {} values, the model {}",
+                x.len(),
+                self.dim
+            )));
+        }
+        let d = self.dim;
+        let mut terms = Vec::with_capacity(self.weights.len());
+        for ((w, mu), cov) in self.weights.iter().zip(&self.means).zip(&self.covariances) {
+            if *w <= 0.0 {
+                continue;
+            }
+            let m = DMatrix::from_row_slice(d, d, cov);
+            let ch = m.cholesky().ok_or_else(|| {
+                RefineError::NonFinite("GMM score: covariance is not positive definite".into())
+            })?;
+            let diff = DVector::from_iterator(d, x.iter().zip(mu).map(|(a, b)| a - b));
+            let sol = ch
+                .l()
+                .solve_lower_triangular(&diff)
+                .ok_or_else(|| RefineError::NonFinite("GMM score: singular covariance".into()))?;
+            let maha = sol.norm_squared();
+            let logdet: f64 = 2.0 * ch.l().diagonal().iter().map(|v| v.ln()).sum::<f64>();
+            terms.push(
+                w.ln() - 0.5 * (d as f64 * (2.0 * std::f64::consts::PI).ln() + logdet + maha),
+            );
+        }
+        let mx = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if !mx.is_finite() {
+            return Ok(f64::NEG_INFINITY);
+        }
+        Ok(mx + terms.iter().map(|t| (t - mx).exp()).sum::<f64>().ln())
+    }
+}
+
+/// Concepts of one action.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ActionConcepts {
+    /// Action label.
+    pub action: u32,
+    /// Anchor concepts (cluster centres), one feature each.
+    pub centroids: Vec<Vec<f64>>,
+    /// Cluster of each training anchor (`None` = DBSCAN noise).
+    pub labels: Vec<Option<usize>>,
+    /// Quality model over the action's anchor features.
+    pub gmm: Gmm,
+    /// Anchors scoring below this log-likelihood are flawed.
+    pub score_threshold: f64,
+}
+
+impl ActionConcepts {
+    /// Index of and L2 distance to the nearest concept.
+    pub fn nearest(&self, feature: &[f64]) -> Option<(usize, f64)> {
+        self.centroids
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let d2: f64 = c.iter().zip(feature).map(|(a, b)| (a - b) * (a - b)).sum();
+                (i, d2.sqrt())
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+}
+
+/// Anchor concepts of every action, serialisable to JSON.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Concepts {
+    /// Feature dimension (`J · D`).
+    pub dim: usize,
+    /// Parameters they were learned with.
+    pub params: ConceptParams,
+    /// Per action.
+    pub actions: BTreeMap<u32, ActionConcepts>,
+}
+
+impl Concepts {
+    /// The concepts of `action`.
+    pub fn action(&self, action: u32) -> Result<&ActionConcepts> {
+        self.actions
+            .get(&action)
+            .ok_or(RefineError::UnknownAction(action))
+    }
+    /// Quality score (GMM log-likelihood) of a feature under `action`'s model.
+    pub fn score(&self, action: u32, feature: &[f64]) -> Result<f64> {
+        self.action(action)?.gmm.log_likelihood(feature)
+    }
+    /// Pretty JSON.
+    pub fn to_json(&self) -> Result<String> {
+        Ok(serde_json::to_string_pretty(self)?)
+    }
+    /// Parses JSON written by [`Concepts::to_json`].
+    pub fn from_json(text: &str) -> Result<Self> {
+        Ok(serde_json::from_str(text)?)
+    }
+}
+
+fn rng_for(seed: u64, action: u32, salt: u64) -> Xoshiro256Plus {
+    Xoshiro256Plus::seed_from_u64(
+        seed ^ (u64::from(action)).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ salt,
+    )
+}
+
+/// Learns concepts from anchor samples, action by action.
+///
+/// Errors: invalid parameters; no samples; features of different lengths or
+/// non-finite; an action with fewer anchors than mixture components; a
+/// failed clustering or mixture fit (named by action).
+pub fn learn_concepts(samples: &[AnchorSample], params: &ConceptParams) -> Result<Concepts> {
+    params.validate()?;
+    let dim = samples
+        .first()
+        .map(|s| s.feature.len())
+        .ok_or_else(|| RefineError::TooShort {
+            what: "learn_concepts (anchor samples)".into(),
+            needed: 1,
+            got: 0,
+        })?;
+    if dim == 0 {
+        return Err(RefineError::Shape("learn_concepts: empty features".into()));
+    }
+    let mut by_action: BTreeMap<u32, Vec<f64>> = BTreeMap::new();
+    for (i, s) in samples.iter().enumerate() {
+        if s.feature.len() != dim {
+            return Err(RefineError::Shape(format!(
+                "learn_concepts: sample {i} has {} values, sample 0 has {dim}",
+                s.feature.len()
+            )));
+        }
+        if s.feature.iter().any(|v| !v.is_finite()) {
+            return Err(RefineError::NonFinite(format!(
+                "learn_concepts: sample {i} has a non-finite value"
+            )));
+        }
+        by_action.entry(s.action).or_default().extend(&s.feature);
+    }
+    let mut actions = BTreeMap::new();
+    for (action, flat) in by_action {
+        let n = flat.len() / dim;
+        let x = ndarray016::ArrayView2::from_shape((n, dim), &flat)
+            .map_err(|e| RefineError::Shape(e.to_string()))?;
+        let ac = learn_action(action, x, dim, params)?;
+        actions.insert(action, ac);
+    }
+    Ok(Concepts {
+        dim,
+        params: params.clone(),
+        actions,
+    })
+}
+
+fn learn_action(
+    action: u32,
+    x: ndarray016::ArrayView2<'_, f64>,
+    dim: usize,
+    params: &ConceptParams,
+) -> Result<ActionConcepts> {
+    let n = x.nrows();
+    let cerr = |reason: String| RefineError::Clustering { action, reason };
+    if n < params.gmm_components.max(2) {
+        return Err(RefineError::TooShort {
+            what: format!("concepts of action {action} (anchors)"),
+            needed: params.gmm_components.max(2),
+            got: n,
+        });
+    }
+    let (centroids, labels): (Vec<Vec<f64>>, Vec<Option<usize>>) = match &params.method {
+        ClusterMethod::KMeans {
+            n_clusters,
+            n_runs,
+            max_iterations,
+        } => {
+            let k = (*n_clusters).min(n);
+            let ds = DatasetBase::from(x);
+            let model = KMeans::params_with_rng(k, rng_for(params.seed, action, 1))
+                .n_runs(*n_runs)
+                .max_n_iterations(*max_iterations)
+                .tolerance(1e-6)
+                .fit(&ds)
+                .map_err(|e| cerr(e.to_string()))?;
+            let labels = model.predict(&x);
+            (
+                model.centroids().outer_iter().map(|r| r.to_vec()).collect(),
+                labels.iter().map(|&l| Some(l)).collect(),
+            )
+        }
+        ClusterMethod::Dbscan {
+            min_points,
+            tolerance,
+        } => {
+            let labels = Dbscan::params(*min_points)
+                .tolerance(*tolerance)
+                .check()
+                .map_err(|e| cerr(e.to_string()))?
+                .transform(&x);
+            let n_cl = labels.iter().flatten().map(|l| l + 1).max().unwrap_or(0);
+            let mut sums = vec![vec![0.0; dim]; n_cl];
+            let mut counts = vec![0usize; n_cl];
+            for (row, l) in x.outer_iter().zip(labels.iter()) {
+                if let Some(l) = l {
+                    counts[*l] += 1;
+                    for (s, v) in sums[*l].iter_mut().zip(row.iter()) {
+                        *s += v;
+                    }
+                }
+            }
+            let cents = sums
+                .into_iter()
+                .zip(&counts)
+                .map(|(s, &c)| s.into_iter().map(|v| v / c.max(1) as f64).collect())
+                .collect();
+            (cents, labels.to_vec())
+        }
+    };
+    let ds = DatasetBase::from(x);
+    let gmm = GaussianMixtureModel::params_with_rng(
+        params.gmm_components,
+        rng_for(params.seed, action, 2),
+    )
+    .reg_covariance(params.gmm_reg_covariance)
+    .n_runs(params.gmm_n_runs)
+    .max_n_iterations(200)
+    .fit(&ds)
+    .map_err(|e| cerr(format!("Gaussian mixture: {e}")))?;
+    let g = Gmm {
+        dim,
+        weights: gmm.weights().to_vec(),
+        means: gmm.means().outer_iter().map(|r| r.to_vec()).collect(),
+        covariances: gmm
+            .covariances()
+            .outer_iter()
+            .map(|c| c.iter().copied().collect())
+            .collect(),
+    };
+    let mut scores = x
+        .outer_iter()
+        .map(|r| g.log_likelihood(&r.to_vec()))
+        .collect::<Result<Vec<_>>>()?;
+    scores.sort_by(f64::total_cmp);
+    let qi = ((scores.len() - 1) as f64 * params.score_quantile).floor() as usize;
+    let score_threshold = scores.get(qi).copied().unwrap_or(f64::NEG_INFINITY);
+    Ok(ActionConcepts {
+        action,
+        centroids,
+        labels,
+        gmm: g,
+        score_threshold,
+    })
+}

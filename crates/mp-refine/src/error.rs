@@ -1,0 +1,89 @@
+//! Error type of `mp-refine`.
+
+use mp_concrete::ConcreteError;
+use mp_geom::GeomError;
+
+/// Everything that can go wrong in `mp-refine`.
+///
+/// Each variant names the parameter, frame, joint or action that is wrong so
+/// that the message can be shown to a user as it is.
+#[derive(Debug, thiserror::Error)]
+pub enum RefineError {
+    /// An error from `mp-geom` (track checks, spline fitting, data files).
+    #[error(transparent)]
+    Geom(#[from] GeomError),
+    /// An error from `mp-concrete` (the segmentation DP).
+    #[error(transparent)]
+    Concrete(#[from] ConcreteError),
+    /// A parameter outside its valid range.
+    #[error("invalid parameter `{name}`: {reason}")]
+    InvalidParam {
+        /// Field of a `Params` struct.
+        name: &'static str,
+        /// Why it is invalid.
+        reason: String,
+    },
+    /// A track whose joint count differs from what the operation needs.
+    #[error("{what}: expected {expected} joints, got {got}")]
+    JointCount {
+        /// The operation or argument.
+        what: String,
+        /// Joints needed.
+        expected: usize,
+        /// Joints given.
+        got: usize,
+    },
+    /// A track with the wrong number of dimensions per joint.
+    #[error("{what}: expected {expected} dimensions per joint, got {got}")]
+    Dims {
+        /// The operation or argument.
+        what: String,
+        /// Dimensions needed.
+        expected: usize,
+        /// Dimensions given.
+        got: usize,
+    },
+    /// A track or sample set too short for the operation.
+    #[error("{what} needs at least {needed} frames, got {got}")]
+    TooShort {
+        /// The operation.
+        what: String,
+        /// Frames (or samples) needed.
+        needed: usize,
+        /// Frames (or samples) given.
+        got: usize,
+    },
+    /// Two tracks or arrays whose shapes do not agree.
+    #[error("shape mismatch: {0}")]
+    Shape(String),
+    /// A non-finite value where a finite one is needed.
+    #[error("non-finite value: {0}")]
+    NonFinite(String),
+    /// A clustering or mixture-model fit that failed.
+    #[error("clustering of action {action}: {reason}")]
+    Clustering {
+        /// The action whose anchors were clustered.
+        action: u32,
+        /// What went wrong.
+        reason: String,
+    },
+    /// An action that the concepts do not know.
+    #[error("no anchor concepts for action {0}")]
+    UnknownAction(u32),
+    /// JSON that does not deserialize.
+    #[error("JSON: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
+impl RefineError {
+    /// Helper to build a [`RefineError::InvalidParam`].
+    pub fn param(name: &'static str, reason: impl Into<String>) -> Self {
+        RefineError::InvalidParam {
+            name,
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Result alias for `mp-refine`.
+pub type Result<T, E = RefineError> = std::result::Result<T, E>;
