@@ -84,12 +84,20 @@ impl Default for EvalParams {
 
 impl EvalParams {
     /// SPEC defaults for a data set of this track kind: 2D → start at every
-    /// frame; 3D → every 25th frame, root from the skeleton, millimetres for metres.
+    /// frame; 3D → every 25th frame, root from the skeleton (centroid alignment
+    /// when the root joint is valid in fewer than half of `track`'s frames),
+    /// millimetres for metres.
     pub fn for_track(track: &Track) -> Self {
         let mut p = EvalParams::default();
         if track.dims() == 3 {
             p.start_stride_frames = 25;
-            p.root_joint = track.skeleton().root;
+            // root alignment on the skeleton's root joint, unless that joint is valid in
+            // fewer than half of the frames (MSR's hip centre: ~4 %): then align centroids
+            p.root_joint = track.skeleton().root.filter(|&r| {
+                let n = track.n_frames();
+                r < track.n_joints()
+                    && 2 * (0..n).filter(|&t| track.confidence()[[t, r]] > 0.0).count() >= n
+            });
             if track.units() == Units::Metres {
                 p.error_scale = 1000.0;
             }
