@@ -122,20 +122,8 @@ pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<Inte
             if conf[[f, ji]] <= min_conf {
                 continue;
             }
-            let next = valid.partition_point(|&v| v < f);
-            let (a, b) = match (
-                next.checked_sub(1).map(|p| valid[p]),
-                valid.get(next).copied(),
-            ) {
-                (Some(a), Some(b)) => (a, b),
-                (Some(a), None) => (a, a),
-                (None, Some(b)) => (b, b),
-                (None, None) => continue,
-            };
-            let w = if a == b {
-                0.0
-            } else {
-                (f - a) as f64 / (b - a) as f64
+            let Some((a, b, w)) = mp_geom::track::bracket(&valid, f) else {
+                continue;
             };
             let (mut ep, mut el) = (0.0, 0.0);
             for k in 0..d {

@@ -352,20 +352,8 @@ impl Track {
                 if self.confidence[[ti, ji]] > 0.0 {
                     continue;
                 }
-                let next = valid.partition_point(|&v| v < ti);
-                let (a, b) = match (
-                    next.checked_sub(1).map(|p| valid[p]),
-                    valid.get(next).copied(),
-                ) {
-                    (Some(a), Some(b)) => (a, b),
-                    (Some(a), None) => (a, a),
-                    (None, Some(b)) => (b, b),
-                    (None, None) => continue,
-                };
-                let w = if b == a {
-                    0.0
-                } else {
-                    (ti - a) as f64 / (b - a) as f64
+                let Some((a, b, w)) = bracket(&valid, ti) else {
+                    continue;
                 };
                 for k in 0..d {
                     let v = self.positions[[a, ji, k]] * (1.0 - w) + self.positions[[b, ji, k]] * w;
@@ -383,6 +371,29 @@ impl Track {
     pub fn confidence_mut(&mut self) -> ndarray::ArrayViewMut2<'_, f64> {
         self.confidence.view_mut()
     }
+}
+
+/// The nearest entries of the sorted frame list `valid` around frame `f`
+/// and the linear-interpolation weight of the later one: `(a, b, w)` with
+/// `a ≤ f ≤ b` where both exist (an edge repeats the nearest entry, `w = 0`).
+/// `None` when `valid` is empty.
+pub fn bracket(valid: &[usize], f: usize) -> Option<(usize, usize, f64)> {
+    let next = valid.partition_point(|&v| v < f);
+    let (a, b) = match (
+        next.checked_sub(1).map(|p| valid[p]),
+        valid.get(next).copied(),
+    ) {
+        (Some(a), Some(b)) => (a, b),
+        (Some(a), None) => (a, a),
+        (None, Some(b)) => (b, b),
+        (None, None) => return None,
+    };
+    let w = if b == a {
+        0.0
+    } else {
+        (f as f64 - a as f64) / (b - a) as f64
+    };
+    Some((a, b, w))
 }
 
 #[cfg(test)]
