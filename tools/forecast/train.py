@@ -331,15 +331,28 @@ def as_features(pose, n_joints):
     return torch.cat([pose, torch.ones(pose.shape[0], n_joints, dtype=pose.dtype)], 1)
 
 
-def rollout_latent(model, x, steps):
-    """x (B, CONTEXT(+), F) -> predicted poses (B, steps, P), latents (B, steps, C)."""
+def anchored(obs, obs_mask, r_pred, r_obs, dims):
+    """Anchored read-out: observed pose + R(predicted latent) - R(latent of the observed frame),
+    for the joints valid in the observed frame; the plain read-out elsewhere. obs/r_* (..., J*D),
+    obs_mask (..., J). Identical to `ArParams::anchored_readout` in `crates/mp-forecast`."""
+    valid = (obs_mask > 0.5).repeat_interleave(dims, -1)
+    return torch.where(valid, obs + r_pred - r_obs, r_pred)
+
+
+def rollout_latent(model, x, steps, n_pose, dims, anchor=True):
+    """x (B, CONTEXT(+), F) -> predicted poses (B, steps, P) (anchored read-out unless
+    anchor=False), latents (B, steps, C)."""
     lat = model.encode(x[:, :CONTEXT])
+    last = x[:, CONTEXT - 1]
+    obs, obs_mask = last[:, :n_pose], last[:, n_pose:]
+    r_obs = model.readout(lat[:, -1])
     seq = lat
     poses, lats = [], []
     for _ in range(steps):
         nxt = model.step(seq[:, -RF:])
         lats.append(nxt)
-        poses.append(model.readout(nxt))
+        r = model.readout(nxt)
+        poses.append(anchored(obs, obs_mask, r, r_obs, dims) if anchor else r)
         seq = torch.cat([seq, nxt[:, None]], 1)
     return torch.stack(poses, 1), torch.stack(lats, 1)
 
@@ -386,7 +399,7 @@ def validate(kind, model, val, n_joints, dims, horizons):
         for i in range(0, x.shape[0], 512):
             xb = x[i:i + 512]
             if kind == "latent":
-                p, _ = rollout_latent(model, xb, EVAL_HORIZON)
+                p, _ = rollout_latent(model, xb, EVAL_HORIZON, x.shape[-1] - n_joints, dims)
             else:
                 p = rollout_pose(model, xb, EVAL_HORIZON, n_joints)
             preds.append(p)
@@ -442,15 +455,21 @@ def train_one(kind, args, train, val, n_feat, n_pose, n_joints, dims, flip):
                 m = m[:, :, flip_idx]
             if kind == "latent":
                 lat = model.encode(x)
-                rec = masked_l1(model.readout(lat), y, m, dims)
+                r_lat = model.readout(lat)
+                rec = masked_l1(r_lat, y, m, dims)
                 nxt = model.step_all(lat)[:, :-1]
-                tf = masked_l1(model.readout(nxt), y[:, 1:], m[:, 1:], dims)
+                r_nxt = model.readout(nxt)
+                # next frame decoded relative to the frame it is predicted from
+                tf = masked_l1(anchored(y[:, :-1], m[:, :-1], r_nxt, r_lat[:, :-1], dims),
+                               y[:, 1:], m[:, 1:], dims)
                 tf_lat = (nxt - lat[:, 1:].detach()).abs().mean()
                 seq = lat[:, :CONTEXT]
                 roll, roll_lat = 0.0, 0.0
+                obs, obs_mask, r_obs = y[:, CONTEXT - 1], m[:, CONTEXT - 1], r_lat[:, CONTEXT - 1]
                 for s in range(k):
                     nl = model.step(seq[:, -RF:])
-                    roll = roll + masked_l1(model.readout(nl), y[:, CONTEXT + s], m[:, CONTEXT + s], dims)
+                    roll = roll + masked_l1(anchored(obs, obs_mask, model.readout(nl), r_obs, dims),
+                                            y[:, CONTEXT + s], m[:, CONTEXT + s], dims)
                     roll_lat = roll_lat + (nl - lat[:, CONTEXT + s].detach()).abs().mean()
                     seq = torch.cat([seq, nl[:, None]], 1)
                 loss = rec + tf + args.latent_weight * tf_lat
@@ -649,7 +668,8 @@ def main():
         x = torch.cat([coords, mask], 1)[None]
         with torch.no_grad():
             lat, pose = lat_model.encode(x), lat_model.readout(lat_model.encode(x))
-            roll, _ = rollout_latent(lat_model, x, EVAL_HORIZON)
+            # raw read-out: what `ForecastModels::rollout_normalised` returns
+            roll, _ = rollout_latent(lat_model, x, EVAL_HORIZON, n_pose, dims, anchor=False)
             proll = rollout_pose(models["pose"], x, EVAL_HORIZON, n_joints)
         fixture = {
             "description": "ONNX parity fixture: a fixed synthetic input (seeded) and the PyTorch outputs",

@@ -25,7 +25,7 @@ pub struct BenchArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "mp-geom,mp-concrete,mp-abstract"
+        default_value = "mp-geom,mp-concrete,mp-abstract,mp-refine"
     )]
     pub packages: Vec<String>,
     /// Skip the criterion benches (harness only).

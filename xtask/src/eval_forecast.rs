@@ -29,7 +29,8 @@ pub struct EvalForecastArgs {
     /// Output JSON report.
     #[arg(long)]
     pub out: PathBuf,
-    /// Methods to run (comma separated): constant, nn, loop, loop_all, ar, ar_pose.
+    /// Methods to run (comma separated): constant, nn, loop, loop_all, ar, ar_free
+    /// (latent AR without the anchored read-out), ar_pose.
     #[arg(
         long,
         value_delimiter = ',',
@@ -93,12 +94,22 @@ fn method(
             ArSpace::Latent,
             ArParams::default(),
         )?),
+        "ar_free" => Box::new(ArForecaster::new(
+            load()?,
+            ArSpace::Latent,
+            ArParams {
+                anchored_readout: false,
+                ..ArParams::default()
+            },
+        )?),
         "ar_pose" => Box::new(ArForecaster::new(
             load()?,
             ArSpace::Pose,
             ArParams::default(),
         )?),
-        other => bail!("unknown method `{other}` (constant, nn, loop, loop_all, ar, ar_pose)"),
+        other => {
+            bail!("unknown method `{other}` (constant, nn, loop, loop_all, ar, ar_free, ar_pose)")
+        }
     })
 }
 

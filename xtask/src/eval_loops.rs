@@ -19,7 +19,9 @@ use anyhow::{bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_abstract::pipeline::predict_constant;
-use mp_abstract::repetition::{estimate_period, iom, iou, PeriodParams};
+use mp_abstract::repetition::{
+    estimate_period, iom, iou, segment_repetitions, PeriodParams, PeriodicSegment, SegmentParams,
+};
 use mp_abstract::{analyze, predict, AbstractParams, PredictParams, RepetitiveInterval};
 use mp_concrete::Scale;
 use mp_geom::io::datasets::{AistPlusPlus, CmuFeatures, PennAction};
@@ -168,8 +170,54 @@ fn blocks(labels: &[i64]) -> Vec<(i64, usize, usize)> {
     out
 }
 
+/// Counters of the repetition segmenter over several files.
+#[derive(Default)]
+struct SegCounts {
+    det: usize,
+    tp_det_iom: usize,
+    tp_gt_iom: usize,
+    tp_det_iou: usize,
+    tp_gt_iou: usize,
+    one_to_one: usize,
+}
+
+/// Greedy one-to-one matching of detections and labels by decreasing IoM (> 0.5):
+/// the number of matched pairs.
+fn one_to_one(det: &[(usize, usize)], gt: &[(usize, usize)]) -> usize {
+    let mut pairs: Vec<(f64, usize, usize)> = det
+        .iter()
+        .enumerate()
+        .flat_map(|(a, x)| gt.iter().enumerate().map(move |(b, y)| (iom(*x, *y), a, b)))
+        .filter(|p| p.0 > 0.5)
+        .collect();
+    pairs.sort_by(|x, y| y.0.total_cmp(&x.0));
+    let (mut ud, mut ug) = (vec![false; det.len()], vec![false; gt.len()]);
+    let mut n = 0;
+    for (_, a, b) in pairs {
+        if !ud[a] && !ug[b] {
+            ud[a] = true;
+            ug[b] = true;
+            n += 1;
+        }
+    }
+    n
+}
+
+fn segments_json(segs: &[PeriodicSegment], fps: f64) -> Value {
+    Value::Array(
+        segs.iter()
+            .map(|s| {
+                json!({"start_frame": s.start_frame, "end_frame": s.end_frame, "start_s": s.start_frame as f64 / fps,
+                       "end_s": s.end_frame as f64 / fps, "period_frames": s.period_frames, "score": s.score, "count": s.count})
+            })
+            .collect(),
+    )
+}
+
 fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
     let mut by_file = Map::new();
+    let mut seg = SegCounts::default();
+    let (mut loops_one, mut whole_tp_gt) = (0usize, 0usize);
     let (mut det, mut gt) = (0usize, 0usize);
     let (mut tp_det_iom, mut tp_gt_iom, mut tp_det_iou, mut tp_gt_iou) =
         (0usize, 0usize, 0usize, 0usize);
@@ -178,6 +226,8 @@ fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
         let an = analyze(&c.track, &AbstractParams::default())
             .with_context(|| format!("{}", f.display()))?;
         let gts = blocks(&c.labels);
+        let segs = segment_repetitions(&c.track, &SegmentParams::default())
+            .with_context(|| format!("{}", f.display()))?;
         let d: Vec<(usize, usize)> = an
             .intervals
             .iter()
@@ -188,6 +238,22 @@ fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
             |x: &(usize, usize), ys: &[(usize, usize)]| ys.iter().any(|y| iom(*x, *y) > 0.5);
         let m_iou =
             |x: &(usize, usize), ys: &[(usize, usize)]| ys.iter().any(|y| iou(*x, *y) >= 0.5);
+        let ds: Vec<(usize, usize)> = segs.iter().map(|x| (x.start_frame, x.end_frame)).collect();
+        let whole = [(0usize, c.track.n_frames())];
+        let s_td_iom = ds.iter().filter(|x| m_iom(x, &g)).count();
+        let s_tg_iom = g.iter().filter(|x| m_iom(x, &ds)).count();
+        let s_td_iou = ds.iter().filter(|x| m_iou(x, &g)).count();
+        let s_tg_iou = g.iter().filter(|x| m_iou(x, &ds)).count();
+        let s_one = one_to_one(&ds, &g);
+        let l_one = one_to_one(&d, &g);
+        seg.det += ds.len();
+        seg.tp_det_iom += s_td_iom;
+        seg.tp_gt_iom += s_tg_iom;
+        seg.tp_det_iou += s_td_iou;
+        seg.tp_gt_iou += s_tg_iou;
+        seg.one_to_one += s_one;
+        loops_one += l_one;
+        whole_tp_gt += g.iter().filter(|x| m_iom(x, &whole)).count();
         let td_iom = d.iter().filter(|x| m_iom(x, &g)).count();
         let tg_iom = g.iter().filter(|x| m_iom(x, &d)).count();
         let td_iou = d.iter().filter(|x| m_iou(x, &g)).count();
@@ -211,11 +277,31 @@ fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
                 "labelled": gts.iter().map(|b| json!({"label": c.action_names.get((b.0 - 1).max(0) as usize), "start_frame": b.1, "end_frame": b.2})).collect::<Vec<_>>(),
                 "precision_iom": ratio(td_iom, d.len()), "recall_iom": ratio(tg_iom, g.len()),
                 "precision_iou": ratio(td_iou, d.len()), "recall_iou": ratio(tg_iou, g.len()),
+                "segmenter": {
+                    "detected": segments_json(&segs, c.track.fps()),
+                    "precision_iom": ratio(s_td_iom, ds.len()), "recall_iom": ratio(s_tg_iom, g.len()),
+                    "precision_iou": ratio(s_td_iou, ds.len()), "recall_iou": ratio(s_tg_iou, g.len()),
+                    "precision_iom_one_to_one": ratio(s_one, ds.len()), "recall_iom_one_to_one": ratio(s_one, g.len()),
+                },
             }),
         );
     }
     Ok(json!({
         "kind": "cmu_mocap6_features",
+        "precision_iom_one_to_one": ratio(loops_one, det), "recall_iom_one_to_one": ratio(loops_one, gt),
+        "segmenter": {
+            "method": "mp_abstract::repetition::segment_repetitions (local periodicity, dynamic programming)",
+            "detected": seg.det,
+            "precision_iom": ratio(seg.tp_det_iom, seg.det), "recall_iom": ratio(seg.tp_gt_iom, gt),
+            "precision_iou": ratio(seg.tp_det_iou, seg.det), "recall_iou": ratio(seg.tp_gt_iou, gt),
+            "precision_iom_one_to_one": ratio(seg.one_to_one, seg.det), "recall_iom_one_to_one": ratio(seg.one_to_one, gt),
+            "params": serde_json::to_value(SegmentParams::default())?,
+        },
+        "whole_recording_baseline": {
+            "definition": "one interval spanning each whole recording: precision/recall at IoM > 0.5 (any-match), showing how lenient that criterion is when intervals may span several blocks",
+            "precision_iom": 1.0, "recall_iom": ratio(whole_tp_gt, gt),
+        },
+        "matching_definition": "precision_iom/recall_iom: a detection (label) counts when it overlaps any label (detection) with IoM > 0.5; *_one_to_one: greedy one-to-one matching by IoM (each detection and each label used once)",
         "detected": det, "labelled": gt,
         "precision_iom": ratio(tp_det_iom, det), "recall_iom": ratio(tp_gt_iom, gt),
         "precision_iou": ratio(tp_det_iou, det), "recall_iou": ratio(tp_gt_iou, gt),
@@ -467,6 +553,8 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
     let mut by_video = Map::new();
     let (mut maes, mut obos) = (Vec::new(), Vec::new());
     let (mut pmaes, mut pobos) = (Vec::new(), Vec::new());
+    let (mut rmaes, mut robos) = (Vec::new(), Vec::new());
+    let (mut smaes, mut sobos) = (Vec::new(), Vec::new());
     let mut skipped = Vec::new();
     for name in &names {
         let truth = mp_geom::io::npz::read_npy(ann.join(format!("{name}.npy")))?.to_i64()?;
@@ -490,13 +578,25 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
         let obo = (pred as i64 - true_count as i64).abs() <= 1;
         maes.push(mae);
         obos.push(obo);
-        let period = estimate_period(&track, 0, track.n_frames(), &PeriodParams::default())?;
+        let period = estimate_period(&track, 0, track.n_frames(), &PeriodParams::legacy())?;
         let pc = period.map(|p| p.count.round() as usize).unwrap_or(0);
         let pmae = (pc as f64 - true_count as f64).abs() / true_count.max(1) as f64;
         pmaes.push(pmae);
         pobos.push((pc as i64 - true_count as i64).abs() <= 1);
+        let rep = estimate_period(&track, 0, track.n_frames(), &PeriodParams::default())?;
+        let rc = rep.map(|p| p.count.round() as usize).unwrap_or(0);
+        let rmae = (rc as f64 - true_count as f64).abs() / true_count.max(1) as f64;
+        rmaes.push(rmae);
+        robos.push((rc as i64 - true_count as i64).abs() <= 1);
+        let segs = segment_repetitions(&track, &SegmentParams::default())?;
+        let sc = segs.iter().map(|s| s.count).sum::<f64>().round() as usize;
+        let smae = (sc as f64 - true_count as f64).abs() / true_count.max(1) as f64;
+        smaes.push(smae);
+        sobos.push((sc as i64 - true_count as i64).abs() <= 1);
         by_video.insert(name.clone(), json!({"true_count": true_count, "pred_count": pred, "mae": mae, "obo": obo,
             "period": period, "period_count": pc, "period_mae": pmae,
+            "repetition": rep, "repetition_count": rc, "repetition_mae": rmae,
+            "segments": segments_json(&segs, track.fps()), "segment_count": sc, "segment_mae": smae,
             "intervals": intervals_json(&an.intervals, track.fps()), "track": tp.display().to_string()}));
     }
     Ok(json!({
@@ -504,10 +604,20 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
         "videos": maes.len(),
         "count_mae": maes.iter().sum::<f64>() / maes.len().max(1) as f64,
         "obo_acc": obos.iter().filter(|&&b| b).count() as f64 / obos.len().max(1) as f64,
-        "count_definition": "count_mae/obo_acc: sum of the iterations of the loops of the abstract program; period.*: frames / dominant period of the joint velocities",
+        "count_definition": "count_mae/obo_acc: sum of the iterations of the loops of the abstract program; period.*: frames / dominant period of the joint velocities (PeriodParams::legacy(): all joints, unbiased autocorrelation); repetition.*: the same with PeriodParams::default() (limb joints, biased autocorrelation, at least 3 cycles); segments.*: sum over the intervals of segment_repetitions of length / period. MAE = mean over videos of |pred − true| / true (counts rounded); OBO: |pred − true| ≤ 1",
         "period": {
             "count_mae": pmaes.iter().sum::<f64>() / pmaes.len().max(1) as f64,
             "obo_acc": pobos.iter().filter(|&&b| b).count() as f64 / pobos.len().max(1) as f64,
+        },
+        "repetition": {
+            "count_mae": rmaes.iter().sum::<f64>() / rmaes.len().max(1) as f64,
+            "obo_acc": robos.iter().filter(|&&b| b).count() as f64 / robos.len().max(1) as f64,
+            "params": serde_json::to_value(PeriodParams::default())?,
+        },
+        "segments": {
+            "count_mae": smaes.iter().sum::<f64>() / smaes.len().max(1) as f64,
+            "obo_acc": sobos.iter().filter(|&&b| b).count() as f64 / sobos.len().max(1) as f64,
+            "params": serde_json::to_value(SegmentParams::default())?,
         },
         "skipped": skipped,
         "by_video": by_video,

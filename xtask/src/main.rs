@@ -6,9 +6,11 @@ mod eval_forecast;
 mod eval_grammar;
 mod eval_loops;
 mod eval_pose;
+mod eval_refine;
 mod models;
 mod setup;
 mod train_forecast;
+mod train_refine;
 
 use clap::{Parser, Subcommand};
 
@@ -32,6 +34,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Train the forecasting models (PyTorch, CPU) and export them to ONNX under models/forecast/.
     TrainForecast(train_forecast::TrainForecastArgs),
+    /// Train the six refinement networks (PyTorch, CPU) and export them to ONNX under models/refine/.
+    TrainRefine(train_refine::TrainRefineArgs),
 }
 
 #[derive(Subcommand)]
@@ -46,6 +50,8 @@ enum Eval {
     Pose(eval_pose::EvalPoseArgs),
     /// Forecasting (Constant, NN, Loop, AR on Φ / Θ): PCK or (PA-)MPJPE per horizon, with and without DTW.
     Forecast(eval_forecast::EvalForecastArgs),
+    /// Learned motion refinement: injected flaws (MPJPE), generated motion (FID, accuracy, diversity, multimodality), ablation.
+    Refine(eval_refine::EvalRefineArgs),
 }
 
 fn main() {
@@ -57,11 +63,13 @@ fn main() {
             Eval::Grammar(a) => eval_grammar::run(&a),
             Eval::Pose(a) => eval_pose::run(&a),
             Eval::Forecast(a) => eval_forecast::run(&a),
+            Eval::Refine(a) => eval_refine::run(&a),
         },
         Command::Setup(a) => setup::run(&a),
         Command::Models(a) => models::run(&a),
         Command::Bench(a) => bench::run(&a),
         Command::TrainForecast(a) => train_forecast::run(&a),
+        Command::TrainRefine(a) => train_refine::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

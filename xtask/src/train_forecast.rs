@@ -36,7 +36,7 @@ pub struct TrainForecastArgs {
 
 const PACKAGES: [&str; 3] = ["torch", "numpy", "onnx"];
 
-fn venv_python(root: &Path) -> Result<PathBuf> {
+pub(crate) fn venv_python(root: &Path) -> Result<PathBuf> {
     let venv = root.join(".cache/venv-train");
     let python = venv.join("bin/python");
     if !python.is_file() {

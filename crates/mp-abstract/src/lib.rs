@@ -6,7 +6,9 @@
 //! primitives ([`model`]); programs print and parse in the paper's notation
 //! ([`dsl`]), execute deterministically or stochastically with a seed
 //! ([`exec`]), can be edited ([`edit`]), report repetitive intervals and
-//! counts ([`repetition`]) and predict the future by unrolling loops.
+//! counts ([`repetition`]: from loops, from the dominant period of the joint
+//! velocities, or from the local-periodicity segmenter
+//! [`repetition::segment_repetitions`]) and predict the future by unrolling loops.
 
 pub mod dsl;
 pub mod edit;
@@ -25,4 +27,7 @@ pub use pipeline::{
     analyze, predict, read_program, write_program, AbstractParams, Analysis, PredictParams,
     Prediction,
 };
-pub use repetition::RepetitiveInterval;
+pub use repetition::{
+    estimate_period, segment_repetitions, JointSelection, PeriodParams, PeriodicSegment,
+    RepetitiveInterval, SegmentParams,
+};

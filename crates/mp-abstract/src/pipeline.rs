@@ -13,7 +13,9 @@ use crate::error::{AbstractError, Result};
 use crate::exec::{render, unroll_loop, LoopReplay};
 use crate::loops::{DetectedLoop, LoopParams};
 use crate::model::{AbstractProgram, DetPrim, Stmt};
-use crate::repetition::{intervals, RepetitiveInterval};
+use crate::repetition::{
+    estimate_period, intervals, PeriodEstimate, PeriodParams, RepetitiveInterval,
+};
 use crate::synth::{synthesize, translate};
 
 /// Parameters of the whole track → abstract-program analysis.
@@ -165,6 +167,78 @@ pub struct PredictParams {
     pub offset_decay_periods: f64,
     /// What an unrolled iteration executes. Default [`UnrollSource::LastIteration`].
     pub source: UnrollSource,
+    /// Where no usable loop is found: unroll the last period of the observed
+    /// motion measured by autocorrelation ([`PeriodFallback`]); `None` holds
+    /// the last pose instead. Default on.
+    pub period_fallback: Option<PeriodFallback>,
+}
+
+/// Unrolling of the last observed period when the program has no usable loop:
+/// future frame `h` (1-based) repeats observed frame `n − P + ((h − 1) mod P)`
+/// for a period of `P` frames found by [`estimate_period`] over the observed
+/// frames (which requires [`PeriodParams::min_cycles`] cycles).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PeriodFallback {
+    /// Period estimation (defaults of [`PeriodParams`]).
+    pub period: PeriodParams,
+    /// Smallest normalised autocorrelation at the period for the motion to
+    /// count as repetitive. Default 0.5.
+    pub min_strength: f64,
+}
+
+impl Default for PeriodFallback {
+    fn default() -> Self {
+        PeriodFallback {
+            period: PeriodParams::default(),
+            min_strength: 0.5,
+        }
+    }
+}
+
+impl PeriodFallback {
+    /// The `horizon` frames after `obs` by repeating its last period, with
+    /// the estimate used; `None` when the motion is not clearly periodic.
+    pub fn unroll(&self, obs: &Track, horizon: usize) -> Result<Option<(Track, PeriodEstimate)>> {
+        if !(self.min_strength.is_finite() && (0.0..=1.0).contains(&self.min_strength)) {
+            return Err(AbstractError::param(
+                "min_strength",
+                format!("must be in [0, 1], got {}", self.min_strength),
+            ));
+        }
+        let n = obs.n_frames();
+        let Some(est) = estimate_period(obs, 0, n, &self.period)? else {
+            return Ok(None);
+        };
+        let p = est.period_frames;
+        if est.strength < self.min_strength || p == 0 || p >= n || horizon == 0 {
+            return Ok(None);
+        }
+        let mut filled = obs.clone();
+        filled.fill_missing();
+        let src = filled.positions();
+        let (_, j, d) = src.dim();
+        let mut pos = Array3::zeros((horizon, j, d));
+        for h in 1..=horizon {
+            let f = n - p + (h - 1) % p;
+            pos.index_axis_mut(ndarray::Axis(0), h - 1)
+                .assign(&src.index_axis(ndarray::Axis(0), f));
+        }
+        // Joints never observed cannot be placed.
+        let mut conf = ndarray::Array2::ones((horizon, j));
+        for ji in 0..j {
+            if (0..n).all(|f| obs.confidence()[[f, ji]] <= 0.0) {
+                conf.column_mut(ji).fill(0.0);
+            }
+        }
+        let track = Track::new(
+            pos,
+            Some(conf),
+            obs.fps(),
+            obs.units(),
+            obs.skeleton().clone(),
+        )?;
+        Ok(Some((track, est)))
+    }
 }
 
 /// What each unrolled iteration of a loop executes.
@@ -184,6 +258,7 @@ impl Default for PredictParams {
             max_tail_periods: 1.5,
             offset_decay_periods: 1.0,
             source: UnrollSource::LastIteration,
+            period_fallback: Some(PeriodFallback::default()),
         }
     }
 }
@@ -193,9 +268,12 @@ impl Default for PredictParams {
 pub struct Prediction {
     /// The predicted frames (`horizon` frames after the observed ones).
     pub track: Track,
-    /// The loop that was unrolled, or `None` when no usable loop was found
-    /// (the prediction then holds the last observed pose).
+    /// The loop that was unrolled, or `None` when no usable loop was found.
     pub used: Option<RepetitiveInterval>,
+    /// Without a loop: the period whose last cycle was repeated
+    /// ([`PredictParams::period_fallback`]); `None` with `used` also `None`
+    /// means the last observed pose is held.
+    pub period: Option<PeriodEstimate>,
 }
 
 fn prims_start_frame(prims: &[DetPrim], i: usize) -> usize {
@@ -237,7 +315,9 @@ pub fn predict_constant(observed: &Track, horizon: usize) -> Result<Track> {
 /// by unrolling the last detected loop (paper §4.4): the loop body is executed
 /// at its means, in phase with the partial iteration observed after the loop,
 /// and the offset between the last observed pose and the unrolled motion fades
-/// out over `offset_decay_periods`. Without a usable loop the last pose is held.
+/// out over `offset_decay_periods`. Without a usable loop, the last observed
+/// period is repeated when the motion is periodic ([`PeriodFallback`]), else
+/// the last pose is held.
 pub fn predict(
     track: &Track,
     observe: usize,
@@ -258,9 +338,19 @@ pub fn predict(
     }
     let obs = track.slice_frames(0, observe)?;
     let constant = || -> Result<Prediction> {
+        if let Some(fb) = &params.period_fallback {
+            if let Some((track, est)) = fb.unroll(&obs, horizon)? {
+                return Ok(Prediction {
+                    track,
+                    used: None,
+                    period: Some(est),
+                });
+            }
+        }
         Ok(Prediction {
             track: predict_constant(&obs, horizon)?,
             used: None,
+            period: None,
         })
     };
     let analysis = match analyze(&obs, &params.analysis) {
@@ -402,5 +492,6 @@ pub fn predict(
     Ok(Prediction {
         track,
         used: Some(interval.clone()),
+        period: None,
     })
 }

@@ -9,6 +9,7 @@ mod cmd_demo;
 mod cmd_forecast;
 mod cmd_grammar;
 mod cmd_pose;
+mod cmd_refine;
 mod cmd_run;
 
 use clap::{Parser, Subcommand};
@@ -53,6 +54,10 @@ enum Command {
     Grammar(cmd_grammar::GrammarArgs),
     /// Video or track → programs, loops, pictures and an HTML report in one folder.
     Run(cmd_run::RunArgs),
+    /// Refine a 20-joint 3D track with the learned anchor and transition networks.
+    Refine(cmd_refine::RefineArgs),
+    /// Learn anchor concepts (clusters + quality model) from MSR Action3D or a folder of tracks.
+    Concepts(cmd_refine::ConceptsArgs),
 }
 
 fn main() {
@@ -73,6 +78,8 @@ fn main() {
         Command::Demo(a) => cmd_demo::demo_cmd(&a),
         Command::Grammar(a) => cmd_grammar::grammar_cmd(&a),
         Command::Run(a) => cmd_run::run_cmd(&a),
+        Command::Refine(a) => cmd_refine::refine_cmd(&a),
+        Command::Concepts(a) => cmd_refine::concepts_cmd(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

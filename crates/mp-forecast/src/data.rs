@@ -49,6 +49,12 @@ impl ForecastDataset {
                         name: c.clip_id.clone(),
                         action: c.action.clone(),
                         track: d.clip(c.index)?,
+                        box_sizes: Some(
+                            d.bbox(c.index)?
+                                .outer_iter()
+                                .map(|b| (b[2] - b[0]).max(b[3] - b[1]))
+                                .collect(),
+                        ),
                     })
                 })
                 .collect::<Result<Vec<_>>>()?;
@@ -67,6 +73,7 @@ impl ForecastDataset {
                         name: c.name.clone(),
                         action: c.action_name.to_string(),
                         track: d.clip(c.index)?,
+                        box_sizes: None,
                     })
                 })
                 .collect::<Result<Vec<_>>>()?;

@@ -16,10 +16,11 @@
 //!   square root: [`DtwCost::Euclidean`]); the score at `h` is the metric of the
 //!   aligned frame `h`.
 //!
-//! Metrics: 2D — PCK@0.05 ([`mp_geom::metrics::pck_per_frame`]: the size is the
-//! larger side of the bounding box of the visible true joints, after the optimal
-//! scale + translation of the prediction; frames with fewer than 6 visible joints
-//! are NaN). 3D — MPJPE after root alignment and PA-MPJPE (similarity transform
+//! Metrics: 2D — PCK@0.05 ([`mp_geom::metrics::pck_per_frame_sized`]: the size
+//! is the larger side of the clip's annotated person box where the data set has
+//! one ([`EvalClip::box_sizes`], Penn Action), else of the bounding box of the
+//! visible true joints; after the optimal scale + translation of the
+//! prediction; frames with fewer than 6 visible joints are NaN). 3D — MPJPE after root alignment and PA-MPJPE (similarity transform
 //! with the reflection fix), reported in millimetres for metre tracks.
 //!
 //! Aggregation: per clip, the nan-mean over start frames; overall, the nan-mean
@@ -28,8 +29,8 @@
 use std::collections::BTreeMap;
 
 use mp_geom::metrics::{
-    dtw_align, mpjpe_per_frame, nanmean, pa_mpjpe_per_frame, pck_per_frame, DtwCost, PckParams,
-    Poses,
+    dtw_align, mpjpe_per_frame, nanmean, pa_mpjpe_per_frame, pck_per_frame_sized, DtwCost,
+    PckParams, Poses,
 };
 use mp_geom::{Track, Units};
 use rayon::prelude::*;
@@ -47,6 +48,10 @@ pub struct EvalClip {
     pub action: String,
     /// The whole clip.
     pub track: Track,
+    /// 2D only: the PCK reference size of every frame (e.g. the larger side
+    /// of the data set's annotated person box, as the paper's evaluation
+    /// uses). `None`: the extent of the visible true joints.
+    pub box_sizes: Option<Vec<f64>>,
 }
 
 /// Parameters of [`evaluate`].
@@ -176,12 +181,12 @@ fn metric_names(dims: usize) -> Vec<&'static str> {
 fn per_frame(
     pred: Poses<'_>,
     truth: &Track,
-    dims: usize,
-    pa: bool,
+    sizes: Option<&[f64]>,
+    (dims, pa): (usize, bool),
     params: &EvalParams,
 ) -> Result<Vec<f64>> {
     Ok(if dims == 2 {
-        pck_per_frame(pred, truth, &params.pck)?
+        pck_per_frame_sized(pred, truth, sizes, &params.pck)?
     } else if pa {
         pa_mpjpe_per_frame(pred, truth)?
             .into_iter()
@@ -199,6 +204,7 @@ fn per_frame(
 fn score_prediction(
     pred: &Track,
     truth: &Track,
+    sizes: Option<&[f64]>,
     params: &EvalParams,
 ) -> Result<BTreeMap<&'static str, Vec<f64>>> {
     let l = truth.n_frames();
@@ -226,12 +232,18 @@ fn score_prediction(
     if dims == 2 {
         out.insert(
             "pck",
-            at(&per_frame((&pred).into(), truth, 2, false, params)?),
+            at(&per_frame(
+                (&pred).into(),
+                truth,
+                sizes,
+                (2, false),
+                params,
+            )?),
         );
         out.insert(
             "pck_dtw",
             match &aligned {
-                Some(a) => at(&per_frame(a.poses(), truth, 2, false, params)?),
+                Some(a) => at(&per_frame(a.poses(), truth, sizes, (2, false), params)?),
                 None => nan.clone(),
             },
         );
@@ -242,12 +254,18 @@ fn score_prediction(
         ] {
             out.insert(
                 name,
-                at(&per_frame((&pred).into(), truth, dims, pa, params)?),
+                at(&per_frame(
+                    (&pred).into(),
+                    truth,
+                    sizes,
+                    (dims, pa),
+                    params,
+                )?),
             );
             out.insert(
                 name_dtw,
                 match &aligned {
-                    Some(a) => at(&per_frame(a.poses(), truth, dims, pa, params)?),
+                    Some(a) => at(&per_frame(a.poses(), truth, sizes, (dims, pa), params)?),
                     None => nan.clone(),
                 },
             );
@@ -262,7 +280,25 @@ pub fn evaluate_clip(
     clip: &Track,
     params: &EvalParams,
 ) -> Result<(ClipScores, usize)> {
+    evaluate_clip_sized(method, clip, None, params)
+}
+
+/// [`evaluate_clip`] with per-frame PCK reference sizes ([`EvalClip::box_sizes`]).
+pub fn evaluate_clip_sized(
+    method: &dyn Forecaster,
+    clip: &Track,
+    box_sizes: Option<&[f64]>,
+    params: &EvalParams,
+) -> Result<(ClipScores, usize)> {
     params.validate()?;
+    if let Some(b) = box_sizes {
+        if b.len() != clip.n_frames() {
+            return Err(ForecastError::param(
+                "box_sizes",
+                format!("{} sizes for a clip of {} frames", b.len(), clip.n_frames()),
+            ));
+        }
+    }
     let c = params.context_frames;
     let hmax = params.max_horizon();
     let t = clip.n_frames();
@@ -296,7 +332,7 @@ pub fn evaluate_clip(
         .map(|(&s, pred)| {
             let end = (s + c + hmax).min(t);
             let truth = clip.slice_frames(s + c, end)?;
-            score_prediction(pred, &truth, params)
+            score_prediction(pred, &truth, box_sizes.map(|b| &b[s + c..end]), params)
         })
         .collect::<Result<Vec<_>>>()?;
     let mut out = ClipScores::new();
@@ -342,7 +378,8 @@ pub fn evaluate(
                 ),
             ));
         }
-        let (scores, n) = evaluate_clip(method, &clip.track, params)?;
+        let (scores, n) =
+            evaluate_clip_sized(method, &clip.track, clip.box_sizes.as_deref(), params)?;
         predictions += n;
         per_clip.push(scores);
         progress(i + 1, clips.len());

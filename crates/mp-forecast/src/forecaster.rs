@@ -95,7 +95,10 @@ impl Forecaster for Constant {
 }
 
 /// Prediction by unrolling the last detected loop of the observed frames
-/// (`mp_abstract::predict`); without a usable loop the last pose is held.
+/// (`mp_abstract::predict`). Where the program abstraction finds no usable
+/// loop, the last period of the observed motion measured by autocorrelation
+/// is repeated when the motion is periodic (`PredictParams::period_fallback`);
+/// otherwise the last pose is held.
 #[derive(Debug, Clone)]
 pub struct LoopUnroll {
     /// Analysis and unrolling parameters (mp-abstract defaults).

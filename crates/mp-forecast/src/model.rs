@@ -322,6 +322,21 @@ impl ForecastModels {
         features: &[f32],
         horizon: usize,
     ) -> Result<Vec<f32>> {
+        Ok(self
+            .rollout_inner(space, batch, frames, features, horizon)?
+            .0)
+    }
+
+    /// [`Self::rollout_normalised`] plus, in latent space, the read-out of the
+    /// last context frame's latent `(B·P)` (empty in pose space).
+    fn rollout_inner(
+        &self,
+        space: ArSpace,
+        batch: usize,
+        frames: usize,
+        features: &[f32],
+        horizon: usize,
+    ) -> Result<(Vec<f32>, Vec<f32>)> {
         let m = &self.manifest;
         let rf = m.receptive_field_frames;
         if frames < rf {
@@ -333,9 +348,15 @@ impl ForecastModels {
         }
         let (p, f, c) = (m.pose_values, m.features, m.channels);
         let mut out = vec![0f32; batch * horizon * p];
+        let mut last_readout = Vec::new();
         match space {
             ArSpace::Latent => {
-                let (lat, _) = self.encode(batch, frames, features)?;
+                let (lat, poses) = self.encode(batch, frames, features)?;
+                last_readout.reserve(batch * p);
+                for b in 0..batch {
+                    let r = (b * frames + frames - 1) * p;
+                    last_readout.extend_from_slice(&poses[r..r + p]);
+                }
                 // window of the last rf latents per batch item
                 let mut win = vec![0f32; batch * rf * c];
                 for b in 0..batch {
@@ -373,7 +394,7 @@ impl ForecastModels {
                 }
             }
         }
-        Ok(out)
+        Ok((out, last_readout))
     }
 }
 
@@ -393,6 +414,13 @@ pub struct ArParams {
     pub context_frames: usize,
     /// Largest batch passed to ONNX Runtime at once. Default 256.
     pub max_batch: usize,
+    /// Latent space only: decode the future relative to the last observed
+    /// pose, `pose(t+h) = observed(t) + R(φ(t+h)) − R(φ(t))` with `R` the
+    /// read-out, instead of `R(φ(t+h))` alone. The read-out's per-frame error
+    /// then cancels at the start of the rollout and the prediction continues
+    /// from the pose actually seen (joints missing in the last observed frame
+    /// keep the plain read-out). Default true.
+    pub anchored_readout: bool,
 }
 
 impl Default for ArParams {
@@ -400,6 +428,7 @@ impl Default for ArParams {
         ArParams {
             context_frames: 15,
             max_batch: 256,
+            anchored_readout: true,
         }
     }
 }
@@ -477,9 +506,18 @@ impl ArForecaster {
             push_features(past, t - ctx, t, &norm, &mut feats);
             norms.push(norm);
         }
-        let out = self
-            .models
-            .rollout_normalised(self.space, pasts.len(), ctx, &feats, horizon)?;
+        let (mut out, last_readout) =
+            self.models
+                .rollout_inner(self.space, pasts.len(), ctx, &feats, horizon)?;
+        if self.params.anchored_readout && self.space == ArSpace::Latent {
+            anchor_readout(
+                &mut out,
+                &last_readout,
+                &feats,
+                (pasts.len(), ctx, horizon),
+                (m.features, p, d),
+            );
+        }
         let mut res = Vec::with_capacity(pasts.len());
         for (b, (past, norm)) in pasts.iter().zip(&norms).enumerate() {
             let mut pos = Array3::zeros((horizon, j, d));
@@ -506,9 +544,10 @@ impl ArForecaster {
 
 impl Forecaster for ArForecaster {
     fn name(&self) -> &str {
-        match self.space {
-            ArSpace::Latent => "ar",
-            ArSpace::Pose => "ar_pose",
+        match (self.space, self.params.anchored_readout) {
+            (ArSpace::Latent, true) => "ar",
+            (ArSpace::Latent, false) => "ar_free",
+            (ArSpace::Pose, _) => "ar_pose",
         }
     }
     fn context_frames(&self) -> Option<usize> {
@@ -544,5 +583,31 @@ impl Forecaster for ArForecaster {
         out.into_iter()
             .map(|o| o.ok_or_else(|| ForecastError::model("rollout", "a prediction is missing")))
             .collect()
+    }
+}
+
+/// Re-anchors latent-space predictions on the last observed frame (see
+/// [`ArParams::anchored_readout`]). `out` is `(B, H, P)`, `last_readout`
+/// `(B, P)`, `feats` the normalised context windows `(B, T, F)` whose last
+/// frame holds the observed coordinates followed by the joint mask.
+fn anchor_readout(
+    out: &mut [f32],
+    last_readout: &[f32],
+    feats: &[f32],
+    (batch, frames, horizon): (usize, usize, usize),
+    (f, p, d): (usize, usize, usize),
+) {
+    for b in 0..batch {
+        let last = &feats[(b * frames + frames - 1) * f..(b * frames + frames) * f];
+        let (coords, mask) = last.split_at(p);
+        let r = &last_readout[b * p..(b + 1) * p];
+        for h in 0..horizon {
+            let row = &mut out[(b * horizon + h) * p..(b * horizon + h + 1) * p];
+            for (i, v) in row.iter_mut().enumerate() {
+                if mask.get(i / d).copied().unwrap_or(0.0) > 0.5 {
+                    *v = coords[i] + (*v - r[i]);
+                }
+            }
+        }
     }
 }

@@ -158,3 +158,45 @@ fn nn_with_missing_joints_in_the_query_still_predicts() {
     let truth = train.slice_frames(35, 55).unwrap();
     assert!(kd(&pred, &truth).unwrap() < 1e-6);
 }
+
+#[test]
+fn period_fallback_unrolls_the_last_cycle_of_a_periodic_track() {
+    // integer period 20: the unrolled frames equal the true continuation
+    let t = periodic(120, 20.0);
+    let past = t.slice_frames(0, 80).unwrap();
+    let truth = t.slice_frames(80, 110).unwrap();
+    let fb = mp_abstract::pipeline::PeriodFallback::default();
+    let (u, est) = fb
+        .unroll(&past, 30)
+        .unwrap()
+        .expect("a clearly periodic track");
+    assert_eq!(est.period_frames, 20);
+    assert_eq!(u.n_frames(), 30);
+    let max_err = |a: &Track| {
+        (&a.positions() - &truth.positions())
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    };
+    assert!(max_err(&u) < 1e-6, "max error {}", max_err(&u));
+    // a still track is not periodic: no unrolling
+    assert!(fb.unroll(&still(80), 30).unwrap().is_none());
+    // an invalid strength threshold is a typed error
+    let bad = mp_abstract::pipeline::PeriodFallback {
+        min_strength: 2.0,
+        ..Default::default()
+    };
+    assert!(matches!(
+        bad.unroll(&past, 5),
+        Err(mp_abstract::AbstractError::InvalidParam { .. })
+    ));
+    // the loop baseline unrolls either a loop program or this period: close to the truth
+    let lu = LoopUnroll::new(LoopUnroll::default_params(), None).unwrap();
+    let p = lu.predict(&past, 30).unwrap();
+    let c = Constant.predict(&past, 30).unwrap();
+    assert!(
+        max_err(&p) < 0.2 * max_err(&c),
+        "loop {} vs constant {}",
+        max_err(&p),
+        max_err(&c)
+    );
+}

@@ -12,6 +12,7 @@ fn one_clip(track: Track) -> Vec<EvalClip> {
         name: "synthetic".into(),
         action: "wave".into(),
         track,
+        box_sizes: None,
     }]
 }
 

@@ -183,14 +183,15 @@ fn missing_joints_are_masked_not_fatal() {
 
 #[test]
 fn learned_model_beats_constant_on_real_penn_action_clips() {
-    // a small subset of the validation split (clips 0, 10, …, 190): AR on Φ vs Constant, PCK with DTW
+    // every 6th validation clip (21 clips, all 15 actions): AR on Φ vs Constant, PCK with
+    // DTW averaged over the horizons 5–30
     let ds = mp_forecast::data::ForecastDataset::open(
         mp_geom::paths::data_file("penn_action/penn_action_train.npz")
             .expect("shared data: penn_action/penn_action_train.npz (set MP_DATA_DIR)"),
     )
     .unwrap();
     let (_, val) = ds.split();
-    let clips: Vec<EvalClip> = val.iter().take(20).map(|c| (*c).clone()).collect();
+    let clips: Vec<EvalClip> = val.iter().step_by(6).map(|c| (*c).clone()).collect();
     let params = EvalParams {
         start_stride_frames: 5,
         ..EvalParams::default()
@@ -198,12 +199,18 @@ fn learned_model_beats_constant_on_real_penn_action_clips() {
     let ar = ArForecaster::new(models(), ArSpace::Latent, ArParams::default()).unwrap();
     let a = evaluate(&ar, &clips, &params, |_, _| {}).unwrap();
     let c = evaluate(&Constant, &clips, &params, |_, _| {}).unwrap();
-    let h30 = |r: &mp_forecast::MethodReport| r.metrics["pck_dtw"].overall["h30"];
+    let later = |r: &mp_forecast::MethodReport| {
+        ["h5", "h10", "h20", "h30"]
+            .iter()
+            .map(|h| r.metrics["pck_dtw"].overall[*h])
+            .sum::<f64>()
+            / 4.0
+    };
     assert!(
-        h30(&a) > h30(&c),
+        later(&a) > later(&c),
         "AR {:.1} vs constant {:.1}",
-        h30(&a),
-        h30(&c)
+        later(&a),
+        later(&c)
     );
 }
 

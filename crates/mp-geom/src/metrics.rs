@@ -303,9 +303,33 @@ pub fn pck_per_frame<'a, 'b>(
     gt: impl Into<Poses<'b>>,
     params: &PckParams,
 ) -> Result<Vec<f64>> {
+    pck_per_frame_sized(pred, gt, None, params)
+}
+
+/// [`pck_per_frame`] with the reference size of every ground-truth frame
+/// given (e.g. the larger side of a data set's annotated person box) instead
+/// of the extent of the visible joints. `sizes` must hold one entry per
+/// ground-truth frame; a frame whose size is not finite and > 0 (a missing
+/// annotation) falls back to the extent of its visible joints. `None` is
+/// [`pck_per_frame`].
+pub fn pck_per_frame_sized<'a, 'b>(
+    pred: impl Into<Poses<'a>>,
+    gt: impl Into<Poses<'b>>,
+    sizes: Option<&[f64]>,
+    params: &PckParams,
+) -> Result<Vec<f64>> {
     let (pred, gt) = (pred.into(), gt.into());
     params.validate()?;
     check_pair(&pred, &gt, "pck", true)?;
+    if let Some(sz) = sizes {
+        if sz.len() != gt.n_frames() {
+            return Err(GeomError::Shape(format!(
+                "pck: {} reference sizes for {} ground-truth frames",
+                sz.len(),
+                gt.n_frames()
+            )));
+        }
+    }
     let (_, nj, d) = gt.positions.dim();
     let mut pm = vec![0.0; d];
     let mut gm = vec![0.0; d];
@@ -340,7 +364,10 @@ pub fn pck_per_frame<'a, 'b>(
                 }
             }
         }
-        let size = lo.iter().zip(&hi).map(|(a, b)| b - a).fold(0.0, f64::max);
+        let size = match sizes.map(|sz| sz[t]) {
+            Some(v) if v.is_finite() && v > 0.0 => v,
+            _ => lo.iter().zip(&hi).map(|(a, b)| b - a).fold(0.0, f64::max),
+        };
         if both == 0 {
             out.push(0.0);
             continue;

@@ -2,7 +2,8 @@
 
 use mp_geom::metrics::{
     dtw, dtw_align, kd, kd_per_frame, max_adjacent_jump, mpjpe, mpjpe_per_frame, nanmean, pa_mpjpe,
-    pa_mpjpe_per_frame, pck, pck_per_frame, pck_with, procrustes, DtwCost, PckParams, Poses,
+    pa_mpjpe_per_frame, pck, pck_per_frame, pck_per_frame_sized, pck_with, procrustes, DtwCost,
+    PckParams, Poses,
 };
 use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{array, s, Array2, Array3};
@@ -137,6 +138,45 @@ fn pck_hand_computed() {
         ..PckParams::default()
     };
     assert_eq!(pck_with(&p, gp, &five).unwrap(), 100.0);
+}
+
+#[test]
+fn pck_with_given_reference_sizes() {
+    // 6 joints spanning 100 px; one joint 12 px off after the fit cannot pass at size 100
+    // (threshold 5) but passes at a reference size of 400 (threshold 20)
+    let g = array![[
+        [0.0, 0.0],
+        [100.0, 0.0],
+        [100.0, 50.0],
+        [0.0, 50.0],
+        [50.0, 25.0],
+        [20.0, 10.0]
+    ]];
+    let mut p = g.clone();
+    p[[0, 4, 1]] += 12.0;
+    let params = PckParams::default();
+    let own = pck_per_frame(&p, &g, &params).unwrap()[0];
+    let same = pck_per_frame_sized(&p, &g, Some(&[100.0]), &params).unwrap()[0];
+    assert_eq!(own, same);
+    assert!(own < 100.0);
+    assert_eq!(
+        pck_per_frame_sized(&p, &g, Some(&[400.0]), &params).unwrap()[0],
+        100.0
+    );
+    // a missing size (NaN, 0) falls back to the joints' extent
+    assert_eq!(
+        pck_per_frame_sized(&p, &g, Some(&[f64::NAN]), &params).unwrap()[0],
+        own
+    );
+    assert_eq!(
+        pck_per_frame_sized(&p, &g, Some(&[0.0]), &params).unwrap()[0],
+        own
+    );
+    // one size per ground-truth frame
+    assert!(matches!(
+        pck_per_frame_sized(&p, &g, Some(&[1.0, 2.0]), &params),
+        Err(GeomError::Shape(_))
+    ));
 }
 
 #[test]

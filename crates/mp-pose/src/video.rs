@@ -500,10 +500,44 @@ pub struct VideoWriter {
     frames: usize,
 }
 
+/// x264 speed presets, fastest first (`medium` is x264's default).
+pub const X264_PRESETS: [&str; 9] = [
+    "ultrafast",
+    "superfast",
+    "veryfast",
+    "faster",
+    "fast",
+    "medium",
+    "slow",
+    "slower",
+    "veryslow",
+];
+
 impl VideoWriter {
-    /// Starts `ffmpeg` writing `path` at `fps`.
+    /// Starts `ffmpeg` writing `path` at `fps` (x264's default preset, `medium`).
     pub fn create(path: impl AsRef<Path>, width: usize, height: usize, fps: f64) -> Result<Self> {
+        Self::create_with_preset(path, width, height, fps, "medium")
+    }
+
+    /// Starts `ffmpeg` writing `path` at `fps` with an x264 speed preset
+    /// (one of [`X264_PRESETS`]; faster presets trade file size for speed).
+    pub fn create_with_preset(
+        path: impl AsRef<Path>,
+        width: usize,
+        height: usize,
+        fps: f64,
+        preset: &str,
+    ) -> Result<Self> {
         let path = path.as_ref().to_path_buf();
+        if !X264_PRESETS.contains(&preset) {
+            return Err(PoseError::param(
+                "preset",
+                format!(
+                    "unknown x264 preset `{preset}` (expected one of {})",
+                    X264_PRESETS.join(", ")
+                ),
+            ));
+        }
         if width == 0 || height == 0 {
             return Err(PoseError::param(
                 "size",
@@ -527,6 +561,8 @@ impl VideoWriter {
                 "pad=ceil(iw/2)*2:ceil(ih/2)*2",
                 "-c:v",
                 "libx264",
+                "-preset",
+                preset,
                 "-pix_fmt",
                 "yuv420p",
                 "-movflags",

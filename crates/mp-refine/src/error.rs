@@ -73,6 +73,34 @@ pub enum RefineError {
     /// JSON that does not deserialize.
     #[error("JSON: {0}")]
     Json(#[from] serde_json::Error),
+    /// A network file (or its folder) that does not exist.
+    #[error("refinement model `{file}` not found (looked in: {searched}); train the networks with `cargo xtask train-refine` or pass the model folder")]
+    ModelMissing {
+        /// File (or folder) that is missing.
+        file: String,
+        /// Where it was looked for.
+        searched: String,
+    },
+    /// A network that ONNX Runtime cannot run, or whose inputs/outputs do
+    /// not match the contract of `models/refine/README.md`.
+    #[error("model {model}: {reason}")]
+    Model {
+        /// Model file.
+        model: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// File I/O.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// ONNX Runtime could not be found or loaded.
+    #[error(transparent)]
+    Runtime(#[from] mp_pose::PoseError),
 }
 
 impl RefineError {

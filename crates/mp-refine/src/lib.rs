@@ -19,11 +19,22 @@
 //!   splines between the neighbouring good frames — and
 //!   [`baseline::evaluate_injected`], MPJPE to the clean motion before and
 //!   after refinement on MSR Action3D with injected flaws.
+//! * [`nets`], [`pipeline`]: the six refinement networks (ONNX Runtime) and
+//!   the learned refinement — anchor recognition, GMM anchor scores, anchor
+//!   repair, transition refinement.
+//! * [`quality`], [`eval_refine`]: FID, accuracy, diversity, multimodality
+//!   and the evaluation on injected flaws and generated motion.
 
 pub mod baseline;
 pub mod concepts;
+pub mod dataset;
 pub mod error;
+pub mod eval_refine;
 pub mod flaws;
+pub mod motion;
+pub mod nets;
+pub mod pipeline;
+pub mod quality;
 pub mod segment;
 
 pub use baseline::{evaluate_injected, refine, EvalParams, EvalReport, RefineParams, Refinement};

@@ -127,6 +127,41 @@ impl FrameStore {
         Ok(())
     }
 
+    /// Whether frame `index` is one the store keeps (it falls on the step).
+    pub fn wants(&self, index: usize) -> bool {
+        index.is_multiple_of(self.step)
+    }
+
+    /// Keeps frame `index` from a JPEG made elsewhere (e.g. by FFmpeg's
+    /// `mjpeg` encoder) at [`FrameStore::size`]; frames off the step are
+    /// skipped. The JPEG's size is checked against the store's.
+    pub fn push_jpeg(&mut self, index: usize, jpeg: Vec<u8>) -> Result<()> {
+        if !self.wants(index) {
+            return Ok(());
+        }
+        let what = || format!("frame {index}");
+        let (w, h) = jpeg_size(&jpeg).ok_or_else(|| ReportError::Image {
+            what: what(),
+            reason: "not a baseline or progressive JPEG (no frame header)".into(),
+        })?;
+        if (w, h) != self.size {
+            return Err(ReportError::Image {
+                what: what(),
+                reason: format!(
+                    "JPEG is {w}×{h}, the store keeps {}×{}",
+                    self.size.0, self.size.1
+                ),
+            });
+        }
+        if self.frames.last().is_some_and(|(last, _)| *last >= index) {
+            return Err(ReportError::Mismatch(format!(
+                "frame {index} stored out of order"
+            )));
+        }
+        self.frames.push((index, jpeg));
+        Ok(())
+    }
+
     /// Position in [`FrameStore::frames`] of the stored frame nearest at or before `index`.
     pub fn nearest(&self, index: usize) -> Option<usize> {
         if self.frames.is_empty() {
@@ -158,6 +193,152 @@ impl FrameStore {
     }
 }
 
+/// Width and height from a JPEG's frame header (SOF0–SOF15 except DHT,
+/// JPG and DAC), or `None` when there is none before the first scan.
+pub fn jpeg_size(jpeg: &[u8]) -> Option<(usize, usize)> {
+    if jpeg.get(..2) != Some(&[0xFF, 0xD8][..]) {
+        return None;
+    }
+    let mut i = 2;
+    while i + 4 <= jpeg.len() {
+        if jpeg[i] != 0xFF {
+            return None;
+        }
+        let marker = jpeg[i + 1];
+        if marker == 0xFF {
+            i += 1;
+            continue;
+        }
+        let len = u16::from_be_bytes([jpeg[i + 2], jpeg[i + 3]]) as usize;
+        if (0xC0..=0xCF).contains(&marker) && !matches!(marker, 0xC4 | 0xC8 | 0xCC) {
+            let h = u16::from_be_bytes([*jpeg.get(i + 5)?, *jpeg.get(i + 6)?]) as usize;
+            let w = u16::from_be_bytes([*jpeg.get(i + 7)?, *jpeg.get(i + 8)?]) as usize;
+            return Some((w, h));
+        }
+        if marker == 0xDA || len < 2 {
+            return None;
+        }
+        i += 2 + len;
+    }
+    None
+}
+
+/// Reads the next JPEG from a stream of JPEG files written back to back
+/// (FFmpeg's `image2pipe` output): from its start-of-image marker through
+/// its end-of-image marker, following segment lengths and skipping over
+/// entropy-coded data. `Ok(None)` at the end of the stream; a stream that
+/// ends inside a JPEG, or bytes that are not a JPEG, are an error naming
+/// `what` and the image's position in the stream (`number`).
+pub fn read_jpeg(
+    r: &mut impl std::io::BufRead,
+    what: &str,
+    number: usize,
+) -> Result<Option<Vec<u8>>> {
+    let bad = |reason: String| ReportError::Image {
+        what: format!("{what}, image {number}"),
+        reason,
+    };
+    let io = |e: std::io::Error| bad(e.to_string());
+    let mut out = Vec::new();
+    // Start of image, or the end of the stream.
+    let mut soi = [0u8; 2];
+    let mut got = 0;
+    while got < 2 {
+        let n = r.read(&mut soi[got..]).map_err(io)?;
+        if n == 0 {
+            break;
+        }
+        got += n;
+    }
+    match got {
+        0 => return Ok(None),
+        2 if soi == [0xFF, 0xD8] => out.extend_from_slice(&soi),
+        _ => return Err(bad("not a JPEG (no start-of-image marker)".into())),
+    }
+    let truncated = || bad("the stream ends inside the image".into());
+    let byte = |r: &mut dyn std::io::BufRead, out: &mut Vec<u8>| -> Result<u8> {
+        let mut b = [0u8; 1];
+        r.read_exact(&mut b).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                truncated()
+            } else {
+                io(e)
+            }
+        })?;
+        out.push(b[0]);
+        Ok(b[0])
+    };
+    // `pending`: a marker byte already read while scanning entropy-coded data.
+    let mut pending: Option<u8> = None;
+    loop {
+        let marker = match pending.take() {
+            Some(m) => m,
+            None => {
+                if byte(r, &mut out)? != 0xFF {
+                    return Err(bad("expected a marker".into()));
+                }
+                let mut m = byte(r, &mut out)?;
+                while m == 0xFF {
+                    m = byte(r, &mut out)?;
+                }
+                m
+            }
+        };
+        match marker {
+            0xD9 => return Ok(Some(out)),
+            0xD0..=0xD7 | 0x01 => continue,
+            _ => {}
+        }
+        let hi = byte(r, &mut out)?;
+        let lo = byte(r, &mut out)?;
+        let len = u16::from_be_bytes([hi, lo]) as usize;
+        if len < 2 {
+            return Err(bad(format!("segment 0xFF{marker:02X} has length {len}")));
+        }
+        let start = out.len();
+        out.resize(start + len - 2, 0);
+        r.read_exact(&mut out[start..]).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                truncated()
+            } else {
+                io(e)
+            }
+        })?;
+        if marker != 0xDA {
+            continue;
+        }
+        // Entropy-coded data: up to the next marker that is not a stuffed
+        // zero or a restart marker.
+        loop {
+            let buf = r.fill_buf().map_err(io)?;
+            if buf.is_empty() {
+                return Err(truncated());
+            }
+            match buf.iter().position(|&b| b == 0xFF) {
+                None => {
+                    let n = buf.len();
+                    out.extend_from_slice(buf);
+                    r.consume(n);
+                }
+                Some(p) => {
+                    out.extend_from_slice(&buf[..p]);
+                    r.consume(p);
+                    byte(r, &mut out)?; // the 0xFF
+                    let mut m = byte(r, &mut out)?;
+                    while m == 0xFF {
+                        m = byte(r, &mut out)?;
+                    }
+                    if m == 0x00 || (0xD0..=0xD7).contains(&m) {
+                        continue;
+                    }
+                    pending = Some(m);
+                    break;
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -183,5 +364,62 @@ mod tests {
         assert_eq!(back.len(), 50 * 30 * 3);
         assert!(s.push(0, &rgb[..10]).is_err());
         assert!(s.rgb(9).is_err());
+    }
+
+    fn test_jpeg(w: usize, h: usize, shade: u8) -> Vec<u8> {
+        let rgb: Vec<u8> = (0..w * h * 3)
+            .map(|i| shade.wrapping_add((i % 251) as u8))
+            .collect();
+        encode_jpeg(&rgb, w, h, 80).unwrap()
+    }
+
+    #[test]
+    fn jpeg_stream_splits_into_the_images() {
+        let a = test_jpeg(40, 30, 0);
+        let b = test_jpeg(17, 9, 90);
+        assert_eq!(jpeg_size(&a), Some((40, 30)));
+        assert_eq!(jpeg_size(&b), Some((17, 9)));
+        assert_eq!(jpeg_size(&a[2..]), None);
+        let mut stream = a.clone();
+        stream.extend_from_slice(&b);
+        stream.extend_from_slice(&a);
+        // A small buffer makes the reader cross buffer ends inside segments and scans.
+        let mut r = std::io::BufReader::with_capacity(7, &stream[..]);
+        let got: Vec<Vec<u8>> = (0..)
+            .map_while(|k| read_jpeg(&mut r, "test", k).unwrap())
+            .collect();
+        assert_eq!(got, vec![a.clone(), b.clone(), a.clone()]);
+        // Truncated: an error naming the stream and the image.
+        let cut = &stream[..a.len() + b.len() / 2];
+        let mut r = std::io::BufReader::new(cut);
+        assert!(read_jpeg(&mut r, "test", 0).unwrap().is_some());
+        let e = read_jpeg(&mut r, "frames of x.mp4", 1).unwrap_err();
+        assert!(e.to_string().contains("x.mp4, image 1"), "{e}");
+        // Not a JPEG.
+        let mut r = std::io::BufReader::new(&b"GIF89a"[..]);
+        assert!(read_jpeg(&mut r, "test", 0).is_err());
+    }
+
+    #[test]
+    fn store_takes_ready_jpegs_on_its_step() {
+        let p = FrameStoreParams {
+            max_side_px: 40,
+            max_frames: 2,
+            ..Default::default()
+        };
+        let mut s = FrameStore::new(40, 30, Some(4), &p).unwrap();
+        assert_eq!((s.size, s.step), ((40, 30), 2));
+        for i in 0..4 {
+            s.push_jpeg(i, test_jpeg(40, 30, i as u8)).unwrap();
+        }
+        assert_eq!(
+            s.frames.iter().map(|(i, _)| *i).collect::<Vec<_>>(),
+            vec![0, 2]
+        );
+        assert_eq!(s.rgb(1).unwrap().len(), 40 * 30 * 3);
+        // Wrong size, out of order, not a JPEG.
+        assert!(s.push_jpeg(4, test_jpeg(20, 30, 0)).is_err());
+        assert!(s.push_jpeg(2, test_jpeg(40, 30, 0)).is_err());
+        assert!(s.push_jpeg(6, vec![1, 2, 3]).is_err());
     }
 }

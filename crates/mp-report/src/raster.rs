@@ -11,16 +11,74 @@ use resvg::usvg;
 
 use crate::error::{ReportError, Result};
 
+/// The family the pictures' text uses.
+const SANS_FAMILY: &str = "DejaVu Sans";
+
+/// At most this many bytes of font files are held in memory (the text
+/// family's files always are).
+pub const FONT_MEMORY_BUDGET_BYTES: u64 = 32 << 20;
+
 fn fonts() -> Arc<usvg::fontdb::Database> {
     static FONTS: OnceLock<Arc<usvg::fontdb::Database>> = OnceLock::new();
     FONTS
         .get_or_init(|| {
             let mut db = usvg::fontdb::Database::new();
             db.load_system_fonts();
-            db.set_sans_serif_family("DejaVu Sans");
+            let mut db = fonts_in_memory(&db, FONT_MEMORY_BUDGET_BYTES);
+            db.set_sans_serif_family(SANS_FAMILY);
             Arc::new(db)
         })
         .clone()
+}
+
+/// A copy of `db` whose faces read their data from memory instead of from
+/// their files: a file-backed face is read from disk again every time a
+/// glyph is drawn, which made text the slowest part of every picture. The
+/// text family's files come first; other files are copied while the total
+/// stays within `budget_bytes`, the rest stay file-backed.
+fn fonts_in_memory(db: &usvg::fontdb::Database, budget_bytes: u64) -> usvg::fontdb::Database {
+    use std::collections::HashMap;
+    use std::path::PathBuf;
+    use usvg::fontdb::{Database, Source, ID};
+    type Data = Arc<dyn AsRef<[u8]> + Sync + Send>;
+    let is_sans = |f: &usvg::fontdb::FaceInfo| f.families.iter().any(|(n, _)| n == SANS_FAMILY);
+    // Which files to read: the text family's first, then the others in order.
+    let mut order: Vec<(bool, PathBuf)> = Vec::new();
+    for f in db.faces() {
+        if let Source::File(path) = &f.source {
+            order.push((!is_sans(f), path.clone()));
+        }
+    }
+    order.sort_by_key(|(other, _)| *other);
+    let mut data: HashMap<PathBuf, Data> = HashMap::new();
+    let mut used = 0u64;
+    for (other, path) in order {
+        if data.contains_key(&path) {
+            continue;
+        }
+        let Ok(meta) = std::fs::metadata(&path) else {
+            continue;
+        };
+        if other && used + meta.len() > budget_bytes {
+            continue;
+        }
+        if let Ok(bytes) = std::fs::read(&path) {
+            used += bytes.len() as u64;
+            data.insert(path, Arc::new(bytes));
+        }
+    }
+    let mut out = Database::new();
+    for f in db.faces() {
+        let mut f = f.clone();
+        if let Source::File(path) = &f.source {
+            if let Some(d) = data.get(path) {
+                f.source = Source::Binary(d.clone());
+            }
+        }
+        f.id = ID::dummy();
+        out.push_face_info(f);
+    }
+    out
 }
 
 fn parse(name: &str, svg: &str) -> Result<usvg::Tree> {
@@ -71,10 +129,41 @@ pub fn render_svg_onto(name: &str, svg: &str, pixmap: &mut Pixmap) -> Result<()>
 /// Rasterises an SVG document to PNG bytes at `scale` × its size.
 pub fn svg_to_png(name: &str, svg: &str, scale: f32) -> Result<Vec<u8>> {
     let pixmap = svg_to_pixmap(name, svg, scale)?;
-    pixmap.encode_png().map_err(|e| ReportError::Image {
+    pixmap_to_png(name, &pixmap)
+}
+
+/// Encodes a pixmap as PNG with fast compression: 8-bit RGB when every
+/// pixel is opaque, 8-bit RGBA (colours un-premultiplied) otherwise.
+pub fn pixmap_to_png(name: &str, p: &Pixmap) -> Result<Vec<u8>> {
+    let opaque = p.pixels().iter().all(|px| px.alpha() == 255);
+    let (w, h) = (p.width(), p.height());
+    let (bytes, colour) = if opaque {
+        (pixmap_to_rgb(p), image::ExtendedColorType::Rgb8)
+    } else {
+        let mut out = Vec::with_capacity(p.pixels().len() * 4);
+        for px in p.pixels() {
+            let c = px.demultiply();
+            out.extend_from_slice(&[c.red(), c.green(), c.blue(), c.alpha()]);
+        }
+        (out, image::ExtendedColorType::Rgba8)
+    };
+    let mut out = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new_with_quality(
+            &mut out,
+            image::codecs::png::CompressionType::Fast,
+            image::codecs::png::FilterType::Adaptive,
+        ),
+        &bytes,
+        w,
+        h,
+        colour,
+    )
+    .map_err(|e| ReportError::Image {
         what: name.to_string(),
         reason: e.to_string(),
-    })
+    })?;
+    Ok(out)
 }
 
 /// Pixmap (premultiplied RGBA) → RGB bytes (alpha composited over black).
@@ -185,6 +274,30 @@ mod tests {
         assert_eq!((right.red(), right.blue()), (0, 255));
         let png = svg_to_png("t", svg, 1.0).unwrap();
         assert_eq!(&png[1..4], b"PNG");
+    }
+
+    #[test]
+    fn png_keeps_colours_and_transparency() {
+        let svg = r##"<svg xmlns="http://www.w3.org/2000/svg" width="20" height="10"><rect width="10" height="10" fill="#ff0000"/><rect x="10" width="10" height="10" fill="#0000ff" fill-opacity="0.5"/></svg>"##;
+        let p = svg_to_pixmap("t", svg, 1.0).unwrap();
+        let img = image::load_from_memory(&pixmap_to_png("t", &p).unwrap())
+            .unwrap()
+            .to_rgba8();
+        assert_eq!(img.dimensions(), (20, 10));
+        assert_eq!(img.get_pixel(5, 5).0, [255, 0, 0, 255]);
+        let half = img.get_pixel(15, 5).0;
+        assert_eq!((half[0], half[1]), (0, 0));
+        assert!(half[2] >= 254 && (126..=129).contains(&half[3]), "{half:?}");
+        // Opaque pictures are written without an alpha channel.
+        let opaque = svg_to_pixmap(
+            "o",
+            r##"<svg xmlns="http://www.w3.org/2000/svg" width="4" height="4"><rect width="4" height="4" fill="#00ff00"/></svg>"##,
+            1.0,
+        )
+        .unwrap();
+        let back = image::load_from_memory(&pixmap_to_png("o", &opaque).unwrap()).unwrap();
+        assert_eq!(back.color(), image::ColorType::Rgb8);
+        assert_eq!(back.to_rgb8().get_pixel(1, 1).0, [0, 255, 0]);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use ort::session::Session;
+use ort::session::{HasSelectedOutputs, OutputSelector, RunOptions, Session};
 use ort::value::TensorRef;
 
 use crate::error::{PoseError, Result};
@@ -201,6 +201,9 @@ pub fn refine_with_heatmap(landmarks: &mut [CropLandmark], heatmap: &[f32], para
 /// The landmark model: an ONNX session plus pre- and post-processing.
 pub struct LandmarkModel {
     session: Session,
+    /// Asks only for the outputs this crate reads, so ONNX Runtime can skip
+    /// the segmentation mask (same values, less work).
+    run_options: RunOptions<HasSelectedOutputs>,
     name: String,
     kind: LandmarkModelKind,
     refine: RefineParams,
@@ -226,8 +229,18 @@ impl LandmarkModel {
         runtime::check_tensor(&name, &outs, PRESENCE_NAME, "f32", &[1, 1])?;
         runtime::check_tensor(&name, &outs, HEATMAP_NAME, "f32", &[1, 64, 64, 39])?;
         runtime::check_tensor(&name, &outs, WORLD_NAME, "f32", &[1, 117])?;
+        let run_options = RunOptions::new()
+            .map_err(|e| PoseError::model(&name, e))?
+            .with_outputs(
+                OutputSelector::no_default()
+                    .with(LANDMARKS_NAME)
+                    .with(PRESENCE_NAME)
+                    .with(HEATMAP_NAME)
+                    .with(WORLD_NAME),
+            );
         Ok(LandmarkModel {
             session,
+            run_options,
             name,
             kind,
             refine,
@@ -258,7 +271,7 @@ impl LandmarkModel {
             .map_err(|e| PoseError::model(&self.name, e))?;
         let outputs = self
             .session
-            .run(ort::inputs![INPUT_NAME => tensor])
+            .run_with_options(ort::inputs![INPUT_NAME => tensor], &self.run_options)
             .map_err(|e| PoseError::model(&self.name, e))?;
         let raw = runtime::output_f32(&outputs, &self.name, LANDMARKS_NAME, 195)?;
         let presence = runtime::output_f32(&outputs, &self.name, PRESENCE_NAME, 1)?;

@@ -1,0 +1,314 @@
+//! `mp refine` (learned motion refinement of a 20-joint 3D track) and
+//! `mp concepts` (anchor concepts from MSR Action3D or a folder of tracks).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use clap::{Args, ValueEnum};
+use mp_geom::io::bvh::Bvh;
+use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::io::{read_track, write_track};
+use mp_geom::Track;
+use mp_pose::SessionParams;
+use mp_refine::eval_refine::{canonical_anchor_samples, msr_anchor_samples};
+use mp_refine::motion::{bvh_to_msr20, HIP_CENTRE};
+use mp_refine::nets::{find_model_dir, RefineNets};
+use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode, TransitionMethod};
+use mp_refine::{learn_concepts, ClusterMethod, ConceptParams, Concepts, SegmentParams};
+
+/// Arguments of `mp refine`.
+#[derive(Args, Debug)]
+pub struct RefineArgs {
+    /// Input track: 20 MSR Action3D joints in 3D, metres (any format `mp_geom::io::read_track`
+    /// reads), or a CMU BVH file (mapped onto the 20 joints).
+    pub track: PathBuf,
+    /// Output track (format by extension).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Model folder (default: `MP_REFINE_MODELS` or models/refine).
+    #[arg(long)]
+    pub models: Option<PathBuf>,
+    /// Anchor concepts JSON (default: concepts.json in the model folder).
+    #[arg(long)]
+    pub concepts: Option<PathBuf>,
+    /// MSR action (1–20) of the motion; default: the evaluator's prediction.
+    #[arg(long)]
+    pub action: Option<u32>,
+    /// Only refine anchors (no transition refinement).
+    #[arg(long)]
+    pub anchors_only: bool,
+    /// Regenerate transitions with the transition generator (z = 0) instead of the refinement network.
+    #[arg(long)]
+    pub generator_transitions: bool,
+    /// Anchor probability threshold.
+    #[arg(long, default_value_t = NetRefineParams::default().anchor_probability)]
+    pub anchor_probability: f64,
+    /// Transition deviation threshold (metres).
+    #[arg(long, default_value_t = NetRefineParams::default().transition_deviation_m)]
+    pub deviation_m: f64,
+    /// Also write the report as JSON.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// BVH length unit → metres (BVH input only).
+    #[arg(long, default_value_t = 1.0)]
+    pub bvh_scale: f64,
+}
+
+/// `mp refine`.
+pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
+    // BVH (CMU naming) is mapped onto the 20 MSR joints at 15 fps.
+    let track = folder_track(&a.track, a.bvh_scale)
+        .with_context(|| format!("reading {}", a.track.display()))?;
+    let dir = match &a.models {
+        Some(d) => d.clone(),
+        None => find_model_dir()?,
+    };
+    let concepts_path = a
+        .concepts
+        .clone()
+        .unwrap_or_else(|| dir.join("concepts.json"));
+    let concepts = read_concepts(&concepts_path)?;
+    let nets = RefineNets::load(&dir, &SessionParams::default())
+        .with_context(|| format!("loading refinement networks from {}", dir.display()))?;
+    let params = NetRefineParams {
+        anchor_probability: a.anchor_probability,
+        transition_deviation_m: a.deviation_m,
+        mode: if a.anchors_only {
+            RefineMode::AnchorsOnly
+        } else {
+            RefineMode::AnchorsAndTransitions
+        },
+        transition_method: if a.generator_transitions {
+            TransitionMethod::Generator
+        } else {
+            TransitionMethod::Refinement
+        },
+        ..NetRefineParams::default()
+    };
+    let refiner = NetRefiner::new(&nets, &concepts, &params)?;
+    let r = refiner
+        .refine_track(&track, a.action)
+        .with_context(|| format!("refining {}", a.track.display()))?;
+    let rep = &r.report;
+    println!(
+        "action {}{}; {} anchors, {} transitions",
+        rep.action,
+        if rep.action_predicted {
+            " (predicted)"
+        } else {
+            ""
+        },
+        rep.anchors.len(),
+        rep.transitions.len()
+    );
+    let flawed: Vec<_> = rep.flawed_anchors().collect();
+    if flawed.is_empty() {
+        println!("flawed anchors: none");
+    } else {
+        println!("flawed anchors (frame, anchor probability, score < threshold, repair):");
+        for an in flawed {
+            println!(
+                "  frame {:>4}  p={:.2}  score {:>9.2} < {:.2}  {}",
+                an.source_frame,
+                an.probability,
+                an.score.unwrap_or(f64::NAN),
+                an.threshold,
+                match (an.repaired, an.concept) {
+                    (true, Some(c)) => format!("new pose, concept {c}"),
+                    (true, None) => "bridged".to_string(),
+                    (false, _) => "kept (gap too long to bridge)".to_string(),
+                }
+            );
+        }
+    }
+    let refined: Vec<_> = rep.refined_transitions().collect();
+    if refined.is_empty() {
+        println!("refined transitions: none");
+    } else {
+        println!("refined transitions (frames, deviation from a cubic, reason):");
+        for t in refined {
+            println!(
+                "  frames {:>4}–{:<4}  deviation {}  {:?}",
+                t.source_frames.0,
+                t.source_frames.1,
+                t.deviation_m
+                    .map_or("-".into(), |d| format!("{:.1} mm", d * 1e3)),
+                t.refined
+                    .unwrap_or(mp_refine::pipeline::TransitionReason::Deviation)
+            );
+        }
+    }
+    let change = mp_refine::mpjpe_abs(&r.track, &track).unwrap_or(f64::NAN);
+    println!("mean joint change: {:.1} mm", change * 1e3);
+    write_track(&a.output, &r.track).with_context(|| format!("writing {}", a.output.display()))?;
+    if let Some(p) = &a.report {
+        std::fs::write(p, serde_json::to_string_pretty(rep)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}
+
+fn read_concepts(path: &Path) -> anyhow::Result<Concepts> {
+    let text = std::fs::read_to_string(path).with_context(|| {
+        format!(
+            "reading anchor concepts {} (learn them with `mp concepts`)",
+            path.display()
+        )
+    })?;
+    Concepts::from_json(&text).with_context(|| format!("parsing {}", path.display()))
+}
+
+/// Clustering algorithm of `mp concepts`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// K-means (L2).
+    Kmeans,
+    /// DBSCAN.
+    Dbscan,
+}
+
+/// Arguments of `mp concepts`.
+#[derive(Args, Debug)]
+pub struct ConceptsArgs {
+    /// MSR Action3D npz, or a folder of 20-joint tracks / CMU BVH files.
+    pub data: PathBuf,
+    /// Output concepts JSON.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Clustering algorithm.
+    #[arg(long, value_enum, default_value = "kmeans")]
+    pub method: Method,
+    /// Concepts per action (k-means).
+    #[arg(long, default_value_t = 4)]
+    pub clusters: usize,
+    /// Neighbourhood radius (DBSCAN; scale-normalised feature units).
+    #[arg(long, default_value_t = 0.35)]
+    pub tolerance: f64,
+    /// Points of a DBSCAN core.
+    #[arg(long, default_value_t = 4)]
+    pub min_points: usize,
+    /// Subjects of an MSR npz to use (comma separated; default: all but 9, the held-out subject).
+    #[arg(long, value_delimiter = ',')]
+    pub subjects: Option<Vec<u32>>,
+    /// Action of every track of a folder.
+    #[arg(long, default_value_t = 1)]
+    pub action: u32,
+    /// Segmentation penalty λ (mm).
+    #[arg(long, default_value_t = 200.0)]
+    pub lambda: f64,
+    /// BVH length unit → metres.
+    #[arg(long, default_value_t = 1.0)]
+    pub bvh_scale: f64,
+    /// Seed.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+fn is_track_file(p: &Path) -> bool {
+    matches!(
+        p.extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref(),
+        Some("bvh" | "npz" | "npy" | "json" | "csv")
+    )
+}
+
+fn folder_track(p: &Path, bvh_scale: f64) -> anyhow::Result<Track> {
+    let is_bvh = p
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
+    if is_bvh {
+        let bvh = Bvh::read(p)?;
+        Ok(bvh_to_msr20(&bvh, bvh_scale, MsrAction3D::FPS)?)
+    } else {
+        Ok(read_track(p)?)
+    }
+}
+
+/// `mp concepts`.
+pub fn concepts_cmd(a: &ConceptsArgs) -> anyhow::Result<()> {
+    let method = match a.method {
+        Method::Kmeans => ClusterMethod::KMeans {
+            n_clusters: a.clusters,
+            n_runs: 10,
+            max_iterations: 300,
+        },
+        Method::Dbscan => ClusterMethod::Dbscan {
+            min_points: a.min_points,
+            tolerance: a.tolerance,
+        },
+    };
+    let params = ConceptParams {
+        method,
+        root_joint: Some(HIP_CENTRE),
+        seed: a.seed,
+        ..ConceptParams::default()
+    };
+    params.validate()?;
+    let seg = SegmentParams {
+        lambda: a.lambda,
+        ..SegmentParams::default()
+    };
+    let samples = if a.data.is_dir() {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&a.data)
+            .with_context(|| format!("listing {}", a.data.display()))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && is_track_file(p))
+            .collect();
+        files.sort();
+        if files.is_empty() {
+            bail!("{}: no track or BVH file", a.data.display());
+        }
+        let mut out = Vec::new();
+        for f in &files {
+            let t =
+                folder_track(f, a.bvh_scale).with_context(|| format!("reading {}", f.display()))?;
+            out.extend(
+                canonical_anchor_samples(&t, a.action, &seg, &params)
+                    .with_context(|| format!("anchors of {}", f.display()))?,
+            );
+        }
+        println!("{} files, {} anchors", files.len(), out.len());
+        out
+    } else {
+        let data = MsrAction3D::open(&a.data).with_context(|| {
+            format!(
+                "reading {} as an MSR Action3D npz (pass a folder for single tracks)",
+                a.data.display()
+            )
+        })?;
+        let idx: Vec<usize> = data
+            .clips()
+            .iter()
+            .filter(|c| match &a.subjects {
+                Some(s) => s.contains(&c.subject),
+                None => c.subject != 9,
+            })
+            .filter(|c| c.rows.len() >= 8)
+            .map(|c| c.index)
+            .collect();
+        let s = msr_anchor_samples(&data, &idx, &seg, &params)?;
+        println!("{} clips, {} anchors", idx.len(), s.len());
+        s
+    };
+    let concepts = learn_concepts(&samples, &params)?;
+    for (act, ac) in &concepts.actions {
+        let noise = ac.labels.iter().filter(|l| l.is_none()).count();
+        println!(
+            "action {act:>2}: {} concepts from {} anchors{}, flaw threshold {:.2}",
+            ac.centroids.len(),
+            ac.labels.len(),
+            if noise > 0 {
+                format!(" ({noise} noise)")
+            } else {
+                String::new()
+            },
+            ac.score_threshold
+        );
+    }
+    std::fs::write(&a.output, concepts.to_json()?)
+        .with_context(|| format!("writing {}", a.output.display()))?;
+    Ok(())
+}

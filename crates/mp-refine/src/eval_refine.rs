@@ -1,0 +1,748 @@
+//! Evaluation of the learned refinement ([`crate::pipeline`]).
+//!
+//! * **Injected flaws** ([`evaluate_injected_nets`]): clips of the held-out
+//!   subjects of MSR Action3D (subject 9 by default) get one known flaw each
+//!   ([`crate::flaws`]); MPJPE (absolute, no alignment) to the clean clip
+//!   before and after refinement, per flaw and overall, next to the
+//!   non-learned baseline ([`crate::baseline::refine`]); and the MPJPE
+//!   between each clean clip and its refinement (how much refinement
+//!   disturbs clean motion).
+//! * **Generated motion** (in [`evaluate`]): `samples_per_action`
+//!   clips per action from the generator network (seeded latents), refined
+//!   with their action; FID, per-action FID, accuracy, diversity and
+//!   multimodality on the evaluator's features against the real clips,
+//!   before and after refinement.
+//! * **Ablation**: anchor-only vs anchors + transitions, and the anchor
+//!   quality score — the Gaussian mixture (which does not depend on the
+//!   clustering) vs the distance to the nearest concept with concepts from
+//!   k-means or DBSCAN.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::{Skeleton, Track, Units};
+use ndarray::{Array2, Array3, Axis};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::baseline::{full_confidence, EvalFlaw};
+use crate::concepts::{
+    anchor_feature, learn_concepts, AnchorSample, ClusterMethod, ConceptParams, Concepts,
+};
+use crate::error::{RefineError, Result};
+use crate::flaws::{inject, AnchorSource, Flaw, FootSlide};
+use crate::motion::{canonicalize, to_features, FRAME_FEATURES, HIP_CENTRE, NET_FRAMES};
+use crate::nets::{RefineNets, N_ACTIONS};
+use crate::pipeline::{
+    nearest_concept_thresholds, AnchorDetection, AnchorRepair, NetRefineParams, NetRefiner,
+    RefineMode, TransitionMethod,
+};
+use crate::quality::{accuracy, diversity, fid, multimodality, per_action_fid, QualityParams};
+use crate::segment::{mpjpe_abs, segment_track, SegmentParams};
+
+/// An ablation setting: name, concepts, parameters, nearest-concept thresholds.
+type Setting<'a> = (
+    &'static str,
+    &'a Concepts,
+    &'a NetRefineParams,
+    Option<&'a BTreeMap<u32, f64>>,
+);
+
+/// Parameters of the evaluation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefineEvalParams {
+    /// Subjects whose clips are evaluated with injected flaws. Default `[9]`
+    /// (held out from training).
+    pub val_subjects: Vec<u32>,
+    /// At most this many clips for the injected flaws (spread evenly). Default `None`.
+    pub max_clips: Option<usize>,
+    /// Flaws, each injected once per clip (clip `i` uses seed `seed + i`).
+    pub flaws: Vec<EvalFlaw>,
+    /// Generated clips per action. Default 50.
+    pub samples_per_action: usize,
+    /// Refinement parameters.
+    pub refine: NetRefineParams,
+    /// Random-pair metrics.
+    pub quality: QualityParams,
+    /// Run the ablation. Default true.
+    pub ablation: bool,
+    /// Segmentation of the canonical clips for concept learning (ablation).
+    pub segment: SegmentParams,
+    /// DBSCAN of the clustering ablation. Default 4 points, tolerance 0.35
+    /// (scale-normalised feature units).
+    pub dbscan: ClusterMethod,
+    /// Quantile of the training anchors' scores used as the flaw threshold
+    /// of the nearest-concept scores. Default 0.05.
+    pub score_quantile: f64,
+    /// Clips shorter than this (source frames) are skipped. Default 8.
+    pub min_clip_frames: usize,
+    /// Clips longer than this (source frames) are skipped. Default 180
+    /// (12 s at 15 fps, 3 source frames per canonical frame): a handful of
+    /// MSR Action3D recordings run on for hundreds of frames of a held pose,
+    /// which the 60-frame representation cannot resolve.
+    pub max_clip_frames: usize,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for RefineEvalParams {
+    fn default() -> Self {
+        RefineEvalParams {
+            val_subjects: vec![9],
+            max_clips: None,
+            flaws: vec![
+                EvalFlaw::Fixed(Flaw::WrongAnchor {
+                    half_width_frames: 2,
+                    source: AnchorSource::OtherPhase,
+                }),
+                EvalFlaw::WrongAnchorOtherAction {
+                    half_width_frames: 2,
+                },
+                EvalFlaw::Fixed(Flaw::Jump {
+                    frames: 4,
+                    skip_frames: 8,
+                }),
+                EvalFlaw::Fixed(Flaw::Jitter {
+                    frames: 4,
+                    std_m: 0.05,
+                }),
+                EvalFlaw::Fixed(Flaw::Frozen { frames: 6 }),
+                EvalFlaw::Fixed(Flaw::FootSlide(FootSlide {
+                    frames: 10,
+                    drift_m: 0.1,
+                    up_axis: 1,
+                })),
+            ],
+            samples_per_action: 50,
+            refine: NetRefineParams::default(),
+            quality: QualityParams::default(),
+            ablation: true,
+            segment: SegmentParams::default(),
+            dbscan: ClusterMethod::Dbscan {
+                min_points: 4,
+                tolerance: 0.35,
+            },
+            score_quantile: 0.05,
+            min_clip_frames: 8,
+            max_clip_frames: 180,
+            seed: 0,
+        }
+    }
+}
+
+impl RefineEvalParams {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        self.refine.validate()?;
+        self.quality.validate()?;
+        self.segment.validate()?;
+        if self.samples_per_action < 2 {
+            return Err(RefineError::param("samples_per_action", "must be ≥ 2"));
+        }
+        if !(0.0..=1.0).contains(&self.score_quantile) {
+            return Err(RefineError::param(
+                "score_quantile",
+                format!("must be in [0, 1], got {}", self.score_quantile),
+            ));
+        }
+        if self.max_clip_frames < self.min_clip_frames {
+            return Err(RefineError::param(
+                "max_clip_frames",
+                format!("must be ≥ min_clip_frames ({})", self.min_clip_frames),
+            ));
+        }
+        if self.min_clip_frames < self.refine.min_frames {
+            return Err(RefineError::param(
+                "min_clip_frames",
+                format!("must be ≥ refine.min_frames ({})", self.refine.min_frames),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Figures of one flaw kind (metres; means over clips).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InjectedFlawReport {
+    /// Flaw name.
+    pub flaw: String,
+    /// Clips.
+    pub n_clips: usize,
+    /// MPJPE flawed vs clean.
+    pub mpjpe_before_m: f64,
+    /// MPJPE refined vs clean.
+    pub mpjpe_after_m: f64,
+    /// MPJPE after the non-learned baseline.
+    pub baseline_after_m: f64,
+    /// Share of clips where the refinement changed something.
+    pub changed_share: f64,
+}
+
+/// Injected-flaw results.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InjectedReport {
+    /// Clean clips evaluated.
+    pub n_clips: usize,
+    /// MPJPE flawed vs clean, mean over every (clip, flaw).
+    pub mpjpe_before_m: f64,
+    /// MPJPE refined vs clean, mean over every (clip, flaw).
+    pub mpjpe_after_m: f64,
+    /// MPJPE after the non-learned baseline.
+    pub baseline_after_m: f64,
+    /// Relative reduction `1 − after / before`.
+    pub reduction: f64,
+    /// MPJPE between clean clips and their refinement.
+    pub clean_change_m: f64,
+    /// Share of clean clips the refinement changed.
+    pub clean_changed_share: f64,
+    /// Per flaw.
+    pub per_flaw: Vec<InjectedFlawReport>,
+}
+
+fn mean(v: &[f64]) -> f64 {
+    let x: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if x.is_empty() {
+        f64::NAN
+    } else {
+        x.iter().sum::<f64>() / x.len() as f64
+    }
+}
+
+fn spread(v: Vec<usize>, n: Option<usize>) -> Vec<usize> {
+    match n {
+        Some(n) if n > 0 && n < v.len() => (0..n).map(|i| v[i * v.len() / n]).collect(),
+        _ => v,
+    }
+}
+
+/// Indices of the clips of `subjects` with `min_frames..=max_frames`
+/// frames and no frame without any tracked joint (lost tracking: 6 of the
+/// 292 clips of the shared file, whose stored positions there are not poses).
+pub fn clips_of_subjects(
+    data: &MsrAction3D,
+    subjects: &[u32],
+    min_frames: usize,
+    max_frames: usize,
+) -> Vec<usize> {
+    data.clips()
+        .iter()
+        .filter(|c| {
+            subjects.contains(&c.subject)
+                && c.rows.len() >= min_frames
+                && c.rows.len() <= max_frames
+        })
+        .filter(|c| {
+            data.clip(c.index)
+                .map(|t| {
+                    t.confidence()
+                        .outer_iter()
+                        .all(|row| row.iter().any(|&v| v > 0.0))
+                })
+                .unwrap_or(false)
+        })
+        .map(|c| c.index)
+        .collect()
+}
+
+/// Injected-flaw evaluation on the held-out clips (see the module docs).
+pub fn evaluate_injected_nets(
+    data: &MsrAction3D,
+    refiner: &NetRefiner<'_>,
+    params: &RefineEvalParams,
+) -> Result<InjectedReport> {
+    params.validate()?;
+    let idx = spread(
+        clips_of_subjects(
+            data,
+            &params.val_subjects,
+            params.min_clip_frames,
+            params.max_clip_frames,
+        ),
+        params.max_clips,
+    );
+    if idx.is_empty() {
+        return Err(RefineError::TooShort {
+            what: format!(
+                "injected evaluation (clips of subjects {:?})",
+                params.val_subjects
+            ),
+            needed: 1,
+            got: 0,
+        });
+    }
+    let base = crate::baseline::RefineParams::default();
+    let nf = params.flaws.len();
+    let mut acc: Vec<[Vec<f64>; 4]> = (0..nf).map(|_| Default::default()).collect();
+    let mut clean_change = Vec::new();
+    let mut clean_changed = Vec::new();
+    for &i in &idx {
+        let clean = full_confidence(&data.clip(i)?)?;
+        let action = data.clip_info(i)?.action;
+        let rc = refiner.refine_track(&clean, Some(action))?;
+        clean_change.push(mpjpe_abs(&rc.track, &clean)?);
+        clean_changed.push(f64::from(u8::from(rc.report.changed())));
+        for (fi, ef) in params.flaws.iter().enumerate() {
+            let flaw = match ef {
+                EvalFlaw::Fixed(f) => f.clone(),
+                EvalFlaw::WrongAnchorOtherAction { half_width_frames } => {
+                    let n = data.len();
+                    let mut d = (i + n / 2) % n;
+                    while data.clip_info(d)?.action == action {
+                        d = (d + 1) % n;
+                    }
+                    Flaw::WrongAnchor {
+                        half_width_frames: *half_width_frames,
+                        source: AnchorSource::OtherClip(full_confidence(&data.clip(d)?)?),
+                    }
+                }
+            };
+            let inj = match inject(&clean, &flaw, params.seed.wrapping_add(i as u64)) {
+                Ok(x) => x,
+                Err(RefineError::TooShort { .. }) => continue,
+                Err(e) => return Err(e),
+            };
+            if !inj.mask.iter().any(|&m| m) {
+                continue;
+            }
+            let r = refiner.refine_track(&inj.track, Some(action))?;
+            let b = crate::baseline::refine(&inj.track, None, &base)?;
+            let a = &mut acc[fi];
+            a[0].push(mpjpe_abs(&inj.track, &clean)?);
+            a[1].push(mpjpe_abs(&r.track, &clean)?);
+            a[2].push(mpjpe_abs(&b.track, &clean)?);
+            a[3].push(f64::from(u8::from(r.report.changed())));
+        }
+    }
+    let per_flaw: Vec<InjectedFlawReport> = params
+        .flaws
+        .iter()
+        .zip(&acc)
+        .map(|(f, a)| InjectedFlawReport {
+            flaw: match f {
+                EvalFlaw::Fixed(fl) => fl.name().to_string(),
+                EvalFlaw::WrongAnchorOtherAction { .. } => "wrong_anchor_clip".into(),
+            },
+            n_clips: a[0].len(),
+            mpjpe_before_m: mean(&a[0]),
+            mpjpe_after_m: mean(&a[1]),
+            baseline_after_m: mean(&a[2]),
+            changed_share: mean(&a[3]),
+        })
+        .collect();
+    let all = |k: usize| -> Vec<f64> { acc.iter().flat_map(|a| a[k].clone()).collect() };
+    let before = mean(&all(0));
+    let after = mean(&all(1));
+    Ok(InjectedReport {
+        n_clips: idx.len(),
+        mpjpe_before_m: before,
+        mpjpe_after_m: after,
+        baseline_after_m: mean(&all(2)),
+        reduction: 1.0 - after / before,
+        clean_change_m: mean(&clean_change),
+        clean_changed_share: mean(&clean_changed),
+        per_flaw,
+    })
+}
+
+/// Evaluator features and logits of canonical clips (`N × 60 × 60` features), in batches.
+pub fn evaluator_outputs(
+    nets: &RefineNets,
+    clips: &Array3<f32>,
+) -> Result<(Array2<f64>, Array2<f64>)> {
+    let n = clips.dim().0;
+    let nf = nets.sizes().features;
+    let mut feats = Array2::<f64>::zeros((n, nf));
+    let mut logits = Array2::<f64>::zeros((n, N_ACTIONS));
+    let batch = 64;
+    let mut start = 0;
+    while start < n {
+        let end = (start + batch).min(n);
+        let flat: Vec<f32> = clips
+            .slice(ndarray::s![start..end, .., ..])
+            .iter()
+            .copied()
+            .collect();
+        let out = nets.evaluate(&flat)?;
+        for (r, i) in (start..end).enumerate() {
+            for k in 0..nf {
+                feats[[i, k]] = out.features[r * nf + k] as f64;
+            }
+            for k in 0..N_ACTIONS {
+                logits[[i, k]] = out.logits[r * N_ACTIONS + k] as f64;
+            }
+        }
+        start = end;
+    }
+    if feats.iter().chain(logits.iter()).any(|v| !v.is_finite()) {
+        return Err(RefineError::NonFinite(
+            "evaluator: non-finite feature or logit".into(),
+        ));
+    }
+    Ok((feats, logits))
+}
+
+/// Canonical clips (`N × 60 × 60` features) and actions of MSR clips.
+pub fn real_clips(data: &MsrAction3D, idx: &[usize]) -> Result<(Array3<f32>, Vec<u32>)> {
+    let mut out = Array3::<f32>::zeros((idx.len(), NET_FRAMES, FRAME_FEATURES));
+    let mut labels = Vec::with_capacity(idx.len());
+    for (r, &i) in idx.iter().enumerate() {
+        let (c, _) = canonicalize(&data.clip(i)?)?;
+        out.index_axis_mut(Axis(0), r)
+            .assign(&to_features(c.view()));
+        labels.push(data.clip_info(i)?.action);
+    }
+    Ok((out, labels))
+}
+
+/// Clips from the generator: `per_action` per action 1..=20, latents drawn
+/// from `ChaCha8Rng::seed_from_u64(seed)`. Returns `N × 60 × 60` features and labels.
+pub fn generate_clips(
+    nets: &RefineNets,
+    per_action: usize,
+    seed: u64,
+) -> Result<(Array3<f32>, Vec<u32>)> {
+    let zg = nets.sizes().generator_latent;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let n = per_action * N_ACTIONS;
+    let mut out = Array3::<f32>::zeros((n, NET_FRAMES, FRAME_FEATURES));
+    let mut labels = Vec::with_capacity(n);
+    for a in 0..N_ACTIONS {
+        let mut onehot = vec![0f32; per_action * N_ACTIONS];
+        for r in 0..per_action {
+            onehot[r * N_ACTIONS + a] = 1.0;
+        }
+        let z: Vec<f32> = (0..per_action * zg)
+            .map(|_| StandardNormal.sample(&mut rng))
+            .collect();
+        let m = nets.generate_motion(&onehot, &z)?;
+        if m.iter().any(|v| !v.is_finite()) {
+            return Err(RefineError::NonFinite(format!(
+                "generator: non-finite motion for action {}",
+                a + 1
+            )));
+        }
+        let arr = Array3::from_shape_vec((per_action, NET_FRAMES, FRAME_FEATURES), m)
+            .map_err(|e| RefineError::Shape(e.to_string()))?;
+        out.slice_mut(ndarray::s![a * per_action..(a + 1) * per_action, .., ..])
+            .assign(&arr);
+        labels.extend(std::iter::repeat_n(a as u32 + 1, per_action));
+    }
+    Ok((out, labels))
+}
+
+/// Refines canonical clips with their labels; returns the refined clips and
+/// the mean time per clip in milliseconds.
+pub fn refine_clips(
+    refiner: &NetRefiner<'_>,
+    clips: &Array3<f32>,
+    labels: &[u32],
+) -> Result<(Array3<f32>, f64, f64)> {
+    let mut out = clips.clone();
+    let t0 = Instant::now();
+    let mut changed = 0usize;
+    for (i, &a) in labels.iter().enumerate() {
+        let c = crate::motion::from_features(clips.index_axis(Axis(0), i))?;
+        let r = refiner.refine_canonical(c.view(), Some(a))?;
+        if r.report.changed() {
+            changed += 1;
+        }
+        out.index_axis_mut(Axis(0), i)
+            .assign(&to_features(r.clip.view()));
+    }
+    let n = labels.len().max(1) as f64;
+    Ok((
+        out,
+        t0.elapsed().as_secs_f64() * 1e3 / n,
+        changed as f64 / n,
+    ))
+}
+
+/// Quality of one set of clips against the real set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SetQuality {
+    /// FID against the real clips.
+    pub fid: f64,
+    /// Evaluator accuracy with the conditioning action as the label.
+    pub accuracy: f64,
+    /// Diversity (`S_d` pairs).
+    pub diversity: f64,
+    /// Multimodality (`S_m` pairs per action).
+    pub multimodality: f64,
+    /// FID per action against the real clips of that action.
+    pub per_action_fid: BTreeMap<u32, f64>,
+}
+
+fn set_quality(
+    feats: &Array2<f64>,
+    logits: &Array2<f64>,
+    labels: &[u32],
+    real: &Array2<f64>,
+    real_labels: &[u32],
+    q: &QualityParams,
+) -> Result<SetQuality> {
+    Ok(SetQuality {
+        fid: fid(feats.view(), real.view())?,
+        accuracy: accuracy(logits.view(), labels)?,
+        diversity: diversity(feats.view(), q)?,
+        multimodality: multimodality(feats.view(), labels, q)?,
+        per_action_fid: per_action_fid(feats.view(), labels, real.view(), real_labels)?,
+    })
+}
+
+/// Generated-motion results.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GeneratedReport {
+    /// Generated clips.
+    pub n_samples: usize,
+    /// Real clips the features are compared with.
+    pub n_real: usize,
+    /// The real clips themselves (accuracy of the evaluator, diversity, …; FID of
+    /// the held-out subjects' clips against the rest).
+    pub real: SetQuality,
+    /// Before refinement.
+    pub before: SetQuality,
+    /// After refinement.
+    pub after: SetQuality,
+    /// Share of generated clips the refinement changed.
+    pub changed_share: f64,
+    /// Mean refinement time per clip (ms, this machine, inside the evaluation).
+    pub refine_ms_per_clip: f64,
+}
+
+/// One ablation setting on generated clips and injected flaws.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AblationRow {
+    /// Setting.
+    pub name: String,
+    /// FID after refinement.
+    pub fid_after: f64,
+    /// Accuracy after refinement.
+    pub accuracy_after: f64,
+    /// Share of generated clips changed.
+    pub changed_share: f64,
+    /// Injected flaws: MPJPE after refinement (metres).
+    pub injected_mpjpe_after_m: f64,
+    /// Injected flaws: relative reduction.
+    pub injected_reduction: f64,
+    /// Clean clips: MPJPE change (metres).
+    pub clean_change_m: f64,
+}
+
+/// Anchor samples (canonical clips, anchors of the spline segmentation) of
+/// a track labelled `action`, in the feature of `params`.
+pub fn canonical_anchor_samples(
+    track: &Track,
+    action: u32,
+    seg: &SegmentParams,
+    params: &ConceptParams,
+) -> Result<Vec<AnchorSample>> {
+    let (c, frame) = canonicalize(track)?;
+    let dur = (frame.source_frames.saturating_sub(1)) as f64 / frame.source_fps;
+    let fps = if dur > 0.0 {
+        (NET_FRAMES - 1) as f64 / dur
+    } else {
+        frame.source_fps
+    };
+    let t = Track::new(c.clone(), None, fps, Units::Metres, Skeleton::msr20())?;
+    let s = segment_track(&t, seg)?;
+    let root = Some(params.root_joint.unwrap_or(HIP_CENTRE));
+    s.anchors
+        .iter()
+        .map(|&a| {
+            Ok(AnchorSample {
+                action,
+                feature: anchor_feature(c.index_axis(Axis(0), a), root, params.scale_normalise)?,
+            })
+        })
+        .collect()
+}
+
+/// Anchor samples of the MSR clips `idx`.
+pub fn msr_anchor_samples(
+    data: &MsrAction3D,
+    idx: &[usize],
+    seg: &SegmentParams,
+    params: &ConceptParams,
+) -> Result<Vec<AnchorSample>> {
+    let mut out = Vec::new();
+    for &i in idx {
+        let tr = data.clip(i)?;
+        out.extend(canonical_anchor_samples(
+            &tr,
+            data.clip_info(i)?.action,
+            seg,
+            params,
+        )?);
+    }
+    Ok(out)
+}
+
+/// The full evaluation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RefineEvalReport {
+    /// Injected flaws on held-out clips.
+    pub injected: InjectedReport,
+    /// Generated motion.
+    pub generated: GeneratedReport,
+    /// Ablation rows (empty when disabled).
+    pub ablation: Vec<AblationRow>,
+}
+
+/// Runs the whole evaluation with `concepts` (GMM scoring) and the networks.
+pub fn evaluate(
+    data: &MsrAction3D,
+    nets: &RefineNets,
+    concepts: &Concepts,
+    params: &RefineEvalParams,
+) -> Result<RefineEvalReport> {
+    params.validate()?;
+    let refiner = NetRefiner::new(nets, concepts, &params.refine)?;
+    let injected = evaluate_injected_nets(data, &refiner, params)?;
+
+    // Real clips: every clip long enough; held-out subjects for the "real" row.
+    let subjects: Vec<u32> = {
+        let mut v: Vec<u32> = data.clips().iter().map(|c| c.subject).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let all_idx = clips_of_subjects(
+        data,
+        &subjects,
+        params.min_clip_frames,
+        params.max_clip_frames,
+    );
+    let (real, real_labels) = real_clips(data, &all_idx)?;
+    let (real_f, real_l) = evaluator_outputs(nets, &real)?;
+    let val_rows: Vec<usize> = all_idx
+        .iter()
+        .enumerate()
+        .filter(|(_, &i)| {
+            data.clip_info(i)
+                .map(|c| params.val_subjects.contains(&c.subject))
+                .unwrap_or(false)
+        })
+        .map(|(r, _)| r)
+        .collect();
+    let train_rows: Vec<usize> = (0..all_idx.len())
+        .filter(|r| !val_rows.contains(r))
+        .collect();
+    let pick = |x: &Array2<f64>, rows: &[usize]| x.select(Axis(0), rows);
+    let pick_l = |rows: &[usize]| rows.iter().map(|&r| real_labels[r]).collect::<Vec<u32>>();
+    let real_q = {
+        let vf = pick(&real_f, &val_rows);
+        let vl = pick(&real_l, &val_rows);
+        let lab = pick_l(&val_rows);
+        let tf = pick(&real_f, &train_rows);
+        set_quality(&vf, &vl, &lab, &tf, &pick_l(&train_rows), &params.quality)?
+    };
+
+    let (gen, labels) = generate_clips(nets, params.samples_per_action, params.seed)?;
+    let (gf, gl) = evaluator_outputs(nets, &gen)?;
+    let before = set_quality(&gf, &gl, &labels, &real_f, &real_labels, &params.quality)?;
+    let (refined, ms, changed) = refine_clips(&refiner, &gen, &labels)?;
+    let (rf, rl) = evaluator_outputs(nets, &refined)?;
+    let after = set_quality(&rf, &rl, &labels, &real_f, &real_labels, &params.quality)?;
+    let generated = GeneratedReport {
+        n_samples: labels.len(),
+        n_real: real_labels.len(),
+        real: real_q,
+        before,
+        after,
+        changed_share: changed,
+        refine_ms_per_clip: ms,
+    };
+
+    let mut ablation = Vec::new();
+    if params.ablation {
+        let train_subjects: Vec<u32> = subjects
+            .iter()
+            .copied()
+            .filter(|s| !params.val_subjects.contains(s))
+            .collect();
+        let train_idx = clips_of_subjects(
+            data,
+            &train_subjects,
+            params.min_clip_frames,
+            params.max_clip_frames,
+        );
+        let kmeans_params = ConceptParams {
+            root_joint: Some(HIP_CENTRE),
+            seed: params.seed,
+            score_quantile: params.score_quantile,
+            ..concepts.params.clone()
+        };
+        let samples = msr_anchor_samples(data, &train_idx, &params.segment, &kmeans_params)?;
+        let kmeans = learn_concepts(&samples, &kmeans_params)?;
+        let dbscan = learn_concepts(
+            &samples,
+            &ConceptParams {
+                method: params.dbscan.clone(),
+                ..kmeans_params.clone()
+            },
+        )?;
+        let th_k = nearest_concept_thresholds(&kmeans, &samples, params.score_quantile)?;
+        let th_d = nearest_concept_thresholds(&dbscan, &samples, params.score_quantile)?;
+        let anchors_only = NetRefineParams {
+            mode: RefineMode::AnchorsOnly,
+            ..params.refine.clone()
+        };
+        let network_repair = NetRefineParams {
+            anchor_repair: AnchorRepair::Network,
+            ..params.refine.clone()
+        };
+        let segmentation = NetRefineParams {
+            anchor_source: AnchorDetection::Segmentation,
+            ..params.refine.clone()
+        };
+        let generator = NetRefineParams {
+            transition_method: TransitionMethod::Generator,
+            ..params.refine.clone()
+        };
+        let settings: Vec<Setting<'_>> = vec![
+            ("anchors_only_gmm", concepts, &anchors_only, None),
+            ("anchors_transitions_gmm", concepts, &params.refine, None),
+            ("anchor_network_repair", concepts, &network_repair, None),
+            ("segmentation_anchors", concepts, &segmentation, None),
+            ("generator_transitions", concepts, &generator, None),
+            (
+                "anchors_transitions_nearest_kmeans",
+                &kmeans,
+                &params.refine,
+                Some(&th_k),
+            ),
+            (
+                "anchors_transitions_nearest_dbscan",
+                &dbscan,
+                &params.refine,
+                Some(&th_d),
+            ),
+        ];
+        for (name, c, p, th) in settings {
+            let mut r = NetRefiner::new(nets, c, p)?;
+            if let Some(t) = th {
+                r = r.with_nearest_concept(t);
+            }
+            let inj = evaluate_injected_nets(data, &r, params)?;
+            let (refined, _, changed) = refine_clips(&r, &gen, &labels)?;
+            let (rf, rl) = evaluator_outputs(nets, &refined)?;
+            ablation.push(AblationRow {
+                name: name.to_string(),
+                fid_after: fid(rf.view(), real_f.view())?,
+                accuracy_after: accuracy(rl.view(), &labels)?,
+                changed_share: changed,
+                injected_mpjpe_after_m: inj.mpjpe_after_m,
+                injected_reduction: inj.reduction,
+                clean_change_m: inj.clean_change_m,
+            });
+        }
+    }
+    Ok(RefineEvalReport {
+        injected,
+        generated,
+        ablation,
+    })
+}

@@ -1,0 +1,266 @@
+//! Tests of the refinement networks (ONNX Runtime vs PyTorch parity) and of
+//! the learned refinement pipeline on held-out MSR Action3D clips.
+//!
+//! They need the committed models (`models/refine/*.onnx`, `manifest.json`,
+//! `parity.npz`, `concepts.json`), ONNX Runtime (`cargo xtask setup`) and
+//! the shared MSR Action3D file; each fails with a message naming what is missing.
+
+use std::sync::OnceLock;
+
+use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::io::npz::Npz;
+use mp_geom::{Skeleton, Track, Units};
+use mp_pose::SessionParams;
+use mp_refine::baseline::full_confidence;
+use mp_refine::eval_refine::clips_of_subjects;
+use mp_refine::flaws::{inject, AnchorSource, Flaw};
+use mp_refine::nets::{find_model_dir, NetKind, RefineNets};
+use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode};
+use mp_refine::{mpjpe_abs, Concepts, RefineError};
+use ndarray::Array3;
+
+struct Fixture {
+    nets: RefineNets,
+    concepts: Concepts,
+    data: MsrAction3D,
+}
+
+fn fixture() -> &'static Fixture {
+    static F: OnceLock<Fixture> = OnceLock::new();
+    F.get_or_init(|| {
+        let dir = find_model_dir().expect("refinement models missing (models/refine/manifest.json)");
+        let nets = RefineNets::load(&dir, &SessionParams::default())
+            .unwrap_or_else(|e| panic!("loading the refinement networks from {}: {e}", dir.display()));
+        let text = std::fs::read_to_string(dir.join("concepts.json"))
+            .expect("models/refine/concepts.json missing");
+        let concepts = Concepts::from_json(&text).unwrap();
+        let data = MsrAction3D::open_default().expect(
+            "MSR Action3D is missing from ../shared/data (msr_action3d/msr_action3d_odd_subjects.npz)",
+        );
+        Fixture {
+            nets,
+            concepts,
+            data,
+        }
+    })
+}
+
+#[test]
+fn every_network_matches_pytorch_within_1e_4() {
+    let f = fixture();
+    let path = f.nets.dir().join("parity.npz");
+    let z = Npz::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    for kind in NetKind::ALL {
+        let mut owned = Vec::new();
+        for name in kind.input_names() {
+            let key = format!("{}.{name}", kind.name());
+            let a = z
+                .array_f64(&key)
+                .unwrap_or_else(|e| panic!("parity.npz has no `{key}`: {e}"));
+            let shape = a.shape().to_vec();
+            let data: Vec<f32> = a.iter().map(|&v| v as f32).collect();
+            owned.push((name, shape, data));
+        }
+        let inputs: Vec<_> = owned
+            .iter()
+            .map(|(n, s, d)| (*n, s.clone(), d.as_slice()))
+            .collect();
+        let outs = f.nets.run_named(kind, &inputs).unwrap();
+        assert_eq!(outs.len(), kind.output_names().len());
+        for (name, shape, data) in outs {
+            let key = format!("{}.{name}", kind.name());
+            let want = z
+                .array_f64(&key)
+                .unwrap_or_else(|e| panic!("parity.npz has no `{key}`: {e}"));
+            assert_eq!(shape, want.shape().to_vec(), "{key}");
+            let worst = data
+                .iter()
+                .zip(want.iter())
+                .map(|(a, b)| (*a as f64 - b).abs() / b.abs().max(1.0))
+                .fold(0.0f64, f64::max);
+            assert!(worst < 1e-4, "{key}: largest difference {worst:e}");
+        }
+    }
+}
+
+#[test]
+fn bad_input_gives_typed_errors() {
+    let f = fixture();
+    let params = NetRefineParams::default();
+    let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
+    let coco = Track::new(
+        Array3::zeros((30, 17, 3)),
+        None,
+        15.0,
+        Units::Metres,
+        Skeleton::coco17(),
+    )
+    .unwrap();
+    assert!(matches!(
+        r.refine_track(&coco, Some(1)),
+        Err(RefineError::JointCount {
+            expected: 20,
+            got: 17,
+            ..
+        })
+    ));
+    let clip = f.data.clip(0).unwrap();
+    let short = Track::new(
+        clip.positions().slice(ndarray::s![..5, .., ..]).to_owned(),
+        None,
+        15.0,
+        Units::Metres,
+        Skeleton::msr20(),
+    )
+    .unwrap();
+    assert!(matches!(
+        r.refine_track(&short, Some(1)),
+        Err(RefineError::TooShort {
+            needed: 8,
+            got: 5,
+            ..
+        })
+    ));
+    assert!(matches!(
+        r.refine_track(&clip, Some(99)),
+        Err(RefineError::UnknownAction(99))
+    ));
+    assert!(matches!(
+        r.refine_canonical(Array3::<f64>::zeros((30, 20, 3)).view(), Some(1)),
+        Err(RefineError::Shape(_))
+    ));
+    assert!(matches!(
+        RefineNets::load("/nonexistent/models/refine", &SessionParams::default()),
+        Err(RefineError::ModelMissing { .. })
+    ));
+    // Wrong batch sizes at the network level.
+    assert!(matches!(
+        f.nets.anchor_logits(&[0.0; 59]),
+        Err(RefineError::Shape(_))
+    ));
+}
+
+/// Held-out clips (subject 9), every 4th, with full confidence.
+fn heldout(f: &Fixture) -> Vec<(Track, u32)> {
+    clips_of_subjects(&f.data, &[9], 8, 180)
+        .into_iter()
+        .step_by(4)
+        .map(|i| {
+            (
+                full_confidence(&f.data.clip(i).unwrap()).unwrap(),
+                f.data.clip_info(i).unwrap().action,
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn refining_clean_clips_changes_them_little() {
+    let f = fixture();
+    let params = NetRefineParams::default();
+    let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
+    let clips = heldout(f);
+    let mut changes = Vec::new();
+    for (clean, action) in &clips {
+        let out = r.refine_track(clean, Some(*action)).unwrap();
+        assert_eq!(out.track.n_frames(), clean.n_frames());
+        changes.push(mpjpe_abs(&out.track, clean).unwrap());
+    }
+    let mean = changes.iter().sum::<f64>() / changes.len() as f64;
+    eprintln!(
+        "clean change: mean {:.2} mm over {} clips",
+        mean * 1e3,
+        changes.len()
+    );
+    // Measured 0.0 mm with the committed networks (no clean held-out clip
+    // has a rejected anchor that can be bridged, nor a transition over the
+    // deviation threshold). Bound 2 mm: a sixth of the 12 mm that the
+    // transition networks miss on clean transitions, so a refinement that
+    // regenerated every clip would fail.
+    assert!(
+        mean < 0.002,
+        "mean change of clean clips {:.2} mm",
+        mean * 1e3
+    );
+}
+
+/// The clip upside down about its hip centre: an implausible pose for
+/// every action, so the mixture must reject it where it is blended in.
+fn upside_down(t: &Track) -> Track {
+    let mut p = t.positions().to_owned();
+    for mut frame in p.outer_iter_mut() {
+        let hip = frame[[6, 1]];
+        for mut j in frame.outer_iter_mut() {
+            j[1] = 2.0 * hip - j[1];
+        }
+    }
+    Track::new(p, None, t.fps(), Units::Metres, Skeleton::msr20()).unwrap()
+}
+
+#[test]
+fn implausible_anchor_is_repaired() {
+    let f = fixture();
+    let params = NetRefineParams::default();
+    let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
+    let (mut before, mut after) = (0.0, 0.0);
+    let mut n = 0;
+    for (i, (clean, action)) in heldout(f).iter().enumerate() {
+        let flaw = Flaw::WrongAnchor {
+            half_width_frames: 1,
+            source: AnchorSource::OtherClip(upside_down(clean)),
+        };
+        let Ok(inj) = inject(clean, &flaw, i as u64) else {
+            continue;
+        };
+        let out = r.refine_track(&inj.track, Some(*action)).unwrap();
+        before += mpjpe_abs(&inj.track, clean).unwrap();
+        after += mpjpe_abs(&out.track, clean).unwrap();
+        n += 1;
+    }
+    assert!(n >= 5, "only {n} clips");
+    eprintln!(
+        "implausible anchor: MPJPE {:.2} → {:.2} mm over {n} clips",
+        before / n as f64 * 1e3,
+        after / n as f64 * 1e3
+    );
+    // Measured 48.3 → 35.2 mm (−27 %): the upside-down poses are rejected
+    // and bridged. Poses of other actions or phases are not (their scores
+    // stay above the thresholds), see docs/RESULTS.md.
+    assert!(after < 0.8 * before, "before {before}, after {after}");
+}
+
+#[test]
+fn anchor_only_mode_touches_no_deviation_transition() {
+    let f = fixture();
+    let params = NetRefineParams {
+        mode: RefineMode::AnchorsOnly,
+        ..NetRefineParams::default()
+    };
+    let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
+    for (clean, action) in heldout(f).iter().take(6) {
+        let out = r.refine_track(clean, Some(*action)).unwrap();
+        for t in &out.report.transitions {
+            assert_ne!(
+                t.refined,
+                Some(mp_refine::pipeline::TransitionReason::Deviation)
+            );
+        }
+        // Anchors are increasing, first and last frame included.
+        let fr: Vec<usize> = out.report.anchors.iter().map(|a| a.frame).collect();
+        assert_eq!(fr.first(), Some(&0));
+        assert_eq!(fr.last(), Some(&59));
+        assert!(fr.windows(2).all(|w| w[0] < w[1]));
+    }
+}
+
+#[test]
+fn generator_and_evaluator_run_and_are_seeded() {
+    let f = fixture();
+    let (a, la) = mp_refine::eval_refine::generate_clips(&f.nets, 2, 7).unwrap();
+    let (b, _) = mp_refine::eval_refine::generate_clips(&f.nets, 2, 7).unwrap();
+    assert_eq!(a, b);
+    assert_eq!(la.len(), 40);
+    let (feats, logits) = mp_refine::eval_refine::evaluator_outputs(&f.nets, &a).unwrap();
+    assert_eq!(feats.nrows(), 40);
+    assert_eq!(logits.ncols(), 20);
+}

@@ -1,0 +1,192 @@
+//! `cargo xtask train-refine`: builds the refinement training set
+//! (`mp_refine::dataset`) into `.cache/refine/`, then trains the six
+//! refinement networks with PyTorch (`tools/refine/train.py`, CPU) and
+//! exports them to ONNX with `manifest.json`, `parity.npz` and
+//! `concepts.json` under `models/refine/`.
+//!
+//! The training environment is the one of `train-forecast`
+//! (`.cache/venv-train`); ONNX Runtime's Python package is added to it on
+//! first use to check every exported network against PyTorch.
+
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use mp_geom::io::datasets::MsrAction3D;
+use mp_refine::dataset::{build_training_set, DatasetParams};
+
+/// Arguments of `cargo xtask train-refine`.
+#[derive(Args, Debug)]
+pub struct TrainRefineArgs {
+    /// MSR Action3D folder (holding `msr_action3d_odd_subjects.npz`) or the npz itself.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Folder of CMU BVH takes added as extra (unlabelled) motion; every `*.bvh` in it is used
+    /// (default: the shared `cmu_salsa_bvh` folder when it exists).
+    #[arg(long)]
+    pub bvh: Option<PathBuf>,
+    /// Train on MSR Action3D only (no BVH takes).
+    #[arg(long)]
+    pub no_bvh: bool,
+    /// Training length multiplier: each network trains for this many passes
+    /// over its training examples (times its own factor in train.py).
+    #[arg(long, default_value_t = 100)]
+    pub epochs: usize,
+    /// Output folder of the ONNX files, manifest, parity data and concepts.
+    #[arg(long, default_value = "models/refine")]
+    pub out: PathBuf,
+    /// Seed of the concepts and of the training.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Build the dataset and concepts only.
+    #[arg(long)]
+    pub dataset_only: bool,
+    /// Extra arguments passed to train.py (e.g. `--only evaluator`).
+    #[arg(last = true)]
+    pub extra: Vec<String>,
+}
+
+fn msr_file(data: &Option<PathBuf>) -> Result<PathBuf> {
+    let p = match data {
+        Some(p) if p.is_dir() => p.join("msr_action3d_odd_subjects.npz"),
+        Some(p) => p.clone(),
+        None => mp_geom::paths::data_file(MsrAction3D::FILE).context(
+            "no --data given and the shared MSR Action3D file was not found (set MP_DATA_DIR)",
+        )?,
+    };
+    if !p.is_file() {
+        bail!("{}: no such file", p.display());
+    }
+    Ok(p)
+}
+
+fn bvh_files(a: &TrainRefineArgs) -> Result<Vec<PathBuf>> {
+    if a.no_bvh {
+        return Ok(Vec::new());
+    }
+    let dir = match &a.bvh {
+        Some(d) => d.clone(),
+        None => match mp_geom::paths::data_dir() {
+            Some(d) if d.join("cmu_salsa_bvh").is_dir() => d.join("cmu_salsa_bvh"),
+            _ => return Ok(Vec::new()),
+        },
+    };
+    let dir = &dir;
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("reading {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("bvh")))
+        .collect();
+    v.sort();
+    if v.is_empty() {
+        bail!("{}: no .bvh files", dir.display());
+    }
+    Ok(v)
+}
+
+fn ensure_onnxruntime(python: &std::path::Path) -> Result<()> {
+    let ok = Command::new(python)
+        .args(["-c", "import onnxruntime"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if !ok {
+        println!("train-refine: pip install onnxruntime");
+        let st = Command::new(python)
+            .args(["-m", "pip", "install", "-q", "onnxruntime"])
+            .status()
+            .context("starting pip")?;
+        if !st.success() {
+            bail!("pip install onnxruntime failed");
+        }
+    }
+    Ok(())
+}
+
+pub fn run(a: &TrainRefineArgs) -> Result<()> {
+    let root = crate::setup::workspace_root();
+    let msr_path = msr_file(&a.data)?;
+    let bvh = bvh_files(a)?;
+    let out = if a.out.is_absolute() {
+        a.out.clone()
+    } else {
+        root.join(&a.out)
+    };
+    let cache = root.join(".cache/refine");
+    std::fs::create_dir_all(&cache).with_context(|| format!("creating {}", cache.display()))?;
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+
+    let t0 = Instant::now();
+    let msr = MsrAction3D::open(&msr_path)?;
+    let params = DatasetParams {
+        seed: a.seed,
+        ..DatasetParams::default()
+    };
+    let set = build_training_set(&msr, &bvh, &params)?;
+    let ds_path = cache.join("refine_dataset.npz");
+    set.write_npz(&ds_path)?;
+    std::fs::write(out.join("concepts.json"), set.concepts.to_json()?)
+        .with_context(|| format!("writing {}", out.join("concepts.json").display()))?;
+    let n_val = set.split.iter().filter(|&&s| s == 1).count();
+    let n_mocap = set.action.iter().filter(|&&x| x < 0).count();
+    let n_anchor: i64 = set.anchor.sum();
+    println!(
+        "train-refine: {} BVH takes; {} clips ({} validation, {} mocap windows), {} anchors, dataset {} and concepts {} in {:.1} s",
+        bvh.len(),
+        set.len(),
+        n_val,
+        n_mocap,
+        n_anchor,
+        ds_path.display(),
+        out.join("concepts.json").display(),
+        t0.elapsed().as_secs_f64()
+    );
+    if a.dataset_only {
+        return Ok(());
+    }
+
+    let python = crate::train_forecast::venv_python(&root)?;
+    ensure_onnxruntime(&python)?;
+    let command = format!(
+        "cargo xtask train-refine --data {}{} --epochs {} --seed {} --out {}{}",
+        a.data
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| msr_path.display().to_string()),
+        match (&a.bvh, a.no_bvh) {
+            (_, true) => " --no-bvh".to_string(),
+            (Some(p), false) => format!(" --bvh {}", p.display()),
+            (None, false) => String::new(),
+        },
+        a.epochs,
+        a.seed,
+        a.out.display(),
+        if a.extra.is_empty() {
+            String::new()
+        } else {
+            format!(" -- {}", a.extra.join(" "))
+        }
+    );
+    println!("train-refine: {command}");
+    let st = Command::new(&python)
+        .arg(root.join("tools/refine/train.py"))
+        .arg("--dataset")
+        .arg(&ds_path)
+        .arg("--out")
+        .arg(&out)
+        .args(["--epochs", &a.epochs.to_string()])
+        .args(["--seed", &a.seed.to_string()])
+        .args(["--command", &command])
+        .args(&a.extra)
+        .env("OMP_WAIT_POLICY", "PASSIVE")
+        .current_dir(&root)
+        .status()
+        .context("starting tools/refine/train.py")?;
+    if !st.success() {
+        bail!("tools/refine/train.py failed ({st})");
+    }
+    println!("train-refine: networks written under {}", out.display());
+    Ok(())
+}
