@@ -26,6 +26,7 @@
 #![allow(clippy::needless_range_loop, clippy::manual_memcpy)]
 
 use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::metrics::nanmean;
 use mp_geom::Track;
 use ndarray::s;
 use serde::{Deserialize, Serialize};
@@ -494,16 +495,6 @@ pub struct EvalReport {
     pub flaws: Vec<FlawReport>,
 }
 
-/// Mean of the finite values (NaN when there is none).
-fn mean(v: &[f64]) -> f64 {
-    let x: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if x.is_empty() {
-        f64::NAN
-    } else {
-        x.iter().sum::<f64>() / x.len() as f64
-    }
-}
-
 /// The track with confidence 1 everywhere.
 ///
 /// MSR Action3D's `conf` is the Kinect tracking state: 0 marks an *inferred*
@@ -619,7 +610,7 @@ pub fn evaluate_injected(data: &MsrAction3D, params: &EvalParams) -> Result<Eval
                     .filter(|(f, e)| sel(*f) && e.is_finite())
                     .map(|(_, e)| *e)
                     .collect();
-                mean(&x)
+                nanmean(&x)
             };
             let all = |_: usize| true;
             let masked = |f: usize| inj.mask[f];
@@ -646,20 +637,20 @@ pub fn evaluate_injected(data: &MsrAction3D, params: &EvalParams) -> Result<Eval
         .map(|(f, a)| FlawReport {
             flaw: f.name().to_string(),
             n_clips: a[0].len(),
-            mpjpe_before_m: mean(&a[0]),
-            mpjpe_after_m: mean(&a[1]),
-            masked_before_m: mean(&a[2]),
-            masked_after_m: mean(&a[3]),
-            detection_precision: mean(&a[4]),
-            detection_recall: mean(&a[5]),
+            mpjpe_before_m: nanmean(&a[0]),
+            mpjpe_after_m: nanmean(&a[1]),
+            masked_before_m: nanmean(&a[2]),
+            masked_after_m: nanmean(&a[3]),
+            detection_precision: nanmean(&a[4]),
+            detection_recall: nanmean(&a[5]),
         })
         .collect();
     Ok(EvalReport {
         n_clips: idx.len(),
-        mean_anchors: mean(&anchors),
-        mean_frames: mean(&frames),
-        reconstruction_mpjpe_m: mean(&recon),
-        clean_change_m: mean(&clean_change),
+        mean_anchors: nanmean(&anchors),
+        mean_frames: nanmean(&frames),
+        reconstruction_mpjpe_m: nanmean(&recon),
+        clean_change_m: nanmean(&clean_change),
         flaws,
     })
 }

@@ -17,6 +17,7 @@
 //!   clustering) vs the distance to the nearest concept with concepts from
 //!   k-means or DBSCAN.
 
+use mp_geom::metrics::nanmean;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -202,15 +203,6 @@ pub struct InjectedReport {
     pub per_flaw: Vec<InjectedFlawReport>,
 }
 
-fn mean(v: &[f64]) -> f64 {
-    let x: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if x.is_empty() {
-        f64::NAN
-    } else {
-        x.iter().sum::<f64>() / x.len() as f64
-    }
-}
-
 fn spread(v: Vec<usize>, n: Option<usize>) -> Vec<usize> {
     match n {
         Some(n) if n > 0 && n < v.len() => (0..n).map(|i| v[i * v.len() / n]).collect(),
@@ -326,23 +318,23 @@ pub fn evaluate_injected_nets(
                 EvalFlaw::WrongAnchorOtherAction { .. } => "wrong_anchor_clip".into(),
             },
             n_clips: a[0].len(),
-            mpjpe_before_m: mean(&a[0]),
-            mpjpe_after_m: mean(&a[1]),
-            baseline_after_m: mean(&a[2]),
-            changed_share: mean(&a[3]),
+            mpjpe_before_m: nanmean(&a[0]),
+            mpjpe_after_m: nanmean(&a[1]),
+            baseline_after_m: nanmean(&a[2]),
+            changed_share: nanmean(&a[3]),
         })
         .collect();
     let all = |k: usize| -> Vec<f64> { acc.iter().flat_map(|a| a[k].clone()).collect() };
-    let before = mean(&all(0));
-    let after = mean(&all(1));
+    let before = nanmean(&all(0));
+    let after = nanmean(&all(1));
     Ok(InjectedReport {
         n_clips: idx.len(),
         mpjpe_before_m: before,
         mpjpe_after_m: after,
-        baseline_after_m: mean(&all(2)),
+        baseline_after_m: nanmean(&all(2)),
         reduction: 1.0 - after / before,
-        clean_change_m: mean(&clean_change),
-        clean_changed_share: mean(&clean_changed),
+        clean_change_m: nanmean(&clean_change),
+        clean_changed_share: nanmean(&clean_changed),
         per_flaw,
     })
 }
