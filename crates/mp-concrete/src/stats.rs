@@ -2,8 +2,8 @@
 
 use std::collections::BTreeMap;
 
-use mp_geom::Track;
-use ndarray::ArrayView3;
+use mp_geom::metrics::{self, Poses};
+use mp_geom::{GeomError, Track};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{ConcreteError, Result};
@@ -37,59 +37,6 @@ pub struct ProgramStats {
     pub max_jump_program: f64,
 }
 
-/// Mean Euclidean distance between `a` and `b` (`T × J × D`) over entries
-/// with `conf > min_conf` (`T × J`); `None` when there is none.
-pub fn keypoint_difference(
-    a: ArrayView3<'_, f64>,
-    b: ArrayView3<'_, f64>,
-    conf: ndarray::ArrayView2<'_, f64>,
-    min_conf: f64,
-) -> Option<f64> {
-    let (t, j, d) = a.dim();
-    let (mut sum, mut n) = (0.0, 0usize);
-    for ti in 0..t {
-        for ji in 0..j {
-            if conf[[ti, ji]] > min_conf {
-                let mut s = 0.0;
-                for k in 0..d {
-                    let e = a[[ti, ji, k]] - b[[ti, ji, k]];
-                    s += e * e;
-                }
-                sum += s.sqrt();
-                n += 1;
-            }
-        }
-    }
-    (n > 0).then(|| sum / n as f64)
-}
-
-/// Largest adjacent-frame displacement of any joint, counting only pairs of
-/// frames where both have `conf > min_conf` (all pairs when `conf` is `None`).
-pub fn max_adjacent_jump(
-    pos: ArrayView3<'_, f64>,
-    conf: Option<ndarray::ArrayView2<'_, f64>>,
-    min_conf: f64,
-) -> f64 {
-    let (t, j, d) = pos.dim();
-    let mut best = 0.0f64;
-    for ti in 1..t {
-        for ji in 0..j {
-            if let Some(c) = conf {
-                if !(c[[ti - 1, ji]] > min_conf && c[[ti, ji]] > min_conf) {
-                    continue;
-                }
-            }
-            let mut s = 0.0;
-            for k in 0..d {
-                let e = pos[[ti, ji, k]] - pos[[ti - 1, ji, k]];
-                s += e * e;
-            }
-            best = best.max(s.sqrt());
-        }
-    }
-    best
-}
-
 fn check_compatible(program: &Program, track: &Track) -> Result<()> {
     if program.n_frames() != track.n_frames()
         || program.n_joints() != track.n_joints()
@@ -113,8 +60,21 @@ pub fn program_stats(program: &Program, track: &Track) -> Result<ProgramStats> {
     program.validate()?;
     check_compatible(program, track)?;
     let exec = program.execute_with(&ExecParams::default())?;
-    let kd = keypoint_difference(exec.positions(), track.positions(), track.confidence(), 0.0)
-        .ok_or_else(|| ConcreteError::Track("no observed keypoint to compare".into()))?;
+    let kd = metrics::kd(&exec, track).map_err(|e| match e {
+        GeomError::NoData(_) => ConcreteError::Track("no observed keypoint to compare".into()),
+        e => e.into(),
+    })?;
+    // Largest adjacent-frame jump: of the observed joints of the track, of
+    // every joint of the program (0 for a single frame).
+    let jump = |p: Poses<'_>| -> Result<f64> {
+        if track.n_frames() < 2 {
+            return Ok(0.0);
+        }
+        match metrics::max_adjacent_jump(p) {
+            Err(GeomError::NoData(_)) => Ok(0.0),
+            r => Ok(r?),
+        }
+    };
     let kinds = program
         .kind_counts()
         .into_iter()
@@ -129,7 +89,7 @@ pub fn program_stats(program: &Program, track: &Track) -> Result<ProgramStats> {
         params_program: program.n_params(),
         params_raw: track.n_frames() * track.n_joints() * track.dims(),
         kd,
-        max_jump_raw: max_adjacent_jump(track.positions(), Some(track.confidence()), 0.0),
-        max_jump_program: max_adjacent_jump(exec.positions(), None, 0.0),
+        max_jump_raw: jump(track.into())?,
+        max_jump_program: jump(exec.positions().into())?,
     })
 }

@@ -17,18 +17,22 @@ use mp_pose::SessionParams;
 use ndarray::{Array2, Array3};
 use serde_json::Value;
 
-fn models() -> Arc<ForecastModels> {
-    let dir = find_model_dir("penn_action")
-        .expect("models/forecast/penn_action is part of the repository");
+fn models_of(dataset: &str) -> Arc<ForecastModels> {
+    let dir = find_model_dir(dataset)
+        .unwrap_or_else(|e| panic!("models/forecast/{dataset} is part of the repository: {e}"));
     Arc::new(
         ForecastModels::load(dir, &SessionParams::default())
             .expect("ONNX Runtime: run `cargo xtask setup`"),
     )
 }
 
-fn fixture() -> Value {
+fn models() -> Arc<ForecastModels> {
+    models_of("penn_action")
+}
+
+fn fixture(dataset: &str) -> Value {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../testdata/forecast/penn_action_parity.json");
+        .join(format!("../../testdata/forecast/{dataset}_parity.json"));
     serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap()
 }
 
@@ -55,24 +59,30 @@ fn max_diff(a: &[f32], b: &[f32]) -> f32 {
 
 #[test]
 fn onnx_matches_the_pytorch_export_within_1e4() {
-    let m = models();
-    let fx = fixture();
+    for dataset in ["penn_action", "msr_action3d"] {
+        parity(dataset);
+    }
+}
+
+fn parity(dataset: &str) {
+    let m = models_of(dataset);
+    let fx = fixture(dataset);
     let input = flat(&fx["input"]);
     let frames = fx["context_frames"].as_u64().unwrap() as usize;
     let horizon = fx["horizon"].as_u64().unwrap() as usize;
     let (_, pose) = m.encode(1, frames, &input).unwrap();
     let d = max_diff(&pose, &flat(&fx["encoder_pose"]));
-    assert!(d < 1e-4, "encoder pose differs by {d}");
+    assert!(d < 1e-4, "{dataset}: encoder pose differs by {d}");
     let roll = m
         .rollout_normalised(ArSpace::Latent, 1, frames, &input, horizon)
         .unwrap();
     let d = max_diff(&roll, &flat(&fx["latent_rollout"]));
-    assert!(d < 1e-4, "latent rollout differs by {d}");
+    assert!(d < 1e-4, "{dataset}: latent rollout differs by {d}");
     let roll = m
         .rollout_normalised(ArSpace::Pose, 1, frames, &input, horizon)
         .unwrap();
     let d = max_diff(&roll, &flat(&fx["pose_rollout"]));
-    assert!(d < 1e-4, "pose rollout differs by {d}");
+    assert!(d < 1e-4, "{dataset}: pose rollout differs by {d}");
 }
 
 #[test]
@@ -209,6 +219,41 @@ fn learned_model_beats_constant_on_real_penn_action_clips() {
     assert!(
         later(&a) > later(&c),
         "AR {:.1} vs constant {:.1}",
+        later(&a),
+        later(&c)
+    );
+}
+
+#[test]
+fn learned_3d_model_beats_constant_on_real_msr_action3d_clips() {
+    // the 30 validation clips, a start every 25th frame (SPEC's 3D protocol): PA-MPJPE with
+    // DTW averaged over the horizons 5–30 (mm, lower is better)
+    let ds = mp_forecast::data::ForecastDataset::open(
+        mp_geom::paths::data_file("msr_action3d/msr_action3d_odd_subjects.npz")
+            .expect("shared data: msr_action3d/msr_action3d_odd_subjects.npz (set MP_DATA_DIR)"),
+    )
+    .unwrap();
+    let (_, val) = ds.split();
+    let clips: Vec<EvalClip> = val.iter().map(|c| (*c).clone()).collect();
+    let params = EvalParams::for_track(&clips[0].track);
+    let ar = ArForecaster::new(
+        models_of("msr_action3d"),
+        ArSpace::Latent,
+        ArParams::default(),
+    )
+    .unwrap();
+    let a = evaluate(&ar, &clips, &params, |_, _| {}).unwrap();
+    let c = evaluate(&Constant, &clips, &params, |_, _| {}).unwrap();
+    let later = |r: &mp_forecast::MethodReport| {
+        ["h5", "h10", "h20", "h30"]
+            .iter()
+            .map(|h| r.metrics["pa_mpjpe_dtw"].overall[*h])
+            .sum::<f64>()
+            / 4.0
+    };
+    assert!(
+        later(&a) < 0.9 * later(&c),
+        "AR {:.1} mm vs constant {:.1} mm",
         later(&a),
         later(&c)
     );

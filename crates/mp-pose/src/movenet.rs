@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 
 use mp_geom::Skeleton;
 use ort::session::Session;
-use ort::value::TensorRef;
 
 use crate::error::{PoseError, Result};
 use crate::imageops::{crop_u8, Border, RgbView, Roi};
@@ -106,18 +105,7 @@ impl MoveNet {
     /// 17 × (y, x, score).
     pub fn run_tensor(&mut self, input: &[u8]) -> Result<Vec<[f32; 3]>> {
         let n = MOVENET_INPUT;
-        if input.len() != n * n * 3 {
-            return Err(PoseError::param(
-                "input",
-                format!(
-                    "MoveNet input needs {} values, got {}",
-                    n * n * 3,
-                    input.len()
-                ),
-            ));
-        }
-        let tensor = TensorRef::from_array_view(([1usize, n, n, 3], input))
-            .map_err(|e| PoseError::model(&self.name, e))?;
+        let tensor = runtime::image_tensor(input, n, &self.name, "MoveNet")?;
         let outputs = self
             .session
             .run(ort::inputs![INPUT_NAME => tensor])

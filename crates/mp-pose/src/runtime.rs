@@ -323,6 +323,31 @@ pub(crate) fn check_tensor(
     Ok(())
 }
 
+/// Wraps a prepared `[1, n, n, 3]` (NHWC) image input of `model` as a tensor,
+/// refusing a buffer of the wrong length (`what` names the input in the error).
+pub(crate) fn image_tensor<'a, T>(
+    input: &'a [T],
+    n: usize,
+    model: &str,
+    what: &str,
+) -> Result<ort::value::TensorRef<'a, T>>
+where
+    T: ort::value::PrimitiveTensorElementType + std::fmt::Debug + Clone + 'static,
+{
+    if input.len() != n * n * 3 {
+        return Err(PoseError::param(
+            "input",
+            format!(
+                "{what} input needs {} values, got {}",
+                n * n * 3,
+                input.len()
+            ),
+        ));
+    }
+    ort::value::TensorRef::from_array_view(([1usize, n, n, 3], input))
+        .map_err(|e| PoseError::model(model, e))
+}
+
 /// Reads a named f32 output of a run as (shape, data).
 pub(crate) fn output_f32<'a>(
     outputs: &'a ort::session::SessionOutputs<'_>,

@@ -5,7 +5,6 @@
 use std::path::Path;
 
 use ort::session::Session;
-use ort::value::TensorRef;
 
 use crate::error::{PoseError, Result};
 use crate::imageops::{crop_u8, to_f32, Border, RgbView, Roi};
@@ -294,18 +293,7 @@ impl PoseDetector {
     /// returns the decoded detections after NMS (normalised square coordinates).
     pub fn run_tensor(&mut self, input: &[f32]) -> Result<Vec<Detection>> {
         let n = DETECTOR_INPUT;
-        if input.len() != n * n * 3 {
-            return Err(PoseError::param(
-                "input",
-                format!(
-                    "detector input needs {} values, got {}",
-                    n * n * 3,
-                    input.len()
-                ),
-            ));
-        }
-        let tensor = TensorRef::from_array_view(([1usize, n, n, 3], input))
-            .map_err(|e| PoseError::model(&self.name, e))?;
+        let tensor = runtime::image_tensor(input, n, &self.name, "detector")?;
         let outputs = self
             .session
             .run(ort::inputs![INPUT_NAME => tensor])

@@ -5,7 +5,6 @@
 use std::path::Path;
 
 use ort::session::{HasSelectedOutputs, OutputSelector, RunOptions, Session};
-use ort::value::TensorRef;
 
 use crate::error::{PoseError, Result};
 use crate::imageops::{crop_u8, to_f32, Border, RgbView, Roi};
@@ -257,18 +256,7 @@ impl LandmarkModel {
     /// Runs the model on a prepared `[1, 256, 256, 3]` input in [0, 1].
     pub fn run_tensor(&mut self, input: &[f32]) -> Result<LandmarkOutput> {
         let n = LANDMARK_INPUT;
-        if input.len() != n * n * 3 {
-            return Err(PoseError::param(
-                "input",
-                format!(
-                    "landmark input needs {} values, got {}",
-                    n * n * 3,
-                    input.len()
-                ),
-            ));
-        }
-        let tensor = TensorRef::from_array_view(([1usize, n, n, 3], input))
-            .map_err(|e| PoseError::model(&self.name, e))?;
+        let tensor = runtime::image_tensor(input, n, &self.name, "landmark")?;
         let outputs = self
             .session
             .run_with_options(ort::inputs![INPUT_NAME => tensor], &self.run_options)
