@@ -445,6 +445,20 @@ fn eval_penn(path: &Path, max_clips: usize) -> anyhow::Result<Value> {
         let mut m = Map::new();
         m.insert("clips".into(), json!(rows.len()));
         m.insert("loop_found_fraction".into(), json!(found / n));
+        let mut paths = Map::new();
+        for p in ["loop", "period", "self_match", "constant"] {
+            let k = rows
+                .iter()
+                .filter(|r| r["path"].as_str() == Some(p))
+                .count() as f64;
+            paths.insert(p.into(), json!(k / n));
+        }
+        let refl = rows
+            .iter()
+            .filter(|r| r["self_match"]["kind"].as_str() == Some("Reflection"))
+            .count() as f64;
+        paths.insert("self_match_reflection".into(), json!(refl / n));
+        m.insert("path_fraction".into(), Value::Object(paths));
         for method in ["loop", "constant"] {
             for metric in ["kd_px_512", "pck"] {
                 let mut hm = Map::new();
@@ -481,7 +495,7 @@ fn eval_penn(path: &Path, max_clips: usize) -> anyhow::Result<Value> {
         "overall": agg(&all),
         "by_action": by,
         "errors": errors,
-        "protocol": "observe the first half of each clip, predict the next 5/10/20/30 frames (clips too short for a horizon are skipped at that horizon); KD in px rescaled to a 512-px frame; PCK@0.05 of the bbox after the optimal scale+translation fit",
+        "protocol": "observe the first half of each clip, predict the next 5/10/20/30 frames (clips too short for a horizon are skipped at that horizon); KD in px rescaled to a 512-px frame; PCK@0.05 of the bbox after the optimal scale+translation fit; path_fraction: share of clips predicted by each path of mp_abstract::predict (loop, autocorrelation period, self-match by lag or reflection, constant)",
     }))
 }
 
@@ -539,6 +553,8 @@ fn penn_clip(penn: &PennAction, i: usize) -> anyhow::Result<Value> {
         out[name] = json!({"kd_px_512": kdm, "pck": pckm});
     }
     out["used_loop"] = json!(pred_loop.used.is_some());
+    out["path"] = json!(pred_loop.method().as_str());
+    out["self_match"] = json!(pred_loop.self_match);
     Ok(out)
 }
 

@@ -8,7 +8,8 @@
 //! ([`exec`]), can be edited ([`edit`]), report repetitive intervals and
 //! counts ([`repetition`]: from loops, from the dominant period of the joint
 //! velocities, or from the local-periodicity segmenter
-//! [`repetition::segment_repetitions`]) and predict the future by unrolling loops.
+//! [`repetition::segment_repetitions`]) and predict the future by unrolling
+//! loops, or, with a single observed cycle, by self-match unrolling ([`selfmatch`]).
 
 pub mod dsl;
 pub mod edit;
@@ -18,16 +19,18 @@ pub mod loops;
 pub mod model;
 pub mod pipeline;
 pub mod repetition;
+pub mod selfmatch;
 pub mod synth;
 
 pub use error::{AbstractError, Result};
 pub use loops::{detect_loops, DetectedLoop, LoopParams};
 pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
 pub use pipeline::{
-    analyze, predict, read_program, write_program, AbstractParams, Analysis, PredictParams,
-    Prediction,
+    analyze, predict, read_program, write_program, AbstractParams, Analysis, PredictMethod,
+    PredictParams, Prediction,
 };
 pub use repetition::{
     estimate_period, segment_repetitions, JointSelection, PeriodParams, PeriodicSegment,
     RepetitiveInterval, SegmentParams,
 };
+pub use selfmatch::{SelfMatch, SelfMatchFallback, SelfMatchKind};

@@ -16,6 +16,7 @@ use crate::model::{AbstractProgram, DetPrim, Stmt};
 use crate::repetition::{
     estimate_period, intervals, PeriodEstimate, PeriodParams, RepetitiveInterval,
 };
+pub use crate::selfmatch::{SelfMatch, SelfMatchFallback, SelfMatchKind};
 use crate::synth::{synthesize, translate};
 
 /// Parameters of the whole track → abstract-program analysis.
@@ -171,6 +172,17 @@ pub struct PredictParams {
     /// motion measured by autocorrelation ([`PeriodFallback`]); `None` holds
     /// the last pose instead. Default on.
     pub period_fallback: Option<PeriodFallback>,
+    /// Where neither a loop nor the autocorrelation period is found (the
+    /// period needs three observed cycles): replay the observed motion with the
+    /// lag at which its most recent frames best match an earlier part
+    /// ([`SelfMatchFallback`]), which works from about one observed cycle;
+    /// `None` holds the last pose instead. Default on.
+    #[serde(default = "default_self_match")]
+    pub self_match: Option<SelfMatchFallback>,
+}
+
+fn default_self_match() -> Option<SelfMatchFallback> {
+    Some(SelfMatchFallback::default())
 }
 
 /// Unrolling of the last observed period when the program has no usable loop:
@@ -259,6 +271,7 @@ impl Default for PredictParams {
             offset_decay_periods: 1.0,
             source: UnrollSource::LastIteration,
             period_fallback: Some(PeriodFallback::default()),
+            self_match: default_self_match(),
         }
     }
 }
@@ -274,6 +287,49 @@ pub struct Prediction {
     /// ([`PredictParams::period_fallback`]); `None` with `used` also `None`
     /// means the last observed pose is held.
     pub period: Option<PeriodEstimate>,
+    /// Without a loop or a period: the lag with which self-match unrolling
+    /// ([`PredictParams::self_match`]) replayed the observed motion.
+    pub self_match: Option<SelfMatch>,
+}
+
+/// Which path of [`predict`] produced a prediction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PredictMethod {
+    /// A loop of the abstract program was unrolled.
+    Loop,
+    /// The last autocorrelation period was repeated ([`PeriodFallback`]).
+    Period,
+    /// The observed motion was replayed with its self-match lag ([`SelfMatchFallback`]).
+    SelfMatch,
+    /// The last observed pose was held.
+    Constant,
+}
+
+impl PredictMethod {
+    /// Lower-case name (`loop`, `period`, `self_match`, `constant`).
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            PredictMethod::Loop => "loop",
+            PredictMethod::Period => "period",
+            PredictMethod::SelfMatch => "self_match",
+            PredictMethod::Constant => "constant",
+        }
+    }
+}
+
+impl Prediction {
+    /// The path that produced this prediction.
+    pub fn method(&self) -> PredictMethod {
+        if self.used.is_some() {
+            PredictMethod::Loop
+        } else if self.period.is_some() {
+            PredictMethod::Period
+        } else if self.self_match.is_some() {
+            PredictMethod::SelfMatch
+        } else {
+            PredictMethod::Constant
+        }
+    }
 }
 
 fn prims_start_frame(prims: &[DetPrim], i: usize) -> usize {
@@ -316,8 +372,11 @@ pub fn predict_constant(observed: &Track, horizon: usize) -> Result<Track> {
 /// at its means, in phase with the partial iteration observed after the loop,
 /// and the offset between the last observed pose and the unrolled motion fades
 /// out over `offset_decay_periods`. Without a usable loop, the last observed
-/// period is repeated when the motion is periodic ([`PeriodFallback`]), else
-/// the last pose is held.
+/// period is repeated when the motion holds three clear cycles
+/// ([`PeriodFallback`]), else the observed motion is replayed with the lag at
+/// which its recent frames match an earlier part ([`SelfMatchFallback`], from
+/// about one cycle), else the last pose is held. [`Prediction::method`] says
+/// which path was taken.
 pub fn predict(
     track: &Track,
     observe: usize,
@@ -344,6 +403,17 @@ pub fn predict(
                     track,
                     used: None,
                     period: Some(est),
+                    self_match: None,
+                });
+            }
+        }
+        if let Some(sm) = &params.self_match {
+            if let Some((track, m)) = sm.unroll(&obs, horizon)? {
+                return Ok(Prediction {
+                    track,
+                    used: None,
+                    period: None,
+                    self_match: Some(m),
                 });
             }
         }
@@ -351,6 +421,7 @@ pub fn predict(
             track: predict_constant(&obs, horizon)?,
             used: None,
             period: None,
+            self_match: None,
         })
     };
     let analysis = match analyze(&obs, &params.analysis) {
@@ -493,5 +564,6 @@ pub fn predict(
         track,
         used: Some(interval.clone()),
         period: None,
+        self_match: None,
     })
 }

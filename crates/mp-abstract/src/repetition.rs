@@ -371,8 +371,21 @@ pub struct SegmentParams {
     pub min_period_s: f64,
     /// Longest period considered, seconds. Default 4.
     pub max_period_s: f64,
-    /// An interval holds at least this many periods (≥ 1). Default 2.
+    /// An interval holds at least this many periods (≥ 1). Default 1.5:
+    /// slow exercises (a torso twist, a toe touch) are often done only one
+    /// and a half times in a row. Intervals of fewer than two periods must
+    /// pass the stricter [`SegmentParams::short_threshold`].
     pub min_cycles: f64,
+    /// The score an interval holding fewer than two periods must exceed
+    /// (≥ `threshold`, ≤ 2): its self-match is measured over less than one
+    /// period of overlap, so chance matches are likelier. Default 0.5.
+    pub short_threshold: f64,
+    /// Divide each channel of a unitless feature track (joint angles, …) by
+    /// its standard deviation over the whole track, so that every channel
+    /// weighs the same in the pooled score whatever its range (a joint that
+    /// moves a lot in one exercise otherwise dominates the others). Positions
+    /// (pixels, metres) are never rescaled. Default true.
+    pub standardise_features: bool,
     /// Shortest interval, seconds. Default 1.5.
     pub min_duration_s: f64,
     /// Longest interval, seconds (bounds the search; a longer bout is reported
@@ -382,7 +395,9 @@ pub struct SegmentParams {
     /// [`segment_repetitions`]) exceeds this (−2..2). Default 0.4.
     pub threshold: f64,
     /// Cost of each interval, in seconds of perfectly periodic motion: larger
-    /// values merge more. Default 1.
+    /// values merge more, but also drop short bouts (an interval of `len`
+    /// seconds needs a score above `threshold + interval_penalty_s / len`).
+    /// Default 0.25.
     pub interval_penalty_s: f64,
     /// Interval boundaries lie on a grid of this step, seconds (at least one
     /// frame). Default 0.2.
@@ -405,11 +420,13 @@ impl Default for SegmentParams {
             centre_frames: true,
             min_period_s: 0.4,
             max_period_s: 4.0,
-            min_cycles: 2.0,
+            min_cycles: 1.5,
+            short_threshold: 0.5,
+            standardise_features: true,
             min_duration_s: 1.5,
             max_duration_s: 120.0,
             threshold: 0.4,
-            interval_penalty_s: 1.0,
+            interval_penalty_s: 0.25,
             grid_s: 0.2,
             peak_ratio: 0.8,
             rest_fraction: 0.2,
@@ -464,6 +481,18 @@ impl SegmentParams {
             return Err(AbstractError::param(
                 "threshold",
                 format!("must be in [-2, 2], got {}", self.threshold),
+            ));
+        }
+        if !(self.short_threshold.is_finite()
+            && self.short_threshold >= self.threshold
+            && self.short_threshold <= 2.0)
+        {
+            return Err(AbstractError::param(
+                "short_threshold",
+                format!(
+                    "must be in [threshold = {}, 2], got {}",
+                    self.threshold, self.short_threshold
+                ),
             ));
         }
         if !(self.peak_ratio > 0.0 && self.peak_ratio <= 1.0) {
@@ -624,9 +653,13 @@ impl Concordance {
 /// the interval with itself shifted by `l` frames (all selected coordinates
 /// pooled): a true period repeats the motion (`C(p)` near 1) while half of it
 /// does not; a slowly drifting, non-periodic signal has a high `C` at every
-/// lag and so a low score. Dynamic programming picks the partition that
-/// maximises `Σ length · (score − threshold) − interval_penalty` over the
-/// repetitive intervals (rest scores 0), so a change of exercise, where the
+/// lag and so a low score. Channels of a unitless feature track are first
+/// divided by their standard deviation over the track
+/// ([`SegmentParams::standardise_features`]). Dynamic programming picks the
+/// partition that maximises `Σ length · (score − threshold) − interval_penalty`
+/// over the repetitive intervals (rest scores 0; an interval of fewer than two
+/// periods is held to [`SegmentParams::short_threshold`] instead of
+/// `threshold`), so a change of exercise, where the
 /// motion stops repeating, ends an interval even without a pause. Intervals
 /// shorter than `min_duration_s` are not considered. The count of an interval
 /// is its length over its period.
@@ -651,9 +684,15 @@ pub fn segment_repetitions(
         return Ok(Vec::new());
     }
     let centre = params.centre_frames && track.units() != mp_geom::Units::Unitless;
-    let Some((x, n, c)) = channels(track, 0, n, params.joints, centre)? else {
+    let Some((mut x, n, c)) = channels(track, 0, n, params.joints, centre)? else {
         return Ok(Vec::new());
     };
+    // Rest is judged on the motion as recorded; only the periodicity score
+    // reads the standardised channels.
+    let raw = x.clone();
+    if params.standardise_features && track.units() == mp_geom::Units::Unitless {
+        standardise(&mut x, n, c);
+    }
     let frames = |s: f64| (s * fps).round().max(1.0) as usize;
     let lmin = frames(params.min_period_s);
     let lmax = frames(params.max_period_s).max(lmin);
@@ -723,10 +762,11 @@ pub fn segment_repetitions(
                 .collect()
         };
         for (i, sc, l) in cands {
-            if sc <= params.threshold {
+            let thr = threshold_for(params, e - nodes[i], l);
+            if sc <= thr {
                 continue;
             }
-            let g = value[i] + (e - nodes[i]) as f64 * (sc - params.threshold) - penalty;
+            let g = value[i] + (e - nodes[i]) as f64 * (sc - thr) - penalty;
             if g > value[j] {
                 value[j] = g;
                 back[j] = Some((i, Some((sc, l))));
@@ -753,7 +793,7 @@ pub fn segment_repetitions(
                 (t.saturating_sub(1), t)
             };
             (0..c)
-                .map(|k| (x[b * c + k] - x[a * c + k]).powi(2))
+                .map(|k| (raw[b * c + k] - raw[a * c + k]).powi(2))
                 .sum::<f64>()
                 .sqrt()
         })
@@ -773,7 +813,7 @@ pub fn segment_repetitions(
                 continue;
             } else {
                 match best_of(a, b) {
-                    Some((sc, l)) if sc > params.threshold => (sc, l),
+                    Some((sc, l)) if sc > threshold_for(params, b - a, l) => (sc, l),
                     _ => continue,
                 }
             };
@@ -787,6 +827,17 @@ pub fn segment_repetitions(
         }
     }
     Ok(segs)
+}
+
+/// The score an interval of `len` frames with a period of `period` frames
+/// must exceed: [`SegmentParams::short_threshold`] below two periods,
+/// [`SegmentParams::threshold`] otherwise.
+fn threshold_for(params: &SegmentParams, len: usize, period: usize) -> f64 {
+    if len < 2 * period {
+        params.short_threshold
+    } else {
+        params.threshold
+    }
 }
 
 /// The parts of `[s, e)` that are not rest: frames whose mean speed over a

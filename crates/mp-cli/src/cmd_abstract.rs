@@ -8,7 +8,9 @@ use mp_abstract::dsl::{print_with, PrintOptions};
 use mp_abstract::edit::set_iterations;
 use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};
 use mp_abstract::pipeline::predict_constant;
-use mp_abstract::{analyze, predict, read_program, write_program, AbstractParams, PredictParams};
+use mp_abstract::{
+    analyze, predict, read_program, write_program, AbstractParams, PredictParams, SelfMatchKind,
+};
 use mp_concrete::Scale;
 use mp_geom::io::{read_track, write_track};
 
@@ -246,12 +248,28 @@ pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
                 ..PredictParams::default()
             };
             let p = predict(&track, a.observe, a.horizon, &params)?;
-            match &p.used {
-                Some(i) => eprintln!(
+            match (&p.used, &p.period, &p.self_match) {
+                (Some(i), _, _) => eprintln!(
                     "unrolling the loop of frames {}..{} ({} iterations of body {})",
                     i.start_frame, i.end_frame, i.iterations, i.body_size
                 ),
-                None => eprintln!("no loop in the observed frames: holding the last pose"),
+                (None, Some(e), _) => eprintln!(
+                    "no loop program: repeating the last period of {} frames (autocorrelation {:.2})",
+                    e.period_frames, e.strength
+                ),
+                (None, None, Some(m)) => match m.kind {
+                    SelfMatchKind::Lag => eprintln!(
+                        "no loop program: replaying the motion with its self-match lag of {} frames",
+                        m.lag_frames
+                    ),
+                    SelfMatchKind::Reflection => eprintln!(
+                        "no loop program: retracing the motion backwards from its turning frame {}",
+                        m.lag_frames
+                    ),
+                },
+                (None, None, None) => {
+                    eprintln!("no repetition in the observed frames: holding the last pose")
+                }
             }
             p.track
         }
