@@ -11,7 +11,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use mp_forecast::data::ForecastDataset;
+use mp_forecast::data::{ForecastDataset, PENN_REPETITIVE_CLASSES};
 use mp_forecast::model::find_model_dir;
 use mp_forecast::{
     evaluate, ArForecaster, ArParams, ArSpace, Constant, EvalClip, EvalParams, ForecastModels,
@@ -29,8 +29,9 @@ pub struct EvalForecastArgs {
     /// Output JSON report.
     #[arg(long)]
     pub out: PathBuf,
-    /// Methods to run (comma separated): constant, nn, loop, loop_all, ar, ar_free
-    /// (latent AR without the anchored read-out), ar_pose.
+    /// Methods to run (comma separated): constant, nn, loop (15 context frames), loop_all
+    /// (loop unrolling on every observed frame before the start: more context than the
+    /// others get), ar, ar_free (latent AR without the anchored read-out), ar_pose.
     #[arg(
         long,
         value_delimiter = ',',
@@ -158,13 +159,33 @@ fn per_action_md(reports: &[MethodReport], metric: &str, h: usize) -> String {
         s += "---|";
     }
     s += "\n";
-    for a in &actions {
-        s += &format!("| {a} |");
+    let mut groups: Vec<String> = Vec::new();
+    for r in reports {
+        if let Some(t) = r.metrics.get(metric) {
+            for g in t.per_group.keys() {
+                if !groups.contains(g) {
+                    groups.push(g.clone());
+                }
+            }
+        }
+    }
+    let rows = actions
+        .iter()
+        .map(|a| (a.clone(), a, false))
+        .chain(groups.iter().map(|g| (format!("**{g}** (group)"), g, true)));
+    for (label, key, group) in rows {
+        s += &format!("| {label} |");
         for r in reports {
             let v = r
                 .metrics
                 .get(metric)
-                .and_then(|t| t.per_action.get(a))
+                .and_then(|t| {
+                    if group {
+                        t.per_group.get(key)
+                    } else {
+                        t.per_action.get(key)
+                    }
+                })
                 .and_then(|x| x.get(&format!("h{h}")))
                 .copied()
                 .unwrap_or(f64::NAN);
@@ -188,6 +209,15 @@ pub fn run(a: &EvalForecastArgs) -> Result<()> {
     let mut params = EvalParams::for_track(&first.track);
     if let Some(s) = a.stride {
         params.start_stride_frames = s;
+    }
+    if ds.kind == "penn_action" {
+        params.action_groups.insert(
+            "repetitive".into(),
+            PENN_REPETITIVE_CLASSES
+                .iter()
+                .map(|c| c.to_string())
+                .collect(),
+        );
     }
     let model_dir = match &a.models {
         Some(p) => p.clone(),
@@ -262,6 +292,12 @@ pub fn run(a: &EvalForecastArgs) -> Result<()> {
             .map(|(metric, t)| (metric, t.per_action.iter().collect()))
             .collect();
         m.insert("per_action".into(), serde_json::to_value(per_action)?);
+        let per_group: BTreeMap<&String, BTreeMap<&String, &BTreeMap<String, f64>>> = r
+            .metrics
+            .iter()
+            .map(|(metric, t)| (metric, t.per_group.iter().collect()))
+            .collect();
+        m.insert("per_group".into(), serde_json::to_value(per_group)?);
         m.insert("predictions".into(), json!(r.predictions));
         m.insert("clips".into(), json!(r.clips));
         m.insert("seconds".into(), json!(r.seconds));

@@ -47,15 +47,7 @@ pub struct EvalLoopsArgs {
     pub max_clips: usize,
 }
 
-const PENN_REPETITIVE: [&str; 7] = [
-    "jumping_jacks",
-    "squat",
-    "pushup",
-    "pullup",
-    "situp",
-    "jump_rope",
-    "bench_press",
-];
+use mp_forecast::data::PENN_REPETITIVE_CLASSES as PENN_REPETITIVE;
 const HORIZONS: [usize; 4] = [5, 10, 20, 30];
 
 fn bar(n: usize, what: &str) -> ProgressBar {

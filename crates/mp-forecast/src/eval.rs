@@ -71,6 +71,9 @@ pub struct EvalParams {
     pub root_joint: Option<usize>,
     /// Factor applied to 3D errors (1000: metres → millimetres). Default 1000 for metre tracks.
     pub error_scale: f64,
+    /// Named groups of action classes reported together ([`MetricTable::per_group`]):
+    /// the nan-mean over the clips of those classes. Default none.
+    pub action_groups: BTreeMap<String, Vec<String>>,
 }
 
 impl Default for EvalParams {
@@ -83,6 +86,7 @@ impl Default for EvalParams {
             dtw_cost: DtwCost::Euclidean,
             root_joint: None,
             error_scale: 1.0,
+            action_groups: BTreeMap::new(),
         }
     }
 }
@@ -149,6 +153,9 @@ pub struct MetricTable {
     pub overall: HorizonScores,
     /// The same per action class.
     pub per_action: BTreeMap<String, HorizonScores>,
+    /// The same per group of classes ([`EvalParams::action_groups`]); groups
+    /// without an evaluated clip are left out.
+    pub per_group: BTreeMap<String, HorizonScores>,
 }
 
 /// Every metric of one method.
@@ -401,6 +408,17 @@ pub fn evaluate(
         actions.entry(c.action.clone()).or_default().push(i);
     }
     let all: Vec<usize> = (0..clips.len()).collect();
+    let groups: Vec<(&String, Vec<usize>)> = params
+        .action_groups
+        .iter()
+        .map(|(g, members)| {
+            let idx: Vec<usize> = (0..clips.len())
+                .filter(|&i| members.contains(&clips[i].action))
+                .collect();
+            (g, idx)
+        })
+        .filter(|(_, idx)| !idx.is_empty())
+        .collect();
     let metrics = metric_names(dims)
         .into_iter()
         .map(|name| {
@@ -409,6 +427,10 @@ pub fn evaluate(
                 per_action: actions
                     .iter()
                     .map(|(a, m)| (a.clone(), aggregate(m, name)))
+                    .collect(),
+                per_group: groups
+                    .iter()
+                    .map(|(g, m)| ((*g).clone(), aggregate(m, name)))
                     .collect(),
             };
             (name.to_string(), table)

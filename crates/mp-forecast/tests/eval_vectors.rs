@@ -245,3 +245,38 @@ fn bad_params_are_typed_errors() {
         Err(mp_forecast::ForecastError::InvalidParam { .. })
     ));
 }
+
+#[test]
+fn action_groups_average_the_clips_of_their_classes() {
+    // three clips of two classes, on which Constant scores differently
+    let clip = |name: &str, action: &str, period: f64| EvalClip {
+        name: name.into(),
+        action: action.into(),
+        track: periodic(60, period),
+        box_sizes: None,
+    };
+    let clips = vec![
+        clip("a1", "fast", 6.0),
+        clip("a2", "fast", 9.0),
+        clip("b1", "slow", 40.0),
+    ];
+    let mut params = EvalParams::default();
+    params
+        .action_groups
+        .insert("fast_only".into(), vec!["fast".into()]);
+    params
+        .action_groups
+        .insert("both".into(), vec!["fast".into(), "slow".into()]);
+    params
+        .action_groups
+        .insert("none".into(), vec!["absent".into()]);
+    let r = evaluate(&mp_forecast::Constant, &clips, &params, |_, _| {}).unwrap();
+    let t = &r.metrics["pck"];
+    for h in ["h5", "h10", "h30"] {
+        assert_eq!(t.per_group["fast_only"][h], t.per_action["fast"][h]);
+        assert_eq!(t.per_group["both"][h], t.overall[h]);
+    }
+    // the groups differ, so the checks above tell them apart
+    assert!((t.per_group["both"]["h10"] - t.per_group["fast_only"]["h10"]).abs() > 1.0);
+    assert!(!t.per_group.contains_key("none"));
+}
