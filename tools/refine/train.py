@@ -7,7 +7,9 @@ and calls this script with the training virtual environment's Python.
 
 Writes into --out: anchor_recognition.onnx, anchor_refinement.onnx,
 transition_generator.onnx, transition_refinement.onnx, generator.onnx,
-evaluator.onnx, manifest.json and parity.npz (a fixed seeded input batch of 2
+evaluator.onnx, flaw_detector.onnx (trained on --flaw-dataset: flawed copies
+of the clips of subjects 1, 3, 5 and the mocap windows; epochs and
+thresholds selected on subject 7), manifest.json and parity.npz (a fixed seeded input batch of 2
 for every network with the PyTorch output; ONNX Runtime must agree within 1e-4).
 The tensor contract is in models/refine/README.md.
 """
@@ -37,7 +39,7 @@ D_MODEL = 64
 OPSET = 17
 
 NETS = ["anchor_recognition", "anchor_refinement", "transition_generator",
-        "transition_refinement", "generator", "evaluator"]
+        "transition_refinement", "generator", "evaluator", "flaw_detector"]
 
 
 # ----------------------------------------------------------------------------
@@ -262,6 +264,47 @@ class Evaluator(nn.Module):
         y, _ = self.gru(self.drop_in(x))
         feat = y.mean(dim=1)
         return self.cls(self.drop(feat)), feat
+
+
+class FlawDetector(nn.Module):
+    """Per-frame, per-joint flaw logits. Frame tokens (pose relative to the hip
+    centre, hip trajectory, velocity, acceleration) go through a transformer
+    encoder; a head shared by the joints reads the frame token, a joint
+    embedding and the joint's own local motion (position, velocities and
+    accelerations of the frame and its neighbours)."""
+
+    def __init__(self, d=D_MODEL, blocks=2, joint_emb=8):
+        super().__init__()
+        self.emb = nn.Linear(D + 3 + 2 * D, d)
+        self.register_buffer("pe", sinusoidal(T, d))
+        self.blocks = nn.ModuleList([Block(d) for _ in range(blocks)])
+        self.ln = nn.LayerNorm(d)
+        self.joint = nn.Parameter(0.1 * torch.randn(J, joint_emb))
+        self.head = nn.Sequential(nn.Linear(d + joint_emb + 20, 64), nn.GELU(), nn.Linear(64, 1))
+
+    def forward(self, motion):
+        b = motion.shape[0]
+        hip = motion[:, :, 18:21]
+        rel = motion - hip.repeat(1, 1, J)
+        z1 = torch.zeros_like(motion[:, :1])
+        vel = 10.0 * torch.cat([z1, motion[:, 1:] - motion[:, :-1]], dim=1)
+        acc = 10.0 * torch.cat([z1, motion[:, 2:] - 2.0 * motion[:, 1:-1] + motion[:, :-2], z1], dim=1)
+        h = self.emb(torch.cat([rel, hip, vel, acc], dim=-1)) + self.pe
+        for blk in self.blocks:
+            h = blk(h)
+        h = self.ln(h)
+        # Joint-local features: [rel, vel(t), vel(t+1), acc(t-1), acc(t), acc(t+1), |acc(t)|, |vel(t)|] per joint.
+        vel_n = torch.cat([vel[:, 1:], z1], dim=1)
+        acc_p = torch.cat([z1, acc[:, :-1]], dim=1)
+        acc_n = torch.cat([acc[:, 1:], z1], dim=1)
+        loc = torch.stack([rel, vel, vel_n, acc_p, acc, acc_n], dim=-1)  # B,T,60,6
+        loc = loc.reshape(b, T, J, 3, 6).transpose(3, 4).reshape(b, T, J, 18)
+        an = acc.reshape(b, T, J, 3).norm(dim=-1, keepdim=True)
+        vn = vel.reshape(b, T, J, 3).norm(dim=-1, keepdim=True)
+        jl = torch.cat([loc, an, vn], dim=-1)  # B,T,J,20
+        je = self.joint[None, None].expand(b, T, J, self.joint.shape[1])
+        hj = h[:, :, None, :].expand(b, T, J, h.shape[-1])
+        return self.head(torch.cat([hj, je, jl], dim=-1)).squeeze(-1)
 
 
 # ----------------------------------------------------------------------------
@@ -611,6 +654,79 @@ def train_transition_refinement(data, args, rng, log):
     return model
 
 
+class FlawData:
+    def __init__(self, path):
+        z = np.load(path)
+        self.motion = z["motion"].astype(np.float32)
+        self.mask = z["mask"].astype(np.float32)
+        self.split = z["split"].astype(np.int64)
+        self.flaws = z["flaws"]
+        self.train = np.nonzero(self.split == 0)[0]
+        self.sel = np.nonzero(self.split == 1)[0]
+
+
+def prf(prob, y, thr):
+    pred = prob > thr
+    tp = float((pred & (y > 0.5)).sum())
+    prec = tp / max(float(pred.sum()), 1.0)
+    rec = tp / max(float((y > 0.5).sum()), 1.0)
+    return prec, rec
+
+
+def train_flaw_detector(data, args, rng, log):
+    fd = data.flaw
+    model = FlawDetector()
+    opt = torch.optim.Adam(model.parameters(), lr=args.lr * 2, weight_decay=1e-5)
+    x = torch.tensor(fd.motion)
+    y = torch.tensor(fd.mask)
+    tr, se = fd.train, fd.sel
+    pos = y[tr].mean().item()
+    pw = torch.tensor(args.flaw_pos_weight)
+    epochs = max(1, int(args.epochs * args.flaw_epochs_factor))
+    best, best_state, hist = None, None, []
+    bs = 64
+    for ep in range(epochs):
+        model.train()
+        for b in batches(len(tr), bs, rng):
+            i = tr[b]
+            xb = rot_y(x[i], torch.tensor(rng.uniform(-0.3, 0.3, len(i)), dtype=torch.float32))
+            xb = xb * torch.tensor(rng.uniform(0.9, 1.1, (len(i), 1, 1)), dtype=torch.float32)
+            loss = F.binary_cross_entropy_with_logits(model(xb), y[i], pos_weight=pw)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        if (ep + 1) % max(1, epochs // 10) == 0 or ep + 1 == epochs:
+            model.eval()
+            with torch.no_grad():
+                lv = F.binary_cross_entropy_with_logits(model(x[se]), y[se], pos_weight=pw).item()
+            hist.append((ep + 1, round(lv, 4)))
+            print(f"train.py: flaw_detector epoch {ep + 1}: selection loss {lv:.4f}", flush=True)
+            if best is None or lv < best:
+                best = lv
+                best_state = {k: v.clone() for k, v in model.state_dict().items()}
+                best_ep = ep + 1
+    model.load_state_dict(best_state)
+    model.eval()
+    with torch.no_grad():
+        lt = F.binary_cross_entropy_with_logits(model(x[tr]), y[tr], pos_weight=pw).item()
+        ps = torch.sigmoid(model(x[se])).numpy()
+    ys = fd.mask[se]
+    metrics = {}
+    for thr in (0.3, 0.5, 0.7, 0.9):
+        p_, r_ = prf(ps, ys, thr)
+        metrics[f"select_precision_at_{thr}"] = p_
+        metrics[f"select_recall_at_{thr}"] = r_
+    # Frame level (a frame is flawed when any joint is).
+    pf, rf = prf(ps.max(-1), ys.max(-1), 0.5)
+    clean = np.array([f == "clean" for f in fd.flaws[se]])
+    clean_flag = float((ps[clean] > 0.5).mean()) if clean.any() else float("nan")
+    log.update(train_loss=lt, select_loss=best, selected_epoch=best_ep, select_loss_history=hist,
+               select_frame_precision_at_0_5=pf, select_frame_recall_at_0_5=rf,
+               select_clean_cells_flagged_at_0_5=clean_flag, pos_weight=float(pw),
+               train_clips=int(len(tr)), select_clips=int(len(se)), epochs=epochs, **metrics)
+    return model
+
+
 def train_evaluator(data, args, rng, log):
     model = Evaluator()
     opt = torch.optim.Adam(model.parameters(), lr=args.lr * 2, weight_decay=1e-4)
@@ -702,6 +818,7 @@ SPECS = {
                               [[TR_FRAMES, D], [D], [D], [1]], ["coeffs"]),
     "generator": (["action", "z"], [[N_ACTIONS], [Z_GEN]], ["motion"]),
     "evaluator": (["motion"], [[T, D]], ["logits", "features"]),
+    "flaw_detector": (["motion"], [[T, D]], ["flaw_logit"]),
 }
 
 
@@ -712,6 +829,11 @@ def parity_inputs(name, data, seed):
     clips = data.motion[va[:2]]
     if name in ("anchor_recognition", "evaluator"):
         return [clips]
+    if name == "flaw_detector":
+        # Two flawed clips of the selection subject.
+        fd = data.flaw
+        rows = [i for i in fd.sel if fd.flaws[i] != "clean"][:2]
+        return [fd.motion[rows]]
     if name == "anchor_refinement":
         items = data.anchor_items(va[:2])
         pick = [items[items[:, 0] == va[0]][2], items[items[:, 0] == va[1]][3]]
@@ -791,6 +913,11 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--only", default="", help="comma-separated networks to train (others kept from an existing manifest)")
     ap.add_argument("--command", default="")
+    ap.add_argument("--flaw-dataset", default="", help="flaw detector training set (flaw_dataset.npz)")
+    ap.add_argument("--flaw-pos-weight", type=float, default=1.0,
+                    help="positive weight of the flaw detector's BCE (1: calibrated probabilities)")
+    ap.add_argument("--flaw-epochs-factor", type=float, default=0.15,
+                    help="flaw detector epochs = --epochs × this")
     args = ap.parse_args()
 
     torch.set_num_threads(args.threads)
@@ -798,14 +925,17 @@ def main():
     rng = np.random.default_rng(args.seed)
     os.makedirs(args.out, exist_ok=True)
     data = Data(args.dataset)
+    data.flaw = FlawData(args.flaw_dataset) if args.flaw_dataset else None
     print(f"train.py: {len(data.motion)} clips, {len(data.train)} train, {len(data.val)} val", flush=True)
 
     only = [s for s in args.only.split(",") if s]
     man_path = os.path.join(args.out, "manifest.json")
-    old = {}
+    old, old_training = {}, None
     if only and os.path.exists(man_path):
         with open(man_path) as f:
-            old = json.load(f).get("networks", {})
+            old_man = json.load(f)
+        old = old_man.get("networks", {})
+        old_training = old_man.get("training")
 
     t_all = time.time()
     models, logs = {}, {}
@@ -815,11 +945,15 @@ def main():
         "transition_generator": train_transition_generator,
         "transition_refinement": train_transition_refinement,
         "evaluator": train_evaluator,
+        "flaw_detector": train_flaw_detector,
     }
     order = ["evaluator", "anchor_recognition", "anchor_refinement", "transition_generator",
-             "transition_refinement", "generator"]
+             "transition_refinement", "generator", "flaw_detector"]
     for name in order:
         if only and name not in only:
+            continue
+        if name == "flaw_detector" and data.flaw is None:
+            print("train.py: no --flaw-dataset: flaw_detector skipped", file=sys.stderr)
             continue
         torch.manual_seed(args.seed + NETS.index(name))
         r = np.random.default_rng(args.seed + 100 + NETS.index(name))
@@ -872,6 +1006,24 @@ def main():
             "onnx_max_abs_diff": worst,
             "metrics": logs[name],
         }
+        if name == "flaw_detector":
+            nets[name]["training"] = {
+                "command": args.command,
+                "dataset": os.path.basename(args.flaw_dataset),
+                "train_subjects": [1, 3, 5],
+                "train_mocap_windows": True,
+                "select_subjects": [7],
+                "rows_train": int(len(data.flaw.train)),
+                "rows_select": int(len(data.flaw.sel)),
+                "epochs": logs[name]["epochs"],
+                "selected_epoch": logs[name]["selected_epoch"],
+                "seed": args.seed,
+                "optimizer": "Adam",
+                "lr": args.lr * 2,
+                "batch": 64,
+                "threads": args.threads,
+                "torch": torch.__version__,
+            }
         print(f"train.py: {name}.onnx {os.path.getsize(path) / 1e6:.2f} MB, "
               f"{nets[name]['params']} params, ONNX vs torch max |Δ| {worst:.2e}", flush=True)
     np.savez(parity_path, **parity)
@@ -886,7 +1038,7 @@ def main():
         "transition_latent": Z_TR,
         "generator_latent": Z_GEN,
         "d_model": D_MODEL,
-        "training": {
+        "training": old_training if old_training is not None else {
             "command": args.command,
             "dataset": os.path.basename(args.dataset),
             "clips": int(len(data.motion)),

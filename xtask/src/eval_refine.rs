@@ -1,8 +1,10 @@
 //! `cargo xtask eval refine`: the learned refinement of `mp_refine::pipeline`
-//! on MSR Action3D — injected flaws on the held-out subject, generated
+//! on MSR Action3D — injected flaws on the held-out subject (9) with the flaw
+//! detector's precision and recall, generated
 //! motion (FID, accuracy, diversity, multimodality, per action) and the
 //! ablation (anchor-only vs anchors + transitions; GMM vs nearest-concept
-//! scores with k-means or DBSCAN concepts).
+//! scores with k-means or DBSCAN concepts). `--select` adds the grid of
+//! settings on the selection subject (7) that the defaults are chosen from.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -11,8 +13,9 @@ use anyhow::{Context, Result};
 use clap::Args;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_pose::SessionParams;
-use mp_refine::eval_refine::{evaluate, RefineEvalParams, SetQuality};
+use mp_refine::eval_refine::{evaluate, selection_grid, RefineEvalParams, SetQuality};
 use mp_refine::nets::{find_model_dir, RefineNets};
+use mp_refine::pipeline::{FlawRepair, NetRefineParams, RefineMode};
 use mp_refine::Concepts;
 use serde_json::{json, Value};
 
@@ -46,9 +49,107 @@ pub struct EvalRefineArgs {
     /// Anchor score margin (log-likelihood units).
     #[arg(long)]
     pub score_margin: Option<f64>,
+    /// Flaw detector probability threshold.
+    #[arg(long)]
+    pub flaw_probability: Option<f64>,
+    /// Dilation of the flagged frames (frames).
+    #[arg(long)]
+    pub flaw_dilation: Option<usize>,
+    /// Flaw detector hysteresis (grow flags into frames above this probability).
+    #[arg(long)]
+    pub flaw_extend: Option<f64>,
+    /// Longest refilled run (frames).
+    #[arg(long)]
+    pub max_run: Option<usize>,
+    /// Share of flagged joints that flags a whole frame.
+    #[arg(long)]
+    pub frame_share: Option<f64>,
+    /// Flagged-frame repair: linear, cubic or fit (least-squares cubic, 3 context frames).
+    #[arg(long)]
+    pub repair: Option<String>,
+    /// Switch the flaw detector off.
+    #[arg(long)]
+    pub no_detector: bool,
+    /// Also evaluate the grid of settings on the selection subject (7).
+    #[arg(long)]
+    pub select: bool,
     /// Seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+}
+
+/// The settings the defaults are chosen from, evaluated on the selection subject.
+fn grid(base: &NetRefineParams) -> Vec<(String, NetRefineParams)> {
+    let mut g = Vec::new();
+    // The anchor and transition steps without the detector.
+    for margin in [50.0, 100.0, 200.0, 400.0] {
+        for dev in [0.1, 0.2] {
+            g.push((
+                format!("steps_only/margin{margin}/dev{dev}"),
+                NetRefineParams {
+                    flaw_detection: false,
+                    mode: RefineMode::AnchorsAndTransitions,
+                    score_margin: margin,
+                    transition_deviation_m: dev,
+                    ..base.clone()
+                },
+            ));
+        }
+    }
+    let det = |repair: FlawRepair, seed: f64, extend: f64, dil: usize, run: usize, share: f64| {
+        (
+            format!("detector_only/{repair:?}/p{seed}/ext{extend}/dil{dil}/run{run}/share{share}"),
+            NetRefineParams {
+                mode: RefineMode::DetectorOnly,
+                flaw_detection: true,
+                flaw_repair: repair,
+                flaw_probability: seed,
+                flaw_extend_probability: extend.min(seed),
+                flaw_dilation_frames: dil,
+                max_repair_run_frames: run,
+                flaw_frame_share: share,
+                ..base.clone()
+            },
+        )
+    };
+    for repair in [
+        FlawRepair::Linear,
+        FlawRepair::Cubic,
+        FlawRepair::CubicFit { context: 3 },
+    ] {
+        for seed in [0.5, 0.7, 0.8, 0.9] {
+            for extend in [seed, 0.3] {
+                g.push(det(repair, seed, extend, 0, 8, 1.0));
+            }
+        }
+    }
+    let r = base.flaw_repair;
+    for seed in [0.6, 0.7, 0.8] {
+        for run in [6, 8, 10] {
+            g.push(det(r, seed, seed, 0, run, 1.0));
+        }
+        for dil in [1, 2] {
+            g.push(det(r, seed, seed, dil, 8, 1.0));
+        }
+        for share in [0.25, 0.5] {
+            g.push(det(r, seed, seed, 0, 8, share));
+        }
+    }
+    // The anchor and transition steps after the detector (base detector settings).
+    for margin in [50.0, 100.0, 200.0, 400.0] {
+        for dev in [0.1, 0.2] {
+            g.push((
+                format!("detector+steps/margin{margin}/dev{dev}"),
+                NetRefineParams {
+                    mode: RefineMode::AnchorsAndTransitions,
+                    score_margin: margin,
+                    transition_deviation_m: dev,
+                    ..base.clone()
+                },
+            ));
+        }
+    }
+    g
 }
 
 fn quality_json(q: &SetQuality) -> Value {
@@ -93,6 +194,52 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
     if let Some(m) = a.score_margin {
         params.refine.score_margin = m;
     }
+    if let Some(p) = a.flaw_probability {
+        params.refine.flaw_probability = p;
+    }
+    if let Some(e) = a.flaw_extend {
+        params.refine.flaw_extend_probability = e;
+    }
+    if let Some(f) = a.frame_share {
+        params.refine.flaw_frame_share = f;
+    }
+    if let Some(r) = &a.repair {
+        params.refine.flaw_repair = match r.as_str() {
+            "linear" => FlawRepair::Linear,
+            "cubic" => FlawRepair::Cubic,
+            "fit" => FlawRepair::CubicFit { context: 3 },
+            other => anyhow::bail!("--repair: unknown method `{other}` (linear, cubic, fit)"),
+        };
+    }
+    if let Some(r) = a.max_run {
+        params.refine.max_repair_run_frames = r;
+    }
+    if let Some(d) = a.flaw_dilation {
+        params.refine.flaw_dilation_frames = d;
+    }
+    if a.no_detector {
+        params.refine.flaw_detection = false;
+    }
+    let selection = if a.select {
+        let rows = selection_grid(&data, &nets, &concepts, &params, &grid(&params.refine))?;
+        for r in &rows {
+            println!(
+                "select (subjects {:?}) {:<44} MPJPE {:.2} → {:.2} mm ({:.1} %), clean {:.2} mm, clean flagged {:.1} %, P {:.2} R {:.2}",
+                params.select_subjects,
+                r.name,
+                r.injected.mpjpe_before_m * 1e3,
+                r.injected.mpjpe_after_m * 1e3,
+                r.injected.reduction * 100.0,
+                r.injected.clean_change_m * 1e3,
+                r.injected.clean_flagged_frame_share * 100.0,
+                r.injected.detector_precision,
+                r.injected.detector_recall,
+            );
+        }
+        serde_json::to_value(&rows)?
+    } else {
+        Value::Null
+    };
     let r = evaluate(&data, &nets, &concepts, &params)?;
     let g = &r.generated;
     let per_action: serde_json::Map<String, Value> = g
@@ -120,6 +267,7 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             "quality": serde_json::to_value(&params.quality)?,
             "samples_per_action": params.samples_per_action,
             "val_subjects": params.val_subjects,
+            "select_subjects": params.select_subjects,
             "seed": params.seed,
         },
         "injected": {
@@ -130,6 +278,9 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             "reduction": r.injected.reduction,
             "clean_change": r.injected.clean_change_m,
             "clean_changed_share": r.injected.clean_changed_share,
+            "clean_flagged_frame_share": r.injected.clean_flagged_frame_share,
+            "detector_precision": r.injected.detector_precision,
+            "detector_recall": r.injected.detector_recall,
             "per_flaw": serde_json::to_value(&r.injected.per_flaw)?,
             "units": "metres",
         },
@@ -142,6 +293,8 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             "accuracy_before": g.before.accuracy,
             "accuracy_after": g.after.accuracy,
             "changed_share": g.changed_share,
+            "detector_changed_share": g.detector_changed_share,
+            "flagged_cells_per_clip": g.flagged_cells_per_clip,
             "refine_ms_per_clip": g.refine_ms_per_clip,
             "real_heldout": quality_json(&g.real),
         },
@@ -157,6 +310,7 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
         },
         "per_action": per_action,
         "ablation": serde_json::to_value(&r.ablation)?,
+        "selection": selection,
         "seconds": t0.elapsed().as_secs_f64(),
     });
     if let Some(parent) = a.out.parent() {
@@ -167,13 +321,29 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
     std::fs::write(&a.out, serde_json::to_string_pretty(&report)?)
         .with_context(|| format!("writing {}", a.out.display()))?;
     println!(
-        "injected: MPJPE {:.1} → {:.1} mm ({:.0} % less; baseline {:.1} mm), clean change {:.2} mm",
+        "injected (subjects {:?}): MPJPE {:.2} → {:.2} mm ({:.1} % less; baseline {:.2} mm), clean change {:.2} mm, detector P {:.3} R {:.3}, clean frames flagged {:.1} %",
+        params.val_subjects,
         r.injected.mpjpe_before_m * 1e3,
         r.injected.mpjpe_after_m * 1e3,
         r.injected.reduction * 100.0,
         r.injected.baseline_after_m * 1e3,
-        r.injected.clean_change_m * 1e3
+        r.injected.clean_change_m * 1e3,
+        r.injected.detector_precision,
+        r.injected.detector_recall,
+        r.injected.clean_flagged_frame_share * 100.0
     );
+    for f in &r.injected.per_flaw {
+        println!(
+            "  {:<20} {:.2} → {:.2} mm (baseline {:.2}), changed {:.0} %, detector P {:.2} R {:.2}",
+            f.flaw,
+            f.mpjpe_before_m * 1e3,
+            f.mpjpe_after_m * 1e3,
+            f.baseline_after_m * 1e3,
+            f.changed_share * 100.0,
+            f.detector_precision,
+            f.detector_recall
+        );
+    }
     println!(
         "generated: FID {:.3} → {:.3}, accuracy {:.3} → {:.3}, diversity {:.3} → {:.3}, multimodality {:.3} → {:.3} ({:.2} ms/clip)",
         g.before.fid,

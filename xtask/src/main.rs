@@ -34,7 +34,7 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Train the forecasting models (PyTorch, CPU) and export them to ONNX under models/forecast/.
     TrainForecast(train_forecast::TrainForecastArgs),
-    /// Train the six refinement networks (PyTorch, CPU) and export them to ONNX under models/refine/.
+    /// Train the seven refinement networks (PyTorch, CPU) and export them to ONNX under models/refine/.
     TrainRefine(train_refine::TrainRefineArgs),
 }
 

@@ -1,6 +1,8 @@
-//! `cargo xtask train-refine`: builds the refinement training set
-//! (`mp_refine::dataset`) into `.cache/refine/`, then trains the six
-//! refinement networks with PyTorch (`tools/refine/train.py`, CPU) and
+//! `cargo xtask train-refine`: builds the refinement training set and the
+//! flaw detector's training set (`mp_refine::dataset`: flawed copies of the
+//! clips of subjects 1, 3, 5 for training and 7 for selection; subject 9 is
+//! never read) into `.cache/refine/`, then trains the seven refinement
+//! networks with PyTorch (`tools/refine/train.py`, CPU) and
 //! exports them to ONNX with `manifest.json`, `parity.npz` and
 //! `concepts.json` under `models/refine/`.
 //!
@@ -15,7 +17,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use mp_geom::io::datasets::MsrAction3D;
-use mp_refine::dataset::{build_training_set, DatasetParams};
+use mp_refine::dataset::{build_flaw_set, build_training_set, DatasetParams, FlawSetParams};
 
 /// Arguments of `cargo xtask train-refine`.
 #[derive(Args, Debug)]
@@ -129,6 +131,25 @@ pub fn run(a: &TrainRefineArgs) -> Result<()> {
     set.write_npz(&ds_path)?;
     std::fs::write(out.join("concepts.json"), set.concepts.to_json()?)
         .with_context(|| format!("writing {}", out.join("concepts.json").display()))?;
+    let t1 = Instant::now();
+    let fparams = FlawSetParams {
+        seed: a.seed,
+        ..FlawSetParams::default()
+    };
+    let flaw_set = build_flaw_set(&msr, &bvh, &fparams)?;
+    let flaw_path = cache.join("flaw_dataset.npz");
+    flaw_set.write_npz(&flaw_path)?;
+    let n_flawed_cells: usize = flaw_set.mask.iter().map(|&v| usize::from(v)).sum();
+    println!(
+        "train-refine: flaw set {}: {} clips ({} selection, subjects {:?}; training subjects {:?} + mocap), {:.1} % flawed cells, {:.1} s",
+        flaw_path.display(),
+        flaw_set.len(),
+        flaw_set.split.iter().filter(|&&s| s == 1).count(),
+        fparams.select_subjects,
+        fparams.train_subjects,
+        100.0 * n_flawed_cells as f64 / flaw_set.mask.len().max(1) as f64,
+        t1.elapsed().as_secs_f64()
+    );
     let n_val = set.split.iter().filter(|&&s| s == 1).count();
     let n_mocap = set.action.iter().filter(|&&x| x < 0).count();
     let n_anchor: i64 = set.anchor.sum();
@@ -174,6 +195,8 @@ pub fn run(a: &TrainRefineArgs) -> Result<()> {
         .arg(root.join("tools/refine/train.py"))
         .arg("--dataset")
         .arg(&ds_path)
+        .arg("--flaw-dataset")
+        .arg(&flaw_path)
         .arg("--out")
         .arg(&out)
         .args(["--epochs", &a.epochs.to_string()])

@@ -1,5 +1,7 @@
 //! Latency of the learned refinement of one 60-frame sequence (target:
-//! < 5 ms on 2 cores): a clean held-out MSR Action3D clip, and the same clip
+//! < 5 ms on 2 cores): the defaults (flaw detector and repair) on a clean
+//! held-out MSR Action3D clip and on the clip with 4 jittered frames; with
+//! the anchor and transition steps, the clean clip and the same clip
 //! with an implausible (upside-down) anchor pose blended in, which is
 //! rejected and repaired — by a bridge (default) or by the anchor refinement
 //! network followed by transition refinement (every network runs).
@@ -12,7 +14,7 @@ use mp_refine::baseline::full_confidence;
 use mp_refine::flaws::{inject, AnchorSource, Flaw};
 use mp_refine::motion::{resample, NET_FRAMES};
 use mp_refine::nets::{find_model_dir, RefineNets};
-use mp_refine::pipeline::{AnchorRepair, NetRefineParams, NetRefiner};
+use mp_refine::pipeline::{AnchorRepair, NetRefineParams, NetRefiner, RefineMode};
 use mp_refine::Concepts;
 
 fn bench(c: &mut Criterion) {
@@ -72,7 +74,11 @@ fn bench(c: &mut Criterion) {
         source: AnchorSource::OtherClip(flipped),
     };
     // The first seed whose implausible pose is recognised as an anchor and repaired.
-    let probe_params = NetRefineParams::default();
+    let steps = NetRefineParams {
+        mode: RefineMode::AnchorsAndTransitions,
+        ..NetRefineParams::default()
+    };
+    let probe_params = steps.clone();
     let probe = NetRefiner::new(&nets, &concepts, &probe_params).unwrap();
     let flawed = (0..50)
         .map(|seed| inject(&clean, &flaw, seed).unwrap().track)
@@ -82,12 +88,24 @@ fn bench(c: &mut Criterion) {
                 .is_ok_and(|r| r.report.anchors.iter().any(|a| a.repaired))
         })
         .unwrap_or_else(|| inject(&clean, &flaw, 1).unwrap().track);
-    let params = NetRefineParams::default();
-    let refiner = NetRefiner::new(&nets, &concepts, &params).unwrap();
+    let refiner = NetRefiner::new(&nets, &concepts, &steps).unwrap();
     let net_params = NetRefineParams {
         anchor_repair: AnchorRepair::Network,
-        ..NetRefineParams::default()
+        ..steps.clone()
     };
+    // Defaults: the flaw detector and its repair only.
+    let default_params = NetRefineParams::default();
+    let detector = NetRefiner::new(&nets, &concepts, &default_params).unwrap();
+    let jittered = inject(
+        &clean,
+        &Flaw::Jitter {
+            frames: 4,
+            std_m: 0.05,
+        },
+        3,
+    )
+    .unwrap()
+    .track;
     let net_refiner = NetRefiner::new(&nets, &concepts, &net_params).unwrap();
     let r = net_refiner
         .refine_track(&flawed, Some(info.action))
@@ -98,6 +116,12 @@ fn bench(c: &mut Criterion) {
         r.report.refined_transitions().count()
     );
     let mut g = c.benchmark_group("refine_60_frames");
+    g.bench_function("default_detector_clean", |b| {
+        b.iter(|| detector.refine_track(&clean, Some(info.action)).unwrap())
+    });
+    g.bench_function("default_detector_jitter", |b| {
+        b.iter(|| detector.refine_track(&jittered, Some(info.action)).unwrap())
+    });
     g.bench_function("clean_action_given", |b| {
         b.iter(|| refiner.refine_track(&clean, Some(info.action)).unwrap())
     });

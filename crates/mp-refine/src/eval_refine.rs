@@ -1,12 +1,15 @@
 //! Evaluation of the learned refinement ([`crate::pipeline`]).
 //!
 //! * **Injected flaws** ([`evaluate_injected_nets`]): clips of the held-out
-//!   subjects of MSR Action3D (subject 9 by default) get one known flaw each
+//!   subjects of MSR Action3D (subject 9 by default; parameters are chosen
+//!   on the selection subjects, 7 by default, with [`selection_grid`]) get
+//!   one known flaw each
 //!   ([`crate::flaws`]); MPJPE (absolute, no alignment) to the clean clip
 //!   before and after refinement, per flaw and overall, next to the
 //!   non-learned baseline ([`crate::baseline::refine`]); and the MPJPE
 //!   between each clean clip and its refinement (how much refinement
-//!   disturbs clean motion).
+//!   disturbs clean motion), and the flaw detector's frame-level precision
+//!   and recall against the injected frames.
 //! * **Generated motion** (in [`evaluate`]): `samples_per_action`
 //!   clips per action from the generator network (seeded latents), refined
 //!   with their action; FID, per-action FID, accuracy, diversity and
@@ -56,8 +59,11 @@ type Setting<'a> = (
 #[derive(Debug, Clone, PartialEq)]
 pub struct RefineEvalParams {
     /// Subjects whose clips are evaluated with injected flaws. Default `[9]`
-    /// (held out from training).
+    /// (held out from training and from every choice of parameters).
     pub val_subjects: Vec<u32>,
+    /// Subjects on which parameters are chosen ([`selection_grid`]).
+    /// Default `[7]`; must not overlap [`Self::val_subjects`].
+    pub select_subjects: Vec<u32>,
     /// At most this many clips for the injected flaws (spread evenly). Default `None`.
     pub max_clips: Option<usize>,
     /// Flaws, each injected once per clip (clip `i` uses seed `seed + i`).
@@ -93,6 +99,7 @@ impl Default for RefineEvalParams {
     fn default() -> Self {
         RefineEvalParams {
             val_subjects: vec![9],
+            select_subjects: vec![7],
             max_clips: None,
             flaws: vec![
                 EvalFlaw::Fixed(Flaw::WrongAnchor {
@@ -140,6 +147,16 @@ impl RefineEvalParams {
         self.refine.validate()?;
         self.quality.validate()?;
         self.segment.validate()?;
+        if let Some(s) = self
+            .select_subjects
+            .iter()
+            .find(|s| self.val_subjects.contains(s))
+        {
+            return Err(RefineError::param(
+                "select_subjects",
+                format!("subject {s} is also an evaluation subject"),
+            ));
+        }
         if self.samples_per_action < 2 {
             return Err(RefineError::param("samples_per_action", "must be ≥ 2"));
         }
@@ -180,6 +197,10 @@ pub struct InjectedFlawReport {
     pub baseline_after_m: f64,
     /// Share of clips where the refinement changed something.
     pub changed_share: f64,
+    /// Flaw detector: flagged frames that were injected / flagged frames.
+    pub detector_precision: f64,
+    /// Flaw detector: injected frames that were flagged / injected frames.
+    pub detector_recall: f64,
 }
 
 /// Injected-flaw results.
@@ -199,6 +220,14 @@ pub struct InjectedReport {
     pub clean_change_m: f64,
     /// Share of clean clips the refinement changed.
     pub clean_changed_share: f64,
+    /// Share of the clean clips' frames the flaw detector flagged.
+    pub clean_flagged_frame_share: f64,
+    /// Flaw detector, frame level over every flawed clip: flagged frames
+    /// that were injected / flagged frames (a frame is flagged when any
+    /// joint is).
+    pub detector_precision: f64,
+    /// Flaw detector, frame level: injected frames flagged / injected frames.
+    pub detector_recall: f64,
     /// Per flaw.
     pub per_flaw: Vec<InjectedFlawReport>,
 }
@@ -239,17 +268,38 @@ pub fn clips_of_subjects(
         .collect()
 }
 
-/// Injected-flaw evaluation on the held-out clips (see the module docs).
+/// Injected-flaw evaluation on the held-out clips
+/// ([`RefineEvalParams::val_subjects`], see the module docs).
 pub fn evaluate_injected_nets(
     data: &MsrAction3D,
     refiner: &NetRefiner<'_>,
     params: &RefineEvalParams,
 ) -> Result<InjectedReport> {
+    evaluate_injected_on(data, refiner, params, &params.val_subjects)
+}
+
+/// Frame-level detector counts: (true positives, flagged, injected).
+fn detector_counts(flagged: &[usize], mask: &[bool]) -> [f64; 3] {
+    let tp = flagged
+        .iter()
+        .filter(|&&f| mask.get(f).copied().unwrap_or(false))
+        .count();
+    let inj = mask.iter().filter(|&&m| m).count();
+    [tp as f64, flagged.len() as f64, inj as f64]
+}
+
+/// Injected-flaw evaluation on the clips of `subjects`.
+pub fn evaluate_injected_on(
+    data: &MsrAction3D,
+    refiner: &NetRefiner<'_>,
+    params: &RefineEvalParams,
+    subjects: &[u32],
+) -> Result<InjectedReport> {
     params.validate()?;
     let idx = spread(
         clips_of_subjects(
             data,
-            &params.val_subjects,
+            subjects,
             params.min_clip_frames,
             params.max_clip_frames,
         ),
@@ -257,10 +307,7 @@ pub fn evaluate_injected_nets(
     );
     if idx.is_empty() {
         return Err(RefineError::TooShort {
-            what: format!(
-                "injected evaluation (clips of subjects {:?})",
-                params.val_subjects
-            ),
+            what: format!("injected evaluation (clips of subjects {subjects:?})"),
             needed: 1,
             got: 0,
         });
@@ -268,14 +315,18 @@ pub fn evaluate_injected_nets(
     let base = crate::baseline::RefineParams::default();
     let nf = params.flaws.len();
     let mut acc: Vec<[Vec<f64>; 4]> = (0..nf).map(|_| Default::default()).collect();
+    let mut det: Vec<[f64; 3]> = vec![[0.0; 3]; nf];
     let mut clean_change = Vec::new();
     let mut clean_changed = Vec::new();
+    let (mut clean_flagged, mut clean_frames) = (0usize, 0usize);
     for &i in &idx {
         let clean = full_confidence(&data.clip(i)?)?;
         let action = data.clip_info(i)?.action;
         let rc = refiner.refine_track(&clean, Some(action))?;
         clean_change.push(mpjpe_abs(&rc.track, &clean)?);
         clean_changed.push(f64::from(u8::from(rc.report.changed())));
+        clean_flagged += rc.report.flagged_frames.len();
+        clean_frames += clean.n_frames();
         for (fi, ef) in params.flaws.iter().enumerate() {
             let flaw = match ef {
                 EvalFlaw::Fixed(f) => f.clone(),
@@ -306,13 +357,19 @@ pub fn evaluate_injected_nets(
             a[1].push(mpjpe_abs(&r.track, &clean)?);
             a[2].push(mpjpe_abs(&b.track, &clean)?);
             a[3].push(f64::from(u8::from(r.report.changed())));
+            let c = detector_counts(&r.report.flagged_frames, &inj.mask);
+            for k in 0..3 {
+                det[fi][k] += c[k];
+            }
         }
     }
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
     let per_flaw: Vec<InjectedFlawReport> = params
         .flaws
         .iter()
         .zip(&acc)
-        .map(|(f, a)| InjectedFlawReport {
+        .zip(&det)
+        .map(|((f, a), d)| InjectedFlawReport {
             flaw: match f {
                 EvalFlaw::Fixed(fl) => fl.name().to_string(),
                 EvalFlaw::WrongAnchorOtherAction { .. } => "wrong_anchor_clip".into(),
@@ -322,8 +379,16 @@ pub fn evaluate_injected_nets(
             mpjpe_after_m: nanmean(&a[1]),
             baseline_after_m: nanmean(&a[2]),
             changed_share: nanmean(&a[3]),
+            detector_precision: ratio(d[0], d[1]),
+            detector_recall: ratio(d[0], d[2]),
         })
         .collect();
+    let tot = det.iter().fold([0.0; 3], |mut t, d| {
+        for k in 0..3 {
+            t[k] += d[k];
+        }
+        t
+    });
     let all = |k: usize| -> Vec<f64> { acc.iter().flat_map(|a| a[k].clone()).collect() };
     let before = nanmean(&all(0));
     let after = nanmean(&all(1));
@@ -335,6 +400,9 @@ pub fn evaluate_injected_nets(
         reduction: 1.0 - after / before,
         clean_change_m: nanmean(&clean_change),
         clean_changed_share: nanmean(&clean_changed),
+        clean_flagged_frame_share: ratio(clean_flagged as f64, clean_frames as f64),
+        detector_precision: ratio(tot[0], tot[1]),
+        detector_recall: ratio(tot[0], tot[2]),
         per_flaw,
     })
 }
@@ -425,31 +493,62 @@ pub fn generate_clips(
     Ok((out, labels))
 }
 
-/// Refines canonical clips with their labels; returns the refined clips and
-/// the mean time per clip in milliseconds.
-pub fn refine_clips(
+/// What the refinement did to a set of canonical clips.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefinedClips {
+    /// Refined clips, `N × 60 × 60` features.
+    pub clips: Array3<f32>,
+    /// Mean time per clip, milliseconds.
+    pub ms_per_clip: f64,
+    /// Share of clips changed by any step.
+    pub changed_share: f64,
+    /// Share of clips with at least one run refilled by the flaw repair.
+    pub detector_changed_share: f64,
+    /// Mean flagged (frame, joint) cells per clip.
+    pub flagged_cells_per_clip: f64,
+}
+
+/// Refines canonical clips with their labels.
+pub fn refine_clips_report(
     refiner: &NetRefiner<'_>,
     clips: &Array3<f32>,
     labels: &[u32],
-) -> Result<(Array3<f32>, f64, f64)> {
+) -> Result<RefinedClips> {
     let mut out = clips.clone();
     let t0 = Instant::now();
-    let mut changed = 0usize;
+    let (mut changed, mut det, mut cells) = (0usize, 0usize, 0usize);
     for (i, &a) in labels.iter().enumerate() {
         let c = crate::motion::from_features(clips.index_axis(Axis(0), i))?;
         let r = refiner.refine_canonical(c.view(), Some(a))?;
         if r.report.changed() {
             changed += 1;
         }
+        if !r.report.repaired_runs.is_empty() {
+            det += 1;
+        }
+        cells += r.report.flaw_cells.len();
         out.index_axis_mut(Axis(0), i)
             .assign(&to_features(r.clip.view()));
     }
     let n = labels.len().max(1) as f64;
-    Ok((
-        out,
-        t0.elapsed().as_secs_f64() * 1e3 / n,
-        changed as f64 / n,
-    ))
+    Ok(RefinedClips {
+        clips: out,
+        ms_per_clip: t0.elapsed().as_secs_f64() * 1e3 / n,
+        changed_share: changed as f64 / n,
+        detector_changed_share: det as f64 / n,
+        flagged_cells_per_clip: cells as f64 / n,
+    })
+}
+
+/// Refines canonical clips with their labels; returns the refined clips,
+/// the mean time per clip in milliseconds and the share of clips changed.
+pub fn refine_clips(
+    refiner: &NetRefiner<'_>,
+    clips: &Array3<f32>,
+    labels: &[u32],
+) -> Result<(Array3<f32>, f64, f64)> {
+    let r = refine_clips_report(refiner, clips, labels)?;
+    Ok((r.clips, r.ms_per_clip, r.changed_share))
 }
 
 /// Quality of one set of clips against the real set.
@@ -500,6 +599,10 @@ pub struct GeneratedReport {
     pub after: SetQuality,
     /// Share of generated clips the refinement changed.
     pub changed_share: f64,
+    /// Share of generated clips in which the flaw repair refilled something.
+    pub detector_changed_share: f64,
+    /// Mean (frame, joint) cells the flaw detector flagged per generated clip.
+    pub flagged_cells_per_clip: f64,
     /// Mean refinement time per clip (ms, this machine, inside the evaluation).
     pub refine_ms_per_clip: f64,
 }
@@ -635,8 +738,8 @@ pub fn evaluate(
     let (gen, labels) = generate_clips(nets, params.samples_per_action, params.seed)?;
     let (gf, gl) = evaluator_outputs(nets, &gen)?;
     let before = set_quality(&gf, &gl, &labels, &real_f, &real_labels, &params.quality)?;
-    let (refined, ms, changed) = refine_clips(&refiner, &gen, &labels)?;
-    let (rf, rl) = evaluator_outputs(nets, &refined)?;
+    let rc = refine_clips_report(&refiner, &gen, &labels)?;
+    let (rf, rl) = evaluator_outputs(nets, &rc.clips)?;
     let after = set_quality(&rf, &rl, &labels, &real_f, &real_labels, &params.quality)?;
     let generated = GeneratedReport {
         n_samples: labels.len(),
@@ -644,8 +747,10 @@ pub fn evaluate(
         real: real_q,
         before,
         after,
-        changed_share: changed,
-        refine_ms_per_clip: ms,
+        changed_share: rc.changed_share,
+        detector_changed_share: rc.detector_changed_share,
+        flagged_cells_per_clip: rc.flagged_cells_per_clip,
+        refine_ms_per_clip: rc.ms_per_clip,
     };
 
     let mut ablation = Vec::new();
@@ -678,38 +783,58 @@ pub fn evaluate(
         )?;
         let th_k = nearest_concept_thresholds(&kmeans, &samples, params.score_quantile)?;
         let th_d = nearest_concept_thresholds(&dbscan, &samples, params.score_quantile)?;
+        // The anchor and transition steps, with and without the detector first.
+        let steps = NetRefineParams {
+            mode: RefineMode::AnchorsAndTransitions,
+            ..params.refine.clone()
+        };
+        let no_detector = NetRefineParams {
+            flaw_detection: false,
+            ..steps.clone()
+        };
+        let detector_only = NetRefineParams {
+            mode: RefineMode::DetectorOnly,
+            ..params.refine.clone()
+        };
         let anchors_only = NetRefineParams {
             mode: RefineMode::AnchorsOnly,
-            ..params.refine.clone()
+            ..steps.clone()
         };
         let network_repair = NetRefineParams {
             anchor_repair: AnchorRepair::Network,
-            ..params.refine.clone()
+            ..steps.clone()
         };
         let segmentation = NetRefineParams {
             anchor_source: AnchorDetection::Segmentation,
-            ..params.refine.clone()
+            ..steps.clone()
         };
         let generator = NetRefineParams {
             transition_method: TransitionMethod::Generator,
-            ..params.refine.clone()
+            ..steps.clone()
         };
         let settings: Vec<Setting<'_>> = vec![
+            ("detector_only", concepts, &detector_only, None),
+            (
+                "no_detector_anchors_transitions_gmm",
+                concepts,
+                &no_detector,
+                None,
+            ),
             ("anchors_only_gmm", concepts, &anchors_only, None),
-            ("anchors_transitions_gmm", concepts, &params.refine, None),
+            ("anchors_transitions_gmm", concepts, &steps, None),
             ("anchor_network_repair", concepts, &network_repair, None),
             ("segmentation_anchors", concepts, &segmentation, None),
             ("generator_transitions", concepts, &generator, None),
             (
                 "anchors_transitions_nearest_kmeans",
                 &kmeans,
-                &params.refine,
+                &steps,
                 Some(&th_k),
             ),
             (
                 "anchors_transitions_nearest_dbscan",
                 &dbscan,
-                &params.refine,
+                &steps,
                 Some(&th_d),
             ),
         ];
@@ -737,4 +862,38 @@ pub fn evaluate(
         generated,
         ablation,
     })
+}
+
+/// One setting of [`selection_grid`] on the selection subjects.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SelectionRow {
+    /// Setting.
+    pub name: String,
+    /// The refinement parameters.
+    pub params: NetRefineParams,
+    /// Injected flaws on the selection subjects.
+    pub injected: InjectedReport,
+}
+
+/// Evaluates each named parameter set with injected flaws on
+/// [`RefineEvalParams::select_subjects`] (never on the evaluation subjects):
+/// the figures the defaults of [`NetRefineParams`] are chosen from.
+pub fn selection_grid(
+    data: &MsrAction3D,
+    nets: &RefineNets,
+    concepts: &Concepts,
+    params: &RefineEvalParams,
+    grid: &[(String, NetRefineParams)],
+) -> Result<Vec<SelectionRow>> {
+    params.validate()?;
+    grid.iter()
+        .map(|(name, p)| {
+            let r = NetRefiner::new(nets, concepts, p)?;
+            Ok(SelectionRow {
+                name: name.clone(),
+                params: p.clone(),
+                injected: evaluate_injected_on(data, &r, params, &params.select_subjects)?,
+            })
+        })
+        .collect()
 }

@@ -19,9 +19,10 @@
 //!   splines between the neighbouring good frames — and
 //!   [`baseline::evaluate_injected`], MPJPE to the clean motion before and
 //!   after refinement on MSR Action3D with injected flaws.
-//! * [`nets`], [`pipeline`]: the six refinement networks (ONNX Runtime) and
-//!   the learned refinement — anchor recognition, GMM anchor scores, anchor
-//!   repair, transition refinement.
+//! * [`nets`], [`pipeline`]: the seven refinement networks (ONNX Runtime) and
+//!   the learned refinement — a learned flaw detector whose flagged frames
+//!   and joints are refilled in the input's own frames, then anchor
+//!   recognition, GMM anchor scores, anchor repair, transition refinement.
 //! * [`quality`], [`eval_refine`]: FID, accuracy, diversity, multimodality
 //!   and the evaluation on injected flaws and generated motion.
 

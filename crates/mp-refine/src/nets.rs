@@ -1,7 +1,7 @@
-//! The six refinement networks, run with ONNX Runtime.
+//! The seven refinement networks, run with ONNX Runtime.
 //!
 //! A model folder (`models/refine/`, see its `README.md`) holds
-//! `manifest.json` and six ONNX files. Every tensor is `f32` with a dynamic
+//! `manifest.json` and seven ONNX files. Every tensor is `f32` with a dynamic
 //! batch dimension `B`; clips are canonical ([`crate::motion`]): 60 frames of
 //! 60 features.
 //!
@@ -13,6 +13,7 @@
 //! | [`NetKind::TransitionRefinement`] | `transition [B,16,60]`, `anchor_a`, `anchor_b`, `duration` | `coeffs [B,4,60]` |
 //! | [`NetKind::Generator`] | `action [B,20]`, `z [B,Zg]` | `motion [B,60,60]` |
 //! | [`NetKind::Evaluator`] | `motion [B,60,60]` | `logits [B,20]`, `features [B,F]` |
+//! | [`NetKind::FlawDetector`] | `motion [B,60,60]` | `flaw_logit [B,60,20]` |
 //!
 //! [`RefineNets::load`] checks every input and output name and every fixed
 //! dimension against this contract when the sessions are opened, so a wrong
@@ -44,7 +45,7 @@ pub const N_COEFFS: usize = 4;
 /// Action classes of the generator and the evaluator (MSR Action3D).
 pub const N_ACTIONS: usize = 20;
 
-/// One of the six networks.
+/// One of the seven networks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum NetKind {
     /// Per-frame anchor logits.
@@ -59,6 +60,8 @@ pub enum NetKind {
     Generator,
     /// Action classifier on real motion; its features feed FID etc.
     Evaluator,
+    /// Per-frame, per-joint flaw logits.
+    FlawDetector,
 }
 
 /// A dimension of the contract.
@@ -84,16 +87,18 @@ const LATENT: &[Dim] = &[Batch, Open];
 const COEFFS: &[Dim] = &[Batch, Fixed(N_COEFFS), Fixed(FRAME_FEATURES)];
 const TRANSITION: &[Dim] = &[Batch, Fixed(TRANSITION_FRAMES), Fixed(FRAME_FEATURES)];
 const ACTIONS: &[Dim] = &[Batch, Fixed(N_ACTIONS)];
+const PER_JOINT: &[Dim] = &[Batch, Fixed(NET_FRAMES), Fixed(MSR_JOINTS)];
 
 impl NetKind {
-    /// All six, in the order of the README.
-    pub const ALL: [NetKind; 6] = [
+    /// All seven, in the order of the README.
+    pub const ALL: [NetKind; 7] = [
         NetKind::AnchorRecognition,
         NetKind::AnchorRefinement,
         NetKind::TransitionGenerator,
         NetKind::TransitionRefinement,
         NetKind::Generator,
         NetKind::Evaluator,
+        NetKind::FlawDetector,
     ];
 
     /// Base name (file stem, and prefix of the `parity.npz` keys).
@@ -105,6 +110,7 @@ impl NetKind {
             NetKind::TransitionRefinement => "transition_refinement",
             NetKind::Generator => "generator",
             NetKind::Evaluator => "evaluator",
+            NetKind::FlawDetector => "flaw_detector",
         }
     }
 
@@ -115,7 +121,9 @@ impl NetKind {
 
     fn inputs(self) -> &'static [Spec] {
         match self {
-            NetKind::AnchorRecognition | NetKind::Evaluator => &[("motion", MOTION)],
+            NetKind::AnchorRecognition | NetKind::Evaluator | NetKind::FlawDetector => {
+                &[("motion", MOTION)]
+            }
             NetKind::AnchorRefinement => &[
                 ("motion", MOTION),
                 ("mask", PER_FRAME),
@@ -144,6 +152,7 @@ impl NetKind {
             NetKind::TransitionGenerator | NetKind::TransitionRefinement => &[("coeffs", COEFFS)],
             NetKind::Generator => &[("motion", MOTION)],
             NetKind::Evaluator => &[("logits", ACTIONS), ("features", LATENT)],
+            NetKind::FlawDetector => &[("flaw_logit", PER_JOINT)],
         }
     }
 
@@ -422,7 +431,7 @@ pub struct EvaluatorOut {
     pub features: Vec<f32>,
 }
 
-/// The six networks of one model folder, loaded once and shared
+/// The seven networks of one model folder, loaded once and shared
 /// (`Send + Sync`; each session runs one batch at a time).
 pub struct RefineNets {
     dir: PathBuf,
@@ -483,7 +492,7 @@ impl RefineNets {
         sizes.concepts = from_manifest("concepts", sizes.concepts);
         sizes.transition_latent = from_manifest("transition_latent", sizes.transition_latent);
         sizes.generator_latent = from_manifest("generator_latent", sizes.generator_latent);
-        let mut nets = Vec::with_capacity(6);
+        let mut nets = Vec::with_capacity(NetKind::ALL.len());
         for k in NetKind::ALL {
             let (net, open) = Net::open(&dir, k, session)?;
             let pick = |i: usize, fallback: usize| match open.get(i) {
@@ -585,6 +594,19 @@ impl RefineNets {
             NetKind::AnchorRecognition,
             &[("motion", vec![b, NET_FRAMES, FRAME_FEATURES], motion)],
             &[b * NET_FRAMES],
+        )?;
+        Ok(o.swap_remove(0))
+    }
+
+    /// Flaw logits (`B × 60 × 20`: frame, joint) of a batch of canonical
+    /// clips (`B × 60 × 60`).
+    pub fn flaw_logits(&self, motion: &[f32]) -> Result<Vec<f32>> {
+        let per = NET_FRAMES * FRAME_FEATURES;
+        let b = Self::batch_of("flaw detector motion", motion.len(), per)?;
+        let mut o = self.run_expect(
+            NetKind::FlawDetector,
+            &[("motion", vec![b, NET_FRAMES, FRAME_FEATURES], motion)],
+            &[b * NET_FRAMES * MSR_JOINTS],
         )?;
         Ok(o.swap_remove(0))
     }

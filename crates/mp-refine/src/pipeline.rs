@@ -4,6 +4,16 @@
 //! [`NetRefiner::refine_canonical`] works on a canonical clip
 //! ([`crate::motion`]: 60 frames × 20 joints, metres):
 //!
+//! 0. **Flaw detection** ([`NetRefineParams::flaw_detection`]): the flaw
+//!    detector gives a probability per canonical frame and joint. Cells
+//!    above [`NetRefineParams::flaw_probability`] seed flags that grow into
+//!    neighbouring frames above [`NetRefineParams::flaw_extend_probability`]
+//!    (hysteresis); flags are mapped to the frames of the input
+//!    ([`source_probabilities`]), optionally widened, and each run of
+//!    flagged frames of a joint is refilled from the nearest unflagged
+//!    frames before and after it ([`FlawRepair`]). In
+//!    [`NetRefiner::refine_track`] this happens in the track's own frames,
+//!    so short flaws are not blurred by the 60-frame resampling.
 //! 1. **Anchor recognition**: the anchor recognition network gives a
 //!    per-frame anchor probability (sigmoid of its logit). Interior frames
 //!    that are local maxima above [`NetRefineParams::anchor_probability`]
@@ -60,8 +70,28 @@ pub enum RefineMode {
     /// Anchor recognition, scoring and anchor refinement (neighbouring
     /// transitions rebuilt by the generator) only.
     AnchorsOnly,
-    /// Also transition refinement (default).
+    /// Also transition refinement.
     AnchorsAndTransitions,
+    /// Only the flaw detector and its repair (no anchor or transition step).
+    DetectorOnly,
+}
+
+/// How flagged source frames of a joint are refilled from the nearest
+/// unflagged frames before (`a`) and after (`b`) the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FlawRepair {
+    /// Straight line from `a` to `b`.
+    Linear,
+    /// Cubic Hermite from `a` to `b`, with the velocities of the clean
+    /// neighbours (`a − 1 → a` and `b → b + 1`; the chord where a
+    /// neighbour is flagged or missing).
+    Cubic,
+    /// Least-squares cubic in time through up to `context` unflagged frames
+    /// on each side of the run (a line when fewer than 4 are available).
+    CubicFit {
+        /// Unflagged frames used on each side.
+        context: usize,
+    },
 }
 
 /// Which network regenerates transitions in the transition step.
@@ -109,14 +139,19 @@ pub struct NetRefineParams {
     /// more probable. Default 3.
     pub min_anchor_gap_frames: usize,
     /// An anchor is flawed when its score is below the action's threshold
-    /// minus this margin (log-likelihood units). Default 100: the
+    /// minus this margin (log-likelihood units). Default 200: the
     /// thresholds are the 5 % quantile of the *training* subjects' anchor
     /// scores, and the 60-dimensional mixtures score new subjects lower —
-    /// without a margin more than half of the held-out subject's clean
-    /// poses fall below; with 100, under a tenth (chosen on subject 9, see
-    /// `docs/RESULTS.md`).
+    /// without a margin more than half of a new subject's clean poses fall
+    /// below. Chosen on subject 7 among 50, 100, 200 and 400 (anchor and
+    /// transition steps alone: injected-flaw MPJPE −4.1 % with 200, and no
+    /// clean clip changed; see `docs/RESULTS.md`). Used only when
+    /// [`Self::mode`] runs the anchor step.
     pub score_margin: f64,
-    /// Steps to run. Default [`RefineMode::AnchorsAndTransitions`].
+    /// Steps to run. Default [`RefineMode::DetectorOnly`]: on subject 7 the
+    /// anchor and transition steps after the flaw repair change the
+    /// injected-flaw MPJPE by less than 0.1 mm (−22.7 % with, −22.9 %
+    /// without them at the same detector settings) and move clean clips.
     pub mode: RefineMode,
     /// Network of the transition step. Default [`TransitionMethod::Refinement`].
     pub transition_method: TransitionMethod,
@@ -137,8 +172,9 @@ pub struct NetRefineParams {
     pub replace_frames_over_m: Option<f64>,
     /// A transition whose largest per-frame mean joint distance to its own
     /// least-squares cubic exceeds this (metres) is flawed. Default 0.1:
-    /// above the 99th percentile (94 mm) measured on clean MSR Action3D
-    /// clips of held-out subject 9.
+    /// on subject 7, 0.1 and 0.2 give identical results (with anchors every
+    /// ~4 canonical frames no transition of a clean or flawed clip gets
+    /// near either), so the lower, more sensitive value is kept.
     pub transition_deviation_m: f64,
     /// Transitions shorter than this (canonical frame intervals) are not
     /// tested for deviation (a cubic fits ≤ 4 frames exactly). Default 5.
@@ -153,6 +189,45 @@ pub struct NetRefineParams {
     pub max_bridge_frames: usize,
     /// Tracks shorter than this (source frames) are refused. Default 8.
     pub min_frames: usize,
+    /// Run the flaw detector first and repair the flagged frames of the
+    /// flagged joints. Default true. The defaults of the `flaw_*` fields
+    /// and of [`Self::max_repair_run_frames`] were chosen on subject 7
+    /// (`cargo xtask eval refine --select`), never on the evaluation
+    /// subject 9.
+    pub flaw_detection: bool,
+    /// A (canonical frame, joint) cell is flagged when the detector's
+    /// probability exceeds this. Default 0.7: on subject 7 (injected flaws,
+    /// least-squares repair, runs ≤ 8 frames) 0.5 / 0.6 / 0.7 / 0.8 / 0.9
+    /// reduce the MPJPE by 15.3 / 20.5 / 22.9 / 21.5 / 14.9 %, and flag
+    /// 3.8 / 2.8 / 1.8 / 1.0 / 0.7 % of the clean clips' frames.
+    pub flaw_probability: f64,
+    /// Flags grow from frames above [`Self::flaw_probability`] into the
+    /// neighbouring frames of the same joint whose probability exceeds this
+    /// (hysteresis; equal to `flaw_probability`: no growth). Default 0.7
+    /// (no growth): growing into frames above 0.3 found more flawed frames
+    /// on subject 7 but flagged twice as many clean ones, and lost 3–8
+    /// points of MPJPE reduction at every seed threshold.
+    pub flaw_extend_probability: f64,
+    /// A source frame where at least this share of the joints is flagged
+    /// is flagged for every joint (flaws such as jumps, frozen frames and
+    /// wrong poses move the whole body). Default 1 (off): 0.25 and 0.5
+    /// changed the subject-7 reduction by less than 1 point.
+    pub flaw_frame_share: f64,
+    /// Flagged source frames are widened by this many frames on each side
+    /// (per joint) before the repair. Default 0: 1 and 2 frames lost 7 and
+    /// 23 points of MPJPE reduction on subject 7 (a refilled gap of real
+    /// 15 fps motion grows fast with its length).
+    pub flaw_dilation_frames: usize,
+    /// Refill of flagged frames. Default [`FlawRepair::CubicFit`] with 3
+    /// context frames: on subject 7 at threshold 0.7 it reduces the MPJPE by
+    /// 22.9 %, the straight line by 22.3 %, the Hermite cubic by 17.9 %
+    /// (one-frame velocities of the Kinect skeletons are noisy).
+    pub flaw_repair: FlawRepair,
+    /// Runs of flagged frames of a joint longer than this (source frames)
+    /// are reported but not refilled. Default 6: on subject 7, 6 / 8 / 10
+    /// frames give 23.3 / 22.9 / 21.9 % (a refill across more frames of
+    /// real 15 fps motion costs more than most flaws).
+    pub max_repair_run_frames: usize,
 }
 
 impl Default for NetRefineParams {
@@ -160,8 +235,8 @@ impl Default for NetRefineParams {
         NetRefineParams {
             anchor_probability: 0.3,
             min_anchor_gap_frames: 3,
-            score_margin: 100.0,
-            mode: RefineMode::AnchorsAndTransitions,
+            score_margin: 200.0,
+            mode: RefineMode::DetectorOnly,
             transition_method: TransitionMethod::Refinement,
             anchor_source: AnchorDetection::Network,
             segment: SegmentParams::default(),
@@ -172,6 +247,13 @@ impl Default for NetRefineParams {
             pin_anchors: true,
             max_bridge_frames: 10,
             min_frames: 8,
+            flaw_detection: true,
+            flaw_probability: 0.7,
+            flaw_extend_probability: 0.7,
+            flaw_frame_share: 1.0,
+            flaw_dilation_frames: 0,
+            flaw_repair: FlawRepair::CubicFit { context: 3 },
+            max_repair_run_frames: 6,
         }
     }
 }
@@ -233,6 +315,39 @@ impl NetRefineParams {
                 format!("must be ≥ 2, got {}", self.min_frames),
             ));
         }
+        if !(self.flaw_probability.is_finite() && (0.0..1.0).contains(&self.flaw_probability)) {
+            return Err(RefineError::param(
+                "flaw_probability",
+                format!("must be in [0, 1), got {}", self.flaw_probability),
+            ));
+        }
+        if !(self.flaw_extend_probability.is_finite()
+            && self.flaw_extend_probability >= 0.0
+            && self.flaw_extend_probability <= self.flaw_probability)
+        {
+            return Err(RefineError::param(
+                "flaw_extend_probability",
+                format!(
+                    "must be in [0, flaw_probability = {}], got {}",
+                    self.flaw_probability, self.flaw_extend_probability
+                ),
+            ));
+        }
+        if !(self.flaw_frame_share > 0.0 && self.flaw_frame_share <= 1.0) {
+            return Err(RefineError::param(
+                "flaw_frame_share",
+                format!("must be in (0, 1], got {}", self.flaw_frame_share),
+            ));
+        }
+        if self.flaw_dilation_frames > 10 {
+            return Err(RefineError::param(
+                "flaw_dilation_frames",
+                format!("must be ≤ 10, got {}", self.flaw_dilation_frames),
+            ));
+        }
+        if self.max_repair_run_frames == 0 {
+            return Err(RefineError::param("max_repair_run_frames", "must be ≥ 1"));
+        }
         Ok(())
     }
 }
@@ -285,6 +400,29 @@ pub struct TransitionReport {
     pub refined: Option<TransitionReason>,
 }
 
+/// A (canonical frame, joint) cell flagged by the flaw detector.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlawCell {
+    /// Canonical frame (0..60).
+    pub frame: usize,
+    /// Joint (MSR order).
+    pub joint: usize,
+    /// Flaw probability.
+    pub probability: f64,
+}
+
+/// A run of flagged frames of one joint that was refilled.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RepairedRun {
+    /// Joint (MSR order).
+    pub joint: usize,
+    /// First refilled frame (source frames of the track; canonical frames
+    /// for [`NetRefiner::refine_canonical`]).
+    pub start: usize,
+    /// Last refilled frame (inclusive).
+    pub end: usize,
+}
+
 /// What the refinement found and did.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RefineReport {
@@ -296,6 +434,13 @@ pub struct RefineReport {
     pub anchors: Vec<AnchorReport>,
     /// Transitions between consecutive anchors.
     pub transitions: Vec<TransitionReport>,
+    /// Cells flagged by the flaw detector, with their probabilities.
+    pub flaw_cells: Vec<FlawCell>,
+    /// Frames (source frames of the track) where the detector flagged at
+    /// least one joint, before dilation.
+    pub flagged_frames: Vec<usize>,
+    /// Runs refilled by the flaw repair (after dilation).
+    pub repaired_runs: Vec<RepairedRun>,
 }
 
 impl RefineReport {
@@ -309,7 +454,9 @@ impl RefineReport {
     }
     /// Whether anything changed.
     pub fn changed(&self) -> bool {
-        self.anchors.iter().any(|a| a.repaired) || self.refined_transitions().next().is_some()
+        !self.repaired_runs.is_empty()
+            || self.anchors.iter().any(|a| a.repaired)
+            || self.refined_transitions().next().is_some()
     }
 }
 
@@ -606,11 +753,87 @@ impl<'a> NetRefiner<'a> {
         Ok(base - self.params.score_margin)
     }
 
-    /// Refines a canonical clip (`60 × 20 × 3`).
+    /// Flaw probabilities (`60 × 20`: canonical frame, joint) of a
+    /// canonical clip's features (`60 × 60`).
+    pub fn flaw_probabilities(&self, feats: &Array2<f32>) -> Result<Array2<f64>> {
+        let flat: Vec<f32> = feats.iter().copied().collect();
+        let logits = self.nets.flaw_logits(&flat)?;
+        check_finite("flaw detector", &logits)?;
+        Array2::from_shape_vec(
+            (NET_FRAMES, MSR_JOINTS),
+            logits.iter().map(|&l| sigmoid(l)).collect(),
+        )
+        .map_err(|e| RefineError::Shape(format!("flaw detector output: {e}")))
+    }
+
+    /// Step 0: runs the detector on `clip` (canonical) and refills the
+    /// flagged frames of `pos` (`T × 20 × 3`, the frames `clip` was
+    /// resampled from) in place. Returns the flagged cells, the flagged
+    /// source frames and the refilled runs.
+    fn detect_and_repair(
+        &self,
+        clip: ArrayView3<'_, f64>,
+        pos: &mut Array3<f64>,
+    ) -> Result<(Vec<FlawCell>, Vec<usize>, Vec<RepairedRun>)> {
+        let p = self.params;
+        let prob = self.flaw_probabilities(&to_features(clip))?;
+        let mut cells = Vec::new();
+        for f in 0..NET_FRAMES {
+            for j in 0..MSR_JOINTS {
+                if prob[[f, j]] > p.flaw_probability {
+                    cells.push(FlawCell {
+                        frame: f,
+                        joint: j,
+                        probability: prob[[f, j]],
+                    });
+                }
+            }
+        }
+        let t = pos.dim().0;
+        let mut flags = hysteresis_flags(
+            &source_probabilities(&prob, t),
+            p.flaw_probability,
+            p.flaw_extend_probability,
+        );
+        promote_frames(&mut flags, p.flaw_frame_share);
+        let flagged_frames: Vec<usize> = (0..t)
+            .filter(|&f| flags.row(f).iter().any(|&v| v))
+            .collect();
+        let flags = if p.flaw_dilation_frames > 0 {
+            dilate_flags(&flags, p.flaw_dilation_frames)
+        } else {
+            flags
+        };
+        let runs = repair_flagged(pos, &flags, p.flaw_repair, p.max_repair_run_frames)?;
+        Ok((cells, flagged_frames, runs))
+    }
+
+    /// Refines a canonical clip (`60 × 20 × 3`): the flaw detector and its
+    /// repair (in canonical frames), then the anchor and transition steps.
     ///
     /// `action` (1-based MSR action) selects the concepts used for scoring;
     /// `None` uses the evaluator's prediction.
     pub fn refine_canonical(
+        &self,
+        clip: ArrayView3<'_, f64>,
+        action: Option<u32>,
+    ) -> Result<CanonicalRefinement> {
+        check_canonical(clip)?;
+        let mut x = clip.to_owned();
+        let (cells, frames, runs) = if self.params.flaw_detection {
+            self.detect_and_repair(clip, &mut x)?
+        } else {
+            Default::default()
+        };
+        let mut r = self.refine_steps(x.view(), action)?;
+        r.report.flaw_cells = cells;
+        r.report.flagged_frames = frames;
+        r.report.repaired_runs = runs;
+        Ok(r)
+    }
+
+    /// Steps 1–4 on a canonical clip (see the module docs).
+    fn refine_steps(
         &self,
         clip: ArrayView3<'_, f64>,
         action: Option<u32>,
@@ -628,6 +851,27 @@ impl<'a> NetRefiner<'a> {
         }
         let p = self.params;
         let feats = to_features(clip);
+        if p.mode == RefineMode::DetectorOnly {
+            let (action, action_predicted) = match action {
+                Some(a) => {
+                    self.concepts.action(a)?;
+                    (a, false)
+                }
+                None => (self.predict_action(&feats)?, true),
+            };
+            return Ok(CanonicalRefinement {
+                clip: clip.to_owned(),
+                report: RefineReport {
+                    action,
+                    action_predicted,
+                    anchors: Vec::new(),
+                    transitions: Vec::new(),
+                    flaw_cells: Vec::new(),
+                    flagged_frames: Vec::new(),
+                    repaired_runs: Vec::new(),
+                },
+            });
+        }
         let flat: Vec<f32> = feats.iter().copied().collect();
         // 1. Anchors.
         let logits = self.nets.anchor_logits(&flat)?;
@@ -862,6 +1106,9 @@ impl<'a> NetRefiner<'a> {
                 action_predicted,
                 anchors: reports,
                 transitions,
+                flaw_cells: Vec::new(),
+                flagged_frames: Vec::new(),
+                repaired_runs: Vec::new(),
             },
         })
     }
@@ -945,15 +1192,36 @@ impl<'a> NetRefiner<'a> {
                 got: track.n_frames(),
             });
         }
-        let (clip, frame) = canonicalize(track)?;
-        let r = self.refine_canonical(clip.view(), action)?;
-        let delta = &r.clip - &clip;
-        let rot = CanonicalFrame {
-            origin: [0.0; 3],
-            ..frame.clone()
+        let (mut clip, mut frame) = canonicalize(track)?;
+        let mut pos = track.positions().to_owned();
+        let (cells, frames, runs) = if self.params.flaw_detection {
+            // Step 0 in source frames, so short flaws are not blurred by
+            // the 60-frame resampling.
+            let d = self.detect_and_repair(clip.view(), &mut pos)?;
+            if !d.2.is_empty() {
+                let repaired = Track::new(
+                    pos.clone(),
+                    Some(track.confidence().to_owned()),
+                    track.fps(),
+                    track.units(),
+                    track.skeleton().clone(),
+                )?;
+                (clip, frame) = canonicalize(&repaired)?;
+            }
+            d
+        } else {
+            Default::default()
         };
-        let back = decanonicalize(delta.view(), &rot)?;
-        let pos = &track.positions() + &back.positions();
+        let r = self.refine_steps(clip.view(), action)?;
+        let delta = &r.clip - &clip;
+        if delta.iter().any(|&v| v != 0.0) {
+            let rot = CanonicalFrame {
+                origin: [0.0; 3],
+                ..frame.clone()
+            };
+            let back = decanonicalize(delta.view(), &rot)?;
+            pos += &back.positions();
+        }
         let out = Track::new(
             pos,
             Some(track.confidence().to_owned()),
@@ -962,6 +1230,9 @@ impl<'a> NetRefiner<'a> {
             track.skeleton().clone(),
         )?;
         let mut report = r.report;
+        report.flaw_cells = cells;
+        report.flagged_frames = frames;
+        report.repaired_runs = runs;
         let scale = (track.n_frames() - 1) as f64 / (NET_FRAMES - 1) as f64;
         let src = |f: usize| (f as f64 * scale).round() as usize;
         for a in report.anchors.iter_mut() {
@@ -972,6 +1243,292 @@ impl<'a> NetRefiner<'a> {
         }
         Ok(NetRefinement { track: out, report })
     }
+}
+
+/// Least-squares polynomial of degree `deg` (1 or 3) through `(x, y)`, in
+/// `u = (x − x0)/scale`; coefficients of `1, u, u², u³`. `None` when the
+/// system is singular.
+fn poly_fit(x: &[f64], y: &[f64], deg: usize, x0: f64, scale: f64) -> Option<[f64; 4]> {
+    let m = deg.min(3) + 1;
+    if x.len() < m || scale <= 0.0 {
+        return None;
+    }
+    let mut ata = Matrix4::<f64>::identity();
+    let mut aty = Vector4::<f64>::zeros();
+    for r in 0..m {
+        ata[(r, r)] = 0.0;
+    }
+    for (&xi, &yi) in x.iter().zip(y) {
+        let u = (xi - x0) / scale;
+        let v = Vector4::new(1.0, u, u * u, u * u * u);
+        for r in 0..m {
+            for c in 0..m {
+                ata[(r, c)] += v[r] * v[c];
+            }
+            aty[r] += v[r] * yi;
+        }
+    }
+    let c = ata.try_inverse()? * aty;
+    let mut out = [0.0; 4];
+    for r in 0..m {
+        out[r] = c[r];
+    }
+    Some(out)
+}
+
+fn check_canonical(clip: ArrayView3<'_, f64>) -> Result<()> {
+    if clip.dim() != (NET_FRAMES, MSR_JOINTS, 3) {
+        return Err(RefineError::Shape(format!(
+            "refine_canonical: expected ({NET_FRAMES}, {MSR_JOINTS}, 3), got {:?}",
+            clip.dim()
+        )));
+    }
+    if clip.iter().any(|v| !v.is_finite()) {
+        return Err(RefineError::NonFinite(
+            "refine_canonical: the clip has a non-finite coordinate".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Source-frame probabilities (`t × J`) from canonical ones (`60 × J`).
+///
+/// Canonical frame `f` interpolates the source frames within one frame of
+/// `u = f·(t − 1)/59` (its support), and the training labels
+/// ([`crate::dataset::canonical_mask`]) flag it when any frame of its
+/// support is flawed — so a flawed source frame has *every* canonical frame
+/// of its support flagged, while a clean neighbour has only some. A source
+/// frame therefore takes the smallest probability of the canonical frames
+/// whose support contains it, or, where none does (clips longer than 60
+/// frames), the linear interpolation of the two nearest.
+pub fn source_probabilities(prob: &Array2<f64>, t: usize) -> Array2<f64> {
+    let (n, j) = prob.dim();
+    let mut out = Array2::<f64>::zeros((t, j));
+    if t == 0 || n == 0 {
+        return out;
+    }
+    let scale = if n > 1 && t > 1 {
+        (n - 1) as f64 / (t - 1) as f64
+    } else {
+        0.0
+    };
+    let back = if scale > 0.0 { 1.0 / scale } else { 0.0 };
+    for s in 0..t {
+        // Canonical position of source frame s.
+        let v = s as f64 * scale;
+        let lo = ((v - scale) - 1e-9).ceil().max(0.0) as usize;
+        let hi = (((v + scale) + 1e-9).floor() as usize).min(n - 1);
+        let support: Vec<usize> = (lo..=hi)
+            .filter(|&f| (f as f64 * back - s as f64).abs() < 1.0 - 1e-9)
+            .collect();
+        for a in 0..j {
+            out[[s, a]] = if support.is_empty() {
+                let f0 = (v.floor() as usize).min(n - 1);
+                let f1 = (f0 + 1).min(n - 1);
+                let w = v - f0 as f64;
+                (1.0 - w) * prob[[f0, a]] + w * prob[[f1, a]]
+            } else {
+                support
+                    .iter()
+                    .map(|&f| prob[[f, a]])
+                    .fold(f64::INFINITY, f64::min)
+            };
+        }
+    }
+    out
+}
+
+/// Hysteresis flags (`t × J`) of source probabilities: per joint, runs of
+/// frames above `extend` that contain a frame above `seed`.
+pub fn hysteresis_flags(p: &Array2<f64>, seed: f64, extend: f64) -> Array2<bool> {
+    let (t, j) = p.dim();
+    let mut out = Array2::from_elem((t, j), false);
+    for a in 0..j {
+        let mut f = 0;
+        while f < t {
+            if p[[f, a]] <= extend {
+                f += 1;
+                continue;
+            }
+            let r0 = f;
+            let mut hit = false;
+            while f < t && p[[f, a]] > extend {
+                hit |= p[[f, a]] > seed;
+                f += 1;
+            }
+            if hit {
+                for g in r0..f {
+                    out[[g, a]] = true;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Source-frame flags (`t × J`) from canonical probabilities (`60 × J`):
+/// [`source_probabilities`] above `thr`, widened by `dilate` frames.
+pub fn source_flags(prob: &Array2<f64>, t: usize, thr: f64, dilate: usize) -> Array2<bool> {
+    let out = source_probabilities(prob, t).mapv(|v| v > thr);
+    if dilate > 0 {
+        dilate_flags(&out, dilate)
+    } else {
+        out
+    }
+}
+
+/// Flags every joint of the frames (rows) where at least `share` of the
+/// joints are flagged.
+pub fn promote_frames(flags: &mut Array2<bool>, share: f64) {
+    let j = flags.ncols();
+    let need = ((share * j as f64).ceil() as usize).max(1);
+    for mut row in flags.outer_iter_mut() {
+        if row.iter().filter(|&&v| v).count() >= need {
+            row.fill(true);
+        }
+    }
+}
+
+/// Widens every run of flags (per column) by `d` frames on each side.
+pub fn dilate_flags(flags: &Array2<bool>, d: usize) -> Array2<bool> {
+    let (t, j) = flags.dim();
+    let mut out = flags.clone();
+    for a in 0..j {
+        for f in 0..t {
+            if flags[[f, a]] {
+                let lo = f.saturating_sub(d);
+                let hi = (f + d).min(t.saturating_sub(1));
+                for g in lo..=hi {
+                    out[[g, a]] = true;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Refills the flagged frames of each joint of `pos` (`T × J × D`, flags
+/// `T × J`) from the nearest unflagged frames before and after each run.
+/// A run at the start or end holds its one clean neighbour; a joint
+/// flagged in every frame, and runs longer than `max_run`, are left as
+/// they are. Returns the refilled runs.
+pub fn repair_flagged(
+    pos: &mut Array3<f64>,
+    flags: &Array2<bool>,
+    method: FlawRepair,
+    max_run: usize,
+) -> Result<Vec<RepairedRun>> {
+    let (t, nj, d) = pos.dim();
+    if flags.dim() != (t, nj) {
+        return Err(RefineError::Shape(format!(
+            "repair_flagged: flags {:?} for positions {:?}",
+            flags.dim(),
+            pos.dim()
+        )));
+    }
+    let mut runs = Vec::new();
+    for j in 0..nj {
+        let mut f = 0;
+        while f < t {
+            if !flags[[f, j]] {
+                f += 1;
+                continue;
+            }
+            let r0 = f;
+            while f < t && flags[[f, j]] {
+                f += 1;
+            }
+            let r1 = f - 1;
+            if r1 - r0 + 1 > max_run || (r0 == 0 && r1 + 1 == t) {
+                continue;
+            }
+            let a = r0.checked_sub(1);
+            let b = (r1 + 1 < t).then_some(r1 + 1);
+            for k in 0..d {
+                match (a, b) {
+                    (Some(a), Some(b)) => {
+                        let (pa, pb) = (pos[[a, j, k]], pos[[b, j, k]]);
+                        let len = (b - a) as f64;
+                        let chord = (pb - pa) / len;
+                        if let FlawRepair::CubicFit { context } = method {
+                            let mut ctx: Vec<usize> = Vec::new();
+                            let mut g = a as isize;
+                            while g >= 0 && ctx.len() < context.max(1) {
+                                if !flags[[g as usize, j]] {
+                                    ctx.push(g as usize);
+                                }
+                                g -= 1;
+                            }
+                            let n_before = ctx.len();
+                            let mut g = b;
+                            while g < t && ctx.len() < n_before + context.max(1) {
+                                if !flags[[g, j]] {
+                                    ctx.push(g);
+                                }
+                                g += 1;
+                            }
+                            let fit = poly_fit(
+                                &ctx.iter().map(|&g| g as f64).collect::<Vec<_>>(),
+                                &ctx.iter().map(|&g| pos[[g, j, k]]).collect::<Vec<_>>(),
+                                if ctx.len() >= 6 { 3 } else { 1 },
+                                a as f64,
+                                len,
+                            );
+                            if let Some(c) = fit {
+                                for g in r0..=r1 {
+                                    let u = (g as f64 - a as f64) / len;
+                                    pos[[g, j, k]] = ((c[3] * u + c[2]) * u + c[1]) * u + c[0];
+                                }
+                                continue;
+                            }
+                        }
+                        let (ma, mb) = match method {
+                            FlawRepair::Linear | FlawRepair::CubicFit { .. } => (chord, chord),
+                            FlawRepair::Cubic => (
+                                if a >= 1 && !flags[[a - 1, j]] {
+                                    pa - pos[[a - 1, j, k]]
+                                } else {
+                                    chord
+                                },
+                                if b + 1 < t && !flags[[b + 1, j]] {
+                                    pos[[b + 1, j, k]] - pb
+                                } else {
+                                    chord
+                                },
+                            ),
+                        };
+                        for g in r0..=r1 {
+                            let s = (g - a) as f64 / len;
+                            let (s2, s3) = (s * s, s * s * s);
+                            pos[[g, j, k]] = (2.0 * s3 - 3.0 * s2 + 1.0) * pa
+                                + (s3 - 2.0 * s2 + s) * len * ma
+                                + (-2.0 * s3 + 3.0 * s2) * pb
+                                + (s3 - s2) * len * mb;
+                        }
+                    }
+                    (Some(a), None) => {
+                        let v = pos[[a, j, k]];
+                        for g in r0..=r1 {
+                            pos[[g, j, k]] = v;
+                        }
+                    }
+                    (None, Some(b)) => {
+                        let v = pos[[b, j, k]];
+                        for g in r0..=r1 {
+                            pos[[g, j, k]] = v;
+                        }
+                    }
+                    (None, None) => {}
+                }
+            }
+            runs.push(RepairedRun {
+                joint: j,
+                start: r0,
+                end: r1,
+            });
+        }
+    }
+    Ok(runs)
 }
 
 /// Canonical frames changed by the refinement: refined anchors and frames
@@ -1063,6 +1620,110 @@ mod tests {
     }
 
     #[test]
+    fn repair_is_exact_on_lines_and_cubics() {
+        let t = 20;
+        let mut pos = Array3::<f64>::zeros((t, 2, 3));
+        for f in 0..t {
+            let x = f as f64;
+            for k in 0..3 {
+                pos[[f, 0, k]] = 0.1 * x + k as f64; // a line
+                pos[[f, 1, k]] = 0.001 * x * x * x - 0.02 * x * x + 0.3 * x; // a cubic
+            }
+        }
+        let clean = pos.clone();
+        let mut flags = Array2::from_elem((t, 2), false);
+        for f in 7..11 {
+            flags[[f, 0]] = true;
+            flags[[f, 1]] = true;
+            pos[[f, 0, 1]] += 0.5;
+            pos[[f, 1, 2]] -= 0.5;
+        }
+        let mut lin = pos.clone();
+        let runs = repair_flagged(&mut lin, &flags, FlawRepair::Linear, 30).unwrap();
+        assert_eq!(runs.len(), 2);
+        assert_eq!((runs[0].joint, runs[0].start, runs[0].end), (0, 7, 10));
+        for f in 0..t {
+            for k in 0..3 {
+                assert!((lin[[f, 0, k]] - clean[[f, 0, k]]).abs() < 1e-12);
+            }
+        }
+        // A Hermite cubic with one-sided velocities is not the cubic itself,
+        // but it is much closer than the straight line.
+        let mut cub = pos.clone();
+        repair_flagged(&mut cub, &flags, FlawRepair::Cubic, 30).unwrap();
+        let err = |x: &Array3<f64>| {
+            (7..11)
+                .map(|f| (x[[f, 1, 2]] - clean[[f, 1, 2]]).abs())
+                .fold(0.0, f64::max)
+        };
+        assert!(err(&cub) < 0.5 * err(&lin), "{} {}", err(&cub), err(&lin));
+        // Untouched frames stay bit-identical; runs longer than the limit stay.
+        assert_eq!(cub[[3, 1, 2]], pos[[3, 1, 2]]);
+        let mut long = pos.clone();
+        assert!(repair_flagged(&mut long, &flags, FlawRepair::Linear, 3)
+            .unwrap()
+            .is_empty());
+        assert_eq!(long, pos);
+        // A run at the start holds its clean neighbour.
+        let mut start = Array2::from_elem((t, 2), false);
+        start[[0, 0]] = true;
+        start[[1, 0]] = true;
+        let mut s0 = pos.clone();
+        repair_flagged(&mut s0, &start, FlawRepair::Cubic, 30).unwrap();
+        assert_eq!(s0[[0, 0, 1]], pos[[2, 0, 1]]);
+        assert!(repair_flagged(
+            &mut s0,
+            &Array2::from_elem((3, 2), false),
+            FlawRepair::Cubic,
+            3
+        )
+        .is_err());
+    }
+
+    #[test]
+    fn flags_map_to_source_frames_with_hysteresis() {
+        let mut prob = Array2::<f64>::zeros((NET_FRAMES, 2));
+        prob[[30, 0]] = 0.95;
+        prob[[29, 0]] = 0.6;
+        prob[[31, 0]] = 0.6;
+        prob[[10, 1]] = 0.6; // never above the seed threshold
+                             // Same frame count: identity.
+        let sp = source_probabilities(&prob, NET_FRAMES);
+        assert_eq!(sp, prob);
+        let h = hysteresis_flags(&sp, 0.9, 0.5);
+        let on: Vec<(usize, usize)> = (0..NET_FRAMES)
+            .flat_map(|f| (0..2).map(move |j| (f, j)))
+            .filter(|&(f, j)| h[[f, j]])
+            .collect();
+        assert_eq!(on, vec![(29, 0), (30, 0), (31, 0)]);
+        assert_eq!(
+            hysteresis_flags(&sp, 0.9, 0.9)
+                .iter()
+                .filter(|&&v| v)
+                .count(),
+            1
+        );
+        // More source frames (t = 89): canonical 29, 30, 31 sit at source
+        // 43.25, 44.75, 46.24. Source 45 is interpolated by canonical 30
+        // only (0.95); source 44 also by canonical 29 (0.6), so it stays
+        // below 0.9.
+        let sp2 = source_probabilities(&prob, 89);
+        assert!((sp2[[44, 0]] - 0.6).abs() < 1e-12);
+        let f2 = sp2.mapv(|v| v > 0.9);
+        let on: Vec<usize> = (0..89).filter(|&f| f2[[f, 0]]).collect();
+        assert_eq!(on, vec![45]);
+        let d = dilate_flags(&f2, 2);
+        assert_eq!((0..89).filter(|&f| d[[f, 0]]).count(), 5);
+        assert_eq!(source_flags(&prob, 89, 0.9, 2), d);
+        // Fewer canonical frames than source frames in a support (t = 180):
+        // source frames between canonical frames are interpolated.
+        let sp3 = source_probabilities(&prob, 178);
+        // Canonical 30 sits exactly at source 90; source 91 is between 30 and 31.
+        assert!((sp3[[90, 0]] - 0.95).abs() < 1e-12);
+        assert!(sp3[[91, 0]] < 0.95 && sp3[[91, 0]] >= 0.6);
+    }
+
+    #[test]
     fn params_are_validated() {
         assert!(NetRefineParams::default().validate().is_ok());
         let bad = NetRefineParams {
@@ -1086,5 +1747,29 @@ mod tests {
             ..Default::default()
         };
         assert!(bad.validate().is_err());
+        for bad in [
+            NetRefineParams {
+                flaw_probability: 1.0,
+                ..Default::default()
+            },
+            NetRefineParams {
+                flaw_probability: 0.5,
+                flaw_extend_probability: 0.6,
+                ..Default::default()
+            },
+            NetRefineParams {
+                max_repair_run_frames: 0,
+                ..Default::default()
+            },
+            NetRefineParams {
+                flaw_dilation_frames: 11,
+                ..Default::default()
+            },
+        ] {
+            assert!(matches!(
+                bad.validate(),
+                Err(RefineError::InvalidParam { .. })
+            ));
+        }
     }
 }
