@@ -8,6 +8,7 @@ mod eval_loops;
 mod eval_pose;
 mod eval_refine;
 mod models;
+mod pyenv;
 mod setup;
 mod train_forecast;
 mod train_refine;

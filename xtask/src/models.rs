@@ -190,15 +190,8 @@ fn run_cmd(cmd: &mut Command, what: &str) -> Result<()> {
 
 fn venv_python(root: &Path) -> Result<PathBuf> {
     let venv = root.join(".cache/venv-models");
-    let python = venv.join("bin/python");
+    let python = crate::pyenv::venv(root, ".cache/venv-models", "models")?;
     let marker = venv.join(".mp-tools-installed");
-    if !python.is_file() {
-        println!("models: creating {}", venv.display());
-        run_cmd(
-            Command::new("python3").args(["-m", "venv"]).arg(&venv),
-            "python3 -m venv",
-        )?;
-    }
     if !marker.is_file() {
         println!(
             "models: installing {} into {} (about 700 MB, a few minutes)",

@@ -1,18 +1,18 @@
 //! `cargo xtask train-forecast`: trains the forecasting models with PyTorch
 //! (`tools/forecast/train.py`) and exports them to ONNX under `models/forecast/<dataset>/`.
 //!
-//! The virtual environment `.cache/venv-train` is created on first use with a
-//! plain `pip install torch numpy onnx` from PyPI (the CPU-only index is not a
-//! registry we may use; PyPI's torch imports only with its `nvidia-*`
-//! dependencies installed, ~6–7 GB, and trains on the CPU). Training threads do
-//! not busy-wait (`OMP_WAIT_POLICY=PASSIVE`): on a busy 2-core machine a
-//! spinning OpenMP pool made steps 5–10× slower.
+//! The training environment is `.cache/venv-train` ([`crate::pyenv::training_python`]).
+//! The ONNX parity fixture (`<dataset>_parity.json`) goes to `testdata/forecast/`
+//! when the models go to the committed `models/forecast/`, and next to the models otherwise,
+//! so that an experiment never replaces the fixture of the committed models.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::ffi::OsString;
+use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+
+use crate::pyenv::{command_line, run_script, training_python};
 
 /// Arguments of `cargo xtask train-forecast`.
 #[derive(Args, Debug)]
@@ -34,45 +34,6 @@ pub struct TrainForecastArgs {
     pub extra: Vec<String>,
 }
 
-const PACKAGES: [&str; 3] = ["torch", "numpy", "onnx"];
-
-pub(crate) fn venv_python(root: &Path) -> Result<PathBuf> {
-    let venv = root.join(".cache/venv-train");
-    let python = venv.join("bin/python");
-    if !python.is_file() {
-        println!("train-forecast: creating {}", venv.display());
-        let st = Command::new("python3")
-            .args(["-m", "venv"])
-            .arg(&venv)
-            .status()
-            .context("starting python3 -m venv")?;
-        if !st.success() {
-            bail!("python3 -m venv {} failed", venv.display());
-        }
-    }
-    let ok = Command::new(&python)
-        .args(["-c", "import torch, numpy, onnx"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        println!(
-            "train-forecast: pip install {} into {} (PyPI's torch brings its nvidia-* wheels: ~7 GB, several minutes)",
-            PACKAGES.join(" "),
-            venv.display()
-        );
-        let st = Command::new(&python)
-            .args(["-m", "pip", "install", "-q"])
-            .args(PACKAGES)
-            .status()
-            .context("starting pip")?;
-        if !st.success() {
-            bail!("pip install {} failed", PACKAGES.join(" "));
-        }
-    }
-    Ok(python)
-}
-
 pub fn run(a: &TrainForecastArgs) -> Result<()> {
     let root = crate::setup::workspace_root();
     let data = match &a.data {
@@ -84,48 +45,49 @@ pub fn run(a: &TrainForecastArgs) -> Result<()> {
     if !data.is_file() {
         bail!("{}: no such file", data.display());
     }
-    let python = venv_python(&root)?;
+    let python = training_python(&root, "train-forecast")?;
     let out = if a.out.is_absolute() {
         a.out.clone()
     } else {
         root.join(&a.out)
     };
-    let command = format!(
-        "cargo xtask train-forecast --data {} --epochs {} --seed {} --out {}{}",
-        data.display(),
-        a.epochs,
-        a.seed,
-        a.out.display(),
-        if a.extra.is_empty() {
-            String::new()
-        } else {
-            format!(" -- {}", a.extra.join(" "))
-        }
+    let committed = root.join("models/forecast");
+    let fixture_dir = if out == committed {
+        root.join("testdata/forecast")
+    } else {
+        out.clone()
+    };
+    let command = command_line(
+        format!(
+            "cargo xtask train-forecast --data {} --epochs {} --seed {} --out {}",
+            data.display(),
+            a.epochs,
+            a.seed,
+            a.out.display(),
+        ),
+        &a.extra,
     );
     println!("train-forecast: {command}");
-    let st = Command::new(&python)
-        .arg(root.join("tools/forecast/train.py"))
-        .arg("--data")
-        .arg(&data)
-        .arg("--out")
-        .arg(&out)
-        .arg("--fixture-dir")
-        .arg(root.join("testdata/forecast"))
-        .args([
-            "--epochs",
-            &a.epochs.to_string(),
-            "--seed",
-            &a.seed.to_string(),
-        ])
-        .args(["--command", &command])
-        .args(&a.extra)
-        .env("OMP_WAIT_POLICY", "PASSIVE")
-        .current_dir(&root)
-        .status()
-        .context("starting tools/forecast/train.py")?;
-    if !st.success() {
-        bail!("tools/forecast/train.py failed ({st})");
-    }
-    println!("train-forecast: models written under {}", out.display());
+    let mut args: Vec<OsString> = vec![
+        "--data".into(),
+        data.into_os_string(),
+        "--out".into(),
+        out.clone().into_os_string(),
+        "--fixture-dir".into(),
+        fixture_dir.clone().into_os_string(),
+        "--epochs".into(),
+        a.epochs.to_string().into(),
+        "--seed".into(),
+        a.seed.to_string().into(),
+        "--command".into(),
+        command.into(),
+    ];
+    args.extend(a.extra.iter().map(OsString::from));
+    run_script(&python, &root, "tools/forecast/train.py", &args)?;
+    println!(
+        "train-forecast: models written under {}, parity fixture under {}",
+        out.display(),
+        fixture_dir.display()
+    );
     Ok(())
 }

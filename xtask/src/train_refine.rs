@@ -10,14 +10,16 @@
 //! (`.cache/venv-train`); ONNX Runtime's Python package is added to it on
 //! first use to check every exported network against PyTorch.
 
+use std::ffi::OsString;
 use std::path::PathBuf;
-use std::process::Command;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_refine::dataset::{build_flaw_set, build_training_set, DatasetParams, FlawSetParams};
+
+use crate::pyenv::{command_line, ensure_packages, run_script, training_python};
 
 /// Arguments of `cargo xtask train-refine`.
 #[derive(Args, Debug)]
@@ -88,25 +90,6 @@ fn bvh_files(a: &TrainRefineArgs) -> Result<Vec<PathBuf>> {
     Ok(v)
 }
 
-fn ensure_onnxruntime(python: &std::path::Path) -> Result<()> {
-    let ok = Command::new(python)
-        .args(["-c", "import onnxruntime"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if !ok {
-        println!("train-refine: pip install onnxruntime");
-        let st = Command::new(python)
-            .args(["-m", "pip", "install", "-q", "onnxruntime"])
-            .status()
-            .context("starting pip")?;
-        if !st.success() {
-            bail!("pip install onnxruntime failed");
-        }
-    }
-    Ok(())
-}
-
 pub fn run(a: &TrainRefineArgs) -> Result<()> {
     let root = crate::setup::workspace_root();
     let msr_path = msr_file(&a.data)?;
@@ -168,48 +151,43 @@ pub fn run(a: &TrainRefineArgs) -> Result<()> {
         return Ok(());
     }
 
-    let python = crate::train_forecast::venv_python(&root)?;
-    ensure_onnxruntime(&python)?;
-    let command = format!(
-        "cargo xtask train-refine --data {}{} --epochs {} --seed {} --out {}{}",
-        a.data
-            .as_ref()
-            .map(|p| p.display().to_string())
-            .unwrap_or_else(|| msr_path.display().to_string()),
-        match (&a.bvh, a.no_bvh) {
-            (_, true) => " --no-bvh".to_string(),
-            (Some(p), false) => format!(" --bvh {}", p.display()),
-            (None, false) => String::new(),
-        },
-        a.epochs,
-        a.seed,
-        a.out.display(),
-        if a.extra.is_empty() {
-            String::new()
-        } else {
-            format!(" -- {}", a.extra.join(" "))
-        }
+    let python = training_python(&root, "train-refine")?;
+    ensure_packages(&python, "onnxruntime", &["onnxruntime"], "train-refine", "")?;
+    let command = command_line(
+        format!(
+            "cargo xtask train-refine --data {}{} --epochs {} --seed {} --out {}",
+            a.data
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| msr_path.display().to_string()),
+            match (&a.bvh, a.no_bvh) {
+                (_, true) => " --no-bvh".to_string(),
+                (Some(p), false) => format!(" --bvh {}", p.display()),
+                (None, false) => String::new(),
+            },
+            a.epochs,
+            a.seed,
+            a.out.display(),
+        ),
+        &a.extra,
     );
     println!("train-refine: {command}");
-    let st = Command::new(&python)
-        .arg(root.join("tools/refine/train.py"))
-        .arg("--dataset")
-        .arg(&ds_path)
-        .arg("--flaw-dataset")
-        .arg(&flaw_path)
-        .arg("--out")
-        .arg(&out)
-        .args(["--epochs", &a.epochs.to_string()])
-        .args(["--seed", &a.seed.to_string()])
-        .args(["--command", &command])
-        .args(&a.extra)
-        .env("OMP_WAIT_POLICY", "PASSIVE")
-        .current_dir(&root)
-        .status()
-        .context("starting tools/refine/train.py")?;
-    if !st.success() {
-        bail!("tools/refine/train.py failed ({st})");
-    }
+    let mut args: Vec<OsString> = vec![
+        "--dataset".into(),
+        ds_path.into_os_string(),
+        "--flaw-dataset".into(),
+        flaw_path.into_os_string(),
+        "--out".into(),
+        out.clone().into_os_string(),
+        "--epochs".into(),
+        a.epochs.to_string().into(),
+        "--seed".into(),
+        a.seed.to_string().into(),
+        "--command".into(),
+        command.into(),
+    ];
+    args.extend(a.extra.iter().map(OsString::from));
+    run_script(&python, &root, "tools/refine/train.py", &args)?;
     println!("train-refine: networks written under {}", out.display());
     Ok(())
 }
