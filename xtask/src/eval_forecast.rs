@@ -31,7 +31,8 @@ pub struct EvalForecastArgs {
     pub out: PathBuf,
     /// Methods to run (comma separated): constant, nn, loop (15 context frames), loop_all
     /// (loop unrolling on every observed frame before the start: more context than the
-    /// others get), ar, ar_free (latent AR without the anchored read-out), ar_pose.
+    /// others get), ar, ar_free (latent AR without the anchored read-out), ar_single (ar without the
+    /// left-right mirror average), ar_pose.
     #[arg(
         long,
         value_delimiter = ',',
@@ -103,13 +104,21 @@ fn method(
                 ..ArParams::default()
             },
         )?),
+        "ar_single" => Box::new(ArForecaster::new(
+            load()?,
+            ArSpace::Latent,
+            ArParams {
+                mirror_average: false,
+                ..ArParams::default()
+            },
+        )?),
         "ar_pose" => Box::new(ArForecaster::new(
             load()?,
             ArSpace::Pose,
             ArParams::default(),
         )?),
         other => {
-            bail!("unknown method `{other}` (constant, nn, loop, loop_all, ar, ar_free, ar_pose)")
+            bail!("unknown method `{other}` (constant, nn, loop, loop_all, ar, ar_free, ar_single, ar_pose)")
         }
     })
 }

@@ -176,6 +176,55 @@ fn bad_input_to_the_model_gives_typed_errors() {
 }
 
 #[test]
+fn mirror_average_is_the_mean_of_a_prediction_and_its_mirrored_twin() {
+    let single = ArForecaster::new(
+        models(),
+        ArSpace::Latent,
+        ArParams {
+            mirror_average: false,
+            ..ArParams::default()
+        },
+    )
+    .unwrap();
+    let averaged = ArForecaster::new(models(), ArSpace::Latent, ArParams::default()).unwrap();
+    let t = periodic(20, 9.0);
+    // the mirror image of the context: x negated, left and right joints swapped
+    let swap = [0usize, 2, 1, 4, 3, 6, 5, 8, 7, 10, 9, 12, 11];
+    let (p, c, fps, u, sk) = t.clone().into_parts();
+    let mut mp = p.clone();
+    for f in 0..20 {
+        for j in 0..13 {
+            mp[[f, j, 0]] = -p[[f, swap[j], 0]];
+            mp[[f, j, 1]] = p[[f, swap[j], 1]];
+        }
+    }
+    let mirrored = Track::new(mp, Some(c), fps, u, sk).unwrap();
+    let a = single.predict(&t, 10).unwrap();
+    let b = single.predict(&mirrored, 10).unwrap();
+    let m = averaged.predict(&t, 10).unwrap();
+    let mut max_err = 0.0f64;
+    let mut max_gap = 0.0f64;
+    for f in 0..10 {
+        for j in 0..13 {
+            let bx = -b.positions()[[f, swap[j], 0]];
+            let by = b.positions()[[f, swap[j], 1]];
+            let ex = 0.5 * (a.positions()[[f, j, 0]] + bx);
+            let ey = 0.5 * (a.positions()[[f, j, 1]] + by);
+            max_err = max_err
+                .max((m.positions()[[f, j, 0]] - ex).abs())
+                .max((m.positions()[[f, j, 1]] - ey).abs());
+            max_gap = max_gap.max((a.positions()[[f, j, 0]] - bx).abs());
+        }
+    }
+    assert!(max_err < 1e-3, "mirror average differs by {max_err} px");
+    // the two passes are not identical, so the average is not a no-op
+    assert!(
+        max_gap > 1e-3,
+        "mirrored pass equals the direct one ({max_gap})"
+    );
+}
+
+#[test]
 fn missing_joints_are_masked_not_fatal() {
     let f = ArForecaster::new(models(), ArSpace::Latent, ArParams::default()).unwrap();
     let t = periodic(15, 9.0);
