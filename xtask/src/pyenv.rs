@@ -103,3 +103,23 @@ pub(crate) fn command_line(base: String, extra: &[String]) -> String {
         format!("{base} -- {}", extra.join(" "))
     }
 }
+
+/// The arguments every training script takes after its own: `--epochs`,
+/// `--seed`, `--command` (recorded in the manifest), then the user's extra ones.
+pub(crate) fn training_args(
+    epochs: usize,
+    seed: u64,
+    command: String,
+    extra: &[String],
+) -> Vec<OsString> {
+    let mut v: Vec<OsString> = vec![
+        "--epochs".into(),
+        epochs.to_string().into(),
+        "--seed".into(),
+        seed.to_string().into(),
+        "--command".into(),
+        command.into(),
+    ];
+    v.extend(extra.iter().map(OsString::from));
+    v
+}

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 
-use crate::pyenv::{command_line, run_script, training_python};
+use crate::pyenv::{command_line, run_script, training_args, training_python};
 
 /// Arguments of `cargo xtask train-forecast`.
 #[derive(Args, Debug)]
@@ -75,14 +75,8 @@ pub fn run(a: &TrainForecastArgs) -> Result<()> {
         out.clone().into_os_string(),
         "--fixture-dir".into(),
         fixture_dir.clone().into_os_string(),
-        "--epochs".into(),
-        a.epochs.to_string().into(),
-        "--seed".into(),
-        a.seed.to_string().into(),
-        "--command".into(),
-        command.into(),
     ];
-    args.extend(a.extra.iter().map(OsString::from));
+    args.extend(training_args(a.epochs, a.seed, command, &a.extra));
     run_script(&python, &root, "tools/forecast/train.py", &args)?;
     println!(
         "train-forecast: models written under {}, parity fixture under {}",

@@ -19,7 +19,7 @@ use clap::Args;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_refine::dataset::{build_flaw_set, build_training_set, DatasetParams, FlawSetParams};
 
-use crate::pyenv::{command_line, ensure_packages, run_script, training_python};
+use crate::pyenv::{command_line, ensure_packages, run_script, training_args, training_python};
 
 /// Arguments of `cargo xtask train-refine`.
 #[derive(Args, Debug)]
@@ -179,14 +179,8 @@ pub fn run(a: &TrainRefineArgs) -> Result<()> {
         flaw_path.into_os_string(),
         "--out".into(),
         out.clone().into_os_string(),
-        "--epochs".into(),
-        a.epochs.to_string().into(),
-        "--seed".into(),
-        a.seed.to_string().into(),
-        "--command".into(),
-        command.into(),
     ];
-    args.extend(a.extra.iter().map(OsString::from));
+    args.extend(training_args(a.epochs, a.seed, command, &a.extra));
     run_script(&python, &root, "tools/refine/train.py", &args)?;
     println!("train-refine: networks written under {}", out.display());
     Ok(())

@@ -57,6 +57,30 @@ impl AbstractError {
             reason: reason.into(),
         }
     }
+
+    /// `Ok` when `v` is finite and > 0, else the parameter error naming `name`.
+    pub(crate) fn check_positive(name: &'static str, v: f64) -> Result<(), Self> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(Self::param(
+                name,
+                format!("must be finite and > 0, got {v}"),
+            ))
+        }
+    }
+
+    /// `Ok` when `v` is finite and ≥ 0, else the parameter error naming `name`.
+    pub(crate) fn check_non_negative(name: &'static str, v: f64) -> Result<(), Self> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(())
+        } else {
+            Err(Self::param(
+                name,
+                format!("must be finite and ≥ 0, got {v}"),
+            ))
+        }
+    }
 }
 
 /// Result alias for `mp-abstract`.

@@ -80,18 +80,8 @@ impl LoopParams {
         if self.max_body == 0 {
             return Err(AbstractError::param("max_body", "must be ≥ 1"));
         }
-        if !(self.threshold.is_finite() && self.threshold > 0.0) {
-            return Err(AbstractError::param(
-                "threshold",
-                format!("must be finite and > 0, got {}", self.threshold),
-            ));
-        }
-        if !(self.unit_scale.is_finite() && self.unit_scale > 0.0) {
-            return Err(AbstractError::param(
-                "unit_scale",
-                format!("must be finite and > 0, got {}", self.unit_scale),
-            ));
-        }
+        AbstractError::check_positive("threshold", self.threshold)?;
+        AbstractError::check_positive("unit_scale", self.unit_scale)?;
         if self.min_iterations < 2 {
             return Err(AbstractError::param(
                 "min_iterations",

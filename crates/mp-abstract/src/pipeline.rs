@@ -235,21 +235,7 @@ impl PeriodFallback {
             pos.index_axis_mut(ndarray::Axis(0), h - 1)
                 .assign(&src.index_axis(ndarray::Axis(0), f));
         }
-        // Joints never observed cannot be placed.
-        let mut conf = ndarray::Array2::ones((horizon, j));
-        for ji in 0..j {
-            if (0..n).all(|f| obs.confidence()[[f, ji]] <= 0.0) {
-                conf.column_mut(ji).fill(0.0);
-            }
-        }
-        let track = Track::new(
-            pos,
-            Some(conf),
-            obs.fps(),
-            obs.units(),
-            obs.skeleton().clone(),
-        )?;
-        Ok(Some((track, est)))
+        Ok(Some((future_track(obs, pos)?, est)))
     }
 }
 
@@ -274,6 +260,27 @@ impl Default for PredictParams {
             self_match: default_self_match(),
         }
     }
+}
+
+/// The predicted frames `pos` (`H × J × D`) after `obs` as a track with
+/// `obs`'s frame rate, units and skeleton; joints never observed in `obs`
+/// cannot be placed and get confidence 0.
+pub(crate) fn future_track(obs: &Track, pos: Array3<f64>) -> Result<Track> {
+    let (horizon, j, _) = pos.dim();
+    let n = obs.n_frames();
+    let mut conf = ndarray::Array2::ones((horizon, j));
+    for ji in 0..j {
+        if (0..n).all(|f| obs.confidence()[[f, ji]] <= 0.0) {
+            conf.column_mut(ji).fill(0.0);
+        }
+    }
+    Ok(Track::new(
+        pos,
+        Some(conf),
+        obs.fps(),
+        obs.units(),
+        obs.skeleton().clone(),
+    )?)
 }
 
 /// The result of [`predict`].

@@ -438,16 +438,7 @@ impl SegmentParams {
     /// Checks every field.
     pub fn validate(&self) -> crate::Result<()> {
         use crate::AbstractError;
-        let pos = |name: &'static str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(AbstractError::param(
-                    name,
-                    format!("must be finite and > 0, got {v}"),
-                ))
-            }
-        };
+        let pos = AbstractError::check_positive;
         pos("min_period_s", self.min_period_s)?;
         pos("max_period_s", self.max_period_s)?;
         pos("min_duration_s", self.min_duration_s)?;
@@ -507,12 +498,7 @@ impl SegmentParams {
                 format!("must be in [0, 1), got {}", self.rest_fraction),
             ));
         }
-        if !(self.interval_penalty_s.is_finite() && self.interval_penalty_s >= 0.0) {
-            return Err(AbstractError::param(
-                "interval_penalty_s",
-                format!("must be finite and ≥ 0, got {}", self.interval_penalty_s),
-            ));
-        }
+        AbstractError::check_non_negative("interval_penalty_s", self.interval_penalty_s)?;
         Ok(())
     }
 }

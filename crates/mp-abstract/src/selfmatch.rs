@@ -26,7 +26,7 @@
 //! the last observed one.
 
 use mp_geom::Track;
-use ndarray::{Array2, Array3, Axis};
+use ndarray::{Array3, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{AbstractError, Result};
@@ -125,26 +125,8 @@ pub struct SelfMatch {
 impl SelfMatchFallback {
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
-        let pos = |name: &'static str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(AbstractError::param(
-                    name,
-                    format!("must be finite and > 0, got {v}"),
-                ))
-            }
-        };
-        let nonneg = |name: &'static str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(AbstractError::param(
-                    name,
-                    format!("must be finite and ≥ 0, got {v}"),
-                ))
-            }
-        };
+        let pos = AbstractError::check_positive;
+        let nonneg = AbstractError::check_non_negative;
         pos("window_s", self.window_s)?;
         pos("min_lag_s", self.min_lag_s)?;
         pos("max_lag_s", self.max_lag_s)?;
@@ -451,21 +433,7 @@ impl SelfMatchFallback {
                 }
             }
         }
-        // Joints never observed cannot be placed.
-        let mut conf = Array2::ones((horizon, j));
-        for ji in 0..j {
-            if (0..n).all(|f| obs.confidence()[[f, ji]] <= 0.0) {
-                conf.column_mut(ji).fill(0.0);
-            }
-        }
-        let track = Track::new(
-            pos,
-            Some(conf),
-            obs.fps(),
-            obs.units(),
-            obs.skeleton().clone(),
-        )?;
-        Ok(Some((track, m)))
+        Ok(Some((crate::pipeline::future_track(obs, pos)?, m)))
     }
 }
 
