@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::concepts::{anchor_feature, root_of, Concepts};
 use crate::error::{RefineError, Result};
-use crate::flaws::{inject, AnchorSource, Flaw, FootSlide};
+use crate::flaws::{inject, AnchorSource, Flaw, FootSlide, Injected};
 use crate::segment::{
     check_track, fit_joint, per_frame_error, segment_track, JointData, SegmentParams,
 };
@@ -398,6 +398,41 @@ impl EvalFlaw {
             EvalFlaw::WrongAnchorOtherAction { .. } => "wrong_anchor_clip",
         }
     }
+
+    /// Injects this flaw into `clean`, clip `clip` of `data` (of action
+    /// `action`), with seed `seed + clip`. A wrong anchor of another action
+    /// comes from the first clip of a different action from half-way round
+    /// the data set. `None` when the clip is too short for the flaw or the
+    /// flaw changed no frame.
+    pub fn inject_into(
+        &self,
+        clean: &Track,
+        data: &MsrAction3D,
+        clip: usize,
+        action: u32,
+        seed: u64,
+    ) -> Result<Option<Injected>> {
+        let flaw = match self {
+            EvalFlaw::Fixed(f) => f.clone(),
+            EvalFlaw::WrongAnchorOtherAction { half_width_frames } => {
+                let n = data.len();
+                let mut d = (clip + n / 2) % n;
+                while data.clip_info(d)?.action == action {
+                    d = (d + 1) % n;
+                }
+                Flaw::WrongAnchor {
+                    half_width_frames: *half_width_frames,
+                    source: AnchorSource::OtherClip(full_confidence(&data.clip(d)?)?),
+                }
+            }
+        };
+        let inj = match inject(clean, &flaw, seed.wrapping_add(clip as u64)) {
+            Ok(x) => x,
+            Err(RefineError::TooShort { .. }) => return Ok(None),
+            Err(e) => return Err(e),
+        };
+        Ok(inj.mask.iter().any(|&m| m).then_some(inj))
+    }
 }
 
 /// Parameters of [`evaluate_injected`].
@@ -578,28 +613,9 @@ pub fn evaluate_injected(data: &MsrAction3D, params: &EvalParams) -> Result<Eval
         let rc = refine(&clean, cref, &params.refine)?;
         clean_change.push(crate::segment::mpjpe_abs(&rc.track, &clean)?);
         for (fi, ef) in params.flaws.iter().enumerate() {
-            let flaw = match ef {
-                EvalFlaw::Fixed(f) => f.clone(),
-                EvalFlaw::WrongAnchorOtherAction { half_width_frames } => {
-                    let n = data.len();
-                    let mut d = (i + n / 2) % n;
-                    while data.clip_info(d)?.action == info.action {
-                        d = (d + 1) % n;
-                    }
-                    Flaw::WrongAnchor {
-                        half_width_frames: *half_width_frames,
-                        source: AnchorSource::OtherClip(full_confidence(&data.clip(d)?)?),
-                    }
-                }
-            };
-            let inj = match inject(&clean, &flaw, params.seed.wrapping_add(i as u64)) {
-                Ok(x) => x,
-                Err(RefineError::TooShort { .. }) => continue,
-                Err(e) => return Err(e),
-            };
-            if !inj.mask.iter().any(|&m| m) {
+            let Some(inj) = ef.inject_into(&clean, data, i, info.action, params.seed)? else {
                 continue;
-            }
+            };
             let r = refine(&inj.track, cref, &params.refine)?;
             let before = per_frame_error(inj.track.positions(), &clean);
             let after = per_frame_error(r.track.positions(), &clean);

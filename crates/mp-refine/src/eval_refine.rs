@@ -37,7 +37,7 @@ use crate::concepts::{
     anchor_feature, learn_concepts, AnchorSample, ClusterMethod, ConceptParams, Concepts,
 };
 use crate::error::{RefineError, Result};
-use crate::flaws::{inject, AnchorSource, Flaw, FootSlide};
+use crate::flaws::{AnchorSource, Flaw, FootSlide};
 use crate::motion::{canonicalize, to_features, FRAME_FEATURES, HIP_CENTRE, NET_FRAMES};
 use crate::nets::{RefineNets, N_ACTIONS};
 use crate::pipeline::{
@@ -328,28 +328,9 @@ pub fn evaluate_injected_on(
         clean_flagged += rc.report.flagged_frames.len();
         clean_frames += clean.n_frames();
         for (fi, ef) in params.flaws.iter().enumerate() {
-            let flaw = match ef {
-                EvalFlaw::Fixed(f) => f.clone(),
-                EvalFlaw::WrongAnchorOtherAction { half_width_frames } => {
-                    let n = data.len();
-                    let mut d = (i + n / 2) % n;
-                    while data.clip_info(d)?.action == action {
-                        d = (d + 1) % n;
-                    }
-                    Flaw::WrongAnchor {
-                        half_width_frames: *half_width_frames,
-                        source: AnchorSource::OtherClip(full_confidence(&data.clip(d)?)?),
-                    }
-                }
-            };
-            let inj = match inject(&clean, &flaw, params.seed.wrapping_add(i as u64)) {
-                Ok(x) => x,
-                Err(RefineError::TooShort { .. }) => continue,
-                Err(e) => return Err(e),
-            };
-            if !inj.mask.iter().any(|&m| m) {
+            let Some(inj) = ef.inject_into(&clean, data, i, action, params.seed)? else {
                 continue;
-            }
+            };
             let r = refiner.refine_track(&inj.track, Some(action))?;
             let b = crate::baseline::refine(&inj.track, None, &base)?;
             let a = &mut acc[fi];
