@@ -34,9 +34,19 @@ pub struct RefineArgs {
     /// MSR action (1–20) of the motion; default: the evaluator's prediction.
     #[arg(long)]
     pub action: Option<u32>,
-    /// Only refine anchors (no transition refinement).
+    /// Also run the paper's anchor step (recognition, concept scores, repair of flawed anchors)
+    /// after the flaw detector.
     #[arg(long)]
-    pub anchors_only: bool,
+    pub anchors: bool,
+    /// Also run the anchor step and the transition refinement after the flaw detector.
+    #[arg(long, conflicts_with = "anchors")]
+    pub transitions: bool,
+    /// Switch the learned flaw detector off (with --anchors or --transitions).
+    #[arg(long)]
+    pub no_detector: bool,
+    /// Flaw probability above which a (frame, joint) is refilled.
+    #[arg(long, default_value_t = NetRefineParams::default().flaw_probability)]
+    pub flaw_probability: f64,
     /// Regenerate transitions with the transition generator (z = 0) instead of the refinement network.
     #[arg(long)]
     pub generator_transitions: bool,
@@ -70,13 +80,20 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
     let concepts = read_concepts(&concepts_path)?;
     let nets = RefineNets::load(&dir, &SessionParams::default())
         .with_context(|| format!("loading refinement networks from {}", dir.display()))?;
+    if a.no_detector && !(a.anchors || a.transitions) {
+        bail!("--no-detector leaves nothing to do: add --anchors or --transitions");
+    }
     let params = NetRefineParams {
         anchor_probability: a.anchor_probability,
         transition_deviation_m: a.deviation_m,
-        mode: if a.anchors_only {
+        flaw_detection: !a.no_detector,
+        flaw_probability: a.flaw_probability,
+        mode: if a.transitions {
+            RefineMode::AnchorsAndTransitions
+        } else if a.anchors {
             RefineMode::AnchorsOnly
         } else {
-            RefineMode::AnchorsAndTransitions
+            RefineMode::DetectorOnly
         },
         transition_method: if a.generator_transitions {
             TransitionMethod::Generator
@@ -90,17 +107,46 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
         .refine_track(&track, a.action)
         .with_context(|| format!("refining {}", a.track.display()))?;
     let rep = &r.report;
-    println!(
-        "action {}{}; {} anchors, {} transitions",
-        rep.action,
-        if rep.action_predicted {
-            " (predicted)"
+    let predicted = if rep.action_predicted {
+        " (predicted)"
+    } else {
+        ""
+    };
+    if params.mode == RefineMode::DetectorOnly {
+        println!("action {}{predicted}", rep.action);
+    } else {
+        println!(
+            "action {}{predicted}; {} anchors, {} transitions",
+            rep.action,
+            rep.anchors.len(),
+            rep.transitions.len()
+        );
+    }
+    if params.flaw_detection {
+        if rep.repaired_runs.is_empty() {
+            println!(
+                "flaw detector: nothing above p = {:.2} ({} frames flagged)",
+                params.flaw_probability,
+                rep.flagged_frames.len()
+            );
         } else {
-            ""
-        },
-        rep.anchors.len(),
-        rep.transitions.len()
-    );
+            println!(
+                "flaw detector: {} frames flagged; refilled (joint, frames):",
+                rep.flagged_frames.len()
+            );
+            for run in &rep.repaired_runs {
+                let name = track
+                    .skeleton()
+                    .joints
+                    .get(run.joint)
+                    .map_or("?", |n| n.as_str());
+                println!("  {name:<15} {:>4}–{:<4}", run.start, run.end);
+            }
+        }
+    }
+    if params.mode == RefineMode::DetectorOnly {
+        return finish(a, &r, &track);
+    }
     let flawed: Vec<_> = rep.flawed_anchors().collect();
     if flawed.is_empty() {
         println!("flawed anchors: none");
@@ -138,11 +184,20 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
             );
         }
     }
-    let change = mp_refine::mpjpe_abs(&r.track, &track).unwrap_or(f64::NAN);
+    finish(a, &r, &track)
+}
+
+/// Prints the overall change and writes the refined track and the report.
+fn finish(
+    a: &RefineArgs,
+    r: &mp_refine::pipeline::NetRefinement,
+    track: &Track,
+) -> anyhow::Result<()> {
+    let change = mp_refine::mpjpe_abs(&r.track, track).unwrap_or(f64::NAN);
     println!("mean joint change: {:.1} mm", change * 1e3);
     write_track(&a.output, &r.track).with_context(|| format!("writing {}", a.output.display()))?;
     if let Some(p) = &a.report {
-        std::fs::write(p, serde_json::to_string_pretty(rep)?)
+        std::fs::write(p, serde_json::to_string_pretty(&r.report)?)
             .with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())

@@ -54,7 +54,7 @@ enum Command {
     Grammar(cmd_grammar::GrammarArgs),
     /// Video or track → programs, loops, pictures and an HTML report in one folder.
     Run(cmd_run::RunArgs),
-    /// Refine a 20-joint 3D track with the learned anchor and transition networks.
+    /// Refine a 20-joint 3D track: learned flaw detection and repair (anchor and transition networks as options).
     Refine(cmd_refine::RefineArgs),
     /// Learn anchor concepts (clusters + quality model) from MSR Action3D or a folder of tracks.
     Concepts(cmd_refine::ConceptsArgs),
