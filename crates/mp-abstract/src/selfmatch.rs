@@ -189,14 +189,7 @@ impl SelfMatchFallback {
         if max_lag < min_lag {
             return Ok((Vec::new(), scale));
         }
-        let vel = |f: usize, j: usize, k: usize| -> f64 {
-            let (a, b) = if f + 1 < n {
-                (f - 1, f + 1)
-            } else {
-                (f - 1, f)
-            };
-            (p[[b, j, k]] - p[[a, j, k]]) / (b - a) as f64 * fps
-        };
+        let vel = |f: usize, j: usize, k: usize| velocity(&p, f, j, k, fps);
         let s0 = n - w;
         let mean = |start: usize| -> Vec<f64> {
             let mut m = vec![0.0; d];
@@ -299,14 +292,7 @@ impl SelfMatchFallback {
         if n < 2 * w + 2 {
             return Ok(None);
         }
-        let vel = |f: usize, j: usize, k: usize| -> f64 {
-            let (a, b) = if f + 1 < n {
-                (f - 1, f + 1)
-            } else {
-                (f - 1, f)
-            };
-            (p[[b, j, k]] - p[[a, j, k]]) / (b - a) as f64 * fps
-        };
+        let vel = |f: usize, j: usize, k: usize| velocity(&p, f, j, k, fps);
         let mut best: Option<(usize, f64)> = None;
         // Recent frames fa = n − 1 − q map to fb = 2m − fa, which must lie in 1..n.
         for m in w..n - w.div_ceil(2) - 1 {
@@ -495,4 +481,16 @@ fn observed_joints(obs: &Track, sel: JointSelection) -> Vec<usize> {
         .into_iter()
         .filter(|&j| (0..n).any(|f| obs.confidence()[[f, j]] > 0.0))
         .collect()
+}
+
+/// Velocity of joint `j`, axis `k` at frame `f ≥ 1` of `p` (`T × J × D`), per
+/// second: the central difference, or the backward one at the last frame.
+fn velocity(p: &ndarray::ArrayView3<'_, f64>, f: usize, j: usize, k: usize, fps: f64) -> f64 {
+    let n = p.dim().0;
+    let (a, b) = if f + 1 < n {
+        (f - 1, f + 1)
+    } else {
+        (f - 1, f)
+    };
+    (p[[b, j, k]] - p[[a, j, k]]) / (b - a) as f64 * fps
 }

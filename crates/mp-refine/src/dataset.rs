@@ -538,14 +538,7 @@ pub fn canonical_mask(src: &Array2<bool>, n: usize) -> Array2<bool> {
         return out;
     }
     for f in 0..n {
-        let u = if n <= 1 || t == 1 {
-            0.0
-        } else {
-            f as f64 * (t - 1) as f64 / (n - 1) as f64
-        };
-        let i0 = (u.floor() as usize).min(t - 1);
-        let i1 = (i0 + 1).min(t - 1);
-        let w = u - i0 as f64;
+        let (i0, i1, w) = crate::motion::resample_bracket(f, n, t);
         for a in 0..j {
             out[[f, a]] = (w < 1.0 - 1e-9 && src[[i0, a]]) || (w > 1e-9 && src[[i1, a]]);
         }

@@ -51,6 +51,19 @@ pub struct CanonicalFrame {
     pub source_fps: f64,
 }
 
+/// Output frame `f` of `n` frames spread evenly over `t ≥ 1` input frames:
+/// the two input frames around it and the weight of the second.
+pub(crate) fn resample_bracket(f: usize, n: usize, t: usize) -> (usize, usize, f64) {
+    let u = if n <= 1 || t <= 1 {
+        0.0
+    } else {
+        f as f64 * (t - 1) as f64 / (n - 1) as f64
+    };
+    let i0 = (u.floor() as usize).min(t.saturating_sub(1));
+    let i1 = (i0 + 1).min(t.saturating_sub(1));
+    (i0, i1, u - i0 as f64)
+}
+
 /// Resamples `x` (`T × J × D`) to `n` frames by linear interpolation over
 /// the whole duration (frame 0 ↦ 0, frame `T−1` ↦ `n−1`).
 pub fn resample(x: ArrayView3<'_, f64>, n: usize) -> Result<Array3<f64>> {
@@ -67,14 +80,7 @@ pub fn resample(x: ArrayView3<'_, f64>, n: usize) -> Result<Array3<f64>> {
     }
     let mut out = Array3::<f64>::zeros((n, j, d));
     for f in 0..n {
-        let u = if n == 1 || t == 1 {
-            0.0
-        } else {
-            f as f64 * (t - 1) as f64 / (n - 1) as f64
-        };
-        let i0 = (u.floor() as usize).min(t - 1);
-        let i1 = (i0 + 1).min(t - 1);
-        let w = u - i0 as f64;
+        let (i0, i1, w) = resample_bracket(f, n, t);
         for a in 0..j {
             for k in 0..d {
                 out[[f, a, k]] = (1.0 - w) * x[[i0, a, k]] + w * x[[i1, a, k]];
