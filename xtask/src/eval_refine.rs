@@ -135,6 +135,16 @@ fn grid(base: &NetRefineParams) -> Vec<(String, NetRefineParams)> {
             g.push(det(r, seed, seed, 0, 8, share));
         }
     }
+    // The held-pose rule with the base detector settings.
+    for tol in [None, Some(1e-5), Some(1e-4), Some(1e-3)] {
+        g.push((
+            format!("held_pose/{tol:?}"),
+            NetRefineParams {
+                held_pose_tolerance: tol,
+                ..base.clone()
+            },
+        ));
+    }
     // The anchor and transition steps after the detector (base detector settings).
     for margin in [50.0, 100.0, 200.0, 400.0] {
         for dev in [0.1, 0.2] {

@@ -123,6 +123,13 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
         );
     }
     if params.flaw_detection {
+        if !rep.held_frames.is_empty() {
+            println!(
+                "held pose (frame repeats the previous one): {} frames, {:?}",
+                rep.held_frames.len(),
+                rep.held_frames
+            );
+        }
         if rep.repaired_runs.is_empty() {
             println!(
                 "flaw detector: nothing above p = {:.2} ({} frames flagged)",

@@ -52,7 +52,7 @@ use std::collections::BTreeMap;
 
 use mp_geom::{Skeleton, Track};
 use nalgebra::{Matrix4, Vector4};
-use ndarray::{s, Array2, Array3, ArrayView3};
+use ndarray::{s, Array2, Array3, ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::concepts::{anchor_feature, AnchorSample, Concepts};
@@ -228,6 +228,16 @@ pub struct NetRefineParams {
     /// frames give 23.3 / 22.9 / 21.9 % (a refill across more frames of
     /// real 15 fps motion costs more than most flaws).
     pub max_repair_run_frames: usize,
+    /// A frame (after the first) whose every joint coordinate is within
+    /// this of the previous frame's (track units: metres for the MSR
+    /// skeletons) repeats a held pose, as a tracker that froze does: all its
+    /// joints are flagged and refilled with the detector's flags. `None`
+    /// switches the rule off. Default `Some(1e-4)` (0.1 mm), far below the
+    /// millimetre noise of a sensor: in the MSR Action3D clips every such
+    /// repeat lies in a clip with lost tracking (confidence ≈ 0.07), none in
+    /// a tracked clip. Held runs longer than
+    /// [`Self::max_repair_run_frames`] are reported but kept.
+    pub held_pose_tolerance: Option<f64>,
 }
 
 impl Default for NetRefineParams {
@@ -254,6 +264,7 @@ impl Default for NetRefineParams {
             flaw_dilation_frames: 0,
             flaw_repair: FlawRepair::CubicFit { context: 3 },
             max_repair_run_frames: 6,
+            held_pose_tolerance: Some(1e-4),
         }
     }
 }
@@ -348,6 +359,14 @@ impl NetRefineParams {
         if self.max_repair_run_frames == 0 {
             return Err(RefineError::param("max_repair_run_frames", "must be ≥ 1"));
         }
+        if let Some(v) = self.held_pose_tolerance {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(RefineError::param(
+                    "held_pose_tolerance",
+                    format!("must be finite and ≥ 0, got {v}"),
+                ));
+            }
+        }
         Ok(())
     }
 }
@@ -437,8 +456,12 @@ pub struct RefineReport {
     /// Cells flagged by the flaw detector, with their probabilities.
     pub flaw_cells: Vec<FlawCell>,
     /// Frames (source frames of the track) where the detector flagged at
-    /// least one joint, before dilation.
+    /// least one joint, or that repeat a held pose, before dilation.
     pub flagged_frames: Vec<usize>,
+    /// Frames that repeat the previous frame's pose
+    /// ([`NetRefineParams::held_pose_tolerance`]).
+    #[serde(default)]
+    pub held_frames: Vec<usize>,
     /// Runs refilled by the flaw repair (after dilation).
     pub repaired_runs: Vec<RepairedRun>,
 }
@@ -774,7 +797,7 @@ impl<'a> NetRefiner<'a> {
         &self,
         clip: ArrayView3<'_, f64>,
         pos: &mut Array3<f64>,
-    ) -> Result<(Vec<FlawCell>, Vec<usize>, Vec<RepairedRun>)> {
+    ) -> Result<FlawFindings> {
         let p = self.params;
         let prob = self.flaw_probabilities(&to_features(clip))?;
         let mut cells = Vec::new();
@@ -796,6 +819,13 @@ impl<'a> NetRefiner<'a> {
             p.flaw_extend_probability,
         );
         promote_frames(&mut flags, p.flaw_frame_share);
+        let held = match p.held_pose_tolerance {
+            Some(tol) => held_frames(pos.view(), tol),
+            None => Vec::new(),
+        };
+        for &f in &held {
+            flags.row_mut(f).fill(true);
+        }
         let flagged_frames: Vec<usize> = (0..t)
             .filter(|&f| flags.row(f).iter().any(|&v| v))
             .collect();
@@ -805,7 +835,12 @@ impl<'a> NetRefiner<'a> {
             flags
         };
         let runs = repair_flagged(pos, &flags, p.flaw_repair, p.max_repair_run_frames)?;
-        Ok((cells, flagged_frames, runs))
+        Ok(FlawFindings {
+            cells,
+            frames: flagged_frames,
+            held,
+            runs,
+        })
     }
 
     /// Refines a canonical clip (`60 × 20 × 3`): the flaw detector and its
@@ -820,15 +855,13 @@ impl<'a> NetRefiner<'a> {
     ) -> Result<CanonicalRefinement> {
         check_canonical(clip)?;
         let mut x = clip.to_owned();
-        let (cells, frames, runs) = if self.params.flaw_detection {
+        let found = if self.params.flaw_detection {
             self.detect_and_repair(clip, &mut x)?
         } else {
-            Default::default()
+            FlawFindings::default()
         };
         let mut r = self.refine_steps(x.view(), action)?;
-        r.report.flaw_cells = cells;
-        r.report.flagged_frames = frames;
-        r.report.repaired_runs = runs;
+        found.into_report(&mut r.report);
         Ok(r)
     }
 
@@ -868,6 +901,7 @@ impl<'a> NetRefiner<'a> {
                     transitions: Vec::new(),
                     flaw_cells: Vec::new(),
                     flagged_frames: Vec::new(),
+                    held_frames: Vec::new(),
                     repaired_runs: Vec::new(),
                 },
             });
@@ -1108,6 +1142,7 @@ impl<'a> NetRefiner<'a> {
                 transitions,
                 flaw_cells: Vec::new(),
                 flagged_frames: Vec::new(),
+                held_frames: Vec::new(),
                 repaired_runs: Vec::new(),
             },
         })
@@ -1194,11 +1229,11 @@ impl<'a> NetRefiner<'a> {
         }
         let (mut clip, mut frame) = canonicalize(track)?;
         let mut pos = track.positions().to_owned();
-        let (cells, frames, runs) = if self.params.flaw_detection {
+        let found = if self.params.flaw_detection {
             // Step 0 in source frames, so short flaws are not blurred by
             // the 60-frame resampling.
             let d = self.detect_and_repair(clip.view(), &mut pos)?;
-            if !d.2.is_empty() {
+            if !d.runs.is_empty() {
                 let repaired = Track::new(
                     pos.clone(),
                     Some(track.confidence().to_owned()),
@@ -1210,7 +1245,7 @@ impl<'a> NetRefiner<'a> {
             }
             d
         } else {
-            Default::default()
+            FlawFindings::default()
         };
         let r = self.refine_steps(clip.view(), action)?;
         let delta = &r.clip - &clip;
@@ -1230,9 +1265,7 @@ impl<'a> NetRefiner<'a> {
             track.skeleton().clone(),
         )?;
         let mut report = r.report;
-        report.flaw_cells = cells;
-        report.flagged_frames = frames;
-        report.repaired_runs = runs;
+        found.into_report(&mut report);
         let scale = (track.n_frames() - 1) as f64 / (NET_FRAMES - 1) as f64;
         let src = |f: usize| (f as f64 * scale).round() as usize;
         for a in report.anchors.iter_mut() {
@@ -1243,6 +1276,39 @@ impl<'a> NetRefiner<'a> {
         }
         Ok(NetRefinement { track: out, report })
     }
+}
+
+/// What step 0 (flaw detector and held poses) found and refilled.
+#[derive(Debug, Default)]
+struct FlawFindings {
+    cells: Vec<FlawCell>,
+    frames: Vec<usize>,
+    held: Vec<usize>,
+    runs: Vec<RepairedRun>,
+}
+
+impl FlawFindings {
+    fn into_report(self, report: &mut RefineReport) {
+        report.flaw_cells = self.cells;
+        report.flagged_frames = self.frames;
+        report.held_frames = self.held;
+        report.repaired_runs = self.runs;
+    }
+}
+
+/// Frames `f ≥ 1` of `pos` (`T × J × D`) whose every coordinate is within
+/// `tol` of frame `f − 1`'s: repeats of a held pose. Frames with a
+/// non-finite coordinate never count.
+pub fn held_frames(pos: ArrayView3<'_, f64>, tol: f64) -> Vec<usize> {
+    let t = pos.dim().0;
+    (1..t)
+        .filter(|&f| {
+            pos.index_axis(Axis(0), f)
+                .iter()
+                .zip(pos.index_axis(Axis(0), f - 1).iter())
+                .all(|(a, b)| (a - b).abs() <= tol)
+        })
+        .collect()
 }
 
 /// Least-squares polynomial of degree `deg` (1 or 3) through `(x, y)`, in
@@ -1724,6 +1790,27 @@ mod tests {
     }
 
     #[test]
+    fn held_frames_are_exact_repeats() {
+        let mut pos = Array3::<f64>::zeros((6, 2, 3));
+        for f in 0..6 {
+            pos[[f, 0, 0]] = f as f64 * 0.01;
+            pos[[f, 1, 2]] = -(f as f64) * 0.02;
+        }
+        assert!(held_frames(pos.view(), 1e-4).is_empty());
+        // Frames 3 and 4 hold frame 2's pose; frame 5 moves on.
+        let two = pos.slice(s![2, .., ..]).to_owned();
+        pos.slice_mut(s![3, .., ..]).assign(&two);
+        pos.slice_mut(s![4, .., ..]).assign(&two);
+        assert_eq!(held_frames(pos.view(), 1e-4), vec![3, 4]);
+        // One joint moving by more than the tolerance breaks the hold.
+        pos[[4, 1, 1]] += 2e-4;
+        assert_eq!(held_frames(pos.view(), 1e-4), vec![3]);
+        // A non-finite frame never counts.
+        pos[[3, 0, 0]] = f64::NAN;
+        assert!(held_frames(pos.view(), 1e-4).is_empty());
+    }
+
+    #[test]
     fn params_are_validated() {
         assert!(NetRefineParams::default().validate().is_ok());
         let bad = NetRefineParams {
@@ -1759,6 +1846,10 @@ mod tests {
             },
             NetRefineParams {
                 max_repair_run_frames: 0,
+                ..Default::default()
+            },
+            NetRefineParams {
+                held_pose_tolerance: Some(-1.0),
                 ..Default::default()
             },
             NetRefineParams {

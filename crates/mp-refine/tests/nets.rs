@@ -246,6 +246,47 @@ fn injected_jumps_and_jitter_are_found_and_repaired() {
     }
 }
 
+#[test]
+fn frozen_frames_are_found_and_refilled() {
+    let f = fixture();
+    let params = NetRefineParams::default();
+    let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
+    let off = NetRefineParams {
+        held_pose_tolerance: None,
+        ..params.clone()
+    };
+    let r_off = NetRefiner::new(&f.nets, &f.concepts, &off).unwrap();
+    let (mut before, mut after, mut after_off, mut n) = (0.0, 0.0, 0.0, 0);
+    for (i, (clean, action)) in heldout(f).iter().enumerate().take(10) {
+        let Ok(inj) = inject(clean, &Flaw::Frozen { frames: 5 }, 200 + i as u64) else {
+            continue;
+        };
+        let out = r.refine_track(&inj.track, Some(*action)).unwrap();
+        // Every repeated frame is reported as held.
+        let held: Vec<usize> = (0..inj.mask.len()).filter(|&t| inj.mask[t]).collect();
+        for t in &held {
+            assert!(out.report.held_frames.contains(t), "frame {t} not held");
+            assert!(out.report.flagged_frames.contains(t));
+        }
+        assert!(out.report.held_frames.len() <= held.len() + 1);
+        before += mpjpe_abs(&inj.track, clean).unwrap();
+        after += mpjpe_abs(&out.track, clean).unwrap();
+        let o = r_off.refine_track(&inj.track, Some(*action)).unwrap();
+        assert!(o.report.held_frames.is_empty());
+        after_off += mpjpe_abs(&o.track, clean).unwrap();
+        n += 1;
+    }
+    eprintln!(
+        "frozen: {n} clips, MPJPE {:.2} → {:.2} mm (rule off: {:.2} mm)",
+        before / n as f64 * 1e3,
+        after / n as f64 * 1e3,
+        after_off / n as f64 * 1e3
+    );
+    assert!(n >= 8, "only {n} clips");
+    assert!(after < 0.75 * before, "{before} → {after}");
+    assert!(after < after_off, "{after} vs rule off {after_off}");
+}
+
 /// Held-out clips (subject 9), every 4th, with full confidence.
 fn heldout(f: &Fixture) -> Vec<(Track, u32)> {
     clips_of_subjects(&f.data, &[9], 8, 180)
