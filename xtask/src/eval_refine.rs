@@ -13,9 +13,11 @@ use anyhow::{Context, Result};
 use clap::Args;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_pose::SessionParams;
-use mp_refine::eval_refine::{evaluate, selection_grid, RefineEvalParams, SetQuality};
+use mp_refine::eval_refine::{
+    evaluate, generated_selection_grid, selection_grid, RefineEvalParams, SetQuality,
+};
 use mp_refine::nets::{find_model_dir, RefineNets};
-use mp_refine::pipeline::{FlawRepair, NetRefineParams, RefineMode};
+use mp_refine::pipeline::{AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode};
 use mp_refine::Concepts;
 use serde_json::{json, Value};
 
@@ -162,6 +164,67 @@ fn grid(base: &NetRefineParams) -> Vec<(String, NetRefineParams)> {
     g
 }
 
+/// The settings the generated-motion parameters are chosen from, evaluated
+/// on generated clips of the selection seed.
+fn generated_grid(base: &NetRefineParams) -> Vec<(String, NetRefineParams)> {
+    let mut g = vec![(
+        "detector_only".to_string(),
+        NetRefineParams {
+            mode: RefineMode::DetectorOnly,
+            ..base.clone()
+        },
+    )];
+    for repair in [
+        AnchorRepair::NearestConcept,
+        AnchorRepair::Network,
+        AnchorRepair::Bridge,
+    ] {
+        for margin in [-50.0, -25.0, 0.0, 25.0, 50.0, 200.0] {
+            g.push((
+                format!("anchors/{repair:?}/margin{margin}"),
+                NetRefineParams {
+                    mode: RefineMode::AnchorsOnly,
+                    anchor_repair: repair,
+                    score_margin: margin,
+                    ..base.clone()
+                },
+            ));
+        }
+    }
+    for margin in [-25.0, 0.0, 25.0] {
+        g.push((
+            format!("anchors+transitions/NearestConcept/margin{margin}"),
+            NetRefineParams {
+                mode: RefineMode::AnchorsAndTransitions,
+                anchor_repair: AnchorRepair::NearestConcept,
+                score_margin: margin,
+                ..base.clone()
+            },
+        ));
+        g.push((
+            format!("segmentation_anchors/NearestConcept/margin{margin}"),
+            NetRefineParams {
+                mode: RefineMode::AnchorsOnly,
+                anchor_repair: AnchorRepair::NearestConcept,
+                anchor_source: AnchorDetection::Segmentation,
+                score_margin: margin,
+                ..base.clone()
+            },
+        ));
+        g.push((
+            format!("no_detector/NearestConcept/margin{margin}"),
+            NetRefineParams {
+                mode: RefineMode::AnchorsOnly,
+                anchor_repair: AnchorRepair::NearestConcept,
+                flaw_detection: false,
+                score_margin: margin,
+                ..base.clone()
+            },
+        ));
+    }
+    g
+}
+
 fn quality_json(q: &SetQuality) -> Value {
     json!({
         "fid": q.fid,
@@ -246,7 +309,37 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
                 r.injected.detector_recall,
             );
         }
-        serde_json::to_value(&rows)?
+        let (before, grows) = generated_selection_grid(
+            &data,
+            &nets,
+            &concepts,
+            &params,
+            &generated_grid(&params.generated_refine),
+        )?;
+        println!(
+            "select generated (seed {}) before refinement                  FID {:.3}, accuracy {:.3}",
+            params.generated_select_seed, before.fid, before.accuracy
+        );
+        for r in &grows {
+            println!(
+                "select generated (seed {}) {:<52} FID {:.3} ({:+.1} %), accuracy {:.3}, diversity {:.3}, multimodality {:.3}, changed {:.0} %, anchors {:.1}/clip, moved {:.1} mm",
+                params.generated_select_seed,
+                r.name,
+                r.after.fid,
+                (r.after.fid / before.fid - 1.0) * 100.0,
+                r.after.accuracy,
+                r.after.diversity,
+                r.after.multimodality,
+                r.changed_share * 100.0,
+                r.repaired_anchors_per_clip,
+                r.mean_change_m * 1e3,
+            );
+        }
+        json!({
+            "injected": serde_json::to_value(&rows)?,
+            "generated_before": serde_json::to_value(&before)?,
+            "generated": serde_json::to_value(&grows)?,
+        })
     } else {
         Value::Null
     };
@@ -274,6 +367,8 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
         "concepts": cpath.display().to_string(),
         "params": {
             "refine": serde_json::to_value(&params.refine)?,
+            "generated_refine": serde_json::to_value(&params.generated_refine)?,
+            "generated_select_seed": params.generated_select_seed,
             "quality": serde_json::to_value(&params.quality)?,
             "samples_per_action": params.samples_per_action,
             "val_subjects": params.val_subjects,
@@ -305,6 +400,8 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             "changed_share": g.changed_share,
             "detector_changed_share": g.detector_changed_share,
             "flagged_cells_per_clip": g.flagged_cells_per_clip,
+            "repaired_anchors_per_clip": g.repaired_anchors_per_clip,
+            "mean_change": g.mean_change_m,
             "refine_ms_per_clip": g.refine_ms_per_clip,
             "real_heldout": quality_json(&g.real),
         },
@@ -355,7 +452,7 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
         );
     }
     println!(
-        "generated: FID {:.3} → {:.3}, accuracy {:.3} → {:.3}, diversity {:.3} → {:.3}, multimodality {:.3} → {:.3} ({:.2} ms/clip)",
+        "generated: FID {:.3} → {:.3}, accuracy {:.3} → {:.3}, diversity {:.3} → {:.3}, multimodality {:.3} → {:.3} ({:.2} ms/clip; {:.1} anchors moved to a concept per clip, mean joint displacement {:.1} mm)",
         g.before.fid,
         g.after.fid,
         g.before.accuracy,
@@ -364,7 +461,9 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
         g.after.diversity,
         g.before.multimodality,
         g.after.multimodality,
-        g.refine_ms_per_clip
+        g.refine_ms_per_clip,
+        g.repaired_anchors_per_clip,
+        g.mean_change_m * 1e3
     );
     for row in &r.ablation {
         println!(

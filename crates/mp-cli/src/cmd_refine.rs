@@ -41,6 +41,11 @@ pub struct RefineArgs {
     /// Also run the anchor step and the transition refinement after the flaw detector.
     #[arg(long, conflicts_with = "anchors")]
     pub transitions: bool,
+    /// The track comes from a motion generator trained on the concepts' subjects: run the anchor
+    /// step with the generated-motion settings (anchors scored below the action's threshold + 25 are
+    /// moved to their nearest concept; `NetRefineParams::for_generated`).
+    #[arg(long)]
+    pub generated: bool,
     /// Switch the learned flaw detector off (with --anchors or --transitions).
     #[arg(long)]
     pub no_detector: bool,
@@ -80,9 +85,14 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
     let concepts = read_concepts(&concepts_path)?;
     let nets = RefineNets::load(&dir, &SessionParams::default())
         .with_context(|| format!("loading refinement networks from {}", dir.display()))?;
-    if a.no_detector && !(a.anchors || a.transitions) {
-        bail!("--no-detector leaves nothing to do: add --anchors or --transitions");
+    if a.no_detector && !(a.anchors || a.transitions || a.generated) {
+        bail!("--no-detector leaves nothing to do: add --anchors, --transitions or --generated");
     }
+    let base = if a.generated {
+        NetRefineParams::for_generated()
+    } else {
+        NetRefineParams::default()
+    };
     let params = NetRefineParams {
         anchor_probability: a.anchor_probability,
         transition_deviation_m: a.deviation_m,
@@ -90,7 +100,7 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
         flaw_probability: a.flaw_probability,
         mode: if a.transitions {
             RefineMode::AnchorsAndTransitions
-        } else if a.anchors {
+        } else if a.anchors || a.generated {
             RefineMode::AnchorsOnly
         } else {
             RefineMode::DetectorOnly
@@ -100,7 +110,7 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
         } else {
             TransitionMethod::Refinement
         },
-        ..NetRefineParams::default()
+        ..base
     };
     let refiner = NetRefiner::new(&nets, &concepts, &params)?;
     let r = refiner

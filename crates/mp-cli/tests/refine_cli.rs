@@ -74,3 +74,69 @@ fn refine_repairs_an_injected_jump_and_rejects_a_useless_flag_set() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--no-detector"));
 }
+
+#[test]
+fn refine_generated_moves_flawed_anchors_to_concepts() {
+    use mp_geom::{Skeleton, Track, Units};
+    use mp_pose::SessionParams;
+    use mp_refine::eval_refine::generate_clips;
+    use mp_refine::motion::from_features;
+    use mp_refine::nets::{find_model_dir, RefineNets};
+
+    let dir = find_model_dir().expect("models/refine");
+    let nets = RefineNets::load(&dir, &SessionParams::default()).unwrap();
+    // Two samples of action 7 (draw x), seed 11.
+    let (gen, labels) = generate_clips(&nets, 2, 11).unwrap();
+    let row = labels.iter().position(|&a| a == 7).unwrap();
+    let pos = from_features(gen.outer_iter().nth(row).unwrap()).unwrap();
+    let track = Track::new(pos, None, 15.0, Units::Metres, Skeleton::msr20()).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let input = tmp.path().join("generated.json");
+    let output = tmp.path().join("refined.json");
+    let report = tmp.path().join("report.json");
+    write_track(&input, &track).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_mp"))
+        .args([
+            "refine",
+            input.to_str().unwrap(),
+            "--generated",
+            "--action",
+            "7",
+            "-o",
+        ])
+        .arg(&output)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .expect("running mp");
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "mp refine --generated failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let moved: Vec<&serde_json::Value> = rep["anchors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|a| a["repaired"] == true)
+        .collect();
+    // Every repaired anchor names a concept of action 7 (ids 24–27).
+    for a in &moved {
+        let c = a["concept"]
+            .as_u64()
+            .expect("a repaired anchor names its concept");
+        assert!((24..28).contains(&c), "concept {c}");
+    }
+    if moved.is_empty() {
+        assert!(stdout.contains("flawed anchors: none"), "{stdout}");
+    } else {
+        assert!(stdout.contains("new pose, concept"), "{stdout}");
+        let refined = read_track(&output).unwrap();
+        assert_eq!(refined.n_frames(), track.n_frames());
+        let d = mp_refine::mpjpe_abs(&refined, &track).unwrap();
+        assert!(d > 1e-3, "moved anchors but the track changed by {d} m");
+    }
+}

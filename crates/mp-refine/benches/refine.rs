@@ -138,6 +138,26 @@ fn bench(c: &mut Criterion) {
                 .unwrap()
         })
     });
+    // The generated-motion preset on a generator sample of the same action.
+    let gen_params = NetRefineParams::for_generated();
+    let gen_refiner = NetRefiner::new(&nets, &concepts, &gen_params).unwrap();
+    let (gen, labels) = mp_refine::eval_refine::generate_clips(&nets, 1, 0).unwrap();
+    let row = labels.iter().position(|&a| a == info.action).unwrap_or(0);
+    let sample = Track::new(
+        mp_refine::motion::from_features(gen.outer_iter().nth(row).unwrap()).unwrap(),
+        None,
+        15.0,
+        Units::Metres,
+        Skeleton::msr20(),
+    )
+    .unwrap();
+    g.bench_function("generated_preset_sample", |b| {
+        b.iter(|| {
+            gen_refiner
+                .refine_track(&sample, Some(labels[row]))
+                .unwrap()
+        })
+    });
     g.finish();
 }
 

@@ -70,8 +70,15 @@ pub struct RefineEvalParams {
     pub flaws: Vec<EvalFlaw>,
     /// Generated clips per action. Default 50.
     pub samples_per_action: usize,
-    /// Refinement parameters.
+    /// Refinement parameters of the injected flaws (real captured motion).
     pub refine: NetRefineParams,
+    /// Refinement parameters of the generated motion. Default
+    /// [`NetRefineParams::for_generated`].
+    pub generated_refine: NetRefineParams,
+    /// Seed of the generated clips on which the generated-motion settings
+    /// are chosen ([`generated_selection_grid`]). Default 1; must differ from
+    /// [`Self::seed`], the seed of the reported clips.
+    pub generated_select_seed: u64,
     /// Random-pair metrics.
     pub quality: QualityParams,
     /// Run the ablation. Default true.
@@ -126,6 +133,8 @@ impl Default for RefineEvalParams {
             ],
             samples_per_action: 50,
             refine: NetRefineParams::default(),
+            generated_refine: NetRefineParams::for_generated(),
+            generated_select_seed: 1,
             quality: QualityParams::default(),
             ablation: true,
             segment: SegmentParams::default(),
@@ -145,6 +154,13 @@ impl RefineEvalParams {
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
         self.refine.validate()?;
+        self.generated_refine.validate()?;
+        if self.generated_select_seed == self.seed {
+            return Err(RefineError::param(
+                "generated_select_seed",
+                format!("must differ from seed = {}", self.seed),
+            ));
+        }
         self.quality.validate()?;
         self.segment.validate()?;
         if let Some(s) = self
@@ -487,6 +503,11 @@ pub struct RefinedClips {
     pub detector_changed_share: f64,
     /// Mean flagged (frame, joint) cells per clip.
     pub flagged_cells_per_clip: f64,
+    /// Mean anchors repaired per clip.
+    pub repaired_anchors_per_clip: f64,
+    /// Mean joint displacement between the clips and their refinement
+    /// (canonical frame, metres).
+    pub mean_change_m: f64,
 }
 
 /// Refines canonical clips with their labels.
@@ -497,7 +518,8 @@ pub fn refine_clips_report(
 ) -> Result<RefinedClips> {
     let mut out = clips.clone();
     let t0 = Instant::now();
-    let (mut changed, mut det, mut cells) = (0usize, 0usize, 0usize);
+    let (mut changed, mut det, mut cells, mut anchors) = (0usize, 0usize, 0usize, 0usize);
+    let mut moved = 0.0;
     for (i, &a) in labels.iter().enumerate() {
         let c = crate::motion::from_features(clips.index_axis(Axis(0), i))?;
         let r = refiner.refine_canonical(c.view(), Some(a))?;
@@ -508,6 +530,13 @@ pub fn refine_clips_report(
             det += 1;
         }
         cells += r.report.flaw_cells.len();
+        anchors += r.report.anchors.iter().filter(|a| a.repaired).count();
+        moved += (&r.clip - &c)
+            .lanes(Axis(2))
+            .into_iter()
+            .map(|l| l.dot(&l).sqrt())
+            .sum::<f64>()
+            / (c.dim().0 * c.dim().1).max(1) as f64;
         out.index_axis_mut(Axis(0), i)
             .assign(&to_features(r.clip.view()));
     }
@@ -518,6 +547,8 @@ pub fn refine_clips_report(
         changed_share: changed as f64 / n,
         detector_changed_share: det as f64 / n,
         flagged_cells_per_clip: cells as f64 / n,
+        repaired_anchors_per_clip: anchors as f64 / n,
+        mean_change_m: moved / n,
     })
 }
 
@@ -584,6 +615,11 @@ pub struct GeneratedReport {
     pub detector_changed_share: f64,
     /// Mean (frame, joint) cells the flaw detector flagged per generated clip.
     pub flagged_cells_per_clip: f64,
+    /// Mean anchors repaired per generated clip.
+    pub repaired_anchors_per_clip: f64,
+    /// Mean joint displacement of the generated clips by the refinement
+    /// (canonical frame, metres).
+    pub mean_change_m: f64,
     /// Mean refinement time per clip (ms, this machine, inside the evaluation).
     pub refine_ms_per_clip: f64,
 }
@@ -719,7 +755,8 @@ pub fn evaluate(
     let (gen, labels) = generate_clips(nets, params.samples_per_action, params.seed)?;
     let (gf, gl) = evaluator_outputs(nets, &gen)?;
     let before = set_quality(&gf, &gl, &labels, &real_f, &real_labels, &params.quality)?;
-    let rc = refine_clips_report(&refiner, &gen, &labels)?;
+    let gen_refiner = NetRefiner::new(nets, concepts, &params.generated_refine)?;
+    let rc = refine_clips_report(&gen_refiner, &gen, &labels)?;
     let (rf, rl) = evaluator_outputs(nets, &rc.clips)?;
     let after = set_quality(&rf, &rl, &labels, &real_f, &real_labels, &params.quality)?;
     let generated = GeneratedReport {
@@ -731,6 +768,8 @@ pub fn evaluate(
         changed_share: rc.changed_share,
         detector_changed_share: rc.detector_changed_share,
         flagged_cells_per_clip: rc.flagged_cells_per_clip,
+        repaired_anchors_per_clip: rc.repaired_anchors_per_clip,
+        mean_change_m: rc.mean_change_m,
         refine_ms_per_clip: rc.ms_per_clip,
     };
 
@@ -793,7 +832,50 @@ pub fn evaluate(
             transition_method: TransitionMethod::Generator,
             ..steps.clone()
         };
+        let gen_transitions = NetRefineParams {
+            mode: RefineMode::AnchorsAndTransitions,
+            ..params.generated_refine.clone()
+        };
+        let gen_network = NetRefineParams {
+            anchor_repair: AnchorRepair::Network,
+            ..params.generated_refine.clone()
+        };
+        let gen_no_detector = NetRefineParams {
+            flaw_detection: false,
+            ..params.generated_refine.clone()
+        };
         let settings: Vec<Setting<'_>> = vec![
+            ("generated_preset", concepts, &params.generated_refine, None),
+            (
+                "generated_preset_no_detector",
+                concepts,
+                &gen_no_detector,
+                None,
+            ),
+            (
+                "generated_preset_anchors_transitions",
+                concepts,
+                &gen_transitions,
+                None,
+            ),
+            (
+                "generated_preset_network_anchor_repair",
+                concepts,
+                &gen_network,
+                None,
+            ),
+            (
+                "generated_preset_kmeans_relearned",
+                &kmeans,
+                &params.generated_refine,
+                None,
+            ),
+            (
+                "generated_preset_dbscan",
+                &dbscan,
+                &params.generated_refine,
+                None,
+            ),
             ("detector_only", concepts, &detector_only, None),
             (
                 "no_detector_anchors_transitions_gmm",
@@ -843,6 +925,76 @@ pub fn evaluate(
         generated,
         ablation,
     })
+}
+
+/// One setting of [`generated_selection_grid`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GeneratedSelectionRow {
+    /// Setting.
+    pub name: String,
+    /// The refinement parameters.
+    pub params: NetRefineParams,
+    /// Quality of the refined selection clips.
+    pub after: SetQuality,
+    /// Share of the clips changed.
+    pub changed_share: f64,
+    /// Mean anchors repaired per clip.
+    pub repaired_anchors_per_clip: f64,
+    /// Mean joint displacement by the refinement (metres).
+    pub mean_change_m: f64,
+}
+
+/// Quality of the generated selection clips (seed
+/// [`RefineEvalParams::generated_select_seed`], never the reported seed)
+/// before refinement and after each named parameter set: the figures
+/// [`NetRefineParams::for_generated`] is chosen from. FID is against every
+/// usable real clip, as in [`evaluate`].
+pub fn generated_selection_grid(
+    data: &MsrAction3D,
+    nets: &RefineNets,
+    concepts: &Concepts,
+    params: &RefineEvalParams,
+    grid: &[(String, NetRefineParams)],
+) -> Result<(SetQuality, Vec<GeneratedSelectionRow>)> {
+    params.validate()?;
+    let subjects: Vec<u32> = {
+        let mut v: Vec<u32> = data.clips().iter().map(|c| c.subject).collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let idx = clips_of_subjects(
+        data,
+        &subjects,
+        params.min_clip_frames,
+        params.max_clip_frames,
+    );
+    let (real, real_labels) = real_clips(data, &idx)?;
+    let (real_f, _) = evaluator_outputs(nets, &real)?;
+    let (gen, labels) = generate_clips(
+        nets,
+        params.samples_per_action,
+        params.generated_select_seed,
+    )?;
+    let (gf, gl) = evaluator_outputs(nets, &gen)?;
+    let before = set_quality(&gf, &gl, &labels, &real_f, &real_labels, &params.quality)?;
+    let rows = grid
+        .iter()
+        .map(|(name, p)| {
+            let r = NetRefiner::new(nets, concepts, p)?;
+            let rc = refine_clips_report(&r, &gen, &labels)?;
+            let (rf, rl) = evaluator_outputs(nets, &rc.clips)?;
+            Ok(GeneratedSelectionRow {
+                name: name.clone(),
+                params: p.clone(),
+                after: set_quality(&rf, &rl, &labels, &real_f, &real_labels, &params.quality)?,
+                changed_share: rc.changed_share,
+                repaired_anchors_per_clip: rc.repaired_anchors_per_clip,
+                mean_change_m: rc.mean_change_m,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok((before, rows))
 }
 
 /// One setting of [`selection_grid`] on the selection subjects.

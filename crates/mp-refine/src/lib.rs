@@ -20,9 +20,11 @@
 //!   [`baseline::evaluate_injected`], MPJPE to the clean motion before and
 //!   after refinement on MSR Action3D with injected flaws.
 //! * [`nets`], [`pipeline`]: the seven refinement networks (ONNX Runtime) and
-//!   the learned refinement — a learned flaw detector whose flagged frames
-//!   and joints are refilled in the input's own frames, then anchor
-//!   recognition, GMM anchor scores, anchor repair, transition refinement.
+//!   the learned refinement — a learned flaw detector (and a held-pose rule)
+//!   whose flagged frames and joints are refilled in the input's own frames,
+//!   then anchor recognition, GMM anchor scores, anchor repair (for
+//!   generated motion, [`pipeline::NetRefineParams::for_generated`]: flawed
+//!   anchors moved to their nearest concept), transition refinement.
 //! * [`quality`], [`eval_refine`]: FID, accuracy, diversity, multimodality
 //!   and the evaluation on injected flaws and generated motion.
 
