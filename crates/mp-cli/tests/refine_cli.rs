@@ -82,28 +82,43 @@ fn refine_generated_moves_flawed_anchors_to_concepts() {
     use mp_refine::eval_refine::generate_clips;
     use mp_refine::motion::from_features;
     use mp_refine::nets::{find_model_dir, RefineNets};
+    use mp_refine::pipeline::{NetRefineParams, NetRefiner};
+    use mp_refine::Concepts;
 
     let dir = find_model_dir().expect("models/refine");
     let nets = RefineNets::load(&dir, &SessionParams::default()).unwrap();
-    // Two samples of action 7 (draw x), seed 11.
+    let concepts =
+        Concepts::from_json(&std::fs::read_to_string(dir.join("concepts.json")).unwrap()).unwrap();
+    let params = NetRefineParams::for_generated();
+    let lib = NetRefiner::new(&nets, &concepts, &params).unwrap();
+    // The first generator sample (seed 11) in which the library moves an anchor.
     let (gen, labels) = generate_clips(&nets, 2, 11).unwrap();
-    let row = labels.iter().position(|&a| a == 7).unwrap();
-    let pos = from_features(gen.outer_iter().nth(row).unwrap()).unwrap();
-    let track = Track::new(pos, None, 15.0, Units::Metres, Skeleton::msr20()).unwrap();
+    let (track, action, expected) = gen
+        .outer_iter()
+        .zip(&labels)
+        .find_map(|(x, &a)| {
+            let pos = from_features(x).unwrap();
+            let t = Track::new(pos, None, 15.0, Units::Metres, Skeleton::msr20()).unwrap();
+            let r = lib.refine_track(&t, Some(a)).unwrap();
+            let moved: Vec<usize> = r
+                .report
+                .anchors
+                .iter()
+                .filter(|an| an.repaired)
+                .map(|an| an.frame)
+                .collect();
+            (!moved.is_empty()).then_some((t, a, moved))
+        })
+        .expect("a generated sample with a flawed anchor");
     let tmp = tempfile::tempdir().unwrap();
     let input = tmp.path().join("generated.json");
     let output = tmp.path().join("refined.json");
     let report = tmp.path().join("report.json");
     write_track(&input, &track).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_mp"))
-        .args([
-            "refine",
-            input.to_str().unwrap(),
-            "--generated",
-            "--action",
-            "7",
-            "-o",
-        ])
+        .args(["refine", input.to_str().unwrap(), "--generated", "--action"])
+        .arg(action.to_string())
+        .arg("-o")
         .arg(&output)
         .arg("--report")
         .arg(&report)
@@ -115,28 +130,23 @@ fn refine_generated_moves_flawed_anchors_to_concepts() {
         "mp refine --generated failed:\n{stdout}\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    assert!(stdout.contains("new pose, concept"), "{stdout}");
     let rep: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
-    let moved: Vec<&serde_json::Value> = rep["anchors"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|a| a["repaired"] == true)
-        .collect();
-    // Every repaired anchor names a concept of action 7 (ids 24–27).
-    for a in &moved {
-        let c = a["concept"]
-            .as_u64()
-            .expect("a repaired anchor names its concept");
-        assert!((24..28).contains(&c), "concept {c}");
+    let mut moved = Vec::new();
+    for a in rep["anchors"].as_array().unwrap() {
+        if a["repaired"] == true {
+            moved.push(a["frame"].as_u64().unwrap() as usize);
+            // Concepts of the action: ids (action − 1)·4 .. (action − 1)·4 + 3.
+            let c = a["concept"]
+                .as_u64()
+                .expect("a moved anchor names its concept") as u32;
+            assert_eq!(c / 4 + 1, action, "concept {c} for action {action}");
+        }
     }
-    if moved.is_empty() {
-        assert!(stdout.contains("flawed anchors: none"), "{stdout}");
-    } else {
-        assert!(stdout.contains("new pose, concept"), "{stdout}");
-        let refined = read_track(&output).unwrap();
-        assert_eq!(refined.n_frames(), track.n_frames());
-        let d = mp_refine::mpjpe_abs(&refined, &track).unwrap();
-        assert!(d > 1e-3, "moved anchors but the track changed by {d} m");
-    }
+    assert_eq!(moved, expected);
+    let refined = read_track(&output).unwrap();
+    assert_eq!(refined.n_frames(), track.n_frames());
+    let d = mp_refine::mpjpe_abs(&refined, &track).unwrap();
+    assert!(d > 1e-3, "anchors moved but the track changed by {d} m");
 }
