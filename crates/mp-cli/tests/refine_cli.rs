@@ -2,6 +2,7 @@
 //! injected jump: the flaw detector finds and refills it, and the refined
 //! track is closer to the clean one than the flawed input was.
 
+use std::path::Path;
 use std::process::Command;
 
 use mp_geom::io::datasets::MsrAction3D;
@@ -9,6 +10,28 @@ use mp_geom::io::{read_track, write_track};
 use mp_refine::baseline::full_confidence;
 use mp_refine::flaws::{inject, Flaw};
 use mp_refine::mpjpe_abs;
+
+/// Runs `mp refine INPUT -o OUTPUT --report REPORT EXTRA…`, asserts that it
+/// succeeds and returns its standard output.
+fn run_refine(input: &Path, output: &Path, report: &Path, extra: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_mp"))
+        .arg("refine")
+        .arg(input)
+        .arg("-o")
+        .arg(output)
+        .arg("--report")
+        .arg(report)
+        .args(extra)
+        .output()
+        .expect("running mp");
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "mp refine {extra:?} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
 
 #[test]
 fn refine_repairs_an_injected_jump_and_rejects_a_useless_flag_set() {
@@ -36,19 +59,7 @@ fn refine_repairs_an_injected_jump_and_rejects_a_useless_flag_set() {
     let output = dir.path().join("refined.json");
     let report = dir.path().join("report.json");
     write_track(&input, &flawed.track).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_mp"))
-        .args(["refine", input.to_str().unwrap(), "-o"])
-        .arg(&output)
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .expect("running mp");
-    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(
-        out.status.success(),
-        "mp refine failed:\n{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stdout = run_refine(&input, &output, &report, &[]);
     assert!(stdout.contains("flaw detector"), "{stdout}");
     let refined = read_track(&output).unwrap();
     assert_eq!(refined.n_frames(), clean.n_frames());
@@ -115,20 +126,11 @@ fn refine_generated_moves_flawed_anchors_to_concepts() {
     let output = tmp.path().join("refined.json");
     let report = tmp.path().join("report.json");
     write_track(&input, &track).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_mp"))
-        .args(["refine", input.to_str().unwrap(), "--generated", "--action"])
-        .arg(action.to_string())
-        .arg("-o")
-        .arg(&output)
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .expect("running mp");
-    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(
-        out.status.success(),
-        "mp refine --generated failed:\n{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
+    let stdout = run_refine(
+        &input,
+        &output,
+        &report,
+        &["--generated", "--action", &action.to_string()],
     );
     assert!(stdout.contains("new pose, concept"), "{stdout}");
     let rep: serde_json::Value =

@@ -312,15 +312,7 @@ pub fn evaluate_injected_on(
     subjects: &[u32],
 ) -> Result<InjectedReport> {
     params.validate()?;
-    let idx = spread(
-        clips_of_subjects(
-            data,
-            subjects,
-            params.min_clip_frames,
-            params.max_clip_frames,
-        ),
-        params.max_clips,
-    );
+    let idx = spread(usable_clips(data, subjects, params), params.max_clips);
     if idx.is_empty() {
         return Err(RefineError::TooShort {
             what: format!("injected evaluation (clips of subjects {subjects:?})"),
@@ -703,6 +695,24 @@ pub struct RefineEvalReport {
     pub ablation: Vec<AblationRow>,
 }
 
+/// Every subject of `data`, ascending.
+fn all_subjects(data: &MsrAction3D) -> Vec<u32> {
+    let mut v: Vec<u32> = data.clips().iter().map(|c| c.subject).collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
+/// The clips of `subjects` whose length is within the evaluation's bounds.
+fn usable_clips(data: &MsrAction3D, subjects: &[u32], params: &RefineEvalParams) -> Vec<usize> {
+    clips_of_subjects(
+        data,
+        subjects,
+        params.min_clip_frames,
+        params.max_clip_frames,
+    )
+}
+
 /// Runs the whole evaluation with `concepts` (GMM scoring) and the networks.
 pub fn evaluate(
     data: &MsrAction3D,
@@ -715,18 +725,8 @@ pub fn evaluate(
     let injected = evaluate_injected_nets(data, &refiner, params)?;
 
     // Real clips: every clip long enough; held-out subjects for the "real" row.
-    let subjects: Vec<u32> = {
-        let mut v: Vec<u32> = data.clips().iter().map(|c| c.subject).collect();
-        v.sort_unstable();
-        v.dedup();
-        v
-    };
-    let all_idx = clips_of_subjects(
-        data,
-        &subjects,
-        params.min_clip_frames,
-        params.max_clip_frames,
-    );
+    let subjects = all_subjects(data);
+    let all_idx = usable_clips(data, &subjects, params);
     let (real, real_labels) = real_clips(data, &all_idx)?;
     let (real_f, real_l) = evaluator_outputs(nets, &real)?;
     let val_rows: Vec<usize> = all_idx
@@ -780,12 +780,7 @@ pub fn evaluate(
             .copied()
             .filter(|s| !params.val_subjects.contains(s))
             .collect();
-        let train_idx = clips_of_subjects(
-            data,
-            &train_subjects,
-            params.min_clip_frames,
-            params.max_clip_frames,
-        );
+        let train_idx = usable_clips(data, &train_subjects, params);
         let kmeans_params = ConceptParams {
             root_joint: Some(HIP_CENTRE),
             seed: params.seed,
@@ -957,18 +952,7 @@ pub fn generated_selection_grid(
     grid: &[(String, NetRefineParams)],
 ) -> Result<(SetQuality, Vec<GeneratedSelectionRow>)> {
     params.validate()?;
-    let subjects: Vec<u32> = {
-        let mut v: Vec<u32> = data.clips().iter().map(|c| c.subject).collect();
-        v.sort_unstable();
-        v.dedup();
-        v
-    };
-    let idx = clips_of_subjects(
-        data,
-        &subjects,
-        params.min_clip_frames,
-        params.max_clip_frames,
-    );
+    let idx = usable_clips(data, &all_subjects(data), params);
     let (real, real_labels) = real_clips(data, &idx)?;
     let (real_f, _) = evaluator_outputs(nets, &real)?;
     let (gen, labels) = generate_clips(
