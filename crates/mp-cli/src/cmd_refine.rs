@@ -10,6 +10,7 @@ use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::io::{read_track, write_track};
 use mp_geom::Track;
 use mp_pose::SessionParams;
+use mp_refine::concepts::Linkage;
 use mp_refine::eval_refine::{canonical_anchor_samples, msr_anchor_samples};
 use mp_refine::motion::{bvh_to_msr20, HIP_CENTRE};
 use mp_refine::nets::{find_model_dir, RefineNets};
@@ -237,6 +238,23 @@ pub enum Method {
     Kmeans,
     /// DBSCAN.
     Dbscan,
+    /// OPTICS, cut at --tolerance (ordering radius --optics-radius).
+    Optics,
+    /// Agglomerative hierarchical clustering into --clusters concepts (--linkage).
+    Hierarchical,
+}
+
+/// Linkage of `mp concepts --method hierarchical`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkageArg {
+    /// Ward's minimum variance.
+    Ward,
+    /// Mean pairwise distance.
+    Average,
+    /// Largest pairwise distance.
+    Complete,
+    /// Smallest pairwise distance.
+    Single,
 }
 
 /// Arguments of `mp concepts`.
@@ -250,15 +268,21 @@ pub struct ConceptsArgs {
     /// Clustering algorithm.
     #[arg(long, value_enum, default_value = "kmeans")]
     pub method: Method,
-    /// Concepts per action (k-means).
+    /// Concepts per action (k-means, hierarchical).
     #[arg(long, default_value_t = 4)]
     pub clusters: usize,
-    /// Neighbourhood radius (DBSCAN; scale-normalised feature units).
+    /// Neighbourhood radius (DBSCAN; the cut of OPTICS; scale-normalised feature units).
     #[arg(long, default_value_t = 0.35)]
     pub tolerance: f64,
-    /// Points of a DBSCAN core.
+    /// Largest radius of the OPTICS ordering (≥ --tolerance).
+    #[arg(long, default_value_t = 1.0)]
+    pub optics_radius: f64,
+    /// Points of a DBSCAN / OPTICS core.
     #[arg(long, default_value_t = 4)]
     pub min_points: usize,
+    /// Linkage of hierarchical clustering.
+    #[arg(long, value_enum, default_value = "ward")]
+    pub linkage: LinkageArg,
     /// Subjects of an MSR npz to use (comma separated; default: all but 9, the held-out subject).
     #[arg(long, value_delimiter = ',')]
     pub subjects: Option<Vec<u32>>,
@@ -310,6 +334,20 @@ pub fn concepts_cmd(a: &ConceptsArgs) -> anyhow::Result<()> {
         Method::Dbscan => ClusterMethod::Dbscan {
             min_points: a.min_points,
             tolerance: a.tolerance,
+        },
+        Method::Optics => ClusterMethod::Optics {
+            min_points: a.min_points,
+            tolerance: a.optics_radius,
+            cut: a.tolerance,
+        },
+        Method::Hierarchical => ClusterMethod::Hierarchical {
+            n_clusters: a.clusters,
+            linkage: match a.linkage {
+                LinkageArg::Ward => Linkage::Ward,
+                LinkageArg::Average => Linkage::Average,
+                LinkageArg::Complete => Linkage::Complete,
+                LinkageArg::Single => Linkage::Single,
+            },
         },
     };
     let params = ConceptParams {

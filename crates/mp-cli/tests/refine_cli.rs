@@ -152,3 +152,94 @@ fn refine_generated_moves_flawed_anchors_to_concepts() {
     let d = mp_refine::mpjpe_abs(&refined, &track).unwrap();
     assert!(d > 1e-3, "anchors moved but the track changed by {d} m");
 }
+
+#[test]
+fn concepts_from_a_folder_with_each_clustering_method() {
+    let data = MsrAction3D::open_default()
+        .expect("shared data: msr_action3d/msr_action3d_odd_subjects.npz (set MP_DATA_DIR)");
+    // Six clips of action 5 (forward punch) as track files.
+    let tmp = tempfile::tempdir().unwrap();
+    let folder = tmp.path().join("punch");
+    std::fs::create_dir(&folder).unwrap();
+    for (k, &i) in data.clips_of_action(5).iter().take(6).enumerate() {
+        let t = full_confidence(&data.clip(i).unwrap()).unwrap();
+        write_track(&folder.join(format!("clip{k}.json")), &t).unwrap();
+    }
+    let run = |extra: &[&str]| {
+        let out_path = tmp.path().join("concepts.json");
+        let out = Command::new(env!("CARGO_BIN_EXE_mp"))
+            .arg("concepts")
+            .arg(&folder)
+            .arg("-o")
+            .arg(&out_path)
+            .args(["--action", "5"])
+            .args(extra)
+            .output()
+            .expect("running mp");
+        let text = std::fs::read_to_string(&out_path).unwrap_or_default();
+        let _ = std::fs::remove_file(&out_path);
+        (out, text)
+    };
+    for (extra, expect) in [
+        (&["--method", "kmeans", "--clusters", "3"][..], Some(3)),
+        (
+            &["--method", "hierarchical", "--clusters", "3"][..],
+            Some(3),
+        ),
+        (
+            &[
+                "--method",
+                "hierarchical",
+                "--clusters",
+                "2",
+                "--linkage",
+                "average",
+            ][..],
+            Some(2),
+        ),
+        (&["--method", "optics", "--min-points", "3"][..], None),
+    ] {
+        let (out, text) = run(extra);
+        assert!(
+            out.status.success(),
+            "mp concepts {extra:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let c: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let a = &c["actions"]["5"];
+        let n_cent = a["centroids"].as_array().unwrap().len();
+        let labels = a["labels"].as_array().unwrap();
+        assert!(labels.len() >= 12, "{extra:?}: {} anchors", labels.len());
+        match expect {
+            Some(k) => {
+                assert_eq!(n_cent, k, "{extra:?}");
+                assert!(labels
+                    .iter()
+                    .all(|l| l.as_u64().is_some_and(|l| l < k as u64)));
+            }
+            None => {
+                // Density clusters: every label names a centroid; some may be noise.
+                assert!(n_cent >= 1, "{extra:?}: no cluster");
+                assert!(labels
+                    .iter()
+                    .all(|l| l.is_null() || l.as_u64().is_some_and(|l| l < n_cent as u64)));
+            }
+        }
+        assert!(a["score_threshold"].as_f64().is_some_and(f64::is_finite));
+    }
+    // An OPTICS cut beyond the ordering's radius is refused, naming the parameter.
+    let (out, _) = run(&[
+        "--method",
+        "optics",
+        "--tolerance",
+        "2",
+        "--optics-radius",
+        "1",
+    ]);
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("cut"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

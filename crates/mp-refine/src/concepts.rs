@@ -3,11 +3,11 @@
 //! Anchor poses are turned into features ([`anchor_feature`]: root-relative,
 //! optionally divided by the pose's RMS joint distance to the root) and
 //! clustered action by action. Each cluster centre is an *anchor concept*.
-//! K-means (L2, seeded) is the default, as in the paper; DBSCAN is an option.
-//! The paper's other two alternatives are not offered: linfa-clustering's
-//! OPTICS returns a reachability ordering rather than clusters, and
-//! hierarchical clustering lives in a separate crate (`linfa-hierarchical`)
-//! that is not a dependency here.
+//! K-means (L2, seeded) is the default, as in the paper; the paper's
+//! ablation alternatives are options: DBSCAN and OPTICS (linfa-clustering;
+//! OPTICS clusters are cut from linfa's reachability ordering at a radius,
+//! Ankerst et al.'s ExtractDBSCAN) and agglomerative hierarchical clustering
+//! (linfa-hierarchical, on squared Euclidean distances).
 //!
 //! A Gaussian mixture (2 components by default, full covariances, fitted by
 //! EM in linfa-clustering) over the anchor features of each action gives the
@@ -23,7 +23,9 @@ use std::collections::BTreeMap;
 
 use linfa::traits::{Fit, Predict, Transformer};
 use linfa::{DatasetBase, ParamGuard};
-use linfa_clustering::{Dbscan, GaussianMixtureModel, KMeans};
+use linfa_clustering::{Dbscan, GaussianMixtureModel, KMeans, Optics};
+use linfa_hierarchical::{HierarchicalCluster, Method};
+use linfa_kernel::{Kernel, KernelMethod};
 use mp_geom::Track;
 use nalgebra::{DMatrix, DVector};
 use ndarray::ArrayView2;
@@ -53,6 +55,153 @@ pub enum ClusterMethod {
         /// Neighbourhood radius in feature units.
         tolerance: f64,
     },
+    /// OPTICS ordering (linfa-clustering) up to radius `tolerance`, cut into
+    /// clusters at radius `cut` ≤ `tolerance` ([`optics_clusters`]); noise
+    /// anchors belong to no concept.
+    Optics {
+        /// Neighbours (including the point) needed for a core point.
+        min_points: usize,
+        /// Largest neighbourhood radius of the ordering (feature units).
+        tolerance: f64,
+        /// Radius at which clusters are cut from the ordering.
+        cut: f64,
+    },
+    /// Agglomerative hierarchical clustering (linfa-hierarchical) into
+    /// `n_clusters` concepts per action (fewer when an action has fewer
+    /// anchors).
+    Hierarchical {
+        /// Number of concepts per action.
+        n_clusters: usize,
+        /// How the dissimilarity of merged clusters is updated.
+        linkage: Linkage,
+    },
+}
+
+/// Linkage of [`ClusterMethod::Hierarchical`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Linkage {
+    /// Ward's minimum variance.
+    Ward,
+    /// Mean pairwise dissimilarity (UPGMA).
+    Average,
+    /// Largest pairwise dissimilarity.
+    Complete,
+    /// Smallest pairwise dissimilarity.
+    Single,
+}
+
+impl ClusterMethod {
+    /// Concepts per action at most (`None` for the density-based methods,
+    /// whose count depends on the data).
+    pub fn max_concepts(&self) -> Option<usize> {
+        match self {
+            ClusterMethod::KMeans { n_clusters, .. }
+            | ClusterMethod::Hierarchical { n_clusters, .. } => Some(*n_clusters),
+            ClusterMethod::Dbscan { .. } | ClusterMethod::Optics { .. } => None,
+        }
+    }
+}
+
+/// Clusters cut from an OPTICS ordering at radius `cut` (Ankerst et al.
+/// 1999, ExtractDBSCAN-Clustering). `order` holds, in the ordering, each
+/// point's index, core distance and reachability distance (`None`:
+/// undefined within the ordering's radius). A point whose reachability
+/// exceeds `cut` starts a new cluster when its core distance is within
+/// `cut`, and is noise otherwise; every other point joins the current
+/// cluster (noise before the first cluster). Returns one label per point
+/// (`n` points), clusters numbered in the order they start.
+pub fn optics_clusters(
+    order: &[(usize, Option<f64>, Option<f64>)],
+    n: usize,
+    cut: f64,
+) -> Vec<Option<usize>> {
+    let mut labels = vec![None; n];
+    let mut current: Option<usize> = None;
+    let mut next = 0;
+    for &(i, core, reach) in order {
+        if i >= n {
+            continue;
+        }
+        if reach.is_none_or(|r| r > cut) {
+            if core.is_some_and(|c| c <= cut) {
+                current = Some(next);
+                next += 1;
+                labels[i] = current;
+            }
+        } else {
+            labels[i] = current;
+        }
+    }
+    labels
+}
+
+/// Reachability of each point of an OPTICS ordering from the points before
+/// it: `min over earlier core points q within tolerance of max(core(q),
+/// d(q, p))`, `None` where no earlier core point is within `tolerance` (the
+/// start of a new component). linfa-clustering's ordering gives each point
+/// its reachability from the point that *expanded* it, which may come later
+/// in the ordering, so a new component is not marked; this recomputes the
+/// textbook value from the ordering and core distances.
+fn reachability_in_order(
+    x: ndarray016::ArrayView2<'_, f64>,
+    order: &[(usize, Option<f64>)],
+    tolerance: f64,
+) -> Vec<Option<f64>> {
+    let mut out = Vec::with_capacity(order.len());
+    for (k, &(p, _)) in order.iter().enumerate() {
+        let mut best: Option<f64> = None;
+        for &(q, core) in &order[..k] {
+            let Some(c) = core else { continue };
+            let d = x
+                .row(p)
+                .iter()
+                .zip(x.row(q).iter())
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt();
+            if d <= tolerance {
+                let r = c.max(d);
+                best = Some(best.map_or(r, |b: f64| b.min(r)));
+            }
+        }
+        out.push(best);
+    }
+    out
+}
+
+/// Centres of the labelled clusters (`labels[i]` of row `i` of `x`; rows
+/// without a label are left out) and the labels renumbered `0..k` in order
+/// of each cluster's first row.
+fn cluster_centres(
+    x: ndarray016::ArrayView2<'_, f64>,
+    labels: &[Option<usize>],
+) -> (Vec<Vec<f64>>, Vec<Option<usize>>) {
+    let dim = x.ncols();
+    let mut renum: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut out = Vec::with_capacity(labels.len());
+    for l in labels {
+        out.push(l.map(|l| {
+            let k = renum.len();
+            *renum.entry(l).or_insert(k)
+        }));
+    }
+    let k = renum.len();
+    let mut sums = vec![vec![0.0; dim]; k];
+    let mut counts = vec![0usize; k];
+    for (row, l) in x.outer_iter().zip(&out) {
+        if let Some(l) = l {
+            counts[*l] += 1;
+            for (s, v) in sums[*l].iter_mut().zip(row.iter()) {
+                *s += v;
+            }
+        }
+    }
+    let cents = sums
+        .into_iter()
+        .zip(&counts)
+        .map(|(s, &c)| s.into_iter().map(|v| v / c.max(1) as f64).collect())
+        .collect();
+    (cents, out)
 }
 
 /// Parameters of concept learning.
@@ -128,6 +277,32 @@ impl ConceptParams {
                         "tolerance",
                         format!("must be finite and > 0, got {tolerance}"),
                     ));
+                }
+            }
+            ClusterMethod::Optics {
+                min_points,
+                tolerance,
+                cut,
+            } => {
+                if *min_points < 2 {
+                    return Err(RefineError::param("min_points", "must be ≥ 2"));
+                }
+                if !(tolerance.is_finite() && *tolerance > 0.0) {
+                    return Err(RefineError::param(
+                        "tolerance",
+                        format!("must be finite and > 0, got {tolerance}"),
+                    ));
+                }
+                if !(cut.is_finite() && *cut > 0.0 && cut <= tolerance) {
+                    return Err(RefineError::param(
+                        "cut",
+                        format!("must be in (0, tolerance = {tolerance}], got {cut}"),
+                    ));
+                }
+            }
+            ClusterMethod::Hierarchical { n_clusters, .. } => {
+                if *n_clusters == 0 {
+                    return Err(RefineError::param("n_clusters", "must be ≥ 1"));
                 }
             }
         }
@@ -447,23 +622,59 @@ fn learn_action(
                 .check()
                 .map_err(|e| cerr(e.to_string()))?
                 .transform(&x);
-            let n_cl = labels.iter().flatten().map(|l| l + 1).max().unwrap_or(0);
-            let mut sums = vec![vec![0.0; dim]; n_cl];
-            let mut counts = vec![0usize; n_cl];
-            for (row, l) in x.outer_iter().zip(labels.iter()) {
-                if let Some(l) = l {
-                    counts[*l] += 1;
-                    for (s, v) in sums[*l].iter_mut().zip(row.iter()) {
-                        *s += v;
-                    }
+            cluster_centres(x, &labels.to_vec())
+        }
+        ClusterMethod::Optics {
+            min_points,
+            tolerance,
+            cut,
+        } => {
+            let analysis = Optics::params(*min_points)
+                .tolerance(*tolerance)
+                .transform(x)
+                .map_err(|e| cerr(format!("OPTICS: {e}")))?;
+            let cores: Vec<(usize, Option<f64>)> = analysis
+                .iter()
+                .map(|s| (s.index(), *s.core_distance()))
+                .collect();
+            let reach = reachability_in_order(x, &cores, *tolerance);
+            let order: Vec<(usize, Option<f64>, Option<f64>)> = cores
+                .iter()
+                .zip(reach)
+                .map(|(&(i, c), r)| (i, c, r))
+                .collect();
+            cluster_centres(x, &optics_clusters(&order, n, *cut))
+        }
+        ClusterMethod::Hierarchical {
+            n_clusters,
+            linkage,
+        } => {
+            // linfa-hierarchical works on a Gaussian kernel and merges on
+            // −ln k = ‖a − b‖² / ε: squared Euclidean distances, scaled by
+            // the largest one so that none is clamped.
+            let mut max_d2: f64 = 0.0;
+            for (i, a) in x.outer_iter().enumerate() {
+                for b in x.outer_iter().skip(i + 1) {
+                    let d2: f64 = a.iter().zip(b.iter()).map(|(p, q)| (p - q) * (p - q)).sum();
+                    max_d2 = max_d2.max(d2);
                 }
             }
-            let cents = sums
-                .into_iter()
-                .zip(&counts)
-                .map(|(s, &c)| s.into_iter().map(|v| v / c.max(1) as f64).collect())
-                .collect();
-            (cents, labels.to_vec())
+            let kernel = Kernel::params()
+                .method(KernelMethod::Gaussian(max_d2.max(1e-12)))
+                .transform(x);
+            let method = match linkage {
+                Linkage::Ward => Method::Ward,
+                Linkage::Average => Method::Average,
+                Linkage::Complete => Method::Complete,
+                Linkage::Single => Method::Single,
+            };
+            let out = HierarchicalCluster::default()
+                .with_method(method)
+                .num_clusters((*n_clusters).min(n))
+                .transform(kernel)
+                .map_err(|e| cerr(format!("hierarchical clustering: {e}")))?;
+            let labels: Vec<Option<usize>> = out.targets().iter().map(|&l| Some(l)).collect();
+            cluster_centres(x, &labels)
         }
     };
     let ds = DatasetBase::from(x);
@@ -500,4 +711,171 @@ fn learn_action(
         gmm: g,
         score_threshold,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two tight blobs of `n` points each in 3D, far apart, and one far
+    /// outlier.
+    fn blobs(n: usize) -> Vec<AnchorSample> {
+        let mut out = Vec::new();
+        for i in 0..n {
+            let e = (i as f64 * 0.37).sin() * 0.05;
+            out.push(AnchorSample {
+                action: 1,
+                feature: vec![e, 0.02 * i as f64 / n as f64, -e],
+            });
+            out.push(AnchorSample {
+                action: 1,
+                feature: vec![5.0 + e, 5.0 - e, 0.01 * i as f64 / n as f64],
+            });
+        }
+        out.push(AnchorSample {
+            action: 1,
+            feature: vec![-20.0, 20.0, 20.0],
+        });
+        out
+    }
+
+    fn params(method: ClusterMethod) -> ConceptParams {
+        ConceptParams {
+            method,
+            gmm_components: 1,
+            ..ConceptParams::default()
+        }
+    }
+
+    #[test]
+    fn optics_cut_follows_the_reachability_plot() {
+        // Ordering: a cluster (0, 1, 2), noise (3), a second cluster (4, 5).
+        let order = vec![
+            (0, Some(0.1), None),
+            (1, Some(0.1), Some(0.2)),
+            (2, Some(0.3), Some(0.2)),
+            (3, None, None),
+            (4, Some(0.2), Some(5.0)),
+            (5, Some(0.2), Some(0.2)),
+        ];
+        let l = optics_clusters(&order, 6, 0.5);
+        assert_eq!(l, vec![Some(0), Some(0), Some(0), None, Some(1), Some(1)]);
+        // A smaller radius: point 2's core distance no longer counts, but
+        // it is still reachable from 1.
+        let l = optics_clusters(&order, 6, 0.25);
+        assert_eq!(l, vec![Some(0), Some(0), Some(0), None, Some(1), Some(1)]);
+        // Below every reachability each point with a small core starts its own cluster.
+        let l = optics_clusters(&order, 6, 0.15);
+        assert_eq!(l, vec![Some(0), Some(1), None, None, None, None]);
+        // A point reachable after a noise point joins the last cluster.
+        let order = vec![
+            (0, Some(0.1), None),
+            (1, None, Some(0.2)),
+            (2, None, Some(0.6)),
+            (3, Some(0.1), Some(0.2)),
+        ];
+        let l = optics_clusters(&order, 4, 0.5);
+        assert_eq!(l, vec![Some(0), Some(0), None, Some(0)]);
+    }
+
+    #[test]
+    fn every_clustering_option_finds_the_two_blobs() {
+        let s = blobs(12);
+        let methods = [
+            ClusterMethod::KMeans {
+                n_clusters: 3,
+                n_runs: 5,
+                max_iterations: 100,
+            },
+            ClusterMethod::Dbscan {
+                min_points: 3,
+                tolerance: 0.5,
+            },
+            ClusterMethod::Optics {
+                min_points: 3,
+                tolerance: 2.0,
+                cut: 0.5,
+            },
+            ClusterMethod::Hierarchical {
+                n_clusters: 3,
+                linkage: Linkage::Average,
+            },
+            ClusterMethod::Hierarchical {
+                n_clusters: 3,
+                linkage: Linkage::Ward,
+            },
+        ];
+        for m in methods {
+            let p = params(m.clone());
+            let c = learn_concepts(&s, &p).unwrap();
+            // Deterministic per seed, labels included.
+            assert_eq!(c, learn_concepts(&s, &p).unwrap(), "{m:?}");
+            let ac = c.action(1).unwrap();
+            // Points of a blob share a label and the blobs differ.
+            let la: Vec<Option<usize>> = (0..12).map(|i| ac.labels[2 * i]).collect();
+            let lb: Vec<Option<usize>> = (0..12).map(|i| ac.labels[2 * i + 1]).collect();
+            assert!(
+                la.iter().all(|l| l.is_some() && *l == la[0]),
+                "{m:?}: {la:?}"
+            );
+            assert!(
+                lb.iter().all(|l| l.is_some() && *l == lb[0]),
+                "{m:?}: {lb:?}"
+            );
+            assert_ne!(la[0], lb[0], "{m:?}");
+            // The blob centres are concepts.
+            let near_a = ac.nearest(&[0.0, 0.01, 0.0]).unwrap();
+            let near_b = ac.nearest(&[5.0, 5.0, 0.005]).unwrap();
+            assert!(
+                near_a.1 < 0.1 && near_b.1 < 0.1,
+                "{m:?}: {near_a:?} {near_b:?}"
+            );
+            match m {
+                // The density methods leave the outlier out.
+                ClusterMethod::Dbscan { .. } | ClusterMethod::Optics { .. } => {
+                    assert_eq!(ac.labels[24], None, "{m:?}");
+                    assert_eq!(ac.centroids.len(), 2, "{m:?}");
+                }
+                // Three clusters: the outlier is its own.
+                ClusterMethod::Hierarchical { .. } | ClusterMethod::KMeans { .. } => {
+                    assert_eq!(ac.centroids.len(), 3, "{m:?}");
+                    assert!(ac.labels[24].is_some_and(|l| Some(l) != la[0] && Some(l) != lb[0]));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_clustering_parameters_are_named() {
+        for (m, name) in [
+            (
+                ClusterMethod::Optics {
+                    min_points: 3,
+                    tolerance: 1.0,
+                    cut: 2.0,
+                },
+                "cut",
+            ),
+            (
+                ClusterMethod::Optics {
+                    min_points: 1,
+                    tolerance: 1.0,
+                    cut: 0.5,
+                },
+                "min_points",
+            ),
+            (
+                ClusterMethod::Hierarchical {
+                    n_clusters: 0,
+                    linkage: Linkage::Ward,
+                },
+                "n_clusters",
+            ),
+        ] {
+            match params(m).validate() {
+                Err(RefineError::InvalidParam { name: n, .. }) => assert_eq!(n, name),
+                other => panic!("{name}: {other:?}"),
+            }
+        }
+    }
 }

@@ -22,7 +22,7 @@ use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{s, Array1, Array2, Array3, ArrayView3};
 use serde::{Deserialize, Serialize};
 
-use crate::concepts::{anchor_feature, learn_concepts, AnchorSample, ClusterMethod, ConceptParams};
+use crate::concepts::{anchor_feature, learn_concepts, AnchorSample, ConceptParams};
 use crate::error::{RefineError, Result};
 use crate::motion::{
     bvh_to_msr20, canonicalize, to_features, FRAME_FEATURES, HIP_CENTRE, MSR_JOINTS, NET_FRAMES,
@@ -103,12 +103,10 @@ impl DatasetParams {
         Ok(())
     }
 
-    /// Concepts per action (the k of k-means; 0 for DBSCAN, which has no fixed count).
+    /// Concepts per action (the k of k-means or of hierarchical clustering;
+    /// 0 for DBSCAN and OPTICS, which have no fixed count).
     pub fn concepts_per_action(&self) -> usize {
-        match self.concepts.method {
-            ClusterMethod::KMeans { n_clusters, .. } => n_clusters,
-            ClusterMethod::Dbscan { .. } => 0,
-        }
+        self.concepts.method.max_concepts().unwrap_or(0)
     }
 }
 
@@ -786,6 +784,7 @@ impl FlawSet {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::concepts::ClusterMethod;
     use mp_geom::io::npz::Npz;
 
     fn msr() -> MsrAction3D {

@@ -34,7 +34,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::baseline::{full_confidence, EvalFlaw};
 use crate::concepts::{
-    anchor_feature, learn_concepts, AnchorSample, ClusterMethod, ConceptParams, Concepts,
+    anchor_feature, learn_concepts, AnchorSample, ClusterMethod, ConceptParams, Concepts, Linkage,
 };
 use crate::error::{RefineError, Result};
 use crate::flaws::{AnchorSource, Flaw, FootSlide};
@@ -88,6 +88,12 @@ pub struct RefineEvalParams {
     /// DBSCAN of the clustering ablation. Default 4 points, tolerance 0.35
     /// (scale-normalised feature units).
     pub dbscan: ClusterMethod,
+    /// OPTICS of the clustering ablation. Default 4 points, ordering radius
+    /// 1.0, cut at 0.35 (as DBSCAN).
+    pub optics: ClusterMethod,
+    /// Hierarchical clustering of the ablation. Default 4 concepts per
+    /// action (as k-means), Ward linkage.
+    pub hierarchical: ClusterMethod,
     /// Quantile of the training anchors' scores used as the flaw threshold
     /// of the nearest-concept scores. Default 0.05.
     pub score_quantile: f64,
@@ -141,6 +147,15 @@ impl Default for RefineEvalParams {
             dbscan: ClusterMethod::Dbscan {
                 min_points: 4,
                 tolerance: 0.35,
+            },
+            optics: ClusterMethod::Optics {
+                min_points: 4,
+                tolerance: 1.0,
+                cut: 0.35,
+            },
+            hierarchical: ClusterMethod::Hierarchical {
+                n_clusters: 4,
+                linkage: Linkage::Ward,
             },
             score_quantile: 0.05,
             min_clip_frames: 8,
@@ -796,8 +811,24 @@ pub fn evaluate(
                 ..kmeans_params.clone()
             },
         )?;
+        let optics = learn_concepts(
+            &samples,
+            &ConceptParams {
+                method: params.optics.clone(),
+                ..kmeans_params.clone()
+            },
+        )?;
+        let hierarchical = learn_concepts(
+            &samples,
+            &ConceptParams {
+                method: params.hierarchical.clone(),
+                ..kmeans_params.clone()
+            },
+        )?;
         let th_k = nearest_concept_thresholds(&kmeans, &samples, params.score_quantile)?;
         let th_d = nearest_concept_thresholds(&dbscan, &samples, params.score_quantile)?;
+        let th_o = nearest_concept_thresholds(&optics, &samples, params.score_quantile)?;
+        let th_h = nearest_concept_thresholds(&hierarchical, &samples, params.score_quantile)?;
         // The anchor and transition steps, with and without the detector first.
         let steps = NetRefineParams {
             mode: RefineMode::AnchorsAndTransitions,
@@ -871,6 +902,18 @@ pub fn evaluate(
                 &params.generated_refine,
                 None,
             ),
+            (
+                "generated_preset_optics",
+                &optics,
+                &params.generated_refine,
+                None,
+            ),
+            (
+                "generated_preset_hierarchical",
+                &hierarchical,
+                &params.generated_refine,
+                None,
+            ),
             ("detector_only", concepts, &detector_only, None),
             (
                 "no_detector_anchors_transitions_gmm",
@@ -894,6 +937,18 @@ pub fn evaluate(
                 &dbscan,
                 &steps,
                 Some(&th_d),
+            ),
+            (
+                "anchors_transitions_nearest_optics",
+                &optics,
+                &steps,
+                Some(&th_o),
+            ),
+            (
+                "anchors_transitions_nearest_hierarchical",
+                &hierarchical,
+                &steps,
+                Some(&th_h),
             ),
         ];
         for (name, c, p, th) in settings {

@@ -61,7 +61,7 @@ use nalgebra::{Matrix4, Vector4};
 use ndarray::{s, Array2, Array3, ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::concepts::{anchor_feature, AnchorSample, ClusterMethod, Concepts};
+use crate::concepts::{anchor_feature, AnchorSample, Concepts};
 use crate::error::{RefineError, Result};
 use crate::motion::{
     canonicalize, decanonicalize, from_features, to_features, CanonicalFrame, FRAME_FEATURES,
@@ -1061,16 +1061,19 @@ impl<'a> NetRefiner<'a> {
             next_to_refined = bridged;
         } else if !flawed.is_empty() && p.anchor_repair == AnchorRepair::NearestConcept {
             let ac = self.concepts.action(action)?;
-            let per_action = match self.concepts.params.method {
-                ClusterMethod::KMeans { n_clusters, .. } => n_clusters,
-                ClusterMethod::Dbscan { .. } => self
-                    .concepts
-                    .actions
-                    .values()
-                    .map(|a| a.centroids.len())
-                    .max()
-                    .unwrap_or(0),
-            };
+            let per_action = self
+                .concepts
+                .params
+                .method
+                .max_concepts()
+                .unwrap_or_else(|| {
+                    self.concepts
+                        .actions
+                        .values()
+                        .map(|a| a.centroids.len())
+                        .max()
+                        .unwrap_or(0)
+                });
             let mut delta = Array2::<f64>::zeros((anchors.len(), FRAME_FEATURES));
             for &i in &flawed {
                 let f = anchors[i];
