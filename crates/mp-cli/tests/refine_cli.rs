@@ -163,7 +163,7 @@ fn concepts_from_a_folder_with_each_clustering_method() {
     std::fs::create_dir(&folder).unwrap();
     for (k, &i) in data.clips_of_action(5).iter().take(6).enumerate() {
         let t = full_confidence(&data.clip(i).unwrap()).unwrap();
-        write_track(&folder.join(format!("clip{k}.json")), &t).unwrap();
+        write_track(folder.join(format!("clip{k}.json")), &t).unwrap();
     }
     let run = |extra: &[&str]| {
         let out_path = tmp.path().join("concepts.json");
