@@ -419,11 +419,13 @@ fn eval_penn(path: &Path, max_clips: usize) -> anyhow::Result<Value> {
         match r {
             Ok(v) => {
                 all.push(v.clone());
-                by_action
+                if let Some(a) = by_action
                     .entry(cls)
                     .or_insert_with(|| json!([]))
                     .as_array_mut()
-                    .map(|a| a.push(v));
+                {
+                    a.push(v);
+                }
             }
             Err(e) => errors.push(format!("clip {i}: {e:#}")),
         }

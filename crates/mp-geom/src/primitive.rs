@@ -143,9 +143,8 @@ impl Primitive {
                 if center.len() == 2 || axes.len() < 2 {
                     out[0] = center[0] + radius * c;
                     out[1] = center[1] + radius * s;
-                    for k in 2..out.len() {
-                        out[k] = center[k];
-                    }
+                    let n = out.len();
+                    out[2..].copy_from_slice(&center[2..n]);
                 } else {
                     for k in 0..out.len() {
                         out[k] = center[k] + radius * (c * axes[0][k] + s * axes[1][k]);
