@@ -268,31 +268,13 @@ impl ConceptParams {
             ClusterMethod::Dbscan {
                 min_points,
                 tolerance,
-            } => {
-                if *min_points < 2 {
-                    return Err(RefineError::param("min_points", "must be ≥ 2"));
-                }
-                if !(tolerance.is_finite() && *tolerance > 0.0) {
-                    return Err(RefineError::param(
-                        "tolerance",
-                        format!("must be finite and > 0, got {tolerance}"),
-                    ));
-                }
-            }
+            } => check_density(*min_points, *tolerance)?,
             ClusterMethod::Optics {
                 min_points,
                 tolerance,
                 cut,
             } => {
-                if *min_points < 2 {
-                    return Err(RefineError::param("min_points", "must be ≥ 2"));
-                }
-                if !(tolerance.is_finite() && *tolerance > 0.0) {
-                    return Err(RefineError::param(
-                        "tolerance",
-                        format!("must be finite and > 0, got {tolerance}"),
-                    ));
-                }
+                check_density(*min_points, *tolerance)?;
                 if !(cut.is_finite() && *cut > 0.0 && cut <= tolerance) {
                     return Err(RefineError::param(
                         "cut",
@@ -326,6 +308,20 @@ impl ConceptParams {
         }
         Ok(())
     }
+}
+
+/// Checks the core size and radius of a density-based clustering.
+fn check_density(min_points: usize, tolerance: f64) -> Result<()> {
+    if min_points < 2 {
+        return Err(RefineError::param("min_points", "must be ≥ 2"));
+    }
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(RefineError::param(
+            "tolerance",
+            format!("must be finite and > 0, got {tolerance}"),
+        ));
+    }
+    Ok(())
 }
 
 /// The feature of one pose (`J × D`): root-relative coordinates, flattened

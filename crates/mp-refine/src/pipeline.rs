@@ -909,17 +909,7 @@ impl<'a> NetRefiner<'a> {
         clip: ArrayView3<'_, f64>,
         action: Option<u32>,
     ) -> Result<CanonicalRefinement> {
-        if clip.dim() != (NET_FRAMES, MSR_JOINTS, 3) {
-            return Err(RefineError::Shape(format!(
-                "refine_canonical: expected ({NET_FRAMES}, {MSR_JOINTS}, 3), got {:?}",
-                clip.dim()
-            )));
-        }
-        if clip.iter().any(|v| !v.is_finite()) {
-            return Err(RefineError::NonFinite(
-                "refine_canonical: the clip has a non-finite coordinate".into(),
-            ));
-        }
+        check_canonical(clip)?;
         let p = self.params;
         let feats = to_features(clip);
         if p.mode == RefineMode::DetectorOnly {
