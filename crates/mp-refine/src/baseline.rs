@@ -133,6 +133,15 @@ fn frame_dist(p: &ndarray::ArrayView3<'_, f64>, a: usize, b: usize) -> f64 {
     s / nj.max(1) as f64
 }
 
+/// Frames `f ≥ 1` of `pos` (`T × J × D`) whose mean joint displacement from
+/// frame `f − 1` is below `tol`: repeats of a held pose. Frames with a
+/// non-finite coordinate never count.
+pub fn held_frames(pos: ndarray::ArrayView3<'_, f64>, tol: f64) -> Vec<usize> {
+    (1..pos.dim().0)
+        .filter(|&f| frame_dist(&pos, f, f - 1) < tol)
+        .collect()
+}
+
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return 0.0;
@@ -160,9 +169,10 @@ fn detect_parts(track: &Track, params: &RefineParams) -> Result<(Vec<bool>, Vec<
     let t = track.n_frames();
     let mut flag = vec![false; t];
     let mut out = vec![false; t];
-    let frozen: Vec<bool> = (0..t)
-        .map(|f| f > 0 && frame_dist(&p, f, f - 1) < params.frozen_speed_m)
-        .collect();
+    let mut frozen = vec![false; t];
+    for f in held_frames(p, params.frozen_speed_m) {
+        frozen[f] = true;
+    }
     let mut f = 0;
     while f < t {
         if !frozen[f] {

@@ -363,12 +363,18 @@ pub fn anchor_feature(
         ));
     }
     if scale_normalise {
-        let rms = (f.iter().map(|v| v * v).sum::<f64>() / j as f64).sqrt();
+        let rms = feature_rms(&f, j);
         if rms > 0.0 {
             f.iter_mut().for_each(|v| *v /= rms);
         }
     }
     Ok(f)
+}
+
+/// RMS joint distance to the root of a root-relative feature of `joints`
+/// joints: the scale [`anchor_feature`] divides by.
+pub fn feature_rms(feature: &[f64], joints: usize) -> f64 {
+    (feature.iter().map(|v| v * v).sum::<f64>() / joints.max(1) as f64).sqrt()
 }
 
 /// One anchor pose of an action, as a feature.

@@ -61,7 +61,8 @@ use nalgebra::{Matrix4, Vector4};
 use ndarray::{s, Array2, Array3, ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::concepts::{anchor_feature, AnchorSample, Concepts};
+use crate::baseline::held_frames;
+use crate::concepts::{anchor_feature, feature_rms, AnchorSample, Concepts};
 use crate::error::{RefineError, Result};
 use crate::motion::{
     canonicalize, decanonicalize, from_features, to_features, CanonicalFrame, FRAME_FEATURES,
@@ -240,9 +241,10 @@ pub struct NetRefineParams {
     /// frames give 23.3 / 22.9 / 21.9 % (a refill across more frames of
     /// real 15 fps motion costs more than most flaws).
     pub max_repair_run_frames: usize,
-    /// A frame (after the first) whose every joint coordinate is within
-    /// this of the previous frame's (track units: metres for the MSR
-    /// skeletons) repeats a held pose, as a tracker that froze does: all its
+    /// A frame (after the first) whose mean joint displacement from the
+    /// previous frame is below this (track units: metres for the MSR
+    /// skeletons; [`crate::baseline::held_frames`], the baseline's frozen
+    /// test) repeats a held pose, as a tracker that froze does: all its
     /// joints are flagged and refilled with the detector's flags. `None`
     /// switches the rule off. Default `Some(1e-4)` (0.1 mm), far below the
     /// millimetre noise of a sensor: in the MSR Action3D clips every such
@@ -1070,8 +1072,7 @@ impl<'a> NetRefiner<'a> {
                 let pose = x.index_axis(Axis(0), f);
                 let feat = anchor_feature(pose, self.root, false)?;
                 let scale = if self.concepts.params.scale_normalise {
-                    let j = pose.nrows().max(1) as f64;
-                    (feat.iter().map(|v| v * v).sum::<f64>() / j).sqrt()
+                    feature_rms(&feat, pose.nrows())
                 } else {
                     1.0
                 };
@@ -1089,8 +1090,7 @@ impl<'a> NetRefiner<'a> {
                 // back to unit scale, then to the anchor's own.
                 let cen = &ac.centroids[c];
                 let gain = if self.concepts.params.scale_normalise {
-                    let j = pose.nrows().max(1) as f64;
-                    let rms = (cen.iter().map(|v| v * v).sum::<f64>() / j).sqrt();
+                    let rms = feature_rms(cen, pose.nrows());
                     if rms > 0.0 {
                         scale / rms
                     } else {
@@ -1392,21 +1392,6 @@ impl FlawFindings {
         report.held_frames = self.held;
         report.repaired_runs = self.runs;
     }
-}
-
-/// Frames `f ≥ 1` of `pos` (`T × J × D`) whose every coordinate is within
-/// `tol` of frame `f − 1`'s: repeats of a held pose. Frames with a
-/// non-finite coordinate never count.
-pub fn held_frames(pos: ArrayView3<'_, f64>, tol: f64) -> Vec<usize> {
-    let t = pos.dim().0;
-    (1..t)
-        .filter(|&f| {
-            pos.index_axis(Axis(0), f)
-                .iter()
-                .zip(pos.index_axis(Axis(0), f - 1).iter())
-                .all(|(a, b)| (a - b).abs() <= tol)
-        })
-        .collect()
 }
 
 /// Least-squares polynomial of degree `deg` (1 or 3) through `(x, y)`, in
