@@ -1053,6 +1053,9 @@ impl<'a> NetRefiner<'a> {
             next_to_refined = bridged;
         } else if !flawed.is_empty() && p.anchor_repair == AnchorRepair::NearestConcept {
             let ac = self.concepts.action(action)?;
+            let first_id = (action as usize)
+                .checked_sub(1)
+                .ok_or_else(|| RefineError::param("action", "actions are numbered from 1"))?;
             let per_action = self
                 .concepts
                 .params
@@ -1102,7 +1105,7 @@ impl<'a> NetRefiner<'a> {
                 for (k, (&cv, &fv)) in cen.iter().zip(&feat).enumerate() {
                     delta[[i, k]] = cv * gain - fv;
                 }
-                reports[i].concept = Some((action as usize - 1) * per_action + c);
+                reports[i].concept = Some(first_id * per_action + c);
                 next_to_refined[i - 1] = true;
                 next_to_refined[i] = true;
             }
