@@ -10,7 +10,11 @@
 //! velocities, or from the local-periodicity segmenter
 //! [`repetition::segment_repetitions`]) and predict the future by unrolling
 //! loops, or, with a single observed cycle, by self-match unrolling ([`selfmatch`]).
+//! [`count`] turns these into the repetition counts a user gets (intervals,
+//! count per interval, total, the signal and method that decided, a
+//! confidence), from keypoints and, for video, from frame thumbnails.
 
+pub mod count;
 pub mod dsl;
 pub mod edit;
 pub mod error;
@@ -22,6 +26,10 @@ pub mod repetition;
 pub mod selfmatch;
 pub mod synth;
 
+pub use count::{
+    count_repetitions, count_signals, CountMethod, CountParams, CountSignal, CountedInterval,
+    Counts,
+};
 pub use error::{AbstractError, Result};
 pub use loops::{detect_loops, DetectedLoop, LoopParams};
 pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};

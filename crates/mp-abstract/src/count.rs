@@ -1,0 +1,432 @@
+//! Repetition counts a user gets: intervals, a count per interval, the total,
+//! the signal and method that decided, and a confidence.
+//!
+//! Steps, for each signal there is (the keypoints of the performer, and, for
+//! video, the grey thumbnails of the frames):
+//! 1. **Period of the whole recording** ([`estimate_period`]): the dominant
+//!    period of the motion and its strength (the autocorrelation at that lag).
+//! 2. **Intervals** ([`segment_repetitions`]): where the motion repeats, and
+//!    with which period. Where two or more intervals have clearly different
+//!    periods (a change of exercise), each is counted on its own: its length
+//!    over its period.
+//! 3. Otherwise the recording holds one repetitive activity: when its period
+//!    is strong enough ([`CountParams::min_strength`]) the count is the motion's
+//!    active length (rest at either end trimmed) over the period; when not,
+//!    nothing repeats (a golf swing is one movement).
+//!
+//! The signal whose repetition is the most certain decides
+//! ([`count_signals`]): keypoints are the primary signal, and frames take
+//! over where no person is found (a bar lift in the dark) or where the
+//! pixels repeat more clearly than the keypoints (a hula hoop that hides
+//! the hips).
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{AbstractError, Result};
+use crate::repetition::{
+    estimate_period, segment_repetitions, PeriodEstimate, PeriodParams, PeriodicSegment,
+    RepetitiveInterval, SegmentParams,
+};
+use mp_geom::Track;
+
+/// Which signal a count was read from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CountSignal {
+    /// Joint positions of the performer.
+    Keypoints,
+    /// Grey thumbnails of the video frames.
+    Frames,
+}
+
+impl CountSignal {
+    /// Lower-case name (`keypoints`, `frames`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CountSignal::Keypoints => "keypoints",
+            CountSignal::Frames => "frames",
+        }
+    }
+}
+
+/// How a count was reached.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CountMethod {
+    /// One repetitive activity: active length over the recording's period.
+    Period,
+    /// Several intervals of different periods, each counted on its own.
+    Intervals,
+    /// Nothing repeats clearly enough.
+    None,
+}
+
+impl CountMethod {
+    /// Lower-case name (`period`, `intervals`, `none`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CountMethod::Period => "period",
+            CountMethod::Intervals => "intervals",
+            CountMethod::None => "none",
+        }
+    }
+}
+
+/// Parameters of [`count_repetitions`] and [`count_signals`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CountParams {
+    /// Period of the whole recording, keypoint signal.
+    pub period: PeriodParams,
+    /// Period of the whole recording, frame signal ([`PeriodParams::frames`]).
+    pub frame_period: PeriodParams,
+    /// Repetitive intervals (for recordings with several activities).
+    pub segment: SegmentParams,
+    /// A recording repeats when the autocorrelation of its motion at the
+    /// period reaches this (0..1). Default 0.05: a single golf swing scores
+    /// about 0.01, repeated exercises 0.06–0.75 on keypoints.
+    pub min_strength: f64,
+    /// Two intervals count as different activities when their periods differ
+    /// by more than this fraction of the shorter one. Default 0.25.
+    pub period_tolerance: f64,
+    /// Frames whose speed, averaged over one period, is below this fraction
+    /// of the median are rest, trimmed from the ends of the activity.
+    /// Default 0.2 (as [`SegmentParams::rest_fraction`]).
+    pub rest_fraction: f64,
+    /// Keypoints count only where a person is found in at least this fraction
+    /// of the frames. Default 0.5.
+    pub min_found_fraction: f64,
+}
+
+impl Default for CountParams {
+    fn default() -> Self {
+        CountParams {
+            period: PeriodParams::default(),
+            frame_period: PeriodParams::frames(),
+            segment: SegmentParams::default(),
+            min_strength: 0.05,
+            period_tolerance: 0.25,
+            rest_fraction: 0.2,
+            min_found_fraction: 0.5,
+        }
+    }
+}
+
+impl CountParams {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        self.period.validate()?;
+        self.frame_period.validate()?;
+        self.segment.validate()?;
+        let unit = |name: &'static str, v: f64| {
+            if v.is_finite() && (0.0..=1.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(AbstractError::param(
+                    name,
+                    format!("must be in [0, 1], got {v}"),
+                ))
+            }
+        };
+        unit("min_strength", self.min_strength)?;
+        unit("rest_fraction", self.rest_fraction)?;
+        unit("min_found_fraction", self.min_found_fraction)?;
+        AbstractError::check_non_negative("period_tolerance", self.period_tolerance)?;
+        Ok(())
+    }
+}
+
+/// One counted interval.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CountedInterval {
+    /// First frame.
+    pub start_frame: usize,
+    /// One past the last frame.
+    pub end_frame: usize,
+    /// Period, frames.
+    pub period_frames: usize,
+    /// Length over period, before rounding.
+    pub cycles: f64,
+    /// Repetitions (`cycles` rounded).
+    pub count: usize,
+    /// Frame where each repetition starts, plus `end_frame`.
+    pub boundaries: Vec<usize>,
+    /// How periodic the interval is (autocorrelation or concordance at the period).
+    pub confidence: f64,
+}
+
+impl CountedInterval {
+    fn new(start: usize, end: usize, period: usize, confidence: f64) -> Self {
+        let period = period.max(1);
+        let cycles = (end - start) as f64 / period as f64;
+        let count = cycles.round().max(0.0) as usize;
+        let mut boundaries: Vec<usize> = (0..count)
+            .map(|i| start + i * period)
+            .filter(|&b| b < end)
+            .collect();
+        boundaries.push(end);
+        CountedInterval {
+            start_frame: start,
+            end_frame: end,
+            period_frames: period,
+            cycles,
+            count,
+            boundaries,
+            confidence,
+        }
+    }
+
+    /// As a [`RepetitiveInterval`] (no loop body: `body_size` 0), for the
+    /// report's timeline and plots.
+    pub fn to_interval(&self) -> RepetitiveInterval {
+        RepetitiveInterval {
+            start_frame: self.start_frame,
+            end_frame: self.end_frame,
+            body_size: 0,
+            iterations: self.count,
+            boundaries: self.boundaries.clone(),
+            count: self.count,
+            score: self.confidence,
+        }
+    }
+}
+
+/// The repetition counts of a recording.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Counts {
+    /// Counted intervals, in time order.
+    pub intervals: Vec<CountedInterval>,
+    /// Sum of the interval counts.
+    pub total: usize,
+    /// The signal that decided.
+    pub signal: CountSignal,
+    /// How the count was reached.
+    pub method: CountMethod,
+    /// How certain the repetition is: the periodicity strength of the
+    /// deciding signal over the whole recording (the autocorrelation of its
+    /// motion at the period, 0..1), or for several activities the larger of
+    /// that and the intervals' mean score.
+    pub confidence: f64,
+    /// Frames of the recording.
+    pub frames: usize,
+    /// Frame rate.
+    pub fps: f64,
+}
+
+impl Counts {
+    fn none(signal: CountSignal, frames: usize, fps: f64, confidence: f64) -> Self {
+        Counts {
+            intervals: Vec::new(),
+            total: 0,
+            signal,
+            method: CountMethod::None,
+            confidence,
+            frames,
+            fps,
+        }
+    }
+
+    /// The intervals as [`RepetitiveInterval`]s.
+    pub fn repetitive_intervals(&self) -> Vec<RepetitiveInterval> {
+        self.intervals.iter().map(|i| i.to_interval()).collect()
+    }
+}
+
+/// Counts the repetitions of one signal (a keypoint track, or a unitless
+/// feature track such as frame thumbnails) — see the module docs.
+pub fn count_repetitions(
+    signal: &Track,
+    kind: CountSignal,
+    params: &CountParams,
+) -> Result<Counts> {
+    params.validate()?;
+    let n = signal.n_frames();
+    let fps = signal.fps();
+    if n < 4 || signal.valid_count() == 0 {
+        return Ok(Counts::none(kind, n, fps, 0.0));
+    }
+    let period_params = match kind {
+        CountSignal::Keypoints => &params.period,
+        CountSignal::Frames => &params.frame_period,
+    };
+    let whole = estimate_period(signal, 0, n, period_params)?;
+    let strength = whole.map(|e| e.strength.max(0.0)).unwrap_or(0.0);
+    // Intervals of at least two cycles: shorter ones are too uncertain to
+    // stand for an activity of their own.
+    let segs: Vec<PeriodicSegment> = segment_repetitions(signal, &params.segment)?
+        .into_iter()
+        .filter(|s| s.count >= 2.0)
+        .collect();
+    if several_activities(&segs, params.period_tolerance) {
+        let intervals: Vec<CountedInterval> = segs
+            .iter()
+            .map(|s| CountedInterval::new(s.start_frame, s.end_frame, s.period_frames, s.score))
+            .collect();
+        let confidence = strength.max(weighted_score(&segs).clamp(0.0, 1.0));
+        return Ok(Counts {
+            total: intervals.iter().map(|i| i.count).sum(),
+            intervals,
+            signal: kind,
+            method: CountMethod::Intervals,
+            confidence,
+            frames: n,
+            fps,
+        });
+    }
+    match whole {
+        Some(PeriodEstimate {
+            period_frames,
+            strength,
+            ..
+        }) if strength >= params.min_strength => {
+            let (a, b) = active_span(signal, period_frames, params.rest_fraction)?;
+            let iv = CountedInterval::new(a, b, period_frames, strength);
+            Ok(Counts {
+                total: iv.count,
+                intervals: if iv.count > 0 { vec![iv] } else { Vec::new() },
+                signal: kind,
+                method: CountMethod::Period,
+                confidence: strength,
+                frames: n,
+                fps,
+            })
+        }
+        _ => Ok(Counts::none(kind, n, fps, strength)),
+    }
+}
+
+/// Counts from the keypoints and, when given, the frame thumbnails of the
+/// same recording, and returns the count of the more certain signal.
+/// Keypoints take part only when a person is found in at least
+/// [`CountParams::min_found_fraction`] of the frames; with neither signal
+/// usable the count is 0 with [`CountMethod::None`].
+pub fn count_signals(
+    keypoints: Option<&Track>,
+    frames: Option<&Track>,
+    params: &CountParams,
+) -> Result<Counts> {
+    params.validate()?;
+    let mut best: Option<Counts> = None;
+    let mut consider = |c: Counts| {
+        let better = match &best {
+            None => true,
+            Some(b) => {
+                // A count beats no count; between two counts (or two
+                // non-counts) the more periodic signal wins.
+                let (cr, br) = (c.method != CountMethod::None, b.method != CountMethod::None);
+                (cr && !br) || (cr == br && c.confidence > b.confidence)
+            }
+        };
+        if better {
+            best = Some(c);
+        }
+    };
+    if let Some(k) = keypoints {
+        if found_fraction(k) >= params.min_found_fraction {
+            let mut filled = k.clone();
+            filled.fill_missing();
+            consider(count_repetitions(&filled, CountSignal::Keypoints, params)?);
+        }
+    }
+    if let Some(f) = frames {
+        consider(count_repetitions(f, CountSignal::Frames, params)?);
+    }
+    match best {
+        Some(b) => Ok(b),
+        None => {
+            let (n, fps) = keypoints
+                .or(frames)
+                .map(|t| (t.n_frames(), t.fps()))
+                .ok_or_else(|| {
+                    AbstractError::param("signals", "neither keypoints nor frames were given")
+                })?;
+            Ok(Counts::none(CountSignal::Keypoints, n, fps, 0.0))
+        }
+    }
+}
+
+/// Fraction of frames with at least one valid joint.
+pub fn found_fraction(track: &Track) -> f64 {
+    let n = track.n_frames();
+    if n == 0 {
+        return 0.0;
+    }
+    let c = track.confidence();
+    let found = (0..n)
+        .filter(|&t| (0..track.n_joints()).any(|j| c[[t, j]] > 0.0))
+        .count();
+    found as f64 / n as f64
+}
+
+/// Whether the segmenter's intervals show two or more activities: at least
+/// two intervals whose periods differ by more than `tolerance`.
+fn several_activities(segs: &[PeriodicSegment], tolerance: f64) -> bool {
+    let periods: Vec<f64> = segs.iter().map(|s| s.period_frames as f64).collect();
+    periods.iter().enumerate().any(|(i, &a)| {
+        periods[i + 1..]
+            .iter()
+            .any(|&b| (a - b).abs() > tolerance * a.min(b))
+    })
+}
+
+fn weighted_score(segs: &[PeriodicSegment]) -> f64 {
+    let w: f64 = segs.iter().map(|s| s.len_frames() as f64).sum();
+    if w <= 0.0 {
+        return 0.0;
+    }
+    segs.iter()
+        .map(|s| s.score * s.len_frames() as f64)
+        .sum::<f64>()
+        / w
+}
+
+/// The frames between the first and the last that move: a frame is rest
+/// when its speed (summed over channels, averaged over a centred window of
+/// one period) is below `fraction` of the median over the recording. Falls
+/// back to the whole recording when no frame moves.
+fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, usize)> {
+    let n = track.n_frames();
+    if fraction <= 0.0 || n < 2 {
+        return Ok((0, n));
+    }
+    let pos = track.positions();
+    let (_, j, d) = pos.dim();
+    let speed: Vec<f64> = (0..n)
+        .map(|t| {
+            let (a, b) = if t + 1 < n { (t, t + 1) } else { (t - 1, t) };
+            let mut s = 0.0;
+            for ji in 0..j {
+                let mut q = 0.0;
+                for k in 0..d {
+                    q += (pos[[b, ji, k]] - pos[[a, ji, k]]).powi(2);
+                }
+                s += q.sqrt();
+            }
+            s
+        })
+        .collect();
+    let w = period.max(1);
+    let mut prefix = vec![0.0; n + 1];
+    for t in 0..n {
+        prefix[t + 1] = prefix[t] + speed[t];
+    }
+    let local: Vec<f64> = (0..n)
+        .map(|t| {
+            let lo = t.saturating_sub(w / 2);
+            let hi = (t + w - w / 2).min(n);
+            (prefix[hi] - prefix[lo]) / (hi - lo).max(1) as f64
+        })
+        .collect();
+    let mut sorted = local.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[n / 2];
+    if !(median > 0.0) {
+        return Ok((0, n));
+    }
+    let first = local.iter().position(|&v| v >= fraction * median);
+    let last = local.iter().rposition(|&v| v >= fraction * median);
+    match (first, last) {
+        (Some(a), Some(b)) if b >= a => Ok((a, b + 1)),
+        _ => Ok((0, n)),
+    }
+}

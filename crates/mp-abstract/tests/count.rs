@@ -1,0 +1,140 @@
+//! The counting API: synthetic recordings with known counts, the choice
+//! between keypoints and frames, and bad input.
+
+use mp_abstract::{
+    count_repetitions, count_signals, CountMethod, CountParams, CountSignal, PeriodParams,
+};
+use mp_geom::{Skeleton, Track, Units};
+use ndarray::{Array2, Array3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+/// `j` joints: `lead` still frames, then `k` cycles of `period` frames, plus noise.
+fn exercise(lead: usize, k: usize, period: usize, j: usize, noise_px: f64, seed: u64) -> Track {
+    let n = lead + k * period;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, noise_px).unwrap();
+    let mut p = Array3::zeros((n, j, 2));
+    for t in 0..n {
+        let ph = if t < lead {
+            0.0
+        } else {
+            2.0 * std::f64::consts::PI * (t - lead) as f64 / period as f64
+        };
+        for ji in 0..j {
+            let a = ji as f64 * 0.7;
+            p[[t, ji, 0]] = 200.0 + 10.0 * ji as f64 + 30.0 * (ph + a).sin() - 30.0 * a.sin()
+                + noise.sample(&mut rng);
+            p[[t, ji, 1]] = 300.0 + 25.0 * (ph + 2.0 * a).cos() + noise.sample(&mut rng);
+        }
+    }
+    Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(j)).unwrap()
+}
+
+/// A unitless "thumbnail" track: `c` cells, a bright blob sweeping back and
+/// forth with the given period, plus pixel noise.
+fn thumbnails(n: usize, period: f64, c: usize, seed: u64) -> Track {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, 2.0).unwrap();
+    let mut p = Array3::zeros((n, c, 1));
+    for t in 0..n {
+        let centre =
+            (c as f64 / 2.0) * (1.0 + 0.6 * (2.0 * std::f64::consts::PI * t as f64 / period).sin());
+        for k in 0..c {
+            let d = (k as f64 - centre) / 3.0;
+            p[[t, k, 0]] = 40.0 + 120.0 * (-d * d).exp() + noise.sample(&mut rng);
+        }
+    }
+    Track::new(p, None, 30.0, Units::Unitless, Skeleton::generic(c)).unwrap()
+}
+
+#[test]
+fn counts_a_single_exercise() {
+    for (k, period) in [(5, 40), (8, 25), (12, 18)] {
+        let t = exercise(0, k, period, 12, 1.0, k as u64);
+        let c = count_repetitions(&t, CountSignal::Keypoints, &CountParams::default()).unwrap();
+        assert_eq!(c.total, k, "{k} cycles of {period}: {c:?}");
+        assert_eq!(c.method, CountMethod::Period);
+        assert_eq!(c.intervals.len(), 1);
+        let iv = &c.intervals[0];
+        assert!(
+            (iv.period_frames as i64 - period as i64).abs() <= 1,
+            "{iv:?}"
+        );
+        assert_eq!(iv.boundaries.len(), iv.count + 1);
+        assert!(c.confidence > 0.5, "{}", c.confidence);
+    }
+}
+
+#[test]
+fn still_and_one_off_motion_count_zero() {
+    let still = exercise(90, 0, 30, 12, 0.5, 1);
+    let c = count_repetitions(&still, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert_eq!((c.total, c.method), (0, CountMethod::None), "{c:?}");
+    // One smooth movement from one pose to another (a swing, not a repetition).
+    let n = 150;
+    let mut p = Array3::zeros((n, 12, 2));
+    for t in 0..n {
+        let s = (t as f64 / n as f64 * std::f64::consts::PI).sin().powi(2);
+        for j in 0..12 {
+            p[[t, j, 0]] = 100.0 + 5.0 * j as f64 + 80.0 * s;
+            p[[t, j, 1]] = 200.0 - 40.0 * s * (j as f64 / 12.0);
+        }
+    }
+    let swing = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap();
+    let c = count_repetitions(&swing, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert_eq!(c.total, 0, "{c:?}");
+}
+
+#[test]
+fn frames_count_where_no_person_is_found() {
+    let thumbs = thumbnails(300, 45.0, 64, 3);
+    // Keypoints of an empty video: nobody found in any frame.
+    let none = Track::new(
+        Array3::zeros((300, 17, 2)),
+        Some(Array2::zeros((300, 17))),
+        30.0,
+        Units::Pixels,
+        Skeleton::coco17(),
+    )
+    .unwrap();
+    let c = count_signals(Some(&none), Some(&thumbs), &CountParams::default()).unwrap();
+    assert_eq!(c.signal, CountSignal::Frames);
+    assert!((c.total as i64 - 7).abs() <= 1, "300 / 45 ≈ 6.7: {c:?}");
+    // With a person repeating clearly, the keypoints decide.
+    let kp = exercise(0, 6, 50, 12, 0.5, 4);
+    let flat = thumbnails(300, 1e9, 64, 5);
+    let c = count_signals(Some(&kp), Some(&flat), &CountParams::default()).unwrap();
+    assert_eq!((c.signal, c.total), (CountSignal::Keypoints, 6), "{c:?}");
+}
+
+#[test]
+fn bad_input_and_parameters() {
+    assert!(count_signals(None, None, &CountParams::default()).is_err());
+    let t = exercise(0, 3, 20, 4, 0.5, 1);
+    for p in [
+        CountParams {
+            min_strength: f64::NAN,
+            ..CountParams::default()
+        },
+        CountParams {
+            min_found_fraction: 2.0,
+            ..CountParams::default()
+        },
+        CountParams {
+            period: PeriodParams {
+                smooth_s: -1.0,
+                ..PeriodParams::default()
+            },
+            ..CountParams::default()
+        },
+    ] {
+        let e = count_repetitions(&t, CountSignal::Keypoints, &p).unwrap_err();
+        assert!(e.to_string().contains("must be"), "{e}");
+    }
+    // Too short to hold a repetition: a count of 0, not an error.
+    let short = exercise(0, 1, 3, 4, 0.5, 1);
+    let c = count_repetitions(&short, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert_eq!(c.total, 0);
+}
