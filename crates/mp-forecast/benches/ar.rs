@@ -7,7 +7,7 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use mp_forecast::model::{find_model_dir, ArSpace, ForecastModels};
 use mp_forecast::{ArForecaster, ArParams, Forecaster};
 use mp_geom::{Skeleton, Track, Units};
-use mp_pose::SessionParams;
+use mp_onnx::SessionParams;
 use ndarray::Array3;
 
 fn track(n: usize, phase: f64) -> Track {

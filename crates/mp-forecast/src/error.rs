@@ -52,9 +52,9 @@ pub enum ForecastError {
     /// An error from `mp-abstract` (loop unrolling).
     #[error(transparent)]
     Abstract(#[from] mp_abstract::AbstractError),
-    /// An error from `mp-pose`'s ONNX Runtime loader.
+    /// ONNX Runtime could not be found or loaded, or refused a model or its inputs.
     #[error(transparent)]
-    Runtime(#[from] mp_pose::PoseError),
+    Runtime(#[from] mp_onnx::OnnxError),
 }
 
 impl ForecastError {

@@ -20,13 +20,11 @@
 //! directly on poses; a predicted pose re-enters as a frame with every joint valid.
 
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use mp_geom::Track;
-use mp_pose::runtime::{open_session, SessionParams};
+use mp_onnx::{Input, ModelDirs, Network, SessionParams};
 use ndarray::{Array2, Array3};
-use ort::session::Session;
-use ort::value::TensorRef;
 use serde::Deserialize;
 
 use crate::error::{ForecastError, Result};
@@ -98,47 +96,25 @@ impl Manifest {
 
 /// Candidate model folders for a data set, in search order: `MP_FORECAST_MODELS`
 /// (itself or its `<dataset>` subfolder), `<workspace>/models/forecast/<dataset>`,
-/// and `models/forecast/<dataset>` above the current directory.
+/// and `models/forecast/<dataset>` above the current directory (where it exists).
 pub fn model_dir_candidates(dataset: &str) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    if let Ok(p) = std::env::var(MODEL_DIR_ENV) {
-        if !p.is_empty() {
-            let p = PathBuf::from(p);
-            out.push(p.clone());
-            out.push(p.join(dataset));
-        }
-    }
-    if let Some(root) = mp_geom::paths::workspace_root() {
-        out.push(root.join(MODEL_DIR_IN_WORKSPACE).join(dataset));
-    }
-    if let Ok(cwd) = std::env::current_dir() {
-        for anc in cwd.ancestors() {
-            let d = anc.join(MODEL_DIR_IN_WORKSPACE).join(dataset);
-            if !out.contains(&d) {
-                out.push(d);
-            }
-        }
-    }
-    out
+    model_search(dataset).dirs().to_vec()
+}
+
+fn model_search(dataset: &str) -> ModelDirs {
+    ModelDirs::new()
+        .with_env(MODEL_DIR_ENV, &[dataset])
+        .with_workspace(Path::new(MODEL_DIR_IN_WORKSPACE).join(dataset))
 }
 
 /// The first candidate folder with a `manifest.json` for `dataset`.
 pub fn find_model_dir(dataset: &str) -> Result<PathBuf> {
-    let cands = model_dir_candidates(dataset);
-    for c in &cands {
-        if c.join("manifest.json").is_file() {
-            return Ok(c.clone());
-        }
-    }
-    Err(ForecastError::ModelMissing {
-        file: format!("{dataset}/manifest.json"),
-        searched: cands
-            .iter()
-            .take(4)
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
-    })
+    let dirs = model_search(dataset);
+    dirs.find_dir_with("manifest.json")
+        .ok_or_else(|| ForecastError::ModelMissing {
+            file: format!("{dataset}/manifest.json"),
+            searched: dirs.describe(4),
+        })
 }
 
 /// The data set whose models suit a skeleton (`penn13` → `penn_action`, `msr20` → `msr_action3d`).
@@ -150,9 +126,9 @@ pub fn dataset_for_skeleton(skeleton_name: &str) -> Option<&'static str> {
     }
 }
 
+/// One network of a model folder.
 struct Net {
-    name: String,
-    session: Mutex<Session>,
+    net: Network,
 }
 
 impl Net {
@@ -164,10 +140,8 @@ impl Net {
                 searched: dir.display().to_string(),
             });
         }
-        let session = open_session(&path, params)?;
         Ok(Net {
-            name: path.display().to_string(),
-            session: Mutex::new(session),
+            net: Network::open(&path, params)?,
         })
     }
 
@@ -179,24 +153,8 @@ impl Net {
         data: &[f32],
         outputs: &[&str],
     ) -> Result<Vec<Vec<f32>>> {
-        let tensor = TensorRef::from_array_view((shape, data))
-            .map_err(|e| ForecastError::model(&self.name, e))?;
-        let mut session = self.session.lock().unwrap_or_else(|e| e.into_inner());
-        let out = session
-            .run(ort::inputs![input => tensor])
-            .map_err(|e| ForecastError::model(&self.name, e))?;
-        outputs
-            .iter()
-            .map(|name| {
-                let v = out.get(name).ok_or_else(|| {
-                    ForecastError::model(&self.name, format!("run produced no output `{name}`"))
-                })?;
-                let (_, d) = v
-                    .try_extract_tensor::<f32>()
-                    .map_err(|e| ForecastError::model(&self.name, e))?;
-                Ok(d.to_vec())
-            })
-            .collect()
+        let out = self.net.run(&[Input::new(input, &shape, data)], outputs)?;
+        Ok(out.into_iter().map(|o| o.data).collect())
     }
 }
 

@@ -13,7 +13,7 @@ use mp_forecast::{
     Forecaster, StatueParams,
 };
 use mp_geom::{Skeleton, Track, Units};
-use mp_pose::SessionParams;
+use mp_onnx::SessionParams;
 use ndarray::{Array2, Array3};
 use serde_json::Value;
 

@@ -8,17 +8,10 @@ use std::path::PathBuf;
 /// the message can be shown to a user as it is.
 #[derive(Debug, thiserror::Error)]
 pub enum PoseError {
-    /// The ONNX Runtime shared library was not found.
-    #[error(
-        "ONNX Runtime library not found (looked in: {searched}); run `cargo xtask setup`, \
-         or set ORT_DYLIB_PATH to libonnxruntime.so"
-    )]
-    RuntimeMissing { searched: String },
-    /// The ONNX Runtime library exists but could not be loaded.
-    #[error(
-        "cannot load ONNX Runtime from {path}: {reason}; run `cargo xtask setup` to reinstall it"
-    )]
-    RuntimeLoad { path: PathBuf, reason: String },
+    /// ONNX Runtime could not be found or loaded, or a session could not be
+    /// opened or checked (see [`mp_onnx::OnnxError`]).
+    #[error(transparent)]
+    Runtime(#[from] mp_onnx::OnnxError),
     /// A model file was not found in any model folder.
     #[error("model file `{file}` not found (looked in: {searched}); run `cargo xtask models`")]
     ModelMissing { file: String, searched: String },

@@ -40,6 +40,7 @@ pub use extract::{
 };
 pub use imageops::Roi;
 pub use movenet::{MoveNet, MoveNetParams};
+pub use mp_onnx::{OnnxError, SessionParams};
 pub use pose::{Pose, PoseEstimator};
-pub use runtime::{ModelFile, SessionParams};
+pub use runtime::ModelFile;
 pub use video::{open_source, probe, read_image, Frame, FrameSource, VideoInfo, VideoReader};

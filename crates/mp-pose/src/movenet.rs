@@ -51,7 +51,7 @@ impl MoveNetParams {
                 format!("must be in [0, 1], got {}", self.min_pose_score),
             ));
         }
-        self.session.validate()
+        Ok(self.session.validate()?)
     }
 }
 

@@ -9,7 +9,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
-use mp_pose::SessionParams;
+use mp_onnx::SessionParams;
 use mp_refine::baseline::full_confidence;
 use mp_refine::flaws::{inject, AnchorSource, Flaw};
 use mp_refine::motion::{resample, NET_FRAMES};

@@ -98,9 +98,10 @@ pub enum RefineError {
         /// The I/O error.
         source: std::io::Error,
     },
-    /// ONNX Runtime could not be found or loaded.
+    /// ONNX Runtime could not be found or loaded, or failed to open or run
+    /// a network.
     #[error(transparent)]
-    Runtime(#[from] mp_pose::PoseError),
+    Runtime(#[from] mp_onnx::OnnxError),
 }
 
 impl RefineError {

@@ -23,12 +23,8 @@
 //! `transition_latent`, `generator_latent`) when a graph leaves them open.
 
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 
-use mp_pose::runtime::{inputs_of, open_session, outputs_of, TensorInfo};
-use mp_pose::SessionParams;
-use ort::session::{Session, SessionInputValue};
-use ort::value::TensorRef;
+use mp_onnx::{Input, ModelDirs, Network, SessionParams, TensorInfo};
 use serde_json::Value;
 
 use crate::error::{RefineError, Result};
@@ -168,45 +164,22 @@ impl NetKind {
 }
 
 /// Candidate model folders, in search order: `MP_REFINE_MODELS`,
-/// `<workspace>/models/refine`, and `models/refine` above the current directory.
+/// `<workspace>/models/refine`, and `models/refine` above the current
+/// directory (where it exists).
 pub fn model_dir_candidates() -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    if let Ok(p) = std::env::var(MODEL_DIR_ENV) {
-        if !p.is_empty() {
-            out.push(PathBuf::from(p));
-        }
-    }
-    if let Some(root) = mp_geom::paths::workspace_root() {
-        out.push(root.join(MODEL_DIR_IN_WORKSPACE));
-    }
-    if let Ok(cwd) = std::env::current_dir() {
-        for anc in cwd.ancestors() {
-            let d = anc.join(MODEL_DIR_IN_WORKSPACE);
-            if !out.contains(&d) {
-                out.push(d);
-            }
-        }
-    }
-    out
+    ModelDirs::standard(MODEL_DIR_ENV, MODEL_DIR_IN_WORKSPACE)
+        .dirs()
+        .to_vec()
 }
 
 /// The first candidate folder holding a `manifest.json`.
 pub fn find_model_dir() -> Result<PathBuf> {
-    let cands = model_dir_candidates();
-    for c in &cands {
-        if c.join("manifest.json").is_file() {
-            return Ok(c.clone());
-        }
-    }
-    Err(RefineError::ModelMissing {
-        file: "manifest.json".into(),
-        searched: cands
-            .iter()
-            .take(3)
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
-    })
+    let dirs = ModelDirs::standard(MODEL_DIR_ENV, MODEL_DIR_IN_WORKSPACE);
+    dirs.find_dir_with("manifest.json")
+        .ok_or_else(|| RefineError::ModelMissing {
+            file: "manifest.json".into(),
+            searched: dirs.describe(3),
+        })
 }
 
 /// Open sizes of the networks.
@@ -338,10 +311,10 @@ fn check_spec(path: &Path, infos: &[TensorInfo], spec: &Spec, role: &str) -> Res
     Ok(open)
 }
 
+/// One network of the folder and its place in the contract.
 struct Net {
     kind: NetKind,
-    path: PathBuf,
-    session: Mutex<Session>,
+    net: Network,
 }
 
 /// A named input: name, shape, row-major data.
@@ -358,58 +331,33 @@ impl Net {
                 searched: dir.display().to_string(),
             });
         }
-        let session = open_session(&path, params)?;
-        let ins = inputs_of(&session);
-        let outs = outputs_of(&session);
+        let net = Network::open(&path, params)?;
         let mut open = Vec::new();
         for s in kind.inputs() {
-            open.push(check_spec(&path, &ins, s, "input")?);
+            open.push(check_spec(&path, net.inputs(), s, "input")?);
         }
         for s in kind.outputs() {
-            open.push(check_spec(&path, &outs, s, "output")?);
+            open.push(check_spec(&path, net.outputs(), s, "output")?);
         }
-        Ok((
-            Net {
-                kind,
-                path,
-                session: Mutex::new(session),
-            },
-            open,
-        ))
+        Ok((Net { kind, net }, open))
     }
 
+    /// Runs the network; inputs whose shape or length does not fit the
+    /// graph are [`RefineError::Shape`] errors naming the network and input.
     fn run(&self, inputs: &[NamedInput<'_>]) -> Result<Vec<NamedOutput>> {
-        let mut vals: Vec<(std::borrow::Cow<'_, str>, SessionInputValue<'_>)> =
-            Vec::with_capacity(inputs.len());
-        for (name, shape, data) in inputs {
-            let n: usize = shape.iter().product();
-            if n != data.len() {
-                return Err(RefineError::Shape(format!(
-                    "{}: input `{name}` of shape {shape:?} needs {n} values, got {}",
-                    self.kind.name(),
-                    data.len()
-                )));
-            }
-            let t = TensorRef::from_array_view((shape.clone(), *data))
-                .map_err(|e| model_err(&self.path, e))?;
-            vals.push((std::borrow::Cow::Borrowed(*name), t.into()));
-        }
-        let mut session = self.session.lock().unwrap_or_else(|e| e.into_inner());
-        let out = session.run(vals).map_err(|e| model_err(&self.path, e))?;
-        self.kind
-            .outputs()
+        let inputs: Vec<Input<'_>> = inputs
             .iter()
-            .map(|(name, _)| {
-                let v = out
-                    .get(name)
-                    .ok_or_else(|| model_err(&self.path, format!("no output `{name}`")))?;
-                let (shape, d) = v
-                    .try_extract_tensor::<f32>()
-                    .map_err(|e| model_err(&self.path, e))?;
-                let shape: Vec<usize> = shape.iter().map(|&x| x.max(0) as usize).collect();
-                Ok((name.to_string(), shape, d.to_vec()))
-            })
-            .collect()
+            .map(|(name, shape, data)| Input::new(name, shape, data))
+            .collect();
+        let names = self.kind.output_names();
+        let out = self.net.run(&inputs, &names).map_err(|e| {
+            if e.is_shape_mismatch() {
+                RefineError::Shape(e.to_string())
+            } else {
+                RefineError::Runtime(e)
+            }
+        })?;
+        Ok(out.into_iter().map(|o| (o.name, o.shape, o.data)).collect())
     }
 }
 

@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::io::npz::Npz;
 use mp_geom::{Skeleton, Track, Units};
-use mp_pose::SessionParams;
+use mp_onnx::SessionParams;
 use mp_refine::baseline::full_confidence;
 use mp_refine::dataset::{canonical_mask, changed_joints};
 use mp_refine::eval_refine::clips_of_subjects;

@@ -1,0 +1,42 @@
+//! # mp-onnx — ONNX Runtime for the toolkit
+//!
+//! Everything the model-running crates (`mp-pose`, `mp-forecast`,
+//! `mp-refine`) share about ONNX Runtime:
+//!
+//! * [`library`]: finding the ONNX Runtime shared library (`ORT_DYLIB_PATH`,
+//!   `.cache/onnxruntime/lib` as installed by `cargo xtask setup`, next to
+//!   the executable) and loading it once per process ([`environment`]).
+//!   Nothing in `ort` is touched before the library has been found, so a
+//!   missing library is an [`OnnxError`], not a panic.
+//! * [`session`]: session settings ([`SessionParams`]), opening a model
+//!   ([`open_session`]) and describing its tensors ([`TensorInfo`]).
+//! * [`network`]: [`Network`], one opened model with its input and output
+//!   names and shapes, run on `f32` tensors after checking every input's
+//!   name, shape and length against the graph.
+//! * [`lookup`]: [`ModelDirs`], the ordered folders searched for model
+//!   files (an environment variable, the workspace, the current directory's
+//!   ancestors).
+//!
+//! ```no_run
+//! use mp_onnx::{Input, Network, SessionParams};
+//! let net = Network::open("models/refine/evaluator.onnx", &SessionParams::default())?;
+//! let motion = vec![0f32; 60 * 60];
+//! let out = net.run(&[Input::new("motion", &[1, 60, 60], &motion)], &["logits"])?;
+//! println!("logits of shape {:?}", out[0].shape);
+//! # Ok::<(), mp_onnx::OnnxError>(())
+//! ```
+
+pub mod error;
+pub mod library;
+pub mod lookup;
+pub mod network;
+pub mod session;
+
+pub use error::{format_shape, OnnxError, Result};
+pub use library::{
+    environment, find_library, library_candidates, workspace_root, LIBRARY_DIR_IN_WORKSPACE,
+    LIBRARY_FILE,
+};
+pub use lookup::ModelDirs;
+pub use network::{Input, Network, Output};
+pub use session::{check_tensor, inputs_of, open_session, outputs_of, SessionParams, TensorInfo};
