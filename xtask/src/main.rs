@@ -2,6 +2,7 @@
 
 mod bench;
 mod eval_concrete;
+mod eval_count;
 mod eval_forecast;
 mod eval_grammar;
 mod eval_loops;
@@ -41,6 +42,8 @@ enum Command {
 
 #[derive(Subcommand)]
 enum Eval {
+    /// Repetition counts from video exactly as `mp run` makes them, against per-video labels (MAE, OBO, time per frame).
+    Count(eval_count::EvalCountArgs),
     /// Repetition detection, counting and prediction by unrolling (CMU mocap6, AIST++, Penn Action, QUVA).
     Loops(eval_loops::EvalLoopsArgs),
     /// Motion grammars: symbols (purity, NMI), grammars (rules, DL), synthesis vs the FSM baseline.
@@ -60,6 +63,7 @@ fn main() {
     let result: anyhow::Result<()> = match cli.command {
         Command::Eval(e) => match e {
             Eval::Concrete(a) => eval_concrete::run(&a),
+            Eval::Count(a) => eval_count::run(&a),
             Eval::Loops(a) => eval_loops::run(&a),
             Eval::Grammar(a) => eval_grammar::run(&a),
             Eval::Pose(a) => eval_pose::run(&a),

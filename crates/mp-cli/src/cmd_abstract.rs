@@ -9,10 +9,10 @@ use mp_abstract::edit::set_iterations;
 use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};
 use mp_abstract::pipeline::predict_constant;
 use mp_abstract::{
-    analyze, predict, read_program, write_program, AbstractParams, PredictParams, SelfMatchKind,
+    predict, read_program, write_program, AbstractParams, PredictParams, SelfMatchKind,
 };
-use mp_concrete::Scale;
 use mp_geom::io::{read_track, write_track};
+use mp_pipeline::{analyse_track, Params};
 
 /// Options shared by the commands that analyse a track.
 #[derive(Args, Debug, Clone)]
@@ -21,22 +21,29 @@ pub struct AnalysisOpts {
     #[arg(long)]
     pub frame_size: Option<f64>,
     /// Loop score threshold at the 512-px reference scale.
-    #[arg(long, default_value_t = 8.0)]
+    #[arg(long, default_value_t = Params::default().analysis.loops.threshold)]
     pub threshold: f64,
     /// Largest loop-body size tried.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = Params::default().analysis.loops.max_body)]
     pub max_body: usize,
 }
 
 impl AnalysisOpts {
-    fn params(&self) -> AbstractParams {
-        let mut p = AbstractParams::default();
-        if let Some(f) = self.frame_size {
-            p.synth.scale = Scale::FrameSize { frame_px: f };
-        }
-        p.loops.threshold = self.threshold;
-        p.loops.max_body = self.max_body;
+    /// The pipeline's parameters with these options.
+    pub fn pipeline_params(&self) -> Params {
+        let mut p = Params::default();
+        p.analysis.loops.threshold = self.threshold;
+        p.analysis.loops.max_body = self.max_body;
         p
+    }
+
+    /// The abstract analysis parameters with these options (scale included).
+    fn params(&self) -> AbstractParams {
+        let p = self.pipeline_params();
+        AbstractParams {
+            synth: p.synth_for(self.frame_size),
+            loops: p.analysis.loops,
+        }
     }
 }
 
@@ -58,7 +65,7 @@ pub struct AbstractArgs {
 /// Arguments of `mp loops`.
 #[derive(Args, Debug)]
 pub struct LoopsArgs {
-    /// Input track.
+    /// Input track, or a video (keypoints and frames are read as `mp run` reads them).
     pub track: PathBuf,
     #[command(flatten)]
     pub opts: AnalysisOpts,
@@ -136,7 +143,7 @@ pub struct PredictArgs {
 
 pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
-    let an = analyze(&track, &a.opts.params())?;
+    let an = analyse_track(&track, a.opts.frame_size, &a.opts.pipeline_params())?;
     write_program(&an.program, &a.output)?;
     if !a.quiet {
         print!("{}", print_with(&an.program, &PrintOptions::summary()));
@@ -152,37 +159,50 @@ pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `mp loops`: the repetition counts `mp run` writes (intervals, counts, the
+/// signal and method that decided), from a track or a video.
 pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
-    let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
-    let an = analyze(&track, &a.opts.params())?;
+    let params = a.opts.pipeline_params();
+    let input = mp_pipeline::Input::open(&a.track, a.opts.frame_size)?;
+    let out = mp_pipeline::analyse_input(
+        input,
+        &params,
+        &mp_pipeline::Silent,
+        &crate::progress::ctrl_c_token(),
+    )?;
+    let c = &out.counts;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&an.intervals)?);
+        let v = mp_pipeline::output::loops_json(&out.keypoints.track, c, out.analysis.as_ref());
+        println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    let fps = track.fps();
+    let fps = out.keypoints.track.fps();
     println!(
-        "{:>4} {:>8} {:>8} {:>9} {:>9} {:>5} {:>10} {:>6}",
-        "#", "start", "end", "start_s", "end_s", "body", "iterations", "count"
+        "{:>4} {:>8} {:>8} {:>9} {:>9} {:>9} {:>6} {:>10}",
+        "#", "start", "end", "start_s", "end_s", "period_s", "count", "confidence"
     );
-    for (i, r) in an.intervals.iter().enumerate() {
+    for (i, r) in c.intervals.iter().enumerate() {
         println!(
-            "{:>4} {:>8} {:>8} {:>9.2} {:>9.2} {:>5} {:>10} {:>6}",
+            "{:>4} {:>8} {:>8} {:>9.2} {:>9.2} {:>9.2} {:>6} {:>10.2}",
             i,
             r.start_frame,
             r.end_frame,
             r.start_frame as f64 / fps,
             r.end_frame as f64 / fps,
-            r.body_size,
-            r.iterations,
-            r.count
+            r.period_frames as f64 / fps,
+            r.count,
+            r.confidence
         );
     }
-    if an.intervals.is_empty() {
-        println!(
-            "(no repetitive interval found in {} frames)",
-            track.n_frames()
-        );
-    }
+    println!(
+        "total {} repetition{} in {} frames (from the {}, {}, confidence {:.2})",
+        c.total,
+        if c.total == 1 { "" } else { "s" },
+        out.keypoints.track.n_frames(),
+        c.signal.as_str(),
+        c.method.as_str(),
+        c.confidence
+    );
     Ok(())
 }
 

@@ -4,10 +4,8 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use mp_concrete::{
-    dsl, program_stats, synthesize_detailed, ExecParams, Lambda, Program, Scale, SynthParams,
-    Transition, UnobservedJoints,
-};
+use mp_concrete::{dsl, program_stats, ExecParams, Lambda, Program, Transition, UnobservedJoints};
+use mp_pipeline::Params;
 
 /// Arguments of `mp fit`.
 #[derive(Args, Debug)]
@@ -17,22 +15,20 @@ pub struct FitArgs {
     /// Output program: `.json` for JSON, anything else for the DSL text.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Fixed segment penalty λ at the 512-px reference scale.
-    #[arg(long, default_value_t = Lambda::DEFAULT_FIXED, conflicts_with = "adaptive")]
-    pub lambda: f64,
-    /// Adaptive λ from the keypoint covariance around each frame (clamped to [100, 1600]).
+    /// A fixed segment penalty λ at the 512-px reference scale (the paper's
+    /// reference value is 400) instead of the default adaptive λ.
     #[arg(long)]
-    pub adaptive: bool,
+    pub lambda: Option<f64>,
     /// Maximum segment length in frames.
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = Params::default().analysis.synth.max_segment_frames)]
     pub window: usize,
     /// Largest side of the video frame in pixels (sets the scale: frame / 512);
     /// without it the scale comes from the track's extent.
     #[arg(long)]
     pub frame_size: Option<f64>,
-    /// Keep joints that are never observed (fitted to their stored positions) instead of failing.
+    /// Fail on joints that are never observed instead of fitting them to their stored positions.
     #[arg(long)]
-    pub allow_unobserved: bool,
+    pub strict_joints: bool,
     /// Decimals of the program printed on the terminal (the written file is lossless).
     #[arg(long, default_value_t = 2)]
     pub precision: usize,
@@ -69,29 +65,20 @@ pub struct StatsArgs {
     pub json: bool,
 }
 
-/// `mp fit`.
+/// `mp fit`: the same concrete program as `mp run` and `mp abstract` give
+/// for the same track and options.
 pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     let track = mp_geom::io::read_track(&a.track)
         .with_context(|| format!("reading {}", a.track.display()))?;
-    let params = SynthParams {
-        lambda: if a.adaptive {
-            Lambda::adaptive()
-        } else {
-            Lambda::fixed(a.lambda)
-        },
-        max_segment_frames: a.window,
-        scale: match a.frame_size {
-            Some(frame_px) => Scale::FrameSize { frame_px },
-            None => Scale::Auto,
-        },
-        unobserved_joints: if a.allow_unobserved {
-            UnobservedJoints::Ignore
-        } else {
-            UnobservedJoints::Error
-        },
-        ..SynthParams::default()
-    };
-    let syn = synthesize_detailed(&track, &params)
+    let mut params = Params::default();
+    if let Some(l) = a.lambda {
+        params.analysis.synth.lambda = Lambda::fixed(l);
+    }
+    params.analysis.synth.max_segment_frames = a.window;
+    if a.strict_joints {
+        params.analysis.synth.unobserved_joints = UnobservedJoints::Error;
+    }
+    let syn = mp_pipeline::concrete_program(&track, a.frame_size, &params)
         .with_context(|| format!("fitting {}", a.track.display()))?;
     let p = &syn.program;
     if !a.quiet {

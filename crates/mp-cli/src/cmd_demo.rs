@@ -9,6 +9,8 @@ use mp_abstract::dsl::{print_with, PrintOptions};
 use mp_geom::io::write_track;
 use mp_geom::performer::{perform, PerformerParams};
 
+use mp_pipeline::{Input, Params};
+
 use crate::cmd_run;
 
 /// Arguments of `mp performer`.
@@ -69,14 +71,14 @@ pub fn performer_cmd(a: &PerformerArgs) -> anyhow::Result<()> {
 }
 
 pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
-    let params = PerformerParams {
+    let perf_params = PerformerParams {
         seed: a.seed,
         ..PerformerParams::default()
     };
-    let perf = perform(&params)?;
-    let (w, h) = params.frame_size_px;
+    let perf = perform(&perf_params)?;
+    let (w, h) = perf_params.frame_size_px;
     let track = perf.track_2d.clone();
-    let source = cmd_run::Source::Track {
+    let input = Input::Track {
         description: format!(
             "procedural performer (seed {}) · {} frames × {} joints (COCO-17, px) at {} fps · {}×{} frame · {}",
             a.seed,
@@ -97,30 +99,39 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
         // Scale from the performer's own extent (as for any track file), not the canvas size.
         frame_px: None,
     };
-    let opts = cmd_run::RunOptions {
-        quiet: a.quiet,
-        overlay_video: false,
-    };
-    let summary = cmd_run::run_or_exit(source, &a.out, &opts)?;
-    let an = &summary.analysis;
-    print!("{}", print_with(&an.program, &PrintOptions::summary()));
-    println!();
-    println!("Repetitions found (ground truth of the performer in brackets):");
-    for i in &an.intervals {
-        let gt = perf.segments.iter().find(|s| {
-            mp_abstract::repetition::iom(
-                (i.start_frame, i.end_frame),
-                (s.frames.start, s.frames.end),
-            ) > 0.5
-        });
+    let summary = cmd_run::run_or_exit(input, &a.out, &Params::default(), a.quiet)?;
+    let o = &summary.outcome;
+    if let Some(an) = &o.analysis {
+        print!("{}", print_with(&an.program, &PrintOptions::summary()));
+        println!();
+        println!("Loops of the abstract program (ground truth of the performer in brackets):");
+        for i in &an.intervals {
+            println!(
+                "  frames {:>4}..{:<4} {} × body of {} primitives  [{}]",
+                i.start_frame,
+                i.end_frame,
+                i.count,
+                i.body_size,
+                truth(&perf, i.start_frame, i.end_frame)
+            );
+        }
+    }
+    let c = &o.counts;
+    println!(
+        "Repetitions counted: {} (from the {}, {}, confidence {:.2}); the performer did {}",
+        c.total,
+        c.signal.as_str(),
+        c.method.as_str(),
+        c.confidence,
+        perf.segments.iter().map(|s| s.reps.len()).sum::<usize>()
+    );
+    for i in &c.intervals {
         println!(
-            "  frames {:>4}..{:<4} {} × body of {} primitives  [{}]",
+            "  frames {:>4}..{:<4} {} repetitions  [{}]",
             i.start_frame,
             i.end_frame,
             i.count,
-            i.body_size,
-            gt.map(|s| format!("{} × {}", s.reps.len(), s.kind.name()))
-                .unwrap_or_else(|| "no labelled move".into())
+            truth(&perf, i.start_frame, i.end_frame)
         );
     }
     println!();
@@ -131,6 +142,17 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
         "Results written to {}/ (track.npz, program.txt/.json, abstract.txt/.json, loops.json, plots/, timeline.svg/.png, contact_sheet.png)",
         a.out.display()
     );
-    println!("Open the report: {}", summary.report.display());
+    if let Some(r) = &summary.report {
+        println!("Open the report: {}", r.display());
+    }
     Ok(())
+}
+
+/// The performer's labelled move overlapping frames `a..b` (IoM > 0.5).
+fn truth(perf: &mp_geom::performer::Performance, a: usize, b: usize) -> String {
+    perf.segments
+        .iter()
+        .find(|s| mp_abstract::repetition::iom((a, b), (s.frames.start, s.frames.end)) > 0.5)
+        .map(|s| format!("{} × {}", s.reps.len(), s.kind.name()))
+        .unwrap_or_else(|| "no labelled move".into())
 }

@@ -11,6 +11,7 @@ mod cmd_grammar;
 mod cmd_pose;
 mod cmd_refine;
 mod cmd_run;
+mod progress;
 
 use clap::{Parser, Subcommand};
 

@@ -11,7 +11,9 @@
 //! * [`metrics`]: KD, PCK, MPJPE, PA-MPJPE, DTW, max adjacent-frame jump.
 //! * [`performer`]: a procedurally generated performer (jumping jacks,
 //!   squats, arm circles, golf swing) with ground-truth repetitions.
+//! * [`cancel`]: a [`CancelToken`] that long runs check between steps.
 
+pub mod cancel;
 pub mod error;
 pub mod fit;
 pub mod io;
@@ -22,6 +24,7 @@ pub mod primitive;
 pub mod skeleton;
 pub mod track;
 
+pub use cancel::CancelToken;
 pub use error::{GeomError, Result};
 pub use primitive::{Primitive, PrimitiveKind};
 pub use skeleton::Skeleton;

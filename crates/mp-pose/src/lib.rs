@@ -10,6 +10,10 @@
 //! * [`extract()`]: a whole video to an `mp_geom::Track` (pixels, and metres for
 //!   BlazePose), frames without a person marked with confidence 0.
 //! * [`draw`]: skeletons drawn on frames, contact sheets.
+//! * [`decode`]: decoding on its own thread ahead of the pose model, and
+//!   reduced JPEG copies of the frames from a second FFmpeg process.
+//! * [`thumbs`]: grey thumbnails of whole frames (a feature track for
+//!   counting repetitions where no person is found).
 //!
 //! ONNX Runtime is loaded at run time (`cargo xtask setup` installs it; see
 //! [`runtime`]); the models come from `cargo xtask models`.
@@ -22,6 +26,7 @@
 //! ```
 
 pub mod blazepose;
+pub mod decode;
 pub mod draw;
 pub mod error;
 pub mod extract;
@@ -30,6 +35,7 @@ pub mod imageops;
 pub mod movenet;
 pub mod pose;
 pub mod runtime;
+pub mod thumbs;
 pub mod video;
 
 pub use blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};

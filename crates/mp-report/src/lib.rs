@@ -7,9 +7,11 @@
 //! * [`draw`]: skeletons on frames or on a blank canvas, contact sheets.
 //! * [`frames`]: reduced JPEG copies of video frames for the report.
 //! * [`html`]: the self-contained report page.
+//! * [`pictures`]: every picture of an analysis and its report page, written
+//!   into an output folder.
 //! * [`raster`]: SVG → PNG (resvg, pure Rust), PNG/JPEG encoding.
 //! * [`outdir`]: an output folder whose files appear complete or not at all,
-//!   with Ctrl-C support.
+//!   cancelled through a `CancelToken`.
 //!
 //! Pictures are written as SVG (exact, small, readable in any browser) and
 //! rasterised to PNG from the same SVG, so both always agree.
@@ -20,6 +22,7 @@ pub mod error;
 pub mod frames;
 pub mod html;
 pub mod outdir;
+pub mod pictures;
 pub mod plots;
 pub mod raster;
 pub mod style;
@@ -30,5 +33,6 @@ pub use error::{ReportError, Result};
 pub use frames::{FrameStore, FrameStoreParams};
 pub use html::{report_html, standard_cards, Card, ReportInput};
 pub use outdir::OutputDir;
+pub use pictures::{report_page, write_pictures, Analysed};
 pub use plots::{joint_trajectory_svg, PlotParams};
 pub use timeline::{timeline_svg, TimeAxis, TimelineParams};

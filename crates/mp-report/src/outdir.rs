@@ -1,39 +1,29 @@
 //! An output folder whose files appear complete or not at all.
 //!
 //! Every file is written into a hidden staging folder inside the output
-//! folder (`.mp-partial-<pid>`) and renamed into place when complete. An
-//! interrupted run (Ctrl-C) stops at the next check of [`check_interrupt`],
-//! and dropping the [`OutputDir`] removes the staging folder; if the
-//! program has to exit at once, [`emergency_cleanup`] removes every staging
-//! folder of the process while holding the lock that file writes take, so
-//! no write can be half done at that moment.
+//! folder (`.mp-partial-<pid>`) and renamed into place when complete. A
+//! cancelled run (its [`CancelToken`], e.g. from a Ctrl-C handler) stops at
+//! the next write, and dropping the [`OutputDir`] removes the staging folder;
+//! if the program has to exit at once, [`emergency_cleanup`] removes every
+//! staging folder of the process while holding the lock that file writes
+//! take, so no write can be half done at that moment.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
+
+use mp_geom::CancelToken;
 
 use crate::error::{ReportError, Result};
 
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 static STAGING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 fn registry() -> MutexGuard<'static, Vec<PathBuf>> {
     STAGING.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Marks the process as interrupted (call from a Ctrl-C handler).
-pub fn request_interrupt() {
-    INTERRUPTED.store(true, Ordering::SeqCst);
-}
-
-/// Whether an interrupt was requested.
-pub fn interrupted() -> bool {
-    INTERRUPTED.load(Ordering::SeqCst)
-}
-
-/// `Err(ReportError::Interrupted)` once an interrupt was requested.
-pub fn check_interrupt() -> Result<()> {
-    if interrupted() {
+/// `Err(ReportError::Interrupted)` once `cancel` was cancelled.
+pub fn check_cancel(cancel: &CancelToken) -> Result<()> {
+    if cancel.is_cancelled() {
         Err(ReportError::Interrupted)
     } else {
         Ok(())
@@ -61,22 +51,39 @@ pub fn staging_name() -> String {
 pub struct OutputDir {
     dir: PathBuf,
     staging: PathBuf,
+    cancel: CancelToken,
 }
 
 impl OutputDir {
-    /// Creates `dir` (and its parents) and a fresh staging folder in it.
+    /// Creates `dir` (and its parents) and a fresh staging folder in it; the
+    /// folder is never cancelled.
     pub fn create(dir: impl AsRef<Path>) -> Result<Self> {
+        Self::create_with_cancel(dir, CancelToken::new())
+    }
+
+    /// Like [`OutputDir::create`]; once `cancel` is cancelled every write
+    /// fails with [`ReportError::Interrupted`].
+    pub fn create_with_cancel(dir: impl AsRef<Path>, cancel: CancelToken) -> Result<Self> {
         let dir = dir.as_ref().to_path_buf();
         std::fs::create_dir_all(&dir).map_err(|e| ReportError::io(&dir, e))?;
         let staging = dir.join(staging_name());
         let mut reg = registry();
-        check_interrupt()?;
+        check_cancel(&cancel)?;
         if staging.exists() {
             std::fs::remove_dir_all(&staging).map_err(|e| ReportError::io(&staging, e))?;
         }
         std::fs::create_dir(&staging).map_err(|e| ReportError::io(&staging, e))?;
         reg.push(staging.clone());
-        Ok(OutputDir { dir, staging })
+        Ok(OutputDir {
+            dir,
+            staging,
+            cancel,
+        })
+    }
+
+    /// The token that cancels this folder's writes.
+    pub fn cancel_token(&self) -> &CancelToken {
+        &self.cancel
     }
 
     /// The output folder.
@@ -116,7 +123,7 @@ impl OutputDir {
         use std::io::Write;
         Self::check_rel(rel)?;
         let _lock = registry();
-        check_interrupt()?;
+        check_cancel(&self.cancel)?;
         let tmp = self.staging_file(rel);
         let mut f = std::fs::File::create(&tmp).map_err(|e| ReportError::io(&tmp, e))?;
         f.write_all(bytes).map_err(|e| ReportError::io(&tmp, e))?;
@@ -129,7 +136,7 @@ impl OutputDir {
     pub fn commit(&self, staged: &Path, rel: &str) -> Result<PathBuf> {
         Self::check_rel(rel)?;
         let _lock = registry();
-        check_interrupt()?;
+        check_cancel(&self.cancel)?;
         self.rename_into_place(staged, rel)
     }
 
@@ -177,5 +184,24 @@ mod tests {
             .collect();
         names.sort();
         assert_eq!(names, vec!["plots", "video.mp4"]);
+    }
+
+    #[test]
+    fn a_cancelled_folder_writes_nothing_and_others_go_on() {
+        let tmp = tempfile::tempdir().unwrap();
+        let token = CancelToken::new();
+        let a = OutputDir::create_with_cancel(tmp.path().join("a"), token.clone()).unwrap();
+        let b = OutputDir::create(tmp.path().join("b")).unwrap();
+        a.write("x.txt", b"1").unwrap();
+        token.cancel();
+        assert!(matches!(
+            a.write("y.txt", b"2"),
+            Err(ReportError::Interrupted)
+        ));
+        b.write("y.txt", b"2").unwrap();
+        drop(a);
+        assert!(!tmp.path().join("a/y.txt").exists());
+        assert!(tmp.path().join("a/x.txt").exists() && tmp.path().join("b/y.txt").exists());
+        assert!(OutputDir::create_with_cancel(tmp.path().join("c"), token).is_err());
     }
 }

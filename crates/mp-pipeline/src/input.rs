@@ -1,0 +1,107 @@
+//! What a run reads: a video, a keypoint track file, or a track in memory.
+
+use std::path::{Path, PathBuf};
+
+use mp_geom::Track;
+
+use crate::error::{PipelineError, Result};
+
+/// File extensions read as videos; anything else is read as a keypoint track.
+pub const VIDEO_EXTENSIONS: [&str; 10] = [
+    "mp4", "mov", "avi", "webm", "mkv", "m4v", "mpg", "mpeg", "wmv", "flv",
+];
+
+/// Whether a path names a video by its extension.
+pub fn is_video(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .is_some_and(|e| VIDEO_EXTENSIONS.contains(&e.as_str()))
+}
+
+/// The input of a run.
+#[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)]
+pub enum Input {
+    /// A video, run through the pose model.
+    Video {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A keypoint track.
+    Track {
+        /// The keypoints.
+        track: Track,
+        /// Title of the report.
+        title: String,
+        /// Where the track came from (subtitle of the report).
+        description: String,
+        /// Video frame size (width, height) in pixels, when known (for drawing).
+        frame_size: Option<(usize, usize)>,
+        /// Largest frame side in pixels, used as the scale; `None`: the motion's extent.
+        frame_px: Option<f64>,
+    },
+}
+
+impl Input {
+    /// A video or a track file, told apart by the extension
+    /// ([`VIDEO_EXTENSIONS`]); `frame_px` is the frame size to use as the scale
+    /// of a track (ignored for videos, whose frame size is known).
+    pub fn open(path: impl AsRef<Path>, frame_px: Option<f64>) -> Result<Self> {
+        let path = path.as_ref();
+        if !path.exists() {
+            return Err(PipelineError::MissingInput(path.to_path_buf()));
+        }
+        if is_video(path) {
+            return Ok(Input::Video {
+                path: path.to_path_buf(),
+            });
+        }
+        let track = mp_geom::io::read_track(path).map_err(|source| PipelineError::Track {
+            path: path.to_path_buf(),
+            extensions: VIDEO_EXTENSIONS.join(", "),
+            source,
+        })?;
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        Ok(Self::from_track(track, &name, frame_px))
+    }
+
+    /// A track in memory; `name` titles the report.
+    pub fn from_track(track: Track, name: &str, frame_px: Option<f64>) -> Self {
+        Input::Track {
+            description: describe_track(&track, name),
+            title: name.to_string(),
+            track,
+            frame_size: None,
+            frame_px,
+        }
+    }
+
+    /// A short name (the file name or the title).
+    pub fn name(&self) -> String {
+        match self {
+            Input::Video { path } => path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            Input::Track { title, .. } => title.clone(),
+        }
+    }
+}
+
+/// "keypoint track NAME · T frames × J joints (skeleton, 2D, px) at F fps".
+pub fn describe_track(track: &Track, name: &str) -> String {
+    format!(
+        "keypoint track {} · {} frames × {} joints ({}, {}D, {}) at {} fps",
+        name,
+        track.n_frames(),
+        track.n_joints(),
+        track.skeleton().name,
+        track.dims(),
+        track.units().as_str(),
+        track.fps()
+    )
+}

@@ -1,0 +1,296 @@
+//! # mp-pipeline — the whole analysis of a video or a keypoint track
+//!
+//! One library function per job, used by the `mp` binary, the evaluations
+//! (`cargo xtask eval`) and the Python package alike, so that what is
+//! measured is what a user runs:
+//!
+//! 1. [`keypoints`]: video → FFmpeg decoding (own thread, with grey frame
+//!    thumbnails) → pose model → `Track`; or a track file.
+//! 2. [`concrete_program`]: segmentation and primitive fits.
+//! 3. [`analyse_track`]: abstract program and loops.
+//! 4. [`count`]: repetition intervals and counts from the keypoints and, for
+//!    video, the frame thumbnails (where no person is found, the frames count).
+//! 5. [`run`]: all of the above into an output folder, with pictures, an
+//!    overlay video and `report.html`.
+//!
+//! [`Params::default()`] holds the libraries' defaults, validated once; an
+//! [`Observer`] receives progress and stage timings, and a
+//! [`CancelToken`] stops a run between steps (a cancelled run leaves only
+//! complete files in its output folder).
+//!
+//! ```no_run
+//! use mp_pipeline::{analyse_input, CancelToken, Input, Params, Silent};
+//! let input = Input::open("squats.mp4", None)?;
+//! let out = analyse_input(input, &Params::default(), &Silent, &CancelToken::new())?;
+//! println!("{} repetitions ({})", out.counts.total, out.counts.method.as_str());
+//! # Ok::<(), mp_pipeline::PipelineError>(())
+//! ```
+
+pub mod analysis;
+pub mod error;
+pub mod input;
+pub mod keypoints;
+pub mod output;
+pub mod params;
+pub mod progress;
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+pub use analysis::{analyse_track, concrete_program, count};
+pub use error::{PipelineError, Result};
+pub use input::{is_video, Input, VIDEO_EXTENSIONS};
+pub use keypoints::{keypoints, Keep, Keypoints};
+pub use mp_abstract::{Analysis, CountMethod, CountSignal, CountedInterval, Counts};
+pub use mp_geom::CancelToken;
+pub use params::{OutputParams, Params, PoseParams};
+pub use progress::{Observer, Silent, Stage, StageTime};
+
+use mp_report::pictures::Analysed;
+use mp_report::{Card, OutputDir};
+use progress::{check, Timings};
+
+/// What an analysis produced.
+pub struct Outcome {
+    /// The keypoints (the track, thumbnails, where they came from).
+    pub keypoints: Keypoints,
+    /// Programs and loops; `None` when no person was found in any frame (the
+    /// counts then come from the frames alone).
+    pub analysis: Option<Analysis>,
+    /// Repetition counts.
+    pub counts: Counts,
+    /// Time per stage.
+    pub stages: Vec<StageTime>,
+    /// Wall time of the whole run.
+    pub total: Duration,
+}
+
+impl Outcome {
+    /// Duration of the motion in seconds.
+    pub fn motion_s(&self) -> f64 {
+        self.keypoints.track.n_frames() as f64 / self.keypoints.track.fps()
+    }
+}
+
+/// What [`run`] produced.
+pub struct RunSummary {
+    /// The analysis (its frame copies are released).
+    pub outcome: Outcome,
+    /// The report page, when one was written.
+    pub report: Option<PathBuf>,
+    /// Files written, relative to the output folder.
+    pub files: Vec<String>,
+}
+
+/// Steps 1–4 without writing anything: keypoints, programs, counts.
+pub fn analyse_input(
+    input: Input,
+    params: &Params,
+    observer: &dyn Observer,
+    cancel: &CancelToken,
+) -> Result<Outcome> {
+    params.validate()?;
+    let start = Instant::now();
+    let mut timings = Timings::new(observer);
+    let kp = keypoints::keypoints_timed(input, params, Keep::default(), &mut timings, cancel)?;
+    finish_analysis(kp, params, &mut timings, cancel, start)
+}
+
+fn finish_analysis(
+    kp: Keypoints,
+    params: &Params,
+    timings: &mut Timings<'_>,
+    cancel: &CancelToken,
+    start: Instant,
+) -> Result<Outcome> {
+    let n = kp.track.n_frames();
+    if n < 2 {
+        return Err(PipelineError::TooShort(n));
+    }
+    let analysis = if kp.track.valid_count() > 0 {
+        Some(analysis::analyse(
+            &kp.track,
+            kp.frame_px,
+            params,
+            timings,
+            cancel,
+        )?)
+    } else {
+        None
+    };
+    let counts = analysis::count_timed(&kp.track, kp.thumbnails.as_ref(), params, timings)?;
+    check(cancel)?;
+    Ok(Outcome {
+        keypoints: kp,
+        analysis,
+        counts,
+        stages: std::mem::take(&mut timings.stages),
+        total: start.elapsed(),
+    })
+}
+
+/// The whole pipeline into `out_dir`: `track.npz`, `program.txt/.json`,
+/// `abstract.txt/.json`, `loops.json`, and (see [`OutputParams`]) `plots/`,
+/// `timeline.svg/.png`, `contact_sheet.png`, `overlay.mp4` for video, and
+/// `report.html`, written last. The overlay video is encoded on its own
+/// thread alongside the pictures and the report page.
+pub fn run(
+    input: Input,
+    out_dir: &Path,
+    params: &Params,
+    observer: &dyn Observer,
+    cancel: &CancelToken,
+) -> Result<RunSummary> {
+    params.validate()?;
+    let start = Instant::now();
+    let mut timings = Timings::new(observer);
+    let keep = Keep {
+        report_frames: params.output.report,
+        overlay: params.output.overlay_video,
+    };
+    let mut kp = keypoints::keypoints_timed(input, params, keep, &mut timings, cancel)?;
+    let frames = kp.frames.take();
+    let overlay_src = kp.overlay.take();
+    let mut outcome = finish_analysis(kp, params, &mut timings, cancel, start)?;
+    // The output folder is created once there is something to write.
+    let out = OutputDir::create_with_cancel(out_dir, cancel.clone())
+        .map_err(PipelineError::from_report)?;
+    let track = &outcome.keypoints.track;
+    let mut files =
+        output::write_analysis(&out, track, outcome.analysis.as_ref(), &outcome.counts)?;
+    let mut report = None;
+    if let (Some(an), true) = (outcome.analysis.as_ref(), params.output.report) {
+        let executed = an
+            .concrete
+            .execute()
+            .map_err(|e| PipelineError::stage("executing the program", e))?;
+        let intervals = outcome.counts.repetitive_intervals();
+        let kp = &outcome.keypoints;
+        let analysed = Analysed {
+            track,
+            program: &an.concrete,
+            executed: &executed,
+            abstract_program: &an.program,
+            intervals: &intervals,
+            frames: frames.as_ref(),
+            frame_size: kp.frame_size,
+            title: &kp.title,
+        };
+        let n = track.n_frames();
+        let overlay_src = overlay_src.filter(|_| params.output.overlay_video);
+        let with_overlay = overlay_src.is_some();
+        let (pictures, overlay) = std::thread::scope(|s| {
+            let overlay = overlay_src.map(|src| {
+                observer.started(Stage::Overlay, Some(n));
+                let (out, executed) = (&out, &executed);
+                s.spawn(move || {
+                    let t0 = Instant::now();
+                    output::write_overlay(out, src, track, executed, &|d| {
+                        observer.progress(Stage::Overlay, d)
+                    })
+                    .map(|()| t0.elapsed())
+                })
+            });
+            let pictures =
+                pictures_and_page(&out, &analysed, kp, &outcome.counts, with_overlay, observer);
+            let overlay = overlay.map(|h| {
+                h.join()
+                    .map_err(|_| {
+                        PipelineError::stage("overlay video", "the overlay thread panicked")
+                    })
+                    .and_then(|r| r)
+            });
+            (pictures, overlay)
+        });
+        let (pic_files, pic_time, html, html_time) = pictures?;
+        files.extend(pic_files);
+        timings.push(Stage::Pictures, pic_time, n);
+        if let Some(ov) = overlay {
+            let t = ov?;
+            files.push("overlay.mp4".into());
+            timings.push(Stage::Overlay, t, n);
+        }
+        // The report is written last: when it exists, everything it links to does too.
+        let t_write = Instant::now();
+        report = Some(
+            out.write("report.html", html.as_bytes())
+                .map_err(PipelineError::from_report)?,
+        );
+        files.push("report.html".into());
+        timings.push(Stage::Report, html_time + t_write.elapsed(), n);
+    }
+    check(cancel)?;
+    drop(out);
+    outcome.stages.extend(std::mem::take(&mut timings.stages));
+    outcome.total = start.elapsed();
+    Ok(RunSummary {
+        outcome,
+        report,
+        files,
+    })
+}
+
+/// Pictures, then the report page (not yet written): files, times, page.
+fn pictures_and_page(
+    out: &OutputDir,
+    a: &Analysed<'_>,
+    kp: &Keypoints,
+    counts: &Counts,
+    with_overlay: bool,
+    observer: &dyn Observer,
+) -> Result<(Vec<String>, Duration, String, Duration)> {
+    let t_pic = Instant::now();
+    observer.started(Stage::Pictures, Some(a.program.n_joints() + 2));
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let pic_files = mp_report::write_pictures(out, a, &|| {
+        let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        observer.progress(Stage::Pictures, d);
+    })
+    .map_err(PipelineError::from_report)?;
+    let pic_time = t_pic.elapsed();
+    let t_rep = Instant::now();
+    observer.started(Stage::Report, None);
+    let mut linked: Vec<String> = [
+        "program.txt",
+        "program.json",
+        "abstract.txt",
+        "abstract.json",
+        "loops.json",
+        "track.npz",
+        "timeline.svg",
+        "contact_sheet.png",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    if with_overlay {
+        linked.push("overlay.mp4".into());
+    }
+    linked.extend(
+        pic_files
+            .iter()
+            .filter(|f| f.starts_with("plots/") && f.ends_with(".svg"))
+            .cloned(),
+    );
+    let mut cards = Vec::new();
+    if let Some(model) = &kp.model {
+        cards.push(Card::new(
+            "pose",
+            format!("{:.0}%", 100.0 * kp.found_fraction),
+            format!("of frames with a person · {model}"),
+        ));
+    }
+    cards.push(Card::new(
+        "count",
+        counts.total.to_string(),
+        format!(
+            "repetitions · from {} ({}, confidence {:.2})",
+            counts.signal.as_str(),
+            counts.method.as_str(),
+            counts.confidence
+        ),
+    ));
+    let html = mp_report::report_page(a, &kp.description, &cards, &linked)
+        .map_err(PipelineError::from_report)?;
+    Ok((pic_files, pic_time, html, t_rep.elapsed()))
+}

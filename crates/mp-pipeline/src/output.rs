@@ -1,0 +1,129 @@
+//! Step 5: the output folder — track, programs, counts, pictures, overlay
+//! video and report — every file written through the folder's staging area,
+//! so a cancelled run leaves only complete files.
+
+use mp_abstract::{Analysis, Counts};
+use mp_geom::{CancelToken, Track};
+use mp_pose::video::{VideoReader, VideoWriter};
+use mp_report::draw::{draw_skeleton, SkeletonStyle, View};
+use mp_report::outdir::check_cancel;
+use mp_report::raster::{pixmap_to_rgb, rgb_to_pixmap};
+use mp_report::OutputDir;
+use serde_json::json;
+
+use crate::error::{PipelineError, Result};
+use crate::keypoints::OverlayFrames;
+
+/// x264 preset of the overlay video (about twice as fast as the default
+/// preset, and smaller files on this kind of footage).
+pub const OVERLAY_PRESET: &str = "veryfast";
+
+/// The content of `loops.json`: the counts a user gets (`total_repetitions`,
+/// one entry of `intervals` and `counts` per counted interval, the signal and
+/// method that decided, a confidence) and the loops of the abstract program.
+pub fn loops_json(
+    track: &Track,
+    counts: &Counts,
+    analysis: Option<&Analysis>,
+) -> serde_json::Value {
+    json!({
+        "fps": track.fps(),
+        "frames": track.n_frames(),
+        "total_repetitions": counts.total,
+        "counts": counts.intervals.iter().map(|i| i.count).collect::<Vec<_>>(),
+        "intervals": counts.repetitive_intervals(),
+        "method": counts.method.as_str(),
+        "signal": counts.signal.as_str(),
+        "confidence": counts.confidence,
+        "counted": counts.intervals,
+        "program_loops": analysis.map(|a| a.intervals.clone()).unwrap_or_default(),
+    })
+}
+
+/// Writes `track.npz`, `loops.json` and, when there is an analysis,
+/// `program.txt`, `program.json`, `abstract.txt` and `abstract.json`.
+/// Returns the files written.
+pub fn write_analysis(
+    out: &OutputDir,
+    track: &Track,
+    analysis: Option<&Analysis>,
+    counts: &Counts,
+) -> Result<Vec<String>> {
+    let mut files = Vec::new();
+    let mut put = |rel: &str, bytes: &[u8]| -> Result<()> {
+        out.write(rel, bytes).map_err(PipelineError::from_report)?;
+        files.push(rel.to_string());
+        Ok(())
+    };
+    put(
+        "track.npz",
+        &mp_geom::io::native::track_to_npz_bytes(track)?,
+    )?;
+    if let Some(an) = analysis {
+        put("program.txt", an.concrete.to_dsl().as_bytes())?;
+        put("program.json", an.concrete.to_json()?.as_bytes())?;
+        put(
+            "abstract.txt",
+            mp_abstract::dsl::print(&an.program).as_bytes(),
+        )?;
+        put(
+            "abstract.json",
+            serde_json::to_string_pretty(&an.program)?.as_bytes(),
+        )?;
+    }
+    put(
+        "loops.json",
+        serde_json::to_string_pretty(&loops_json(track, counts, analysis))?.as_bytes(),
+    )?;
+    Ok(files)
+}
+
+/// Encodes every analysed frame with the keypoints and the executed program
+/// drawn on it into `overlay.mp4`; `progress` is called after each frame.
+pub fn write_overlay(
+    out: &OutputDir,
+    src: OverlayFrames,
+    track: &Track,
+    executed: &Track,
+    progress: &dyn Fn(usize),
+) -> Result<()> {
+    let cancel: &CancelToken = out.cancel_token();
+    let n = track.n_frames();
+    let (width, height, fps) = (src.info.width, src.info.height, src.info.fps);
+    let staged = out.staging_file("overlay.mp4");
+    let mut writer = VideoWriter::create_with_preset(&staged, width, height, fps, OVERLAY_PRESET)?;
+    let s = (width.max(height) as f32 / 512.0).max(0.6);
+    let kp_style = SkeletonStyle::default().scaled(s);
+    let prog_style = SkeletonStyle::program().scaled(s);
+    let view = View::frame(1.0);
+    let mut done = 0usize;
+    let mut draw = |index: usize, rgb: &[u8]| -> Result<()> {
+        check_cancel(cancel).map_err(PipelineError::from_report)?;
+        let mut pm = rgb_to_pixmap(rgb, width, height)?;
+        draw_skeleton(&mut pm, executed, index, &view, &prog_style);
+        draw_skeleton(&mut pm, track, index, &view, &kp_style);
+        writer.write(&pixmap_to_rgb(&pm))?;
+        done += 1;
+        progress(done);
+        Ok(())
+    };
+    match src.kept {
+        Some(frames) => {
+            for (index, rgb) in frames.iter().take(n).enumerate() {
+                draw(index, rgb)?;
+            }
+        }
+        None => {
+            let reader = VideoReader::from_info(src.info)?;
+            for frame in reader.take(n) {
+                let frame = frame?;
+                draw(frame.index, &frame.rgb)?;
+            }
+        }
+    }
+    check_cancel(cancel).map_err(PipelineError::from_report)?;
+    writer.finish()?;
+    out.commit(&staged, "overlay.mp4")
+        .map_err(PipelineError::from_report)?;
+    Ok(())
+}

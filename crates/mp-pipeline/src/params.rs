@@ -1,0 +1,123 @@
+//! The parameters of a whole run, with the libraries' defaults, validated once.
+
+use mp_abstract::{AbstractParams, CountParams};
+use mp_concrete::{Scale, SynthParams, UnobservedJoints};
+use mp_pose::ModelChoice;
+
+use crate::error::{PipelineError, Result};
+
+/// Keypoints from video.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseParams {
+    /// The pose model. Default BlazePose full.
+    pub model: ModelChoice,
+    /// ONNX Runtime threads. Default 2.
+    pub threads: usize,
+    /// Keep all of the model's joints (BlazePose: 33) instead of the COCO-17
+    /// body joints. Default false.
+    pub all_joints: bool,
+    /// Only the first N frames. Default all.
+    pub max_frames: Option<usize>,
+    /// Side of the grey frame thumbnails (cells) that counting reads where
+    /// no person is found. Default 32.
+    pub thumbnail_size: usize,
+}
+
+impl Default for PoseParams {
+    fn default() -> Self {
+        PoseParams {
+            model: ModelChoice::Full,
+            threads: 2,
+            all_joints: false,
+            max_frames: None,
+            thumbnail_size: mp_pose::thumbs::DEFAULT_THUMBNAIL_SIZE,
+        }
+    }
+}
+
+/// What a run writes besides the programs and counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OutputParams {
+    /// Plots, timeline, contact sheet and `report.html`. Default true.
+    pub report: bool,
+    /// `overlay.mp4` for video input. Default true.
+    pub overlay_video: bool,
+}
+
+impl Default for OutputParams {
+    fn default() -> Self {
+        OutputParams {
+            report: true,
+            overlay_video: true,
+        }
+    }
+}
+
+/// Every parameter of a run. `Params::default()` is what `mp run`, `mp fit`,
+/// `mp abstract`, `mp loops`, the evaluations and the Python package use.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Params {
+    /// Concrete synthesis (adaptive λ) and loop detection. The scale rule
+    /// ([`SynthParams::scale`]) is replaced per input: the frame size of a
+    /// video (or the one given for a track), else the motion's own extent.
+    pub analysis: AbstractParams,
+    /// Repetition counting.
+    pub count: CountParams,
+    /// Keypoints from video.
+    pub pose: PoseParams,
+    /// Pictures, report, overlay.
+    pub output: OutputParams,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        let mut analysis = AbstractParams::default();
+        // Video tracks often have joints the model never saw (a cropped
+        // body): they are fitted to their stored positions, not an error.
+        analysis.synth.unobserved_joints = UnobservedJoints::Ignore;
+        Params {
+            analysis,
+            count: CountParams::default(),
+            pose: PoseParams::default(),
+            output: OutputParams::default(),
+        }
+    }
+}
+
+impl Params {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        self.analysis.synth.validate()?;
+        self.analysis.loops.validate()?;
+        self.count.validate()?;
+        if self.pose.threads == 0 {
+            return Err(PipelineError::param("pose.threads", "must be at least 1"));
+        }
+        if self.pose.max_frames == Some(0) {
+            return Err(PipelineError::param(
+                "pose.max_frames",
+                "must be at least 1",
+            ));
+        }
+        if !(1..=256).contains(&self.pose.thumbnail_size) {
+            return Err(PipelineError::param(
+                "pose.thumbnail_size",
+                format!("must be in 1..=256, got {}", self.pose.thumbnail_size),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The synthesis parameters for a motion seen in a frame whose largest
+    /// side is `frame_px` pixels (`None`: the scale comes from the motion's
+    /// own extent).
+    pub fn synth_for(&self, frame_px: Option<f64>) -> SynthParams {
+        SynthParams {
+            scale: match frame_px {
+                Some(frame_px) => Scale::FrameSize { frame_px },
+                None => self.analysis.synth.scale,
+            },
+            ..self.analysis.synth.clone()
+        }
+    }
+}

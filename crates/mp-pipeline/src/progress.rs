@@ -1,0 +1,129 @@
+//! Progress of a run: the stages, their timings, and the observer that a
+//! caller (a progress bar, a GUI, a batch manifest) passes in.
+
+use std::time::Duration;
+
+use mp_geom::CancelToken;
+
+use crate::error::{PipelineError, Result};
+
+/// The stages of a run, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// Video decoding (FFmpeg), on its own thread alongside the pose model.
+    Decode,
+    /// Reduced JPEG copies of the frames for the report, alongside the pose model.
+    Jpeg,
+    /// Pose model loading and inference.
+    Pose,
+    /// Concrete program: segmentation and primitive fits.
+    Concrete,
+    /// Abstract program and loops.
+    Abstract,
+    /// Repetition counting.
+    Count,
+    /// Plots, timeline and contact sheet.
+    Pictures,
+    /// Overlay video.
+    Overlay,
+    /// The report page.
+    Report,
+}
+
+impl Stage {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Decode => "decode",
+            Stage::Jpeg => "jpeg",
+            Stage::Pose => "pose",
+            Stage::Concrete => "concrete",
+            Stage::Abstract => "abstract",
+            Stage::Count => "count",
+            Stage::Pictures => "pictures",
+            Stage::Overlay => "overlay",
+            Stage::Report => "report",
+        }
+    }
+
+    /// What the stage covers and what it runs alongside.
+    pub fn note(self) -> &'static str {
+        match self {
+            Stage::Decode => "FFmpeg rgb24 pipe and frame thumbnails, own thread alongside pose",
+            Stage::Jpeg => "reduced JPEG copies (FFmpeg mjpeg), own thread alongside pose",
+            Stage::Pose => "model loading + inference (waits on decoding included)",
+            Stage::Concrete => "segmentation and primitive fits",
+            Stage::Abstract => "abstract program and loops",
+            Stage::Count => "repetition intervals and counts",
+            Stage::Pictures => "plots (SVG + PNG), timeline, contact sheet",
+            Stage::Overlay => "own thread, alongside pictures + report; draw + H.264",
+            Stage::Report => "HTML page with the frames embedded",
+        }
+    }
+}
+
+/// Time spent in one stage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageTime {
+    /// The stage.
+    pub stage: Stage,
+    /// Wall time.
+    pub time: Duration,
+    /// Frames processed by the stage (for frames per second).
+    pub frames: usize,
+}
+
+/// Receives the progress of a run. Every method has an empty default; the
+/// methods may be called from several threads at once.
+pub trait Observer: Sync {
+    /// A stage starts; `total` is its number of steps when known.
+    fn started(&self, _stage: Stage, _total: Option<usize>) {}
+    /// `done` steps of a stage are finished.
+    fn progress(&self, _stage: Stage, _done: usize) {}
+    /// A stage is finished.
+    fn finished(&self, _time: &StageTime) {}
+}
+
+/// An observer that ignores everything.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Observer for Silent {}
+
+/// `Err(PipelineError::Cancelled)` once `cancel` is cancelled.
+pub fn check(cancel: &CancelToken) -> Result<()> {
+    if cancel.is_cancelled() {
+        Err(PipelineError::Cancelled)
+    } else {
+        Ok(())
+    }
+}
+
+/// Stage timings collected during a run, each also reported to the observer.
+pub(crate) struct Timings<'a> {
+    pub(crate) stages: Vec<StageTime>,
+    observer: &'a dyn Observer,
+}
+
+impl<'a> Timings<'a> {
+    pub(crate) fn new(observer: &'a dyn Observer) -> Self {
+        Timings {
+            stages: Vec::new(),
+            observer,
+        }
+    }
+
+    pub(crate) fn observer(&self) -> &'a dyn Observer {
+        self.observer
+    }
+
+    pub(crate) fn push(&mut self, stage: Stage, time: Duration, frames: usize) {
+        let t = StageTime {
+            stage,
+            time,
+            frames,
+        };
+        self.observer.finished(&t);
+        self.stages.push(t);
+    }
+}

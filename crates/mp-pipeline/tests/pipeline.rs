@@ -1,0 +1,194 @@
+//! The pipeline on real shared videos, as `mp run` runs it: counts from
+//! keypoints and from frames, a single swing that must not count, the output
+//! folder, and cancellation.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use mp_pipeline::{
+    analyse_input, run, CancelToken, CountSignal, Input, Observer, Params, PipelineError, Silent,
+    Stage,
+};
+
+/// A shared data file, or `None` (the test then says what it skipped).
+fn data(rel: &str) -> Option<PathBuf> {
+    let p = mp_geom::paths::data_file(rel);
+    if p.is_none() {
+        eprintln!("skipped: shared data file `{rel}` not found (../shared/data or MP_DATA_DIR)");
+    }
+    p
+}
+
+fn quva(name: &str) -> Option<(PathBuf, usize)> {
+    let video = data(&format!("quva_repetition/videos/{name}.mp4"))?;
+    let ann = data(&format!("quva_repetition/annotations/{name}.npy"))?;
+    let truth = mp_geom::io::npz::read_npy(ann)
+        .unwrap()
+        .to_i64()
+        .unwrap()
+        .len();
+    Some((video, truth))
+}
+
+fn count_video(path: &Path) -> mp_pipeline::Outcome {
+    let input = Input::open(path, None).unwrap();
+    analyse_input(input, &Params::default(), &Silent, &CancelToken::new())
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn quva_videos_count_within_one() {
+    for name in ["020_fitness", "023_fitness", "007_pommel_practice"] {
+        let Some((video, truth)) = quva(name) else {
+            return;
+        };
+        let out = count_video(&video);
+        let c = &out.counts;
+        assert!(
+            (c.total as i64 - truth as i64).abs() <= 1,
+            "{name}: counted {} ({} / {}), labelled {truth}",
+            c.total,
+            c.signal.as_str(),
+            c.method.as_str()
+        );
+        assert!(
+            out.analysis.is_some(),
+            "{name}: a person is found, so programs exist"
+        );
+        assert_eq!(c.frames, out.keypoints.track.n_frames());
+    }
+}
+
+#[test]
+fn a_bar_lift_in_the_dark_counts_from_the_frames() {
+    let Some((video, truth)) = quva("028_bar_lift") else {
+        return;
+    };
+    let out = count_video(&video);
+    let c = &out.counts;
+    assert_eq!(c.signal, CountSignal::Frames, "{c:?}");
+    assert!(
+        (c.total as i64 - truth as i64).abs() <= 1,
+        "counted {}, labelled {truth}",
+        c.total
+    );
+    assert!(out.keypoints.found_fraction < 0.05);
+}
+
+#[test]
+fn one_golf_swing_counts_zero() {
+    let Some(video) = data("golfdb/golf_swing.mp4") else {
+        return;
+    };
+    let out = count_video(&video);
+    assert_eq!(out.counts.total, 0, "{:?}", out.counts);
+    assert!(out.counts.intervals.is_empty());
+}
+
+/// Cancels the run once the pose model has done `after` frames.
+struct CancelAfter {
+    token: CancelToken,
+    after: usize,
+    fired: AtomicBool,
+}
+
+impl Observer for CancelAfter {
+    fn progress(&self, stage: Stage, done: usize) {
+        if stage == Stage::Pose && done >= self.after {
+            self.fired.store(true, Ordering::SeqCst);
+            self.token.cancel();
+        }
+    }
+}
+
+#[test]
+fn run_writes_the_folder_and_a_cancelled_run_leaves_nothing() {
+    let Some((video, _)) = quva("023_fitness") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    // A whole run (no overlay video, to keep it short).
+    let mut params = Params::default();
+    params.output.overlay_video = false;
+    let dir = tmp.path().join("run");
+    let s = run(
+        Input::open(&video, None).unwrap(),
+        &dir,
+        &params,
+        &Silent,
+        &CancelToken::new(),
+    )
+    .unwrap();
+    for f in [
+        "track.npz",
+        "program.txt",
+        "abstract.json",
+        "loops.json",
+        "report.html",
+    ] {
+        assert!(dir.join(f).is_file(), "{f} missing");
+    }
+    let loops: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("loops.json")).unwrap()).unwrap();
+    assert_eq!(loops["total_repetitions"], s.outcome.counts.total);
+    assert_eq!(loops["signal"], "keypoints");
+    let stages: Vec<&str> = s.outcome.stages.iter().map(|t| t.stage.name()).collect();
+    for st in [
+        "decode", "pose", "concrete", "abstract", "count", "pictures", "report",
+    ] {
+        assert!(stages.contains(&st), "stage {st} missing from {stages:?}");
+    }
+    // Cancelled during the pose pass: an error, and no folder at all.
+    let token = CancelToken::new();
+    let obs = CancelAfter {
+        token: token.clone(),
+        after: 20,
+        fired: AtomicBool::new(false),
+    };
+    let dir2 = tmp.path().join("cancelled");
+    let r = run(
+        Input::open(&video, None).unwrap(),
+        &dir2,
+        &params,
+        &obs,
+        &token,
+    );
+    assert!(matches!(r, Err(PipelineError::Cancelled)), "{:?}", r.err());
+    assert!(obs.fired.load(Ordering::SeqCst));
+    assert!(!dir2.exists(), "a cancelled run created {}", dir2.display());
+    // An unrelated run afterwards is not affected by that cancellation.
+    let again = analyse_input(
+        Input::open(&video, None).unwrap(),
+        &params,
+        &Silent,
+        &CancelToken::new(),
+    );
+    assert!(again.is_ok());
+}
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    let e = Input::open("/nonexistent/clip.mp4", None).unwrap_err();
+    assert!(e.to_string().contains("does not exist"), "{e}");
+    let tmp = tempfile::tempdir().unwrap();
+    let junk = tmp.path().join("junk.npz");
+    std::fs::write(&junk, b"not a zip").unwrap();
+    let e = Input::open(&junk, None).unwrap_err();
+    assert!(e.to_string().contains("junk.npz"), "{e}");
+    let corrupt = tmp.path().join("corrupt.mp4");
+    std::fs::write(&corrupt, b"\x00\x00\x00\x18ftypmp42 garbage").unwrap();
+    let r = analyse_input(
+        Input::open(&corrupt, None).unwrap(),
+        &Params::default(),
+        &Silent,
+        &CancelToken::new(),
+    );
+    let e = r.err().expect("a corrupt video is an error");
+    assert!(e.to_string().contains("corrupt.mp4"), "{e}");
+    let mut p = Params::default();
+    p.pose.threads = 0;
+    assert!(p.validate().is_err());
+    p = Params::default();
+    p.count.min_strength = f64::NAN;
+    assert!(p.validate().is_err());
+}

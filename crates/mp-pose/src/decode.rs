@@ -1,0 +1,237 @@
+//! Decoding alongside the pose model.
+//!
+//! * [`decode_ahead`]: a thread decodes frames ahead of the pose model
+//!   through a bounded channel, keeping full-size copies (for an overlay
+//!   video) and grey thumbnails ([`crate::thumbs`]) on the way.
+//! * [`MjpegStream`]: a second FFmpeg process writing reduced (scaled,
+//!   subsampled) frames as JPEG files back to back, much faster than
+//!   encoding them here.
+//!
+//! Both stop when their [`CancelToken`] is cancelled.
+
+use std::io::{BufReader, Read};
+use std::path::PathBuf;
+use std::process::{Child, ChildStdout, Command, Stdio};
+use std::sync::mpsc::sync_channel;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use mp_geom::CancelToken;
+
+use crate::error::{PoseError, Result};
+use crate::thumbs::grey_thumbnail;
+use crate::video::{Frame, FrameSource, VideoInfo, VideoReader};
+
+/// Options of [`decode_ahead`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecodeOptions {
+    /// Stop after this many frames.
+    pub limit: Option<usize>,
+    /// Keep every frame's full-size RGB copy.
+    pub keep_full: bool,
+    /// Grey thumbnail side in cells; `None`: no thumbnails.
+    pub thumbnail_size: Option<usize>,
+    /// Frames decoded ahead of the consumer. Default 8.
+    pub ahead: usize,
+}
+
+impl Default for DecodeOptions {
+    fn default() -> Self {
+        DecodeOptions {
+            limit: None,
+            keep_full: false,
+            thumbnail_size: Some(crate::thumbs::DEFAULT_THUMBNAIL_SIZE),
+            ahead: 8,
+        }
+    }
+}
+
+/// What the decoding thread hands back when its frames are consumed.
+#[derive(Debug, Default)]
+pub struct Decoded {
+    /// Full-size RGB frames, when asked for.
+    pub kept: Option<Vec<Vec<u8>>>,
+    /// Grey thumbnails of every decoded frame, when asked for.
+    pub thumbnails: Vec<Vec<f32>>,
+    /// Time spent decoding (waiting on FFmpeg's pipe).
+    pub decode: Duration,
+}
+
+/// Starts decoding `reader` on its own thread. Returns the frames as a
+/// [`FrameSource`] for the pose model and the thread, which ends (and hands
+/// back what it kept) when the video ends, after `limit` frames, at the first
+/// decoding error (passed on to the source), when `cancel` is cancelled, or
+/// when the source is dropped.
+pub fn decode_ahead(
+    reader: VideoReader,
+    options: &DecodeOptions,
+    cancel: CancelToken,
+) -> Result<(FrameSource, JoinHandle<Decoded>)> {
+    if let Some(0) = options.thumbnail_size {
+        return Err(PoseError::param("thumbnail_size", "must be at least 1"));
+    }
+    let info = reader.info().clone();
+    let (tx, rx) = sync_channel::<Result<Frame>>(options.ahead.max(1));
+    let opts = options.clone();
+    let handle = std::thread::Builder::new()
+        .name("decode".into())
+        .spawn(move || {
+            let mut out = Decoded {
+                kept: opts.keep_full.then(Vec::new),
+                ..Decoded::default()
+            };
+            let mut frames = reader.take(opts.limit.unwrap_or(usize::MAX));
+            loop {
+                if cancel.is_cancelled() {
+                    break;
+                }
+                let t0 = Instant::now();
+                let Some(f) = frames.next() else { break };
+                out.decode += t0.elapsed();
+                if let Ok(frame) = &f {
+                    if let Some(k) = out.kept.as_mut() {
+                        k.push(frame.rgb.clone());
+                    }
+                    if let Some(size) = opts.thumbnail_size {
+                        match grey_thumbnail(frame, size) {
+                            Ok(t) => out.thumbnails.push(t),
+                            Err(e) => {
+                                let _ = tx.send(Err(e));
+                                break;
+                            }
+                        }
+                    }
+                }
+                let failed = f.is_err();
+                if tx.send(f).is_err() || failed {
+                    break;
+                }
+            }
+            out
+        })
+        .map_err(|e| PoseError::io("(decoding thread)", e))?;
+    let source = FrameSource {
+        width: info.width,
+        height: info.height,
+        fps: info.fps,
+        frame_count: info.frame_count,
+        frames: Box::new(rx.into_iter()),
+    };
+    Ok((source, handle))
+}
+
+/// Options of [`MjpegStream::start`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct MjpegOptions {
+    /// Keep every `step`-th frame (≥ 1).
+    pub step: usize,
+    /// Output size; `None`: the video's own.
+    pub size: Option<(usize, usize)>,
+    /// Stop after the frames of this many source frames.
+    pub limit: Option<usize>,
+    /// Quality on FFmpeg's `-q:v` scale (2 best … 31 worst).
+    pub qscale: u32,
+}
+
+/// An FFmpeg process writing reduced frames of a video as JPEG files back to
+/// back on its standard output (read them with a JPEG splitter such as
+/// `mp_report::frames::read_jpeg`).
+pub struct MjpegStream {
+    path: PathBuf,
+    child: Child,
+    stdout: Option<BufReader<ChildStdout>>,
+    stderr: Option<JoinHandle<String>>,
+}
+
+impl MjpegStream {
+    /// Starts FFmpeg on the video.
+    pub fn start(info: &VideoInfo, options: &MjpegOptions) -> Result<Self> {
+        if options.step == 0 {
+            return Err(PoseError::param("step", "must be at least 1"));
+        }
+        if !(2..=31).contains(&options.qscale) {
+            return Err(PoseError::param(
+                "qscale",
+                format!("must be in 2..=31, got {}", options.qscale),
+            ));
+        }
+        let mut filters = Vec::new();
+        if options.step > 1 {
+            filters.push(format!("select=not(mod(n\\,{}))", options.step));
+        }
+        if let Some((w, h)) = options.size {
+            if (w, h) != (info.width, info.height) {
+                filters.push(format!("scale={w}:{h}:flags=area"));
+            }
+        }
+        let mut cmd = Command::new("ffmpeg");
+        cmd.args(["-v", "error", "-nostdin", "-i"])
+            .arg(&info.path)
+            .args(["-map", "0:v:0", "-fps_mode", "passthrough"]);
+        if !filters.is_empty() {
+            cmd.arg("-vf").arg(filters.join(","));
+        }
+        if let Some(n) = options.limit {
+            cmd.arg("-frames:v")
+                .arg(n.div_ceil(options.step).max(1).to_string());
+        }
+        cmd.args(["-c:v", "mjpeg", "-q:v"])
+            .arg(options.qscale.to_string())
+            .args(["-f", "image2pipe", "-"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        let mut child = cmd.spawn().map_err(|e| {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                PoseError::FfmpegMissing {
+                    program: "ffmpeg".into(),
+                }
+            } else {
+                PoseError::io(&info.path, e)
+            }
+        })?;
+        let stdout = child
+            .stdout
+            .take()
+            .map(|o| BufReader::with_capacity(1 << 16, o));
+        let stderr = child.stderr.take().map(|mut e| {
+            std::thread::spawn(move || {
+                let mut s = String::new();
+                let _ = e.read_to_string(&mut s);
+                s
+            })
+        });
+        Ok(MjpegStream {
+            path: info.path.clone(),
+            child,
+            stdout,
+            stderr,
+        })
+    }
+
+    /// The stream of JPEG files.
+    pub fn reader(&mut self) -> Option<&mut BufReader<ChildStdout>> {
+        self.stdout.as_mut()
+    }
+
+    /// Stops FFmpeg if it still runs and returns what it said on its error
+    /// output (empty when nothing), with its exit status.
+    pub fn finish(mut self) -> (String, String) {
+        self.stdout = None;
+        let _ = self.child.kill();
+        let status = self.child.wait().map(|s| s.to_string()).unwrap_or_default();
+        let msg = self
+            .stderr
+            .take()
+            .and_then(|h| h.join().ok())
+            .unwrap_or_default()
+            .trim()
+            .to_string();
+        (status, msg)
+    }
+
+    /// The video.
+    pub fn path(&self) -> &std::path::Path {
+        &self.path
+    }
+}
