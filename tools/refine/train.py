@@ -661,8 +661,13 @@ class FlawData:
         self.mask = z["mask"].astype(np.float32)
         self.split = z["split"].astype(np.int64)
         self.flaws = z["flaws"]
+        self.subject = z["subject"].astype(np.int64)
         self.train = np.nonzero(self.split == 0)[0]
         self.sel = np.nonzero(self.split == 1)[0]
+
+    def subjects(self, rows):
+        """MSR subjects of the rows (mocap windows, subject -1, left out)."""
+        return sorted({int(s) for s in self.subject[rows] if s >= 0})
 
 
 def prf(prob, y, thr):
@@ -1010,9 +1015,9 @@ def main():
             nets[name]["training"] = {
                 "command": args.command,
                 "dataset": os.path.basename(args.flaw_dataset),
-                "train_subjects": [1, 3, 5],
-                "train_mocap_windows": True,
-                "select_subjects": [7],
+                "train_subjects": data.flaw.subjects(data.flaw.train),
+                "train_mocap_windows": bool((data.flaw.subject[data.flaw.train] < 0).any()),
+                "select_subjects": data.flaw.subjects(data.flaw.sel),
                 "rows_train": int(len(data.flaw.train)),
                 "rows_select": int(len(data.flaw.sel)),
                 "epochs": logs[name]["epochs"],
@@ -1044,7 +1049,8 @@ def main():
             "clips": int(len(data.motion)),
             "train_clips": int(len(data.train)),
             "val_clips": int(len(data.val)),
-            "val_subjects": [9],
+            "train_subjects": sorted({int(s) for s in data.subject[data.train] if s >= 0}),
+            "val_subjects": sorted({int(s) for s in data.subject[data.val] if s >= 0}),
             "epochs": args.epochs,
             "seed": args.seed,
             "optimizer": "Adam",

@@ -1,6 +1,8 @@
 //! `cargo xtask eval refine`: the learned refinement of `mp_refine::pipeline`
-//! on MSR Action3D — injected flaws on the held-out subject (9) with the flaw
-//! detector's precision and recall, generated
+//! on MSR Action3D — injected flaws on every subject the networks never saw
+//! (the training manifest next to the models names the training and
+//! selection subjects; subject 9 of the shared file) or on the subjects of
+//! `--eval-subjects`, with the flaw detector's precision and recall, generated
 //! motion (FID, accuracy, diversity, multimodality, per action) and the
 //! ablation (anchor-only vs anchors + transitions; GMM vs nearest-concept
 //! scores with k-means or DBSCAN concepts). `--select` adds the grid of
@@ -16,6 +18,7 @@ use mp_pose::SessionParams;
 use mp_refine::eval_refine::{
     evaluate, generated_selection_grid, selection_grid, RefineEvalParams, SetQuality,
 };
+use mp_refine::eval_split::{split_for, split_params, subjects_of, TrainingSubjects};
 use mp_refine::nets::{find_model_dir, RefineNets};
 use mp_refine::pipeline::{AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode};
 use mp_refine::Concepts;
@@ -24,9 +27,15 @@ use serde_json::{json, Value};
 /// Arguments of `cargo xtask eval refine`.
 #[derive(Args, Debug)]
 pub struct EvalRefineArgs {
-    /// MSR Action3D npz (default: the shared odd-subjects file).
+    /// MSR Action3D npz, or a folder of them read as one set (default: the
+    /// shared odd-subjects file).
     #[arg(long)]
     pub data: Option<PathBuf>,
+    /// Subjects whose clips get the injected flaws (comma separated; default:
+    /// every subject of the data that the training manifest next to the
+    /// models names neither as a training nor as a selection subject).
+    #[arg(long, value_delimiter = ',')]
+    pub eval_subjects: Option<Vec<u32>>,
     /// Output JSON report.
     #[arg(long)]
     pub out: PathBuf,
@@ -238,7 +247,7 @@ fn quality_json(q: &SetQuality) -> Value {
 pub fn run(a: &EvalRefineArgs) -> Result<()> {
     let t0 = Instant::now();
     let data = match &a.data {
-        Some(p) => MsrAction3D::open(p).with_context(|| format!("reading {}", p.display()))?,
+        Some(p) => MsrAction3D::open_path(p).with_context(|| format!("reading {}", p.display()))?,
         None => MsrAction3D::open_default().context("MSR Action3D (pass --data)")?,
     };
     let dir = match &a.models {
@@ -254,13 +263,56 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
     )?;
     let nets = RefineNets::load(&dir, &SessionParams::default())
         .with_context(|| format!("loading {}", dir.display()))?;
-    let mut params = RefineEvalParams {
-        samples_per_action: a.samples_per_action,
-        max_clips: a.max_clips,
-        ablation: !a.no_ablation,
-        seed: a.seed,
-        ..RefineEvalParams::default()
+    let trained = match (TrainingSubjects::read(&dir), &a.eval_subjects) {
+        (Ok(t), _) => t,
+        (Err(e), Some(eval)) => {
+            // No record: the data's other subjects stand in for the training subjects.
+            println!("eval refine: {e}; scoring the subjects of --eval-subjects");
+            TrainingSubjects {
+                train: subjects_of(&data)
+                    .into_iter()
+                    .filter(|s| !eval.contains(s))
+                    .collect(),
+                select: Vec::new(),
+                validation: Vec::new(),
+            }
+        }
+        (Err(e), None) => {
+            return Err(e).context("the evaluation subjects (or pass --eval-subjects)")
+        }
     };
+    let split = split_for(&data, &trained, a.eval_subjects.as_deref())?;
+    println!(
+        "eval refine: {} — scoring subjects {:?} (training subjects {:?}, selection {:?})",
+        data.path().display(),
+        split.eval_subjects,
+        trained.train,
+        trained.select
+    );
+    if !split.seen_eval_subjects.is_empty() {
+        println!(
+            "eval refine: subjects {:?} shaped the networks or their settings: their figures are not held out",
+            split.seen_eval_subjects
+        );
+    }
+    let present = subjects_of(&data);
+    if a.select && !split.select_subjects.iter().any(|s| present.contains(s)) {
+        anyhow::bail!(
+            "--select needs clips of a selection subject that is not evaluated (recorded: {:?}; the data hold {:?})",
+            trained.select,
+            present
+        );
+    }
+    let mut params = split_params(
+        RefineEvalParams {
+            samples_per_action: a.samples_per_action,
+            max_clips: a.max_clips,
+            ablation: !a.no_ablation,
+            seed: a.seed,
+            ..RefineEvalParams::default()
+        },
+        &split,
+    );
     if let Some(d) = a.deviation_m {
         params.refine.transition_deviation_m = d;
     }
@@ -356,7 +408,7 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
                     "name": mp_geom::io::datasets::msr_action_name(*act),
                     "fid_before": before,
                     "fid_after": g.after.per_action_fid.get(act),
-                    "fid_real": g.real.per_action_fid.get(act),
+                    "fid_real": g.real.as_ref().and_then(|r| r.per_action_fid.get(act)),
                 }),
             )
         })
@@ -373,6 +425,8 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             "samples_per_action": params.samples_per_action,
             "val_subjects": params.val_subjects,
             "select_subjects": params.select_subjects,
+            "concept_subjects": params.concept_subjects,
+            "training_subjects": serde_json::to_value(&trained)?,
             "seed": params.seed,
         },
         "injected": {
@@ -403,17 +457,17 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             "repaired_anchors_per_clip": g.repaired_anchors_per_clip,
             "mean_change": g.mean_change_m,
             "refine_ms_per_clip": g.refine_ms_per_clip,
-            "real_heldout": quality_json(&g.real),
+            "real_heldout": g.real.as_ref().map(quality_json),
         },
         "diversity": {
             "before": g.before.diversity,
             "after": g.after.diversity,
-            "real_heldout": g.real.diversity,
+            "real_heldout": g.real.as_ref().map(|r| r.diversity),
         },
         "multimodality": {
             "before": g.before.multimodality,
             "after": g.after.multimodality,
-            "real_heldout": g.real.multimodality,
+            "real_heldout": g.real.as_ref().map(|r| r.multimodality),
         },
         "per_action": per_action,
         "ablation": serde_json::to_value(&r.ablation)?,

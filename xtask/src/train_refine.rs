@@ -24,7 +24,7 @@ use crate::pyenv::{command_line, ensure_packages, run_script, training_args, tra
 /// Arguments of `cargo xtask train-refine`.
 #[derive(Args, Debug)]
 pub struct TrainRefineArgs {
-    /// MSR Action3D folder (holding `msr_action3d_odd_subjects.npz`) or the npz itself.
+    /// MSR Action3D npz, or a folder of them read as one set (default: the shared odd-subjects file).
     #[arg(long)]
     pub data: Option<PathBuf>,
     /// Folder of CMU BVH takes added as extra (unlabelled) motion; every `*.bvh` in it is used
@@ -54,14 +54,13 @@ pub struct TrainRefineArgs {
 
 fn msr_file(data: &Option<PathBuf>) -> Result<PathBuf> {
     let p = match data {
-        Some(p) if p.is_dir() => p.join("msr_action3d_odd_subjects.npz"),
         Some(p) => p.clone(),
         None => mp_geom::paths::data_file(MsrAction3D::FILE).context(
             "no --data given and the shared MSR Action3D file was not found (set MP_DATA_DIR)",
         )?,
     };
-    if !p.is_file() {
-        bail!("{}: no such file", p.display());
+    if !p.exists() {
+        bail!("{}: no such file or folder", p.display());
     }
     Ok(p)
 }
@@ -104,7 +103,8 @@ pub fn run(a: &TrainRefineArgs) -> Result<()> {
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
 
     let t0 = Instant::now();
-    let msr = MsrAction3D::open(&msr_path)?;
+    let msr = MsrAction3D::open_path(&msr_path)
+        .with_context(|| format!("reading {}", msr_path.display()))?;
     let params = DatasetParams {
         seed: a.seed,
         ..DatasetParams::default()

@@ -1,7 +1,8 @@
 //! Evaluation of the learned refinement ([`crate::pipeline`]).
 //!
 //! * **Injected flaws** ([`evaluate_injected_nets`]): clips of the held-out
-//!   subjects of MSR Action3D (subject 9 by default; parameters are chosen
+//!   subjects of MSR Action3D (subject 9 by default; any subjects the
+//!   networks never saw with [`crate::eval_split`]; parameters are chosen
 //!   on the selection subjects, 7 by default, with [`selection_grid`]) get
 //!   one known flaw each
 //!   ([`crate::flaws`]); MPJPE (absolute, no alignment) to the clean clip
@@ -15,10 +16,10 @@
 //!   with their action; FID, per-action FID, accuracy, diversity and
 //!   multimodality on the evaluator's features against the real clips,
 //!   before and after refinement.
-//! * **Ablation**: anchor-only vs anchors + transitions, and the anchor
-//!   quality score — the Gaussian mixture (which does not depend on the
-//!   clustering) vs the distance to the nearest concept with concepts from
-//!   k-means or DBSCAN.
+//! * **Ablation** ([`crate::eval_ablation`]): anchor-only vs anchors +
+//!   transitions, and the anchor quality score — the Gaussian mixture (which
+//!   does not depend on the clustering) vs the distance to the nearest
+//!   concept with concepts from k-means or DBSCAN.
 
 use mp_geom::metrics::nanmean;
 use std::collections::BTreeMap;
@@ -34,26 +35,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::baseline::{full_confidence, EvalFlaw};
 use crate::concepts::{
-    anchor_feature, learn_concepts, AnchorSample, ClusterMethod, ConceptParams, Concepts, Linkage,
+    anchor_feature, AnchorSample, ClusterMethod, ConceptParams, Concepts, Linkage,
 };
 use crate::error::{RefineError, Result};
+use crate::eval_split::subjects_of;
 use crate::flaws::{AnchorSource, Flaw, FootSlide};
 use crate::motion::{canonicalize, to_features, FRAME_FEATURES, HIP_CENTRE, NET_FRAMES};
 use crate::nets::{RefineNets, N_ACTIONS};
-use crate::pipeline::{
-    nearest_concept_thresholds, AnchorDetection, AnchorRepair, NetRefineParams, NetRefiner,
-    RefineMode, TransitionMethod,
-};
+use crate::pipeline::{NetRefineParams, NetRefiner};
 use crate::quality::{accuracy, diversity, fid, multimodality, per_action_fid, QualityParams};
 use crate::segment::{mpjpe_abs, segment_track, SegmentParams};
-
-/// An ablation setting: name, concepts, parameters, nearest-concept thresholds.
-type Setting<'a> = (
-    &'static str,
-    &'a Concepts,
-    &'a NetRefineParams,
-    Option<&'a BTreeMap<u32, f64>>,
-);
 
 /// Parameters of the evaluation.
 #[derive(Debug, Clone, PartialEq)]
@@ -64,6 +55,11 @@ pub struct RefineEvalParams {
     /// Subjects on which parameters are chosen ([`selection_grid`]).
     /// Default `[7]`; must not overlap [`Self::val_subjects`].
     pub select_subjects: Vec<u32>,
+    /// Subjects whose clips the clustering ablation relearns concepts from,
+    /// and the "rest" the real held-out clips are compared with. Default
+    /// `None`: every subject of the data outside [`Self::val_subjects`].
+    /// Must not overlap [`Self::val_subjects`].
+    pub concept_subjects: Option<Vec<u32>>,
     /// At most this many clips for the injected flaws (spread evenly). Default `None`.
     pub max_clips: Option<usize>,
     /// Flaws, each injected once per clip (clip `i` uses seed `seed + i`).
@@ -113,6 +109,7 @@ impl Default for RefineEvalParams {
         RefineEvalParams {
             val_subjects: vec![9],
             select_subjects: vec![7],
+            concept_subjects: None,
             max_clips: None,
             flaws: vec![
                 EvalFlaw::Fixed(Flaw::WrongAnchor {
@@ -185,6 +182,17 @@ impl RefineEvalParams {
         {
             return Err(RefineError::param(
                 "select_subjects",
+                format!("subject {s} is also an evaluation subject"),
+            ));
+        }
+        if let Some(s) = self
+            .concept_subjects
+            .iter()
+            .flatten()
+            .find(|s| self.val_subjects.contains(s))
+        {
+            return Err(RefineError::param(
+                "concept_subjects",
                 format!("subject {s} is also an evaluation subject"),
             ));
         }
@@ -610,8 +618,10 @@ pub struct GeneratedReport {
     /// Real clips the features are compared with.
     pub n_real: usize,
     /// The real clips themselves (accuracy of the evaluator, diversity, …; FID of
-    /// the held-out subjects' clips against the rest).
-    pub real: SetQuality,
+    /// the held-out subjects' clips against the clips of
+    /// [`RefineEvalParams::concept_subjects`]); `None` when the data hold no
+    /// such clips.
+    pub real: Option<SetQuality>,
     /// Before refinement.
     pub before: SetQuality,
     /// After refinement.
@@ -631,24 +641,7 @@ pub struct GeneratedReport {
     pub refine_ms_per_clip: f64,
 }
 
-/// One ablation setting on generated clips and injected flaws.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct AblationRow {
-    /// Setting.
-    pub name: String,
-    /// FID after refinement.
-    pub fid_after: f64,
-    /// Accuracy after refinement.
-    pub accuracy_after: f64,
-    /// Share of generated clips changed.
-    pub changed_share: f64,
-    /// Injected flaws: MPJPE after refinement (metres).
-    pub injected_mpjpe_after_m: f64,
-    /// Injected flaws: relative reduction.
-    pub injected_reduction: f64,
-    /// Clean clips: MPJPE change (metres).
-    pub clean_change_m: f64,
-}
+pub use crate::eval_ablation::AblationRow;
 
 /// Anchor samples (canonical clips, anchors of the spline segmentation) of
 /// a track labelled `action`, in the feature of `params`.
@@ -710,16 +703,12 @@ pub struct RefineEvalReport {
     pub ablation: Vec<AblationRow>,
 }
 
-/// Every subject of `data`, ascending.
-fn all_subjects(data: &MsrAction3D) -> Vec<u32> {
-    let mut v: Vec<u32> = data.clips().iter().map(|c| c.subject).collect();
-    v.sort_unstable();
-    v.dedup();
-    v
-}
-
 /// The clips of `subjects` whose length is within the evaluation's bounds.
-fn usable_clips(data: &MsrAction3D, subjects: &[u32], params: &RefineEvalParams) -> Vec<usize> {
+pub(crate) fn usable_clips(
+    data: &MsrAction3D,
+    subjects: &[u32],
+    params: &RefineEvalParams,
+) -> Vec<usize> {
     clips_of_subjects(
         data,
         subjects,
@@ -740,7 +729,7 @@ pub fn evaluate(
     let injected = evaluate_injected_nets(data, &refiner, params)?;
 
     // Real clips: every clip long enough; held-out subjects for the "real" row.
-    let subjects = all_subjects(data);
+    let subjects = subjects_of(data);
     let all_idx = usable_clips(data, &subjects, params);
     let (real, real_labels) = real_clips(data, &all_idx)?;
     let (real_f, real_l) = evaluator_outputs(nets, &real)?;
@@ -754,17 +743,33 @@ pub fn evaluate(
         })
         .map(|(r, _)| r)
         .collect();
-    let train_rows: Vec<usize> = (0..all_idx.len())
-        .filter(|r| !val_rows.contains(r))
+    let rest = |c: &mp_geom::io::datasets::MsrClip| match &params.concept_subjects {
+        Some(s) => s.contains(&c.subject),
+        None => !params.val_subjects.contains(&c.subject),
+    };
+    let train_rows: Vec<usize> = all_idx
+        .iter()
+        .enumerate()
+        .filter(|(_, &i)| data.clip_info(i).map(rest).unwrap_or(false))
+        .map(|(r, _)| r)
         .collect();
     let pick = |x: &Array2<f64>, rows: &[usize]| x.select(Axis(0), rows);
     let pick_l = |rows: &[usize]| rows.iter().map(|&r| real_labels[r]).collect::<Vec<u32>>();
-    let real_q = {
+    let real_q = if train_rows.is_empty() {
+        None
+    } else {
         let vf = pick(&real_f, &val_rows);
         let vl = pick(&real_l, &val_rows);
         let lab = pick_l(&val_rows);
         let tf = pick(&real_f, &train_rows);
-        set_quality(&vf, &vl, &lab, &tf, &pick_l(&train_rows), &params.quality)?
+        Some(set_quality(
+            &vf,
+            &vl,
+            &lab,
+            &tf,
+            &pick_l(&train_rows),
+            &params.quality,
+        )?)
     };
 
     let (gen, labels) = generate_clips(nets, params.samples_per_action, params.seed)?;
@@ -788,188 +793,21 @@ pub fn evaluate(
         refine_ms_per_clip: rc.ms_per_clip,
     };
 
-    let mut ablation = Vec::new();
-    if params.ablation {
-        let train_subjects: Vec<u32> = subjects
-            .iter()
-            .copied()
-            .filter(|s| !params.val_subjects.contains(s))
-            .collect();
-        let train_idx = usable_clips(data, &train_subjects, params);
-        let kmeans_params = ConceptParams {
-            root_joint: Some(HIP_CENTRE),
-            seed: params.seed,
-            score_quantile: params.score_quantile,
-            ..concepts.params.clone()
-        };
-        let samples = msr_anchor_samples(data, &train_idx, &params.segment, &kmeans_params)?;
-        let kmeans = learn_concepts(&samples, &kmeans_params)?;
-        let dbscan = learn_concepts(
-            &samples,
-            &ConceptParams {
-                method: params.dbscan.clone(),
-                ..kmeans_params.clone()
+    let ablation = if params.ablation {
+        crate::eval_ablation::ablation_rows(
+            data,
+            nets,
+            concepts,
+            params,
+            &crate::eval_ablation::GeneratedSet {
+                clips: &gen,
+                labels: &labels,
+                real_features: &real_f,
             },
-        )?;
-        let optics = learn_concepts(
-            &samples,
-            &ConceptParams {
-                method: params.optics.clone(),
-                ..kmeans_params.clone()
-            },
-        )?;
-        let hierarchical = learn_concepts(
-            &samples,
-            &ConceptParams {
-                method: params.hierarchical.clone(),
-                ..kmeans_params.clone()
-            },
-        )?;
-        let th_k = nearest_concept_thresholds(&kmeans, &samples, params.score_quantile)?;
-        let th_d = nearest_concept_thresholds(&dbscan, &samples, params.score_quantile)?;
-        let th_o = nearest_concept_thresholds(&optics, &samples, params.score_quantile)?;
-        let th_h = nearest_concept_thresholds(&hierarchical, &samples, params.score_quantile)?;
-        // The anchor and transition steps, with and without the detector first.
-        let steps = NetRefineParams {
-            mode: RefineMode::AnchorsAndTransitions,
-            ..params.refine.clone()
-        };
-        let no_detector = NetRefineParams {
-            flaw_detection: false,
-            ..steps.clone()
-        };
-        let detector_only = NetRefineParams {
-            mode: RefineMode::DetectorOnly,
-            ..params.refine.clone()
-        };
-        let anchors_only = NetRefineParams {
-            mode: RefineMode::AnchorsOnly,
-            ..steps.clone()
-        };
-        let network_repair = NetRefineParams {
-            anchor_repair: AnchorRepair::Network,
-            ..steps.clone()
-        };
-        let segmentation = NetRefineParams {
-            anchor_source: AnchorDetection::Segmentation,
-            ..steps.clone()
-        };
-        let generator = NetRefineParams {
-            transition_method: TransitionMethod::Generator,
-            ..steps.clone()
-        };
-        let gen_transitions = NetRefineParams {
-            mode: RefineMode::AnchorsAndTransitions,
-            ..params.generated_refine.clone()
-        };
-        let gen_network = NetRefineParams {
-            anchor_repair: AnchorRepair::Network,
-            ..params.generated_refine.clone()
-        };
-        let gen_no_detector = NetRefineParams {
-            flaw_detection: false,
-            ..params.generated_refine.clone()
-        };
-        let settings: Vec<Setting<'_>> = vec![
-            ("generated_preset", concepts, &params.generated_refine, None),
-            (
-                "generated_preset_no_detector",
-                concepts,
-                &gen_no_detector,
-                None,
-            ),
-            (
-                "generated_preset_anchors_transitions",
-                concepts,
-                &gen_transitions,
-                None,
-            ),
-            (
-                "generated_preset_network_anchor_repair",
-                concepts,
-                &gen_network,
-                None,
-            ),
-            (
-                "generated_preset_kmeans_relearned",
-                &kmeans,
-                &params.generated_refine,
-                None,
-            ),
-            (
-                "generated_preset_dbscan",
-                &dbscan,
-                &params.generated_refine,
-                None,
-            ),
-            (
-                "generated_preset_optics",
-                &optics,
-                &params.generated_refine,
-                None,
-            ),
-            (
-                "generated_preset_hierarchical",
-                &hierarchical,
-                &params.generated_refine,
-                None,
-            ),
-            ("detector_only", concepts, &detector_only, None),
-            (
-                "no_detector_anchors_transitions_gmm",
-                concepts,
-                &no_detector,
-                None,
-            ),
-            ("anchors_only_gmm", concepts, &anchors_only, None),
-            ("anchors_transitions_gmm", concepts, &steps, None),
-            ("anchor_network_repair", concepts, &network_repair, None),
-            ("segmentation_anchors", concepts, &segmentation, None),
-            ("generator_transitions", concepts, &generator, None),
-            (
-                "anchors_transitions_nearest_kmeans",
-                &kmeans,
-                &steps,
-                Some(&th_k),
-            ),
-            (
-                "anchors_transitions_nearest_dbscan",
-                &dbscan,
-                &steps,
-                Some(&th_d),
-            ),
-            (
-                "anchors_transitions_nearest_optics",
-                &optics,
-                &steps,
-                Some(&th_o),
-            ),
-            (
-                "anchors_transitions_nearest_hierarchical",
-                &hierarchical,
-                &steps,
-                Some(&th_h),
-            ),
-        ];
-        for (name, c, p, th) in settings {
-            let mut r = NetRefiner::new(nets, c, p)?;
-            if let Some(t) = th {
-                r = r.with_nearest_concept(t);
-            }
-            let inj = evaluate_injected_nets(data, &r, params)?;
-            let (refined, _, changed) = refine_clips(&r, &gen, &labels)?;
-            let (rf, rl) = evaluator_outputs(nets, &refined)?;
-            ablation.push(AblationRow {
-                name: name.to_string(),
-                fid_after: fid(rf.view(), real_f.view())?,
-                accuracy_after: accuracy(rl.view(), &labels)?,
-                changed_share: changed,
-                injected_mpjpe_after_m: inj.mpjpe_after_m,
-                injected_reduction: inj.reduction,
-                clean_change_m: inj.clean_change_m,
-            });
-        }
-    }
+        )?
+    } else {
+        Vec::new()
+    };
     Ok(RefineEvalReport {
         injected,
         generated,
@@ -1007,7 +845,7 @@ pub fn generated_selection_grid(
     grid: &[(String, NetRefineParams)],
 ) -> Result<(SetQuality, Vec<GeneratedSelectionRow>)> {
     params.validate()?;
-    let idx = usable_clips(data, &all_subjects(data), params);
+    let idx = usable_clips(data, &subjects_of(data), params);
     let (real, real_labels) = real_clips(data, &idx)?;
     let (real_f, _) = evaluator_outputs(nets, &real)?;
     let (gen, labels) = generate_clips(

@@ -464,7 +464,59 @@ impl MsrAction3D {
         })
     }
 
-    /// The file read.
+    /// Reads an MSR Action3D npz, or every `*.npz` of a folder (in name
+    /// order) as one set: the clips of each file follow those of the files
+    /// before it. A folder without any npz is an error naming the folder.
+    pub fn open_path(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        if !path.is_dir() {
+            return Self::open(path);
+        }
+        let mut files: Vec<PathBuf> = std::fs::read_dir(path)
+            .map_err(|e| GeomError::io(path, e))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("npz")))
+            .collect();
+        files.sort();
+        let mut sets = files.iter().map(Self::open);
+        let mut all = match sets.next() {
+            Some(first) => first?,
+            None => {
+                return Err(GeomError::NoData(format!(
+                    "{}: no MSR Action3D npz in this folder",
+                    path.display()
+                )))
+            }
+        };
+        for s in sets {
+            all.append(s?)?;
+        }
+        if files.len() > 1 {
+            all.path = path.to_path_buf();
+        }
+        Ok(all)
+    }
+
+    /// Appends the clips of `other` after those of `self`.
+    fn append(&mut self, other: MsrAction3D) -> Result<()> {
+        let rows = self.joints.dim().0;
+        let n = self.clips.len();
+        let shape =
+            |e: ndarray::ShapeError| GeomError::Shape(format!("{}: {e}", other.path.display()));
+        self.joints =
+            ndarray::concatenate(ndarray::Axis(0), &[self.joints.view(), other.joints.view()])
+                .map_err(shape)?;
+        self.conf = ndarray::concatenate(ndarray::Axis(0), &[self.conf.view(), other.conf.view()])
+            .map_err(shape)?;
+        self.clips.extend(other.clips.into_iter().map(|c| MsrClip {
+            index: c.index + n,
+            rows: c.rows.start + rows..c.rows.end + rows,
+            ..c
+        }));
+        Ok(())
+    }
+
+    /// The file read (the folder, for a set read from several files).
     pub fn path(&self) -> &Path {
         &self.path
     }
