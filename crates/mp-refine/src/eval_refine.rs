@@ -22,15 +22,10 @@
 //!   concept with concepts from k-means or DBSCAN.
 
 use mp_geom::metrics::nanmean;
-use std::collections::BTreeMap;
-use std::time::Instant;
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
-use ndarray::{Array2, Array3, Axis};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
+use ndarray::{Array2, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::baseline::{full_confidence, EvalFlaw};
@@ -40,10 +35,10 @@ use crate::concepts::{
 use crate::error::{RefineError, Result};
 use crate::eval_split::subjects_of;
 use crate::flaws::{AnchorSource, Flaw, FootSlide};
-use crate::motion::{canonicalize, to_features, FRAME_FEATURES, HIP_CENTRE, NET_FRAMES};
-use crate::nets::{RefineNets, N_ACTIONS};
+use crate::motion::{canonicalize, HIP_CENTRE, NET_FRAMES};
+use crate::nets::RefineNets;
 use crate::pipeline::{NetRefineParams, NetRefiner};
-use crate::quality::{accuracy, diversity, fid, multimodality, per_action_fid, QualityParams};
+use crate::quality::QualityParams;
 use crate::segment::{mpjpe_abs, segment_track, SegmentParams};
 
 /// Parameters of the evaluation.
@@ -419,196 +414,11 @@ pub fn evaluate_injected_on(
     })
 }
 
-/// Evaluator features and logits of canonical clips (`N × 60 × 60` features), in batches.
-pub fn evaluator_outputs(
-    nets: &RefineNets,
-    clips: &Array3<f32>,
-) -> Result<(Array2<f64>, Array2<f64>)> {
-    let n = clips.dim().0;
-    let nf = nets.sizes().features;
-    let mut feats = Array2::<f64>::zeros((n, nf));
-    let mut logits = Array2::<f64>::zeros((n, N_ACTIONS));
-    let batch = 64;
-    let mut start = 0;
-    while start < n {
-        let end = (start + batch).min(n);
-        let flat: Vec<f32> = clips
-            .slice(ndarray::s![start..end, .., ..])
-            .iter()
-            .copied()
-            .collect();
-        let out = nets.evaluate(&flat)?;
-        for (r, i) in (start..end).enumerate() {
-            for k in 0..nf {
-                feats[[i, k]] = out.features[r * nf + k] as f64;
-            }
-            for k in 0..N_ACTIONS {
-                logits[[i, k]] = out.logits[r * N_ACTIONS + k] as f64;
-            }
-        }
-        start = end;
-    }
-    if feats.iter().chain(logits.iter()).any(|v| !v.is_finite()) {
-        return Err(RefineError::NonFinite(
-            "evaluator: non-finite feature or logit".into(),
-        ));
-    }
-    Ok((feats, logits))
-}
-
-/// Canonical clips (`N × 60 × 60` features) and actions of MSR clips.
-pub fn real_clips(data: &MsrAction3D, idx: &[usize]) -> Result<(Array3<f32>, Vec<u32>)> {
-    let mut out = Array3::<f32>::zeros((idx.len(), NET_FRAMES, FRAME_FEATURES));
-    let mut labels = Vec::with_capacity(idx.len());
-    for (r, &i) in idx.iter().enumerate() {
-        let (c, _) = canonicalize(&data.clip(i)?)?;
-        out.index_axis_mut(Axis(0), r)
-            .assign(&to_features(c.view()));
-        labels.push(data.clip_info(i)?.action);
-    }
-    Ok((out, labels))
-}
-
-/// Clips from the generator: `per_action` per action 1..=20, latents drawn
-/// from `ChaCha8Rng::seed_from_u64(seed)`. Returns `N × 60 × 60` features and labels.
-pub fn generate_clips(
-    nets: &RefineNets,
-    per_action: usize,
-    seed: u64,
-) -> Result<(Array3<f32>, Vec<u32>)> {
-    let zg = nets.sizes().generator_latent;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let n = per_action * N_ACTIONS;
-    let mut out = Array3::<f32>::zeros((n, NET_FRAMES, FRAME_FEATURES));
-    let mut labels = Vec::with_capacity(n);
-    for a in 0..N_ACTIONS {
-        let mut onehot = vec![0f32; per_action * N_ACTIONS];
-        for r in 0..per_action {
-            onehot[r * N_ACTIONS + a] = 1.0;
-        }
-        let z: Vec<f32> = (0..per_action * zg)
-            .map(|_| StandardNormal.sample(&mut rng))
-            .collect();
-        let m = nets.generate_motion(&onehot, &z)?;
-        if m.iter().any(|v| !v.is_finite()) {
-            return Err(RefineError::NonFinite(format!(
-                "generator: non-finite motion for action {}",
-                a + 1
-            )));
-        }
-        let arr = Array3::from_shape_vec((per_action, NET_FRAMES, FRAME_FEATURES), m)
-            .map_err(|e| RefineError::Shape(e.to_string()))?;
-        out.slice_mut(ndarray::s![a * per_action..(a + 1) * per_action, .., ..])
-            .assign(&arr);
-        labels.extend(std::iter::repeat_n(a as u32 + 1, per_action));
-    }
-    Ok((out, labels))
-}
-
-/// What the refinement did to a set of canonical clips.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RefinedClips {
-    /// Refined clips, `N × 60 × 60` features.
-    pub clips: Array3<f32>,
-    /// Mean time per clip, milliseconds.
-    pub ms_per_clip: f64,
-    /// Share of clips changed by any step.
-    pub changed_share: f64,
-    /// Share of clips with at least one run refilled by the flaw repair.
-    pub detector_changed_share: f64,
-    /// Mean flagged (frame, joint) cells per clip.
-    pub flagged_cells_per_clip: f64,
-    /// Mean anchors repaired per clip.
-    pub repaired_anchors_per_clip: f64,
-    /// Mean joint displacement between the clips and their refinement
-    /// (canonical frame, metres).
-    pub mean_change_m: f64,
-}
-
-/// Refines canonical clips with their labels.
-pub fn refine_clips_report(
-    refiner: &NetRefiner<'_>,
-    clips: &Array3<f32>,
-    labels: &[u32],
-) -> Result<RefinedClips> {
-    let mut out = clips.clone();
-    let t0 = Instant::now();
-    let (mut changed, mut det, mut cells, mut anchors) = (0usize, 0usize, 0usize, 0usize);
-    let mut moved = 0.0;
-    for (i, &a) in labels.iter().enumerate() {
-        let c = crate::motion::from_features(clips.index_axis(Axis(0), i))?;
-        let r = refiner.refine_canonical(c.view(), Some(a))?;
-        if r.report.changed() {
-            changed += 1;
-        }
-        if !r.report.repaired_runs.is_empty() {
-            det += 1;
-        }
-        cells += r.report.flaw_cells.len();
-        anchors += r.report.anchors.iter().filter(|a| a.repaired).count();
-        moved += (&r.clip - &c)
-            .lanes(Axis(2))
-            .into_iter()
-            .map(|l| l.dot(&l).sqrt())
-            .sum::<f64>()
-            / (c.dim().0 * c.dim().1).max(1) as f64;
-        out.index_axis_mut(Axis(0), i)
-            .assign(&to_features(r.clip.view()));
-    }
-    let n = labels.len().max(1) as f64;
-    Ok(RefinedClips {
-        clips: out,
-        ms_per_clip: t0.elapsed().as_secs_f64() * 1e3 / n,
-        changed_share: changed as f64 / n,
-        detector_changed_share: det as f64 / n,
-        flagged_cells_per_clip: cells as f64 / n,
-        repaired_anchors_per_clip: anchors as f64 / n,
-        mean_change_m: moved / n,
-    })
-}
-
-/// Refines canonical clips with their labels; returns the refined clips,
-/// the mean time per clip in milliseconds and the share of clips changed.
-pub fn refine_clips(
-    refiner: &NetRefiner<'_>,
-    clips: &Array3<f32>,
-    labels: &[u32],
-) -> Result<(Array3<f32>, f64, f64)> {
-    let r = refine_clips_report(refiner, clips, labels)?;
-    Ok((r.clips, r.ms_per_clip, r.changed_share))
-}
-
-/// Quality of one set of clips against the real set.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SetQuality {
-    /// FID against the real clips.
-    pub fid: f64,
-    /// Evaluator accuracy with the conditioning action as the label.
-    pub accuracy: f64,
-    /// Diversity (`S_d` pairs).
-    pub diversity: f64,
-    /// Multimodality (`S_m` pairs per action).
-    pub multimodality: f64,
-    /// FID per action against the real clips of that action.
-    pub per_action_fid: BTreeMap<u32, f64>,
-}
-
-fn set_quality(
-    feats: &Array2<f64>,
-    logits: &Array2<f64>,
-    labels: &[u32],
-    real: &Array2<f64>,
-    real_labels: &[u32],
-    q: &QualityParams,
-) -> Result<SetQuality> {
-    Ok(SetQuality {
-        fid: fid(feats.view(), real.view())?,
-        accuracy: accuracy(logits.view(), labels)?,
-        diversity: diversity(feats.view(), q)?,
-        multimodality: multimodality(feats.view(), labels, q)?,
-        per_action_fid: per_action_fid(feats.view(), labels, real.view(), real_labels)?,
-    })
-}
+use crate::eval_generated::set_quality;
+pub use crate::eval_generated::{
+    evaluator_outputs, generate_clips, real_clips, refine_clips, refine_clips_report, RefinedClips,
+    SetQuality,
+};
 
 /// Generated-motion results.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -25,7 +25,7 @@
 //!   then anchor recognition, GMM anchor scores, anchor repair (for
 //!   generated motion, [`pipeline::NetRefineParams::for_generated`]: flawed
 //!   anchors moved to their nearest concept), transition refinement.
-//! * [`quality`], [`eval_refine`], [`eval_ablation`]: FID, accuracy,
+//! * [`quality`], [`eval_refine`], [`eval_generated`], [`eval_ablation`]: FID, accuracy,
 //!   diversity, multimodality and the evaluation on injected flaws and
 //!   generated motion; [`eval_split`]: the subjects an evaluation scores
 //!   (those the training manifest does not name).
@@ -35,6 +35,7 @@ pub mod concepts;
 pub mod dataset;
 pub mod error;
 pub mod eval_ablation;
+pub mod eval_generated;
 pub mod eval_refine;
 pub mod eval_split;
 pub mod flaws;
