@@ -12,7 +12,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use nalgebra::{Matrix3, Vector3};
+use glam::{DAffine3, DMat3, DVec3};
 use ndarray::{s, Array2, Array3, ArrayView2};
 
 use super::write_atomic;
@@ -258,12 +258,13 @@ fn parse_joint(
     }
 }
 
-fn rot(axis: usize, deg: f64) -> Matrix3<f64> {
-    let (s, c) = deg.to_radians().sin_cos();
+/// Rotation by `deg` degrees about axis 0/1/2 (x/y/z), right-handed.
+fn rot(axis: usize, deg: f64) -> DMat3 {
+    let angle = deg.to_radians();
     match axis {
-        0 => Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c),
-        1 => Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c),
-        _ => Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0),
+        0 => DMat3::from_rotation_x(angle),
+        1 => DMat3::from_rotation_y(angle),
+        _ => DMat3::from_rotation_z(angle),
     }
 }
 
@@ -739,35 +740,33 @@ impl Bvh {
         };
         let t = self.n_frames();
         let mut out = Array3::<f64>::zeros((t, nj + ends.len(), 3));
-        let mut rots = vec![Matrix3::<f64>::identity(); nj];
-        let mut pos = vec![Vector3::<f64>::zeros(); nj];
+        // World transform of each joint in the current frame (parents come first).
+        let mut world = vec![DAffine3::IDENTITY; nj];
         for f in 0..t {
             let row = self.motion.row(f);
             for (i, j) in self.joints.iter().enumerate() {
-                let mut local_t = Vector3::new(j.offset[0], j.offset[1], j.offset[2]);
-                let mut r = Matrix3::<f64>::identity();
+                let mut translation = DVec3::from_array(j.offset);
+                let mut rotation = DMat3::IDENTITY;
                 for (k, ch) in j.channels.iter().enumerate() {
                     let v = row[j.first_channel + k];
                     if ch.is_position() {
-                        local_t[ch.axis()] += v;
+                        translation[ch.axis()] += v;
                     } else {
-                        r *= rot(ch.axis(), v);
+                        rotation *= rot(ch.axis(), v);
                     }
                 }
-                local_t *= length_scale;
-                let (wr, wp) = match j.parent {
-                    Some(p) => (rots[p] * r, pos[p] + rots[p] * local_t),
-                    None => (r, local_t),
+                let local = DAffine3::from_mat3_translation(rotation, translation * length_scale);
+                world[i] = match j.parent {
+                    Some(p) => world[p] * local,
+                    None => local,
                 };
-                rots[i] = wr;
-                pos[i] = wp;
+                let wp = world[i].translation;
                 for k in 0..3 {
                     out[[f, i, k]] = wp[k];
                 }
             }
             for (e, (i, off)) in ends.iter().enumerate() {
-                let o = Vector3::new(off[0], off[1], off[2]) * length_scale;
-                let p = pos[*i] + rots[*i] * o;
+                let p = world[*i].transform_point3(DVec3::from_array(*off) * length_scale);
                 for k in 0..3 {
                     out[[f, nj + e, k]] = p[k];
                 }
