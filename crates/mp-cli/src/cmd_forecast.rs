@@ -6,10 +6,10 @@ use std::sync::Arc;
 use anyhow::{bail, Context};
 use clap::Args;
 use mp_forecast::data::ForecastDataset;
-use mp_forecast::model::{dataset_for_skeleton, find_model_dir};
+use mp_forecast::model::find_model_dir;
 use mp_forecast::{
-    find_statue, ArForecaster, ArParams, ArSpace, ForecastModels, Forecaster, NearestNeighbour,
-    NnParams, StatueParams,
+    find_statue, map_to_model, model_dataset, ArForecaster, ArParams, ArSpace, ForecastModels,
+    Forecaster, MappedForecaster, NearestNeighbour, NnParams, StatueParams,
 };
 use mp_geom::io::read_track;
 use mp_geom::Track;
@@ -22,7 +22,9 @@ pub struct ForecastOpts {
     /// split is indexed). Default: the shared Penn Action train split, if present.
     #[arg(long)]
     pub train: Option<PathBuf>,
-    /// Model folder of the `ar` / `ar-pose` methods (default: models/forecast/<dataset>).
+    /// Model folder of the `ar` / `ar-pose` methods (default: models/forecast/<dataset>:
+    /// penn_action for 2D Penn-13, COCO-17 and BlazePose-33 tracks, msr_action3d for 3D MSR-20
+    /// tracks and BlazePose-33 world landmarks).
     #[arg(long)]
     pub models: Option<PathBuf>,
 }
@@ -32,8 +34,13 @@ fn load_models(track: &Track, dir: Option<&Path>) -> anyhow::Result<Arc<Forecast
         Some(d) => d.to_path_buf(),
         None => {
             let name = &track.skeleton().name;
-            let ds = dataset_for_skeleton(name).with_context(|| {
-                format!("no forecasting model for skeleton `{name}` (model folders are per data set: penn13 → penn_action, msr20 → msr_action3d); pass --models DIR")
+            let ds = model_dataset(track.skeleton(), track.dims()).with_context(|| {
+                format!(
+                    "no forecasting model for a {}D track of skeleton `{name}` (penn13, coco17, blazepose33 \
+                     in 2D → penn_action; msr20, blazepose33 world landmarks in 3D → msr_action3d); \
+                     pass --models DIR",
+                    track.dims()
+                )
             })?;
             find_model_dir(ds)?
         }
@@ -44,19 +51,35 @@ fn load_models(track: &Track, dir: Option<&Path>) -> anyhow::Result<Arc<Forecast
     ))
 }
 
-/// The learned forecaster (`latent`: AR on Φ; otherwise AR on Θ) for a track.
+/// The learned forecaster (`latent`: AR on Φ; otherwise AR on Θ) for a
+/// track, through the map onto the model's joints when the track has
+/// another skeleton (`mp_forecast::mapped`).
 pub fn ar_forecaster(
     track: &Track,
     opts: &ForecastOpts,
     latent: bool,
-) -> anyhow::Result<ArForecaster> {
+) -> anyhow::Result<Box<dyn Forecaster>> {
     let models = load_models(track, opts.models.as_deref())?;
+    let map = map_to_model(track.skeleton(), track.dims(), &models.manifest().joints)?;
     let space = if latent {
         ArSpace::Latent
     } else {
         ArSpace::Pose
     };
-    Ok(ArForecaster::new(models, space, ArParams::default())?)
+    let ar = ArForecaster::new(models, space, ArParams::default())?;
+    Ok(match map {
+        Some(map) => {
+            eprintln!(
+                "forecasting through the {} model: {} joints mapped onto {} ({} joints), the prediction carried back",
+                ar.models().manifest().dataset,
+                map.source().name,
+                map.target().name,
+                map.target().len()
+            );
+            Box::new(MappedForecaster::new(ar, map))
+        }
+        None => Box::new(ar),
+    })
 }
 
 /// The nearest-neighbour forecaster over the training split of `--train`.
@@ -91,8 +114,8 @@ pub fn predict_with(
     let past = track.slice_frames(0, observe)?;
     let f: Box<dyn Forecaster> = match method {
         "nn" => Box::new(nn_forecaster(opts)?),
-        "ar" => Box::new(ar_forecaster(track, opts, true)?),
-        "ar-pose" => Box::new(ar_forecaster(track, opts, false)?),
+        "ar" => ar_forecaster(track, opts, true)?,
+        "ar-pose" => ar_forecaster(track, opts, false)?,
         other => bail!("unknown forecasting method `{other}`"),
     };
     Ok(f.predict(&past, horizon)?)
@@ -101,7 +124,8 @@ pub fn predict_with(
 /// Arguments of `mp statue`.
 #[derive(Args, Debug)]
 pub struct StatueArgs {
-    /// Input track (Penn Action-13 or MSR-20 skeleton, or any track with --models).
+    /// Input track (Penn Action-13, COCO-17 or BlazePose-33 in 2D; MSR-20 or BlazePose-33 world
+    /// landmarks in 3D; or any track with the joints of --models).
     pub track: PathBuf,
     /// Use AR on poses (Θ) instead of AR on latents (Φ).
     #[arg(long)]
@@ -130,7 +154,7 @@ pub fn statue_cmd(a: &StatueArgs) -> anyhow::Result<()> {
         future_frames: a.future,
         filter_frames: a.filter,
     };
-    let s = find_statue(&f, &track, &params)?;
+    let s = find_statue(f.as_ref(), &track, &params)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&s)?);
     } else {

@@ -1,4 +1,5 @@
-//! `mp refine` (learned motion refinement of a 20-joint 3D track) and
+//! `mp refine` (learned motion refinement of a 20-joint 3D track or of
+//! BlazePose-33 world landmarks, `mp_refine::mapped`) and
 //! `mp concepts` (anchor concepts from MSR Action3D or a folder of tracks).
 
 use std::path::{Path, PathBuf};
@@ -12,6 +13,7 @@ use mp_geom::Track;
 use mp_pose::SessionParams;
 use mp_refine::concepts::Linkage;
 use mp_refine::eval_refine::{canonical_anchor_samples, msr_anchor_samples};
+use mp_refine::mapped::{msr20_map, refine_any, MappedRefinement};
 use mp_refine::motion::{bvh_to_msr20, HIP_CENTRE};
 use mp_refine::nets::{find_model_dir, RefineNets};
 use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode, TransitionMethod};
@@ -21,7 +23,8 @@ use mp_refine::{learn_concepts, ClusterMethod, ConceptParams, Concepts, SegmentP
 #[derive(Args, Debug)]
 pub struct RefineArgs {
     /// Input track: 20 MSR Action3D joints in 3D, metres (any format `mp_geom::io::read_track`
-    /// reads), or a CMU BVH file (mapped onto the 20 joints).
+    /// reads); BlazePose-33 world landmarks (`mp extract VIDEO --world`), refined through the 20
+    /// MSR joints and carried back; or a CMU BVH file (mapped onto the 20 joints).
     pub track: PathBuf,
     /// Output track (format by extension).
     #[arg(short, long)]
@@ -75,6 +78,8 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
     // BVH (CMU naming) is mapped onto the 20 MSR joints at 15 fps.
     let track = folder_track(&a.track, a.bvh_scale)
         .with_context(|| format!("reading {}", a.track.display()))?;
+    // Refuse what the networks cannot read before loading them.
+    msr20_map(&track).with_context(|| format!("refining {}", a.track.display()))?;
     let dir = match &a.models {
         Some(d) => d.clone(),
         None => find_model_dir()?,
@@ -114,9 +119,18 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
         ..base
     };
     let refiner = NetRefiner::new(&nets, &concepts, &params)?;
-    let r = refiner
-        .refine_track(&track, a.action)
+    let mapped = refine_any(&refiner, &track, a.action)
         .with_context(|| format!("refining {}", a.track.display()))?;
+    if let Some(map) = &mapped.map {
+        println!(
+            "{} joints mapped onto the {} MSR Action3D joints (hip centre, spine, neck, hands, feet and head derived); the refinement is carried back onto the {} joints",
+            map.source().name,
+            map.target().len(),
+            map.source().len()
+        );
+    }
+    let r = &mapped.msr;
+    let msr_track = &r.track;
     let rep = &r.report;
     let predicted = if rep.action_predicted {
         " (predicted)"
@@ -153,7 +167,7 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
                 rep.flagged_frames.len()
             );
             for run in &rep.repaired_runs {
-                let name = track
+                let name = msr_track
                     .skeleton()
                     .joints
                     .get(run.joint)
@@ -163,7 +177,7 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
         }
     }
     if params.mode == RefineMode::DetectorOnly {
-        return finish(a, &r, &track);
+        return finish(a, &mapped, &track);
     }
     let flawed: Vec<_> = rep.flawed_anchors().collect();
     if flawed.is_empty() {
@@ -202,20 +216,16 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
             );
         }
     }
-    finish(a, &r, &track)
+    finish(a, &mapped, &track)
 }
 
 /// Prints the overall change and writes the refined track and the report.
-fn finish(
-    a: &RefineArgs,
-    r: &mp_refine::pipeline::NetRefinement,
-    track: &Track,
-) -> anyhow::Result<()> {
+fn finish(a: &RefineArgs, r: &MappedRefinement, track: &Track) -> anyhow::Result<()> {
     let change = mp_refine::mpjpe_abs(&r.track, track).unwrap_or(f64::NAN);
     println!("mean joint change: {:.1} mm", change * 1e3);
     write_track(&a.output, &r.track).with_context(|| format!("writing {}", a.output.display()))?;
     if let Some(p) = &a.report {
-        std::fs::write(p, serde_json::to_string_pretty(&r.report)?)
+        std::fs::write(p, serde_json::to_string_pretty(&r.msr.report)?)
             .with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())

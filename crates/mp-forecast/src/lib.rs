@@ -15,6 +15,8 @@
 //!   latents to poses ([`ArSpace::Latent`], "AR on Φ"). The ablation
 //!   [`ArSpace::Pose`] ("AR on Θ") runs the same autoregressive network on
 //!   poses. Trained by `tools/forecast/train.py` (`cargo xtask train-forecast`).
+//! * [`mapped`]: the product's skeletons (COCO-17, BlazePose-33) on the
+//!   Penn Action / MSR Action3D models ([`MappedForecaster`]).
 //! * [`normalize`]: the root-relative, torso-scaled keypoint normalisation
 //!   shared with the training code.
 //! * [`eval`]: the evaluation protocol — PCK@0.05 (2D), MPJPE and PA-MPJPE (3D),
@@ -26,6 +28,7 @@ pub mod data;
 pub mod error;
 pub mod eval;
 pub mod forecaster;
+pub mod mapped;
 pub mod model;
 pub mod nn;
 pub mod normalize;
@@ -34,6 +37,7 @@ pub mod statue;
 pub use error::{ForecastError, Result};
 pub use eval::{evaluate, EvalClip, EvalParams, MethodReport};
 pub use forecaster::{Constant, Forecaster, LoopUnroll};
+pub use mapped::{map_to_model, model_dataset, MappedForecaster};
 pub use model::{ArForecaster, ArParams, ArSpace, ForecastModels};
 pub use nn::{NearestNeighbour, NnParams};
 pub use statue::{find_statue, Statue, StatueParams};

@@ -3,7 +3,9 @@
 //! * [`Track`]: `T × J × D` joint positions (pixels or metres) with per-joint
 //!   confidence, a frame rate and a [`Skeleton`].
 //! * [`skeleton`]: COCO-17, BlazePose-33, Penn Action-13, MSR Action3D-20 and
-//!   BVH hierarchies as data, with bones and the mapping to COCO-17.
+//!   BVH hierarchies as data, with bones and the mapping to COCO-17;
+//!   [`skeleton_map`]: mappings between skeletons (COCO-17 / BlazePose-33 →
+//!   Penn-13, BlazePose-33 world landmarks → MSR-20) and back.
 //! * [`io`]: readers for the data sets and common keypoint formats, writers
 //!   for the project's own npz + JSON formats.
 //! * [`fit`]: primitive fitting (stationary, line, circle, cubic spline) in 2D
@@ -22,6 +24,7 @@ pub mod paths;
 pub mod performer;
 pub mod primitive;
 pub mod skeleton;
+pub mod skeleton_map;
 pub mod track;
 
 pub use cancel::CancelToken;

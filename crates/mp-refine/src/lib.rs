@@ -25,6 +25,8 @@
 //!   then anchor recognition, GMM anchor scores, anchor repair (for
 //!   generated motion, [`pipeline::NetRefineParams::for_generated`]: flawed
 //!   anchors moved to their nearest concept), transition refinement.
+//! * [`mapped`]: refinement of BlazePose-33 world landmarks through the 20
+//!   MSR joints, carried back onto the input's joints.
 //! * [`quality`], [`eval_refine`], [`eval_generated`], [`eval_ablation`]: FID, accuracy,
 //!   diversity, multimodality and the evaluation on injected flaws and
 //!   generated motion; [`eval_split`]: the subjects an evaluation scores
@@ -39,6 +41,7 @@ pub mod eval_generated;
 pub mod eval_refine;
 pub mod eval_split;
 pub mod flaws;
+pub mod mapped;
 pub mod motion;
 pub mod nets;
 pub mod pipeline;

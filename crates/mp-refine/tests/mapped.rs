@@ -1,0 +1,54 @@
+//! Refinement of BlazePose-33 world landmarks (MediaPipe's own, on the
+//! shared golf swing) through the 20 MSR joints: the output keeps the
+//! input's skeleton and frames, is finite, and stays close to the input.
+//! Skipped, with a message, where the shared data are absent.
+
+use mp_geom::io::datasets::MediaPipeReference;
+use mp_geom::metrics::nanmean;
+use mp_refine::mapped::refine_any;
+use mp_refine::nets::{find_model_dir, RefineNets};
+use mp_refine::pipeline::{NetRefineParams, NetRefiner};
+use mp_refine::Concepts;
+
+#[test]
+fn blazepose_world_landmarks_are_refined_on_their_own_skeleton() {
+    let Some(path) = mp_geom::paths::data_file("reference_keypoints/golf_swing.npz") else {
+        println!(
+            "skipped: the shared reference_keypoints/golf_swing.npz is absent (set MP_DATA_DIR)"
+        );
+        return;
+    };
+    let world = MediaPipeReference::open(&path)
+        .unwrap()
+        .world
+        .slice_frames(0, 90)
+        .unwrap();
+    let dir = find_model_dir().expect("models/refine is part of the repository");
+    let nets = RefineNets::load_default()
+        .unwrap_or_else(|e| panic!("loading {}: {e} (run `cargo xtask setup`)", dir.display()));
+    let concepts =
+        Concepts::from_json(&std::fs::read_to_string(dir.join("concepts.json")).unwrap()).unwrap();
+    let params = NetRefineParams::default();
+    let refiner = NetRefiner::new(&nets, &concepts, &params).unwrap();
+    let r = refine_any(&refiner, &world, None).unwrap();
+    assert_eq!(r.track.skeleton().name, "blazepose33");
+    assert_eq!(r.track.n_frames(), world.n_frames());
+    assert_eq!(r.msr.track.skeleton().name, "msr20");
+    assert!(r.track.positions().iter().all(|v| v.is_finite()));
+    // the refinement corrects flaws; it does not move a clean capture far
+    let change: Vec<f64> = (0..world.n_frames())
+        .flat_map(|f| {
+            let (a, b) = (&r.track, &world);
+            (0..33).map(move |j| {
+                let d = &a.point(f, j) - &b.point(f, j);
+                d.dot(&d).sqrt()
+            })
+        })
+        .collect();
+    let mean = nanmean(&change);
+    println!(
+        "golf swing, 90 frames: mean landmark change {:.1} mm",
+        mean * 1e3
+    );
+    assert!(mean < 0.05, "mean change {mean} m");
+}
