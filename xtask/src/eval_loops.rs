@@ -20,11 +20,11 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_abstract::pipeline::predict_constant;
 use mp_abstract::repetition::{
-    estimate_period, iom, iou, segment_repetitions, PeriodParams, PeriodicSegment, SegmentParams,
+    estimate_period, segment_repetitions, PeriodParams, PeriodicSegment, SegmentParams,
 };
 use mp_abstract::{analyze, predict, AbstractParams, PredictParams, RepetitiveInterval};
 use mp_concrete::Scale;
-use mp_geom::io::datasets::{AistPlusPlus, CmuFeatures, PennAction};
+use mp_geom::io::datasets::{AistPlusPlus, PennAction};
 use mp_geom::io::npz::Npz;
 use mp_geom::Track;
 use rayon::prelude::*;
@@ -104,7 +104,7 @@ pub fn run(a: &EvalLoopsArgs) -> anyhow::Result<()> {
         }
         let npz = Npz::open(&files[0])?;
         if npz.contains("X") && npz.contains("labels") {
-            eval_cmu(&files)?
+            crate::eval_intervals::eval_cmu(&files)?
         } else if npz.contains("keypoints2d") {
             eval_aist(&files)?
         } else if npz.contains("keypoints") && npz.contains("offsets") && npz.contains("action") {
@@ -149,52 +149,6 @@ fn summary(v: &Value) -> Value {
     }
 }
 
-/// Maximal runs of equal labels: `(label, start, end)`.
-fn blocks(labels: &[i64]) -> Vec<(i64, usize, usize)> {
-    let mut out = Vec::new();
-    let mut s = 0;
-    for i in 1..=labels.len() {
-        if i == labels.len() || labels[i] != labels[s] {
-            out.push((labels[s], s, i));
-            s = i;
-        }
-    }
-    out
-}
-
-/// Counters of the repetition segmenter over several files.
-#[derive(Default)]
-struct SegCounts {
-    det: usize,
-    tp_det_iom: usize,
-    tp_gt_iom: usize,
-    tp_det_iou: usize,
-    tp_gt_iou: usize,
-    one_to_one: usize,
-}
-
-/// Greedy one-to-one matching of detections and labels by decreasing IoM (> 0.5):
-/// the number of matched pairs.
-fn one_to_one(det: &[(usize, usize)], gt: &[(usize, usize)]) -> usize {
-    let mut pairs: Vec<(f64, usize, usize)> = det
-        .iter()
-        .enumerate()
-        .flat_map(|(a, x)| gt.iter().enumerate().map(move |(b, y)| (iom(*x, *y), a, b)))
-        .filter(|p| p.0 > 0.5)
-        .collect();
-    pairs.sort_by(|x, y| y.0.total_cmp(&x.0));
-    let (mut ud, mut ug) = (vec![false; det.len()], vec![false; gt.len()]);
-    let mut n = 0;
-    for (_, a, b) in pairs {
-        if !ud[a] && !ug[b] {
-            ud[a] = true;
-            ug[b] = true;
-            n += 1;
-        }
-    }
-    n
-}
-
 fn segments_json(segs: &[PeriodicSegment], fps: f64) -> Value {
     Value::Array(
         segs.iter()
@@ -206,102 +160,7 @@ fn segments_json(segs: &[PeriodicSegment], fps: f64) -> Value {
     )
 }
 
-fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
-    let mut by_file = Map::new();
-    let mut seg = SegCounts::default();
-    let (mut loops_one, mut whole_tp_gt) = (0usize, 0usize);
-    let (mut det, mut gt) = (0usize, 0usize);
-    let (mut tp_det_iom, mut tp_gt_iom, mut tp_det_iou, mut tp_gt_iou) =
-        (0usize, 0usize, 0usize, 0usize);
-    for f in files {
-        let c = CmuFeatures::open(f)?;
-        let an = analyze(&c.track, &AbstractParams::default())
-            .with_context(|| format!("{}", f.display()))?;
-        let gts = blocks(&c.labels);
-        let segs = segment_repetitions(&c.track, &SegmentParams::default())
-            .with_context(|| format!("{}", f.display()))?;
-        let d: Vec<(usize, usize)> = an
-            .intervals
-            .iter()
-            .map(|i| (i.start_frame, i.end_frame))
-            .collect();
-        let g: Vec<(usize, usize)> = gts.iter().map(|b| (b.1, b.2)).collect();
-        let m_iom =
-            |x: &(usize, usize), ys: &[(usize, usize)]| ys.iter().any(|y| iom(*x, *y) > 0.5);
-        let m_iou =
-            |x: &(usize, usize), ys: &[(usize, usize)]| ys.iter().any(|y| iou(*x, *y) >= 0.5);
-        let ds: Vec<(usize, usize)> = segs.iter().map(|x| (x.start_frame, x.end_frame)).collect();
-        let whole = [(0usize, c.track.n_frames())];
-        let s_td_iom = ds.iter().filter(|x| m_iom(x, &g)).count();
-        let s_tg_iom = g.iter().filter(|x| m_iom(x, &ds)).count();
-        let s_td_iou = ds.iter().filter(|x| m_iou(x, &g)).count();
-        let s_tg_iou = g.iter().filter(|x| m_iou(x, &ds)).count();
-        let s_one = one_to_one(&ds, &g);
-        let l_one = one_to_one(&d, &g);
-        seg.det += ds.len();
-        seg.tp_det_iom += s_td_iom;
-        seg.tp_gt_iom += s_tg_iom;
-        seg.tp_det_iou += s_td_iou;
-        seg.tp_gt_iou += s_tg_iou;
-        seg.one_to_one += s_one;
-        loops_one += l_one;
-        whole_tp_gt += g.iter().filter(|x| m_iom(x, &whole)).count();
-        let td_iom = d.iter().filter(|x| m_iom(x, &g)).count();
-        let tg_iom = g.iter().filter(|x| m_iom(x, &d)).count();
-        let td_iou = d.iter().filter(|x| m_iou(x, &g)).count();
-        let tg_iou = g.iter().filter(|x| m_iou(x, &d)).count();
-        det += d.len();
-        gt += g.len();
-        tp_det_iom += td_iom;
-        tp_gt_iom += tg_iom;
-        tp_det_iou += td_iou;
-        tp_gt_iou += tg_iou;
-        let name = f
-            .file_name()
-            .map(|s| s.to_string_lossy().to_string())
-            .unwrap_or_default();
-        by_file.insert(
-            name,
-            json!({
-                "frames": c.track.n_frames(),
-                "primitives": an.prims.len(),
-                "detected": intervals_json(&an.intervals, c.track.fps()),
-                "labelled": gts.iter().map(|b| json!({"label": c.action_names.get((b.0 - 1).max(0) as usize), "start_frame": b.1, "end_frame": b.2})).collect::<Vec<_>>(),
-                "precision_iom": ratio(td_iom, d.len()), "recall_iom": ratio(tg_iom, g.len()),
-                "precision_iou": ratio(td_iou, d.len()), "recall_iou": ratio(tg_iou, g.len()),
-                "segmenter": {
-                    "detected": segments_json(&segs, c.track.fps()),
-                    "precision_iom": ratio(s_td_iom, ds.len()), "recall_iom": ratio(s_tg_iom, g.len()),
-                    "precision_iou": ratio(s_td_iou, ds.len()), "recall_iou": ratio(s_tg_iou, g.len()),
-                    "precision_iom_one_to_one": ratio(s_one, ds.len()), "recall_iom_one_to_one": ratio(s_one, g.len()),
-                },
-            }),
-        );
-    }
-    Ok(json!({
-        "kind": "cmu_mocap6_features",
-        "precision_iom_one_to_one": ratio(loops_one, det), "recall_iom_one_to_one": ratio(loops_one, gt),
-        "segmenter": {
-            "method": "mp_abstract::repetition::segment_repetitions (local periodicity, dynamic programming)",
-            "detected": seg.det,
-            "precision_iom": ratio(seg.tp_det_iom, seg.det), "recall_iom": ratio(seg.tp_gt_iom, gt),
-            "precision_iou": ratio(seg.tp_det_iou, seg.det), "recall_iou": ratio(seg.tp_gt_iou, gt),
-            "precision_iom_one_to_one": ratio(seg.one_to_one, seg.det), "recall_iom_one_to_one": ratio(seg.one_to_one, gt),
-            "params": serde_json::to_value(SegmentParams::default())?,
-        },
-        "whole_recording_baseline": {
-            "definition": "one interval spanning each whole recording: precision/recall at IoM > 0.5 (any-match), showing how lenient that criterion is when intervals may span several blocks",
-            "precision_iom": 1.0, "recall_iom": ratio(whole_tp_gt, gt),
-        },
-        "matching_definition": "precision_iom/recall_iom: a detection (label) counts when it overlaps any label (detection) with IoM > 0.5; *_one_to_one: greedy one-to-one matching by IoM (each detection and each label used once)",
-        "detected": det, "labelled": gt,
-        "precision_iom": ratio(tp_det_iom, det), "recall_iom": ratio(tp_gt_iom, gt),
-        "precision_iou": ratio(tp_det_iou, det), "recall_iou": ratio(tp_gt_iou, gt),
-        "by_file": by_file,
-    }))
-}
-
-fn ratio(a: usize, b: usize) -> f64 {
+pub(crate) fn ratio(a: usize, b: usize) -> f64 {
     if b == 0 {
         0.0
     } else {

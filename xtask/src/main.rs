@@ -5,6 +5,7 @@ mod eval_concrete;
 mod eval_count;
 mod eval_forecast;
 mod eval_grammar;
+mod eval_intervals;
 mod eval_loops;
 mod eval_pose;
 mod eval_refine;

@@ -96,6 +96,12 @@ pub struct CountParams {
     /// Keypoints count only where a person is found in at least this fraction
     /// of the frames. Default 0.5.
     pub min_found_fraction: f64,
+    /// A unitless feature track with more channels than this (frame
+    /// thumbnails: 1,024) is pooled into this many channels (means of
+    /// consecutive channels: for a row-major thumbnail, runs of cells along
+    /// its rows) before the interval search, whose cost grows with the
+    /// channels; the period is still read from every channel. Default 64.
+    pub max_segment_channels: usize,
 }
 
 impl Default for CountParams {
@@ -108,6 +114,7 @@ impl Default for CountParams {
             period_tolerance: 0.25,
             rest_fraction: 0.2,
             min_found_fraction: 0.5,
+            max_segment_channels: 64,
         }
     }
 }
@@ -132,6 +139,12 @@ impl CountParams {
         unit("rest_fraction", self.rest_fraction)?;
         unit("min_found_fraction", self.min_found_fraction)?;
         AbstractError::check_non_negative("period_tolerance", self.period_tolerance)?;
+        if self.max_segment_channels == 0 {
+            return Err(AbstractError::param(
+                "max_segment_channels",
+                "must be at least 1",
+            ));
+        }
         Ok(())
     }
 }
@@ -251,13 +264,16 @@ pub fn count_repetitions(
     };
     let whole = estimate_period(signal, 0, n, period_params)?;
     let strength = whole.map(|e| e.strength.max(0.0)).unwrap_or(0.0);
-    // Intervals of at least two cycles: shorter ones are too uncertain to
-    // stand for an activity of their own.
-    let segs: Vec<PeriodicSegment> = segment_repetitions(signal, &params.segment)?
-        .into_iter()
-        .filter(|s| s.count >= 2.0)
-        .collect();
-    if several_activities(&segs, params.period_tolerance) {
+    let segs = match pooled(signal, params.max_segment_channels)? {
+        Some(p) => segment_repetitions(&p, &params.segment)?,
+        None => segment_repetitions(signal, &params.segment)?,
+    };
+    // Intervals of at least two cycles decide whether there are several
+    // activities (shorter ones are too uncertain to stand for an activity of
+    // their own); then every interval is counted.
+    let substantial: Vec<PeriodicSegment> =
+        segs.iter().filter(|s| s.count >= 2.0).cloned().collect();
+    if several_activities(&substantial, params.period_tolerance) {
         let intervals: Vec<CountedInterval> = segs
             .iter()
             .map(|s| CountedInterval::new(s.start_frame, s.end_frame, s.period_frames, s.score))
@@ -345,6 +361,38 @@ pub fn count_signals(
     }
 }
 
+/// A unitless track with more than `max` channels, pooled into `max` channels
+/// (each the mean of a run of consecutive channels); `None` when no pooling
+/// is needed.
+fn pooled(track: &Track, max: usize) -> Result<Option<Track>> {
+    let (n, j, d) = track.positions().dim();
+    let c = j * d;
+    if track.units() != mp_geom::Units::Unitless || c <= max {
+        return Ok(None);
+    }
+    let pos = track.positions();
+    let mut out = ndarray::Array3::<f64>::zeros((n, max, 1));
+    let mut counts = vec![0usize; max];
+    for k in 0..c {
+        counts[k * max / c] += 1;
+    }
+    for t in 0..n {
+        for k in 0..c {
+            out[[t, k * max / c, 0]] += pos[[t, k / d, k % d]];
+        }
+        for (g, &m) in counts.iter().enumerate() {
+            out[[t, g, 0]] /= m.max(1) as f64;
+        }
+    }
+    Ok(Some(Track::new(
+        out,
+        None,
+        track.fps(),
+        mp_geom::Units::Unitless,
+        mp_geom::Skeleton::generic(max),
+    )?))
+}
+
 /// Fraction of frames with at least one valid joint.
 pub fn found_fraction(track: &Track) -> f64 {
     let n = track.n_frames();
@@ -420,7 +468,7 @@ fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, us
     let mut sorted = local.clone();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[n / 2];
-    if !(median > 0.0) {
+    if median.is_nan() || median <= 0.0 {
         return Ok((0, n));
     }
     let first = local.iter().position(|&v| v >= fraction * median);

@@ -190,7 +190,7 @@ fn synthesis_rolls_up_the_loop() {
     assert_eq!(loops.len(), 1);
     assert_eq!(prog.loop_indices(), vec![lead]);
     assert_eq!(prog.stmts.len(), lead + 1 + 2);
-    assert_eq!(prog.expected_frames() > 0, true);
+    assert!(prog.expected_frames() > 0);
 }
 
 #[test]
