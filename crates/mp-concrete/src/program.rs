@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use mp_geom::io::{binary, write_atomic};
 use mp_geom::{Primitive, PrimitiveKind, Skeleton, Units};
 use serde::{Deserialize, Serialize};
 
@@ -121,8 +122,8 @@ impl Program {
     /// Checks that the parts agree: fps finite and > 0, D ≥ 1, at least one
     /// joint and one segment, unique non-empty joint names, durations ≥ 1,
     /// one primitive per joint in every segment, every primitive of dimension
-    /// D with finite parameters, circles with radius ≥ 0 (and D ≥ 2) and, when
-    /// given, two plane axes of length D.
+    /// D with finite parameters, lines whose velocity has D values, circles
+    /// with radius ≥ 0 (and D ≥ 2) and, when given, two plane axes of length D.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(ConcreteError::Program(m));
         if !(self.fps.is_finite() && self.fps > 0.0) {
@@ -169,6 +170,15 @@ impl Program {
                     return bad(format!(
                         "segment {si}, joint `{name}`: non-finite parameter"
                     ));
+                }
+                if let Primitive::Line { start, velocity } = p {
+                    if velocity.len() != start.len() {
+                        return bad(format!(
+                            "segment {si}, joint `{name}`: line velocity has {} values, start {}",
+                            velocity.len(),
+                            start.len()
+                        ));
+                    }
                 }
                 if let Primitive::Circle { radius, axes, .. } = p {
                     if *radius < 0.0 {
@@ -219,17 +229,54 @@ impl Program {
         crate::dsl::parse(text)
     }
 
-    /// Reads a program from a file: JSON when the extension is `.json`, DSL text otherwise.
+    /// Encodes the program in the compact binary form (`.mpb`): the framing
+    /// of [`mp_geom::io::binary`] with magic `mp-program` and version 1, then
+    /// the record `fps: f64`, `units` (variant 0 = px, 1 = m, 2 = unitless),
+    /// `dims`, `skeleton`, `joints`, `segments` (each `duration_frames`, then
+    /// per joint a primitive: variant 0 stationary `{point}`, 1 line `{start,
+    /// velocity}`, 2 circle `{center, radius, angle_start, angle_vel,
+    /// angle_acc, axes}`, 3 spline `{coeffs}`). Numbers are exact `f64`s, so
+    /// [`Program::from_bincode`] gives back an equal program. The program is
+    /// validated first.
+    pub fn to_bincode(&self) -> Result<Vec<u8>> {
+        self.validate()?;
+        Ok(binary::encode(
+            BINARY_MAGIC,
+            BINARY_VERSION,
+            &ProgramBin::from(self),
+        )?)
+    }
+
+    /// Decodes a program written by [`Program::to_bincode`] and validates it
+    /// as [`Program::from_json`] does. Corrupt or truncated bytes are a
+    /// [`ConcreteError::Geom`] format error, an inconsistent program a
+    /// [`ConcreteError::Program`]; neither panics.
+    pub fn from_bincode(bytes: &[u8]) -> Result<Self> {
+        Self::from_bincode_at(bytes, Path::new("bincode program"))
+    }
+
+    fn from_bincode_at(bytes: &[u8], source: &Path) -> Result<Self> {
+        let rec: ProgramBin = binary::decode(BINARY_MAGIC, BINARY_VERSION, bytes, source)?;
+        let p = Program::try_from(rec)?;
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Reads a program from a file: JSON when the extension is `.json`, the
+    /// binary form when it is `.mpb`, DSL text otherwise.
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| ConcreteError::Io {
+        let io_err = |source| ConcreteError::Io {
             path: path.into(),
             source,
-        })?;
-        let res = if is_json(path) {
-            Self::from_json(&text)
-        } else {
-            Self::from_dsl(&text)
+        };
+        let res = match Format::of(path) {
+            Format::Binary => {
+                let bytes = std::fs::read(path).map_err(io_err)?;
+                Self::from_bincode_at(&bytes, path)
+            }
+            Format::Json => Self::from_json(&std::fs::read_to_string(path).map_err(io_err)?),
+            Format::Dsl => Self::from_dsl(&std::fs::read_to_string(path).map_err(io_err)?),
         };
         res.map_err(|e| match e {
             ConcreteError::Parse { err, .. } => ConcreteError::Parse {
@@ -245,24 +292,186 @@ impl Program {
         })
     }
 
-    /// Writes a program to a file: JSON when the extension is `.json`, lossless DSL text otherwise.
+    /// Writes a program to a file: JSON when the extension is `.json`, the
+    /// binary form when it is `.mpb`, lossless DSL text otherwise. Atomic
+    /// (a temporary file in the same folder renamed into place).
     pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         self.validate()?;
-        let text = if is_json(path) {
-            self.to_json()?
-        } else {
-            self.to_dsl()
+        let bytes = match Format::of(path) {
+            Format::Binary => self.to_bincode()?,
+            Format::Json => self.to_json()?.into_bytes(),
+            Format::Dsl => self.to_dsl().into_bytes(),
         };
-        std::fs::write(path, text).map_err(|source| ConcreteError::Io {
-            path: path.into(),
-            source,
-        })
+        Ok(write_atomic(path, &bytes)?)
     }
 }
 
-fn is_json(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+/// Magic bytes that open the binary program format.
+pub const BINARY_MAGIC: &[u8] = b"mp-program";
+/// Version of the binary program format.
+pub const BINARY_VERSION: u32 = 1;
+
+/// File formats of [`Program::read`] / [`Program::write`], by extension.
+enum Format {
+    Json,
+    Binary,
+    Dsl,
+}
+
+impl Format {
+    fn of(path: &Path) -> Self {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("json") => Format::Json,
+            Some("mpb") => Format::Binary,
+            _ => Format::Dsl,
+        }
+    }
+}
+
+/// The binary record of a program. [`Primitive`] is internally tagged in
+/// JSON (`"type": "line"`), which bincode cannot decode, so the binary form
+/// mirrors it with an externally tagged enum (variant index, then fields).
+#[derive(Serialize, Deserialize)]
+struct ProgramBin {
+    fps: f64,
+    units: Units,
+    dims: u64,
+    skeleton: String,
+    joints: Vec<String>,
+    segments: Vec<SegmentBin>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct SegmentBin {
+    duration_frames: u64,
+    primitives: Vec<PrimitiveBin>,
+}
+
+#[derive(Serialize, Deserialize)]
+enum PrimitiveBin {
+    Stationary {
+        point: Vec<f64>,
+    },
+    Line {
+        start: Vec<f64>,
+        velocity: Vec<f64>,
+    },
+    Circle {
+        center: Vec<f64>,
+        radius: f64,
+        angle_start: f64,
+        angle_vel: f64,
+        angle_acc: f64,
+        axes: Vec<Vec<f64>>,
+    },
+    Spline {
+        coeffs: Vec<[f64; 4]>,
+    },
+}
+
+impl From<&Primitive> for PrimitiveBin {
+    fn from(p: &Primitive) -> Self {
+        match p.clone() {
+            Primitive::Stationary { point } => PrimitiveBin::Stationary { point },
+            Primitive::Line { start, velocity } => PrimitiveBin::Line { start, velocity },
+            Primitive::Circle {
+                center,
+                radius,
+                angle_start,
+                angle_vel,
+                angle_acc,
+                axes,
+            } => PrimitiveBin::Circle {
+                center,
+                radius,
+                angle_start,
+                angle_vel,
+                angle_acc,
+                axes,
+            },
+            Primitive::Spline { coeffs } => PrimitiveBin::Spline { coeffs },
+        }
+    }
+}
+
+impl From<PrimitiveBin> for Primitive {
+    fn from(p: PrimitiveBin) -> Self {
+        match p {
+            PrimitiveBin::Stationary { point } => Primitive::Stationary { point },
+            PrimitiveBin::Line { start, velocity } => Primitive::Line { start, velocity },
+            PrimitiveBin::Circle {
+                center,
+                radius,
+                angle_start,
+                angle_vel,
+                angle_acc,
+                axes,
+            } => Primitive::Circle {
+                center,
+                radius,
+                angle_start,
+                angle_vel,
+                angle_acc,
+                axes,
+            },
+            PrimitiveBin::Spline { coeffs } => Primitive::Spline { coeffs },
+        }
+    }
+}
+
+impl From<&Program> for ProgramBin {
+    fn from(p: &Program) -> Self {
+        ProgramBin {
+            fps: p.fps,
+            units: p.units,
+            dims: p.dims as u64,
+            skeleton: p.skeleton.clone(),
+            joints: p.joints.clone(),
+            segments: p
+                .segments
+                .iter()
+                .map(|s| SegmentBin {
+                    duration_frames: s.duration_frames as u64,
+                    primitives: s.primitives.iter().map(PrimitiveBin::from).collect(),
+                })
+                .collect(),
+        }
+    }
+}
+
+impl TryFrom<ProgramBin> for Program {
+    type Error = ConcreteError;
+    fn try_from(r: ProgramBin) -> Result<Self> {
+        let size = |v: u64, what: &str| {
+            usize::try_from(v).map_err(|_| {
+                ConcreteError::Program(format!("{what} {v} does not fit this machine"))
+            })
+        };
+        Ok(Program {
+            fps: r.fps,
+            units: r.units,
+            dims: size(r.dims, "dims")?,
+            skeleton: r.skeleton,
+            joints: r.joints,
+            segments: r
+                .segments
+                .into_iter()
+                .enumerate()
+                .map(|(i, s)| {
+                    Ok(Segment {
+                        duration_frames: size(
+                            s.duration_frames,
+                            &format!("segment {i}: duration"),
+                        )?,
+                        primitives: s.primitives.into_iter().map(Primitive::from).collect(),
+                    })
+                })
+                .collect::<Result<_>>()?,
+        })
+    }
 }

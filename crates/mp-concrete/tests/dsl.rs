@@ -1,4 +1,5 @@
-//! DSL and JSON: lossless round trips, the paper's notation, and errors with positions.
+//! DSL, JSON and the binary form: lossless round trips, the paper's notation,
+//! and errors with positions.
 
 use mp_concrete::dsl::{self, parse, print, print_pretty};
 use mp_concrete::{ConcreteError, Program, Segment};
@@ -109,6 +110,14 @@ proptest! {
     #[test]
     fn json_roundtrip(p in program()) {
         let q = Program::from_json(&p.to_json().unwrap()).unwrap();
+        prop_assert_eq!(q, p);
+    }
+
+    #[test]
+    fn bincode_roundtrip(p in program()) {
+        let q = Program::from_bincode(&p.to_bincode().unwrap()).unwrap();
+        // Bit-exact numbers, signed zeros included.
+        prop_assert_eq!(print(&q), print(&p));
         prop_assert_eq!(q, p);
     }
 
@@ -336,11 +345,17 @@ fn json_rejects_inconsistent_programs() {
 fn file_round_trip_by_extension() {
     let dir = tempfile::tempdir().unwrap();
     let p = paper_program();
-    for name in ["p.txt", "p.json", "p.mp"] {
+    for name in ["p.txt", "p.json", "p.mp", "p.mpb", "P.MPB"] {
         let path = dir.path().join(name);
         p.write(&path).unwrap();
         assert_eq!(Program::read(&path).unwrap(), p, "{name}");
     }
+    assert_eq!(
+        std::fs::read(dir.path().join("p.mpb")).unwrap(),
+        p.to_bincode().unwrap()
+    );
+    // Writes are atomic: only the final files remain.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 5);
     let bad = dir.path().join("bad.txt");
     std::fs::write(
         &bad,

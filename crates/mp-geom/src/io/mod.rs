@@ -3,8 +3,10 @@
 //! * [`npz`]: `.npy`/`.npz` of any numeric, boolean or unicode dtype.
 //! * [`datasets`]: the shared data sets (Penn Action, AIST++, MSR Action3D,
 //!   CMU mocap features, MediaPipe reference keypoints).
-//! * [`native`]: the project's own track formats (`.npz` and `.json`), which
-//!   read back identically.
+//! * [`native`]: the project's own track formats (`.npz`, `.json` and the
+//!   compact binary `.mpt`), which read back identically.
+//! * [`binary`]: the binary framing (magic, version, bincode record) shared
+//!   by `.mpt` tracks and `.mpb` programs.
 //! * [`csv`]: long (`frame,joint,x,y[,z][,confidence]`) and wide
 //!   (`j0_x,j0_y,…`) CSV tables.
 //! * [`openpose`]: OpenPose per-frame JSON folders (BODY_25, COCO-18) and
@@ -17,12 +19,15 @@
 //! Every write goes to a temporary file in the destination folder that is
 //! renamed into place, so a crash never leaves a half-written file.
 
+pub mod binary;
 pub mod bvh;
 pub mod csv;
 pub mod datasets;
 pub mod native;
 pub mod npz;
 pub mod openpose;
+
+pub use native::{track_from_bincode, track_to_bincode};
 
 use std::io::Write;
 use std::path::Path;
@@ -174,7 +179,8 @@ pub fn read_track(path: impl AsRef<Path>) -> Result<Track> {
 /// * `.json`: the project's format, an AlphaPose result list, or a single
 ///   OpenPose frame;
 /// * `.csv`: long or wide CSV;
-/// * `.bvh`: BVH, forward kinematics to joint positions.
+/// * `.bvh`: BVH, forward kinematics to joint positions;
+/// * `.mpt`: the project's binary form ([`track_from_bincode`]).
 pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
     let path = path.as_ref();
     opts.validate()?;
@@ -235,6 +241,7 @@ pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Tra
             }
         }
         "csv" => csv::read_csv(path, opts),
+        "mpt" => native::read_track_bincode(path),
         "bvh" => {
             let b = bvh::Bvh::read(path)?;
             b.to_track(&bvh::BvhTrackParams {
@@ -246,23 +253,25 @@ pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Tra
         other => Err(GeomError::format(
             path,
             format!(
-                "unknown track file extension `{other}` (npz, npy, json, csv, bvh or a folder)"
+                "unknown track file extension `{other}` (npz, npy, json, csv, bvh, mpt or a folder)"
             ),
         )),
     }
 }
 
 /// Writes a track in the project's format chosen by extension: `.npz`
-/// (compressed), `.json`, or `.csv` (wide). Atomic (temporary file + rename).
+/// (compressed), `.json`, `.csv` (wide) or `.mpt` (binary). Atomic
+/// (temporary file + rename).
 pub fn write_track(path: impl AsRef<Path>, track: &Track) -> Result<()> {
     let path = path.as_ref();
     match extension(path).as_str() {
         "npz" => native::write_track_npz(path, track),
         "json" => native::write_track_json(path, track),
         "csv" => csv::write_csv(path, track, csv::CsvLayout::Wide),
+        "mpt" => native::write_track_bincode(path, track),
         other => Err(GeomError::format(
             path,
-            format!("cannot write tracks as `{other}` (use .npz, .json or .csv)"),
+            format!("cannot write tracks as `{other}` (use .npz, .json, .csv or .mpt)"),
         )),
     }
 }

@@ -19,12 +19,20 @@
 //! {name, joints, bones, coco17, root}, "positions": [[[x, y(, z)] per joint]
 //! per frame], "confidence": [[c per joint] per frame]}`. Floats are written
 //! with the shortest representation that reads back to the same `f64`.
+//!
+//! **Binary** (`.mpt`, compact, exact): the framing of [`super::binary`]
+//! with magic `mp-track` and version 1, then the record `fps: f64`,
+//! `units` (variant 0 = px, 1 = m, 2 = unitless), `skeleton {name, joints,
+//! bones, coco17, root}`, `shape: [T, J, D]`, `positions` (`T·J·D` f64,
+//! row-major) and `confidence` (`T·J` f64, row-major). See
+//! [`track_to_bincode`] / [`track_from_bincode`].
 
 use std::path::Path;
 
 use ndarray::{arr0, Array1, Array2, Array3, Ix2, Ix3};
 use serde::{Deserialize, Serialize};
 
+use super::binary;
 use super::npz::{Npz, NpzOut};
 use super::{infer_skeleton, write_atomic, ReadOptions};
 use crate::error::{GeomError, Result};
@@ -35,6 +43,10 @@ use crate::track::{Track, Units};
 pub const JSON_FORMAT: &str = "mp-track";
 /// Version written in both formats.
 pub const FORMAT_VERSION: i64 = 1;
+/// Magic bytes that open the binary track format.
+pub const BINARY_MAGIC: &[u8] = b"mp-track";
+/// Version of the binary track format.
+pub const BINARY_VERSION: u32 = 1;
 
 /// Encodes a track as compressed npz bytes.
 pub fn track_to_npz_bytes(track: &Track) -> Result<Vec<u8>> {
@@ -290,16 +302,7 @@ pub fn track_from_json_value(value: serde_json::Value, path: &Path) -> Result<Tr
             conf[[ti, ji]] = c;
         }
     }
-    let sk = &doc.skeleton;
-    if sk.bones.iter().any(|&(a, b)| a >= j || b >= j)
-        || sk.coco17.iter().flatten().any(|&c| c >= j)
-        || sk.root.is_some_and(|r| r >= j)
-    {
-        return Err(GeomError::format(
-            path,
-            format!("skeleton `{}` refers to a joint outside 0..{j}", sk.name),
-        ));
-    }
+    check_skeleton_indices(&doc.skeleton, j, path)?;
     Track::new(pos, Some(conf), doc.fps, doc.units, doc.skeleton)
         .map_err(|e| GeomError::format(path, e.to_string()))
 }
@@ -311,6 +314,109 @@ pub fn read_track_json(path: impl AsRef<Path>) -> Result<Track> {
     let value: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| GeomError::format(path, format!("invalid JSON: {e}")))?;
     track_from_json_value(value, path)
+}
+
+#[derive(Serialize, Deserialize)]
+struct TrackBin {
+    fps: f64,
+    units: Units,
+    skeleton: Skeleton,
+    shape: [u64; 3],
+    positions: Vec<f64>,
+    confidence: Vec<f64>,
+}
+
+/// Encodes a track in the compact binary form (`.mpt`): exact `f64`s,
+/// skeleton included; [`track_from_bincode`] gives back an equal track.
+pub fn track_to_bincode(track: &Track) -> Result<Vec<u8>> {
+    let (t, j, d) = track.positions().dim();
+    let rec = TrackBin {
+        fps: track.fps(),
+        units: track.units(),
+        skeleton: track.skeleton().clone(),
+        shape: [t as u64, j as u64, d as u64],
+        positions: track.positions().iter().copied().collect(),
+        confidence: track.confidence().iter().copied().collect(),
+    };
+    binary::encode(BINARY_MAGIC, BINARY_VERSION, &rec)
+}
+
+/// Decodes a track written by [`track_to_bincode`]. Corrupt or truncated
+/// bytes, shapes that disagree with the data, a non-finite or non-positive
+/// frame rate and skeleton indices outside the joints are errors
+/// ([`GeomError::Format`]), never panics.
+pub fn track_from_bincode(bytes: &[u8]) -> Result<Track> {
+    track_from_bincode_at(bytes, Path::new("bincode track"))
+}
+
+/// [`track_from_bincode`] naming `path` in errors.
+pub fn track_from_bincode_at(bytes: &[u8], path: &Path) -> Result<Track> {
+    let rec: TrackBin = binary::decode(BINARY_MAGIC, BINARY_VERSION, bytes, path)?;
+    let bad = |reason: String| GeomError::format(path, reason);
+    let [t, j, d] = rec.shape;
+    let dim = |v: u64, what: &str| {
+        usize::try_from(v).map_err(|_| bad(format!("{what} count {v} does not fit this machine")))
+    };
+    let (t, j, d) = (dim(t, "frame")?, dim(j, "joint")?, dim(d, "dimension")?);
+    let n_pos = t
+        .checked_mul(j)
+        .and_then(|v| v.checked_mul(d))
+        .ok_or_else(|| bad(format!("shape ({t}, {j}, {d}) overflows")))?;
+    if rec.positions.len() != n_pos {
+        return Err(bad(format!(
+            "positions hold {} values, shape ({t}, {j}, {d}) needs {n_pos}",
+            rec.positions.len()
+        )));
+    }
+    if rec.confidence.len() != t * j {
+        return Err(bad(format!(
+            "confidence holds {} values, shape ({t}, {j}) needs {}",
+            rec.confidence.len(),
+            t * j
+        )));
+    }
+    check_skeleton_indices(&rec.skeleton, j, path)?;
+    let pos = Array3::from_shape_vec((t, j, d), rec.positions)
+        .map_err(|e| bad(format!("positions: {e}")))?;
+    let conf = Array2::from_shape_vec((t, j), rec.confidence)
+        .map_err(|e| bad(format!("confidence: {e}")))?;
+    Track::new(pos, Some(conf), rec.fps, rec.units, rec.skeleton).map_err(|e| bad(e.to_string()))
+}
+
+/// Writes a track in the binary form (atomic).
+pub fn write_track_bincode(path: impl AsRef<Path>, track: &Track) -> Result<()> {
+    write_atomic(path, &track_to_bincode(track)?)
+}
+
+/// Reads a track from a binary (`.mpt`) file.
+pub fn read_track_bincode(path: impl AsRef<Path>) -> Result<Track> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|e| GeomError::io(path, e))?;
+    track_from_bincode_at(&bytes, path)
+}
+
+/// Checks that a skeleton's bones, COCO-17 mapping and root refer to joints in `0..j`.
+fn check_skeleton_indices(sk: &Skeleton, j: usize, path: &Path) -> Result<()> {
+    if sk.bones.iter().any(|&(a, b)| a >= j || b >= j)
+        || sk.coco17.iter().flatten().any(|&c| c >= j)
+        || sk.root.is_some_and(|r| r >= j)
+    {
+        return Err(GeomError::format(
+            path,
+            format!("skeleton `{}` refers to a joint outside 0..{j}", sk.name),
+        ));
+    }
+    if !(sk.coco17.is_empty() || sk.coco17.len() == 17) {
+        return Err(GeomError::format(
+            path,
+            format!(
+                "skeleton `{}`: COCO-17 mapping has {} entries, expected 17 or 0",
+                sk.name,
+                sk.coco17.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Reads a `(T, J, D)` `.npy` array as a track (D = 2 or 3; a `(T, J, D+1)`
