@@ -424,6 +424,7 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
     let (mut pmaes, mut pobos) = (Vec::new(), Vec::new());
     let (mut rmaes, mut robos) = (Vec::new(), Vec::new());
     let (mut smaes, mut sobos) = (Vec::new(), Vec::new());
+    let (mut lmaes, mut lobos) = (Vec::new(), Vec::new());
     let mut skipped = Vec::new();
     for name in &names {
         let truth = mp_geom::io::npz::read_npy(ann.join(format!("{name}.npy")))?.to_i64()?;
@@ -440,9 +441,14 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
             skipped.push(json!({"video": name, "reason": format!("a person in only {valid_frames} of {} frames", track.n_frames())}));
             continue;
         }
+        let product = mp_pipeline::count(&track, None, &mp_pipeline::Params::default())?;
+        let pred = product.total;
         track.fill_missing();
         let an = analyze(&track, &AbstractParams::default())?;
-        let pred: usize = an.intervals.iter().map(|i| i.count).sum();
+        let loops_count: usize = an.intervals.iter().map(|i| i.count).sum();
+        let lmae = (loops_count as f64 - true_count as f64).abs() / true_count.max(1) as f64;
+        lmaes.push(lmae);
+        lobos.push((loops_count as i64 - true_count as i64).abs() <= 1);
         let mae = (pred as f64 - true_count as f64).abs() / true_count.max(1) as f64;
         let obo = (pred as i64 - true_count as i64).abs() <= 1;
         maes.push(mae);
@@ -463,6 +469,7 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
         smaes.push(smae);
         sobos.push((sc as i64 - true_count as i64).abs() <= 1);
         by_video.insert(name.clone(), json!({"true_count": true_count, "pred_count": pred, "mae": mae, "obo": obo,
+            "method": product.method.as_str(), "confidence": product.confidence, "loops_count": loops_count,
             "period": period, "period_count": pc, "period_mae": pmae,
             "repetition": rep, "repetition_count": rc, "repetition_mae": rmae,
             "segments": segments_json(&segs, track.fps()), "segment_count": sc, "segment_mae": smae,
@@ -473,7 +480,11 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
         "videos": maes.len(),
         "count_mae": maes.iter().sum::<f64>() / maes.len().max(1) as f64,
         "obo_acc": obos.iter().filter(|&&b| b).count() as f64 / obos.len().max(1) as f64,
-        "count_definition": "count_mae/obo_acc: sum of the iterations of the loops of the abstract program; period.*: frames / dominant period of the joint velocities (PeriodParams::legacy(): all joints, unbiased autocorrelation); repetition.*: the same with PeriodParams::default() (limb joints, biased autocorrelation, at least 3 cycles); segments.*: sum over the intervals of segment_repetitions of length / period. MAE = mean over videos of |pred − true| / true (counts rounded); OBO: |pred − true| ≤ 1",
+        "count_definition": "count_mae/obo_acc: the product's count (mp_pipeline::count with Params::default(), keypoints only: these tracks come without frames); loops.*: sum of the iterations of the loops of the abstract program; period.*: frames / dominant period of the joint velocities (PeriodParams::legacy(): all joints, unbiased autocorrelation); repetition.*: the same with PeriodParams::default() (limb joints, biased autocorrelation, at least 3 cycles); segments.*: sum over the intervals of segment_repetitions of length / period. MAE = mean over videos of |pred − true| / true (counts rounded); OBO: |pred − true| ≤ 1",
+        "loops": {
+            "count_mae": lmaes.iter().sum::<f64>() / lmaes.len().max(1) as f64,
+            "obo_acc": lobos.iter().filter(|&&b| b).count() as f64 / lobos.len().max(1) as f64,
+        },
         "period": {
             "count_mae": pmaes.iter().sum::<f64>() / pmaes.len().max(1) as f64,
             "obo_acc": pobos.iter().filter(|&&b| b).count() as f64 / pobos.len().max(1) as f64,

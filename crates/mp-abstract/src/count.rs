@@ -6,8 +6,9 @@
 //! 1. **Period of the whole recording** ([`estimate_period`]): the dominant
 //!    period of the motion and its strength (the autocorrelation at that lag).
 //! 2. **Intervals** ([`segment_repetitions`]): where the motion repeats, and
-//!    with which period. Where two or more intervals have clearly different
-//!    periods (a change of exercise), each is counted on its own: its length
+//!    with which period. Where two or more intervals of at least two cycles,
+//!    with a period inside the search range, have clearly different periods
+//!    (a change of exercise), each interval is counted on its own: its length
 //!    over its period.
 //! 3. Otherwise the recording holds one repetitive activity: when its period
 //!    is strong enough ([`CountParams::min_strength`]) the count is the motion's
@@ -271,8 +272,15 @@ pub fn count_repetitions(
     // Intervals of at least two cycles decide whether there are several
     // activities (shorter ones are too uncertain to stand for an activity of
     // their own); then every interval is counted.
-    let substantial: Vec<PeriodicSegment> =
-        segs.iter().filter(|s| s.count >= 2.0).cloned().collect();
+    // A period at the upper end of the search range is not resolved (the
+    // true one may be longer, or there is none): such an interval does not
+    // count as an activity of its own either.
+    let top_period = (params.segment.max_period_s * fps).round() as usize;
+    let substantial: Vec<PeriodicSegment> = segs
+        .iter()
+        .filter(|s| s.count >= 2.0 && s.period_frames + 1 < top_period)
+        .cloned()
+        .collect();
     if several_activities(&substantial, params.period_tolerance) {
         let intervals: Vec<CountedInterval> = segs
             .iter()

@@ -192,3 +192,37 @@ fn bad_input_gives_clear_errors() {
     p.count.min_strength = f64::NAN;
     assert!(p.validate().is_err());
 }
+
+#[test]
+fn cmu_exercise_blocks_are_counted_one_by_one() {
+    let Some(path) = data("cmu_mocap6_exercise/14_14_features10fps.npz") else {
+        return;
+    };
+    let c = mp_geom::io::datasets::CmuFeatures::open(path).unwrap();
+    // Labelled blocks: maximal runs of one label.
+    let mut blocks = Vec::new();
+    let mut s = 0;
+    for i in 1..=c.labels.len() {
+        if i == c.labels.len() || c.labels[i] != c.labels[s] {
+            blocks.push((s, i));
+            s = i;
+        }
+    }
+    let counts = mp_pipeline::count(&c.track, None, &Params::default()).unwrap();
+    assert_eq!(counts.method, mp_pipeline::CountMethod::Intervals);
+    assert_eq!(
+        counts.intervals.len(),
+        blocks.len(),
+        "{:?} vs {blocks:?}",
+        counts
+            .intervals
+            .iter()
+            .map(|i| (i.start_frame, i.end_frame))
+            .collect::<Vec<_>>()
+    );
+    for (iv, b) in counts.intervals.iter().zip(&blocks) {
+        let m = mp_abstract::repetition::iom((iv.start_frame, iv.end_frame), *b);
+        assert!(m > 0.5, "interval {iv:?} vs block {b:?}: IoM {m:.2}");
+        assert!(iv.count >= 1);
+    }
+}
