@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Installs what the project needs on a fresh Debian machine:
-#   - Debian packages: pkg-config, OpenBLAS (LAPACK), FFmpeg (video decoding), Chromium (report test)
+#   - Debian packages: pkg-config, FFmpeg (video decoding), Chromium (report test), DejaVu fonts
 #   - ONNX Runtime's shared library and the pose models (`cargo xtask setup`)
 # Idempotent: what is already there is skipped.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-PKGS=(pkg-config libopenblas-dev ffmpeg chromium fonts-dejavu-core)
+PKGS=(pkg-config ffmpeg chromium fonts-dejavu-core)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
