@@ -64,6 +64,8 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
     let mut by_video = Map::new();
     let (mut errs, mut obos) = (Vec::new(), Vec::new());
     let (mut frames_total, mut count_s, mut total_s) = (0usize, 0.0f64, 0.0f64);
+    // Keypoints, thumbnails and labels of each video, for leave-one-video-out.
+    let mut kept: Vec<(String, mp_geom::Track, Option<mp_geom::Track>, usize)> = Vec::new();
     for (video, label) in &items {
         let truth = mp_geom::io::npz::read_npy(label)?.to_i64()?.len();
         let name = video
@@ -95,6 +97,12 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
         };
         count_s += stage_s(Stage::Count);
         total_s += out.total.as_secs_f64();
+        kept.push((
+            name.clone(),
+            out.keypoints.track.clone(),
+            out.keypoints.thumbnails.clone(),
+            truth,
+        ));
         by_video.insert(
             name,
             json!({
@@ -117,6 +125,7 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
         "total_ms_per_frame": 1000.0 * total_s / frames_total.max(1) as f64,
         "frames": frames_total,
         "definition": "mp_pipeline::analyse_input with Params::default() on each video (what `mp run` writes as loops.json total_repetitions). MAE = mean over videos of |count − true| / true; OBO = fraction with |count − true| ≤ 1. count_ms_per_frame: the counting stage alone (after keypoints); total_ms_per_frame: decoding, pose, programs and counting.",
+        "leave_one_video_out": leave_one_out(&kept)?,
         "videos_dir": a.videos.display().to_string(),
         "labels_dir": a.labels.display().to_string(),
         "runtime_s": t0.elapsed().as_secs_f64(),
@@ -135,4 +144,72 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
     println!("{}", serde_json::to_string_pretty(&summary)?);
     eprintln!("written to {}", a.out.display());
     Ok(())
+}
+
+/// The counting settings tried by leave-one-video-out: how periodic a
+/// recording must be to count, and the smoothing of the frame signal. The
+/// defaults are one of them.
+fn candidates() -> Vec<(String, Params)> {
+    let mut out = Vec::new();
+    for strength in [0.02, 0.05, 0.1] {
+        for smooth in [0.1, 0.25, 0.5] {
+            let mut p = Params::default();
+            p.count.min_strength = strength;
+            p.count.frame_period.smooth_s = smooth;
+            out.push((
+                format!("min_strength {strength}, frame_period.smooth_s {smooth}"),
+                p,
+            ));
+        }
+    }
+    out
+}
+
+/// For each video, the candidate with the lowest MAE on the other videos
+/// (the first on ties) counts the video left out; returns the left-out
+/// figures and each fold's choice.
+fn leave_one_out(
+    kept: &[(String, mp_geom::Track, Option<mp_geom::Track>, usize)],
+) -> anyhow::Result<Value> {
+    let cands = candidates();
+    let mut errs = vec![vec![0.0; kept.len()]; cands.len()];
+    let mut counts = vec![vec![0usize; kept.len()]; cands.len()];
+    for (ci, (_, p)) in cands.iter().enumerate() {
+        for (vi, (_, track, thumbs, truth)) in kept.iter().enumerate() {
+            let c = mp_pipeline::count(track, thumbs.as_ref(), p)?;
+            counts[ci][vi] = c.total;
+            errs[ci][vi] = (c.total as f64 - *truth as f64).abs() / (*truth).max(1) as f64;
+        }
+    }
+    let (mut held_err, mut held_obo) = (Vec::new(), Vec::new());
+    let mut folds = Vec::new();
+    for (vi, (name, _, _, truth)) in kept.iter().enumerate() {
+        let mut best = (f64::INFINITY, 0usize);
+        for (ci, row) in errs.iter().enumerate() {
+            let m = row
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| *k != vi)
+                .map(|(_, e)| e)
+                .sum::<f64>()
+                / (kept.len() - 1).max(1) as f64;
+            if m < best.0 - 1e-12 {
+                best = (m, ci);
+            }
+        }
+        let c = counts[best.1][vi];
+        held_err.push(errs[best.1][vi]);
+        held_obo.push((c as i64 - *truth as i64).abs() <= 1);
+        folds.push(
+            json!({"left_out": name, "chosen": cands[best.1].0, "count": c, "true_count": truth}),
+        );
+    }
+    let k = held_err.len().max(1) as f64;
+    Ok(json!({
+        "definition": "for each video, the candidate with the lowest MAE on the other videos counts the one left out (keypoints and thumbnails as mp run makes them)",
+        "candidates": cands.iter().map(|c| c.0.clone()).collect::<Vec<_>>(),
+        "count_mae": held_err.iter().sum::<f64>() / k,
+        "obo_acc": held_obo.iter().filter(|&&b| b).count() as f64 / k,
+        "folds": folds,
+    }))
 }
