@@ -11,6 +11,7 @@ use mp_abstract::pipeline::predict_constant;
 use mp_abstract::{
     predict, read_program, write_program, AbstractParams, PredictParams, SelfMatchKind,
 };
+use mp_forecast::ForecastMethod;
 use mp_geom::io::{read_track, write_track};
 use mp_pipeline::{analyse_track, Params};
 
@@ -103,7 +104,7 @@ pub struct SampleArgs {
     pub output: PathBuf,
 }
 
-/// Prediction methods.
+/// Prediction methods (names as [`ForecastMethod::as_str`]).
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
     /// Hold the last observed pose.
@@ -130,7 +131,7 @@ pub struct PredictArgs {
     #[arg(long)]
     pub horizon: usize,
     /// Method.
-    #[arg(long, value_enum, default_value_t = Method::Loop)]
+    #[arg(long, value_enum, default_value = ForecastMethod::default().as_str())]
     pub method: Method,
     /// Output track of the predicted frames.
     #[arg(short, long)]
@@ -141,6 +142,7 @@ pub struct PredictArgs {
     pub forecast: crate::cmd_forecast::ForecastOpts,
 }
 
+/// `mp abstract`: the abstract program of a track, written and summarised.
 pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
     let an = analyse_track(&track, a.opts.frame_size, &a.opts.pipeline_params())?;
@@ -211,6 +213,8 @@ fn is_program_path(p: &std::path::Path) -> bool {
         .is_some_and(|e| e == "txt" || e == "json" || e == "mp")
 }
 
+/// `mp extend`: a loop's iteration count changed, then the program executed
+/// (loops replayed as observed) or written.
 pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
     let mut prog = read_program(&a.program)?;
     set_iterations(&mut prog, a.loop_index, a.iters)?;
@@ -228,6 +232,7 @@ pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `mp sample`: one seeded stochastic execution of an abstract program.
 pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
     let prog = read_program(&a.program)?;
     let t = sample(&prog, a.seed, &ExecParams::default())?;
@@ -241,6 +246,8 @@ pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `mp predict`: the frames after the observed ones, by the chosen method,
+/// with their KD to the actual frames when the track has them.
 pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
     let pred = match a.method {

@@ -30,7 +30,7 @@ pub struct FitArgs {
     #[arg(long)]
     pub strict_joints: bool,
     /// Decimals of the program printed on the terminal (the written file is lossless).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = dsl::PRETTY_DECIMALS)]
     pub precision: usize,
     /// Do not print the program.
     #[arg(short, long)]
@@ -101,14 +101,14 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
 /// `mp execute`.
 pub fn execute(a: &ExecuteArgs) -> anyhow::Result<()> {
     let p = Program::read(&a.program)?;
-    let track = p.execute_with(&ExecParams {
+    let mut params = ExecParams {
         fps_out: a.fps,
-        transition: if a.extrapolate {
-            Transition::Extrapolate
-        } else {
-            Transition::Blend
-        },
-    })?;
+        ..ExecParams::default()
+    };
+    if a.extrapolate {
+        params.transition = Transition::Extrapolate;
+    }
+    let track = p.execute_with(&params)?;
     mp_geom::io::write_track(&a.output, &track)
         .with_context(|| format!("writing {}", a.output.display()))?;
     eprintln!(

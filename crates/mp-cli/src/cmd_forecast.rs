@@ -11,6 +11,7 @@ use mp_forecast::{
     find_statue, map_to_model, model_dataset, ArForecaster, ArParams, ArSpace, ForecastModels,
     Forecaster, MappedForecaster, NearestNeighbour, NnParams, StatueParams,
 };
+use mp_geom::io::datasets::PennAction;
 use mp_geom::io::read_track;
 use mp_geom::Track;
 use mp_pose::SessionParams;
@@ -86,7 +87,7 @@ pub fn ar_forecaster(
 pub fn nn_forecaster(opts: &ForecastOpts) -> anyhow::Result<NearestNeighbour> {
     let path = match &opts.train {
         Some(p) => p.clone(),
-        None => mp_geom::paths::data_file("penn_action/penn_action_train.npz").context(
+        None => mp_geom::paths::data_file(PennAction::TRAIN_FILE).context(
             "the nn method needs a training set: pass --train PATH (a Penn Action or MSR Action3D npz); \
              the shared Penn Action train split was not found",
         )?,
@@ -131,13 +132,13 @@ pub struct StatueArgs {
     #[arg(long)]
     pub pose_space: bool,
     /// Conditioning frames.
-    #[arg(long, default_value_t = 15)]
+    #[arg(long, default_value_t = StatueParams::default().context_frames)]
     pub context: usize,
     /// Future frames scored after each window.
-    #[arg(long, default_value_t = 15)]
+    #[arg(long, default_value_t = StatueParams::default().future_frames)]
     pub future: usize,
     /// Half-width of the low-pass difference filter, in frames.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = StatueParams::default().filter_frames)]
     pub filter: usize,
     /// Print the per-window errors as JSON.
     #[arg(long)]
@@ -146,6 +147,7 @@ pub struct StatueArgs {
     pub opts: ForecastOpts,
 }
 
+/// `mp statue`: the frame after which the learned forecaster's error drops most.
 pub fn statue_cmd(a: &StatueArgs) -> anyhow::Result<()> {
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
     let f = ar_forecaster(&track, &a.opts, !a.pose_space)?;

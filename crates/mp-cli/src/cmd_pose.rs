@@ -7,11 +7,12 @@ use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use mp_geom::{Track, Units};
-use mp_pose::draw::{contact_sheet, draw_pose, resize, Canvas, DrawStyle};
+use mp_pose::draw::{contact_sheet, draw_pose, resize, Canvas, ContactSheetParams, DrawStyle};
 use mp_pose::extract::{extract, open_estimator, ExtractOptions, ModelChoice, SmoothingParams};
 use mp_pose::video::{open_source, VideoWriter};
 use mp_pose::SessionParams;
 
+/// Arguments of `mp extract`.
 #[derive(clap::Args, Debug)]
 pub struct ExtractArgs {
     /// Input video (anything FFmpeg decodes) or still image (.png, .jpg).
@@ -20,7 +21,7 @@ pub struct ExtractArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Pose model: full, lite (BlazePose-33) or movenet (COCO-17).
-    #[arg(long, default_value = "full")]
+    #[arg(long, default_value = ModelChoice::default().as_str())]
     pub model: String,
     /// Write BlazePose's world coordinates (metres, hip-centred, 3D) instead of pixels.
     #[arg(long)]
@@ -32,7 +33,7 @@ pub struct ExtractArgs {
     #[arg(long)]
     pub coco17: bool,
     /// ONNX Runtime threads.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = SessionParams::default().intra_threads)]
     pub threads: usize,
     /// Only the first N frames.
     #[arg(long)]
@@ -62,6 +63,7 @@ fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {
     pb
 }
 
+/// `mp extract`: keypoints of a video or image written as a track.
 pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
     if a.world && model == ModelChoice::MoveNet {
@@ -86,7 +88,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     let opts = ExtractOptions {
         smoothing: a.smooth.then(SmoothingParams::default),
         max_frames: a.max_frames,
-        fixed_frame_interval_s: None,
+        ..ExtractOptions::default()
     };
     let ex = extract(source, est.as_mut(), &opts, |done, _| {
         pb.set_position(done as u64)
@@ -122,6 +124,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     Ok(())
 }
 
+/// Arguments of `mp overlay`.
 #[derive(clap::Args, Debug)]
 pub struct OverlayArgs {
     /// The video the track was extracted from.
@@ -132,16 +135,16 @@ pub struct OverlayArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Frames on the contact sheet.
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = ContactSheetParams::default().frames)]
     pub frames: usize,
     /// Columns of the contact sheet.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = ContactSheetParams::default().cols)]
     pub cols: usize,
     /// Width of each contact-sheet tile in pixels.
-    #[arg(long, default_value_t = 320)]
+    #[arg(long, default_value_t = ContactSheetParams::default().tile_width_px)]
     pub tile_width: usize,
     /// Joints with confidence at or below this are not drawn.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = DrawStyle::default().min_confidence)]
     pub min_confidence: f64,
     /// No progress bar.
     #[arg(long, short)]
@@ -165,6 +168,8 @@ fn draw_frame(rgb: &mut [u8], w: usize, h: usize, track: &Track, t: usize, style
     draw_pose(&mut canvas, track.skeleton(), &kps, &c, style);
 }
 
+/// `mp overlay`: a track's skeleton drawn on its video, as a contact sheet
+/// (`.png`) or a video (`.mp4`, `.mkv`, `.mov`).
 pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
     let track = mp_geom::io::read_track(&a.track)
         .with_context(|| format!("reading {}", a.track.display()))?;
@@ -180,10 +185,9 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
     let (w, h) = (source.width, source.height);
     let style = DrawStyle {
         min_confidence: a.min_confidence,
-        thickness_px: (w.max(h) as f64 / 300.0).max(2.0),
-        radius_px: (w.max(h) as f64 / 200.0).max(3.0),
-        ..Default::default()
-    };
+        ..DrawStyle::default()
+    }
+    .scaled_to(w, h);
     let ext = extension(&a.output);
     match ext.as_str() {
         "png" => {
@@ -217,7 +221,8 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
             if tiles.is_empty() {
                 bail!("{}: no frames decoded", a.video.display());
             }
-            let (px, sw, sh) = contact_sheet(&tiles, a.tile_width, tile_h, a.cols, 4);
+            let gap = ContactSheetParams::default().gap_px;
+            let (px, sw, sh) = contact_sheet(&tiles, a.tile_width, tile_h, a.cols, gap);
             image::save_buffer(
                 &a.output,
                 &px,

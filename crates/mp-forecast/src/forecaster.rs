@@ -30,6 +30,38 @@ pub trait Forecaster: Send + Sync {
     }
 }
 
+/// The forecasting methods of the toolkit, the choice of `mp predict --method`.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+pub enum ForecastMethod {
+    /// Hold the last observed pose ([`Constant`]).
+    Constant,
+    /// Unroll the last loop of the observed frames' abstract program, with
+    /// its period and self-match fallbacks (`mp_abstract::predict`). Default.
+    #[default]
+    Loop,
+    /// Nearest neighbour in a training set ([`crate::NearestNeighbour`]).
+    Nn,
+    /// The learned autoregressive model on latents, AR on Φ ([`crate::ArSpace::Latent`]).
+    Ar,
+    /// The learned autoregressive model on poses, AR on Θ ([`crate::ArSpace::Pose`]).
+    ArPose,
+}
+
+impl ForecastMethod {
+    /// Name on the command line: `constant`, `loop`, `nn`, `ar` or `ar-pose`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ForecastMethod::Constant => "constant",
+            ForecastMethod::Loop => "loop",
+            ForecastMethod::Nn => "nn",
+            ForecastMethod::Ar => "ar",
+            ForecastMethod::ArPose => "ar-pose",
+        }
+    }
+}
+
 pub(crate) fn check_horizon(horizon: usize) -> Result<()> {
     if horizon == 0 {
         return Err(ForecastError::param("horizon", "must be ≥ 1 frame"));

@@ -36,7 +36,7 @@ pub mod statue;
 
 pub use error::{ForecastError, Result};
 pub use eval::{evaluate, EvalClip, EvalParams, MethodReport};
-pub use forecaster::{Constant, Forecaster, LoopUnroll};
+pub use forecaster::{Constant, ForecastMethod, Forecaster, LoopUnroll};
 pub use mapped::{map_to_model, model_dataset, MappedForecaster};
 pub use model::{ArForecaster, ArParams, ArSpace, ForecastModels};
 pub use nn::{NearestNeighbour, NnParams};

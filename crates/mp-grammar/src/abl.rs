@@ -485,6 +485,23 @@ impl Alignment {
     }
 }
 
+impl Alignment {
+    /// The reference flag of this alignment (`wm`, `wb`, `st1`–`st4`), the
+    /// inverse of [`Self::from_flag`].
+    pub fn flag(&self) -> &'static str {
+        match self {
+            Alignment::EditDistance(a) if a.biased => "wb",
+            Alignment::EditDistance(_) => "wm",
+            Alignment::SuffixTree(a) => match a.variant {
+                StVariant::St1 => "st1",
+                StVariant::St2 => "st2",
+                StVariant::St3 => "st3",
+                StVariant::St4 => "st4",
+            },
+        }
+    }
+}
+
 impl Aligner for Alignment {
     fn align(&self, corpus: &[Vec<u32>], store: &mut HypothesisStore) {
         match self {
@@ -502,6 +519,16 @@ pub enum Selection {
     Branch,
     /// Earlier-learned hypotheses win (order-dependent baseline).
     First,
+}
+
+impl Selection {
+    /// Lower-case name: `branch` or `first`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Selection::Branch => "branch",
+            Selection::First => "first",
+        }
+    }
 }
 
 /// Parameters of ABL.
@@ -989,6 +1016,15 @@ mod tests {
             .collect();
         v.sort_unstable();
         v
+    }
+
+    #[test]
+    fn alignment_flags_round_trip() {
+        for flag in ["wm", "wb", "st1", "st2", "st3", "st4"] {
+            assert_eq!(Alignment::from_flag(flag).unwrap().flag(), flag);
+        }
+        assert_eq!(AblParams::default().alignment.flag(), "st3");
+        assert_eq!(AblParams::default().selection.as_str(), "branch");
     }
 
     #[test]

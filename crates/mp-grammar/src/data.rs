@@ -53,6 +53,9 @@ pub fn read_motion(path: impl AsRef<Path>) -> Result<Motion> {
     read_motions(&[path.as_ref().to_path_buf()], 1)
 }
 
+/// Frame step of [`read_motions`] when none is chosen: 1, every frame is kept.
+pub const DEFAULT_FRAME_STEP: usize = 1;
+
 /// Reads files (or one folder of `.bvh` files, sorted by name), keeps every
 /// `frame_step`-th frame of each and joins them in time. BVH files must
 /// share one hierarchy (joint names, parents, channels; the offsets of the

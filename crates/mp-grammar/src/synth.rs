@@ -310,6 +310,14 @@ fn axes_for(alignment: &RootAlignment, default: &[usize], dims: usize) -> Result
 }
 
 impl Stitcher {
+    /// Segments a synthesis derives at least when no count is chosen
+    /// ([`Self::synthesize`], [`Self::synthesize_fsm`]): 20.
+    pub const DEFAULT_SEGMENTS: usize = 20;
+
+    /// Levels above the terminal's nearest nonterminal ancestor that
+    /// [`Self::regenerate`] climbs when none are chosen: 0 (that ancestor).
+    pub const DEFAULT_REGENERATE_LEVELS: usize = 0;
+
     /// Prepares `track` (and its BVH, whose forward kinematics with length
     /// scale 1 the track must be) cut into the segments of `symbols`.
     ///

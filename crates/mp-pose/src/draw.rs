@@ -34,6 +34,28 @@ impl Default for DrawStyle {
     }
 }
 
+impl DrawStyle {
+    /// Pixels of the frame's larger side per pixel of line thickness in
+    /// [`Self::scaled_to`]: 300.
+    pub const SIDE_PX_PER_THICKNESS_PX: f64 = 300.0;
+    /// Pixels of the frame's larger side per pixel of joint radius in
+    /// [`Self::scaled_to`]: 200.
+    pub const SIDE_PX_PER_RADIUS_PX: f64 = 200.0;
+
+    /// This style for a `width × height` frame: line thickness and joint
+    /// radius grow with the frame's larger side
+    /// ([`Self::SIDE_PX_PER_THICKNESS_PX`], [`Self::SIDE_PX_PER_RADIUS_PX`]),
+    /// never below this style's own.
+    pub fn scaled_to(self, width: usize, height: usize) -> Self {
+        let side = width.max(height) as f64;
+        DrawStyle {
+            thickness_px: (side / Self::SIDE_PX_PER_THICKNESS_PX).max(self.thickness_px),
+            radius_px: (side / Self::SIDE_PX_PER_RADIUS_PX).max(self.radius_px),
+            ..self
+        }
+    }
+}
+
 /// A mutable RGB image.
 pub struct Canvas<'a> {
     /// Width.
@@ -143,6 +165,31 @@ pub fn resize(src: RgbView<'_>, out_w: usize, out_h: usize) -> Vec<u8> {
     let mut out = Vec::new();
     crop_u8(src, &roi, out_w, out_h, Border::Replicate, &mut out);
     out
+}
+
+/// Layout of a contact sheet of evenly spaced frames of a video.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ContactSheetParams {
+    /// Frames on the sheet. Default 12.
+    pub frames: usize,
+    /// Columns. Default 4.
+    pub cols: usize,
+    /// Width of each tile in pixels (the height keeps the frame's aspect).
+    /// Default 320.
+    pub tile_width_px: usize,
+    /// Dark border between and around the tiles, pixels. Default 4.
+    pub gap_px: usize,
+}
+
+impl Default for ContactSheetParams {
+    fn default() -> Self {
+        ContactSheetParams {
+            frames: 12,
+            cols: 4,
+            tile_width_px: 320,
+            gap_px: 4,
+        }
+    }
 }
 
 /// Tiles equally sized RGB images (`tile_w × tile_h`) into a grid of `cols`

@@ -18,9 +18,10 @@ use crate::runtime::SessionParams;
 use crate::video::{open_source, Frame, FrameSource};
 
 /// Which model to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum ModelChoice {
-    /// BlazePose with the full landmark model (default).
+    /// BlazePose with the full landmark model. Default.
+    #[default]
     Full,
     /// BlazePose with the lite landmark model.
     Lite,

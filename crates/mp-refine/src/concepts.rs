@@ -78,9 +78,10 @@ pub enum ClusterMethod {
 }
 
 /// Linkage of [`ClusterMethod::Hierarchical`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Linkage {
-    /// Ward's minimum variance.
+    /// Ward's minimum variance. Default.
+    #[default]
     Ward,
     /// Mean pairwise dissimilarity (UPGMA).
     Average,
@@ -90,7 +91,82 @@ pub enum Linkage {
     Single,
 }
 
+impl Linkage {
+    /// Lower-case name: `ward`, `average`, `complete` or `single`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Linkage::Ward => "ward",
+            Linkage::Average => "average",
+            Linkage::Complete => "complete",
+            Linkage::Single => "single",
+        }
+    }
+}
+
 impl ClusterMethod {
+    /// Concepts per action of k-means and hierarchical clustering by
+    /// default: 4.
+    pub const DEFAULT_CLUSTERS: usize = 4;
+    /// K-means restarts by default: 10.
+    pub const DEFAULT_KMEANS_RUNS: usize = 10;
+    /// K-means iteration cap by default: 300.
+    pub const DEFAULT_KMEANS_MAX_ITERATIONS: u64 = 300;
+    /// Neighbours (including the point) of a DBSCAN / OPTICS core point by
+    /// default: 4.
+    pub const DEFAULT_MIN_POINTS: usize = 4;
+    /// DBSCAN neighbourhood radius, and the radius at which OPTICS clusters
+    /// are cut, by default: 0.35 (scale-normalised feature units).
+    pub const DEFAULT_TOLERANCE: f64 = 0.35;
+    /// Largest neighbourhood radius of the OPTICS ordering by default: 1.0
+    /// (scale-normalised feature units).
+    pub const DEFAULT_OPTICS_RADIUS: f64 = 1.0;
+
+    /// K-means into `n_clusters` concepts per action with the default
+    /// restarts and iteration cap.
+    pub fn kmeans(n_clusters: usize) -> Self {
+        ClusterMethod::KMeans {
+            n_clusters,
+            n_runs: Self::DEFAULT_KMEANS_RUNS,
+            max_iterations: Self::DEFAULT_KMEANS_MAX_ITERATIONS,
+        }
+    }
+
+    /// DBSCAN with the default core size and radius.
+    pub fn default_dbscan() -> Self {
+        ClusterMethod::Dbscan {
+            min_points: Self::DEFAULT_MIN_POINTS,
+            tolerance: Self::DEFAULT_TOLERANCE,
+        }
+    }
+
+    /// OPTICS with the default core size, ordering radius and cut.
+    pub fn default_optics() -> Self {
+        ClusterMethod::Optics {
+            min_points: Self::DEFAULT_MIN_POINTS,
+            tolerance: Self::DEFAULT_OPTICS_RADIUS,
+            cut: Self::DEFAULT_TOLERANCE,
+        }
+    }
+
+    /// Hierarchical clustering into the default number of concepts with the
+    /// default linkage.
+    pub fn default_hierarchical() -> Self {
+        ClusterMethod::Hierarchical {
+            n_clusters: Self::DEFAULT_CLUSTERS,
+            linkage: Linkage::default(),
+        }
+    }
+
+    /// Lower-case name: `kmeans`, `dbscan`, `optics` or `hierarchical`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ClusterMethod::KMeans { .. } => "kmeans",
+            ClusterMethod::Dbscan { .. } => "dbscan",
+            ClusterMethod::Optics { .. } => "optics",
+            ClusterMethod::Hierarchical { .. } => "hierarchical",
+        }
+    }
+
     /// Concepts per action at most (`None` for the density-based methods,
     /// whose count depends on the data).
     pub fn max_concepts(&self) -> Option<usize> {
@@ -230,11 +306,7 @@ pub struct ConceptParams {
 impl Default for ConceptParams {
     fn default() -> Self {
         ConceptParams {
-            method: ClusterMethod::KMeans {
-                n_clusters: 4,
-                n_runs: 10,
-                max_iterations: 300,
-            },
+            method: ClusterMethod::kmeans(ClusterMethod::DEFAULT_CLUSTERS),
             root_joint: None,
             scale_normalise: true,
             gmm_components: 2,

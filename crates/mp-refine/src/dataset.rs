@@ -25,7 +25,8 @@ use serde::{Deserialize, Serialize};
 use crate::concepts::{anchor_feature, learn_concepts, AnchorSample, ConceptParams};
 use crate::error::{RefineError, Result};
 use crate::motion::{
-    bvh_to_msr20, canonicalize, to_features, FRAME_FEATURES, HIP_CENTRE, MSR_JOINTS, NET_FRAMES,
+    bvh_to_msr20, canonicalize, to_features, DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, HIP_CENTRE,
+    MSR_JOINTS, NET_FRAMES,
 };
 use crate::segment::{segment_track, SegmentParams};
 use crate::Concepts;
@@ -65,7 +66,7 @@ impl Default for DatasetParams {
             val_subjects: vec![9],
             subjects: None,
             bvh_fps: 15.0,
-            bvh_length_scale: 1.0,
+            bvh_length_scale: DEFAULT_BVH_LENGTH_SCALE,
             bvh_window_frames: NET_FRAMES,
             bvh_stride_frames: 30,
             min_clip_frames: 8,
@@ -428,7 +429,7 @@ impl Default for FlawSetParams {
             change_epsilon_m: 0.02,
             clip_frames: (8, 180),
             bvh_fps: 15.0,
-            bvh_length_scale: 1.0,
+            bvh_length_scale: DEFAULT_BVH_LENGTH_SCALE,
             bvh_window_frames: NET_FRAMES,
             bvh_stride_frames: 30,
             seed: 0,

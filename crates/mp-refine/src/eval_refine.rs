@@ -29,9 +29,7 @@ use ndarray::{Array2, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::baseline::{full_confidence, EvalFlaw};
-use crate::concepts::{
-    anchor_feature, AnchorSample, ClusterMethod, ConceptParams, Concepts, Linkage,
-};
+use crate::concepts::{anchor_feature, AnchorSample, ClusterMethod, ConceptParams, Concepts};
 use crate::error::{RefineError, Result};
 use crate::eval_split::subjects_of;
 use crate::flaws::{AnchorSource, Flaw, FootSlide};
@@ -136,19 +134,9 @@ impl Default for RefineEvalParams {
             quality: QualityParams::default(),
             ablation: true,
             segment: SegmentParams::default(),
-            dbscan: ClusterMethod::Dbscan {
-                min_points: 4,
-                tolerance: 0.35,
-            },
-            optics: ClusterMethod::Optics {
-                min_points: 4,
-                tolerance: 1.0,
-                cut: 0.35,
-            },
-            hierarchical: ClusterMethod::Hierarchical {
-                n_clusters: 4,
-                linkage: Linkage::Ward,
-            },
+            dbscan: ClusterMethod::default_dbscan(),
+            optics: ClusterMethod::default_optics(),
+            hierarchical: ClusterMethod::default_hierarchical(),
             score_quantile: 0.05,
             min_clip_frames: 8,
             max_clip_frames: 180,

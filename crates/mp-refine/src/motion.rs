@@ -260,6 +260,10 @@ pub const CMU_BVH_TO_MSR20: [&str; MSR_JOINTS] = [
     "head",      // head
 ];
 
+/// BVH length unit → metres of [`bvh_to_msr20`] when none is given: 1 (the
+/// CMU salsa files are in metres).
+pub const DEFAULT_BVH_LENGTH_SCALE: f64 = 1.0;
+
 /// World positions of a CMU-style BVH mapped onto the 20 MSR joints,
 /// resampled to `fps` (linear interpolation), in metres after `length_scale`.
 pub fn bvh_to_msr20(bvh: &Bvh, length_scale: f64, fps: f64) -> Result<Track> {

@@ -21,5 +21,5 @@ mod print;
 pub use parse::{parse, parse_statement};
 pub use print::{
     axis_name, fmt_number, header, joint_block, print, print_pretty, print_with, statement,
-    NumberFormat,
+    NumberFormat, PRETTY_DECIMALS,
 };

@@ -182,6 +182,9 @@ pub fn print(p: &Program) -> String {
     print_with(p, NumberFormat::Exact)
 }
 
+/// Decimals of [`print_pretty`] when none are chosen: 2, as the paper's figures.
+pub const PRETTY_DECIMALS: usize = 2;
+
 /// Human-friendly text with `decimals` digits after the point (the paper uses 2).
 /// Not lossless.
 pub fn print_pretty(p: &Program, decimals: usize) -> String {

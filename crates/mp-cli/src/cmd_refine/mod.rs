@@ -1,23 +1,26 @@
 //! `mp refine` (learned motion refinement of a 20-joint 3D track or of
 //! BlazePose-33 world landmarks, `mp_refine::mapped`) and
-//! `mp concepts` (anchor concepts from MSR Action3D or a folder of tracks).
+//! `mp concepts` (anchor concepts from MSR Action3D or a folder of tracks,
+//! in [`concepts`]).
+
+mod concepts;
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use mp_geom::io::bvh::Bvh;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::io::{read_track, write_track};
 use mp_geom::Track;
 use mp_pose::SessionParams;
-use mp_refine::concepts::Linkage;
-use mp_refine::eval_refine::{canonical_anchor_samples, msr_anchor_samples};
 use mp_refine::mapped::{msr20_map, refine_any, MappedRefinement};
-use mp_refine::motion::{bvh_to_msr20, HIP_CENTRE};
+use mp_refine::motion::{bvh_to_msr20, DEFAULT_BVH_LENGTH_SCALE};
 use mp_refine::nets::{find_model_dir, RefineNets};
 use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode, TransitionMethod};
-use mp_refine::{learn_concepts, ClusterMethod, ConceptParams, Concepts, SegmentParams};
+use mp_refine::Concepts;
+
+pub use concepts::{concepts_cmd, ConceptsArgs};
 
 /// Arguments of `mp refine`.
 #[derive(Args, Debug)]
@@ -69,7 +72,7 @@ pub struct RefineArgs {
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// BVH length unit → metres (BVH input only).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = DEFAULT_BVH_LENGTH_SCALE)]
     pub bvh_scale: f64,
 }
 
@@ -241,85 +244,8 @@ fn read_concepts(path: &Path) -> anyhow::Result<Concepts> {
     Concepts::from_json(&text).with_context(|| format!("parsing {}", path.display()))
 }
 
-/// Clustering algorithm of `mp concepts`.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
-    /// K-means (L2).
-    Kmeans,
-    /// DBSCAN.
-    Dbscan,
-    /// OPTICS, cut at --tolerance (ordering radius --optics-radius).
-    Optics,
-    /// Agglomerative hierarchical clustering into --clusters concepts (--linkage).
-    Hierarchical,
-}
-
-/// Linkage of `mp concepts --method hierarchical`.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LinkageArg {
-    /// Ward's minimum variance.
-    Ward,
-    /// Mean pairwise distance.
-    Average,
-    /// Largest pairwise distance.
-    Complete,
-    /// Smallest pairwise distance.
-    Single,
-}
-
-/// Arguments of `mp concepts`.
-#[derive(Args, Debug)]
-pub struct ConceptsArgs {
-    /// MSR Action3D npz, or a folder of 20-joint tracks / CMU BVH files.
-    pub data: PathBuf,
-    /// Output concepts JSON.
-    #[arg(short, long)]
-    pub output: PathBuf,
-    /// Clustering algorithm.
-    #[arg(long, value_enum, default_value = "kmeans")]
-    pub method: Method,
-    /// Concepts per action (k-means, hierarchical).
-    #[arg(long, default_value_t = 4)]
-    pub clusters: usize,
-    /// Neighbourhood radius (DBSCAN; the cut of OPTICS; scale-normalised feature units).
-    #[arg(long, default_value_t = 0.35)]
-    pub tolerance: f64,
-    /// Largest radius of the OPTICS ordering (≥ --tolerance).
-    #[arg(long, default_value_t = 1.0)]
-    pub optics_radius: f64,
-    /// Points of a DBSCAN / OPTICS core.
-    #[arg(long, default_value_t = 4)]
-    pub min_points: usize,
-    /// Linkage of hierarchical clustering.
-    #[arg(long, value_enum, default_value = "ward")]
-    pub linkage: LinkageArg,
-    /// Subjects of an MSR npz to use (comma separated; default: all but 9, the held-out subject).
-    #[arg(long, value_delimiter = ',')]
-    pub subjects: Option<Vec<u32>>,
-    /// Action of every track of a folder.
-    #[arg(long, default_value_t = 1)]
-    pub action: u32,
-    /// Segmentation penalty λ (mm).
-    #[arg(long, default_value_t = 200.0)]
-    pub lambda: f64,
-    /// BVH length unit → metres.
-    #[arg(long, default_value_t = 1.0)]
-    pub bvh_scale: f64,
-    /// Seed.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-}
-
-fn is_track_file(p: &Path) -> bool {
-    matches!(
-        p.extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .as_deref(),
-        Some("bvh" | "npz" | "npy" | "json" | "csv")
-    )
-}
-
+/// A track file, or a CMU BVH file mapped onto the 20 MSR joints at MSR's
+/// frame rate (`bvh_scale`: BVH length unit → metres).
 fn folder_track(p: &Path, bvh_scale: f64) -> anyhow::Result<Track> {
     let is_bvh = p
         .extension()
@@ -331,104 +257,4 @@ fn folder_track(p: &Path, bvh_scale: f64) -> anyhow::Result<Track> {
     } else {
         Ok(read_track(p)?)
     }
-}
-
-/// `mp concepts`.
-pub fn concepts_cmd(a: &ConceptsArgs) -> anyhow::Result<()> {
-    let method = match a.method {
-        Method::Kmeans => ClusterMethod::KMeans {
-            n_clusters: a.clusters,
-            n_runs: 10,
-            max_iterations: 300,
-        },
-        Method::Dbscan => ClusterMethod::Dbscan {
-            min_points: a.min_points,
-            tolerance: a.tolerance,
-        },
-        Method::Optics => ClusterMethod::Optics {
-            min_points: a.min_points,
-            tolerance: a.optics_radius,
-            cut: a.tolerance,
-        },
-        Method::Hierarchical => ClusterMethod::Hierarchical {
-            n_clusters: a.clusters,
-            linkage: match a.linkage {
-                LinkageArg::Ward => Linkage::Ward,
-                LinkageArg::Average => Linkage::Average,
-                LinkageArg::Complete => Linkage::Complete,
-                LinkageArg::Single => Linkage::Single,
-            },
-        },
-    };
-    let params = ConceptParams {
-        method,
-        root_joint: Some(HIP_CENTRE),
-        seed: a.seed,
-        ..ConceptParams::default()
-    };
-    params.validate()?;
-    let seg = SegmentParams {
-        lambda: a.lambda,
-        ..SegmentParams::default()
-    };
-    let samples = if a.data.is_dir() {
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&a.data)
-            .with_context(|| format!("listing {}", a.data.display()))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.is_file() && is_track_file(p))
-            .collect();
-        files.sort();
-        if files.is_empty() {
-            bail!("{}: no track or BVH file", a.data.display());
-        }
-        let mut out = Vec::new();
-        for f in &files {
-            let t =
-                folder_track(f, a.bvh_scale).with_context(|| format!("reading {}", f.display()))?;
-            out.extend(
-                canonical_anchor_samples(&t, a.action, &seg, &params)
-                    .with_context(|| format!("anchors of {}", f.display()))?,
-            );
-        }
-        println!("{} files, {} anchors", files.len(), out.len());
-        out
-    } else {
-        let data = MsrAction3D::open(&a.data).with_context(|| {
-            format!(
-                "reading {} as an MSR Action3D npz (pass a folder for single tracks)",
-                a.data.display()
-            )
-        })?;
-        let idx: Vec<usize> = data
-            .clips()
-            .iter()
-            .filter(|c| match &a.subjects {
-                Some(s) => s.contains(&c.subject),
-                None => c.subject != 9,
-            })
-            .filter(|c| c.rows.len() >= 8)
-            .map(|c| c.index)
-            .collect();
-        let s = msr_anchor_samples(&data, &idx, &seg, &params)?;
-        println!("{} clips, {} anchors", idx.len(), s.len());
-        s
-    };
-    let concepts = learn_concepts(&samples, &params)?;
-    for (act, ac) in &concepts.actions {
-        let noise = ac.labels.iter().filter(|l| l.is_none()).count();
-        println!(
-            "action {act:>2}: {} concepts from {} anchors{}, flaw threshold {:.2}",
-            ac.centroids.len(),
-            ac.labels.len(),
-            if noise > 0 {
-                format!(" ({noise} noise)")
-            } else {
-                String::new()
-            },
-            ac.score_threshold
-        );
-    }
-    std::fs::write(&a.output, concepts.to_json()?)
-        .with_context(|| format!("writing {}", a.output.display()))?;
-    Ok(())
 }
