@@ -16,7 +16,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_concrete::{
     interpolation_experiment, program_stats, synthesize, InterpParams, Lambda, Scale, SynthParams,
-    Transition, UnobservedJoints,
+    Transition,
 };
 use mp_geom::io::datasets::PennAction;
 use rayon::prelude::*;
@@ -31,14 +31,13 @@ pub struct EvalConcreteArgs {
     /// Output JSON report.
     #[arg(long)]
     pub out: PathBuf,
-    /// Fixed λ at the 512-px reference scale.
-    #[arg(long, default_value_t = Lambda::DEFAULT_FIXED, conflicts_with = "adaptive")]
-    pub lambda: f64,
-    /// Adaptive λ instead of a fixed one.
+    /// A fixed λ at the 512-px reference scale (the paper's setting; `Lambda::DEFAULT_FIXED`
+    /// is 1600) instead of the product's default (`mp_pipeline::Params::default()`: adaptive λ),
+    /// which `mp fit` and `mp run` use.
     #[arg(long)]
-    pub adaptive: bool,
+    pub lambda: Option<f64>,
     /// Maximum segment length in frames.
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = mp_pipeline::Params::default().analysis.synth.max_segment_frames)]
     pub window: usize,
     /// Only these action classes (repeatable).
     #[arg(long)]
@@ -232,16 +231,12 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
             .context("Penn Action not found: pass --data or set MP_DATA_DIR")?,
     };
     let pa = PennAction::open(&path).with_context(|| format!("opening {}", path.display()))?;
-    let base = SynthParams {
-        lambda: if a.adaptive {
-            Lambda::adaptive()
-        } else {
-            Lambda::fixed(a.lambda)
-        },
-        max_segment_frames: a.window,
-        unobserved_joints: UnobservedJoints::Ignore,
-        ..SynthParams::default()
-    };
+    // The product's synthesis parameters (`mp fit`, `mp run`), with the options given.
+    let mut base = mp_pipeline::Params::default().analysis.synth;
+    if let Some(l) = a.lambda {
+        base.lambda = Lambda::fixed(l);
+    }
+    base.max_segment_frames = a.window;
     base.validate()?;
     let mut per_action: BTreeMap<&str, usize> = BTreeMap::new();
     let clips: Vec<usize> = pa

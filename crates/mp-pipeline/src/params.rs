@@ -9,9 +9,9 @@ use crate::error::{PipelineError, Result};
 /// Keypoints from video.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseParams {
-    /// The pose model. Default BlazePose full.
+    /// The pose model. Default `ModelChoice::default()` (BlazePose full).
     pub model: ModelChoice,
-    /// ONNX Runtime threads. Default 2.
+    /// ONNX Runtime threads. Default `SessionParams::default()` (2).
     pub threads: usize,
     /// Keep all of the model's joints (BlazePose: 33) instead of the COCO-17
     /// body joints. Default false.
@@ -26,8 +26,8 @@ pub struct PoseParams {
 impl Default for PoseParams {
     fn default() -> Self {
         PoseParams {
-            model: ModelChoice::Full,
-            threads: 2,
+            model: ModelChoice::default(),
+            threads: mp_pose::SessionParams::default().intra_threads,
             all_joints: false,
             max_frames: None,
             thumbnail_size: mp_pose::thumbs::DEFAULT_THUMBNAIL_SIZE,
