@@ -2,7 +2,7 @@
 
 use mp_abstract::{AbstractParams, CountParams};
 use mp_concrete::{Scale, SynthParams, UnobservedJoints};
-use mp_pose::ModelChoice;
+pub use mp_pose::ModelChoice;
 
 use crate::error::{PipelineError, Result};
 

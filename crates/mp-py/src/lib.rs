@@ -1,0 +1,188 @@
+//! # motion_programs — the Python package of `mp`
+//!
+//! A thin layer over the libraries: every function calls the same library
+//! function as the `mp` command that does the same job, with the same
+//! defaults (`mp_pipeline::Params::default()`), releases the GIL while Rust
+//! works, and raises the library's errors as Python exceptions (one type
+//! per error family, all deriving from `MpError`). Build it with
+//! `maturin build` (see `crates/mp-py/pyproject.toml`).
+
+mod errors;
+mod programs;
+mod run;
+mod track;
+
+use std::path::PathBuf;
+
+use mp_pipeline::{CancelToken, Input, Keep, Params, Silent};
+use pyo3::prelude::*;
+
+use programs::{PyAbstract, PyCounts, PyProgram};
+use track::PyTrack;
+
+/// The pipeline's parameters with the options a Python call gave.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn params_with(
+    model: Option<&str>,
+    threads: Option<usize>,
+    max_frames: Option<usize>,
+    all_joints: bool,
+    lambda_: Option<f64>,
+    max_segment_frames: Option<usize>,
+) -> PyResult<Params> {
+    let mut p = Params::default();
+    if let Some(m) = model {
+        p.pose.model = mp_pose_model(m)?;
+    }
+    if let Some(t) = threads {
+        p.pose.threads = t;
+    }
+    p.pose.max_frames = max_frames;
+    p.pose.all_joints = all_joints;
+    if let Some(l) = lambda_ {
+        p.analysis.synth.lambda = mp_concrete::Lambda::fixed(l);
+    }
+    if let Some(w) = max_segment_frames {
+        p.analysis.synth.max_segment_frames = w;
+    }
+    p.validate().map_err(errors::pipeline)?;
+    Ok(p)
+}
+
+fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
+    mp_pipeline::params::ModelChoice::parse(name)
+        .map_err(|e| errors::ParamError::new_err(e.to_string()))
+}
+
+/// Reads a keypoint track: the project's `.npz`/`.json`/`.mpt`, CSV, `.npy`,
+/// BVH, OpenPose folders.
+#[pyfunction]
+fn read_track(py: Python<'_>, path: PathBuf) -> PyResult<PyTrack> {
+    let t = py
+        .detach(|| mp_geom::io::read_track(&path))
+        .map_err(errors::geom)?;
+    Ok(PyTrack::new(t))
+}
+
+/// Keypoints of a video (as `mp extract`, COCO-17 joints unless
+/// `all_joints`): BlazePose `full` (default), `lite`, or `movenet`.
+#[pyfunction]
+#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false))]
+fn extract(
+    py: Python<'_>,
+    video: PathBuf,
+    model: &str,
+    max_frames: Option<usize>,
+    threads: Option<usize>,
+    all_joints: bool,
+) -> PyResult<PyTrack> {
+    let params = params_with(Some(model), threads, max_frames, all_joints, None, None)?;
+    let input = Input::open(&video, None).map_err(errors::pipeline)?;
+    if !matches!(input, Input::Video { .. }) {
+        return Err(errors::PoseError::new_err(format!(
+            "{} is not a video (extensions: {})",
+            video.display(),
+            mp_pipeline::VIDEO_EXTENSIONS.join(", ")
+        )));
+    }
+    let (kp, _) = py
+        .detach(|| {
+            mp_pipeline::keypoints(
+                input,
+                &params,
+                Keep::default(),
+                &Silent,
+                &CancelToken::new(),
+            )
+        })
+        .map_err(errors::pipeline)?;
+    Ok(PyTrack::new(kp.track))
+}
+
+/// The concrete program of a track (as `mp fit`): `frame_size` is the
+/// largest side of the video frame in pixels (default: the motion's own
+/// extent sets the scale), `lambda_` a fixed segment penalty at the 512-px
+/// reference (default: adaptive), `max_segment_frames` the longest segment.
+#[pyfunction]
+#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None))]
+fn fit(
+    py: Python<'_>,
+    track: &PyTrack,
+    frame_size: Option<f64>,
+    lambda_: Option<f64>,
+    max_segment_frames: Option<usize>,
+) -> PyResult<PyProgram> {
+    let params = params_with(None, None, None, false, lambda_, max_segment_frames)?;
+    let t = &track.inner;
+    let syn = py
+        .detach(|| mp_pipeline::concrete_program(t, frame_size, &params))
+        .map_err(errors::pipeline)?;
+    Ok(PyProgram { inner: syn.program })
+}
+
+/// The abstract program of a track (as `mp abstract`).
+#[pyfunction(name = "abstract")]
+#[pyo3(signature = (track, frame_size=None))]
+fn abstract_program(
+    py: Python<'_>,
+    track: &PyTrack,
+    frame_size: Option<f64>,
+) -> PyResult<PyAbstract> {
+    let params = Params::default();
+    let t = &track.inner;
+    let an = py
+        .detach(|| mp_pipeline::analyse_track(t, frame_size, &params))
+        .map_err(errors::pipeline)?;
+    Ok(PyAbstract { inner: an })
+}
+
+/// Repetition counts (as `mp loops` and `mp run`): of a `Track` (from its
+/// keypoints), or of a video or track file given by its path (a video is
+/// decoded and run through the pose model, and its frames are read too).
+#[pyfunction]
+#[pyo3(signature = (source, thumbnails=None))]
+fn count(
+    py: Python<'_>,
+    source: &Bound<'_, PyAny>,
+    thumbnails: Option<&PyTrack>,
+) -> PyResult<PyCounts> {
+    let params = Params::default();
+    if let Ok(t) = source.cast::<PyTrack>() {
+        let t = &t.get().inner;
+        let th = thumbnails.map(|x| &x.inner);
+        let c = py
+            .detach(|| mp_pipeline::count(t, th, &params))
+            .map_err(errors::pipeline)?;
+        return Ok(PyCounts { inner: c });
+    }
+    let path: PathBuf = source.extract().map_err(|_| {
+        errors::ParamError::new_err("count() takes a Track or the path of a video or track file")
+    })?;
+    let out = py
+        .detach(|| {
+            let input = Input::open(&path, None)?;
+            mp_pipeline::analyse_input(input, &params, &Silent, &CancelToken::new())
+        })
+        .map_err(errors::pipeline)?;
+    Ok(PyCounts { inner: out.counts })
+}
+
+/// The Python module.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    m.add_class::<PyTrack>()?;
+    m.add_class::<PyProgram>()?;
+    m.add_class::<PyAbstract>()?;
+    m.add_class::<PyCounts>()?;
+    m.add_class::<run::PySummary>()?;
+    m.add_function(wrap_pyfunction!(read_track, m)?)?;
+    m.add_function(wrap_pyfunction!(extract, m)?)?;
+    m.add_function(wrap_pyfunction!(fit, m)?)?;
+    m.add_function(wrap_pyfunction!(abstract_program, m)?)?;
+    m.add_function(wrap_pyfunction!(count, m)?)?;
+    m.add_function(wrap_pyfunction!(run::run, m)?)?;
+    m.add_function(wrap_pyfunction!(run::grammar_symbols, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,284 @@
+//! Programs and counts: `Program` (concrete), `AbstractProgram`, `Counts`,
+//! `Summary` of a run.
+
+use mp_abstract::{Analysis, Counts};
+use mp_concrete::{ExecParams, Program};
+use numpy::{PyArray3, ToPyArray};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::errors;
+use crate::track::PyTrack;
+
+/// A concrete program: per joint, a sequence of primitives (circle, line,
+/// stationary, cubic spline) over shared segments, executable at any frame
+/// rate.
+#[pyclass(name = "Program", module = "motion_programs", frozen)]
+pub struct PyProgram {
+    pub(crate) inner: Program,
+}
+
+#[pymethods]
+impl PyProgram {
+    /// The program in the paper's notation (lossless; `Program.parse` reads it back).
+    #[getter]
+    fn text(&self) -> String {
+        self.inner.to_dsl()
+    }
+
+    /// The program as JSON.
+    fn to_json(&self) -> PyResult<String> {
+        self.inner.to_json().map_err(errors::concrete)
+    }
+
+    /// A program from its notation or JSON text.
+    #[staticmethod]
+    fn parse(text: &str) -> PyResult<Self> {
+        let p = if text.trim_start().starts_with('{') {
+            Program::from_json(text)
+        } else {
+            Program::from_dsl(text)
+        }
+        .map_err(errors::concrete)?;
+        Ok(PyProgram { inner: p })
+    }
+
+    /// Reads a program (`.json`, `.mpb` or the notation).
+    #[staticmethod]
+    fn read(path: std::path::PathBuf) -> PyResult<Self> {
+        Ok(PyProgram {
+            inner: Program::read(&path).map_err(errors::concrete)?,
+        })
+    }
+
+    /// Writes the program (`.json`, `.mpb`, anything else: the notation), atomically.
+    fn save(&self, path: std::path::PathBuf) -> PyResult<()> {
+        self.inner.write(&path).map_err(errors::concrete)
+    }
+
+    /// Positions of the executed program, `T' × J × D`, at `fps` frames per
+    /// second (default: the program's own rate).
+    #[pyo3(signature = (fps=None))]
+    fn execute<'py>(
+        &self,
+        py: Python<'py>,
+        fps: Option<f64>,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let t = self.execute_track(py, fps)?;
+        Ok(t.inner.positions().to_pyarray(py))
+    }
+
+    /// The executed program as a `Track` (see `execute`).
+    #[pyo3(signature = (fps=None))]
+    fn execute_track(&self, py: Python<'_>, fps: Option<f64>) -> PyResult<PyTrack> {
+        let p = &self.inner;
+        let params = ExecParams {
+            fps_out: fps,
+            ..ExecParams::default()
+        };
+        let t = py
+            .detach(|| p.execute_with(&params))
+            .map_err(errors::concrete)?;
+        Ok(PyTrack::new(t))
+    }
+
+    /// The segments: one dict per segment with `start_frame`, `frames` and
+    /// the primitive `kinds` of every joint.
+    #[getter]
+    fn segments<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let list = PyList::empty(py);
+        let mut start = 0usize;
+        for s in &self.inner.segments {
+            let d = PyDict::new(py);
+            d.set_item("start_frame", start)?;
+            d.set_item("frames", s.duration_frames)?;
+            let kinds: Vec<&str> = s.primitives.iter().map(|p| p.kind().as_str()).collect();
+            d.set_item("kinds", kinds)?;
+            list.append(d)?;
+            start += s.duration_frames;
+        }
+        Ok(list)
+    }
+
+    /// Frames per second.
+    #[getter]
+    fn fps(&self) -> f64 {
+        self.inner.fps
+    }
+
+    /// Joint names.
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        self.inner.joints.clone()
+    }
+
+    /// Number of segments.
+    #[getter]
+    fn n_segments(&self) -> usize {
+        self.inner.n_segments()
+    }
+
+    /// Number of frames.
+    #[getter]
+    fn n_frames(&self) -> usize {
+        self.inner.n_frames()
+    }
+
+    /// Number of parameters (every primitive's parameters plus one duration per segment).
+    #[getter]
+    fn n_params(&self) -> usize {
+        self.inner.n_params()
+    }
+
+    fn __eq__(&self, other: &Self) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Program({} frames, {} joints, {} segments, {} fps)",
+            self.inner.n_frames(),
+            self.inner.n_joints(),
+            self.inner.n_segments(),
+            self.inner.fps
+        )
+    }
+}
+
+/// An abstract program: `for` loops of probabilistic primitives, with the
+/// concrete program it was made from.
+#[pyclass(name = "AbstractProgram", module = "motion_programs", frozen)]
+pub struct PyAbstract {
+    pub(crate) inner: Analysis,
+}
+
+#[pymethods]
+impl PyAbstract {
+    /// The abstract program in its text form.
+    #[getter]
+    fn text(&self) -> String {
+        mp_abstract::dsl::print(&self.inner.program)
+    }
+
+    /// The abstract program as JSON.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string_pretty(&self.inner.program)
+            .map_err(|e| errors::MpError::new_err(e.to_string()))
+    }
+
+    /// The concrete program it was made from.
+    #[getter]
+    fn concrete(&self) -> PyProgram {
+        PyProgram {
+            inner: self.inner.concrete.clone(),
+        }
+    }
+
+    /// The loops as frame intervals: dicts with `start_frame`, `end_frame`,
+    /// `iterations`, `body_size`, `boundaries`.
+    #[getter]
+    fn loops<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let list = PyList::empty(py);
+        for iv in &self.inner.intervals {
+            let d = PyDict::new(py);
+            d.set_item("start_frame", iv.start_frame)?;
+            d.set_item("end_frame", iv.end_frame)?;
+            d.set_item("iterations", iv.iterations)?;
+            d.set_item("body_size", iv.body_size)?;
+            d.set_item("boundaries", iv.boundaries.clone())?;
+            list.append(d)?;
+        }
+        Ok(list)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "AbstractProgram({} statements, {} loops)",
+            self.inner.program.stmts.len(),
+            self.inner.loops.len()
+        )
+    }
+}
+
+/// Repetition counts: `total`, `intervals` (dicts with `start_frame`,
+/// `end_frame`, `period_frames`, `count`, `cycles`, `boundaries`,
+/// `confidence`), the `signal` (`keypoints` or `frames`) and `method`
+/// (`period`, `intervals`, `none`) that decided, and a `confidence`.
+#[pyclass(name = "Counts", module = "motion_programs", frozen)]
+pub struct PyCounts {
+    pub(crate) inner: Counts,
+}
+
+#[pymethods]
+impl PyCounts {
+    /// Total repetitions.
+    #[getter]
+    fn total(&self) -> usize {
+        self.inner.total
+    }
+
+    /// `keypoints` or `frames`.
+    #[getter]
+    fn signal(&self) -> &'static str {
+        self.inner.signal.as_str()
+    }
+
+    /// `period`, `intervals` or `none`.
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.method.as_str()
+    }
+
+    /// How periodic the deciding signal is (0..1).
+    #[getter]
+    fn confidence(&self) -> f64 {
+        self.inner.confidence
+    }
+
+    /// Frames of the recording.
+    #[getter]
+    fn frames(&self) -> usize {
+        self.inner.frames
+    }
+
+    /// Frame rate.
+    #[getter]
+    fn fps(&self) -> f64 {
+        self.inner.fps
+    }
+
+    /// The counted intervals.
+    #[getter]
+    fn intervals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let list = PyList::empty(py);
+        for iv in &self.inner.intervals {
+            let d = PyDict::new(py);
+            d.set_item("start_frame", iv.start_frame)?;
+            d.set_item("end_frame", iv.end_frame)?;
+            d.set_item("period_frames", iv.period_frames)?;
+            d.set_item("cycles", iv.cycles)?;
+            d.set_item("count", iv.count)?;
+            d.set_item("boundaries", iv.boundaries.clone())?;
+            d.set_item("confidence", iv.confidence)?;
+            list.append(d)?;
+        }
+        Ok(list)
+    }
+
+    /// The counts as JSON (the `counted` part of `loops.json`).
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string_pretty(&self.inner)
+            .map_err(|e| errors::MpError::new_err(e.to_string()))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Counts(total={}, signal='{}', method='{}', confidence={:.2}, intervals={})",
+            self.inner.total,
+            self.inner.signal.as_str(),
+            self.inner.method.as_str(),
+            self.inner.confidence,
+            self.inner.intervals.len()
+        )
+    }
+}

@@ -1,0 +1,181 @@
+//! `run` (the whole pipeline into an output folder, as `mp run`) and the
+//! grammar's symbol search.
+
+use std::path::PathBuf;
+
+use mp_grammar::data::Motion;
+use mp_grammar::model::find_symbols;
+use mp_grammar::{PoseDistanceParams, SymbolParams};
+use mp_pipeline::{CancelToken, Input, RunSummary, Silent};
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+
+use crate::errors;
+use crate::programs::{PyAbstract, PyCounts, PyProgram};
+use crate::track::PyTrack;
+
+/// What `run` produced: `counts`, `track`, `program` and `abstract_program`
+/// (None when no person was found in any frame), `report` (path or None),
+/// `files` (relative to the output folder), `stages` (name, seconds,
+/// frames), `seconds` (wall time).
+#[pyclass(name = "Summary", module = "motion_programs", frozen)]
+pub struct PySummary {
+    inner: RunSummary,
+    out_dir: PathBuf,
+}
+
+#[pymethods]
+impl PySummary {
+    /// Repetition counts (what `loops.json` holds).
+    #[getter]
+    fn counts(&self) -> PyCounts {
+        PyCounts {
+            inner: self.inner.outcome.counts.clone(),
+        }
+    }
+
+    /// The keypoints.
+    #[getter]
+    fn track(&self) -> PyTrack {
+        PyTrack::new(self.inner.outcome.keypoints.track.clone())
+    }
+
+    /// The concrete program, or None.
+    #[getter]
+    fn program(&self) -> Option<PyProgram> {
+        self.inner.outcome.analysis.as_ref().map(|a| PyProgram {
+            inner: a.concrete.clone(),
+        })
+    }
+
+    /// The abstract program, or None.
+    #[getter]
+    fn abstract_program(&self) -> Option<PyAbstract> {
+        self.inner
+            .outcome
+            .analysis
+            .as_ref()
+            .map(|a| PyAbstract { inner: a.clone() })
+    }
+
+    /// The report page, or None.
+    #[getter]
+    fn report(&self) -> Option<PathBuf> {
+        self.inner.report.clone()
+    }
+
+    /// The output folder.
+    #[getter]
+    fn out_dir(&self) -> PathBuf {
+        self.out_dir.clone()
+    }
+
+    /// Files written, relative to the output folder.
+    #[getter]
+    fn files(&self) -> Vec<String> {
+        self.inner.files.clone()
+    }
+
+    /// Fraction of frames with a person.
+    #[getter]
+    fn person_found(&self) -> f64 {
+        self.inner.outcome.keypoints.found_fraction
+    }
+
+    /// Time per stage: a list of (name, seconds, frames).
+    #[getter]
+    fn stages<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let l = PyList::empty(py);
+        for s in &self.inner.outcome.stages {
+            l.append((s.stage.name(), s.time.as_secs_f64(), s.frames))?;
+        }
+        Ok(l)
+    }
+
+    /// Wall time of the run, seconds.
+    #[getter]
+    fn seconds(&self) -> f64 {
+        self.inner.outcome.total.as_secs_f64()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Summary({} repetitions, {} files in {}, {:.2} s)",
+            self.inner.outcome.counts.total,
+            self.inner.files.len(),
+            self.out_dir.display(),
+            self.inner.outcome.total.as_secs_f64()
+        )
+    }
+}
+
+/// The whole pipeline into `out_dir` (as `mp run`): keypoints (for a video),
+/// programs, counts, pictures, `overlay.mp4` (video only, unless
+/// `overlay_video=False`) and `report.html` (unless `report=False`).
+/// `source` is a video or track file path, or a `Track`.
+#[pyfunction]
+#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=true, report=true))]
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    py: Python<'_>,
+    source: &Bound<'_, PyAny>,
+    out_dir: PathBuf,
+    model: Option<&str>,
+    threads: Option<usize>,
+    max_frames: Option<usize>,
+    all_joints: bool,
+    frame_size: Option<f64>,
+    overlay_video: bool,
+    report: bool,
+) -> PyResult<PySummary> {
+    let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
+    params.output.overlay_video = overlay_video;
+    params.output.report = report;
+    let input = if let Ok(t) = source.cast::<PyTrack>() {
+        Input::from_track(t.get().inner.clone(), "track", frame_size)
+    } else {
+        let path: PathBuf = source.extract().map_err(|_| {
+            errors::ParamError::new_err("run() takes a Track or the path of a video or track file")
+        })?;
+        Input::open(&path, frame_size).map_err(errors::pipeline)?
+    };
+    let dir = out_dir.clone();
+    let s = py
+        .detach(|| mp_pipeline::run(input, &dir, &params, &Silent, &CancelToken::new()))
+        .map_err(errors::pipeline)?;
+    Ok(PySummary { inner: s, out_dir })
+}
+
+/// Terminal symbols of a motion (as `mp grammar symbols`): the track is
+/// cut into segments clustered into `k` symbols (PAM + genetic search +
+/// annealing). Returns a dict: `text` (the symbol string), `k`, `segments`
+/// (start/end frame and symbol), `quality` and the parameters used.
+#[pyfunction]
+#[pyo3(signature = (track, k=None, seed=None))]
+pub fn grammar_symbols<'py>(
+    py: Python<'py>,
+    track: &PyTrack,
+    k: Option<usize>,
+    seed: Option<u64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let mut p = SymbolParams::default();
+    if let Some(k) = k {
+        p.k = k;
+    }
+    if let Some(s) = seed {
+        p.seed = s;
+    }
+    let motion = Motion {
+        track: track.inner.clone(),
+        bvh: None,
+        paths: Vec::new(),
+        frame_step: 1,
+    };
+    let s = py
+        .detach(|| find_symbols(&motion, &PoseDistanceParams::default(), &p))
+        .map_err(errors::grammar)?;
+    let json = serde_json::to_string(&s).map_err(|e| errors::MpError::new_err(e.to_string()))?;
+    let loads = py.import("json")?.getattr("loads")?;
+    let d = loads.call1((json,))?;
+    Ok(d)
+}

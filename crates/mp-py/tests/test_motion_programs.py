@@ -1,0 +1,139 @@
+"""motion_programs against the `mp` command line on the same input: the same
+programs and counts, bad input as clear exceptions, the GIL released while
+Rust works."""
+
+import json
+import pickle
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import motion_programs as mp
+
+
+def run_cli(mp_bin, *args):
+    out = subprocess.run([str(mp_bin), *map(str, args)], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    return out.stdout
+
+
+def test_track_arrays_and_round_trips(performer, tmp_path):
+    t = mp.read_track(performer)
+    assert t.positions.shape == (t.n_frames, t.n_joints, t.dims) == (t.n_frames, 17, 2)
+    assert t.confidence.shape == (t.n_frames, 17)
+    assert t.skeleton == "coco17" and t.joint_names[0] == "nose"
+    assert t.units == "px" and t.fps > 0 and len(t) == t.n_frames
+    # numpy in and out.
+    u = mp.Track.from_numpy(t.positions, t.fps, confidence=t.confidence, skeleton="coco17")
+    np.testing.assert_array_equal(u.positions, t.positions)
+    # Pickle (through the binary form) and files.
+    v = pickle.loads(pickle.dumps(t))
+    np.testing.assert_array_equal(v.positions, t.positions)
+    assert v.joint_names == t.joint_names
+    t.save(tmp_path / "t.mpt")
+    np.testing.assert_array_equal(mp.read_track(tmp_path / "t.mpt").positions, t.positions)
+
+
+def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
+    t = mp.read_track(performer)
+    prog = mp.fit(t)
+    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "p.txt", "--quiet")
+    assert prog.text == (tmp_path / "p.txt").read_text(), "mp.fit and mp fit differ"
+    assert prog == mp.Program.read(tmp_path / "p.txt")
+    assert prog.n_segments == len(prog.segments) > 10
+    x = prog.execute()
+    assert x.shape == t.positions.shape and np.isfinite(x).all()
+    assert prog.execute(fps=2 * t.fps).shape[0] >= 2 * t.n_frames - 2
+    # The abstract program and the counts.
+    a = mp.abstract(t)
+    run_cli(mp_bin, "abstract", performer, "-o", tmp_path / "a.json", "--quiet")
+    assert json.loads(a.to_json()) == json.loads((tmp_path / "a.json").read_text())
+    assert a.concrete == prog
+    c = mp.count(t)
+    cli = json.loads(run_cli(mp_bin, "loops", performer, "--json"))
+    assert c.total == cli["total_repetitions"] == 10
+    assert [i["count"] for i in c.intervals] == cli["counts"] == [4, 3, 3]
+    assert c.method == cli["method"] and c.signal == "keypoints"
+    # A fixed λ is honoured.
+    assert mp.fit(t, lambda_=400.0).n_segments != prog.n_segments
+
+
+def test_counts_from_video_equal_the_cli(data, mp_bin):
+    video = data("quva_repetition/videos/023_fitness.mp4")
+    truth = len(np.load(data("quva_repetition/annotations/023_fitness.npy")))
+    c = mp.count(str(video))
+    assert abs(c.total - truth) <= 1, c
+    cli = json.loads(run_cli(mp_bin, "loops", video, "--json"))
+    assert c.total == cli["total_repetitions"]
+    assert c.signal == cli["signal"]
+
+
+def test_run_writes_what_mp_run_writes(performer, mp_bin, tmp_path):
+    s = mp.run(str(performer), tmp_path / "py", overlay_video=False)
+    run_cli(mp_bin, "run", performer, "--out", tmp_path / "cli", "--quiet")
+    for f in ["track.npz", "program.txt", "abstract.json", "loops.json", "report.html"]:
+        assert (tmp_path / "py" / f).is_file(), f
+    assert (tmp_path / "py" / "program.txt").read_text() == (tmp_path / "cli" / "program.txt").read_text()
+    a = json.loads((tmp_path / "py" / "loops.json").read_text())
+    b = json.loads((tmp_path / "cli" / "loops.json").read_text())
+    assert a["total_repetitions"] == b["total_repetitions"] == s.counts.total
+    assert s.report is not None and s.program is not None
+    assert [n for n, _, _ in s.stages][:2] == ["concrete", "abstract"]
+
+
+def test_extract_a_video(data):
+    video = data("golfdb/golf_swing.mp4")
+    t = mp.extract(str(video), max_frames=20)
+    assert t.n_frames == 20 and t.skeleton == "coco17" and t.units == "px"
+    assert (t.confidence > 0.5).mean() > 0.5
+
+
+def test_bad_input_raises_clear_exceptions(tmp_path):
+    with pytest.raises(mp.TrackError, match="nope.npz"):
+        mp.read_track(tmp_path / "nope.npz")
+    with pytest.raises(mp.MpError, match="does not exist"):
+        mp.count(str(tmp_path / "missing.mp4"))
+    with pytest.raises(mp.TrackError, match="T × J × D"):
+        mp.Track.from_numpy(np.zeros((10, 17)), 30.0)
+    with pytest.raises(mp.TrackError, match="confidence"):
+        mp.Track.from_numpy(np.zeros((10, 17, 2)), 30.0, confidence=np.ones((10, 3)))
+    with pytest.raises(mp.TrackError, match="fps"):
+        mp.Track.from_numpy(np.zeros((10, 17, 2)), float("nan"))
+    # NaN positions are missing joints; a track with no observed joint cannot be fitted.
+    t = mp.Track.from_numpy(np.full((10, 3, 2), np.nan), 30.0)
+    assert (t.confidence == 0).all()
+    with pytest.raises(mp.ProgramError):
+        mp.fit(t)
+    with pytest.raises(mp.ParamError):
+        mp.extract(str(tmp_path / "x.mp4"), model="nonexistent")
+    bad = tmp_path / "corrupt.mp4"
+    bad.write_bytes(b"\x00\x00\x00\x18ftypmp42 junk")
+    with pytest.raises(mp.PoseError, match="corrupt.mp4"):
+        mp.extract(str(bad))
+    with pytest.raises(mp.TrackError):
+        mp.Track.from_bytes(b"garbage")
+
+
+def test_the_gil_is_released_while_rust_works(performer):
+    t = mp.read_track(performer)
+    ticks = 0
+    done = threading.Event()
+
+    def work():
+        mp.fit(t)
+        done.set()
+
+    th = threading.Thread(target=work)
+    th.start()
+    t0 = time.perf_counter()
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.001)
+    elapsed = time.perf_counter() - t0
+    th.join()
+    # While fit ran (hundreds of milliseconds), this thread kept running.
+    assert elapsed > 0.05
+    assert ticks > 10, f"only {ticks} ticks in {elapsed:.3f} s: the GIL was held"
