@@ -7,11 +7,8 @@ use clap::{Args, ValueEnum};
 use mp_abstract::dsl::{print_with, PrintOptions};
 use mp_abstract::edit::set_iterations;
 use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};
-use mp_abstract::pipeline::predict_constant;
-use mp_abstract::{
-    predict, read_program, write_program, AbstractParams, PredictParams, SelfMatchKind,
-};
-use mp_forecast::ForecastMethod;
+use mp_abstract::{read_program, write_program, AbstractParams};
+use mp_forecast::{ForecastMethod, PredictOptions};
 use mp_geom::io::{read_track, write_track};
 use mp_pipeline::{analyse_track, Params};
 
@@ -117,6 +114,18 @@ pub enum Method {
     Ar,
     /// Learned autoregressive model on poses (AR on Θ).
     ArPose,
+}
+
+impl From<Method> for ForecastMethod {
+    fn from(m: Method) -> Self {
+        match m {
+            Method::Constant => ForecastMethod::Constant,
+            Method::Loop => ForecastMethod::Loop,
+            Method::Nn => ForecastMethod::Nn,
+            Method::Ar => ForecastMethod::Ar,
+            Method::ArPose => ForecastMethod::ArPose,
+        }
+    }
 }
 
 /// Arguments of `mp predict`.
@@ -246,76 +255,53 @@ pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `mp predict`: the frames after the observed ones, by the chosen method,
-/// with their KD to the actual frames when the track has them.
+/// `mp predict`: the frames after the observed ones, by the chosen method
+/// (`mp_forecast::predict`), with their KD to the actual frames when the track has them.
 pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
-    let pred = match a.method {
-        Method::Nn => {
-            crate::cmd_forecast::predict_with("nn", &track, a.observe, a.horizon, &a.forecast)?
-        }
-        Method::Ar => {
-            crate::cmd_forecast::predict_with("ar", &track, a.observe, a.horizon, &a.forecast)?
-        }
-        Method::ArPose => {
-            crate::cmd_forecast::predict_with("ar-pose", &track, a.observe, a.horizon, &a.forecast)?
-        }
-        Method::Constant => {
-            if a.observe == 0 || a.observe > track.n_frames() {
-                anyhow::bail!(
-                    "--observe must be in 1..={} (the track's length)",
-                    track.n_frames()
-                );
-            }
-            predict_constant(&track.slice_frames(0, a.observe)?, a.horizon)?
-        }
-        Method::Loop => {
-            let params = PredictParams {
-                analysis: a.opts.params(),
-                ..PredictParams::default()
-            };
-            let p = predict(&track, a.observe, a.horizon, &params)?;
-            match (&p.used, &p.period, &p.self_match) {
-                (Some(i), _, _) => eprintln!(
-                    "unrolling the loop of frames {}..{} ({} iterations of body {})",
-                    i.start_frame, i.end_frame, i.iterations, i.body_size
-                ),
-                (None, Some(e), _) => eprintln!(
-                    "no loop program: repeating the last period of {} frames (autocorrelation {:.2})",
-                    e.period_frames, e.strength
-                ),
-                (None, None, Some(m)) => match m.kind {
-                    SelfMatchKind::Lag => eprintln!(
-                        "no loop program: replaying the motion with its self-match lag of {} frames",
-                        m.lag_frames
-                    ),
-                    SelfMatchKind::Reflection => eprintln!(
-                        "no loop program: retracing the motion backwards from its turning frame {}",
-                        m.lag_frames
-                    ),
-                },
-                (None, None, None) => {
-                    eprintln!("no repetition in the observed frames: holding the last pose")
-                }
-            }
-            p.track
-        }
+    let mut opts = PredictOptions {
+        method: a.method.into(),
+        train: a.forecast.train.clone(),
+        models: a.forecast.models.clone(),
+        ..PredictOptions::default()
     };
+    opts.loop_params.analysis = a.opts.params();
+    let p = mp_forecast::predict(&track, a.observe, a.horizon, &opts)?;
+    if let Some(text) = p.explanation() {
+        eprintln!("{text}");
+    }
     if let Some(out) = &a.output {
-        write_track(out, &pred)?;
+        write_track(out, &p.track)?;
         eprintln!(
             "{} predicted frames written to {}",
-            pred.n_frames(),
+            p.track.n_frames(),
             out.display()
         );
     }
-    if a.observe + a.horizon <= track.n_frames() {
-        let truth = track.slice_frames(a.observe, a.observe + a.horizon)?;
-        let kd = mp_geom::metrics::kd(&pred, &truth)?;
+    if let Some(kd) = p.actual_kd {
         println!(
             "KD to the actual frames: {kd:.3} {}",
             track.units().as_str()
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn predict_without_flags_uses_the_library_defaults() {
+        let opts = AnalysisOpts {
+            frame_size: None,
+            threshold: Params::default().analysis.loops.threshold,
+            max_body: Params::default().analysis.loops.max_body,
+        };
+        assert_eq!(
+            opts.params(),
+            PredictOptions::default().loop_params.analysis
+        );
+        assert_eq!(ForecastMethod::from(Method::ArPose), ForecastMethod::ArPose);
+    }
 }

@@ -43,6 +43,38 @@ pub enum ForecastError {
         #[source]
         source: std::io::Error,
     },
+    /// A number of observed frames outside what the track holds or the method needs.
+    #[error("`observe` must be in {min}..={frames} (the track's length) for the {method} method, got {observe}")]
+    ObserveOutOfRange {
+        /// Observed frames asked for.
+        observe: usize,
+        /// Fewest observed frames the method accepts.
+        min: usize,
+        /// Frames of the track.
+        frames: usize,
+        /// The method (`ForecastMethod::as_str`).
+        method: &'static str,
+    },
+    /// A horizon beyond the longest one predicted (`crate::predict::max_horizon_frames`).
+    #[error("a horizon of {horizon} frames is too long: at most {limit} frames ({} frames or {} s of motion at {fps} fps, whichever is fewer)", crate::predict::MAX_HORIZON_FRAMES, crate::predict::MAX_HORIZON_SECONDS)]
+    HorizonTooLong {
+        /// Frames asked for.
+        horizon: usize,
+        /// The longest horizon accepted for the track.
+        limit: usize,
+        /// The track's frame rate.
+        fps: f64,
+    },
+    /// No learned model suits the track's skeleton and dimensions.
+    #[error("no forecasting model for a {dims}D track of skeleton `{skeleton}` (penn13, coco17, blazepose33 \
+             in 2D → penn_action; msr20, blazepose33 world landmarks in 3D → msr_action3d); \
+             pass a model folder (--models DIR)")]
+    NoModelForSkeleton {
+        /// The track's skeleton.
+        skeleton: String,
+        /// The track's dimensions per joint.
+        dims: usize,
+    },
     /// No training data for a method that needs it.
     #[error("no training data: {0}")]
     NoTrainingData(String),

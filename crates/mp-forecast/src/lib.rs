@@ -15,6 +15,10 @@
 //!   latents to poses ([`ArSpace::Latent`], "AR on Φ"). The ablation
 //!   [`ArSpace::Pose`] ("AR on Θ") runs the same autoregressive network on
 //!   poses. Trained by `tools/forecast/train.py` (`cargo xtask train-forecast`).
+//! * [`predict()`], [`search_statue`]: one call per job with the defaults of
+//!   `mp predict` and `mp statue` ([`PredictOptions`], [`StatueOptions`]):
+//!   training set and model lookup, the map onto the model's joints, and
+//!   the path taken ([`PredictPath`]).
 //! * [`mapped`]: the product's skeletons (COCO-17, BlazePose-33) on the
 //!   Penn Action / MSR Action3D models ([`MappedForecaster`]).
 //! * [`normalize`]: the root-relative, torso-scaled keypoint normalisation
@@ -32,6 +36,7 @@ pub mod mapped;
 pub mod model;
 pub mod nn;
 pub mod normalize;
+pub mod predict;
 pub mod statue;
 
 pub use error::{ForecastError, Result};
@@ -40,4 +45,8 @@ pub use forecaster::{Constant, ForecastMethod, Forecaster, LoopUnroll};
 pub use mapped::{map_to_model, model_dataset, MappedForecaster};
 pub use model::{ArForecaster, ArParams, ArSpace, ForecastModels};
 pub use nn::{NearestNeighbour, NnParams};
+pub use predict::{
+    predict, search_statue, LearnedModel, ModelMapping, PredictOptions, PredictPath, Prediction,
+    StatueOptions, StatueSearch,
+};
 pub use statue::{find_statue, Statue, StatueParams};

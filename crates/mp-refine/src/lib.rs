@@ -27,11 +27,15 @@
 //!   anchors moved to their nearest concept), transition refinement.
 //! * [`mapped`]: refinement of BlazePose-33 world landmarks through the 20
 //!   MSR joints, carried back onto the input's joints.
+//! * [`api`]: [`refine_default`], the learned refinement in one call with
+//!   the defaults of `mp refine` ([`RefineOptions`]: model folder, concepts,
+//!   action, steps and thresholds).
 //! * [`quality`], [`eval_refine`], [`eval_generated`], [`eval_ablation`]: FID, accuracy,
 //!   diversity, multimodality and the evaluation on injected flaws and
 //!   generated motion; [`eval_split`]: the subjects an evaluation scores
 //!   (those the training manifest does not name).
 
+pub mod api;
 pub mod baseline;
 pub mod concepts;
 pub mod dataset;
@@ -48,6 +52,7 @@ pub mod pipeline;
 pub mod quality;
 pub mod segment;
 
+pub use api::{refine_default, RefineOptions};
 pub use baseline::{evaluate_injected, refine, EvalParams, EvalReport, RefineParams, Refinement};
 pub use concepts::{learn_concepts, ActionConcepts, ClusterMethod, ConceptParams, Concepts, Gmm};
 pub use error::{RefineError, Result};

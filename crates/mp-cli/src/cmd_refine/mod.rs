@@ -9,16 +9,13 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use clap::Args;
-use mp_geom::io::bvh::Bvh;
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::io::{read_track, write_track};
+use mp_geom::io::write_track;
 use mp_geom::Track;
-use mp_pose::SessionParams;
-use mp_refine::mapped::{msr20_map, refine_any, MappedRefinement};
-use mp_refine::motion::{bvh_to_msr20, DEFAULT_BVH_LENGTH_SCALE};
-use mp_refine::nets::{find_model_dir, RefineNets};
-use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode, TransitionMethod};
-use mp_refine::Concepts;
+use mp_refine::api::read_input;
+use mp_refine::mapped::MappedRefinement;
+use mp_refine::motion::DEFAULT_BVH_LENGTH_SCALE;
+use mp_refine::pipeline::{NetRefineParams, RefineMode, TransitionMethod};
+use mp_refine::{refine_default, RefineOptions};
 
 pub use concepts::{concepts_cmd, ConceptsArgs};
 
@@ -49,25 +46,33 @@ pub struct RefineArgs {
     #[arg(long, conflicts_with = "anchors")]
     pub transitions: bool,
     /// The track comes from a motion generator trained on the concepts' subjects: run the anchor
-    /// step with the generated-motion settings (anchors scored below the action's threshold + 25 are
+    /// step with the generated-motion settings (anchors scored below their action's threshold are
     /// moved to their nearest concept; `NetRefineParams::for_generated`).
     #[arg(long)]
     pub generated: bool,
     /// Switch the learned flaw detector off (with --anchors or --transitions).
     #[arg(long)]
     pub no_detector: bool,
-    /// Flaw probability above which a (frame, joint) is refilled.
-    #[arg(long, default_value_t = NetRefineParams::default().flaw_probability)]
-    pub flaw_probability: f64,
+    // Thresholds: `None` keeps the value of the starting parameters (`NetRefineParams::default()`,
+    // or `for_generated()` with --generated); the help shows the default.
+    #[arg(long, help = format!(
+        "Flaw probability above which a (frame, joint) is refilled [default: {}]",
+        NetRefineParams::default().flaw_probability
+    ))]
+    pub flaw_probability: Option<f64>,
     /// Regenerate transitions with the transition generator (z = 0) instead of the refinement network.
     #[arg(long)]
     pub generator_transitions: bool,
-    /// Anchor probability threshold.
-    #[arg(long, default_value_t = NetRefineParams::default().anchor_probability)]
-    pub anchor_probability: f64,
-    /// Transition deviation threshold (metres).
-    #[arg(long, default_value_t = NetRefineParams::default().transition_deviation_m)]
-    pub deviation_m: f64,
+    #[arg(long, help = format!(
+        "Anchor probability threshold [default: {}]",
+        NetRefineParams::default().anchor_probability
+    ))]
+    pub anchor_probability: Option<f64>,
+    #[arg(long, help = format!(
+        "Transition deviation threshold (metres) [default: {}]",
+        NetRefineParams::default().transition_deviation_m
+    ))]
+    pub deviation_m: Option<f64>,
     /// Also write the report as JSON.
     #[arg(long)]
     pub report: Option<PathBuf>,
@@ -76,54 +81,54 @@ pub struct RefineArgs {
     pub bvh_scale: f64,
 }
 
+impl RefineArgs {
+    /// The library's options with these flags: `--generated` starts from
+    /// `RefineOptions::generated()`, the step flags set the mode and the
+    /// detector, the thresholds override only when given.
+    pub fn options(&self) -> RefineOptions {
+        let mut opts = if self.generated {
+            RefineOptions::generated()
+        } else {
+            RefineOptions::default()
+        };
+        opts.models = self.models.clone();
+        opts.concepts = self.concepts.clone();
+        opts.action = self.action;
+        let p = &mut opts.params;
+        if self.transitions {
+            p.mode = RefineMode::AnchorsAndTransitions;
+        } else if self.anchors {
+            p.mode = RefineMode::AnchorsOnly;
+        }
+        p.flaw_detection = !self.no_detector;
+        if self.generator_transitions {
+            p.transition_method = TransitionMethod::Generator;
+        }
+        if let Some(v) = self.anchor_probability {
+            p.anchor_probability = v;
+        }
+        if let Some(v) = self.deviation_m {
+            p.transition_deviation_m = v;
+        }
+        if let Some(v) = self.flaw_probability {
+            opts.set_flaw_probability(v);
+        }
+        opts
+    }
+}
+
 /// `mp refine`.
 pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
     // BVH (CMU naming) is mapped onto the 20 MSR joints at 15 fps.
     let track = folder_track(&a.track, a.bvh_scale)
         .with_context(|| format!("reading {}", a.track.display()))?;
-    // Refuse what the networks cannot read before loading them.
-    msr20_map(&track).with_context(|| format!("refining {}", a.track.display()))?;
-    let dir = match &a.models {
-        Some(d) => d.clone(),
-        None => find_model_dir()?,
-    };
-    let concepts_path = a
-        .concepts
-        .clone()
-        .unwrap_or_else(|| dir.join("concepts.json"));
-    let concepts = read_concepts(&concepts_path)?;
-    let nets = RefineNets::load(&dir, &SessionParams::default())
-        .with_context(|| format!("loading refinement networks from {}", dir.display()))?;
     if a.no_detector && !(a.anchors || a.transitions || a.generated) {
         bail!("--no-detector leaves nothing to do: add --anchors, --transitions or --generated");
     }
-    let base = if a.generated {
-        NetRefineParams::for_generated()
-    } else {
-        NetRefineParams::default()
-    };
-    let params = NetRefineParams {
-        anchor_probability: a.anchor_probability,
-        transition_deviation_m: a.deviation_m,
-        flaw_detection: !a.no_detector,
-        flaw_probability: a.flaw_probability,
-        mode: if a.transitions {
-            RefineMode::AnchorsAndTransitions
-        } else if a.anchors || a.generated {
-            RefineMode::AnchorsOnly
-        } else {
-            RefineMode::DetectorOnly
-        },
-        transition_method: if a.generator_transitions {
-            TransitionMethod::Generator
-        } else {
-            TransitionMethod::Refinement
-        },
-        ..base
-    };
-    let refiner = NetRefiner::new(&nets, &concepts, &params)?;
-    let mapped = refine_any(&refiner, &track, a.action)
-        .with_context(|| format!("refining {}", a.track.display()))?;
+    let opts = a.options();
+    let params = &opts.params;
+    let mapped =
+        refine_default(&track, &opts).with_context(|| format!("refining {}", a.track.display()))?;
     if let Some(map) = &mapped.map {
         println!(
             "{} joints mapped onto the {} MSR Action3D joints (hip centre, spine, neck, hands, feet and head derived); the refinement is carried back onto the {} joints",
@@ -234,27 +239,59 @@ fn finish(a: &RefineArgs, r: &MappedRefinement, track: &Track) -> anyhow::Result
     Ok(())
 }
 
-fn read_concepts(path: &Path) -> anyhow::Result<Concepts> {
-    let text = std::fs::read_to_string(path).with_context(|| {
-        format!(
-            "reading anchor concepts {} (learn them with `mp concepts`)",
-            path.display()
-        )
-    })?;
-    Concepts::from_json(&text).with_context(|| format!("parsing {}", path.display()))
+/// A track file, or a CMU BVH file mapped onto the 20 MSR joints at MSR's
+/// frame rate (`bvh_scale`: BVH length unit → metres; `mp_refine::api::read_input`).
+fn folder_track(p: &Path, bvh_scale: f64) -> anyhow::Result<Track> {
+    Ok(read_input(p, bvh_scale)?)
 }
 
-/// A track file, or a CMU BVH file mapped onto the 20 MSR joints at MSR's
-/// frame rate (`bvh_scale`: BVH length unit → metres).
-fn folder_track(p: &Path, bvh_scale: f64) -> anyhow::Result<Track> {
-    let is_bvh = p
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
-    if is_bvh {
-        let bvh = Bvh::read(p)?;
-        Ok(bvh_to_msr20(&bvh, bvh_scale, MsrAction3D::FPS)?)
-    } else {
-        Ok(read_track(p)?)
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: RefineArgs,
+    }
+
+    fn options(flags: &[&str]) -> RefineOptions {
+        let argv = ["mp", "in.json", "-o", "out.json"].iter().chain(flags);
+        Cli::try_parse_from(argv).unwrap().args.options()
+    }
+
+    #[test]
+    fn flags_map_onto_the_library_options() {
+        assert_eq!(options(&[]), RefineOptions::default());
+        assert_eq!(options(&["--generated"]), RefineOptions::generated());
+        // thresholds given with --generated override only themselves
+        let o = options(&[
+            "--generated",
+            "--anchor-probability",
+            "0.4",
+            "--deviation-m",
+            "0.2",
+        ]);
+        let expected = NetRefineParams {
+            anchor_probability: 0.4,
+            transition_deviation_m: 0.2,
+            ..NetRefineParams::for_generated()
+        };
+        assert_eq!(o.params, expected);
+        let o = options(&[
+            "--transitions",
+            "--no-detector",
+            "--flaw-probability",
+            "0.5",
+        ]);
+        assert_eq!(o.params.mode, RefineMode::AnchorsAndTransitions);
+        assert!(!o.params.flaw_detection);
+        assert_eq!(o.params.flaw_probability, 0.5);
+        assert!(o.validate().is_ok());
+        let o = options(&["--anchors", "--generator-transitions", "--action", "7"]);
+        assert_eq!(o.params.mode, RefineMode::AnchorsOnly);
+        assert_eq!(o.params.transition_method, TransitionMethod::Generator);
+        assert_eq!(o.action, Some(7));
     }
 }
