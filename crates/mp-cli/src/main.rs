@@ -4,6 +4,7 @@
 //! and prints or writes the result. Subcommands live in their own modules.
 
 mod cmd_abstract;
+mod cmd_batch;
 mod cmd_concrete;
 mod cmd_demo;
 mod cmd_forecast;
@@ -55,6 +56,8 @@ enum Command {
     Grammar(cmd_grammar::GrammarArgs),
     /// Video or track → programs, loops, pictures and an HTML report in one folder.
     Run(cmd_run::RunArgs),
+    /// Many videos or tracks (a folder or a list) through `mp run`, several at once, with a resumable manifest.
+    Batch(cmd_batch::BatchArgs),
     /// Refine a 20-joint 3D track: learned flaw detection and repair (anchor and transition networks as options).
     Refine(cmd_refine::RefineArgs),
     /// Learn anchor concepts (clusters + quality model) from MSR Action3D or a folder of tracks.
@@ -79,6 +82,7 @@ fn main() {
         Command::Demo(a) => cmd_demo::demo_cmd(&a),
         Command::Grammar(a) => cmd_grammar::grammar_cmd(&a),
         Command::Run(a) => cmd_run::run_cmd(&a),
+        Command::Batch(a) => cmd_batch::batch_cmd(&a),
         Command::Refine(a) => cmd_refine::refine_cmd(&a),
         Command::Concepts(a) => cmd_refine::concepts_cmd(&a),
     };

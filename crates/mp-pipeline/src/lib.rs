@@ -12,6 +12,8 @@
 //!    video, the frame thumbnails (where no person is found, the frames count).
 //! 5. [`run`]: all of the above into an output folder, with pictures, an
 //!    overlay video and `report.html`.
+//! 6. [`batch()`]: [`run`] over a folder or a list of inputs, several at
+//!    once, each into its own folder, with a resumable `manifest.jsonl`.
 //!
 //! [`Params::default()`] holds the libraries' defaults, validated once; an
 //! [`Observer`] receives progress and stage timings, and a
@@ -27,6 +29,7 @@
 //! ```
 
 pub mod analysis;
+pub mod batch;
 pub mod error;
 pub mod input;
 pub mod keypoints;
@@ -38,6 +41,10 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 pub use analysis::{analyse_track, concrete_program, count};
+pub use batch::{
+    batch, batch_items, BatchError, BatchObserver, BatchParams, BatchSummary, ItemReport,
+    ItemStatus,
+};
 pub use error::{PipelineError, Result};
 pub use input::{is_video, Input, VIDEO_EXTENSIONS};
 pub use keypoints::{keypoints, Keep, Keypoints};
