@@ -86,9 +86,15 @@ pub fn from_concrete(
 /// Track → concrete program → abstract program, loops and repetition intervals.
 pub fn analyze(track: &Track, params: &AbstractParams) -> Result<Analysis> {
     let syn = synthesize_detailed(track, &params.synth)?;
+    analyze_synthesis(syn, &params.loops)
+}
+
+/// A concrete synthesis → abstract program, loops and repetition intervals;
+/// the loop thresholds use the synthesis' `unit_scale`.
+pub fn analyze_synthesis(syn: mp_concrete::Synthesis, loops: &LoopParams) -> Result<Analysis> {
     let loops = LoopParams {
         unit_scale: syn.unit_scale,
-        ..params.loops.clone()
+        ..loops.clone()
     };
     let (program, found, prims) = from_concrete(&syn.program, &loops)?;
     let intervals = intervals(&prims, &found, 0);

@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use mp_abstract::{count_signals, Analysis, Counts, LoopParams};
+use mp_abstract::{count_signals, Analysis, Counts};
 use mp_concrete::{synthesize_detailed, Synthesis};
 use mp_geom::{CancelToken, Track};
 
@@ -54,23 +54,11 @@ pub(crate) fn analyse(
     check(cancel)?;
     obs.started(Stage::Abstract, None);
     let t1 = Instant::now();
-    let loops = LoopParams {
-        unit_scale: syn.unit_scale,
-        ..params.analysis.loops.clone()
-    };
-    let (program, found, prims) = mp_abstract::pipeline::from_concrete(&syn.program, &loops)
+    let an = mp_abstract::pipeline::analyze_synthesis(syn, &params.analysis.loops)
         .map_err(|e| PipelineError::stage("finding loops (abstract program)", e))?;
-    let intervals = mp_abstract::repetition::intervals(&prims, &found, 0);
     timings.push(Stage::Abstract, t1.elapsed(), track.n_frames());
     check(cancel)?;
-    Ok(Analysis {
-        concrete: syn.program,
-        prims,
-        program,
-        loops: found,
-        intervals,
-        unit_scale: syn.unit_scale,
-    })
+    Ok(an)
 }
 
 /// Step 4: repetition counts from the keypoints and, for video, the frame

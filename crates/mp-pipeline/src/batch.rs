@@ -1,4 +1,4 @@
-//! Many inputs in one go: each video or track file through [`run`] into its
+//! Many inputs in one go: each video or track file through [`run`](crate::run) into its
 //! own output folder, several at once, with a manifest that lets an
 //! interrupted batch resume.
 //!
@@ -7,7 +7,7 @@
 //! * [`batch()`] runs every item into `OUT_DIR/<file stem>` (equal stems are
 //!   told apart by their extension, then by a number) and appends one JSON
 //!   line per finished item to `OUT_DIR/manifest.jsonl`, written to disk
-//!   before the next line. What a folder holds is exactly what [`run`]
+//!   before the next line. What a folder holds is exactly what [`run`](crate::run)
 //!   writes for that input.
 //! * **Resume**: an item whose output folder holds `loops.json` and whose
 //!   last manifest line says `ok` (or `skipped`) is not run again; its new
@@ -22,7 +22,7 @@
 //!   the container states them), then the track files, so that the last
 //!   item to finish is a short one.
 //! * **Cancellation**: the [`CancelToken`] stops new items from starting
-//!   and cancels the running ones ([`run`] removes their staging folders);
+//!   and cancels the running ones ([`run`](crate::run) removes their staging folders);
 //!   they get no manifest line and run again next time.
 //!
 //! The manifest describes the latest batch: at the start it is rewritten
@@ -55,7 +55,6 @@ use crate::error::PipelineError;
 use crate::input::{is_video, Input};
 use crate::params::Params;
 use crate::progress::{Observer, Silent, Stage, StageTime};
-use crate::run;
 
 /// Extensions of the keypoint track files that [`batch_items`] lists from a
 /// folder (besides the videos of [`crate::VIDEO_EXTENSIONS`]).
@@ -156,7 +155,7 @@ pub struct BatchParams {
     /// Largest side of the video frame in pixels for track inputs (the
     /// scale), as in [`Input::open`]. Default `None`: the motion's extent.
     pub frame_px: Option<f64>,
-    /// The parameters of every item's [`run`]. Default [`Params::default()`].
+    /// The parameters of every item's [`run`](crate::run). Default [`Params::default()`].
     pub params: Params,
 }
 
@@ -624,7 +623,9 @@ fn work_estimate(path: &Path, max_frames: Option<usize>) -> (bool, u64) {
     }
 }
 
-/// Runs one item: [`Input::open`], then [`run`] into `output`.
+/// Runs one item: [`Input::open`], then [`run`](crate::run) into `output`, with the
+/// worker's pose model (`slot`, kept loaded between its items).
+#[allow(clippy::too_many_arguments)]
 fn run_item(
     index: usize,
     input: &Path,
@@ -633,6 +634,7 @@ fn run_item(
     frame_px: Option<f64>,
     observer: &dyn BatchObserver,
     cancel: &CancelToken,
+    slot: &mut crate::ModelSlot,
 ) -> ItemReport {
     let start = Instant::now();
     let item_observer = ItemObserver {
@@ -641,8 +643,12 @@ fn run_item(
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let opened = Input::open(input, frame_px)?;
-        run(opened, output, params, &item_observer, cancel)
+        crate::run_with(opened, output, params, &item_observer, cancel, slot)
     }));
+    if result.is_err() {
+        // A model that panicked mid-video is not reused.
+        *slot = crate::ModelSlot::default();
+    }
     let seconds = start.elapsed().as_secs_f64();
     match result {
         Ok(Ok(summary)) => {
@@ -684,7 +690,7 @@ fn run_item(
 }
 
 /// Runs every item of `items` into its own folder under `out_dir` (see the
-/// module docs): [`run`] with `params.params`, `params.jobs` items at once,
+/// module docs): [`run`](crate::run) with `params.params`, `params.jobs` items at once,
 /// one manifest line per finished item, items complete from an earlier
 /// batch skipped.
 ///
@@ -762,42 +768,46 @@ pub fn batch(
     let stopped = || cancel.is_cancelled() || fatal.lock().map(|f| f.is_some()).unwrap_or(true);
     std::thread::scope(|s| {
         for _ in 0..jobs {
-            s.spawn(|| loop {
-                if stopped() {
-                    break;
-                }
-                let k = next.fetch_add(1, Ordering::SeqCst);
-                let Some(&i) = pending.get(k) else {
-                    break;
-                };
-                observer.item_started(i, &items[i]);
-                let report = run_item(
-                    i,
-                    &items[i],
-                    &outputs[i],
-                    &run_params,
-                    params.frame_px,
-                    observer,
-                    cancel,
-                );
-                if report.status != ItemStatus::Cancelled {
-                    let written = match manifest.lock() {
-                        Ok(mut m) => m.append(&report),
-                        Err(_) => Err(BatchError::io(
-                            "append to the manifest",
-                            &manifest_path,
-                            std::io::Error::other("a writer panicked"),
-                        )),
+            s.spawn(|| {
+                let mut slot = crate::ModelSlot::default();
+                loop {
+                    if stopped() {
+                        break;
+                    }
+                    let k = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(&i) = pending.get(k) else {
+                        break;
                     };
-                    if let Err(e) = written {
-                        if let Ok(mut f) = fatal.lock() {
-                            f.get_or_insert(e);
+                    observer.item_started(i, &items[i]);
+                    let report = run_item(
+                        i,
+                        &items[i],
+                        &outputs[i],
+                        &run_params,
+                        params.frame_px,
+                        observer,
+                        cancel,
+                        &mut slot,
+                    );
+                    if report.status != ItemStatus::Cancelled {
+                        let written = match manifest.lock() {
+                            Ok(mut m) => m.append(&report),
+                            Err(_) => Err(BatchError::io(
+                                "append to the manifest",
+                                &manifest_path,
+                                std::io::Error::other("a writer panicked"),
+                            )),
+                        };
+                        if let Err(e) = written {
+                            if let Ok(mut f) = fatal.lock() {
+                                f.get_or_insert(e);
+                            }
                         }
                     }
-                }
-                observer.item_finished(i, &report);
-                if let Ok(mut r) = results.lock() {
-                    r[i] = Some(report);
+                    observer.item_finished(i, &report);
+                    if let Ok(mut r) = results.lock() {
+                        r[i] = Some(report);
+                    }
                 }
             });
         }

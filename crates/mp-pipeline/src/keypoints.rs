@@ -14,6 +14,7 @@ use mp_pose::extract::{extract, open_estimator, ExtractOptions};
 use mp_pose::thumbs::thumbnail_track;
 use mp_pose::video::{VideoInfo, VideoReader};
 use mp_pose::SessionParams;
+use mp_pose::{ModelChoice, PoseEstimator};
 use mp_report::{FrameStore, FrameStoreParams};
 
 use crate::error::{PipelineError, Result};
@@ -36,6 +37,36 @@ pub struct OverlayFrames {
     pub info: VideoInfo,
     /// Full-size RGB frames kept during the pose pass; `None`: decode the video again.
     pub kept: Option<Vec<Vec<u8>>>,
+}
+
+/// A pose model kept loaded between videos: the first video opens it, the
+/// next ones with the same model and thread count reuse it (its tracking
+/// state is reset for each video).
+#[derive(Default)]
+pub struct ModelSlot {
+    loaded: Option<(ModelChoice, usize, Box<dyn PoseEstimator + Send>)>,
+}
+
+impl ModelSlot {
+    /// The model for `params`, opened when not loaded yet (or loaded with other settings).
+    fn get(&mut self, params: &Params) -> Result<&mut (dyn PoseEstimator + Send)> {
+        let (model, threads) = (params.pose.model, params.pose.threads.max(1));
+        let fits = matches!(&self.loaded, Some((m, t, _)) if *m == model && *t == threads);
+        if !fits {
+            let est = open_estimator(
+                model,
+                SessionParams {
+                    intra_threads: threads,
+                    ..Default::default()
+                },
+            )?;
+            self.loaded = Some((model, threads, est));
+        }
+        match self.loaded.as_mut() {
+            Some((_, _, est)) => Ok(est.as_mut()),
+            None => Err(PipelineError::stage("loading the pose model", "no model")),
+        }
+    }
 }
 
 /// What step 1 produced.
@@ -81,7 +112,14 @@ pub fn keypoints(
 ) -> Result<(Keypoints, Vec<StageTime>)> {
     params.validate()?;
     let mut timings = Timings::new(observer);
-    let kp = keypoints_timed(input, params, keep, &mut timings, cancel)?;
+    let kp = keypoints_timed(
+        input,
+        params,
+        keep,
+        &mut timings,
+        cancel,
+        &mut ModelSlot::default(),
+    )?;
     Ok((kp, timings.stages))
 }
 
@@ -91,9 +129,10 @@ pub(crate) fn keypoints_timed(
     keep: Keep,
     timings: &mut Timings<'_>,
     cancel: &CancelToken,
+    slot: &mut ModelSlot,
 ) -> Result<Keypoints> {
     match input {
-        Input::Video { path } => from_video(&path, params, keep, timings, cancel),
+        Input::Video { path } => from_video(&path, params, keep, timings, cancel, slot),
         Input::Track {
             mut track,
             title,
@@ -128,6 +167,7 @@ fn from_video(
     keep: Keep,
     timings: &mut Timings<'_>,
     cancel: &CancelToken,
+    slot: &mut ModelSlot,
 ) -> Result<Keypoints> {
     let max_frames = params.pose.max_frames;
     let reader = VideoReader::open(path)?;
@@ -165,17 +205,10 @@ fn from_video(
     )?;
     let observer = timings.observer();
     observer.started(Stage::Pose, expected);
-    let ex = open_estimator(
-        params.pose.model,
-        SessionParams {
-            intra_threads: params.pose.threads.max(1),
-            ..Default::default()
-        },
-    )
-    .and_then(|mut est| {
+    let ex = slot.get(params).and_then(|est| {
         let ex = extract(
             source,
-            est.as_mut(),
+            est,
             &ExtractOptions {
                 max_frames,
                 ..Default::default()

@@ -4,7 +4,7 @@
 //! (`cargo xtask eval`) and the Python package alike, so that what is
 //! measured is what a user runs:
 //!
-//! 1. [`keypoints`]: video → FFmpeg decoding (own thread, with grey frame
+//! 1. [`keypoints()`]: video → FFmpeg decoding (own thread, with grey frame
 //!    thumbnails) → pose model → `Track`; or a track file.
 //! 2. [`concrete_program`]: segmentation and primitive fits.
 //! 3. [`analyse_track`]: abstract program and loops.
@@ -12,7 +12,9 @@
 //!    video, the frame thumbnails (where no person is found, the frames count).
 //! 5. [`run`]: all of the above into an output folder, with pictures, an
 //!    overlay video and `report.html`.
-//! 6. [`batch()`]: [`run`] over a folder or a list of inputs, several at
+//! 6. [`Analyser`]: many inputs with one set of parameters, the pose model
+//!    kept loaded between videos.
+//! 7. [`batch()`]: [`run`] over a folder or a list of inputs, several at
 //!    once, each into its own folder, with a resumable `manifest.jsonl`.
 //!
 //! [`Params::default()`] holds the libraries' defaults, validated once; an
@@ -47,7 +49,7 @@ pub use batch::{
 };
 pub use error::{PipelineError, Result};
 pub use input::{is_video, Input, VIDEO_EXTENSIONS};
-pub use keypoints::{keypoints, Keep, Keypoints};
+pub use keypoints::{keypoints, Keep, Keypoints, ModelSlot};
 pub use mp_abstract::{Analysis, CountMethod, CountSignal, CountedInterval, Counts};
 pub use mp_geom::CancelToken;
 pub use params::{OutputParams, Params, PoseParams};
@@ -96,11 +98,74 @@ pub fn analyse_input(
     observer: &dyn Observer,
     cancel: &CancelToken,
 ) -> Result<Outcome> {
+    analyse_with(input, params, observer, cancel, &mut ModelSlot::default())
+}
+
+fn analyse_with(
+    input: Input,
+    params: &Params,
+    observer: &dyn Observer,
+    cancel: &CancelToken,
+    slot: &mut ModelSlot,
+) -> Result<Outcome> {
     params.validate()?;
     let start = Instant::now();
     let mut timings = Timings::new(observer);
-    let kp = keypoints::keypoints_timed(input, params, Keep::default(), &mut timings, cancel)?;
+    let kp =
+        keypoints::keypoints_timed(input, params, Keep::default(), &mut timings, cancel, slot)?;
     finish_analysis(kp, params, &mut timings, cancel, start)
+}
+
+/// Runs many inputs with one set of parameters, keeping the pose model
+/// loaded between videos (a worker of a batch, a Ray actor). One analyser
+/// runs one input at a time; use one per thread.
+pub struct Analyser {
+    params: Params,
+    slot: ModelSlot,
+}
+
+impl Analyser {
+    /// An analyser with validated parameters; the pose model is loaded with the first video.
+    pub fn new(params: Params) -> Result<Self> {
+        params.validate()?;
+        Ok(Analyser {
+            params,
+            slot: ModelSlot::default(),
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// As [`analyse_input`].
+    pub fn analyse(
+        &mut self,
+        input: Input,
+        observer: &dyn Observer,
+        cancel: &CancelToken,
+    ) -> Result<Outcome> {
+        analyse_with(input, &self.params, observer, cancel, &mut self.slot)
+    }
+
+    /// As [`run`].
+    pub fn run(
+        &mut self,
+        input: Input,
+        out_dir: &Path,
+        observer: &dyn Observer,
+        cancel: &CancelToken,
+    ) -> Result<RunSummary> {
+        run_with(
+            input,
+            out_dir,
+            &self.params,
+            observer,
+            cancel,
+            &mut self.slot,
+        )
+    }
 }
 
 fn finish_analysis(
@@ -148,6 +213,24 @@ pub fn run(
     observer: &dyn Observer,
     cancel: &CancelToken,
 ) -> Result<RunSummary> {
+    run_with(
+        input,
+        out_dir,
+        params,
+        observer,
+        cancel,
+        &mut ModelSlot::default(),
+    )
+}
+
+pub(crate) fn run_with(
+    input: Input,
+    out_dir: &Path,
+    params: &Params,
+    observer: &dyn Observer,
+    cancel: &CancelToken,
+    slot: &mut ModelSlot,
+) -> Result<RunSummary> {
     params.validate()?;
     let start = Instant::now();
     let mut timings = Timings::new(observer);
@@ -155,7 +238,7 @@ pub fn run(
         report_frames: params.output.report,
         overlay: params.output.overlay_video,
     };
-    let mut kp = keypoints::keypoints_timed(input, params, keep, &mut timings, cancel)?;
+    let mut kp = keypoints::keypoints_timed(input, params, keep, &mut timings, cancel, slot)?;
     let frames = kp.frames.take();
     let overlay_src = kp.overlay.take();
     let mut outcome = finish_analysis(kp, params, &mut timings, cancel, start)?;

@@ -226,3 +226,24 @@ fn cmu_exercise_blocks_are_counted_one_by_one() {
         assert!(iv.count >= 1);
     }
 }
+
+#[test]
+fn an_analyser_reuses_its_model_and_gives_the_same_results() {
+    let (Some((a, _)), Some((b, _))) = (quva("023_fitness"), quva("020_fitness")) else {
+        return;
+    };
+    let mut analyser = mp_pipeline::Analyser::new(Params::default()).unwrap();
+    let cancel = CancelToken::new();
+    for video in [&a, &b, &a] {
+        let reused = analyser
+            .analyse(Input::open(video, None).unwrap(), &Silent, &cancel)
+            .unwrap();
+        let fresh = count_video(video);
+        assert_eq!(reused.counts, fresh.counts, "{}", video.display());
+        assert_eq!(
+            reused.keypoints.track.positions(),
+            fresh.keypoints.track.positions(),
+            "the pose model's tracking state must not carry over between videos"
+        );
+    }
+}

@@ -61,7 +61,7 @@ impl ModelChoice {
 pub fn open_estimator(
     model: ModelChoice,
     session: SessionParams,
-) -> Result<Box<dyn PoseEstimator>> {
+) -> Result<Box<dyn PoseEstimator + Send>> {
     let lm = match model {
         ModelChoice::Full => LandmarkModelKind::Full,
         ModelChoice::Lite => LandmarkModelKind::Lite,

@@ -7,6 +7,19 @@ use pyo3::prelude::*;
 
 create_exception!(
     motion_programs,
+    ForecastError,
+    MpError,
+    "Forecasting (prediction of future frames) failed."
+);
+create_exception!(
+    motion_programs,
+    RefineError,
+    MpError,
+    "Motion refinement failed."
+);
+
+create_exception!(
+    motion_programs,
     MpError,
     PyException,
     "Base class of every error raised by motion_programs."
@@ -69,6 +82,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ProgramError", py.get_type::<ProgramError>())?;
     m.add("AbstractError", py.get_type::<AbstractError>())?;
     m.add("GrammarError", py.get_type::<GrammarError>())?;
+    m.add("ForecastError", py.get_type::<ForecastError>())?;
+    m.add("RefineError", py.get_type::<RefineError>())?;
     m.add("ParamError", py.get_type::<ParamError>())?;
     m.add("CancelledError", py.get_type::<CancelledError>())?;
     m.add("OutputError", py.get_type::<OutputError>())?;
@@ -88,6 +103,16 @@ pub fn concrete(e: mp_concrete::ConcreteError) -> PyErr {
 /// A grammar error.
 pub fn grammar(e: mp_grammar::GrammarError) -> PyErr {
     GrammarError::new_err(e.to_string())
+}
+
+/// A forecasting error.
+pub fn forecast(e: mp_forecast::ForecastError) -> PyErr {
+    ForecastError::new_err(e.to_string())
+}
+
+/// A refinement error.
+pub fn refine(e: mp_refine::RefineError) -> PyErr {
+    RefineError::new_err(e.to_string())
 }
 
 /// A pipeline error, raised as the family of the library that failed.

@@ -167,6 +167,65 @@ fn count(
     Ok(PyCounts { inner: out.counts })
 }
 
+/// The future of a track (as `mp predict`): `horizon` frames after its
+/// first `observe` frames (default: all of them). `method`: `loop`
+/// (unrolling the last loop; default), `constant`, `nn`, `ar`, `ar-pose`.
+/// Returns the predicted frames as a `Track` and a line saying which path
+/// was taken (or None).
+#[pyfunction]
+#[pyo3(signature = (track, horizon, method="loop", observe=None, models=None, train=None))]
+fn predict(
+    py: Python<'_>,
+    track: &PyTrack,
+    horizon: usize,
+    method: &str,
+    observe: Option<usize>,
+    models: Option<PathBuf>,
+    train: Option<PathBuf>,
+) -> PyResult<(PyTrack, Option<String>)> {
+    let m: mp_forecast::ForecastMethod = method
+        .parse()
+        .map_err(|e: mp_forecast::ForecastError| errors::ParamError::new_err(e.to_string()))?;
+    let opts = mp_forecast::PredictOptions {
+        models,
+        train,
+        ..mp_forecast::PredictOptions::with_method(m)
+    };
+    let t = &track.inner;
+    let observe = observe.unwrap_or(t.n_frames());
+    let p = py
+        .detach(|| mp_forecast::predict(t, observe, horizon, &opts))
+        .map_err(errors::forecast)?;
+    let why = p.explanation();
+    Ok((PyTrack::new(p.track), why))
+}
+
+/// Learned refinement of a 3D track (as `mp refine`): MSR Action3D's 20
+/// joints, or BlazePose world landmarks (`extract(..., world=True)` is not
+/// offered here: use `mp extract --world`), mapped onto the networks'
+/// joints and back. `action` (1–20) skips action recognition.
+#[pyfunction]
+#[pyo3(signature = (track, action=None, models=None, concepts=None))]
+fn refine(
+    py: Python<'_>,
+    track: &PyTrack,
+    action: Option<u32>,
+    models: Option<PathBuf>,
+    concepts: Option<PathBuf>,
+) -> PyResult<PyTrack> {
+    let opts = mp_refine::RefineOptions {
+        models,
+        concepts,
+        action,
+        ..mp_refine::RefineOptions::default()
+    };
+    let t = &track.inner;
+    let r = py
+        .detach(|| mp_refine::refine_default(t, &opts))
+        .map_err(errors::refine)?;
+    Ok(PyTrack::new(r.track))
+}
+
 /// The Python module.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -176,11 +235,14 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyAbstract>()?;
     m.add_class::<PyCounts>()?;
     m.add_class::<run::PySummary>()?;
+    m.add_class::<run::PyAnalyser>()?;
     m.add_function(wrap_pyfunction!(read_track, m)?)?;
     m.add_function(wrap_pyfunction!(extract, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(abstract_program, m)?)?;
     m.add_function(wrap_pyfunction!(count, m)?)?;
+    m.add_function(wrap_pyfunction!(predict, m)?)?;
+    m.add_function(wrap_pyfunction!(refine, m)?)?;
     m.add_function(wrap_pyfunction!(run::run, m)?)?;
     m.add_function(wrap_pyfunction!(run::grammar_symbols, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -2,11 +2,12 @@
 //! grammar's symbol search.
 
 use std::path::PathBuf;
+use std::sync::Mutex;
 
 use mp_grammar::data::Motion;
 use mp_grammar::model::find_symbols;
 use mp_grammar::{PoseDistanceParams, SymbolParams};
-use mp_pipeline::{CancelToken, Input, RunSummary, Silent};
+use mp_pipeline::{Analyser, CancelToken, Input, RunSummary, Silent};
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 
@@ -21,7 +22,7 @@ use crate::track::PyTrack;
 #[pyclass(name = "Summary", module = "motion_programs", frozen)]
 pub struct PySummary {
     inner: RunSummary,
-    out_dir: PathBuf,
+    out_dir: Option<PathBuf>,
 }
 
 #[pymethods]
@@ -64,10 +65,16 @@ impl PySummary {
         self.inner.report.clone()
     }
 
-    /// The output folder.
+    /// The output folder (None for an analysis that wrote nothing).
     #[getter]
-    fn out_dir(&self) -> PathBuf {
+    fn out_dir(&self) -> Option<PathBuf> {
         self.out_dir.clone()
+    }
+
+    /// Frames analysed.
+    #[getter]
+    fn frames(&self) -> usize {
+        self.inner.outcome.keypoints.track.n_frames()
     }
 
     /// Files written, relative to the output folder.
@@ -103,7 +110,10 @@ impl PySummary {
             "Summary({} repetitions, {} files in {}, {:.2} s)",
             self.inner.outcome.counts.total,
             self.inner.files.len(),
-            self.out_dir.display(),
+            self.out_dir
+                .as_ref()
+                .map(|d| d.display().to_string())
+                .unwrap_or_else(|| "no folder".into()),
             self.inner.outcome.total.as_secs_f64()
         )
     }
@@ -131,19 +141,100 @@ pub fn run(
     let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
     params.output.overlay_video = overlay_video;
     params.output.report = report;
-    let input = if let Ok(t) = source.cast::<PyTrack>() {
-        Input::from_track(t.get().inner.clone(), "track", frame_size)
-    } else {
-        let path: PathBuf = source.extract().map_err(|_| {
-            errors::ParamError::new_err("run() takes a Track or the path of a video or track file")
-        })?;
-        Input::open(&path, frame_size).map_err(errors::pipeline)?
-    };
+    let input = input_of(source, frame_size)?;
     let dir = out_dir.clone();
     let s = py
         .detach(|| mp_pipeline::run(input, &dir, &params, &Silent, &CancelToken::new()))
         .map_err(errors::pipeline)?;
-    Ok(PySummary { inner: s, out_dir })
+    Ok(PySummary {
+        inner: s,
+        out_dir: Some(out_dir),
+    })
+}
+
+/// The input a Python call names: a `Track`, or the path of a video or track file.
+fn input_of(source: &Bound<'_, PyAny>, frame_size: Option<f64>) -> PyResult<Input> {
+    if let Ok(t) = source.cast::<PyTrack>() {
+        return Ok(Input::from_track(t.get().inner.clone(), "track", frame_size));
+    }
+    let path: PathBuf = source.extract().map_err(|_| {
+        errors::ParamError::new_err("expected a Track or the path of a video or track file")
+    })?;
+    Input::open(&path, frame_size).map_err(errors::pipeline)
+}
+
+/// Analyses many inputs with one set of parameters and the pose model kept
+/// loaded between videos — one per worker of a batch job (a Ray actor, a
+/// process of a pool). Its methods release the GIL; one analyser runs one
+/// input at a time (calls from several threads wait for each other).
+#[pyclass(name = "Analyser", module = "motion_programs", frozen)]
+pub struct PyAnalyser {
+    inner: Mutex<Analyser>,
+}
+
+#[pymethods]
+impl PyAnalyser {
+    #[new]
+    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=true, report=true))]
+    fn new(
+        model: Option<&str>,
+        threads: Option<usize>,
+        max_frames: Option<usize>,
+        all_joints: bool,
+        overlay_video: bool,
+        report: bool,
+    ) -> PyResult<Self> {
+        let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
+        params.output.overlay_video = overlay_video;
+        params.output.report = report;
+        Ok(PyAnalyser {
+            inner: Mutex::new(Analyser::new(params).map_err(errors::pipeline)?),
+        })
+    }
+
+    /// Keypoints, programs and counts of `source` (a video or track path, or
+    /// a `Track`) without writing anything; `Summary.out_dir` is None.
+    #[pyo3(signature = (source, frame_size=None))]
+    fn analyse(&self, py: Python<'_>, source: &Bound<'_, PyAny>, frame_size: Option<f64>) -> PyResult<PySummary> {
+        let input = input_of(source, frame_size)?;
+        let outcome = py
+            .detach(|| {
+                let mut a = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+                a.analyse(input, &Silent, &CancelToken::new())
+            })
+            .map_err(errors::pipeline)?;
+        Ok(PySummary {
+            inner: RunSummary {
+                outcome,
+                report: None,
+                files: Vec::new(),
+            },
+            out_dir: None,
+        })
+    }
+
+    /// As `run()`, with this analyser's parameters and loaded model.
+    #[pyo3(signature = (source, out_dir, frame_size=None))]
+    fn run(
+        &self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        out_dir: PathBuf,
+        frame_size: Option<f64>,
+    ) -> PyResult<PySummary> {
+        let input = input_of(source, frame_size)?;
+        let dir = out_dir.clone();
+        let s = py
+            .detach(|| {
+                let mut a = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+                a.run(input, &dir, &Silent, &CancelToken::new())
+            })
+            .map_err(errors::pipeline)?;
+        Ok(PySummary {
+            inner: s,
+            out_dir: Some(out_dir),
+        })
+    }
 }
 
 /// Terminal symbols of a motion (as `mp grammar symbols`): the track is

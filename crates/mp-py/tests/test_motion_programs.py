@@ -137,3 +137,47 @@ def test_the_gil_is_released_while_rust_works(performer):
     # While fit ran (hundreds of milliseconds), this thread kept running.
     assert elapsed > 0.05
     assert ticks > 10, f"only {ticks} ticks in {elapsed:.3f} s: the GIL was held"
+
+
+def test_the_plot_example(data, tmp_path):
+    import importlib.util
+    import pathlib
+
+    root = pathlib.Path(__file__).resolve().parents[3]
+    spec = importlib.util.spec_from_file_location("plot_repetitions", root / "examples" / "plot_repetitions.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    out = tmp_path / "reps.png"
+    c = mod.plot(str(data("quva_repetition/videos/023_fitness.mp4")), str(out))
+    assert out.stat().st_size > 10_000
+    assert c.total == 7
+
+
+def test_predict_equals_the_cli(performer, mp_bin, tmp_path):
+    t = mp.read_track(performer)
+    pred, why = mp.predict(t, 30, observe=120)
+    assert pred.n_frames == 30 and pred.joint_names == t.joint_names
+    run_cli(mp_bin, "predict", performer, "--observe", 120, "--horizon", 30, "-o", tmp_path / "p.npz")
+    np.testing.assert_allclose(pred.positions, mp.read_track(tmp_path / "p.npz").positions, atol=1e-9)
+    const, _ = mp.predict(t, 5, method="constant", observe=50)
+    np.testing.assert_allclose(const.positions[-1], t.positions[49])
+    with pytest.raises(mp.ForecastError, match="observe"):
+        mp.predict(t, 5, observe=0)
+    with pytest.raises(mp.ParamError):
+        mp.predict(t, 5, method="crystal-ball")
+    with pytest.raises(mp.ForecastError):
+        mp.predict(t, 10**12)
+
+
+def test_refine_a_3d_track(data, mp_bin, tmp_path):
+    video = data("golfdb/golf_swing.mp4")
+    run_cli(mp_bin, "extract", video, "--world", "--max-frames", 60, "-o", tmp_path / "w.npz", "-q")
+    w = mp.read_track(tmp_path / "w.npz")
+    r = mp.refine(w)
+    assert r.joint_names == w.joint_names and r.n_frames == w.n_frames
+    assert np.isfinite(r.positions).all()
+    run_cli(mp_bin, "refine", tmp_path / "w.npz", "-o", tmp_path / "r.npz")
+    np.testing.assert_allclose(r.positions, mp.read_track(tmp_path / "r.npz").positions, atol=1e-6)
+    with pytest.raises(mp.RefineError):
+        # A 2D track cannot be refined: the networks read 3D motion.
+        mp.refine(mp.Track.from_numpy(np.zeros((60, 17, 2)), 30.0, skeleton="coco17"))

@@ -14,8 +14,10 @@ and defaults as the ``mp`` command line tool.
 from ._native import (  # noqa: F401
     AbstractError,
     AbstractProgram,
+    Analyser,
     CancelledError,
     Counts,
+    ForecastError,
     GrammarError,
     MpError,
     OutputError,
@@ -31,7 +33,10 @@ from ._native import (  # noqa: F401
     extract,
     fit,
     grammar_symbols,
+    predict,
     read_track,
+    refine,
+    RefineError,
     run,
 )
 from ._native import abstract as abstract_program  # noqa: F401
@@ -43,8 +48,10 @@ abstract = abstract_program
 __all__ = [
     "AbstractError",
     "AbstractProgram",
+    "Analyser",
     "CancelledError",
     "Counts",
+    "ForecastError",
     "GrammarError",
     "MpError",
     "OutputError",
@@ -60,6 +67,9 @@ __all__ = [
     "extract",
     "fit",
     "grammar_symbols",
+    "predict",
     "read_track",
+    "refine",
+    "RefineError",
     "run",
 ]

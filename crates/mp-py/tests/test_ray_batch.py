@@ -1,0 +1,57 @@
+"""The Ray Data pipeline (examples/ray_batch.py) on a local Ray cluster gives the same per-video
+results as `mp batch` on the same videos."""
+
+import importlib.util
+import json
+import pathlib
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+VIDEOS = ["007_pommel_practice", "009_pommel_practice", "020_fitness", "023_fitness", "027_fitness", "038_monkey_bars"]
+
+
+def load_example():
+    spec = importlib.util.spec_from_file_location("ray_batch", ROOT / "examples" / "ray_batch.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_ray_pipeline_equals_mp_batch(data, mp_bin, tmp_path):
+    ray = pytest.importorskip("ray")
+    paths = [str(data(f"quva_repetition/videos/{v}.mp4")) for v in VIDEOS]
+    listing = tmp_path / "videos.txt"
+    listing.write_text("\n".join(paths) + "\n")
+    # mp batch, two jobs.
+    out = subprocess.run(
+        [str(mp_bin), "batch", str(listing), "--out", str(tmp_path / "batch"), "--jobs", "2", "--no-video", "--quiet"],
+        capture_output=True, text=True,
+    )
+    assert out.returncode == 0, out.stderr
+    manifest = {}
+    for line in (tmp_path / "batch" / "manifest.jsonl").read_text().splitlines():
+        item = json.loads(line)
+        manifest[str(pathlib.Path(item["input"]).resolve())] = item
+    assert len(manifest) == len(paths)
+    # The Ray pipeline on a local two-CPU cluster, two actors.
+    rb = load_example()
+    ray.init(num_cpus=2, include_dashboard=False, ignore_reinit_error=True)
+    try:
+        df = rb.analyse_videos(paths, str(tmp_path / "parquet"), workers=2, threads=1)
+    finally:
+        ray.shutdown()
+    assert list(df["path"]) == paths
+    assert list((tmp_path / "parquet").glob("*.parquet")), "no Parquet written"
+    for _, row in df.iterrows():
+        item = manifest[str(pathlib.Path(row["path"]).resolve())]
+        assert row["status"] == item["status"] == "ok", (row["error"], item.get("error"))
+        assert row["total_repetitions"] == item["total_repetitions"], row["path"]
+        assert json.loads(row["counts"]) == item["counts"], row["path"]
+        folder = pathlib.Path(item["output"])
+        if not folder.is_absolute():
+            folder = tmp_path / "batch" / folder
+        assert row["program"] == (folder / "program.txt").read_text(), row["path"]
+        n, j, d = row["positions_shape"]
+        assert n == row["frames"] and len(row["positions"]) == n * j * d
