@@ -40,21 +40,26 @@
 //! # Ok::<(), mp_pipeline::batch::BatchError>(())
 //! ```
 
-use std::collections::{HashMap, HashSet};
-use std::fs::{File, OpenOptions};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use mp_geom::CancelToken;
-use serde::{Deserialize, Serialize};
 
 use crate::error::PipelineError;
-use crate::input::{is_video, Input};
+use crate::input::Input;
 use crate::params::Params;
 use crate::progress::{Observer, Silent, Stage, StageTime};
+
+mod items;
+mod manifest;
+
+pub use items::{batch_items, is_batch_input, output_names};
+pub use manifest::{read_manifest, ItemReport, ItemStatus};
+
+use items::work_estimate;
+use manifest::Manifest;
 
 /// Extensions of the keypoint track files that [`batch_items`] lists from a
 /// folder (besides the videos of [`crate::VIDEO_EXTENSIONS`]).
@@ -205,102 +210,6 @@ impl BatchParams {
     }
 }
 
-/// What became of an item.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ItemStatus {
-    /// Run now, and complete.
-    Ok,
-    /// Failed; the report holds the message.
-    Failed,
-    /// Complete from an earlier batch, not run again.
-    Skipped,
-    /// Interrupted or not started because the batch was cancelled; never
-    /// written to the manifest.
-    Cancelled,
-}
-
-impl ItemStatus {
-    /// Lower-case name, as in the manifest.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            ItemStatus::Ok => "ok",
-            ItemStatus::Failed => "failed",
-            ItemStatus::Skipped => "skipped",
-            ItemStatus::Cancelled => "cancelled",
-        }
-    }
-}
-
-/// One item of a batch: a line of the manifest.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ItemReport {
-    /// The input file, as given.
-    #[serde(serialize_with = "lossy_path")]
-    pub input: PathBuf,
-    /// Its output folder.
-    #[serde(serialize_with = "lossy_path")]
-    pub output: PathBuf,
-    /// What became of it.
-    pub status: ItemStatus,
-    /// For a failed item, the error message followed by its causes.
-    #[serde(default)]
-    pub error: Option<String>,
-    /// Frames of the motion.
-    #[serde(default)]
-    pub frames: Option<usize>,
-    /// Frame rate of the motion.
-    #[serde(default)]
-    pub fps: Option<f64>,
-    /// Wall time of the item in seconds (reading the input, the analysis and
-    /// every output file); for a skipped item, that of the run it skips.
-    #[serde(default)]
-    pub seconds: Option<f64>,
-    /// Repetitions counted in the whole motion.
-    #[serde(default)]
-    pub total_repetitions: Option<usize>,
-    /// Repetitions per counted interval, in time order.
-    #[serde(default)]
-    pub counts: Vec<usize>,
-    /// The signal that decided the count (`keypoints` or `frames`).
-    #[serde(default)]
-    pub signal: Option<String>,
-    /// How the count was reached (`period`, `intervals` or `none`).
-    #[serde(default)]
-    pub method: Option<String>,
-}
-
-fn lossy_path<S: serde::Serializer>(p: &Path, s: S) -> std::result::Result<S::Ok, S::Error> {
-    s.serialize_str(&p.to_string_lossy())
-}
-
-impl ItemReport {
-    fn empty(input: &Path, output: &Path, status: ItemStatus) -> Self {
-        ItemReport {
-            input: input.to_path_buf(),
-            output: output.to_path_buf(),
-            status,
-            error: None,
-            frames: None,
-            fps: None,
-            seconds: None,
-            total_repetitions: None,
-            counts: Vec::new(),
-            signal: None,
-            method: None,
-        }
-    }
-
-    /// The report as one line of JSON (no newline).
-    pub fn to_json_line(&self) -> String {
-        // Serialising plain strings, numbers and enums cannot fail.
-        serde_json::to_string(self).unwrap_or_else(|e| {
-            serde_json::json!({ "input": self.input.to_string_lossy(), "error": e.to_string() })
-                .to_string()
-        })
-    }
-}
-
 /// What a batch did.
 #[derive(Debug, Clone)]
 pub struct BatchSummary {
@@ -397,130 +306,6 @@ impl Observer for ItemObserver<'_> {
     }
 }
 
-/// Whether [`batch_items`] lists a file of a folder: a video by its
-/// extension ([`crate::VIDEO_EXTENSIONS`]) or a track file
-/// ([`TRACK_EXTENSIONS`]), not hidden.
-pub fn is_batch_input(path: &Path) -> bool {
-    let hidden = path
-        .file_name()
-        .map(|n| n.to_string_lossy().starts_with('.'))
-        .unwrap_or(true);
-    !hidden && (is_video(path) || is_track_file(path))
-}
-
-fn is_track_file(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .is_some_and(|e| TRACK_EXTENSIONS.contains(&e.as_str()))
-}
-
-/// The inputs of a batch:
-///
-/// * a folder: its videos and track files ([`is_batch_input`]), sorted by
-///   path; hidden files and subfolders (the output folder among them) are
-///   not read;
-/// * a video or track file: that one input;
-/// * any other file: a text list of inputs, one path per line; blank lines
-///   and lines starting with `#` are ignored, relative paths are relative to
-///   the list's folder. Whether the listed files exist is checked per item
-///   (a missing one fails alone).
-pub fn batch_items(path: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
-    let path = path.as_ref();
-    if path.is_dir() {
-        let rd = std::fs::read_dir(path).map_err(|e| BatchError::io("read the folder", path, e))?;
-        let mut items = Vec::new();
-        for entry in rd {
-            let entry = entry.map_err(|e| BatchError::io("read the folder", path, e))?;
-            let p = entry.path();
-            // Follows links: a linked file counts as a file.
-            if p.is_file() && is_batch_input(&p) {
-                items.push(p);
-            }
-        }
-        items.sort();
-        if items.is_empty() {
-            return Err(BatchError::NoItems {
-                path: path.to_path_buf(),
-            });
-        }
-        return Ok(items);
-    }
-    if !path.is_file() {
-        return Err(BatchError::Missing {
-            path: path.to_path_buf(),
-        });
-    }
-    if is_video(path) || is_track_file(path) {
-        return Ok(vec![path.to_path_buf()]);
-    }
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| BatchError::io("read the list of inputs", path, e))?;
-    let base = path.parent().unwrap_or(Path::new(""));
-    let items: Vec<PathBuf> = text
-        .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.starts_with('#'))
-        .map(|l| {
-            let p = Path::new(l);
-            if p.is_absolute() {
-                p.to_path_buf()
-            } else {
-                base.join(p)
-            }
-        })
-        .collect();
-    if items.is_empty() {
-        return Err(BatchError::EmptyList {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(items)
-}
-
-/// The output folder names of `items`, in order: the file stem, or
-/// `<stem>-<extension>` where stems are equal (compared without case), then
-/// a numeric suffix `-2`, `-3`, … where names are still equal. Depends only
-/// on the list, so a batch run again maps every input to the same folder.
-pub fn output_names(items: &[PathBuf]) -> Vec<String> {
-    let stem = |p: &PathBuf| -> String {
-        let s = p
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        if s.is_empty() || s == "." || s == ".." {
-            "item".to_string()
-        } else {
-            s
-        }
-    };
-    let stems: Vec<String> = items.iter().map(stem).collect();
-    let mut seen: HashMap<String, usize> = HashMap::new();
-    for s in &stems {
-        *seen.entry(s.to_lowercase()).or_default() += 1;
-    }
-    let mut used: HashSet<String> = HashSet::new();
-    used.insert(MANIFEST.to_lowercase());
-    let mut names = Vec::with_capacity(items.len());
-    for (p, s) in items.iter().zip(&stems) {
-        let mut name = s.clone();
-        if seen[&s.to_lowercase()] > 1 {
-            if let Some(ext) = p.extension() {
-                name = format!("{s}-{}", ext.to_string_lossy());
-            }
-        }
-        let mut candidate = name.clone();
-        let mut k = 2;
-        while used.contains(&candidate.to_lowercase()) {
-            candidate = format!("{name}-{k}");
-            k += 1;
-        }
-        used.insert(candidate.to_lowercase());
-        names.push(candidate);
-    }
-    names
-}
-
 /// The error message followed by its causes (each once).
 pub fn error_chain(e: &dyn std::error::Error) -> String {
     let mut s = e.to_string();
@@ -534,93 +319,6 @@ pub fn error_chain(e: &dyn std::error::Error) -> String {
         source = c.source();
     }
     s
-}
-
-/// Reads a manifest; lines that do not parse (a line cut short by a crash)
-/// are ignored. A missing manifest is empty.
-pub fn read_manifest(path: &Path) -> Result<Vec<ItemReport>> {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(BatchError::io("read the manifest", path, e)),
-    };
-    Ok(bytes
-        .split(|&b| b == b'\n')
-        .filter_map(|line| serde_json::from_slice::<ItemReport>(line).ok())
-        .collect())
-}
-
-/// Same file when both can be resolved, else the same path.
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => a == b,
-    }
-}
-
-/// The manifest, appended line by line, each on disk before the next.
-struct Manifest {
-    file: File,
-    path: PathBuf,
-}
-
-impl Manifest {
-    /// Replaces the manifest with `lines` (through a temporary file renamed
-    /// into place) and opens it for appending.
-    fn start(path: &Path, lines: &[ItemReport]) -> Result<Self> {
-        let tmp = path.with_extension("jsonl.tmp");
-        {
-            let mut f = File::create(&tmp).map_err(|e| BatchError::io("write", &tmp, e))?;
-            for l in lines {
-                writeln!(f, "{}", l.to_json_line())
-                    .map_err(|e| BatchError::io("write", &tmp, e))?;
-            }
-            f.sync_all().map_err(|e| BatchError::io("write", &tmp, e))?;
-        }
-        std::fs::rename(&tmp, path).map_err(|e| BatchError::io("write the manifest", path, e))?;
-        if let Some(dir) = path.parent() {
-            // Makes the rename durable where folders can be synced.
-            if let Ok(d) = File::open(dir) {
-                let _ = d.sync_all();
-            }
-        }
-        let file = OpenOptions::new()
-            .append(true)
-            .open(path)
-            .map_err(|e| BatchError::io("open the manifest", path, e))?;
-        Ok(Manifest {
-            file,
-            path: path.to_path_buf(),
-        })
-    }
-
-    fn append(&mut self, report: &ItemReport) -> Result<()> {
-        let mut line = report.to_json_line();
-        line.push('\n');
-        self.file
-            .write_all(line.as_bytes())
-            .and_then(|()| self.file.flush())
-            .and_then(|()| self.file.sync_data())
-            .map_err(|e| BatchError::io("append to the manifest", &self.path, e))
-    }
-}
-
-/// How long an item will take, for ordering: videos (frames, from the
-/// container) before track files (bytes), which need no pose model.
-fn work_estimate(path: &Path, max_frames: Option<usize>) -> (bool, u64) {
-    if is_video(path) {
-        let frames = mp_pose::video::probe(path)
-            .ok()
-            .and_then(|info| {
-                info.frame_count
-                    .or_else(|| info.duration_s.map(|d| (d * info.fps).round() as usize))
-            })
-            .unwrap_or(0);
-        let frames = max_frames.map_or(frames, |m| frames.min(m));
-        (true, frames as u64)
-    } else {
-        (false, std::fs::metadata(path).map(|m| m.len()).unwrap_or(0))
-    }
 }
 
 /// Runs one item: [`Input::open`], then [`run`](crate::run) into `output`, with the
@@ -715,32 +413,7 @@ pub fn batch(
         .map(|n| out_dir.join(n))
         .collect();
 
-    // Skipped items: complete folder and an ok line for the same input.
-    let mut reports: Vec<Option<ItemReport>> = vec![None; items.len()];
-    let mut pending = Vec::new();
-    for (i, (input, output)) in items.iter().zip(&outputs).enumerate() {
-        let name = output.file_name();
-        let last = earlier
-            .iter()
-            .rev()
-            .find(|l| l.output.file_name() == name && same_file(&l.input, input));
-        let done = last.is_some_and(|l| {
-            matches!(l.status, ItemStatus::Ok | ItemStatus::Skipped)
-                && output.join(RESULT_FILE).is_file()
-        });
-        match (done, last) {
-            (true, Some(l)) => {
-                reports[i] = Some(ItemReport {
-                    input: input.clone(),
-                    output: output.clone(),
-                    status: ItemStatus::Skipped,
-                    error: None,
-                    ..l.clone()
-                })
-            }
-            _ => pending.push(i),
-        }
-    }
+    let (reports, mut pending) = manifest::resume(items, &outputs, &earlier);
     let skipped: Vec<ItemReport> = reports.iter().flatten().cloned().collect();
     let manifest = Mutex::new(Manifest::start(&manifest_path, &skipped)?);
 
@@ -842,19 +515,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn output_names_are_unique_and_deterministic() {
-        let items: Vec<PathBuf> = ["a/x.npz", "b/x.json", "c/y.mp4", "d/x.npz", "e/x-npz.csv"]
-            .iter()
-            .map(PathBuf::from)
-            .collect();
-        let names = output_names(&items);
-        assert_eq!(names, vec!["x-npz", "x-json", "y", "x-npz-2", "x-npz-3"]);
-        assert_eq!(output_names(&items), names);
-        let m = output_names(&[PathBuf::from("manifest.jsonl.csv")]);
-        assert_eq!(m, vec!["manifest.jsonl-2"]);
-    }
-
-    #[test]
     fn params_are_validated() {
         let bad = BatchParams {
             jobs: 0,
@@ -876,21 +536,5 @@ mod tests {
         };
         assert_eq!(p.threads_per_item(8), 3);
         assert!(BatchParams::default().threads_per_item(1_000_000) >= 1);
-    }
-
-    #[test]
-    fn a_cut_line_in_the_manifest_is_ignored() {
-        let tmp = tempfile::tempdir().unwrap();
-        let path = tmp.path().join(MANIFEST);
-        let ok = ItemReport {
-            frames: Some(10),
-            total_repetitions: Some(3),
-            counts: vec![3],
-            ..ItemReport::empty(Path::new("in/a.npz"), Path::new("out/a"), ItemStatus::Ok)
-        };
-        let line = ok.to_json_line();
-        std::fs::write(&path, format!("{line}\n{}", &line[..line.len() / 2])).unwrap();
-        let read = read_manifest(&path).unwrap();
-        assert_eq!(read, vec![ok]);
     }
 }
