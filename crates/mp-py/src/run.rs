@@ -155,7 +155,11 @@ pub fn run(
 /// The input a Python call names: a `Track`, or the path of a video or track file.
 fn input_of(source: &Bound<'_, PyAny>, frame_size: Option<f64>) -> PyResult<Input> {
     if let Ok(t) = source.cast::<PyTrack>() {
-        return Ok(Input::from_track(t.get().inner.clone(), "track", frame_size));
+        return Ok(Input::from_track(
+            t.get().inner.clone(),
+            "track",
+            frame_size,
+        ));
     }
     let path: PathBuf = source.extract().map_err(|_| {
         errors::ParamError::new_err("expected a Track or the path of a video or track file")
@@ -195,7 +199,12 @@ impl PyAnalyser {
     /// Keypoints, programs and counts of `source` (a video or track path, or
     /// a `Track`) without writing anything; `Summary.out_dir` is None.
     #[pyo3(signature = (source, frame_size=None))]
-    fn analyse(&self, py: Python<'_>, source: &Bound<'_, PyAny>, frame_size: Option<f64>) -> PyResult<PySummary> {
+    fn analyse(
+        &self,
+        py: Python<'_>,
+        source: &Bound<'_, PyAny>,
+        frame_size: Option<f64>,
+    ) -> PyResult<PySummary> {
         let input = input_of(source, frame_size)?;
         let outcome = py
             .detach(|| {
@@ -269,4 +278,31 @@ pub fn grammar_symbols<'py>(
     let loads = py.import("json")?.getattr("loads")?;
     let d = loads.call1((json,))?;
     Ok(d)
+}
+
+/// A context-free grammar of a motion's symbols (as `mp grammar learn`):
+/// the symbol string (a dict from `grammar_symbols`) is cut into sentences
+/// by MDL, and Alignment-Based Learning induces the grammar. Returns the
+/// grammar model as a dict (`grammar` with its rules, `sentences`,
+/// `description_length`, …).
+#[pyfunction]
+#[pyo3(signature = (symbols, seed=None))]
+pub fn grammar_learn<'py>(
+    py: Python<'py>,
+    symbols: &Bound<'py, PyAny>,
+    seed: Option<u64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let json = py.import("json")?;
+    let text: String = json.getattr("dumps")?.call1((symbols,))?.extract()?;
+    let sf: mp_grammar::model::SymbolsFile = serde_json::from_str(&text)
+        .map_err(|e| errors::GrammarError::new_err(format!("not a symbols dict: {e}")))?;
+    let mut p = mp_grammar::sentences::PartitionParams::default();
+    if let Some(s) = seed {
+        p.seed = s;
+    }
+    let g = py
+        .detach(|| mp_grammar::model::learn_grammar(&sf, &p))
+        .map_err(errors::grammar)?;
+    let out = serde_json::to_string(&g).map_err(|e| errors::MpError::new_err(e.to_string()))?;
+    json.getattr("loads")?.call1((out,))
 }

@@ -181,3 +181,19 @@ def test_refine_a_3d_track(data, mp_bin, tmp_path):
     with pytest.raises(mp.RefineError):
         # A 2D track cannot be refined: the networks read 3D motion.
         mp.refine(mp.Track.from_numpy(np.zeros((60, 17, 2)), 30.0, skeleton="coco17"))
+
+
+def test_grammar_symbols_and_learn_equal_the_cli(performer, mp_bin, tmp_path):
+    t = mp.read_track(performer).slice(0, 330)
+    t.save(tmp_path / "part.npz")
+    s = mp.grammar_symbols(t, k=4)
+    run_cli(mp_bin, "grammar", "symbols", tmp_path / "part.npz", "--k", 4, "-o", tmp_path / "s.json")
+    cli = json.loads((tmp_path / "s.json").read_text())
+    assert s["text"] == cli["text"] and len(s["text"].split()) > 4
+    g = mp.grammar_learn(s)
+    run_cli(mp_bin, "grammar", "learn", tmp_path / "s.json", "-o", tmp_path / "g.json")
+    gc = json.loads((tmp_path / "g.json").read_text())
+    assert g["grammar"] == gc["grammar"]
+    assert g["sentences"] == gc["sentences"]
+    with pytest.raises(mp.GrammarError):
+        mp.grammar_learn({"not": "symbols"})
