@@ -431,7 +431,7 @@ pub fn detect_loops(prims: &[DetPrim], params: &LoopParams) -> Result<Vec<Detect
         let (mut best_s, mut best_len) = (c.start, 0);
         let mut run_s = c.start;
         for p in c.start..=c.end {
-            if p == c.end || taken[p] {
+            if p == c.end || taken.get(p).copied().unwrap_or(true) {
                 if p - run_s > best_len {
                     best_s = run_s;
                     best_len = p - run_s;

@@ -205,9 +205,9 @@ fn mirror_average_is_the_mean_of_a_prediction_and_its_mirrored_twin() {
     let mut max_err = 0.0f64;
     let mut max_gap = 0.0f64;
     for f in 0..10 {
-        for j in 0..13 {
-            let bx = -b.positions()[[f, swap[j], 0]];
-            let by = b.positions()[[f, swap[j], 1]];
+        for (j, &sj) in swap.iter().enumerate().take(13) {
+            let bx = -b.positions()[[f, sj, 0]];
+            let by = b.positions()[[f, sj, 1]];
             let ex = 0.5 * (a.positions()[[f, j, 0]] + bx);
             let ey = 0.5 * (a.positions()[[f, j, 1]] + by);
             max_err = max_err
