@@ -46,6 +46,17 @@ pub enum ConcreteError {
         /// Why it is invalid.
         reason: String,
     },
+    /// A size the user controls (output frame rate, frame count) that implies
+    /// more output than the documented limit ([`crate::exec::MAX_FRAME_JOINTS`]).
+    #[error("`{name}` = {value} is too large: {limit}")]
+    TooLarge {
+        /// Name of the parameter (field of a `Params` struct or CLI option).
+        name: &'static str,
+        /// The value given.
+        value: String,
+        /// The limit it exceeds and what it implies.
+        limit: String,
+    },
     /// A track that cannot be synthesised (empty, one frame, no data).
     #[error("invalid track: {0}")]
     Track(String),

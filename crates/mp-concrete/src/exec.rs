@@ -15,6 +15,41 @@ use serde::{Deserialize, Serialize};
 use crate::error::{ConcreteError, Result};
 use crate::program::Program;
 
+/// The most output cells (frames × joints) one execution may produce:
+/// 10 million, i.e. at most 240 MB of positions at 3 dimensions × 8 bytes
+/// (e.g. 1 hour at 30 fps of 92 joints, or 588 000 frames of 17 joints).
+/// Larger requests (an absurd `fps_out`, a program of absurd durations) are a
+/// [`ConcreteError::TooLarge`] instead of an allocation failure.
+pub const MAX_FRAME_JOINTS: usize = 10_000_000;
+
+/// The most output frames for `joints` joints: `MAX_FRAME_JOINTS / joints` (at least 1).
+pub fn max_output_frames(joints: usize) -> usize {
+    (MAX_FRAME_JOINTS / joints.max(1)).max(1)
+}
+
+/// Checks that `frames` output frames of `joints` joints (as `f64`, so that
+/// absurd values cannot overflow) fit [`MAX_FRAME_JOINTS`]; the error names
+/// the parameter `name` and its `value`. Returns the frame count.
+pub fn check_output_frames(
+    name: &'static str,
+    value: impl std::fmt::Display,
+    frames: f64,
+    joints: usize,
+) -> Result<usize> {
+    let limit = max_output_frames(joints);
+    if frames.is_finite() && frames >= 0.0 && frames <= limit as f64 {
+        return Ok(frames as usize);
+    }
+    Err(ConcreteError::TooLarge {
+        name,
+        value: value.to_string(),
+        limit: format!(
+            "it implies {frames:.0} output frames of {joints} joints, \
+             at most {limit} frames ({MAX_FRAME_JOINTS} frame·joints)"
+        ),
+    })
+}
+
 /// What happens between the last frame of a segment and the first frame of the next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -88,6 +123,7 @@ impl Program {
     /// each in `[0, T − 1]`).
     pub fn sample_frames(&self, frames: &[f64], transition: Transition) -> Result<Array3<f64>> {
         self.validate()?;
+        check_output_frames("frames", frames.len(), frames.len() as f64, self.n_joints())?;
         let (j, d) = (self.n_joints(), self.dims);
         let b = self.boundaries();
         let mut out = Array3::zeros((frames.len(), j, d));
@@ -127,7 +163,11 @@ impl Program {
         }
         let last = (self.n_frames() - 1) as f64;
         let ratio = self.fps / fps_out;
-        let n_out = (last / ratio + 1e-9).floor() as usize + 1;
+        let n_out_f = (last / ratio + 1e-9).floor() + 1.0;
+        let n_out = match params.fps_out {
+            Some(f) => check_output_frames("fps_out", f, n_out_f, self.n_joints())?,
+            None => check_output_frames("frames", self.n_frames(), n_out_f, self.n_joints())?,
+        };
         let frames: Vec<f64> = (0..n_out).map(|k| (k as f64 * ratio).min(last)).collect();
         let pos = self.sample_frames(&frames, params.transition)?;
         let units: Units = self.units;
