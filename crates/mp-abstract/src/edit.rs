@@ -2,20 +2,37 @@
 //! section), drop or repeat one recorded iteration.
 
 use crate::error::{AbstractError, Result};
+use crate::exec::{check_output_frames, output_frames_bound, LoopReplay};
 use crate::model::AbstractProgram;
+
+/// The largest iteration count [`set_iterations`] accepts, whatever the body:
+/// one million. The program's output must also fit
+/// [`mp_concrete::exec::MAX_FRAME_JOINTS`] (frames × joints) when sampled,
+/// which is usually the tighter bound.
+pub const MAX_ITERATIONS: usize = 1_000_000;
 
 /// Sets the iteration count of loop `n` (0-based, program order). Recorded
 /// iterations beyond the new count are dropped; new iterations execute the
-/// body's distributions.
+/// body's distributions. Counts above [`MAX_ITERATIONS`], or whose execution
+/// (at the longest body durations) would exceed
+/// [`mp_concrete::exec::MAX_FRAME_JOINTS`], are an error naming `iterations`;
+/// the program is then unchanged.
 pub fn set_iterations(prog: &mut AbstractProgram, n: usize, iterations: usize) -> Result<()> {
-    if iterations > 1_000_000 {
+    if iterations > MAX_ITERATIONS {
         return Err(AbstractError::param(
             "iterations",
-            format!("{iterations} is absurdly large (max 1,000,000)"),
+            format!("{iterations} is too large: at most {MAX_ITERATIONS} iterations"),
         ));
     }
     let l = prog.loop_mut(n)?;
+    let old = l.iterations;
     l.iterations = iterations;
+    let bound = output_frames_bound(prog, LoopReplay::Mean, true);
+    if let Err(e) = check_output_frames(prog, bound) {
+        prog.loop_mut(n)?.iterations = old;
+        return Err(e);
+    }
+    let l = prog.loop_mut(n)?;
     l.observed.truncate(iterations);
     Ok(())
 }

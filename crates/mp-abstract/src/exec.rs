@@ -252,9 +252,70 @@ pub fn fit_for(prog: &AbstractProgram, params: &ExecParams) -> FitParams {
     }
 }
 
+/// Upper bound of the frames one execution of `prog` produces, computed in
+/// `f64` without unrolling (absurd iteration counts cannot overflow):
+/// deterministic execution with `replay` when `sampled` is false, else the
+/// longest duration of each body primitive's distribution.
+pub fn output_frames_bound(prog: &AbstractProgram, replay: LoopReplay, sampled: bool) -> f64 {
+    let body_frames = |l: &Loop| -> f64 {
+        l.body
+            .iter()
+            .map(|b| {
+                let d = if sampled {
+                    b.duration.counts.keys().next_back().copied()
+                } else {
+                    b.duration.mean_rounded()
+                };
+                d.unwrap_or(1) as f64
+            })
+            .sum()
+    };
+    prog.stmts
+        .iter()
+        .map(|s| match s {
+            Stmt::Prim(p) => p.duration as f64,
+            Stmt::Loop(l) => {
+                let per_iter = body_frames(l);
+                if !sampled && replay == LoopReplay::Observed {
+                    let n_obs = l.observed.len().min(l.iterations);
+                    let obs: f64 = l.observed[..n_obs]
+                        .iter()
+                        .flatten()
+                        .map(|p| p.duration as f64)
+                        .sum();
+                    obs + (l.iterations - n_obs) as f64 * per_iter
+                } else {
+                    l.iterations as f64 * per_iter
+                }
+            }
+        })
+        .sum()
+}
+
+/// Checks that `frames` output frames fit
+/// [`mp_concrete::exec::MAX_FRAME_JOINTS`] for the program's joints. The error
+/// names `iterations` (the largest iteration count) when the program has
+/// loops, else `frames`.
+pub fn check_output_frames(prog: &AbstractProgram, frames: f64) -> Result<usize> {
+    let most_iterations = prog
+        .stmts
+        .iter()
+        .filter_map(|s| match s {
+            Stmt::Loop(l) => Some(l.iterations),
+            Stmt::Prim(_) => None,
+        })
+        .max();
+    let j = prog.joints.len();
+    Ok(match most_iterations {
+        Some(it) => mp_concrete::exec::check_output_frames("iterations", it, frames, j)?,
+        None => mp_concrete::exec::check_output_frames("frames", frames, frames, j)?,
+    })
+}
+
 /// Deterministic execution (loop bodies at their means, or replayed as observed).
 pub fn execute(prog: &AbstractProgram, params: &ExecParams) -> Result<Track> {
     prog.validate()?;
+    check_output_frames(prog, output_frames_bound(prog, params.replay, false))?;
     let prims = flatten(prog, params.replay)?;
     render(&prims, prog, &fit_for(prog, params))
 }
@@ -266,6 +327,7 @@ pub fn sample(prog: &AbstractProgram, seed: u64, params: &ExecParams) -> Result<
     if !(params.jitter.is_finite() && params.jitter >= 0.0) {
         return Err(AbstractError::param("jitter", "must be finite and ≥ 0"));
     }
+    check_output_frames(prog, output_frames_bound(prog, params.replay, true))?;
     let prims = flatten_sampled(prog, seed, params.jitter)?;
     render(&prims, prog, &fit_for(prog, params))
 }

@@ -28,6 +28,16 @@ use serde::{Deserialize, Serialize};
 use crate::error::{AbstractError, Result};
 use crate::model::DetPrim;
 
+/// The largest loop-body size [`LoopParams::validate`] accepts: 1000
+/// primitives. Detection tries every body size up to `max_body`, each with
+/// windows of at least `2·k` primitives, so the work grows with its square;
+/// no recorded motion has a repeated unit of more primitives.
+pub const MAX_BODY: usize = 1000;
+
+/// The largest window (in primitives) [`LoopParams::validate`] accepts in
+/// `windows` and as `short_window_iterations`: one million.
+pub const MAX_WINDOW: usize = 1_000_000;
+
 /// Parameters of loop detection. Defaults follow SPEC.md.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LoopParams {
@@ -79,6 +89,24 @@ impl LoopParams {
     pub fn validate(&self) -> Result<()> {
         if self.max_body == 0 {
             return Err(AbstractError::param("max_body", "must be ≥ 1"));
+        }
+        if self.max_body > MAX_BODY {
+            return Err(AbstractError::param(
+                "max_body",
+                format!("{} is too large: at most {MAX_BODY}", self.max_body),
+            ));
+        }
+        if let Some(&w) = self.windows.iter().find(|&&w| w > MAX_WINDOW) {
+            return Err(AbstractError::param(
+                "windows",
+                format!("a window of {w} primitives is too large: at most {MAX_WINDOW}"),
+            ));
+        }
+        if let Some(n) = self.short_window_iterations.filter(|&n| n > MAX_WINDOW) {
+            return Err(AbstractError::param(
+                "short_window_iterations",
+                format!("{n} is too large: at most {MAX_WINDOW}"),
+            ));
         }
         AbstractError::check_positive("threshold", self.threshold)?;
         AbstractError::check_positive("unit_scale", self.unit_scale)?;
