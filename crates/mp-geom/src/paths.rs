@@ -1,6 +1,8 @@
 //! Where shared data lives: `MP_DATA_DIR` / `MP_SHARED_DIR`, or a `shared/`
 //! folder beside the workspace (found by walking up from the current
 //! directory and from the workspace root recorded at build time).
+//! `MP_NO_SHARED_DATA=1` hides the shared data sets (as on a clone without it);
+//! tests then skip through [`data_file_or_skip`], logging to `MP_SKIP_LOG`.
 
 use std::path::{Path, PathBuf};
 
@@ -41,6 +43,9 @@ pub fn shared_dir() -> Option<PathBuf> {
 
 /// The shared data folder: `MP_DATA_DIR` when set, else `shared_dir()/data`.
 pub fn data_dir() -> Option<PathBuf> {
+    if shared_data_disabled() {
+        return None;
+    }
     if let Ok(p) = std::env::var("MP_DATA_DIR") {
         let p = PathBuf::from(p);
         return p.is_dir().then_some(p);
@@ -51,6 +56,83 @@ pub fn data_dir() -> Option<PathBuf> {
 /// A file under the shared data folder, if that file exists.
 pub fn data_file(rel: impl AsRef<Path>) -> Option<PathBuf> {
     data_dir().map(|d| d.join(rel)).filter(|p| p.exists())
+}
+
+/// True when `MP_NO_SHARED_DATA` is set to a non-empty value other than `0`:
+/// [`data_dir`] (and so [`data_file`]) then reports no data sets, so a test
+/// run can behave as on a clone without `../shared/data`.
+pub fn shared_data_disabled() -> bool {
+    std::env::var("MP_NO_SHARED_DATA").is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+/// For tests: the shared data file `rel` when present; otherwise prints
+/// `skipped (no shared data): {test} needs {rel}` to stderr, appends
+/// `{test}\t{rel}` to the file named by `MP_SKIP_LOG` (when set; write errors
+/// are ignored) and returns `None`, so the caller can return early.
+pub fn data_file_or_skip(rel: impl AsRef<Path>, test: &str) -> Option<PathBuf> {
+    let rel = rel.as_ref();
+    if let Some(p) = data_file(rel) {
+        return Some(p);
+    }
+    record_skip(rel, test);
+    None
+}
+
+/// For tests: the shared data folder when present, else records the skip of
+/// `test` (see [`data_file_or_skip`]) and returns `None`.
+pub fn data_dir_or_skip(test: &str) -> Option<PathBuf> {
+    if let Some(d) = data_dir() {
+        return Some(d);
+    }
+    record_skip(Path::new("."), test);
+    None
+}
+
+/// The running test's name: libtest names each test's thread after it.
+pub fn current_test_name() -> String {
+    std::thread::current()
+        .name()
+        .unwrap_or("unnamed test")
+        .to_string()
+}
+
+/// In a test: the shared data file `rel` as a `PathBuf`, or, when it is
+/// missing, records the skip ([`data_file_or_skip`], named after the running
+/// test) and `return`s from the enclosing test.
+#[macro_export]
+macro_rules! data_or_return {
+    ($rel:expr) => {
+        match $crate::paths::data_file_or_skip($rel, &$crate::paths::current_test_name()) {
+            Some(p) => p,
+            None => return,
+        }
+    };
+}
+
+/// In a test: the shared data folder, or records the skip and `return`s.
+#[macro_export]
+macro_rules! data_dir_or_return {
+    () => {
+        match $crate::paths::data_dir_or_skip(&$crate::paths::current_test_name()) {
+            Some(p) => p,
+            None => return,
+        }
+    };
+}
+
+fn record_skip(rel: &Path, test: &str) {
+    let rel = rel.display();
+    eprintln!("skipped (no shared data): {test} needs {rel}");
+    if let Some(log) = std::env::var_os("MP_SKIP_LOG").filter(|s| !s.is_empty()) {
+        use std::io::Write;
+        if let Ok(mut f) = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(log)
+        {
+            let _ = writeln!(f, "{test}\t{rel}");
+        }
+    }
 }
 
 /// The workspace root recorded at build time, when built inside the workspace.

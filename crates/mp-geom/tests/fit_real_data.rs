@@ -45,6 +45,7 @@ fn encode(
 
 #[test]
 fn penn_action_windows() {
+    mp_geom::data_or_return!(PennAction::TRAIN_FILE);
     let penn = PennAction::open_default()
         .expect("Penn Action npz in the shared data (MP_DATA_DIR or ../shared/data)");
     let mut kds = Vec::new();

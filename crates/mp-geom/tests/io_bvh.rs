@@ -3,7 +3,7 @@
 
 use mp_geom::io::bvh::{Bvh, BvhTrackParams, Channel};
 use mp_geom::io::read_track;
-use mp_geom::paths::data_dir;
+use mp_geom::paths::data_file_or_skip;
 use mp_geom::{GeomError, Units};
 
 const TOY: &str = "HIERARCHY
@@ -34,10 +34,9 @@ Frame Time: 0.5
 0 0 0 0 0 0 0 0 0 0 0 90
 ";
 
-fn salsa_files() -> Vec<std::path::PathBuf> {
-    let d = data_dir()
-        .expect("shared data folder (MP_DATA_DIR or ../shared/data)")
-        .join("cmu_salsa_bvh");
+/// The six salsa BVH files, or `None` (skip recorded) without the shared data.
+fn salsa_files(test: &str) -> Option<Vec<std::path::PathBuf>> {
+    let d = data_file_or_skip("cmu_salsa_bvh", test)?;
     let mut v: Vec<_> = std::fs::read_dir(&d)
         .unwrap_or_else(|e| panic!("{}: {e}", d.display()))
         .map(|e| e.unwrap().path())
@@ -50,7 +49,7 @@ fn salsa_files() -> Vec<std::path::PathBuf> {
         "six salsa BVH files expected in {}",
         d.display()
     );
-    v
+    Some(v)
 }
 
 fn approx(a: &[f64], b: &[f64], tol: f64) -> bool {
@@ -162,7 +161,10 @@ fn toy_write_slice_concat() {
 
 #[test]
 fn salsa_files_forward_kinematics() {
-    for path in salsa_files() {
+    let Some(files) = salsa_files("salsa_files_forward_kinematics") else {
+        return;
+    };
+    for path in files {
         let text = std::fs::read_to_string(&path).unwrap();
         let header_frames: usize = text
             .lines()
@@ -228,7 +230,10 @@ fn salsa_files_forward_kinematics() {
 
 #[test]
 fn salsa_write_parse_fk_round_trip() {
-    let path = &salsa_files()[0];
+    let Some(files) = salsa_files("salsa_write_parse_fk_round_trip") else {
+        return;
+    };
+    let path = &files[0];
     let b = Bvh::read(path).unwrap();
     let part = b.slice_frames(100, 220).unwrap();
     let dir = tempfile::tempdir().unwrap();

@@ -4,13 +4,13 @@
 use mp_geom::io::datasets::{
     fps_from_timestamps_us, AistPlusPlus, CmuFeatures, MediaPipeReference, MsrAction3D, PennAction,
 };
-use mp_geom::paths::data_file;
 use mp_geom::{GeomError, Units};
 
-fn data(rel: &str) -> std::path::PathBuf {
-    data_file(rel).unwrap_or_else(|| {
-        panic!("shared data file `{rel}` is missing (MP_DATA_DIR or ../shared/data)")
-    })
+/// The shared data file `rel`, or the test records its skip and returns.
+macro_rules! data {
+    ($rel:expr) => {
+        mp_geom::data_or_return!($rel)
+    };
 }
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
@@ -19,6 +19,7 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 
 #[test]
 fn penn_action_train_split() {
+    data!(PennAction::TRAIN_FILE);
     let p = PennAction::open_default().expect("Penn Action npz in the shared data");
     assert_eq!(p.len(), 1258);
     assert_eq!(p.clips().iter().map(|c| c.n_frames).sum::<usize>(), 87543);
@@ -57,7 +58,7 @@ fn penn_action_train_split() {
 
 #[test]
 fn aistpp_nine_views_at_60_fps() {
-    let a = AistPlusPlus::open(data("aistpp_keypoints2d/gBR_sBM_cAll_d04_mBR0_ch01.npz")).unwrap();
+    let a = AistPlusPlus::open(data!("aistpp_keypoints2d/gBR_sBM_cAll_d04_mBR0_ch01.npz")).unwrap();
     assert_eq!(a.views.len(), 9);
     assert_eq!(a.fps, 60.0);
     assert_eq!(a.timestamps_us.len(), 720);
@@ -84,6 +85,7 @@ fn aistpp_nine_views_at_60_fps() {
 
 #[test]
 fn msr_action3d_odd_subjects() {
+    data!(MsrAction3D::FILE);
     let m = MsrAction3D::open_default().unwrap();
     assert_eq!(m.len(), 292);
     let c = m.clip_info(0).unwrap();
@@ -127,7 +129,7 @@ fn msr_action3d_odd_subjects() {
 
 #[test]
 fn cmu_features() {
-    let c = CmuFeatures::open(data("cmu_mocap6_exercise/13_29_features10fps.npz")).unwrap();
+    let c = CmuFeatures::open(data!("cmu_mocap6_exercise/13_29_features10fps.npz")).unwrap();
     let t = &c.track;
     assert_eq!((t.n_frames(), t.n_joints(), t.dims()), (382, 12, 1));
     assert_eq!(t.units(), Units::Unitless);
@@ -147,7 +149,7 @@ fn cmu_features() {
 
 #[test]
 fn mediapipe_reference_golf_swing() {
-    let r = MediaPipeReference::open(data("reference_keypoints/golf_swing.npz")).unwrap();
+    let r = MediaPipeReference::open(data!("reference_keypoints/golf_swing.npz")).unwrap();
     assert_eq!((r.width_px, r.height_px), (354, 492));
     assert!(close(r.fps, 29.97, 1e-12));
     assert_eq!(r.found.len(), 264);
@@ -167,13 +169,13 @@ fn mediapipe_reference_golf_swing() {
     assert_eq!(r.world.units(), Units::Metres);
     assert!(close(r.z[[100, 16]], -295.3628, 1e-3));
     assert!(close(r.presence[[100, 16]], 0.994547, 1e-6));
-    let s = MediaPipeReference::open_smooth(data("reference_keypoints/golf_swing.npz")).unwrap();
+    let s = MediaPipeReference::open_smooth(data!("reference_keypoints/golf_swing.npz")).unwrap();
     assert!(close(s.image.point(100, 16)[0], 149.88939, 1e-4));
 }
 
 #[test]
 fn mediapipe_reference_missing_frames_have_zero_confidence() {
-    let r = MediaPipeReference::open(data("reference_keypoints/007_pommel_practice.npz")).unwrap();
+    let r = MediaPipeReference::open(data!("reference_keypoints/007_pommel_practice.npz")).unwrap();
     assert_eq!(r.found.iter().filter(|&&f| f).count(), 100);
     assert!(!r.found[27] && r.found[26]);
     for t in [27, 32, 33] {
@@ -183,17 +185,17 @@ fn mediapipe_reference_missing_frames_have_zero_confidence() {
     assert!(r.image.positions().iter().all(|v| v.is_finite()));
     assert!(close(r.image.point(149, 15)[0], 225.09244, 1e-4));
     assert!(close(r.image.confidence()[[149, 15]], 0.20136635, 1e-7));
-    let none = MediaPipeReference::open(data("reference_keypoints/028_bar_lift.npz")).unwrap();
+    let none = MediaPipeReference::open(data!("reference_keypoints/028_bar_lift.npz")).unwrap();
     assert_eq!(none.image.n_frames(), 404);
     assert_eq!(none.image.valid_count(), 0);
 }
 
 #[test]
 fn wrong_file_for_a_reader_is_a_clear_error() {
-    let e = PennAction::open(data("msr_action3d/msr_action3d_odd_subjects.npz")).unwrap_err();
+    let e = PennAction::open(data!("msr_action3d/msr_action3d_odd_subjects.npz")).unwrap_err();
     assert!(e.to_string().contains("`keypoints`"), "{e}");
-    let e = MsrAction3D::open(data("penn_action/penn_action_train.npz")).unwrap_err();
+    let e = MsrAction3D::open(data!("penn_action/penn_action_train.npz")).unwrap_err();
     assert!(e.to_string().contains("`joints`"), "{e}");
-    let e = CmuFeatures::open(data("reference_keypoints/golf_swing.npz")).unwrap_err();
+    let e = CmuFeatures::open(data!("reference_keypoints/golf_swing.npz")).unwrap_err();
     assert!(e.to_string().contains("`X`"), "{e}");
 }

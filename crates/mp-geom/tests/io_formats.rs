@@ -10,11 +10,15 @@ use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 use proptest::prelude::*;
 
-fn penn_clip() -> Track {
-    PennAction::open_default()
-        .expect("Penn Action npz")
-        .clip(7)
-        .unwrap()
+/// A Penn Action clip, or `None` (skip recorded) without the shared data.
+fn penn_clip(test: &str) -> Option<Track> {
+    mp_geom::paths::data_file_or_skip(PennAction::TRAIN_FILE, test)?;
+    Some(
+        PennAction::open_default()
+            .expect("Penn Action npz")
+            .clip(7)
+            .unwrap(),
+    )
 }
 
 fn msr_like(t: usize) -> Track {
@@ -30,7 +34,10 @@ fn msr_like(t: usize) -> Track {
 #[test]
 fn npz_and_json_round_trip_exactly() {
     let dir = tempfile::tempdir().unwrap();
-    for tr in [penn_clip(), msr_like(9)] {
+    let Some(penn) = penn_clip("npz_and_json_round_trip_exactly") else {
+        return;
+    };
+    for tr in [penn, msr_like(9)] {
         for ext in ["npz", "json"] {
             let p = dir.path().join(format!("t.{ext}"));
             write_track(&p, &tr).unwrap();
@@ -68,7 +75,9 @@ fn npz_written_with_custom_skeleton_keeps_it() {
 
 #[test]
 fn csv_long_and_wide_round_trip() {
-    let tr = penn_clip();
+    let Some(tr) = penn_clip("csv_long_and_wide_round_trip") else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     for layout in [CsvLayout::Long, CsvLayout::Wide] {
         let p = dir.path().join(format!("{layout:?}.csv"));
@@ -291,23 +300,21 @@ fn alphapose_results() {
 #[test]
 fn read_track_dispatch_and_errors() {
     // Data-set files that hold one track are read directly.
-    let golf =
-        mp_geom::paths::data_file("reference_keypoints/golf_swing.npz").expect("shared data");
+    let golf = mp_geom::data_or_return!("reference_keypoints/golf_swing.npz");
     let t = read_track(&golf).unwrap();
     assert_eq!(
         (t.n_frames(), t.skeleton().name.as_str()),
         (264, "blazepose33")
     );
-    let cmu = mp_geom::paths::data_file("cmu_mocap6_exercise/13_30_features10fps.npz").unwrap();
+    let cmu = mp_geom::data_or_return!("cmu_mocap6_exercise/13_30_features10fps.npz");
     assert_eq!(read_track(&cmu).unwrap().n_frames(), 205);
     // Multi-track files point to their reader.
-    let penn = mp_geom::paths::data_file("penn_action/penn_action_train.npz").unwrap();
+    let penn = mp_geom::data_or_return!("penn_action/penn_action_train.npz");
     assert!(read_track(&penn)
         .unwrap_err()
         .to_string()
         .contains("PennAction"));
-    let aist =
-        mp_geom::paths::data_file("aistpp_keypoints2d/gBR_sBM_cAll_d04_mBR0_ch02.npz").unwrap();
+    let aist = mp_geom::data_or_return!("aistpp_keypoints2d/gBR_sBM_cAll_d04_mBR0_ch02.npz");
     assert!(read_track(&aist)
         .unwrap_err()
         .to_string()

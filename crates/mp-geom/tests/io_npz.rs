@@ -2,14 +2,14 @@
 //! the rarer layouts, and typed errors for broken input.
 
 use mp_geom::io::npz::{read_npy, DType, NpyArray, Npz, NpzOut};
-use mp_geom::paths::data_file;
 use mp_geom::GeomError;
 use ndarray::{arr0, array, Array2};
 
-fn data(rel: &str) -> std::path::PathBuf {
-    data_file(rel).unwrap_or_else(|| {
-        panic!("shared data file `{rel}` is missing (MP_DATA_DIR or ../shared/data)")
-    })
+/// The shared data file `rel`, or the test records its skip and returns.
+macro_rules! data {
+    ($rel:expr) => {
+        mp_geom::data_or_return!($rel)
+    };
 }
 
 /// A version-1.0 `.npy` with the given header dict and raw data.
@@ -27,7 +27,7 @@ fn npy_bytes(dict: &str, data: &[u8]) -> Vec<u8> {
 
 #[test]
 fn penn_npz_every_dtype() {
-    let z = Npz::open(data("penn_action/penn_action_train.npz")).unwrap();
+    let z = Npz::open(data!("penn_action/penn_action_train.npz")).unwrap();
     let names = z.names().to_vec();
     for k in [
         "action",
@@ -72,11 +72,11 @@ fn penn_npz_every_dtype() {
 
 #[test]
 fn msr_i2_and_reference_bool_scalars() {
-    let m = Npz::open(data("msr_action3d/msr_action3d_odd_subjects.npz")).unwrap();
+    let m = Npz::open(data!("msr_action3d/msr_action3d_odd_subjects.npz")).unwrap();
     let a = m.array("action").unwrap();
     assert_eq!(a.dtype, DType::Int(2));
     assert_eq!(a.to_i64().unwrap().len(), 292);
-    let r = Npz::open(data("reference_keypoints/golf_swing.npz")).unwrap();
+    let r = Npz::open(data!("reference_keypoints/golf_swing.npz")).unwrap();
     assert_eq!(r.array("found").unwrap().dtype, DType::Bool);
     assert!(r.array_f64("found").unwrap().iter().all(|&v| v == 1.0));
     assert!((r.scalar_f64("fps").unwrap() - 29.97).abs() < 1e-12);
@@ -228,7 +228,7 @@ fn npz_errors_are_typed_and_named() {
     assert!(matches!(e, GeomError::Format { .. }), "{e}");
     assert!(e.to_string().contains("not a valid .npz"), "{e}");
     // Truncated real file: either the archive or the member read fails, never a panic.
-    let full = std::fs::read(data("cmu_mocap6_exercise/13_29_features10fps.npz")).unwrap();
+    let full = std::fs::read(data!("cmu_mocap6_exercise/13_29_features10fps.npz")).unwrap();
     for cut in [full.len() / 2, full.len() - 30, 100] {
         let r = Npz::from_bytes(full[..cut].to_vec(), "cut.npz").and_then(|z| z.array_f64("X"));
         assert!(r.is_err(), "cut at {cut} read fine");
@@ -242,7 +242,7 @@ fn npz_errors_are_typed_and_named() {
         assert!(z.array_f64("X").is_err() || z.array_f64("labels").is_err());
     }
     // Wrong key: names the key and lists the available ones.
-    let z = Npz::open(data("cmu_mocap6_exercise/13_29_features10fps.npz")).unwrap();
+    let z = Npz::open(data!("cmu_mocap6_exercise/13_29_features10fps.npz")).unwrap();
     let e = z.array_f64("Y").unwrap_err();
     let msg = e.to_string();
     assert!(
