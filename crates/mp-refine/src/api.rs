@@ -119,7 +119,7 @@ pub fn read_concepts(path: &Path) -> Result<Concepts> {
     })?;
     Concepts::from_json(&text).map_err(|e| RefineError::Model {
         model: path.display().to_string(),
-        reason: format!("anchor concepts that do not parse: {e}"),
+        reason: format!("invalid anchor concepts: {e}"),
     })
 }
 
@@ -215,6 +215,39 @@ mod tests {
         o.set_flaw_probability(0.2);
         assert_eq!(o.params.flaw_extend_probability, 0.2);
         assert!(o.validate().is_ok());
+    }
+
+    #[test]
+    fn invalid_concepts_name_the_file_and_the_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("concepts.json");
+        let text = r#"{"dim": 3, "params": {"method": {"KMeans": {"n_clusters": 2, "n_runs": 1,
+            "max_iterations": 10}}, "root_joint": null, "scale_normalise": true,
+            "gmm_components": 1, "gmm_reg_covariance": 0.001, "gmm_n_runs": 1,
+            "score_quantile": 0.05, "seed": 0},
+            "actions": {"1": {"action": 1, "centroids": [[0.0, 0.0]], "labels": [],
+            "gmm": {"dim": 3, "weights": [1.0], "means": [[0.0, 0.0, 0.0]],
+            "covariances": [[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]]},
+            "score_threshold": -3.0}}}"#;
+        std::fs::write(&p, text).unwrap();
+        let e = read_concepts(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(&p.display().to_string()) && e.contains("`centroids`[0] has 2 values"),
+            "{e}"
+        );
+        std::fs::write(&p, text.replace("[[0.0, 0.0]]", "[[0.0, 0.0, 0.0]]")).unwrap();
+        read_concepts(&p).unwrap();
+        std::fs::write(
+            &p,
+            text.replace("[[0.0, 0.0]]", "[[0.0, 0.0, 0.0]]")
+                .replace("\"weights\": [1.0]", "\"weights\": [-1.0]"),
+        )
+        .unwrap();
+        let e = read_concepts(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(&p.display().to_string()) && e.contains("`gmm.weights[0]` is negative"),
+            "{e}"
+        );
     }
 
     #[test]

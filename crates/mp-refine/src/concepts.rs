@@ -499,6 +499,94 @@ pub struct Gmm {
 }
 
 impl Gmm {
+    /// Tolerance on the sum of the mixing weights: `|Σ w − 1| ≤ 1e-6`.
+    pub const WEIGHT_SUM_TOLERANCE: f64 = 1e-6;
+
+    /// Checks the mixture: `dim` ≥ 1; at least one component; as many
+    /// weights, means and covariances; weights finite, non-negative and
+    /// summing to 1 (within [`Gmm::WEIGHT_SUM_TOLERANCE`]); means of `dim`
+    /// finite values; covariances of `dim × dim` finite values, symmetric
+    /// and positive definite where the weight is positive. Errors name the
+    /// field (`gmm.weights`, `gmm.means[c]`, `gmm.covariances[c]`, …).
+    pub fn validate(&self) -> Result<()> {
+        let d = self.dim;
+        if d == 0 {
+            return Err(RefineError::Shape("`gmm.dim` is 0".into()));
+        }
+        let k = self.weights.len();
+        if k == 0 {
+            return Err(RefineError::Shape("`gmm.weights` is empty".into()));
+        }
+        if self.means.len() != k || self.covariances.len() != k {
+            return Err(RefineError::Shape(format!(
+                "`gmm.weights` has {k} components, `gmm.means` {}, `gmm.covariances` {}",
+                self.means.len(),
+                self.covariances.len()
+            )));
+        }
+        if let Some(c) = self.weights.iter().position(|w| !w.is_finite()) {
+            return Err(RefineError::NonFinite(format!(
+                "`gmm.weights[{c}]` is {}",
+                self.weights[c]
+            )));
+        }
+        if let Some(c) = self.weights.iter().position(|w| *w < 0.0) {
+            return Err(RefineError::Shape(format!(
+                "`gmm.weights[{c}]` is negative ({})",
+                self.weights[c]
+            )));
+        }
+        let sum: f64 = self.weights.iter().sum();
+        if (sum - 1.0).abs() > Self::WEIGHT_SUM_TOLERANCE {
+            return Err(RefineError::Shape(format!(
+                "`gmm.weights` sum to {sum}, not 1"
+            )));
+        }
+        for (c, mu) in self.means.iter().enumerate() {
+            if mu.len() != d {
+                return Err(RefineError::Shape(format!(
+                    "`gmm.means[{c}]` has {} values, `gmm.dim` is {d}",
+                    mu.len()
+                )));
+            }
+            if mu.iter().any(|v| !v.is_finite()) {
+                return Err(RefineError::NonFinite(format!(
+                    "`gmm.means[{c}]` has a non-finite value"
+                )));
+            }
+        }
+        for (c, cov) in self.covariances.iter().enumerate() {
+            if cov.len() != d * d {
+                return Err(RefineError::Shape(format!(
+                    "`gmm.covariances[{c}]` has {} values, {d} × {d} = {} expected",
+                    cov.len(),
+                    d * d
+                )));
+            }
+            if cov.iter().any(|v| !v.is_finite()) {
+                return Err(RefineError::NonFinite(format!(
+                    "`gmm.covariances[{c}]` has a non-finite value"
+                )));
+            }
+            for i in 0..d {
+                for j in 0..i {
+                    let (a, b) = (cov[i * d + j], cov[j * d + i]);
+                    if (a - b).abs() > 1e-9 * (1.0 + a.abs().max(b.abs())) {
+                        return Err(RefineError::Shape(format!(
+                            "`gmm.covariances[{c}]` is not symmetric at ({i}, {j}): {a} ≠ {b}"
+                        )));
+                    }
+                }
+            }
+            if self.weights[c] > 0.0 && DMatrix::from_row_slice(d, d, cov).cholesky().is_none() {
+                return Err(RefineError::Shape(format!(
+                    "`gmm.covariances[{c}]` is not positive definite"
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// Log-likelihood `log Σ_c w_c N(x; μ_c, Σ_c)` of one feature.
     pub fn log_likelihood(&self, x: &[f64]) -> Result<f64> {
         if x.len() != self.dim {
@@ -510,9 +598,23 @@ impl Gmm {
         }
         let d = self.dim;
         let mut terms = Vec::with_capacity(self.weights.len());
-        for ((w, mu), cov) in self.weights.iter().zip(&self.means).zip(&self.covariances) {
+        for (c, ((w, mu), cov)) in self
+            .weights
+            .iter()
+            .zip(&self.means)
+            .zip(&self.covariances)
+            .enumerate()
+        {
             if *w <= 0.0 {
                 continue;
+            }
+            if mu.len() != d || cov.len() != d * d {
+                return Err(RefineError::Shape(format!(
+                    "GMM score: component {c} has a mean of {} values and a covariance of {}, \
+                     the model's dimension is {d}",
+                    mu.len(),
+                    cov.len()
+                )));
             }
             let m = DMatrix::from_row_slice(d, d, cov);
             let ch = m.cholesky().ok_or_else(|| {
@@ -592,9 +694,99 @@ impl Concepts {
     pub fn to_json(&self) -> Result<String> {
         Ok(serde_json::to_string_pretty(self)?)
     }
-    /// Parses JSON written by [`Concepts::to_json`].
+    /// Parses JSON written by [`Concepts::to_json`] and checks it with
+    /// [`Concepts::validate`].
     pub fn from_json(text: &str) -> Result<Self> {
-        Ok(serde_json::from_str(text)?)
+        let c: Concepts = serde_json::from_str(text)?;
+        c.validate()?;
+        Ok(c)
+    }
+
+    /// Checks that the concepts are consistent: a feature dimension ≥ 1;
+    /// valid learning parameters; per action, a key equal to its `action`,
+    /// at most the method's number of concepts, concept features of `dim`
+    /// finite values, labels that name existing concepts, a finite
+    /// threshold and a valid quality model ([`Gmm::validate`] with the same
+    /// dimension).
+    ///
+    /// Errors name the action and the field: [`RefineError::Shape`] for
+    /// wrong lengths or counts, [`RefineError::NonFinite`] for NaN or
+    /// infinite values, [`RefineError::InvalidParam`] for bad parameters.
+    pub fn validate(&self) -> Result<()> {
+        if self.dim == 0 {
+            return Err(RefineError::Shape("concepts: `dim` is 0".into()));
+        }
+        self.params.validate()?;
+        for (&key, ac) in &self.actions {
+            let at = |field: &str| format!("concepts: action {key}: `{field}`");
+            if ac.action != key {
+                return Err(RefineError::Shape(format!(
+                    "{} is {}, the key is {key}",
+                    at("action"),
+                    ac.action
+                )));
+            }
+            if let Some(max) = self.params.method.max_concepts() {
+                if ac.centroids.len() > max {
+                    return Err(RefineError::Shape(format!(
+                        "{} holds {} concepts, the {} method at most {max}",
+                        at("centroids"),
+                        ac.centroids.len(),
+                        self.params.method.name()
+                    )));
+                }
+            }
+            for (i, c) in ac.centroids.iter().enumerate() {
+                if c.len() != self.dim {
+                    return Err(RefineError::Shape(format!(
+                        "{}[{i}] has {} values, `dim` is {}",
+                        at("centroids"),
+                        c.len(),
+                        self.dim
+                    )));
+                }
+                if c.iter().any(|v| !v.is_finite()) {
+                    return Err(RefineError::NonFinite(format!(
+                        "{}[{i}] has a non-finite value",
+                        at("centroids")
+                    )));
+                }
+            }
+            for (i, l) in ac.labels.iter().enumerate() {
+                if let Some(l) = l {
+                    if *l >= ac.centroids.len() {
+                        return Err(RefineError::Shape(format!(
+                            "{}[{i}] is {l}, there are {} concepts",
+                            at("labels"),
+                            ac.centroids.len()
+                        )));
+                    }
+                }
+            }
+            if !ac.score_threshold.is_finite() {
+                return Err(RefineError::NonFinite(format!(
+                    "{} is {}",
+                    at("score_threshold"),
+                    ac.score_threshold
+                )));
+            }
+            if ac.gmm.dim != self.dim {
+                return Err(RefineError::Shape(format!(
+                    "{} is {}, `dim` is {}",
+                    at("gmm.dim"),
+                    ac.gmm.dim,
+                    self.dim
+                )));
+            }
+            ac.gmm.validate().map_err(|e| match e {
+                RefineError::Shape(m) => RefineError::Shape(format!("concepts: action {key}: {m}")),
+                RefineError::NonFinite(m) => {
+                    RefineError::NonFinite(format!("concepts: action {key}: {m}"))
+                }
+                other => other,
+            })?;
+        }
+        Ok(())
     }
 }
 
@@ -917,6 +1109,161 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Concepts learned from the blobs, as JSON.
+    fn concepts_json() -> serde_json::Value {
+        let c = learn_concepts(&blobs(12), &params(ClusterMethod::kmeans(3))).unwrap();
+        serde_json::from_str(&c.to_json().unwrap()).unwrap()
+    }
+
+    /// The error of `from_json` on `v` changed by `edit`.
+    fn load_error(edit: impl FnOnce(&mut serde_json::Value)) -> RefineError {
+        let mut v = concepts_json();
+        edit(&mut v);
+        Concepts::from_json(&v.to_string()).expect_err("an invalid file loads")
+    }
+
+    #[test]
+    fn concepts_round_trip_through_validation() {
+        let v = concepts_json();
+        let c = Concepts::from_json(&v.to_string()).unwrap();
+        assert_eq!(c.dim, 3);
+        c.validate().unwrap();
+    }
+
+    #[test]
+    fn concepts_with_wrong_shapes_or_values_are_refused_by_field() {
+        type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+        let cases: Vec<(Edit, &str, &str)> = vec![
+            (
+                Box::new(|v| v["actions"]["1"]["centroids"][0] = serde_json::json!([1.0, 2.0])),
+                "shape",
+                "`centroids`[0] has 2 values",
+            ),
+            (
+                Box::new(|v| {
+                    v["actions"]["1"]["gmm"]["means"][0] = serde_json::json!([1.0, 2.0, 3.0, 4.0])
+                }),
+                "shape",
+                "`gmm.means[0]` has 4 values",
+            ),
+            (
+                Box::new(|v| v["actions"]["1"]["gmm"]["covariances"][0] = serde_json::json!([1.0])),
+                "shape",
+                "`gmm.covariances[0]` has 1 values",
+            ),
+            (
+                Box::new(|v| v["actions"]["1"]["gmm"]["weights"][0] = serde_json::json!(-0.5)),
+                "shape",
+                "`gmm.weights[0]` is negative",
+            ),
+            (
+                Box::new(|v| v["actions"]["1"]["gmm"]["weights"][0] = serde_json::json!(7.0)),
+                "shape",
+                "`gmm.weights` sum to",
+            ),
+            (
+                Box::new(|v| v["actions"]["1"]["gmm"]["means"] = serde_json::json!([])),
+                "shape",
+                "`gmm.means` 0",
+            ),
+            (
+                Box::new(|v| {
+                    v["actions"]["1"]["gmm"]["covariances"][0][1] = serde_json::json!(9.0)
+                }),
+                "shape",
+                "not symmetric",
+            ),
+            (
+                Box::new(|v| {
+                    v["actions"]["1"]["gmm"]["covariances"][0] =
+                        serde_json::json!([-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])
+                }),
+                "shape",
+                "not positive definite",
+            ),
+            (
+                Box::new(|v| v["actions"]["1"]["gmm"]["dim"] = serde_json::json!(4)),
+                "shape",
+                "`gmm.dim` is 4",
+            ),
+            (
+                Box::new(|v| v["actions"]["1"]["labels"][0] = serde_json::json!(7)),
+                "shape",
+                "`labels`[0] is 7",
+            ),
+            (
+                Box::new(|v| v["actions"]["1"]["action"] = serde_json::json!(2)),
+                "shape",
+                "`action` is 2",
+            ),
+            (
+                Box::new(|v| {
+                    let c = v["actions"]["1"]["centroids"][0].clone();
+                    v["actions"]["1"]["centroids"]
+                        .as_array_mut()
+                        .unwrap()
+                        .extend([c.clone(), c]);
+                }),
+                "shape",
+                "at most 3",
+            ),
+            (
+                Box::new(|v| v["dim"] = serde_json::json!(0)),
+                "shape",
+                "`dim` is 0",
+            ),
+        ];
+        for (edit, kind, needle) in cases {
+            let e = load_error(edit);
+            let msg = e.to_string();
+            let ok = match kind {
+                "shape" => matches!(e, RefineError::Shape(_)),
+                _ => matches!(e, RefineError::Json(_)),
+            };
+            assert!(ok && msg.contains(needle), "{needle}: {e:?}");
+            if kind == "shape" && needle != "`dim` is 0" {
+                assert!(msg.contains("action 1"), "{msg}");
+            }
+        }
+    }
+
+    #[test]
+    fn non_finite_values_in_concepts_are_refused() {
+        let mut c = learn_concepts(&blobs(12), &params(ClusterMethod::kmeans(3))).unwrap();
+        let ac = c.actions.get_mut(&1).unwrap();
+        ac.gmm.means[0][1] = f64::NAN;
+        let e = c.validate().unwrap_err();
+        assert!(
+            matches!(&e, RefineError::NonFinite(m) if m.contains("`gmm.means[0]`") && m.contains("action 1")),
+            "{e:?}"
+        );
+        let mut c = learn_concepts(&blobs(12), &params(ClusterMethod::kmeans(3))).unwrap();
+        c.actions.get_mut(&1).unwrap().score_threshold = f64::NAN;
+        let e = c.validate().unwrap_err();
+        assert!(
+            matches!(&e, RefineError::NonFinite(m) if m.contains("`score_threshold`")),
+            "{e:?}"
+        );
+        let mut c = learn_concepts(&blobs(12), &params(ClusterMethod::kmeans(3))).unwrap();
+        c.actions.get_mut(&1).unwrap().gmm.weights[0] = f64::INFINITY;
+        let e = c.validate().unwrap_err();
+        assert!(
+            matches!(&e, RefineError::NonFinite(m) if m.contains("`gmm.weights[0]`")),
+            "{e:?}"
+        );
+        // A bad covariance given directly to the score is an error, not a panic.
+        let mut g = learn_concepts(&blobs(12), &params(ClusterMethod::kmeans(3)))
+            .unwrap()
+            .actions[&1]
+            .gmm
+            .clone();
+        g.covariances[0].pop();
+        assert!(matches!(
+            g.log_likelihood(&[0.0, 0.0, 0.0]),
+            Err(RefineError::Shape(_))
+        ));
     }
 
     #[test]

@@ -230,6 +230,35 @@ pub fn read_manifest(path: &Path) -> Result<Value> {
     if !v.is_object() {
         return Err(model_err(path, "the manifest is not a JSON object"));
     }
+    // Every size the manifest states must be a positive integer.
+    for k in [
+        "joints",
+        "n_joints",
+        "frames",
+        "n_frames",
+        "net_frames",
+        "features",
+        "frame_features",
+        "concepts",
+        "transition_frames",
+        "transition_latent",
+        "generator_latent",
+        "d_model",
+    ] {
+        let top = v.get(k).map(|x| (x, k.to_string()));
+        let nested = v
+            .get("representation")
+            .and_then(|r| r.get(k))
+            .map(|x| (x, format!("representation.{k}")));
+        for (x, field) in top.into_iter().chain(nested) {
+            if !matches!(x.as_u64(), Some(n) if n > 0) {
+                return Err(model_err(
+                    path,
+                    format!("manifest field `{field}` must be a positive integer, got {x}"),
+                ));
+            }
+        }
+    }
     let find = |keys: &[&str]| -> Option<u64> {
         keys.iter().find_map(|k| {
             v.get(*k)
@@ -760,6 +789,33 @@ mod tests {
         assert!(matches!(read_manifest(&p), Err(RefineError::Model { .. })));
         std::fs::write(&p, "{\"joints\": 20, \"frames\": 60, \"features\": 60}").unwrap();
         assert!(read_manifest(&p).is_ok());
+        // Sizes of the wrong type or not positive are named, not skipped.
+        for (text, field) in [
+            ("{\"joints\": \"20\"}", "`joints`"),
+            ("{\"frames\": 60.5}", "`frames`"),
+            ("{\"concepts\": 0}", "`concepts`"),
+            ("{\"transition_latent\": -16}", "`transition_latent`"),
+            (
+                "{\"representation\": {\"features\": null}}",
+                "`representation.features`",
+            ),
+        ] {
+            std::fs::write(&p, text).unwrap();
+            let e = read_manifest(&p).unwrap_err();
+            let msg = e.to_string();
+            assert!(
+                matches!(e, RefineError::Model { .. })
+                    && msg.contains(field)
+                    && msg.contains(&p.display().to_string()),
+                "{text}: {msg}"
+            );
+        }
+        // The shipped manifest passes.
+        let shipped =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/refine/manifest.json");
+        if shipped.is_file() {
+            read_manifest(&shipped).unwrap();
+        }
     }
 
     #[test]
