@@ -471,12 +471,7 @@ fn bad_parameters_stop_the_batch_before_anything_is_written() {
 
 #[test]
 fn a_real_video_item() {
-    let Some(video) = mp_geom::paths::data_file("quva_repetition/videos/023_fitness.mp4") else {
-        eprintln!(
-            "skipped: shared data file `quva_repetition/videos/023_fitness.mp4` not found (../shared/data or MP_DATA_DIR)"
-        );
-        return;
-    };
+    let video = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
     let tmp = tempfile::tempdir().unwrap();
     let track = tmp.path().join("023_fitness.npz");
     write_performer(&track, 7, 2);

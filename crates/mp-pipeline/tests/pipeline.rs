@@ -10,13 +10,9 @@ use mp_pipeline::{
     Stage,
 };
 
-/// A shared data file, or `None` (the test then says what it skipped).
+/// A shared data file, or `None` (the running test's skip is recorded).
 fn data(rel: &str) -> Option<PathBuf> {
-    let p = mp_geom::paths::data_file(rel);
-    if p.is_none() {
-        eprintln!("skipped: shared data file `{rel}` not found (../shared/data or MP_DATA_DIR)");
-    }
-    p
+    mp_geom::paths::data_file_or_skip(rel, &mp_geom::paths::current_test_name())
 }
 
 fn quva(name: &str) -> Option<(PathBuf, usize)> {

@@ -9,7 +9,7 @@ use mp_pose::{BlazePose, BlazePoseParams, MoveNet, MoveNetParams, PoseError};
 
 #[test]
 fn golf_video_has_264_frames_at_29_97_fps() {
-    let path = common::data("golfdb/golf_swing.mp4");
+    let path = mp_geom::data_or_return!("golfdb/golf_swing.mp4");
     let info = probe(&path).unwrap();
     assert_eq!((info.width, info.height), (354, 492));
     assert!((info.fps - 29.97).abs() < 1e-9);
@@ -31,7 +31,7 @@ fn golf_video_has_264_frames_at_29_97_fps() {
 #[test]
 fn quva_video_frame_count_and_rate() {
     // 020_fitness: 152 frames, 640×360, 29 fps (PyAV counts in the reference README).
-    let path = common::data("quva_repetition/videos/020_fitness.mp4");
+    let path = mp_geom::data_or_return!("quva_repetition/videos/020_fitness.mp4");
     let info = probe(&path).unwrap();
     assert_eq!((info.width, info.height), (640, 360));
     assert!((info.fps - 29.0).abs() < 0.01, "{}", info.fps);
@@ -84,7 +84,7 @@ fn corrupt_video_is_a_decoding_error() {
 fn truncated_video_fails_or_stops_cleanly() {
     // The first 40% of a real video: frames decode, then the stream ends with
     // fewer frames than announced (never a panic, never a partial frame).
-    let src = std::fs::read(common::data("golfdb/golf_swing.mp4")).unwrap();
+    let src = std::fs::read(mp_geom::data_or_return!("golfdb/golf_swing.mp4")).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cut.mp4");
     std::fs::write(&path, &src[..src.len() * 2 / 5]).unwrap();

@@ -14,14 +14,19 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-fn golf() -> std::path::PathBuf {
-    common::data("golfdb/golf_swing.mp4")
+/// The golf video, or the test records its skip and returns.
+macro_rules! golf {
+    () => {
+        mp_geom::data_or_return!("golfdb/golf_swing.mp4")
+    };
 }
 
 #[test]
 fn first_golf_frame_matches_mediapipe() {
-    let r = common::reference("golf_swing");
-    let frame = VideoReader::open(golf()).unwrap().next().unwrap().unwrap();
+    let Some(r) = common::reference("golf_swing") else {
+        return;
+    };
+    let frame = VideoReader::open(golf!()).unwrap().next().unwrap().unwrap();
     let mut bp = BlazePose::new(BlazePoseParams::default()).unwrap();
     let (pose, diag) = bp.process(&frame).unwrap();
     let pose = pose.expect("MediaPipe finds the golfer in frame 0");
@@ -63,13 +68,15 @@ fn first_golf_frame_matches_mediapipe() {
 #[test]
 fn tracking_follows_mediapipe_on_golf() {
     // 40 frames: detector once, then tracking from the auxiliary landmarks.
-    let r = common::reference("golf_swing");
+    let Some(r) = common::reference("golf_swing") else {
+        return;
+    };
     let mut bp = BlazePose::new(BlazePoseParams {
         fixed_frame_interval_s: Some(1.0 / 30.0),
         ..Default::default()
     })
     .unwrap();
-    let source = open_source(golf()).unwrap();
+    let source = open_source(golf!()).unwrap();
     let ex = extract(
         source,
         &mut bp,
@@ -124,7 +131,7 @@ fn blank_frame_has_no_pose() {
 #[test]
 fn frames_without_a_person_are_marked_missing_in_the_track() {
     // A person, then blank frames, then the person again.
-    let person = VideoReader::open(golf()).unwrap().next().unwrap().unwrap();
+    let person = VideoReader::open(golf!()).unwrap().next().unwrap().unwrap();
     let blank = Frame::new(
         1,
         1.0 / 30.0,
@@ -172,7 +179,7 @@ fn frames_without_a_person_are_marked_missing_in_the_track() {
 #[test]
 fn coco_image_blazepose_and_movenet_agree_with_annotation() {
     // COCO 000000000785 (skier): compare with the annotation (PCK@0.2 torso).
-    let dir = common::data("coco_sample");
+    let dir = mp_geom::data_or_return!("coco_sample");
     let frame = read_image(dir.join("000000000785.jpg")).unwrap();
     assert_eq!((frame.width, frame.height), (640, 425));
     let ann: serde_json::Value =

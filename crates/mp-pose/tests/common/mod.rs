@@ -6,11 +6,10 @@ use std::path::PathBuf;
 use ndarray::{Array1, Array2, Array3};
 use ndarray_npy::NpzReader;
 
-/// A file under the shared data folder; fails with a clear message when absent.
-pub fn data(rel: &str) -> PathBuf {
-    mp_geom::paths::data_file(rel).unwrap_or_else(|| {
-        panic!("shared data file `{rel}` not found: set MP_DATA_DIR or put the shared folder beside the workspace")
-    })
+/// A file under the shared data folder, or `None` when absent (the running
+/// test's skip is recorded: `mp_geom::paths::data_file_or_skip`).
+pub fn data(rel: &str) -> Option<PathBuf> {
+    mp_geom::paths::data_file_or_skip(rel, &mp_geom::paths::current_test_name())
 }
 
 /// MediaPipe reference keypoints of one video.
@@ -22,14 +21,15 @@ pub struct Reference {
     pub roi_from_detection: Array2<f32>,
 }
 
-pub fn reference(stem: &str) -> Reference {
-    let path = data(&format!("reference_keypoints/{stem}.npz"));
+/// `None` (skip recorded) without the shared data.
+pub fn reference(stem: &str) -> Option<Reference> {
+    let path = data(&format!("reference_keypoints/{stem}.npz"))?;
     let mut npz = NpzReader::new(std::fs::File::open(&path).unwrap()).unwrap();
-    Reference {
+    Some(Reference {
         landmarks_px: npz.by_name("landmarks_px").unwrap(),
         visibility: npz.by_name("visibility").unwrap(),
         found: npz.by_name("found").unwrap(),
         roi_from_landmarks: npz.by_name("roi_from_landmarks").unwrap(),
         roi_from_detection: npz.by_name("roi_from_detection").unwrap(),
-    }
+    })
 }
