@@ -61,6 +61,16 @@ pub enum RuleWeighting {
     Counts,
 }
 
+/// The deepest `max_depth` [`DeriveParams::validate`] accepts: 10 000.
+/// Derivation recurses once per level, so deeper limits only risk the
+/// stack; learned grammars are a few dozen levels deep.
+pub const MAX_DEPTH: usize = 10_000;
+
+/// The most terminals asked of one derivation (`max_terminals`, and
+/// `min_terminals` of [`derive_at_least`]): one million, the most segments a
+/// synthesis may request (`crate::synth::MAX_SEGMENTS`).
+pub const MAX_TERMINALS: usize = 1_000_000;
+
 /// Parameters of random derivation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct DeriveParams {
@@ -90,8 +100,23 @@ impl DeriveParams {
         if self.max_depth == 0 {
             return Err(GrammarError::param("max_depth", "must be ≥ 1"));
         }
+        if self.max_depth > MAX_DEPTH {
+            return Err(GrammarError::param(
+                "max_depth",
+                format!("{} is too large: at most {MAX_DEPTH}", self.max_depth),
+            ));
+        }
         if self.max_terminals == 0 {
             return Err(GrammarError::param("max_terminals", "must be ≥ 1"));
+        }
+        if self.max_terminals > MAX_TERMINALS {
+            return Err(GrammarError::param(
+                "max_terminals",
+                format!(
+                    "{} is too large: at most {MAX_TERMINALS}",
+                    self.max_terminals
+                ),
+            ));
         }
         Ok(())
     }
@@ -388,6 +413,12 @@ pub fn derive_at_least(
     min_terminals: usize,
     seed: u64,
 ) -> Result<Derivation> {
+    if min_terminals > MAX_TERMINALS {
+        return Err(GrammarError::param(
+            "min_terminals",
+            format!("{min_terminals} is too large: at most {MAX_TERMINALS}"),
+        ));
+    }
     let d = Deriver::new(grammar, params)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut sentences = Vec::new();

@@ -128,6 +128,17 @@ impl Default for SaParams {
     }
 }
 
+/// The most symbols K [`SymbolParams::validate`] accepts: 10 000 (K-medoids
+/// keeps K medoids and a K × K symbol table; motions have far fewer
+/// distinct units).
+pub const MAX_SYMBOLS: usize = 10_000;
+
+/// The longest segment window (`candidate_step_frames`, `min_segment_frames`,
+/// `max_segment_frames`) [`SymbolParams::validate`] accepts: 10 million
+/// frames, the most frames a track of one joint may have
+/// (`mp_concrete::exec::MAX_FRAME_JOINTS`).
+pub const MAX_SEGMENT_FRAMES: usize = 10_000_000;
+
 /// Parameters of symbol identification.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SymbolParams {
@@ -185,6 +196,24 @@ impl SymbolParams {
     pub fn validate(&self) -> Result<()> {
         if self.k == 0 {
             return Err(GrammarError::param("k", "must be ≥ 1"));
+        }
+        if self.k > MAX_SYMBOLS {
+            return Err(GrammarError::param(
+                "k",
+                format!("{} is too large: at most {MAX_SYMBOLS}", self.k),
+            ));
+        }
+        for (name, v) in [
+            ("candidate_step_frames", self.candidate_step_frames),
+            ("min_segment_frames", self.min_segment_frames),
+            ("max_segment_frames", self.max_segment_frames),
+        ] {
+            if v > MAX_SEGMENT_FRAMES {
+                return Err(GrammarError::param(
+                    name,
+                    format!("{v} is too large: at most {MAX_SEGMENT_FRAMES} frames"),
+                ));
+            }
         }
         unit_interval("omega", self.omega)?;
         if self.min_segment_frames == 0 {

@@ -280,6 +280,18 @@ enum Output {
     },
 }
 
+/// The most output cells (frames × joints) one synthesis may produce: 10
+/// million (the same bound as concrete-program execution,
+/// `mp_concrete::exec::MAX_FRAME_JOINTS`), i.e. at most 240 MB of positions
+/// at 3 dimensions × 8 bytes.
+pub const MAX_FRAME_JOINTS: usize = 10_000_000;
+
+/// The most segments a synthesis may request (`segments` of
+/// [`Stitcher::synthesize`] and [`Stitcher::synthesize_fsm`]), whatever
+/// their length: one million. The frames they imply must also fit
+/// [`MAX_FRAME_JOINTS`], counting every segment at the source's longest.
+pub const MAX_SEGMENTS: usize = 1_000_000;
+
 /// A source motion cut into symbol segments, ready to stitch.
 #[derive(Debug, Clone)]
 pub struct Stitcher {
@@ -686,6 +698,33 @@ impl Stitcher {
             .collect()
     }
 
+    /// Checks a requested segment count against [`MAX_SEGMENTS`] and, at the
+    /// source's longest segment, against [`MAX_FRAME_JOINTS`]; the error
+    /// names `segments`, the value and the limit.
+    pub fn check_segments(&self, segments: usize) -> Result<()> {
+        let longest = self
+            .segments
+            .iter()
+            .map(|s| s.len())
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let joints = self.conf.ncols().max(1);
+        let by_frames = (MAX_FRAME_JOINTS / joints / longest).max(1);
+        let limit = by_frames.min(MAX_SEGMENTS);
+        if segments > limit {
+            return Err(GrammarError::param(
+                "segments",
+                format!(
+                    "{segments} is too large: at most {limit} segments ({MAX_SEGMENTS}, or \
+                     {MAX_FRAME_JOINTS} frame·joints at {longest} frames × {joints} joints \
+                     per segment, whichever is fewer)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Stitches the given source segments in order.
     pub fn render(&self, segments: &[usize]) -> Result<Synthesis> {
         if segments.is_empty() {
@@ -698,6 +737,18 @@ impl Stitcher {
             )));
         }
         let total: usize = segments.iter().map(|&i| self.segments[i].len()).sum();
+        let joints = self.conf.ncols().max(1);
+        if total.saturating_mul(joints) > MAX_FRAME_JOINTS {
+            return Err(GrammarError::param(
+                "segments",
+                format!(
+                    "{} segments of {total} frames are too large: at most {} frames of \
+                     {joints} joints ({MAX_FRAME_JOINTS} frame·joints)",
+                    segments.len(),
+                    MAX_FRAME_JOINTS / joints
+                ),
+            ));
+        }
         let mut rows = Array2::zeros((total, self.rows.ncols()));
         let mut conf = Array2::zeros((total, self.conf.ncols()));
         let mut len = 0;
@@ -724,6 +775,7 @@ impl Stitcher {
         min_segments: usize,
         seed: u64,
     ) -> Result<Synthesis> {
+        self.check_segments(min_segments)?;
         let map = self.terminal_symbols(grammar)?;
         let derivation = derive_at_least(grammar, derive, min_segments.max(1), seed)?;
         let symbols: Vec<usize> = derivation
@@ -738,6 +790,7 @@ impl Stitcher {
 
     /// `n_segments` symbols from the finite-state machine, stitched (seeded).
     pub fn synthesize_fsm(&self, fsm: &Fsm, n_segments: usize, seed: u64) -> Result<Synthesis> {
+        self.check_segments(n_segments)?;
         if fsm.k() != self.k() {
             return Err(GrammarError::Invalid(format!(
                 "the state machine has {} symbols, the motion {}",
