@@ -72,25 +72,65 @@ impl Manifest {
             path: path.to_path_buf(),
             reason: e.to_string(),
         })?;
-        let j = m.joints.len();
-        if j == 0
-            || m.dims == 0
-            || m.pose_values != j * m.dims
-            || m.features != j * m.dims + j
-            || m.receptive_field_frames == 0
-            || m.context_frames < m.receptive_field_frames
-            || m.channels == 0
-        {
-            return Err(ForecastError::Format {
-                path: path.to_path_buf(),
-                reason: format!(
-                    "inconsistent sizes: {j} joints × {} dims, {} pose values, {} features, {} channels, \
-                     context {} frames, receptive field {} frames",
-                    m.dims, m.pose_values, m.features, m.channels, m.context_frames, m.receptive_field_frames
-                ),
-            });
-        }
+        m.validate().map_err(|reason| ForecastError::Format {
+            path: path.to_path_buf(),
+            reason,
+        })?;
         Ok(m)
+    }
+
+    /// Checks the sizes against each other: at least one joint, joint names
+    /// non-empty and distinct, `dims` ≥ 1, `pose_values` = joints × `dims`,
+    /// `features` = joints × `dims` + joints, `channels` ≥ 1,
+    /// `receptive_field_frames` ≥ 1 and `context_frames` ≥
+    /// `receptive_field_frames`. The error names the field.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        let j = self.joints.len();
+        if j == 0 {
+            return Err("field `joints` is empty".into());
+        }
+        for (i, name) in self.joints.iter().enumerate() {
+            if name.trim().is_empty() {
+                return Err(format!("field `joints`: joint {i} has an empty name"));
+            }
+            if self.joints[..i].contains(name) {
+                return Err(format!(
+                    "field `joints`: joint {i} repeats the name `{name}`"
+                ));
+            }
+        }
+        if self.dims == 0 {
+            return Err("field `dims` is 0".into());
+        }
+        if self.pose_values != j * self.dims {
+            return Err(format!(
+                "field `pose_values` is {}, {j} joints × {} dims = {}",
+                self.pose_values,
+                self.dims,
+                j * self.dims
+            ));
+        }
+        if self.features != j * self.dims + j {
+            return Err(format!(
+                "field `features` is {}, {j} joints × ({} dims + 1) = {}",
+                self.features,
+                self.dims,
+                j * self.dims + j
+            ));
+        }
+        if self.channels == 0 {
+            return Err("field `channels` is 0".into());
+        }
+        if self.receptive_field_frames == 0 {
+            return Err("field `receptive_field_frames` is 0".into());
+        }
+        if self.context_frames < self.receptive_field_frames {
+            return Err(format!(
+                "field `context_frames` is {}, less than `receptive_field_frames` = {}",
+                self.context_frames, self.receptive_field_frames
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -666,6 +706,95 @@ fn anchor_readout(
                     *v = coords[i] + (*v - r[i]);
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn good() -> serde_json::Value {
+        serde_json::json!({
+            "dataset": "msr_action3d",
+            "joints": ["a", "b", "c"],
+            "dims": 3,
+            "features": 12,
+            "pose_values": 9,
+            "channels": 8,
+            "context_frames": 15,
+            "receptive_field_frames": 13,
+        })
+    }
+
+    fn read_with(v: &serde_json::Value) -> (PathBuf, Result<Manifest>, tempfile::TempDir) {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("manifest.json");
+        std::fs::write(&p, v.to_string()).unwrap();
+        let r = Manifest::read(&p);
+        (p, r, dir)
+    }
+
+    #[test]
+    fn consistent_manifests_load() {
+        let (_, r, _d) = read_with(&good());
+        assert_eq!(r.unwrap().joints.len(), 3);
+        for ds in ["msr_action3d", "penn_action"] {
+            let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../models/forecast")
+                .join(ds)
+                .join("manifest.json");
+            if p.is_file() {
+                Manifest::read(&p).unwrap();
+            }
+        }
+    }
+
+    #[test]
+    fn inconsistent_manifests_name_the_file_and_the_field() {
+        let cases: [(&str, serde_json::Value, &str); 9] = [
+            ("joints", serde_json::json!([]), "`joints` is empty"),
+            ("joints", serde_json::json!(["a", "a", "c"]), "repeats"),
+            ("joints", serde_json::json!(["a", "", "c"]), "empty name"),
+            ("dims", serde_json::json!(0), "`dims` is 0"),
+            ("pose_values", serde_json::json!(10), "`pose_values` is 10"),
+            ("features", serde_json::json!(9), "`features` is 9"),
+            ("channels", serde_json::json!(0), "`channels` is 0"),
+            (
+                "receptive_field_frames",
+                serde_json::json!(0),
+                "`receptive_field_frames` is 0",
+            ),
+            (
+                "context_frames",
+                serde_json::json!(5),
+                "`context_frames` is 5",
+            ),
+        ];
+        for (field, value, needle) in cases {
+            let mut v = good();
+            v[field] = value;
+            let (p, r, _d) = read_with(&v);
+            let e = r.unwrap_err();
+            let msg = e.to_string();
+            assert!(
+                matches!(e, ForecastError::Format { .. })
+                    && msg.contains(needle)
+                    && msg.contains(&p.display().to_string()),
+                "{field}: {msg}"
+            );
+        }
+        // Wrong types and negative sizes are refused by the parser, naming the field.
+        for (field, value) in [
+            ("dims", serde_json::json!(-3)),
+            ("channels", serde_json::json!(2.5)),
+            ("context_frames", serde_json::json!("15")),
+        ] {
+            let mut v = good();
+            v[field] = value;
+            let (p, r, _d) = read_with(&v);
+            let msg = r.unwrap_err().to_string();
+            assert!(msg.contains(&p.display().to_string()), "{field}: {msg}");
         }
     }
 }
