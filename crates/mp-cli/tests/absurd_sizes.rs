@@ -1,0 +1,104 @@
+//! Absurd sizes on the command line end with exit code 1 and a message
+//! naming the parameter, never an allocation abort (a signal).
+
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mp"))
+        .args(args)
+        .output()
+        .expect("cannot start mp")
+}
+
+fn ok(args: &[&str]) {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "mp {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Exit code 1 (an error, not a signal) and stderr naming `param`.
+fn refused(args: &[&str], param: &str) {
+    let out = run(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "mp {args:?} should fail with exit code 1 (status {:?}):\n{stderr}",
+        out.status
+    );
+    assert!(
+        stderr.contains(param),
+        "mp {args:?}: the message should name `{param}`:\n{stderr}"
+    );
+}
+
+#[test]
+fn absurd_sizes_are_errors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |name: &str| tmp.path().join(name).to_string_lossy().into_owned();
+    ok(&["performer", "-o", &p("perf.npz")]);
+    ok(&["fit", &p("perf.npz"), "-o", &p("fit.json"), "--quiet"]);
+    ok(&["abstract", &p("perf.npz"), "-o", &p("abs.json"), "--quiet"]);
+
+    refused(
+        &[
+            "execute",
+            &p("fit.json"),
+            "--fps",
+            "1e15",
+            "-o",
+            &p("x.npz"),
+        ],
+        "fps_out",
+    );
+    refused(
+        &[
+            "extend",
+            &p("abs.json"),
+            "--iters",
+            "1000000000000",
+            "-o",
+            &p("x.npz"),
+        ],
+        "iterations",
+    );
+    refused(
+        &[
+            "predict",
+            &p("perf.npz"),
+            "--observe",
+            "30",
+            "--horizon",
+            "1000000000000",
+        ],
+        "horizon",
+    );
+
+    ok(&[
+        "grammar",
+        "symbols",
+        &p("perf.npz"),
+        "--k",
+        "4",
+        "--seed",
+        "1",
+        "-o",
+        &p("sym.json"),
+    ]);
+    ok(&["grammar", "learn", &p("sym.json"), "-o", &p("gram.json")]);
+    refused(
+        &[
+            "grammar",
+            "synth",
+            &p("gram.json"),
+            "--segments",
+            "1000000000000",
+            "-o",
+            &p("x.npz"),
+        ],
+        "segments",
+    );
+}
