@@ -258,10 +258,8 @@ fn limb_selection_picks_the_coco_limbs() {
 fn quva_reference_keypoints_count() {
     // Real data: MediaPipe keypoints of a QUVA video with 7 annotated cycles.
     let name = "023_fitness";
-    let path = mp_geom::paths::data_file(format!("reference_keypoints/{name}.npz"))
-        .expect("../shared/data/reference_keypoints/023_fitness.npz is missing (set MP_DATA_DIR)");
-    let ann = mp_geom::paths::data_file(format!("quva_repetition/annotations/{name}.npy"))
-        .expect("../shared/data/quva_repetition/annotations/023_fitness.npy is missing");
+    let path = mp_geom::data_or_return!(format!("reference_keypoints/{name}.npz"));
+    let ann = mp_geom::data_or_return!(format!("quva_repetition/annotations/{name}.npy"));
     let truth = mp_geom::io::npz::read_npy(ann)
         .unwrap()
         .to_i64()
@@ -277,8 +275,7 @@ fn quva_reference_keypoints_count() {
 #[test]
 fn cmu_exercise_blocks_are_segmented() {
     // Real data: 6 labelled exercise blocks back to back, 12 joint angles at 10 fps.
-    let path = mp_geom::paths::data_file("cmu_mocap6_exercise/14_14_features10fps.npz")
-        .expect("../shared/data/cmu_mocap6_exercise/14_14_features10fps.npz is missing");
+    let path = mp_geom::data_or_return!("cmu_mocap6_exercise/14_14_features10fps.npz");
     let c = mp_geom::io::datasets::CmuFeatures::open(&path).unwrap();
     let mut blocks = Vec::new();
     let mut s = 0;

@@ -95,8 +95,7 @@ fn bad_input_is_a_typed_error() {
 /// they agree with the hand labels better than chance (purity).
 #[test]
 fn cmu_exercise_features() {
-    let path = mp_geom::paths::data_file("cmu_mocap6_exercise/13_29_features10fps.npz")
-        .expect("shared data cmu_mocap6_exercise/13_29_features10fps.npz is missing");
+    let path = mp_geom::data_or_return!("cmu_mocap6_exercise/13_29_features10fps.npz");
     let data = mp_geom::io::datasets::CmuFeatures::open(path).unwrap();
     let f = PoseFeatures::from_track(&data.track, &Default::default()).unwrap();
     let mut p = small_params(6, 1);
