@@ -52,9 +52,14 @@ impl Gaussian {
                 n * n
             )));
         }
-        if self.mean.iter().chain(&self.cov).any(|v| !v.is_finite()) {
+        if self.mean.iter().any(|v| !v.is_finite()) {
             return Err(AbstractError::NonFinite(format!(
-                "{what}: Gaussian has a non-finite mean or covariance"
+                "{what}: Gaussian `mean` has a non-finite value"
+            )));
+        }
+        if self.cov.iter().any(|v| !v.is_finite()) {
+            return Err(AbstractError::NonFinite(format!(
+                "{what}: Gaussian `cov` has a non-finite value"
             )));
         }
         Ok(())
@@ -276,7 +281,7 @@ impl AbstractProgram {
                     for (bi, b) in l.body.iter().enumerate() {
                         if b.duration.total() == 0 || b.duration.counts.contains_key(&0) {
                             return Err(AbstractError::InvalidLoop(format!(
-                                "statement {si}, body {bi}: duration distribution is empty or has 0"
+                                "statement {si}, body {bi}: `duration` distribution is empty or has 0"
                             )));
                         }
                         if b.joints.len() != j {
@@ -288,7 +293,7 @@ impl AbstractProgram {
                         for (ji, g) in b.joints.iter().enumerate() {
                             if g.dim() != n {
                                 return Err(AbstractError::Shape(format!(
-                                    "statement {si}, body {bi}, joint {ji}: Gaussian of dimension {}, expected {n}",
+                                    "statement {si}, body {bi}, joint {ji}: Gaussian `mean` of dimension {}, expected {n}",
                                     g.dim()
                                 )));
                             }

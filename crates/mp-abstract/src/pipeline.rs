@@ -134,7 +134,19 @@ pub fn read_program(path: impl AsRef<Path>) -> Result<AbstractProgram> {
             other => other,
         })?
     };
-    prog.validate()?;
+    prog.validate().map_err(|e| {
+        let at = |m: String| format!("{}: {m}", path.display());
+        match e {
+            AbstractError::Shape(m) => AbstractError::Shape(at(m)),
+            AbstractError::NonFinite(m) => AbstractError::NonFinite(at(m)),
+            AbstractError::InvalidLoop(m) => AbstractError::InvalidLoop(at(m)),
+            AbstractError::InvalidParam { name, reason } => AbstractError::InvalidParam {
+                name,
+                reason: at(reason),
+            },
+            other => other,
+        }
+    })?;
     Ok(prog)
 }
 
