@@ -244,10 +244,9 @@ fn missing_joints_are_masked_not_fatal() {
 fn learned_model_beats_constant_on_real_penn_action_clips() {
     // every 6th validation clip (21 clips, all 15 actions): AR on Φ vs Constant, PCK with
     // DTW averaged over the horizons 5–30
-    let ds = mp_forecast::data::ForecastDataset::open(
-        mp_geom::paths::data_file("penn_action/penn_action_train.npz")
-            .expect("shared data: penn_action/penn_action_train.npz (set MP_DATA_DIR)"),
-    )
+    let ds = mp_forecast::data::ForecastDataset::open(mp_geom::data_or_return!(
+        "penn_action/penn_action_train.npz"
+    ))
     .unwrap();
     let (_, val) = ds.split();
     let clips: Vec<EvalClip> = val.iter().step_by(6).map(|c| (*c).clone()).collect();
@@ -277,10 +276,9 @@ fn learned_model_beats_constant_on_real_penn_action_clips() {
 fn learned_3d_model_beats_constant_on_real_msr_action3d_clips() {
     // the 30 validation clips, a start every 25th frame (SPEC's 3D protocol): PA-MPJPE with
     // DTW averaged over the horizons 5–30 (mm, lower is better)
-    let ds = mp_forecast::data::ForecastDataset::open(
-        mp_geom::paths::data_file("msr_action3d/msr_action3d_odd_subjects.npz")
-            .expect("shared data: msr_action3d/msr_action3d_odd_subjects.npz (set MP_DATA_DIR)"),
-    )
+    let ds = mp_forecast::data::ForecastDataset::open(mp_geom::data_or_return!(
+        "msr_action3d/msr_action3d_odd_subjects.npz"
+    ))
     .unwrap();
     let (_, val) = ds.split();
     let clips: Vec<EvalClip> = val.iter().map(|c| (*c).clone()).collect();
