@@ -788,10 +788,12 @@ mod tests {
     use crate::concepts::ClusterMethod;
     use mp_geom::io::npz::Npz;
 
-    fn msr() -> MsrAction3D {
-        let path = mp_geom::paths::data_file(MsrAction3D::FILE)
-            .expect("shared data: msr_action3d/msr_action3d_odd_subjects.npz");
-        MsrAction3D::open(path).unwrap()
+    /// The shared MSR Action3D file, or returns from the test (recording
+    /// the skip) where it is absent.
+    macro_rules! msr_or_return {
+        () => {
+            MsrAction3D::open(mp_geom::data_or_return!(MsrAction3D::FILE)).unwrap()
+        };
     }
 
     fn small_params(seed: u64) -> DatasetParams {
@@ -814,9 +816,8 @@ mod tests {
 
     #[test]
     fn training_set_shapes_anchors_and_concepts() {
-        let msr = msr();
-        let bvh = mp_geom::paths::data_file("cmu_salsa_bvh/60_01_scaled.bvh")
-            .expect("shared data: cmu_salsa_bvh/60_01_scaled.bvh");
+        let msr = msr_or_return!();
+        let bvh = mp_geom::data_or_return!("cmu_salsa_bvh/60_01_scaled.bvh");
         let set = build_training_set(&msr, &[bvh], &small_params(3)).unwrap();
         let n = set.len();
         let n_msr = msr
@@ -908,7 +909,7 @@ mod tests {
 
     #[test]
     fn flaw_set_marks_flawed_joints_and_never_reads_the_evaluation_subject() {
-        let msr = msr();
+        let msr = msr_or_return!();
         let p = FlawSetParams {
             train_subjects: vec![1],
             select_subjects: vec![7],
@@ -961,7 +962,7 @@ mod tests {
 
     #[test]
     fn invalid_params_are_rejected() {
-        let msr = msr();
+        let msr = msr_or_return!();
         let p = DatasetParams {
             bvh_stride_frames: 0,
             ..DatasetParams::default()

@@ -380,8 +380,7 @@ mod tests {
 
     #[test]
     fn cmu_salsa_maps_to_msr_joints() {
-        let path = mp_geom::paths::data_file("cmu_salsa_bvh/60_01_scaled.bvh")
-            .expect("shared data: cmu_salsa_bvh/60_01_scaled.bvh");
+        let path = mp_geom::data_or_return!("cmu_salsa_bvh/60_01_scaled.bvh");
         let bvh = Bvh::read(path).unwrap();
         let t = bvh_to_msr20(&bvh, 1.0, 15.0).unwrap();
         assert_eq!(t.n_joints(), MSR_JOINTS);

@@ -79,13 +79,8 @@ fn assert_finite(r: &RefineEvalReport) {
 
 #[test]
 fn files_without_subject_9_are_scored_on_the_subjects_the_networks_never_saw() {
-    let Ok(shared) = MsrAction3D::open_default() else {
-        println!(
-            "skipped: the shared MSR Action3D file ({}) is absent (set MP_DATA_DIR)",
-            MsrAction3D::FILE
-        );
-        return;
-    };
+    let path = mp_geom::data_or_return!(MsrAction3D::FILE);
+    let shared = MsrAction3D::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let dir = find_model_dir().expect("models/refine/manifest.json is part of the repository");
     let nets = RefineNets::load_default()
         .unwrap_or_else(|e| panic!("loading {}: {e} (run `cargo xtask setup`)", dir.display()));

@@ -12,12 +12,7 @@ use mp_refine::Concepts;
 
 #[test]
 fn blazepose_world_landmarks_are_refined_on_their_own_skeleton() {
-    let Some(path) = mp_geom::paths::data_file("reference_keypoints/golf_swing.npz") else {
-        println!(
-            "skipped: the shared reference_keypoints/golf_swing.npz is absent (set MP_DATA_DIR)"
-        );
-        return;
-    };
+    let path = mp_geom::data_or_return!("reference_keypoints/golf_swing.npz");
     let world = MediaPipeReference::open(&path)
         .unwrap()
         .world

@@ -3,7 +3,8 @@
 //!
 //! They need the committed models (`models/refine/*.onnx`, `manifest.json`,
 //! `parity.npz`, `concepts.json`), ONNX Runtime (`cargo xtask setup`) and
-//! the shared MSR Action3D file; each fails with a message naming what is missing.
+//! the shared MSR Action3D file; each fails with a message naming what is
+//! missing, except that tests needing the shared data skip where it is absent.
 
 use std::sync::OnceLock;
 
@@ -27,35 +28,68 @@ use ndarray::Array3;
 const FRAME_RECALL_MIN: f64 = 0.5;
 const CELL_RECALL_MIN: f64 = 0.5;
 
-struct Fixture {
+/// The committed networks and concepts (no shared data needed).
+struct Models {
     nets: RefineNets,
     concepts: Concepts,
-    data: MsrAction3D,
 }
 
-fn fixture() -> &'static Fixture {
-    static F: OnceLock<Fixture> = OnceLock::new();
-    F.get_or_init(|| {
-        let dir = find_model_dir().expect("refinement models missing (models/refine/manifest.json)");
-        let nets = RefineNets::load(&dir, &SessionParams::default())
-            .unwrap_or_else(|e| panic!("loading the refinement networks from {}: {e}", dir.display()));
+fn models() -> &'static Models {
+    static M: OnceLock<Models> = OnceLock::new();
+    M.get_or_init(|| {
+        let dir =
+            find_model_dir().expect("refinement models missing (models/refine/manifest.json)");
+        let nets = RefineNets::load(&dir, &SessionParams::default()).unwrap_or_else(|e| {
+            panic!(
+                "loading the refinement networks from {}: {e}",
+                dir.display()
+            )
+        });
         let text = std::fs::read_to_string(dir.join("concepts.json"))
             .expect("models/refine/concepts.json missing");
         let concepts = Concepts::from_json(&text).unwrap();
-        let data = MsrAction3D::open_default().expect(
-            "MSR Action3D is missing from ../shared/data (msr_action3d/msr_action3d_odd_subjects.npz)",
-        );
-        Fixture {
-            nets,
-            concepts,
-            data,
-        }
+        Models { nets, concepts }
     })
+}
+
+/// The models plus the shared MSR Action3D file.
+#[derive(Clone, Copy)]
+struct Fixture {
+    nets: &'static RefineNets,
+    concepts: &'static Concepts,
+    data: &'static MsrAction3D,
+}
+
+/// The fixture, or `None` (the skip recorded for the running test) where the
+/// shared MSR Action3D file is absent.
+fn fixture() -> Option<Fixture> {
+    let path =
+        mp_geom::paths::data_file_or_skip(MsrAction3D::FILE, &mp_geom::paths::current_test_name())?;
+    static D: OnceLock<MsrAction3D> = OnceLock::new();
+    let data = D.get_or_init(|| {
+        MsrAction3D::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    });
+    let m = models();
+    Some(Fixture {
+        nets: &m.nets,
+        concepts: &m.concepts,
+        data,
+    })
+}
+
+/// The fixture, or returns from the test (recording the skip).
+macro_rules! fixture_or_return {
+    () => {
+        match fixture() {
+            Some(f) => f,
+            None => return,
+        }
+    };
 }
 
 #[test]
 fn every_network_matches_pytorch_within_1e_4() {
-    let f = fixture();
+    let f = models();
     let path = f.nets.dir().join("parity.npz");
     let z = Npz::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     for kind in NetKind::ALL {
@@ -93,7 +127,7 @@ fn every_network_matches_pytorch_within_1e_4() {
 
 #[test]
 fn bad_input_gives_typed_errors() {
-    let f = fixture();
+    let f = fixture_or_return!();
     let params = NetRefineParams::default();
     let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
     let coco = Track::new(
@@ -168,7 +202,7 @@ fn bad_input_gives_typed_errors() {
 
 #[test]
 fn injected_jumps_and_jitter_are_found_and_repaired() {
-    let f = fixture();
+    let f = fixture_or_return!();
     let params = NetRefineParams::default();
     let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
     let flaws = [
@@ -248,7 +282,7 @@ fn injected_jumps_and_jitter_are_found_and_repaired() {
 
 #[test]
 fn frozen_frames_are_found_and_refilled() {
-    let f = fixture();
+    let f = fixture_or_return!();
     let params = NetRefineParams::default();
     let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
     let off = NetRefineParams {
@@ -288,7 +322,7 @@ fn frozen_frames_are_found_and_refilled() {
 }
 
 /// Held-out clips (subject 9), every 4th, with full confidence.
-fn heldout(f: &Fixture) -> Vec<(Track, u32)> {
+fn heldout(f: Fixture) -> Vec<(Track, u32)> {
     clips_of_subjects(&f.data, &[9], 8, 180)
         .into_iter()
         .step_by(4)
@@ -303,7 +337,7 @@ fn heldout(f: &Fixture) -> Vec<(Track, u32)> {
 
 #[test]
 fn refining_clean_clips_changes_them_little() {
-    let f = fixture();
+    let f = fixture_or_return!();
     let params = NetRefineParams::default();
     let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
     let clips = heldout(f);
@@ -345,7 +379,7 @@ fn upside_down(t: &Track) -> Track {
 
 #[test]
 fn implausible_anchor_is_repaired() {
-    let f = fixture();
+    let f = fixture_or_return!();
     // The anchor and transition steps alone (no flaw detector).
     let params = NetRefineParams {
         mode: RefineMode::AnchorsAndTransitions,
@@ -382,7 +416,7 @@ fn implausible_anchor_is_repaired() {
 
 #[test]
 fn anchor_only_mode_touches_no_deviation_transition() {
-    let f = fixture();
+    let f = fixture_or_return!();
     let params = NetRefineParams {
         mode: RefineMode::AnchorsOnly,
         ..NetRefineParams::default()
@@ -406,7 +440,7 @@ fn anchor_only_mode_touches_no_deviation_transition() {
 
 #[test]
 fn generator_and_evaluator_run_and_are_seeded() {
-    let f = fixture();
+    let f = models();
     let (a, la) = mp_refine::eval_refine::generate_clips(&f.nets, 2, 7).unwrap();
     let (b, _) = mp_refine::eval_refine::generate_clips(&f.nets, 2, 7).unwrap();
     assert_eq!(a, b);
@@ -424,7 +458,7 @@ fn generated_motion_moves_to_its_concepts_and_gets_closer_to_real() {
     };
     use mp_refine::motion::{from_features, HIP_CENTRE};
     use mp_refine::quality::{accuracy, fid};
-    let f = fixture();
+    let f = fixture_or_return!();
     let params = NetRefineParams::for_generated();
     let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
     // Seed 5: neither the selection seed (1) nor the reported one (0).

@@ -10,10 +10,13 @@ use mp_refine::flaws::{AnchorSource, FootSlide};
 use mp_refine::*;
 use ndarray::Array3;
 
-fn msr() -> MsrAction3D {
-    MsrAction3D::open_default().expect(
-        "MSR Action3D is missing from ../shared/data (msr_action3d/msr_action3d_odd_subjects.npz)",
-    )
+/// The shared MSR Action3D file, or returns from the test (recording the
+/// skip) where it is absent.
+macro_rules! msr_or_return {
+    () => {{
+        let path = mp_geom::data_or_return!(MsrAction3D::FILE);
+        MsrAction3D::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    }};
 }
 
 /// Piecewise-cubic motion with junctions at `knots`, C0-continuous, 3 joints.
@@ -57,7 +60,7 @@ fn segmentation_recovers_known_junctions() {
 
 #[test]
 fn segmentation_of_msr_clip_and_lambda() {
-    let d = msr();
+    let d = msr_or_return!();
     let tr = full_confidence(&d.clip(0).unwrap()).unwrap();
     let mut counts = Vec::new();
     for lambda in [200.0, 2000.0, 20000.0] {
@@ -120,7 +123,7 @@ fn bad_input_is_a_typed_error() {
         ),
         Err(RefineError::TooShort { .. })
     ));
-    let d = msr();
+    let d = msr_or_return!();
     let a = full_confidence(&d.clip(0).unwrap()).unwrap();
     let flaw = Flaw::WrongAnchor {
         half_width_frames: 2,
@@ -157,7 +160,7 @@ fn some_anchors(d: &MsrAction3D) -> Vec<AnchorSample> {
 
 #[test]
 fn clustering_is_deterministic_per_seed_and_serialises() {
-    let d = msr();
+    let d = msr_or_return!();
     let samples = some_anchors(&d);
     let p = ConceptParams::default();
     let a = learn_concepts(&samples, &p).unwrap();
@@ -195,7 +198,7 @@ fn clustering_is_deterministic_per_seed_and_serialises() {
 
 #[test]
 fn flaw_injection_is_deterministic_and_masked() {
-    let d = msr();
+    let d = msr_or_return!();
     let clean = full_confidence(&d.clip(0).unwrap()).unwrap();
     let other = full_confidence(&d.clip(200).unwrap()).unwrap();
     let flaws = [
@@ -239,7 +242,7 @@ const FEW: [usize; 4] = [0, 73, 146, 219];
 
 #[test]
 fn refining_clean_msr_changes_little() {
-    let d = msr();
+    let d = msr_or_return!();
     for i in FEW {
         let clean = full_confidence(&d.clip(i).unwrap()).unwrap();
         let r = refine(&clean, None, &RefineParams::default()).unwrap();
@@ -251,7 +254,7 @@ fn refining_clean_msr_changes_little() {
 
 #[test]
 fn baseline_reduces_frozen_and_jitter_error() {
-    let d = msr();
+    let d = msr_or_return!();
     let p = EvalParams {
         clip_stride: 73,
         max_clips: Some(4),

@@ -12,13 +12,7 @@ use mp_refine::{mpjpe_abs, refine_default, Concepts, RefineError, RefineOptions}
 
 #[test]
 fn refine_default_repairs_an_injected_jump_as_the_hand_built_refiner_does() {
-    let Some(path) = mp_geom::paths::data_file(MsrAction3D::FILE) else {
-        println!(
-            "skipped: the shared {} is absent (set MP_DATA_DIR)",
-            MsrAction3D::FILE
-        );
-        return;
-    };
+    let path = mp_geom::data_or_return!(MsrAction3D::FILE);
     let data = MsrAction3D::open(&path).unwrap();
     let i = (0..data.len())
         .find(|&i| {
