@@ -34,47 +34,47 @@ struct Models {
     concepts: Concepts,
 }
 
+fn load_models() -> Models {
+    let dir = find_model_dir().expect("refinement models missing (models/refine/manifest.json)");
+    let nets = RefineNets::load(&dir, &SessionParams::default()).unwrap_or_else(|e| {
+        panic!(
+            "loading the refinement networks from {}: {e}",
+            dir.display()
+        )
+    });
+    let text = std::fs::read_to_string(dir.join("concepts.json"))
+        .expect("models/refine/concepts.json missing");
+    let concepts = Concepts::from_json(&text).unwrap();
+    Models { nets, concepts }
+}
+
 fn models() -> &'static Models {
     static M: OnceLock<Models> = OnceLock::new();
-    M.get_or_init(|| {
-        let dir =
-            find_model_dir().expect("refinement models missing (models/refine/manifest.json)");
-        let nets = RefineNets::load(&dir, &SessionParams::default()).unwrap_or_else(|e| {
-            panic!(
-                "loading the refinement networks from {}: {e}",
-                dir.display()
-            )
-        });
-        let text = std::fs::read_to_string(dir.join("concepts.json"))
-            .expect("models/refine/concepts.json missing");
-        let concepts = Concepts::from_json(&text).unwrap();
-        Models { nets, concepts }
-    })
+    M.get_or_init(load_models)
 }
 
 /// The models plus the shared MSR Action3D file.
-#[derive(Clone, Copy)]
 struct Fixture {
-    nets: &'static RefineNets,
-    concepts: &'static Concepts,
-    data: &'static MsrAction3D,
+    nets: RefineNets,
+    concepts: Concepts,
+    data: MsrAction3D,
 }
 
 /// The fixture, or `None` (the skip recorded for the running test) where the
 /// shared MSR Action3D file is absent.
-fn fixture() -> Option<Fixture> {
+fn fixture() -> Option<&'static Fixture> {
     let path =
         mp_geom::paths::data_file_or_skip(MsrAction3D::FILE, &mp_geom::paths::current_test_name())?;
-    static D: OnceLock<MsrAction3D> = OnceLock::new();
-    let data = D.get_or_init(|| {
-        MsrAction3D::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-    });
-    let m = models();
-    Some(Fixture {
-        nets: &m.nets,
-        concepts: &m.concepts,
-        data,
-    })
+    static F: OnceLock<Fixture> = OnceLock::new();
+    Some(F.get_or_init(|| {
+        let Models { nets, concepts } = load_models();
+        let data = MsrAction3D::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        Fixture {
+            nets,
+            concepts,
+            data,
+        }
+    }))
 }
 
 /// The fixture, or returns from the test (recording the skip).
@@ -322,7 +322,7 @@ fn frozen_frames_are_found_and_refilled() {
 }
 
 /// Held-out clips (subject 9), every 4th, with full confidence.
-fn heldout(f: Fixture) -> Vec<(Track, u32)> {
+fn heldout(f: &Fixture) -> Vec<(Track, u32)> {
     clips_of_subjects(&f.data, &[9], 8, 180)
         .into_iter()
         .step_by(4)
