@@ -1,6 +1,6 @@
 //! Synthesis on real motion (a slice of a CMU salsa take at 30 fps):
 //! determinism, shapes, seams, regeneration, BVH output, and the whole
-//! pipeline through its JSON files.
+//! pipeline through its JSON files. Skipped where the shared data are absent.
 
 use mp_geom::io::bvh::{Bvh, BvhTrackParams};
 use mp_geom::Track;
@@ -15,13 +15,19 @@ use mp_grammar::{
 
 const SEG: usize = 15;
 
-fn salsa_bvh(frames: usize) -> Bvh {
-    let path = mp_geom::paths::data_file("cmu_salsa_bvh/60_01_scaled.bvh")
-        .expect("shared data cmu_salsa_bvh/60_01_scaled.bvh is missing");
-    subsample_bvh(&Bvh::read(path).unwrap(), 4)
-        .unwrap()
-        .slice_frames(0, frames)
-        .unwrap()
+/// The salsa take's first `frames` frames at 30 fps, or `None` (the skip
+/// recorded for the running test) where the shared data are absent.
+fn salsa_bvh(frames: usize) -> Option<Bvh> {
+    let path = mp_geom::paths::data_file_or_skip(
+        "cmu_salsa_bvh/60_01_scaled.bvh",
+        &mp_geom::paths::current_test_name(),
+    )?;
+    Some(
+        subsample_bvh(&Bvh::read(path).unwrap(), 4)
+            .unwrap()
+            .slice_frames(0, frames)
+            .unwrap(),
+    )
 }
 
 /// Segments of 15 frames labelled a b c d a b c d …
@@ -55,15 +61,15 @@ struct Fixture {
     symbols: SymbolString,
 }
 
-fn fixture() -> Fixture {
-    let bvh = salsa_bvh(300);
+fn fixture() -> Option<Fixture> {
+    let bvh = salsa_bvh(300)?;
     let track = bvh.to_track(&BvhTrackParams::default()).unwrap();
     let symbols = round_robin(300, 4);
-    Fixture {
+    Some(Fixture {
         bvh,
         track,
         symbols,
-    }
+    })
 }
 
 fn grammar() -> Grammar {
@@ -85,7 +91,9 @@ fn stitcher(f: &Fixture, bvh: bool, blend: usize) -> Stitcher {
 
 #[test]
 fn synthesis_is_seeded_and_well_formed() {
-    let f = fixture();
+    let Some(f) = fixture() else {
+        return;
+    };
     let g = grammar();
     for bvh in [false, true] {
         let st = stitcher(&f, bvh, 8);
@@ -128,7 +136,9 @@ fn synthesis_is_seeded_and_well_formed() {
 
 #[test]
 fn blending_never_widens_seams() {
-    let f = fixture();
+    let Some(f) = fixture() else {
+        return;
+    };
     let g = grammar();
     let d = DeriveParams::default();
     for bvh in [false, true] {
@@ -177,7 +187,9 @@ fn blending_never_widens_seams() {
 
 #[test]
 fn regeneration_changes_only_the_subtree() {
-    let f = fixture();
+    let Some(f) = fixture() else {
+        return;
+    };
     let g = grammar();
     let d = DeriveParams::default();
     for bvh in [false, true] {
@@ -241,7 +253,9 @@ fn regeneration_changes_only_the_subtree() {
 
 #[test]
 fn bvh_output_parses_back_with_the_input_hierarchy() {
-    let f = fixture();
+    let Some(f) = fixture() else {
+        return;
+    };
     let st = stitcher(&f, true, 8);
     let s = st
         .synthesize(&grammar(), &DeriveParams::default(), 10, 5)
@@ -262,8 +276,7 @@ fn bvh_output_parses_back_with_the_input_hierarchy() {
 /// JSON round trip of the model, and synthesis from the reloaded model.
 #[test]
 fn pipeline_on_salsa() {
-    let path = mp_geom::paths::data_file("cmu_salsa_bvh/60_01_scaled.bvh")
-        .expect("shared data cmu_salsa_bvh/60_01_scaled.bvh is missing");
+    let path = mp_geom::data_or_return!("cmu_salsa_bvh/60_01_scaled.bvh");
     let motion = read_motions(&[path], 4).unwrap();
     let mut p = PipelineParams::default();
     p.symbols.k = 6;
