@@ -27,8 +27,7 @@ fn p(path: &Path) -> &str {
 
 #[test]
 fn symbols_learn_synth_round_trip() {
-    let src = mp_geom::paths::data_file("cmu_salsa_bvh/60_02_scaled.bvh")
-        .expect("shared data cmu_salsa_bvh/60_02_scaled.bvh is missing");
+    let src = mp_geom::data_or_return!("cmu_salsa_bvh/60_02_scaled.bvh");
     let dir = tempfile::tempdir().unwrap();
     // A 1,800-frame slice (15 s at 120 fps) as the input.
     let slice = dir.path().join("slice.bvh");

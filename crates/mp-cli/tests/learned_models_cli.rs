@@ -4,8 +4,9 @@
 //! ar` (through the Penn Action or MSR Action3D model and back), `mp statue`
 //! and `mp refine` (through the 20 MSR joints and back). The output tracks
 //! must have the input's skeleton, the requested frames and finite values
-//! near the observed motion. Skipped, with a message, where the shared video
-//! or ONNX Runtime and the pose models are absent.
+//! near the observed motion. Skipped where the shared video is absent (the
+//! skip recorded through the shared-data helper), and with a message where
+//! ONNX Runtime and the pose models are absent.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -41,22 +42,27 @@ fn run_ok(cmd: &mut Command) -> String {
     text(&out)
 }
 
-/// The golf swing's first 60 frames as `(BlazePose 2D, BlazePose world, COCO-17 2D)`
-/// track files, or why they cannot be made here.
-fn extracted() -> Result<&'static (tempfile::TempDir, [PathBuf; 3]), &'static str> {
+/// The shared golf swing video (`golfdb/golf_swing.mp4`); where it is absent
+/// the test records its skip and returns.
+macro_rules! video_or_return {
+    () => {
+        mp_geom::data_or_return!("golfdb/golf_swing.mp4")
+    };
+}
+
+/// The first 60 frames of `video` (the golf swing) as `(BlazePose 2D,
+/// BlazePose world, COCO-17 2D)` track files, or why they cannot be made here.
+fn extracted(video: &Path) -> Result<&'static (tempfile::TempDir, [PathBuf; 3]), &'static str> {
     static TRACKS: OnceLock<Result<(tempfile::TempDir, [PathBuf; 3]), String>> = OnceLock::new();
     TRACKS
         .get_or_init(|| {
-            let video = mp_geom::paths::data_file("golfdb/golf_swing.mp4").ok_or_else(|| {
-                "the shared video golfdb/golf_swing.mp4 is absent (set MP_DATA_DIR)".to_string()
-            })?;
             let dir = tempfile::tempdir().unwrap();
             let names = ["blazepose.npz", "world.npz", "coco.npz"];
             let extra: [&[&str]; 3] = [&[], &["--world"], &["--coco17"]];
             for (name, extra) in names.iter().zip(extra) {
                 let out = mp()
                     .arg("extract")
-                    .arg(&video)
+                    .arg(video)
                     .arg("-o")
                     .arg(dir.path().join(name))
                     .args(["--max-frames", &FRAMES.to_string(), "--quiet"])
@@ -123,7 +129,8 @@ fn predict(input: &Path, out: &Path) -> String {
 
 #[test]
 fn extracted_tracks_are_forecast_on_their_own_skeleton() {
-    let (dir, tracks) = match extracted() {
+    let video = video_or_return!();
+    let (dir, tracks) = match extracted(&video) {
         Ok(t) => t,
         Err(why) => {
             println!("skipped: {why}");
@@ -162,7 +169,8 @@ fn extracted_tracks_are_forecast_on_their_own_skeleton() {
 
 #[test]
 fn extracted_world_landmarks_are_refined_on_their_own_skeleton() {
-    let (dir, tracks) = match extracted() {
+    let video = video_or_return!();
+    let (dir, tracks) = match extracted(&video) {
         Ok(t) => t,
         Err(why) => {
             println!("skipped: {why}");

@@ -35,8 +35,7 @@ fn run_refine(input: &Path, output: &Path, report: &Path, extra: &[&str]) -> Str
 
 #[test]
 fn refine_repairs_an_injected_jump_and_rejects_a_useless_flag_set() {
-    let data = MsrAction3D::open_default()
-        .expect("shared data: msr_action3d/msr_action3d_odd_subjects.npz (set MP_DATA_DIR)");
+    let data = MsrAction3D::open(mp_geom::data_or_return!(MsrAction3D::FILE)).unwrap();
     // the first usable clip of held-out subject 9
     let i = (0..data.len())
         .find(|&i| {
@@ -155,8 +154,7 @@ fn refine_generated_moves_flawed_anchors_to_concepts() {
 
 #[test]
 fn concepts_from_a_folder_with_each_clustering_method() {
-    let data = MsrAction3D::open_default()
-        .expect("shared data: msr_action3d/msr_action3d_odd_subjects.npz (set MP_DATA_DIR)");
+    let data = MsrAction3D::open(mp_geom::data_or_return!(MsrAction3D::FILE)).unwrap();
     // Six clips of action 5 (forward punch) as track files.
     let tmp = tempfile::tempdir().unwrap();
     let folder = tmp.path().join("punch");

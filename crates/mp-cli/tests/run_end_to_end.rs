@@ -17,14 +17,6 @@ fn mp() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mp"))
 }
 
-fn data(rel: &str) -> PathBuf {
-    mp_geom::paths::data_file(rel).unwrap_or_else(|| {
-        panic!(
-            "shared data file `{rel}` not found: these tests need ../shared/data (or MP_DATA_DIR) with {rel}"
-        )
-    })
-}
-
 fn run_ok(cmd: &mut Command) -> Output {
     let out = cmd.output().expect("cannot start the mp binary");
     assert!(
@@ -37,22 +29,25 @@ fn run_ok(cmd: &mut Command) -> Output {
     out
 }
 
-/// One run of `mp run` on the first 60 frames of the golf swing, shared by the tests below.
-fn golf_run() -> &'static Path {
+/// One run of `mp run` on the first 60 frames of the golf swing, shared by the tests below;
+/// `None` (the skip recorded for the running test) where the shared video is absent.
+fn golf_run() -> Option<&'static Path> {
+    let video = mp_geom::paths::data_file_or_skip(
+        "golfdb/golf_swing.mp4",
+        &mp_geom::paths::current_test_name(),
+    )?;
     static RUN: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
     let (_, dir) = RUN.get_or_init(|| {
         let tmp = tempfile::tempdir().unwrap();
         let dir = tmp.path().join("golf");
-        run_ok(
-            mp().arg("run")
-                .arg(data("golfdb/golf_swing.mp4"))
-                .arg("--out")
-                .arg(&dir)
-                .args(["--max-frames", &GOLF_FRAMES.to_string(), "--quiet"]),
-        );
+        run_ok(mp().arg("run").arg(&video).arg("--out").arg(&dir).args([
+            "--max-frames",
+            &GOLF_FRAMES.to_string(),
+            "--quiet",
+        ]));
         (tmp, dir)
     });
-    dir
+    Some(dir)
 }
 
 /// Names left in a folder that look like temporary or partial files.
@@ -211,7 +206,9 @@ fn check_outputs(dir: &Path, frames: usize, joints: usize, video: bool) -> (Trac
 
 #[test]
 fn run_on_golf_clip_writes_consistent_outputs() {
-    let dir = golf_run();
+    let Some(dir) = golf_run() else {
+        return;
+    };
     let (track, _) = check_outputs(dir, GOLF_FRAMES, 17, true);
     assert_eq!(track.skeleton().name, "coco17");
     assert!((track.fps() - 29.97).abs() < 0.01);
@@ -240,7 +237,7 @@ fn run_on_golf_clip_writes_consistent_outputs() {
 fn run_on_track_file() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("out");
-    let input = data("reference_keypoints/027_fitness.npz");
+    let input = mp_geom::data_or_return!("reference_keypoints/027_fitness.npz");
     let out = run_ok(mp().arg("run").arg(&input).arg("--out").arg(&dir).args([
         "--max-frames",
         "90",
@@ -317,7 +314,7 @@ fn interrupted_run_leaves_no_partial_files() {
     let dir = tmp.path().join("out");
     let mut child = mp()
         .arg("run")
-        .arg(data("golfdb/golf_swing.mp4"))
+        .arg(mp_geom::data_or_return!("golfdb/golf_swing.mp4"))
         .arg("--out")
         .arg(&dir)
         .arg("--quiet")
@@ -414,7 +411,9 @@ fn chromium(page: &Path, profile: &Path, extra: &[&str]) -> Output {
 
 #[test]
 fn report_renders_in_headless_chromium() {
-    let dir = golf_run();
+    let Some(dir) = golf_run() else {
+        return;
+    };
     let page = dir.join("report.html");
     let tmp = tempfile::tempdir().unwrap();
 
