@@ -130,7 +130,9 @@ fn record_skip(rel: &Path, test: &str) {
             .append(true)
             .open(log)
         {
-            let _ = writeln!(f, "{test}\t{rel}");
+            // One write per line (an O_APPEND write is atomic), so lines of
+            // tests skipping in parallel never interleave.
+            let _ = f.write_all(format!("{test}\t{rel}\n").as_bytes());
         }
     }
 }
