@@ -10,6 +10,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[3]
 
 
 def _data_dir():
+    if os.environ.get("MP_NO_SHARED_DATA", "") not in ("", "0"):
+        return None
     env = os.environ.get("MP_DATA_DIR")
     if env and pathlib.Path(env).is_dir():
         return pathlib.Path(env)
