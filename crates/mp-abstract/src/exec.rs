@@ -40,7 +40,7 @@ pub struct ExecParams {
     /// Loop replay mode for deterministic execution.
     pub replay: LoopReplay,
     /// Covariance jitter added to the diagonal before sampling (in squared units), so that
-    /// singular covariances (few iterations) can be sampled. Default 1e-9.
+    /// singular covariances (few iterations) can be sampled. Finite and ≥ 0. Default 1e-9.
     pub jitter: f64,
 }
 
@@ -51,6 +51,20 @@ impl Default for ExecParams {
             replay: LoopReplay::Mean,
             jitter: 1e-9,
         }
+    }
+}
+
+impl ExecParams {
+    /// Checks every field: the fit parameters ([`FitParams::validate`]; their
+    /// `unit_scale` is not checked since execution uses the program's) and
+    /// `jitter` finite and ≥ 0.
+    pub fn validate(&self) -> Result<()> {
+        FitParams {
+            unit_scale: 1.0,
+            ..self.fit.clone()
+        }
+        .validate()?;
+        AbstractError::check_non_negative("jitter", self.jitter)
     }
 }
 
@@ -314,6 +328,7 @@ pub fn check_output_frames(prog: &AbstractProgram, frames: f64) -> Result<usize>
 
 /// Deterministic execution (loop bodies at their means, or replayed as observed).
 pub fn execute(prog: &AbstractProgram, params: &ExecParams) -> Result<Track> {
+    params.validate()?;
     prog.validate()?;
     check_output_frames(prog, output_frames_bound(prog, params.replay, false))?;
     let prims = flatten(prog, params.replay)?;
@@ -323,10 +338,8 @@ pub fn execute(prog: &AbstractProgram, params: &ExecParams) -> Result<Track> {
 /// Stochastic execution with a seed: each loop iteration samples its
 /// start/mid/end points and duration. The same seed gives the same track.
 pub fn sample(prog: &AbstractProgram, seed: u64, params: &ExecParams) -> Result<Track> {
+    params.validate()?;
     prog.validate()?;
-    if !(params.jitter.is_finite() && params.jitter >= 0.0) {
-        return Err(AbstractError::param("jitter", "must be finite and ≥ 0"));
-    }
     check_output_frames(prog, output_frames_bound(prog, params.replay, true))?;
     let prims = flatten_sampled(prog, seed, params.jitter)?;
     render(&prims, prog, &fit_for(prog, params))

@@ -45,6 +45,20 @@ impl Default for AbstractParams {
     }
 }
 
+impl AbstractParams {
+    /// Checks every field: the synthesis parameters ([`SynthParams::validate`])
+    /// and the loop parameters ([`LoopParams::validate`]; their `unit_scale`
+    /// is not checked since the analysis replaces it).
+    pub fn validate(&self) -> Result<()> {
+        self.synth.validate()?;
+        LoopParams {
+            unit_scale: 1.0,
+            ..self.loops.clone()
+        }
+        .validate()
+    }
+}
+
 /// Everything the analysis of one track produces.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Analysis {
@@ -84,7 +98,15 @@ pub fn from_concrete(
 }
 
 /// Track → concrete program → abstract program, loops and repetition intervals.
+///
+/// Errors on parameters that [`AbstractParams::validate`] rejects.
 pub fn analyze(track: &Track, params: &AbstractParams) -> Result<Analysis> {
+    params.validate()?;
+    analyze_valid(track, params)
+}
+
+/// [`analyze`] with parameters already validated.
+fn analyze_valid(track: &Track, params: &AbstractParams) -> Result<Analysis> {
     let syn = synthesize_detailed(track, &params.synth)?;
     analyze_synthesis(syn, &params.loops)
 }
@@ -179,10 +201,11 @@ pub struct PredictParams {
     /// Analysis of the observed frames.
     pub analysis: AbstractParams,
     /// A loop is used only when the frames observed after its end amount to at
-    /// most this many iteration periods (otherwise the motion has moved on). Default 1.5.
+    /// most this many iteration periods (otherwise the motion has moved on).
+    /// Finite and ≥ 0. Default 1.5.
     pub max_tail_periods: f64,
     /// The offset between the last observed pose and the unrolled loop decays
-    /// to zero over this many periods. Default 1.
+    /// to zero over this many periods (at least one frame). Finite and ≥ 0. Default 1.
     pub offset_decay_periods: f64,
     /// What an unrolled iteration executes. Default [`UnrollSource::LastIteration`].
     pub source: UnrollSource,
@@ -212,7 +235,7 @@ pub struct PeriodFallback {
     /// Period estimation (defaults of [`PeriodParams`]).
     pub period: PeriodParams,
     /// Smallest normalised autocorrelation at the period for the motion to
-    /// count as repetitive. Default 0.5.
+    /// count as repetitive, in [0, 1]. Default 0.5.
     pub min_strength: f64,
 }
 
@@ -225,7 +248,36 @@ impl Default for PeriodFallback {
     }
 }
 
+impl PredictParams {
+    /// Checks every field: the analysis ([`AbstractParams::validate`]),
+    /// `max_tail_periods` and `offset_decay_periods` finite and ≥ 0, and the
+    /// fallbacks when enabled.
+    pub fn validate(&self) -> Result<()> {
+        self.analysis.validate()?;
+        AbstractError::check_non_negative("max_tail_periods", self.max_tail_periods)?;
+        AbstractError::check_non_negative("offset_decay_periods", self.offset_decay_periods)?;
+        if let Some(fb) = &self.period_fallback {
+            fb.validate()?;
+        }
+        if let Some(sm) = &self.self_match {
+            sm.validate()?;
+        }
+        Ok(())
+    }
+}
+
 impl PeriodFallback {
+    /// Checks every field: `min_strength` in [0, 1] and the period parameters.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.min_strength.is_finite() && (0.0..=1.0).contains(&self.min_strength)) {
+            return Err(AbstractError::param(
+                "min_strength",
+                format!("must be in [0, 1], got {}", self.min_strength),
+            ));
+        }
+        self.period.validate()
+    }
+
     /// The `horizon` frames after `obs` by repeating its last period, with
     /// the estimate used; `None` when the motion is not clearly periodic.
     pub fn unroll(&self, obs: &Track, horizon: usize) -> Result<Option<(Track, PeriodEstimate)>> {
@@ -408,6 +460,7 @@ pub fn predict(
     horizon: usize,
     params: &PredictParams,
 ) -> Result<Prediction> {
+    params.validate()?;
     if horizon == 0 {
         return Err(AbstractError::param("horizon", "must be ≥ 1"));
     }
@@ -449,7 +502,7 @@ pub fn predict(
             self_match: None,
         })
     };
-    let analysis = match analyze(&obs, &params.analysis) {
+    let analysis = match analyze_valid(&obs, &params.analysis) {
         Ok(a) => a,
         Err(AbstractError::Empty(_)) => return constant(),
         Err(e) => return Err(e),

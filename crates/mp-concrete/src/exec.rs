@@ -64,10 +64,26 @@ pub enum Transition {
 /// Parameters of [`Program::execute_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ExecParams {
-    /// Output frame rate; `None` = the program's own rate (one output frame per program frame).
+    /// Output frame rate, finite and > 0; `None` = the program's own rate
+    /// (one output frame per program frame).
     pub fps_out: Option<f64>,
     /// Between-segment behaviour.
     pub transition: Transition,
+}
+
+impl ExecParams {
+    /// Checks every field: `fps_out`, when given, finite and > 0.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(f) = self.fps_out {
+            if !(f.is_finite() && f > 0.0) {
+                return Err(ConcreteError::param(
+                    "fps_out",
+                    format!("must be finite and > 0, got {f}"),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Program {
@@ -153,14 +169,10 @@ impl Program {
     /// The track at `params.fps_out`: frames at times `k / fps_out` for all
     /// `k` with `k / fps_out ≤ (T − 1) / fps`.
     pub fn execute_with(&self, params: &ExecParams) -> Result<Track> {
+        params.validate()?;
         self.validate()?;
+        // The program's own fps is finite and > 0 (checked by `validate`).
         let fps_out = params.fps_out.unwrap_or(self.fps);
-        if !(fps_out.is_finite() && fps_out > 0.0) {
-            return Err(ConcreteError::param(
-                "fps_out",
-                format!("must be finite and > 0, got {fps_out}"),
-            ));
-        }
         let last = (self.n_frames() - 1) as f64;
         let ratio = self.fps / fps_out;
         let n_out_f = (last / ratio + 1e-9).floor() + 1.0;

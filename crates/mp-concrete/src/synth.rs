@@ -33,7 +33,7 @@
 //!   window with no such joint gets `max_ref`). A segment `k..n` pays the λ
 //!   of its last frame `n − 1`.
 
-use mp_geom::fit::{fit_best, ErrorNorm, FitParams};
+use mp_geom::fit::{fit_best_unchecked, ErrorNorm, FitParams};
 use mp_geom::{Primitive, Track};
 use ndarray::{s, Array2};
 use rayon::prelude::*;
@@ -433,8 +433,8 @@ fn segment_cost(
         if prep.prefix_valid[ji][n] == prep.prefix_valid[ji][k] {
             continue; // joint unobserved in this segment: no evidence, no cost
         }
-        let f =
-            fit_best(pts.slice(s![k..n, ..]), Some(&prep.weights[ji][k..n]), fit).map_err(|e| {
+        let f = fit_best_unchecked(pts.slice(s![k..n, ..]), Some(&prep.weights[ji][k..n]), fit)
+            .map_err(|e| {
                 ConcreteError::Track(format!(
                     "fitting joint `{}` on frames {k}..{n}: {e}",
                     joint_name(track, ji)
@@ -486,7 +486,7 @@ fn fit_segment(
         .map(|(ji, pts)| {
             let observed = prep.prefix_valid[ji][n] > prep.prefix_valid[ji][k];
             let w = observed.then(|| &prep.weights[ji][k..n]);
-            fit_best(pts.slice(s![k..n, ..]), w, fit)
+            fit_best_unchecked(pts.slice(s![k..n, ..]), w, fit)
                 .map(|f| f.primitive)
                 .map_err(|e| {
                     ConcreteError::Track(format!(
@@ -498,6 +498,15 @@ fn fit_segment(
         .collect()
 }
 
+/// The fit parameters at the track's `unit_scale`, validated once here: the
+/// DP then fits every candidate segment with [`fit_best_unchecked`].
+fn scaled_fit(params: &SynthParams, unit_scale: f64) -> Result<FitParams> {
+    let mut fit = params.fit.clone();
+    fit.unit_scale = unit_scale;
+    fit.validate()?;
+    Ok(fit)
+}
+
 /// The DP's cost table for a track: `cost(k, n)` = Σ over joints of the best
 /// fit error on frames `k..n` + λ of frame `n − 1` (track units), for every
 /// segment of at most `max_segment_frames` frames. [`synthesize`] segments
@@ -506,8 +515,7 @@ pub fn segment_costs(track: &Track, params: &SynthParams) -> Result<CostTable> {
     params.validate()?;
     let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
     let unit_scale = params.unit_scale(track);
-    let mut fit = params.fit.clone();
-    fit.unit_scale = unit_scale;
+    let fit = scaled_fit(params, unit_scale)?;
     let lambda = lambda_per_frame(track, params, unit_scale);
     cost_table(&prep, &fit, track, &lambda, params.max_segment_frames)
 }
@@ -517,8 +525,7 @@ pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthe
     params.validate()?;
     let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
     let unit_scale = params.unit_scale(track);
-    let mut fit = params.fit.clone();
-    fit.unit_scale = unit_scale;
+    let fit = scaled_fit(params, unit_scale)?;
     let lambda = lambda_per_frame(track, params, unit_scale);
     let table = cost_table(&prep, &fit, track, &lambda, params.max_segment_frames)?;
     let segmentation = segment_table(&table)?;

@@ -92,7 +92,7 @@ pub struct StitchParams {
     /// Cross-fade length at each seam, frames; 0 = no blending. Default 8
     /// (0.27 s at 30 fps).
     pub blend_frames: usize,
-    /// Root translation alignment. Default [`RootAlignment::Auto`].
+    /// Root translation alignment (explicit axes distinct). Default [`RootAlignment::Auto`].
     pub root_alignment: RootAlignment,
     /// Pose distance for choosing segments (should be the one the symbols
     /// were found with). Default: [`PoseDistanceParams::default`].
@@ -109,6 +109,28 @@ impl Default for StitchParams {
             distance: PoseDistanceParams::default(),
             first_segment: FirstSegment::Random,
         }
+    }
+}
+
+impl StitchParams {
+    /// Checks every field: explicit root-alignment axes distinct, and an
+    /// explicit joint list of the pose distance non-empty. (Axes beyond the
+    /// motion's dimensions are caught by [`Stitcher::new`], which knows them.)
+    pub fn validate(&self) -> Result<()> {
+        if let RootAlignment::Axes(axes) = &self.root_alignment {
+            for (i, a) in axes.iter().enumerate() {
+                if axes[..i].contains(a) {
+                    return Err(GrammarError::param(
+                        "root_alignment",
+                        format!("axis {a} is listed twice"),
+                    ));
+                }
+            }
+        }
+        if self.distance.joints.as_ref().is_some_and(|j| j.is_empty()) {
+            return Err(GrammarError::param("distance.joints", "empty joint list"));
+        }
+        Ok(())
     }
 }
 
@@ -341,6 +363,7 @@ impl Stitcher {
         symbols: &SymbolString,
         params: &StitchParams,
     ) -> Result<Self> {
+        params.validate()?;
         let t_len = track.n_frames();
         if symbols.n_frames != t_len {
             return Err(GrammarError::Invalid(format!(
@@ -964,6 +987,31 @@ pub fn mean_run_length(symbols: &[usize]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stitch_params_reject_bad_fields() {
+        assert!(StitchParams::default().validate().is_ok());
+        let p = StitchParams {
+            root_alignment: RootAlignment::Axes(vec![0, 2, 0]),
+            ..StitchParams::default()
+        };
+        assert!(matches!(
+            p.validate(),
+            Err(GrammarError::InvalidParam {
+                name: "root_alignment",
+                ..
+            })
+        ));
+        let mut p = StitchParams::default();
+        p.distance.joints = Some(Vec::new());
+        assert!(matches!(
+            p.validate(),
+            Err(GrammarError::InvalidParam {
+                name: "distance.joints",
+                ..
+            })
+        ));
+    }
 
     #[test]
     fn weights_fall_from_one_to_zero() {

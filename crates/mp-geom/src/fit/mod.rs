@@ -527,6 +527,17 @@ pub fn fit_best(
     params: &FitParams,
 ) -> Result<Fit> {
     params.validate()?;
+    fit_best_unchecked(points, weights, params)
+}
+
+/// [`fit_best`] without [`FitParams::validate`]: for callers that fit many
+/// segments with the same parameters and validated them once beforehand.
+/// Parameters that `validate` rejects give unspecified (but memory-safe) results.
+pub fn fit_best_unchecked(
+    points: ArrayView2<'_, f64>,
+    weights: Option<&[f64]>,
+    params: &FitParams,
+) -> Result<Fit> {
     let s = input::check("fit_best", points, weights)?;
     let scale = params.unit_scale;
     let allowed = |k: PrimitiveKind| params.kinds.contains(&k);
