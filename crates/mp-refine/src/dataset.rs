@@ -358,7 +358,7 @@ impl TrainingSet {
                 std::fs::create_dir_all(dir).map_err(|e| GeomError::io(dir, e))?;
             }
         }
-        std::fs::write(path, bytes).map_err(|e| GeomError::io(path, e))?;
+        mp_geom::io::write_atomic(path, &bytes)?;
         Ok(())
     }
 }
@@ -777,7 +777,7 @@ impl FlawSet {
                 std::fs::create_dir_all(dir).map_err(|e| GeomError::io(dir, e))?;
             }
         }
-        std::fs::write(path, bytes).map_err(|e| GeomError::io(path, e))?;
+        mp_geom::io::write_atomic(path, &bytes)?;
         Ok(())
     }
 }

@@ -192,7 +192,7 @@ pub fn concepts_cmd(a: &ConceptsArgs) -> anyhow::Result<()> {
             ac.score_threshold
         );
     }
-    std::fs::write(&a.output, concepts.to_json()?)
+    mp_geom::io::write_atomic(&a.output, concepts.to_json()?.as_bytes())
         .with_context(|| format!("writing {}", a.output.display()))?;
     Ok(())
 }

@@ -233,7 +233,7 @@ fn finish(a: &RefineArgs, r: &MappedRefinement, track: &Track) -> anyhow::Result
     println!("mean joint change: {:.1} mm", change * 1e3);
     write_track(&a.output, &r.track).with_context(|| format!("writing {}", a.output.display()))?;
     if let Some(p) = &a.report {
-        std::fs::write(p, serde_json::to_string_pretty(&r.msr.report)?)
+        mp_geom::io::write_atomic(p, serde_json::to_string_pretty(&r.msr.report)?.as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())
