@@ -254,6 +254,11 @@ pub fn count_repetitions(
     params: &CountParams,
 ) -> Result<Counts> {
     params.validate()?;
+    count_checked(signal, kind, params)
+}
+
+/// [`count_repetitions`] with parameters already validated.
+fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Result<Counts> {
     let n = signal.n_frames();
     let fps = signal.fps();
     if n < 4 || signal.valid_count() == 0 {
@@ -349,11 +354,11 @@ pub fn count_signals(
         if found_fraction(k) >= params.min_found_fraction {
             let mut filled = k.clone();
             filled.fill_missing();
-            consider(count_repetitions(&filled, CountSignal::Keypoints, params)?);
+            consider(count_checked(&filled, CountSignal::Keypoints, params)?);
         }
     }
     if let Some(f) = frames {
-        consider(count_repetitions(f, CountSignal::Frames, params)?);
+        consider(count_checked(f, CountSignal::Frames, params)?);
     }
     match best {
         Some(b) => Ok(b),

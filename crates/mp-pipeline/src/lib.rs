@@ -98,9 +98,11 @@ pub fn analyse_input(
     observer: &dyn Observer,
     cancel: &CancelToken,
 ) -> Result<Outcome> {
+    params.validate()?;
     analyse_with(input, params, observer, cancel, &mut ModelSlot::default())
 }
 
+/// [`analyse_input`] with validated parameters and the caller's pose model.
 fn analyse_with(
     input: Input,
     params: &Params,
@@ -108,7 +110,6 @@ fn analyse_with(
     cancel: &CancelToken,
     slot: &mut ModelSlot,
 ) -> Result<Outcome> {
-    params.validate()?;
     let start = Instant::now();
     let mut timings = Timings::new(observer);
     let kp =
@@ -213,6 +214,7 @@ pub fn run(
     observer: &dyn Observer,
     cancel: &CancelToken,
 ) -> Result<RunSummary> {
+    params.validate()?;
     run_with(
         input,
         out_dir,
@@ -223,6 +225,7 @@ pub fn run(
     )
 }
 
+/// [`run`] with validated parameters and the caller's pose model.
 pub(crate) fn run_with(
     input: Input,
     out_dir: &Path,
@@ -231,7 +234,6 @@ pub(crate) fn run_with(
     cancel: &CancelToken,
     slot: &mut ModelSlot,
 ) -> Result<RunSummary> {
-    params.validate()?;
     let start = Instant::now();
     let mut timings = Timings::new(observer);
     let keep = Keep {
