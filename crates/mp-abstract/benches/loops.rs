@@ -1,5 +1,6 @@
 //! Loop detection on 1k / 10k / 100k primitives (13 joints, 2D): a
 //! repeating body of 3 with noise, interleaved with non-repeating stretches.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use mp_abstract::loops::{detect_loops, LoopParams};

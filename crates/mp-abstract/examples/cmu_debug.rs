@@ -1,4 +1,5 @@
 //! Prints the concrete segmentation and loops of a CMU mocap6 feature file.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 use mp_abstract::{analyze, AbstractParams};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args().nth(1).ok_or("usage: cmu_debug FILE")?;

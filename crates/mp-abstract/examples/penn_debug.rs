@@ -1,5 +1,6 @@
 //! Prints the segmentation, loop scores and loops of one Penn Action clip.
 //! `cargo run --release -p mp-abstract --example penn_debug -- PENN.npz CLIP_INDEX`
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 use mp_abstract::{analyze, AbstractParams};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);

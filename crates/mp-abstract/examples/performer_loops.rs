@@ -1,6 +1,7 @@
 //! Detects the repetitions of the procedural performer and prints them next to the ground truth.
 //!
 //! `cargo run --release -p mp-abstract --example performer_loops`
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
 use mp_abstract::{analyze, AbstractParams};
 use mp_geom::performer::{perform, PerformerParams};

@@ -1,4 +1,5 @@
 //! Prints what prediction by unrolling does on a jumping-jack performer.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 use mp_abstract::{analyze, predict, AbstractParams, PredictParams};
 use mp_geom::performer::{perform, Move, PerformerParams};
 

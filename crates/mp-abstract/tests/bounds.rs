@@ -1,5 +1,6 @@
 //! Absurd user-given sizes (iterations, loop parameters) are a typed error
 //! naming the parameter, never an allocation failure.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::edit::{set_iterations, MAX_ITERATIONS};
 use mp_abstract::exec::{execute, output_frames_bound, sample, ExecParams, LoopReplay};

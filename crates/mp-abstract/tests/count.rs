@@ -1,5 +1,6 @@
 //! The counting API: synthetic recordings with known counts, the choice
 //! between keypoints and frames, and bad input.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::{
     count_repetitions, count_signals, CountMethod, CountParams, CountSignal, PeriodParams,

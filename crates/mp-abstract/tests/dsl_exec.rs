@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 use mp_abstract::dsl::{parse, print, print_with, PrintOptions};
 use mp_abstract::edit::{drop_iteration, repeat_iteration, set_iterations};
 use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};

@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 use mp_abstract::loops::{detect_loops, window_score, LoopParams};
 use mp_abstract::model::DetPrim;
 use mp_abstract::synth::{fit_loop, synthesize};

@@ -1,5 +1,6 @@
 //! Every params type of the pipeline rejects NaN and negative fields at its
 //! public entry point with the parameter error naming the field.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::exec::{execute, sample, ExecParams};
 use mp_abstract::{

@@ -1,6 +1,7 @@
 //! Abstract programs read from JSON are validated: a wrong shape, a
 //! non-finite value or a bad duration gives a typed error that names the
 //! file and the field.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::path::PathBuf;
 

@@ -1,5 +1,6 @@
 //! Repetition counting and the repetition segmenter: synthetic tracks with
 //! known counts and intervals, bad input, and real data.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::repetition::{
     estimate_period, iou, segment_repetitions, JointSelection, PeriodParams, SegmentParams,

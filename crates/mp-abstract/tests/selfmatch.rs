@@ -1,5 +1,6 @@
 //! Self-match unrolling: synthetic tracks with about one observed cycle,
 //! tracks that must not be replayed, and bad parameters.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::pipeline::predict_constant;
 use mp_abstract::{predict, AbstractError, PredictMethod, PredictParams};

@@ -1,5 +1,6 @@
 //! Absurd sizes on the command line end with exit code 1 and a message
 //! naming the parameter, never an allocation abort (a signal).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::process::{Command, Output};
 

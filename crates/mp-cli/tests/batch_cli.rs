@@ -1,6 +1,7 @@
 //! `mp batch` through the built binary on a small folder of procedural
 //! performer tracks (written by `mp performer -o`) and a corrupt file: the
 //! manifest, the exit status, the summary and a re-run that skips.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::path::Path;
 use std::process::{Command, Output};

@@ -1,6 +1,7 @@
 //! `mp grammar` end to end through the built binary: symbols → learn →
 //! synth (BVH and track output, FSM baseline, regeneration) on 15 s of a
 //! real salsa take at 30 fps, and learn-strings on the paper's six strings.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::path::Path;
 use std::process::Command;

@@ -7,6 +7,7 @@
 //! near the observed motion. Skipped where the shared video is absent (the
 //! skip recorded through the shared-data helper), and with a message where
 //! ONNX Runtime and the pose models are absent.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

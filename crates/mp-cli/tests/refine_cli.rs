@@ -1,6 +1,7 @@
 //! `mp refine` through the built binary on a real MSR Action3D clip with an
 //! injected jump: the flaw detector finds and refills it, and the refined
 //! track is closer to the clean one than the flawed input was.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::path::Path;
 use std::process::Command;

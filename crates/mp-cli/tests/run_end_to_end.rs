@@ -1,6 +1,7 @@
 //! End-to-end checks of `mp run` through the built binary: a real video clip
 //! (the first 60 frames of the GolfDB swing), a real keypoint track file,
 //! bad input, Ctrl-C, and the report opened in headless Chromium.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

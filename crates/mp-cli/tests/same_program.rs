@@ -1,5 +1,6 @@
 //! `mp fit`, `mp abstract`, `mp loops` and `mp run` give the same concrete
 //! program, abstract program and counts for the same track and defaults.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::process::Command;
 

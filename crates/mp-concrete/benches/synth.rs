@@ -5,6 +5,7 @@
 //! program has a realistic mix of stationary, linear and circular segments.
 //! The 100k case is long, so it runs only when `MP_BENCH_100K=1`; the
 //! `cargo xtask bench` harness times it once instead.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
 use mp_concrete::synthetic::synthetic_track;

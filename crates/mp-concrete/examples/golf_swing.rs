@@ -4,6 +4,7 @@
 //! ```sh
 //! cargo run --release -p mp-concrete --example golf_swing [-- CLIP_INDEX_AMONG_GOLF_SWINGS]
 //! ```
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
 use mp_concrete::{dsl, program_stats, synthesize, Scale, SynthParams, UnobservedJoints};
 use mp_geom::io::datasets::PennAction;

@@ -1,6 +1,7 @@
 //! The binary program form (`.mpb`): exact round trips of synthesised and
 //! hand-written programs, validation on decode, and corrupt, truncated or
 //! random bytes rejected with an error, never a panic.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_concrete::program::{BINARY_MAGIC, BINARY_VERSION};
 use mp_concrete::synthetic::synthetic_track;

@@ -1,4 +1,5 @@
 //! The DP segmentation equals exhaustive search.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_concrete::dp::{segment_brute_force, segment_dp, segment_table, CostTable};
 use mp_concrete::ConcreteError;

@@ -1,5 +1,6 @@
 //! DSL, JSON and the binary form: lossless round trips, the paper's notation,
 //! and errors with positions.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_concrete::dsl::{self, parse, print, print_pretty};
 use mp_concrete::{ConcreteError, Program, Segment};

@@ -1,4 +1,5 @@
 //! Absurd output sizes of program execution are a typed error, never an allocation failure.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_concrete::exec::{max_output_frames, MAX_FRAME_JOINTS};
 use mp_concrete::{synthesize, ConcreteError, ExecParams, SynthParams};

@@ -1,5 +1,6 @@
 //! Execution and synthesis parameters: NaN / negative fields give the
 //! parameter error naming the field; the fit parameters are checked once.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_concrete::synthetic::*;
 use mp_concrete::{synthesize, ConcreteError, ExecParams, Program, SynthParams};

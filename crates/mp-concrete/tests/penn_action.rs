@@ -1,4 +1,5 @@
 //! Real data: programs of Penn Action golf swings (paper §4.1 analysis).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_concrete::{program_stats, synthesize, Program, Scale, SynthParams, UnobservedJoints};
 use mp_geom::io::datasets::PennAction;

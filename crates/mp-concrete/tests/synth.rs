@@ -1,4 +1,5 @@
 //! Synthesis: recovering known programs, invariances, execution, and bad input.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_concrete::{
     interpolation_experiment, program_stats, synthesize, synthesize_detailed, ConcreteError,

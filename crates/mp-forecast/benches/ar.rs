@@ -1,5 +1,6 @@
 //! Throughput of the learned forecaster's autoregressive rollout (target: ≥ 1,000
 //! predicted frames per second on 2 cores), single track and batched.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use std::sync::Arc;
 

@@ -1,4 +1,5 @@
 //! The baselines on synthetic tracks, and bad input.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 mod common;
 

@@ -1,4 +1,5 @@
 //! Metric test vectors pushed end-to-end through the evaluation protocol.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 mod common;
 

@@ -1,5 +1,6 @@
 //! The learned forecaster through ONNX Runtime (needs `cargo xtask setup` for the
 //! library and the committed models in models/forecast/penn_action).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 mod common;
 

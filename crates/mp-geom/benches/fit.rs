@@ -1,5 +1,6 @@
 //! Single primitive fits on 30-frame segments (the inner loop of the
 //! segmentation DP), in 2D and 3D, plus the O(1) prefix-sum path.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use std::hint::black_box;
 

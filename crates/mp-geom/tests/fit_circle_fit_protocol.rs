@@ -4,6 +4,7 @@
 //! circle; the centre and radius errors must stay below 1e-4·r without noise
 //! and below 0.1·r with Gaussian noise of σ = 0.1·r, with fewer than 10
 //! failures out of 1000.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::fit::{fit_circle, FitParams};
 use mp_geom::Primitive;

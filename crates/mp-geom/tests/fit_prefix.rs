@@ -1,4 +1,5 @@
 //! `fit::prefix` agrees with the direct fits (squared norm).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::fit::{fit_line, fit_stationary, prefix::PrefixFits, ErrorNorm, FitParams};
 use mp_geom::Primitive;

@@ -1,4 +1,5 @@
 //! Fitting and metrics on real Penn Action clips (hand-labelled 2D joints).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::fit::{fit_best, FitParams};
 use mp_geom::io::datasets::PennAction;

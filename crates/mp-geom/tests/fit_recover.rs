@@ -1,5 +1,6 @@
 //! Noiseless primitives are recovered by their own fit (fit(execute(p)) ≈ p),
 //! in 2D and 3D, for every kind.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::fit::{
     fit_best, fit_circle, fit_kind, fit_line, fit_spline, fit_stationary, residual_error,

@@ -1,4 +1,5 @@
 //! The selection rules of `fit_best` (SPEC.md, Level 2).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::fit::{fit_best, fit_circle, fit_line, fit_stationary, ErrorNorm, FitParams};
 use mp_geom::{Primitive, PrimitiveKind};

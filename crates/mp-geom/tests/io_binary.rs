@@ -1,5 +1,6 @@
 //! The binary track form (`.mpt`): exact round trips, and corrupt,
 //! truncated or random bytes rejected with an error, never a panic.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::native::{BINARY_MAGIC, BINARY_VERSION};
 use mp_geom::io::{read_track, track_from_bincode, track_to_bincode, write_track};

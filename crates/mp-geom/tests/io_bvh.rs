@@ -1,5 +1,6 @@
 //! BVH parsing, forward kinematics, writing, slicing and concatenation, on
 //! a hand-checked toy hierarchy and on the real CMU salsa files.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::bvh::{Bvh, BvhTrackParams, Channel};
 use mp_geom::io::read_track;

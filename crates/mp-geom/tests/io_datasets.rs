@@ -1,5 +1,6 @@
 //! The data-set readers on the real shared files. Expected values were read
 //! with numpy from the same files.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::datasets::{
     fps_from_timestamps_us, AistPlusPlus, CmuFeatures, MediaPipeReference, MsrAction3D, PennAction,

@@ -1,5 +1,6 @@
 //! The project's own formats (npz, JSON, CSV, npy), OpenPose / AlphaPose
 //! JSON, and the `read_track` / `write_track` dispatch.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::csv::{read_csv, write_csv, CsvLayout};
 use mp_geom::io::datasets::PennAction;

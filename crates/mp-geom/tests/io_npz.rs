@@ -1,5 +1,6 @@
 //! npy/npz reading: every dtype of the shared data, hand-made headers for
 //! the rarer layouts, and typed errors for broken input.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::npz::{read_npy, DType, NpyArray, Npz, NpzOut};
 use mp_geom::GeomError;

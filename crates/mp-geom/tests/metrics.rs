@@ -1,4 +1,5 @@
 //! Metrics: hand-computed values, invariances and bad input.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::metrics::{
     dtw, dtw_align, kd, kd_per_frame, max_adjacent_jump, mpjpe, mpjpe_per_frame, nanmean, pa_mpjpe,

@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 #[test]
 fn finds_shared_data() {
     // The test suite runs with ../shared beside the checkout.

@@ -1,4 +1,5 @@
 //! The procedural performer: determinism, rigid bones, ground truth.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::performer::{perform, Move, PerformerParams, Projection, RIGID_BONES};
 use mp_geom::{GeomError, Units};

@@ -1,5 +1,6 @@
 //! `paths::data_file_or_skip`: the one test of this binary (its own process),
 //! so setting `MP_SKIP_LOG` races with no other test.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::paths::{data_dir, data_file_or_skip};
 

@@ -10,6 +10,7 @@
 //!   symbols of that motion.
 //!
 //! `cargo bench -p mp-grammar` (or `cargo xtask bench --packages mp-grammar`).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use std::time::Duration;
 

@@ -5,6 +5,7 @@
 //! `cargo run --release -p mp-grammar --example salsa_symbols -- [FRAMES] [K]`
 //! (defaults: 8677 frames, K = 20). The criterion version of this timing is
 //! `cargo bench -p mp-grammar --bench grammar`.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
 use mp_grammar::{identify_symbols, PoseFeatures, SymbolParams};
 

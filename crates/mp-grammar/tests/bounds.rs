@@ -1,6 +1,7 @@
 //! Absurd user-given sizes (segments, derivation depth and length, K,
 //! segment windows) are an error naming the parameter, never an allocation
 //! failure.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::{Skeleton, Track, Units};
 use mp_grammar::derive::{derive_at_least, MAX_DEPTH, MAX_TERMINALS};

@@ -2,6 +2,7 @@
 //! corpora: every derived sentence is in the grammar's language, the same
 //! seed gives the same derivation, and regeneration keeps everything outside
 //! the regenerated subtree.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_grammar::abl::{learn, AblParams, Alignment};
 use mp_grammar::{derive_at_least, regenerate, DeriveParams};

@@ -1,5 +1,6 @@
 //! Cross-checks of the project's PAM / FasterPAM against the `kmedoids`
 //! crate (Schubert & Lenssen), used here only as a test-time reference.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_grammar::kmedoids::{first_k, FasterPam, LowerTriangle, MedoidSwap, Pam};
 use ndarray::Array2;

@@ -1,5 +1,6 @@
 //! Test vectors from the motion-grammar paper (Park, Lee & Lee 2011), the
 //! ABL reference documentation and the Sequitur documentation.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_grammar::abl::{align_and_cluster, learn, AblParams, Alignment, Corpus, Selection};
 use mp_grammar::grammar::Grammar;

@@ -1,5 +1,6 @@
 //! Symbol identification: determinism, bad input, and a synthetic motion
 //! whose repeated motifs must be recovered.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_grammar::{identify_symbols, GrammarError, PoseFeatures, SymbolParams};
 use ndarray::Array2;

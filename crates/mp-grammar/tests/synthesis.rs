@@ -1,6 +1,7 @@
 //! Synthesis on real motion (a slice of a CMU salsa take at 30 fps):
 //! determinism, shapes, seams, regeneration, BVH output, and the whole
 //! pipeline through its JSON files. Skipped where the shared data are absent.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::bvh::{Bvh, BvhTrackParams};
 use mp_geom::Track;

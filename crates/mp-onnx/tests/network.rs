@@ -3,6 +3,7 @@
 //! outputs `logits [B, 20]` and `features [B, F]`).
 //!
 //! Needs ONNX Runtime (`cargo xtask setup`) and the committed model.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::sync::OnceLock;
 

@@ -2,6 +2,7 @@
 //! one output folder per input equal to what `run` writes, a corrupt input
 //! that fails alone, resume, several jobs at once, cancellation, and one real
 //! video when the shared data is present.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};

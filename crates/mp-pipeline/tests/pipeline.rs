@@ -1,6 +1,7 @@
 //! The pipeline on real shared videos, as `mp run` runs it: counts from
 //! keypoints and from frames, a single swing that must not count, the output
 //! folder, and cancellation.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -6,6 +6,7 @@
 //! frame when the shared data is absent).
 //!
 //! `cargo bench -p mp-pose --bench pose_latency`
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;

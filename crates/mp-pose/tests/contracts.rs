@@ -3,6 +3,7 @@
 //! with Python onnxruntime (`tools/make_pose_fixtures.py`).
 //!
 //! Needs ONNX Runtime (`cargo xtask setup`) and the models (`cargo xtask models`).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_pose::blazepose::detector::{self, PoseDetector};
 use mp_pose::blazepose::landmarks::{LandmarkModel, LandmarkModelKind, RefineParams};

@@ -1,4 +1,5 @@
 //! Decoding and set-up errors are typed and name what is wrong.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 mod common;
 

@@ -1,6 +1,7 @@
 //! The BlazePose and MoveNet pipelines on real frames, against the original
 //! MediaPipe's output (`../shared/data/reference_keypoints`) and the COCO
 //! annotations. Needs ONNX Runtime (`cargo xtask setup`) and the models.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 mod common;
 

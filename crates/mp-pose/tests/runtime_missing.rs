@@ -1,5 +1,6 @@
 //! A missing ONNX Runtime library is a clear error, not a panic. (Own test
 //! binary: the library, once loaded, stays loaded for the process.)
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_pose::{BlazePose, BlazePoseParams, OnnxError, PoseError};
 

@@ -5,6 +5,7 @@
 //! with an implausible (upside-down) anchor pose blended in, which is
 //! rejected and repaired — by a bridge (default) or by the anchor refinement
 //! network followed by transition refinement (every network runs).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use mp_geom::io::datasets::MsrAction3D;

@@ -2,6 +2,7 @@
 //! non-learned baseline and prints MPJPE to the clean clips before and after.
 //!
 //! `cargo run -p mp-refine --example eval_msr -- [clip_stride] [lambda] [concepts(0/1)]`
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_refine::{evaluate_injected, EvalParams};

@@ -3,6 +3,7 @@
 //! or the subjects named explicitly. The files are built from clips of the
 //! shared odd-subjects file (same keys), so the test is skipped, with a
 //! message, where the shared data are absent.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::path::Path;
 

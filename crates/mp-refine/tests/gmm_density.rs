@@ -2,6 +2,7 @@
 //! Gaussian mixture density written with a Cholesky factor and a
 //! log-sum-exp) against statrs' `MultivariateNormal`, on random mixtures and
 //! on the shipped concept models.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_refine::{Concepts, Gmm};
 use nalgebra::{DMatrix, DVector};

@@ -2,6 +2,7 @@
 //! shared golf swing) through the 20 MSR joints: the output keeps the
 //! input's skeleton and frames, is finite, and stays close to the input.
 //! Skipped, with a message, where the shared data are absent.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::datasets::MediaPipeReference;
 use mp_geom::metrics::nanmean;

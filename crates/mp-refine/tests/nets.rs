@@ -5,6 +5,7 @@
 //! `parity.npz`, `concepts.json`), ONNX Runtime (`cargo xtask setup`) and
 //! the shared MSR Action3D file; each fails with a message naming what is
 //! missing, except that tests needing the shared data skip where it is absent.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use std::sync::OnceLock;
 

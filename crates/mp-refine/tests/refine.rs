@@ -1,5 +1,6 @@
 //! Tests of spline segmentation, concepts, flaw injection and the baseline
 //! refinement, on synthetic motion and a few MSR Action3D clips.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};

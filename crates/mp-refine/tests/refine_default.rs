@@ -2,6 +2,7 @@
 //! same result as the refiner built by hand with the same defaults, and
 //! closer to the clean clip than the flawed input. Skipped, with a message,
 //! where the shared data are absent.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_refine::baseline::full_confidence;
