@@ -35,6 +35,7 @@ pub mod error;
 pub mod exec;
 pub mod interp;
 pub mod program;
+pub mod search;
 pub mod stats;
 pub mod synth;
 pub mod synthetic;
@@ -46,6 +47,6 @@ pub use interp::{interpolation_experiment, InterpParams, InterpolationResult};
 pub use program::{Program, Segment};
 pub use stats::{program_stats, ProgramStats};
 pub use synth::{
-    segment_costs, synthesize, synthesize_detailed, Lambda, Scale, SynthParams, Synthesis,
-    UnobservedJoints,
+    segment, segment_costs, segment_exhaustive, synthesize, synthesize_detailed, Lambda, Scale,
+    SynthParams, Synthesis, UnobservedJoints,
 };

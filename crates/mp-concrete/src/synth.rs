@@ -1,9 +1,13 @@
-//! Synthesis of a concrete program from a track (paper §3.1): every
-//! candidate segment `k..n` (at most `W` frames) is fitted for every joint
-//! with [`mp_geom::fit::fit_best`] in parallel, the segment costs (sum over
-//! joints + λ) go into a [`CostTable`], [`segment_table`] finds the best
-//! shared segmentation and the chosen segments are fitted once more to get
-//! their primitives.
+//! Synthesis of a concrete program from a track (paper §3.1): the shared
+//! segmentation minimising Σ segments (Σ joints best-fit error + λ) is found
+//! by [`segment`] — an exact branch and bound over the DP of [`crate::dp`]
+//! with segment moments updated in O(1) per candidate and lower bounds of the
+//! fit errors ([`crate::search`], module docs there) — and the chosen
+//! segments are fitted once more with [`mp_geom::fit::fit_best`] (in parallel)
+//! to get their primitives. The costs are those of `fit_best` on every
+//! candidate segment `k..n` of at most `W` frames; [`segment_exhaustive`]
+//! still computes them all into a [`CostTable`] and is the reference the
+//! tests compare with (same optimum; `O(T·W)` memory and `O(T·W²·J)` time).
 //!
 //! # Scale
 //!
@@ -42,6 +46,7 @@ use serde::{Deserialize, Serialize};
 use crate::dp::{segment_table, CostTable, Segmentation};
 use crate::error::{ConcreteError, Result};
 use crate::program::{Program, Segment};
+use crate::search::{segment_search, JointTrack};
 
 /// Reference pixels of a 512-px frame.
 pub const REFERENCE_FRAME_PX: f64 = 512.0;
@@ -520,6 +525,45 @@ pub fn segment_costs(track: &Track, params: &SynthParams) -> Result<CostTable> {
     cost_table(&prep, &fit, track, &lambda, params.max_segment_frames)
 }
 
+/// The optimal segmentation by branch and bound over the DP ([`crate::search`]).
+fn search_prepared(
+    prep: &Prepared,
+    fit: &FitParams,
+    track: &Track,
+    lambda: &[f64],
+    window: usize,
+) -> Result<Segmentation> {
+    let joints: Vec<JointTrack<'_>> = prep
+        .points
+        .iter()
+        .zip(&prep.weights)
+        .map(|(points, weights)| JointTrack {
+            points,
+            weights: weights.as_slice(),
+        })
+        .collect();
+    segment_search(&joints, &track.skeleton().joints, fit, lambda, window)
+}
+
+/// The reference segmentation: every candidate segment refitted with
+/// [`mp_geom::fit::fit_best`] into the full cost table ([`segment_costs`],
+/// `O(T·W)` memory, `O(T·W²·J)` time), then the exhaustive DP over it.
+/// [`synthesize`] finds the same optimum much faster (same costs up to
+/// rounding); this is kept for tests and benchmarks.
+pub fn segment_exhaustive(track: &Track, params: &SynthParams) -> Result<Segmentation> {
+    segment_table(&segment_costs(track, params)?)
+}
+
+/// The segmentation that [`synthesize`] uses (branch and bound, no cost table).
+pub fn segment(track: &Track, params: &SynthParams) -> Result<Segmentation> {
+    params.validate()?;
+    let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
+    let unit_scale = params.unit_scale(track);
+    let fit = scaled_fit(params, unit_scale)?;
+    let lambda = lambda_per_frame(track, params, unit_scale);
+    search_prepared(&prep, &fit, track, &lambda, params.max_segment_frames)
+}
+
 /// Synthesises a concrete program with all details (segmentation cost, scale, λ).
 pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthesis> {
     params.validate()?;
@@ -527,8 +571,7 @@ pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthe
     let unit_scale = params.unit_scale(track);
     let fit = scaled_fit(params, unit_scale)?;
     let lambda = lambda_per_frame(track, params, unit_scale);
-    let table = cost_table(&prep, &fit, track, &lambda, params.max_segment_frames)?;
-    let segmentation = segment_table(&table)?;
+    let segmentation = search_prepared(&prep, &fit, track, &lambda, params.max_segment_frames)?;
     let segments = segmentation
         .boundaries
         .windows(2)

@@ -1,0 +1,91 @@
+//! Times the segmentation of long tracks (single thread recommended:
+//! `RAYON_NUM_THREADS=1`): the procedural performer (COCO-17, 567 frames)
+//! repeated `reps` times, and the synthetic 13-joint track.
+//!
+//! `cargo run --release -p mp-concrete --example synth_timing -- [reps] [synthetic T…] [--reference]`
+
+use std::time::Instant;
+
+use mp_concrete::synthetic::synthetic_track;
+use mp_concrete::{segment, segment_exhaustive, synthesize, Scale, SynthParams};
+use mp_geom::performer::{perform, PerformerParams};
+use mp_geom::Track;
+use ndarray::{concatenate, Axis};
+
+type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+fn repeated_performer(reps: usize) -> Res<Track> {
+    let p = perform(&PerformerParams::default())?;
+    let tr = p.track_2d;
+    let views: Vec<_> = (0..reps).map(|_| tr.positions()).collect();
+    let pos = concatenate(Axis(0), &views)?;
+    let cviews: Vec<_> = (0..reps).map(|_| tr.confidence()).collect();
+    let conf = concatenate(Axis(0), &cviews)?;
+    Ok(Track::new(
+        pos,
+        Some(conf),
+        tr.fps(),
+        tr.units(),
+        tr.skeleton().clone(),
+    )?)
+}
+
+fn main() -> Res<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let reference = args.iter().any(|a| a == "--reference");
+    let squared: Option<f64> = args
+        .iter()
+        .position(|a| a == "--squared")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok());
+    let nums: Vec<usize> = args
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i == 0 || args[i - 1] != "--squared")
+        .filter_map(|(_, a)| a.parse().ok())
+        .collect();
+    let reps = nums.first().copied().unwrap_or(18);
+    let sizes: Vec<usize> = nums.iter().skip(1).copied().collect();
+    let track = repeated_performer(reps)?;
+    let mut params = SynthParams::default();
+    if let Some(l) = squared {
+        params.fit.norm = mp_geom::fit::ErrorNorm::Squared;
+        params.lambda = mp_concrete::Lambda::fixed(l);
+    }
+    let t0 = Instant::now();
+    let prog = synthesize(&track, &params)?;
+    println!(
+        "performer ×{reps}: T = {}, J = {}: synthesize {:.3} s, {} segments",
+        track.n_frames(),
+        track.n_joints(),
+        t0.elapsed().as_secs_f64(),
+        prog.n_segments()
+    );
+    if reference {
+        let t0 = Instant::now();
+        let s = segment_exhaustive(&track, &params)?;
+        let fast = segment(&track, &params)?;
+        println!(
+            "  reference {:.3} s, cost {} vs fast {} (same boundaries: {})",
+            t0.elapsed().as_secs_f64(),
+            s.cost,
+            fast.cost,
+            s.boundaries == fast.boundaries
+        );
+    }
+    let px = SynthParams {
+        scale: Scale::UnitScale { unit_scale: 1.0 },
+        ..params.clone()
+    };
+    for n in sizes {
+        let tr = synthetic_track(n, 7)?;
+        let t0 = Instant::now();
+        let prog = synthesize(&tr, &px)?;
+        println!(
+            "synthetic T = {n}: synthesize {:.3} s, {} segments",
+            t0.elapsed().as_secs_f64(),
+            prog.n_segments()
+        );
+    }
+    Ok(())
+}
