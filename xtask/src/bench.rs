@@ -170,7 +170,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
     } else {
         workspace_root().join(&a.out)
     };
-    std::fs::write(&out, &md).with_context(|| format!("writing {}", out.display()))?;
+    crate::write_file(&out, &md).with_context(|| format!("writing {}", out.display()))?;
     println!("{md}");
     eprintln!("wrote {}", out.display());
     if !ok {

@@ -325,7 +325,7 @@ pub fn run(a: &EvalForecastArgs) -> Result<()> {
         "models": model_dir.display().to_string(),
         "methods": methods,
     });
-    std::fs::write(&a.out, serde_json::to_string_pretty(&report)?)
+    crate::write_file(&a.out, serde_json::to_string_pretty(&report)?)
         .with_context(|| format!("writing {}", a.out.display()))?;
     eprintln!("report written to {}", a.out.display());
     let metrics: Vec<&str> = if ds.kind == "penn_action" {
@@ -343,7 +343,7 @@ pub fn run(a: &EvalForecastArgs) -> Result<()> {
     md += &per_action_md(&reports, metrics[1], 30);
     println!("{md}");
     if let Some(p) = &a.markdown {
-        std::fs::write(p, &md).with_context(|| format!("writing {}", p.display()))?;
+        crate::write_file(p, &md).with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())
 }

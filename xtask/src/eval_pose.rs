@@ -390,7 +390,7 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
             std::fs::create_dir_all(parent)?;
         }
     }
-    std::fs::write(&args.out, serde_json::to_string_pretty(&report)?)
+    crate::write_file(&args.out, serde_json::to_string_pretty(&report)?)
         .with_context(|| format!("writing {}", args.out.display()))?;
     println!("wrote {}", args.out.display());
     print_markdown(model, &report, &rows);

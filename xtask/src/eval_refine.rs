@@ -479,7 +479,7 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             std::fs::create_dir_all(parent)?;
         }
     }
-    std::fs::write(&a.out, serde_json::to_string_pretty(&report)?)
+    crate::write_file(&a.out, serde_json::to_string_pretty(&report)?)
         .with_context(|| format!("writing {}", a.out.display()))?;
     println!(
         "injected (subjects {:?}): MPJPE {:.2} → {:.2} mm ({:.1} % less; baseline {:.2} mm), clean change {:.2} mm, detector P {:.3} R {:.3}, clean frames flagged {:.1} %",

@@ -82,3 +82,12 @@ fn main() {
         std::process::exit(1);
     }
 }
+
+/// Writes a report or model file through a temporary file renamed into
+/// place, so an interrupted task leaves the old file or the new one.
+pub(crate) fn write_file(
+    path: impl AsRef<std::path::Path>,
+    bytes: impl AsRef<[u8]>,
+) -> mp_geom::Result<()> {
+    mp_geom::io::write_atomic(path, bytes.as_ref())
+}

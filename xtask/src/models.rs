@@ -204,7 +204,7 @@ fn venv_python(root: &Path) -> Result<PathBuf> {
                 .args(PY_TOOLS),
             "pip install (conversion tools)",
         )?;
-        std::fs::write(&marker, PY_TOOLS.join("\n"))?;
+        crate::write_file(&marker, PY_TOOLS.join("\n"))?;
     }
     Ok(python)
 }

@@ -112,7 +112,7 @@ pub fn run(a: &TrainRefineArgs) -> Result<()> {
     let set = build_training_set(&msr, &bvh, &params)?;
     let ds_path = cache.join("refine_dataset.npz");
     set.write_npz(&ds_path)?;
-    std::fs::write(out.join("concepts.json"), set.concepts.to_json()?)
+    crate::write_file(out.join("concepts.json"), set.concepts.to_json()?)
         .with_context(|| format!("writing {}", out.join("concepts.json").display()))?;
     let t1 = Instant::now();
     let fparams = FlawSetParams {

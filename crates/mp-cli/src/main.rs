@@ -71,6 +71,7 @@ fn main() {
         Command::Overlay(a) => cmd_pose::overlay_cmd(&a),
         Command::Fit(a) => cmd_concrete::fit(&a),
         Command::Execute(a) => cmd_concrete::execute(&a),
+    progress::install_ctrl_c();
         Command::Stats(a) => cmd_concrete::stats(&a),
         Command::Abstract(a) => cmd_abstract::abstract_cmd(&a),
         Command::Loops(a) => cmd_abstract::loops_cmd(&a),

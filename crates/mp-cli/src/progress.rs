@@ -1,7 +1,8 @@
 //! Progress bars for the pipeline's stages, and Ctrl-C as a cancellation.
 
 use std::collections::HashMap;
-use std::sync::{Mutex, Once};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, Once, OnceLock};
 use std::time::Duration;
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -90,32 +91,49 @@ impl Drop for Bars {
 }
 
 static HANDLER: Once = Once::new();
+static TOKEN: OnceLock<CancelToken> = OnceLock::new();
+/// Whether the running command checks the token (set by [`ctrl_c_token`]).
+static OBSERVED: AtomicBool = AtomicBool::new(false);
 
-/// The token that Ctrl-C cancels. The first Ctrl-C cancels it: the run stops
-/// at its next check and removes its staging folder; if it has not finished
-/// within 3 s, or at a second Ctrl-C, every staging folder of the process is
-/// removed and the process exits with status 130.
-pub fn ctrl_c_token() -> CancelToken {
-    static TOKEN: std::sync::OnceLock<CancelToken> = std::sync::OnceLock::new();
-    let token = TOKEN.get_or_init(CancelToken::new).clone();
+/// Removes every partial output of the process (files being written and
+/// staging folders) and exits with status 130, holding the locks that
+/// renames take so that nothing appears meanwhile.
+fn exit_interrupted() -> ! {
+    let _files = mp_geom::io::abandon_partial_writes();
+    let _staging = mp_report::outdir::emergency_cleanup();
+    eprintln!("\ninterrupted");
+    std::process::exit(130);
+}
+
+/// Installs the Ctrl-C handler of the process (once, at start). A command
+/// that checks [`ctrl_c_token`] is cancelled and stops at its next check;
+/// any other command exits at once. Either way a file being written is
+/// removed, never left half written, and earlier outputs stay as they were.
+pub fn install_ctrl_c() {
     HANDLER.call_once(|| {
-        let t = token.clone();
+        let token = TOKEN.get_or_init(CancelToken::new).clone();
         let res = ctrlc::set_handler(move || {
-            if t.is_cancelled() {
-                let _guard = mp_report::outdir::emergency_cleanup();
-                std::process::exit(130);
+            if !OBSERVED.load(Ordering::SeqCst) || token.is_cancelled() {
+                exit_interrupted();
             }
-            t.cancel();
+            token.cancel();
             std::thread::spawn(|| {
                 std::thread::sleep(Duration::from_secs(3));
-                let _guard = mp_report::outdir::emergency_cleanup();
-                eprintln!("\ninterrupted");
-                std::process::exit(130);
+                exit_interrupted();
             });
         });
         if let Err(e) = res {
             eprintln!("warning: cannot install the Ctrl-C handler: {e}");
         }
     });
-    token
+}
+
+/// The token that Ctrl-C cancels. The first Ctrl-C cancels it: the run stops
+/// at its next check and removes its staging folder; if it has not finished
+/// within 3 s, or at a second Ctrl-C, every partial output of the process is
+/// removed and the process exits with status 130.
+pub fn ctrl_c_token() -> CancelToken {
+    install_ctrl_c();
+    OBSERVED.store(true, Ordering::SeqCst);
+    TOKEN.get_or_init(CancelToken::new).clone()
 }

@@ -19,6 +19,7 @@
 //! Every write goes to a temporary file in the destination folder that is
 //! renamed into place, so a crash never leaves a half-written file.
 
+mod atomic;
 pub mod binary;
 pub mod bvh;
 pub mod csv;
@@ -27,9 +28,9 @@ pub mod native;
 pub mod npz;
 pub mod openpose;
 
+pub use atomic::{abandon_partial_writes, write_atomic};
 pub use native::{track_from_bincode, track_to_bincode};
 
-use std::io::Write;
 use std::path::Path;
 
 use crate::error::{GeomError, Result};
@@ -135,26 +136,6 @@ pub fn skeleton_from_names(names: &[String]) -> Skeleton {
     Skeleton::custom("custom", names.to_vec(), Vec::new(), None)
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder that
-/// is renamed into place.
-pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
-    let path = path.as_ref();
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".mp-tmp-")
-        .tempfile_in(&dir)
-        .map_err(|e| GeomError::io(&dir, e))?;
-    tmp.write_all(bytes).map_err(|e| GeomError::io(path, e))?;
-    tmp.as_file()
-        .sync_all()
-        .map_err(|e| GeomError::io(path, e))?;
-    tmp.persist(path)
-        .map_err(|e| GeomError::io(path, e.error))?;
-    Ok(())
-}
 
 fn extension(path: &Path) -> String {
     path.extension()

@@ -178,16 +178,13 @@ impl Manifest {
     /// Replaces the manifest with `lines` (through a temporary file renamed
     /// into place) and opens it for appending.
     pub(super) fn start(path: &Path, lines: &[ItemReport]) -> Result<Self> {
-        let tmp = path.with_extension("jsonl.tmp");
-        {
-            let mut f = File::create(&tmp).map_err(|e| BatchError::io("write", &tmp, e))?;
-            for l in lines {
-                writeln!(f, "{}", l.to_json_line())
-                    .map_err(|e| BatchError::io("write", &tmp, e))?;
-            }
-            f.sync_all().map_err(|e| BatchError::io("write", &tmp, e))?;
+        let mut text = String::new();
+        for l in lines {
+            text.push_str(&l.to_json_line());
+            text.push('\n');
         }
-        std::fs::rename(&tmp, path).map_err(|e| BatchError::io("write the manifest", path, e))?;
+        mp_geom::io::write_atomic(path, text.as_bytes())
+            .map_err(|e| BatchError::io("write the manifest", path, std::io::Error::other(e)))?;
         if let Some(dir) = path.parent() {
             // Makes the rename durable where folders can be synced.
             if let Ok(d) = File::open(dir) {

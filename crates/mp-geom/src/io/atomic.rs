@@ -1,0 +1,84 @@
+//! The one atomic file writer of the workspace.
+//!
+//! [`write_atomic`] writes into a temporary file (`.mp-tmp-*`) in the
+//! destination folder, syncs it and renames it into place, so a reader sees
+//! the old file or the new one, never part of one. The temporary files in
+//! flight are registered: a process that must exit at once (a second Ctrl-C)
+//! calls [`abandon_partial_writes`], which removes them while holding the
+//! lock that renames take, so nothing new appears after it.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
+use crate::error::{GeomError, Result};
+
+static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn in_flight() -> MutexGuard<'static, Vec<PathBuf>> {
+    IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder that
+/// is renamed into place (see the module docs).
+pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
+    let path = path.as_ref();
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut tmp = {
+        let mut reg = in_flight();
+        let tmp = tempfile::Builder::new()
+            .prefix(".mp-tmp-")
+            .tempfile_in(&dir)
+            .map_err(|e| GeomError::io(&dir, e))?;
+        reg.push(tmp.path().to_path_buf());
+        tmp
+    };
+    let tmp_path = tmp.path().to_path_buf();
+    let written = tmp
+        .write_all(bytes)
+        .and_then(|()| tmp.as_file().sync_all())
+        .map_err(|e| GeomError::io(path, e));
+    let mut reg = in_flight();
+    reg.retain(|p| p != &tmp_path);
+    written?;
+    tmp.persist(path).map_err(|e| GeomError::io(path, e.error))?;
+    Ok(())
+}
+
+/// Removes every temporary file that [`write_atomic`] has not yet renamed
+/// into place and returns the lock that renames take: hold it until the
+/// process exits, so that no output appears after this call.
+pub fn abandon_partial_writes() -> MutexGuard<'static, Vec<PathBuf>> {
+    let mut reg = in_flight();
+    for p in reg.drain(..) {
+        let _ = std::fs::remove_file(&p);
+    }
+    reg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replaces_and_leaves_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.txt");
+        write_atomic(&p, b"old").unwrap();
+        write_atomic(&p, b"new").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"new");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        assert!(in_flight().is_empty());
+    }
+
+    #[test]
+    fn a_missing_folder_is_an_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("no/such/folder/a.txt");
+        let e = write_atomic(&p, b"x").unwrap_err().to_string();
+        assert!(e.contains("no/such/folder"), "{e}");
+    }
+}
