@@ -28,14 +28,30 @@
 //!   `b < e` in a sentence, labelled by the pair of branch labels (one label
 //!   per distinct pair over the corpus). Empty spans are not recorded.
 //!
-//! # Clustering
+//! # Clustering ([`Clustering`])
 //!
-//! One pass over the hypotheses of all sentences in order: for a hypothesis
-//! with labels `[l0, l1, …]`, the target is `l0`'s mapping if `l0` is already
-//! mapped, else `l0`; every `li` not yet mapped is mapped to the target.
-//! **First mapping wins**: a label keeps its first mapping and chains are not
-//! followed (this is not a union-find). Each hypothesis then keeps its first
-//! mapped label.
+//! Labels found on the same span name the same nonterminal. Two modes:
+//!
+//! * `Equivalence` (default): "shares a span with" is closed transitively
+//!   (union-find over all labels of all hypotheses; each class is named by
+//!   its smallest label, so `S` stays `S`). After the grammar is read (see
+//!   below), nonterminals with identical rule sets are merged — their
+//!   occurrences on right-hand sides renamed, duplicate rules joined (use
+//!   counts added), a unit rule `X → X` that a merge creates dropped (its
+//!   tree nodes collapse) — and this is repeated until no two nonterminals
+//!   have the same rules.
+//! * `FirstMapping` (the reference description, kept for comparison): one
+//!   pass over the hypotheses of all sentences in order: for a hypothesis
+//!   with labels `[l0, l1, …]`, the target is `l0`'s mapping if `l0` is
+//!   already mapped, else `l0`; every `li` not yet mapped is mapped to the
+//!   target. A label keeps its first mapping and chains are not followed
+//!   (not a union-find), and nonterminals are not merged after reading.
+//!
+//! Each hypothesis then keeps its first (mapped) label. On the paper's
+//! basketball strings (`rfdpm rfdsm rdfsm rdpm rdsm rpm`, `st3` + `branch`)
+//! `FirstMapping` gives 8 nonterminals and 18 rules, with duplicates
+//! (`X4 → p m | s m` beside `X7 → p m`; `X2` and `X6` both derive `r`);
+//! `Equivalence` gives the figures in the test `basketball_six_strings`.
 //!
 //! # Selection ([`Selection`])
 //!
@@ -54,7 +70,7 @@
 //! The selected constituents of a sentence nest into a tree; each node
 //! `X (b, e)` yields `X → (children's labels or words)`, ε for an empty span.
 //! Identical rules merge and count their uses. Nonterminals are renumbered by
-//! first appearance (`S`, `X1`, `X2`, …).
+//! first appearance (`S`, `X1`, `X2`, …), and again after merging.
 
 use std::collections::HashMap;
 
@@ -531,6 +547,34 @@ impl Selection {
     }
 }
 
+/// How hypothesis labels become nonterminals (see the module
+/// documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Clustering {
+    /// Labels sharing a span merged transitively (union-find), then
+    /// nonterminals with identical rule sets merged to a fixed point.
+    /// Default.
+    #[default]
+    Equivalence,
+    /// One pass, first mapping wins, no merging after reading the grammar
+    /// (the reference description; the only mode before `Equivalence`).
+    FirstMapping,
+}
+
+impl Clustering {
+    /// Lower-case name: `equivalence` or `first-mapping`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Clustering::Equivalence => "equivalence",
+            Clustering::FirstMapping => "first-mapping",
+        }
+    }
+    /// The mode of files written before the field existed.
+    fn legacy() -> Self {
+        Clustering::FirstMapping
+    }
+}
+
 /// Parameters of ABL.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct AblParams {
@@ -538,6 +582,11 @@ pub struct AblParams {
     pub alignment: Alignment,
     /// Selection. Default `Branch` (the paper's setting).
     pub selection: Selection,
+    /// Clustering of labels into nonterminals. Default `Equivalence`
+    /// (`FirstMapping` when absent from a file: files written before the
+    /// field existed were learned that way).
+    #[serde(default = "Clustering::legacy")]
+    pub clustering: Clustering,
     /// Seed for tie-breaking in `Branch` selection. Default 0.
     pub seed: u64,
 }
@@ -547,6 +596,7 @@ impl Default for AblParams {
         AblParams {
             alignment: Alignment::SuffixTree(SuffixTreeAligner::default()),
             selection: Selection::Branch,
+            clustering: Clustering::Equivalence,
             seed: 0,
         }
     }
@@ -563,6 +613,10 @@ pub struct AblStats {
     pub labels_after_clustering: usize,
     /// Hypotheses kept by selection (including the start hypotheses).
     pub selected: usize,
+    /// Nonterminals removed by merging identical rule sets
+    /// (`Equivalence` clustering).
+    #[serde(default)]
+    pub nonterminals_merged: usize,
 }
 
 /// Result of ABL: the grammar, one derivation tree per sentence, the
@@ -606,9 +660,71 @@ pub fn align_and_cluster(corpus: &[Vec<u32>], params: &AblParams) -> (Hypothesis
         labels_before_clustering: store.distinct_labels(),
         ..Default::default()
     };
-    cluster(&mut store);
+    match params.clustering {
+        Clustering::Equivalence => cluster_union_find(corpus, &mut store),
+        Clustering::FirstMapping => cluster(&mut store),
+    }
     stats.labels_after_clustering = store.distinct_labels();
     (store, stats)
+}
+
+/// Union-find over labels: all labels of a hypothesis, and all labels of
+/// hypotheses with the same words, are one class, named by its smallest
+/// label.
+fn cluster_union_find(corpus: &[Vec<u32>], store: &mut HypothesisStore) {
+    let mut parent: HashMap<u32, u32> = HashMap::new();
+    fn find(parent: &mut HashMap<u32, u32>, x: u32) -> u32 {
+        let mut root = x;
+        while let Some(&p) = parent.get(&root) {
+            if p == root {
+                break;
+            }
+            root = p;
+        }
+        // Path compression.
+        let mut cur = x;
+        while let Some(&p) = parent.get(&cur) {
+            if p == root {
+                break;
+            }
+            parent.insert(cur, root);
+            cur = p;
+        }
+        root
+    }
+    // First label seen on each phrase.
+    let mut phrase_label: HashMap<&[u32], u32> = HashMap::new();
+    for (s, hyps) in store.sentences.iter().enumerate() {
+        for h in hyps {
+            for &l in &h.labels {
+                parent.entry(l).or_insert(l);
+            }
+            let Some(&l0) = h.labels.first() else {
+                continue;
+            };
+            let phrase = corpus.get(s).and_then(|w| w.get(h.b..h.e)).unwrap_or(&[]);
+            let same_words = *phrase_label.entry(phrase).or_insert(l0);
+            for &l in h.labels[1..].iter().chain(std::iter::once(&same_words)) {
+                let (a, b) = (find(&mut parent, l0), find(&mut parent, l));
+                if a != b {
+                    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+                    parent.insert(hi, lo);
+                }
+            }
+        }
+    }
+    for hyps in &mut store.sentences {
+        for h in hyps.iter_mut() {
+            let mut v: Vec<u32> = Vec::new();
+            for &l in &h.labels {
+                let m = find(&mut parent, l);
+                if !v.contains(&m) {
+                    v.push(m);
+                }
+            }
+            h.labels = v;
+        }
+    }
 }
 
 fn cluster(store: &mut HypothesisStore) {
@@ -720,7 +836,11 @@ pub fn learn(corpus: &[Vec<u32>], terminals: &[String], params: &AblParams) -> R
         );
     }
     stats.selected = constituents.iter().map(|c| c.len()).sum();
-    let (grammar, trees, constituents) = read_grammar(corpus, terminals, constituents);
+    let (mut grammar, mut trees, mut constituents) = read_grammar(corpus, terminals, constituents);
+    if params.clustering == Clustering::Equivalence {
+        stats.nonterminals_merged =
+            merge_equivalent_nonterminals(&mut grammar, &mut trees, &mut constituents);
+    }
     Ok(AblResult {
         grammar,
         trees,
@@ -795,6 +915,146 @@ fn best_set(
 }
 
 type Constituents = Vec<Vec<(usize, usize, u32)>>;
+
+/// Merges nonterminals with identical rule sets until none are left;
+/// returns how many nonterminals were removed. Trees and constituents are
+/// renamed to match.
+fn merge_equivalent_nonterminals(
+    g: &mut Grammar,
+    trees: &mut [Tree],
+    constituents: &mut Constituents,
+) -> usize {
+    let before = g.nonterminals.len();
+    // Each round removes at least one nonterminal, so this terminates.
+    for _ in 0..before {
+        let n = g.nonterminals.len();
+        let mut sets: Vec<Vec<Vec<Sym>>> = vec![Vec::new(); n];
+        for r in &g.rules {
+            if let Some(v) = sets.get_mut(r.lhs as usize) {
+                v.push(r.rhs.clone());
+            }
+        }
+        for v in sets.iter_mut() {
+            v.sort();
+            v.dedup();
+        }
+        let mut first: HashMap<&[Vec<Sym>], u32> = HashMap::new();
+        let mut rep: Vec<u32> = (0..n as u32).collect();
+        for (x, set) in sets.iter().enumerate() {
+            if set.is_empty() {
+                continue;
+            }
+            rep[x] = *first.entry(set.as_slice()).or_insert(x as u32);
+        }
+        if rep.iter().enumerate().all(|(i, &r)| r as usize == i) {
+            break;
+        }
+        apply_nonterminal_map(g, trees, constituents, &rep);
+    }
+    before - g.nonterminals.len()
+}
+
+/// Renames nonterminal `x` to `rep[x]` (a representative `≤ x`), then
+/// renumbers the remaining ones compactly in order.
+fn apply_nonterminal_map(
+    g: &mut Grammar,
+    trees: &mut [Tree],
+    constituents: &mut Constituents,
+    rep: &[u32],
+) {
+    let n = rep.len();
+    let mut new_id = vec![0u32; n];
+    let mut names = Vec::new();
+    let mut next = 0u32;
+    for x in 0..n {
+        if rep[x] as usize == x {
+            new_id[x] = next;
+            names.push(if next == 0 {
+                "S".to_string()
+            } else {
+                format!("X{next}")
+            });
+            next += 1;
+        }
+    }
+    for x in 0..n {
+        new_id[x] = new_id[rep[x] as usize];
+    }
+    let map_sym = |s: Sym| match s {
+        Sym::N(x) => Sym::N(new_id[x as usize]),
+        t => t,
+    };
+    // Rewritten rules, duplicates joined; `None` for a dropped `X → X`.
+    let mut rules: Vec<Rule> = Vec::new();
+    let mut index: HashMap<(u32, Vec<Sym>), usize> = HashMap::new();
+    let mut rule_map: Vec<Option<usize>> = Vec::with_capacity(g.rules.len());
+    for r in &g.rules {
+        let lhs = new_id[r.lhs as usize];
+        let rhs: Vec<Sym> = r.rhs.iter().map(|&s| map_sym(s)).collect();
+        if rhs == [Sym::N(lhs)] {
+            rule_map.push(None);
+            continue;
+        }
+        let i = *index.entry((lhs, rhs.clone())).or_insert_with(|| {
+            rules.push(Rule { lhs, rhs, count: 0 });
+            rules.len() - 1
+        });
+        rules[i].count += r.count;
+        rule_map.push(Some(i));
+    }
+    // Group by left-hand side again (stable).
+    let mut order: Vec<usize> = (0..rules.len()).collect();
+    order.sort_by_key(|&i| (rules[i].lhs, i));
+    let mut pos = vec![0; rules.len()];
+    for (new, &old) in order.iter().enumerate() {
+        pos[old] = new;
+    }
+    let rule_map: Vec<Option<usize>> = rule_map.iter().map(|m| m.map(|i| pos[i])).collect();
+    g.rules = order.iter().map(|&i| rules[i].clone()).collect();
+    g.nonterminals = names;
+    g.start = new_id[g.start as usize];
+
+    fn fix(t: &mut Tree, new_id: &[u32], rule_map: &[Option<usize>]) {
+        loop {
+            let collapse = match t {
+                Tree::Leaf(_) => return,
+                Tree::Node { rule, children, .. } => {
+                    rule_map.get(*rule).copied().flatten().is_none() && children.len() == 1
+                }
+            };
+            if !collapse {
+                break;
+            }
+            let child = match t {
+                Tree::Node { children, .. } => children.pop(),
+                Tree::Leaf(_) => None,
+            };
+            match child {
+                Some(c) => *t = c,
+                None => break,
+            }
+        }
+        if let Tree::Node { nt, rule, children } = t {
+            *nt = new_id.get(*nt as usize).copied().unwrap_or(*nt);
+            if let Some(Some(r)) = rule_map.get(*rule) {
+                *rule = *r;
+            }
+            for c in children.iter_mut() {
+                fix(c, new_id, rule_map);
+            }
+        }
+    }
+    for t in trees.iter_mut() {
+        fix(t, &new_id, &rule_map);
+    }
+    for c in constituents.iter_mut() {
+        for x in c.iter_mut() {
+            x.2 = new_id.get(x.2 as usize).copied().unwrap_or(x.2);
+        }
+        let mut seen = std::collections::HashSet::new();
+        c.retain(|x| seen.insert(*x));
+    }
+}
 
 /// Builds trees and rules from the selected constituents.
 fn read_grammar(

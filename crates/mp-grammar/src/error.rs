@@ -41,6 +41,17 @@ pub enum GrammarError {
     /// A grammar without a terminating derivation for a nonterminal.
     #[error("nonterminal `{0}` has no terminating derivation")]
     NonTerminating(String),
+    /// A file whose content is wrong: the file, the field (or position) and
+    /// what is wrong with it.
+    #[error("{}: `{field}`: {reason}", path.display())]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The field, or the position in a text file.
+        field: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// An error from `mp-geom` (tracks, readers).
     #[error(transparent)]
     Geom(#[from] mp_geom::GeomError),
@@ -69,6 +80,18 @@ impl GrammarError {
     pub fn param(name: &'static str, reason: impl Into<String>) -> Self {
         GrammarError::InvalidParam {
             name,
+            reason: reason.into(),
+        }
+    }
+    /// Helper to build a [`GrammarError::File`].
+    pub fn file(
+        path: impl Into<std::path::PathBuf>,
+        field: impl Into<String>,
+        reason: impl Into<String>,
+    ) -> Self {
+        GrammarError::File {
+            path: path.into(),
+            field: field.into(),
             reason: reason.into(),
         }
     }

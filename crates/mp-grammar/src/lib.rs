@@ -31,11 +31,12 @@ pub use objective::ClusterQuality;
 pub use symbols::{identify_symbols, symbol_name, SymbolParams, SymbolSegment, SymbolString};
 pub mod abl;
 pub mod grammar;
+pub mod score;
 pub mod sentences;
 pub mod sequitur;
 pub mod strings;
 
-pub use abl::{AblParams, AblResult, Alignment, Corpus, Selection};
+pub use abl::{AblParams, AblResult, Alignment, Clustering, Corpus, Selection};
 pub use grammar::{DescriptionLength, Grammar, Rule, Sym, Tree};
 pub mod derive;
 pub mod model;

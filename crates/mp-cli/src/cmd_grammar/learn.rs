@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use mp_grammar::abl::{learn, AblParams, Alignment, Corpus, Selection};
+use mp_grammar::abl::{learn, AblParams, Alignment, Clustering, Corpus, Selection};
 use mp_grammar::model::{learn_grammar, SymbolsFile};
 use mp_grammar::sentences::PartitionParams;
 
@@ -35,6 +35,15 @@ pub enum SelectFlag {
     First,
 }
 
+/// ABL clustering of labels into nonterminals.
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum ClusterFlag {
+    /// Labels sharing a span merged transitively, then nonterminals with identical rules merged.
+    Equivalence,
+    /// One pass, first mapping wins (the reference description).
+    FirstMapping,
+}
+
 /// ABL options shared by `learn` and `learn-strings`.
 #[derive(Args, Debug, Clone)]
 pub struct AblOpts {
@@ -44,6 +53,9 @@ pub struct AblOpts {
     /// Selection method.
     #[arg(long, value_enum, default_value = AblParams::default().selection.as_str())]
     pub selection: SelectFlag,
+    /// Clustering of labels into nonterminals.
+    #[arg(long, value_enum, default_value = AblParams::default().clustering.as_str())]
+    pub clustering: ClusterFlag,
 }
 
 impl AblOpts {
@@ -62,6 +74,10 @@ impl AblOpts {
             selection: match self.selection {
                 SelectFlag::Branch => Selection::Branch,
                 SelectFlag::First => Selection::First,
+            },
+            clustering: match self.clustering {
+                ClusterFlag::Equivalence => Clustering::Equivalence,
+                ClusterFlag::FirstMapping => Clustering::FirstMapping,
             },
             seed,
         })
