@@ -7,17 +7,19 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo fmt --all --check
 cargo clippy --workspace --all-targets --quiet -- -D warnings
-# Tests that need the shared data sets (../shared/data or MP_DATA_DIR) skip without them and
-# list themselves here.
-export MP_SKIP_LOG="$PWD/target/skipped-data-tests.txt"
+# Tests that need the shared data sets (../shared/data or MP_DATA_DIR) or a model the set-up
+# could not provide skip without them and list themselves (test, what it needs) here.
+export MP_SKIP_LOG="$PWD/target/skipped-tests.txt"
 mkdir -p target
 rm -f "$MP_SKIP_LOG"
 cargo test --workspace --no-fail-fast 2>&1
 if [ -s "$MP_SKIP_LOG" ]; then
-    echo "data-set tests skipped: $(cut -f1 "$MP_SKIP_LOG" | sort -u | wc -l) (no ../shared/data or MP_DATA_DIR): see target/skipped-data-tests.txt"
-    cut -f1 "$MP_SKIP_LOG" | sort -u | sed 's/^/  /'
+    n_models=$(grep -P '\tmodels/' "$MP_SKIP_LOG" | cut -f1 | sort -u | wc -l || true)
+    n_data=$(grep -vP '\tmodels/' "$MP_SKIP_LOG" | cut -f1 | sort -u | wc -l || true)
+    echo "tests skipped: $(cut -f1 "$MP_SKIP_LOG" | sort -u | wc -l) ($n_data need the shared data sets: no ../shared/data or MP_DATA_DIR; $n_models need a model the set-up could not convert): see target/skipped-tests.txt"
+    sort -u "$MP_SKIP_LOG" | sed 's/^/  /; s/\t/  needs  /'
 else
-    echo "data-set tests skipped: 0"
+    echo "tests skipped: 0 (the shared data sets and every model were present)"
 fi
 # The Python package in the dev profile, which shares its compiled crates with the tests above.
 bash scripts/python.sh dev

@@ -1,8 +1,9 @@
 //! Where shared data lives: `MP_DATA_DIR` / `MP_SHARED_DIR`, or a `shared/`
 //! folder beside the workspace (found by walking up from the current
 //! directory and from the workspace root recorded at build time).
-//! `MP_NO_SHARED_DATA=1` hides the shared data sets (as on a clone without it);
-//! tests then skip through [`data_file_or_skip`], logging to `MP_SKIP_LOG`.
+//! `MP_NO_SHARED_DATA=1` hides the whole shared folder, its data sets and its
+//! converted models (as on a clone without it); tests then skip through
+//! [`data_file_or_skip`] or [`skip_test`], logging to `MP_SKIP_LOG`.
 
 use std::path::{Path, PathBuf};
 
@@ -29,8 +30,11 @@ fn candidates() -> Vec<PathBuf> {
 
 /// The shared folder (`…/shared`, holding `data/`, `models/`, `docs/`), if any.
 ///
-/// `MP_SHARED_DIR` wins when set.
+/// `MP_SHARED_DIR` wins when set; `MP_NO_SHARED_DATA` hides it.
 pub fn shared_dir() -> Option<PathBuf> {
+    if shared_data_disabled() {
+        return None;
+    }
     if let Ok(p) = std::env::var("MP_SHARED_DIR") {
         let p = PathBuf::from(p);
         return p.is_dir().then_some(p);
@@ -121,8 +125,16 @@ macro_rules! data_dir_or_return {
 }
 
 fn record_skip(rel: &Path, test: &str) {
-    let rel = rel.display();
-    eprintln!("skipped (no shared data): {test} needs {rel}");
+    skip_test(test, &rel.display().to_string());
+}
+
+/// For tests: records that `test` is skipped because `needs` (a shared data
+/// file, a model file) is missing: prints `skipped: {test} needs {needs}` to
+/// stderr and appends `{test}\t{needs}` to the file named by `MP_SKIP_LOG`
+/// (when set; write errors are ignored).
+pub fn skip_test(test: &str, needs: &str) {
+    let rel = needs;
+    eprintln!("skipped: {test} needs {rel}");
     if let Some(log) = std::env::var_os("MP_SKIP_LOG").filter(|s| !s.is_empty()) {
         use std::io::Write;
         if let Ok(mut f) = std::fs::OpenOptions::new()

@@ -33,3 +33,19 @@ pub fn reference(stem: &str) -> Option<Reference> {
         roi_from_detection: npz.by_name("roi_from_detection").unwrap(),
     })
 }
+
+/// The MoveNet model's path, or `None` (skip recorded): the set-up converts
+/// it only from the shared models or a `.tflite` the user gives.
+pub fn movenet_model() -> Option<PathBuf> {
+    use mp_pose::runtime::{model_path, ModelFile};
+    match model_path(ModelFile::MoveNetLightning) {
+        Ok(p) => Some(p),
+        Err(_) => {
+            mp_geom::paths::skip_test(
+                &mp_geom::paths::current_test_name(),
+                "models/movenet_singlepose_lightning_int8.onnx (`cargo xtask models --movenet-tflite FILE`)",
+            );
+            None
+        }
+    }
+}
