@@ -137,13 +137,20 @@ pub fn read_program(path: impl AsRef<Path>) -> Result<AbstractProgram> {
         path: path.to_path_buf(),
         source,
     })?;
+    program_from_str(&text, path)
+}
+
+/// Parses and validates an abstract program as [`read_program`] does: JSON
+/// when `path` ends in `.json`, the text form otherwise; `path` names the
+/// source in errors.
+pub fn program_from_str(text: &str, path: &Path) -> Result<AbstractProgram> {
     let prog: AbstractProgram = if path.extension().is_some_and(|e| e == "json") {
-        serde_json::from_str(&text).map_err(|source| AbstractError::Json {
+        serde_json::from_str(text).map_err(|source| AbstractError::Json {
             path: path.to_path_buf(),
             source,
         })?
     } else {
-        dsl::parse(&text).map_err(|e| match e {
+        dsl::parse(text).map_err(|e| match e {
             AbstractError::Parse {
                 line,
                 column,

@@ -193,7 +193,11 @@ fn read_json<T: for<'de> Deserialize<'de>>(path: &Path, format: &str) -> Result<
         path: path.to_path_buf(),
         source: e,
     })?;
-    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| GrammarError::Json {
+    parse_json(&text, path, format)
+}
+
+fn parse_json<T: for<'de> Deserialize<'de>>(text: &str, path: &Path, format: &str) -> Result<T> {
+    let v: serde_json::Value = serde_json::from_str(text).map_err(|e| GrammarError::Json {
         what: path.display().to_string(),
         source: e,
     })?;
@@ -210,6 +214,42 @@ fn read_json<T: for<'de> Deserialize<'de>>(path: &Path, format: &str) -> Result<
     })
 }
 
+/// Checks that the segments of `s` tile `0..n_frames` with symbols in
+/// `0..k`, that there are at least `k` segments and that the medoids are
+/// segments.
+fn check_symbols(s: &SymbolString, n_frames: usize) -> Result<()> {
+    let mut pos = 0;
+    for (i, seg) in s.segments.iter().enumerate() {
+        if seg.start != pos || seg.end <= seg.start || seg.symbol >= s.k {
+            return Err(GrammarError::Invalid(format!(
+                "segment {i} ({}..{}, symbol {}) does not continue at frame {pos} \
+                 with a symbol in 0..{}",
+                seg.start, seg.end, seg.symbol, s.k
+            )));
+        }
+        pos = seg.end;
+    }
+    if pos != s.n_frames || s.n_frames != n_frames {
+        return Err(GrammarError::Invalid(format!(
+            "segments end at frame {pos}, the motion has {n_frames} frames"
+        )));
+    }
+    if s.k > s.segments.len() {
+        return Err(GrammarError::Invalid(format!(
+            "{} symbols for {} segments",
+            s.k,
+            s.segments.len()
+        )));
+    }
+    if let Some(m) = s.medoids.iter().find(|&&m| m >= s.segments.len()) {
+        return Err(GrammarError::Invalid(format!(
+            "medoid segment {m} outside 0..{}",
+            s.segments.len()
+        )));
+    }
+    Ok(())
+}
+
 impl SymbolsFile {
     /// Writes the file (JSON, atomic).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
@@ -224,25 +264,7 @@ impl SymbolsFile {
     }
     /// Checks that the segments tile the motion with symbols in range.
     pub fn check(&self) -> Result<()> {
-        let s = &self.symbols;
-        let mut pos = 0;
-        for (i, seg) in s.segments.iter().enumerate() {
-            if seg.start != pos || seg.end <= seg.start || seg.symbol >= s.k {
-                return Err(GrammarError::Invalid(format!(
-                    "segment {i} ({}..{}, symbol {}) does not continue at frame {pos} \
-                     with a symbol in 0..{}",
-                    seg.start, seg.end, seg.symbol, s.k
-                )));
-            }
-            pos = seg.end;
-        }
-        if pos != s.n_frames || s.n_frames != self.source.n_frames {
-            return Err(GrammarError::Invalid(format!(
-                "segments end at frame {pos}, the motion has {} frames",
-                self.source.n_frames
-            )));
-        }
-        Ok(())
+        check_symbols(&self.symbols, self.source.n_frames)
     }
     /// Symbol index of each segment.
     pub fn string(&self) -> Vec<u32> {
@@ -312,10 +334,21 @@ impl GrammarModel {
     }
     /// Reads a model written by [`save`](Self::save).
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
-        let m: GrammarModel = read_json(path.as_ref(), MODEL_FORMAT)?;
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| GrammarError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+        Self::from_json(&text, path)
+    }
+    /// Parses model JSON text and checks it as [`load`](Self::load) does;
+    /// `path` names the source in errors.
+    pub fn from_json(text: &str, path: &Path) -> Result<Self> {
+        let m: GrammarModel = parse_json(text, path, MODEL_FORMAT)?;
         m.grammar
             .validate()
-            .map_err(|e| GrammarError::Invalid(format!("{}: {e}", path.as_ref().display())))?;
+            .and_then(|()| check_symbols(&m.symbols, m.source.n_frames))
+            .map_err(|e| GrammarError::Invalid(format!("{}: {e}", path.display())))?;
         Ok(m)
     }
 

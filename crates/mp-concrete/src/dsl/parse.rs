@@ -313,17 +313,28 @@ impl Parser {
         }
         let (args, close) = self.args()?;
         self.eat(&Tok::Semi);
-        let axes: Vec<String> = (0..dims).map(|k| axis_name(k, dims)).collect();
-        let mut allowed: Vec<String> = match name.as_str() {
-            "circular_motion" => ["center", "radius", "angle", "u", "v"]
-                .map(String::from)
-                .to_vec(),
-            _ => axes.clone(),
-        };
-        allowed.push("duration".into());
+        // The axes are named one by one, never listed in full: `dims` comes
+        // from the header and may be far larger than the statement.
+        const CIRCLE_KEYS: [&str; 5] = ["center", "radius", "angle", "u", "v"];
+        let circle = name == "circular_motion";
         for a in &args {
-            if !allowed.contains(&a.key) {
-                let list: Vec<String> = allowed.iter().map(|k| format!("`{k}`")).collect();
+            let ok = a.key == "duration"
+                || if circle {
+                    CIRCLE_KEYS.contains(&a.key.as_str())
+                } else {
+                    is_axis(&a.key, dims)
+                };
+            if !ok {
+                let mut list: Vec<String> = if circle {
+                    CIRCLE_KEYS.iter().map(|k| format!("`{k}`")).collect()
+                } else if dims <= 8 {
+                    (0..dims)
+                        .map(|k| format!("`{}`", axis_name(k, dims)))
+                        .collect()
+                } else {
+                    vec![format!("`x0` … `x{}`", dims - 1)]
+                };
+                list.push("`duration`".into());
                 return Err(perr(
                     a.key_at,
                     format!("one of {} for `{name}` in {dims}D", list.join(", ")),
@@ -331,6 +342,8 @@ impl Parser {
                 ));
             }
         }
+        // Lazily, so that a missing axis stops the loop at once.
+        let axes = (0..dims).map(|k| axis_name(k, dims));
         let get = |key: &str| args.iter().find(|a| a.key == key);
         let need =
             |key: &str| get(key).ok_or_else(|| perr(close, format!("`{key}=` in `{name}`"), "`)`"));
@@ -381,16 +394,16 @@ impl Parser {
         };
         let prim = match name.as_str() {
             "stationary" => {
-                let mut point = Vec::with_capacity(dims);
-                for ax in &axes {
-                    point.push(poly_of(need(ax)?, 0, "a number")?[0]);
+                let mut point = Vec::new();
+                for ax in axes {
+                    point.push(poly_of(need(&ax)?, 0, "a number")?[0]);
                 }
                 Primitive::Stationary { point }
             }
             "linear_motion" => {
                 let (mut start, mut velocity) = (Vec::new(), Vec::new());
-                for ax in &axes {
-                    let c = poly_of(need(ax)?, 1, "`velocity*t + start`")?;
+                for ax in axes {
+                    let c = poly_of(need(&ax)?, 1, "`velocity*t + start`")?;
                     velocity.push(c[0]);
                     start.push(c[1]);
                 }
@@ -398,8 +411,8 @@ impl Parser {
             }
             "spline_motion" => {
                 let mut coeffs = Vec::new();
-                for ax in &axes {
-                    let c = poly_of(need(ax)?, 3, "`a*t^3 + b*t^2 + c*t + d`")?;
+                for ax in axes {
+                    let c = poly_of(need(&ax)?, 3, "`a*t^3 + b*t^2 + c*t + d`")?;
                     coeffs.push([c[0], c[1], c[2], c[3]]);
                 }
                 Primitive::Spline { coeffs }
@@ -523,6 +536,18 @@ impl Parser {
             joints,
             segments,
         })
+    }
+}
+
+/// Whether `key` names an axis of a `dims`-dimensional program
+/// ([`axis_name`]: `x`, `y`, `z` up to 3D, else `x0`, `x1`, …).
+fn is_axis(key: &str, dims: usize) -> bool {
+    if dims <= 3 {
+        ["x", "y", "z"][..dims].contains(&key)
+    } else {
+        key.strip_prefix('x')
+            .and_then(|k| k.parse::<usize>().ok())
+            .is_some_and(|k| k < dims && axis_name(k, dims) == key)
     }
 }
 

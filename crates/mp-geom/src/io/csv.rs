@@ -67,6 +67,13 @@ pub fn read_csv(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
     let path = path.as_ref();
     opts.validate()?;
     let text = std::fs::read_to_string(path).map_err(|e| GeomError::io(path, e))?;
+    track_from_csv_str(&text, path, opts)
+}
+
+/// Parses CSV text (long or wide, detected from the header) as
+/// [`read_csv`] does; `path` names the source in errors.
+pub fn track_from_csv_str(text: &str, path: &Path, opts: &ReadOptions) -> Result<Track> {
+    opts.validate()?;
     let mut lines = text
         .lines()
         .enumerate()

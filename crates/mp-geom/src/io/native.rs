@@ -311,7 +311,12 @@ pub fn track_from_json_value(value: serde_json::Value, path: &Path) -> Result<Tr
 pub fn read_track_json(path: impl AsRef<Path>) -> Result<Track> {
     let path = path.as_ref();
     let text = std::fs::read_to_string(path).map_err(|e| GeomError::io(path, e))?;
-    let value: serde_json::Value = serde_json::from_str(&text)
+    track_from_json_str(&text, path)
+}
+
+/// Parses JSON text in the project's format; `path` names the source in errors.
+pub fn track_from_json_str(text: &str, path: &Path) -> Result<Track> {
+    let value: serde_json::Value = serde_json::from_str(text)
         .map_err(|e| GeomError::format(path, format!("invalid JSON: {e}")))?;
     track_from_json_value(value, path)
 }
@@ -425,7 +430,15 @@ fn check_skeleton_indices(sk: &Skeleton, j: usize, path: &Path) -> Result<()> {
 pub fn read_track_npy(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
     let path = path.as_ref();
     opts.validate()?;
-    let a = super::npz::read_npy(path)?;
+    let bytes = std::fs::read(path).map_err(|e| GeomError::io(path, e))?;
+    track_from_npy_bytes(&bytes, path, opts)
+}
+
+/// Decodes `.npy` bytes as [`read_track_npy`] does; `path` names the
+/// source in errors.
+pub fn track_from_npy_bytes(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Track> {
+    opts.validate()?;
+    let a = super::npz::NpyArray::from_bytes(bytes, &path.display().to_string())?;
     a.expect_shape("array", &[None, None, None])?;
     let pos = a
         .to_f64()?
