@@ -10,7 +10,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use mp_concrete::synthetic::synthetic_track;
-use mp_concrete::{synthesize, Scale, SynthParams};
+use mp_concrete::{segment_exhaustive, synthesize, Scale, SynthParams};
 
 /// Arguments of `cargo xtask bench`.
 #[derive(Args, Debug)]
@@ -44,6 +44,84 @@ fn workspace_root() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("."))
 }
 
+/// CPU seconds used by this process so far (user + system, Linux `/proc`), if known.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // fields after the command name in parentheses; utime and stime are the 14th and 15th fields
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ut: f64 = f.get(11)?.parse().ok()?;
+    let st: f64 = f.get(12)?.parse().ok()?;
+    Some((ut + st) / 100.0)
+}
+
+/// The default procedural performer (COCO-17, 567 frames) repeated `reps` times.
+fn repeated_performer(reps: usize) -> anyhow::Result<mp_geom::Track> {
+    let tr = mp_geom::performer::perform(&mp_geom::performer::PerformerParams::default())?.track_2d;
+    let pos: Vec<_> = (0..reps).map(|_| tr.positions()).collect();
+    let conf: Vec<_> = (0..reps).map(|_| tr.confidence()).collect();
+    Ok(mp_geom::Track::new(
+        ndarray::concatenate(ndarray::Axis(0), &pos)?,
+        Some(ndarray::concatenate(ndarray::Axis(0), &conf)?),
+        tr.fps(),
+        tr.units(),
+        tr.skeleton().clone(),
+    )?)
+}
+
+/// The 17-joint performer at 10,206 frames (default parameters: adaptive scale, λ = 1600),
+/// and the exhaustive reference DP against the search at 1,134 frames.
+fn harness_performer(md: &mut String) -> anyhow::Result<()> {
+    let params = SynthParams::default();
+    writeln!(
+        md,
+        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D, default `SynthParams`) repeated to T frames;          `search` is `mp_concrete::synthesize` (exact branch and bound), `exhaustive` the reference          `mp_concrete::segment_exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
+    )?;
+    writeln!(
+        md,
+        "| track | method | wall (s) | CPU (s) | segments | cost |"
+    )?;
+    writeln!(md, "|---|---|---:|---:|---:|---:|")?;
+    for (reps, exhaustive) in [(2usize, true), (18, false)] {
+        let track = repeated_performer(reps)?;
+        let c0 = cpu_seconds();
+        let t0 = Instant::now();
+        let syn = mp_concrete::synthesize_detailed(&track, &params)?;
+        let (wall, cpu) = (
+            t0.elapsed().as_secs_f64(),
+            cpu_seconds().zip(c0).map(|(a, b)| a - b),
+        );
+        let cpu = cpu.map_or("–".into(), |c| format!("{c:.2}"));
+        writeln!(
+            md,
+            "| performer ×{reps} ({} frames, 17 joints) | search | {wall:.3} | {cpu} | {} | {:.1} |",
+            track.n_frames(),
+            syn.program.n_segments(),
+            syn.segmentation.cost
+        )?;
+        eprintln!("performer ×{reps}: search {wall:.3} s");
+        if exhaustive {
+            let c0 = cpu_seconds();
+            let t0 = Instant::now();
+            let s = segment_exhaustive(&track, &params)?;
+            let (wall, cpu) = (
+                t0.elapsed().as_secs_f64(),
+                cpu_seconds().zip(c0).map(|(a, b)| a - b),
+            );
+            let cpu = cpu.map_or("–".into(), |c| format!("{c:.2}"));
+            writeln!(
+                md,
+                "| performer ×{reps} ({} frames, 17 joints) | exhaustive | {wall:.3} | {cpu} | {} | {:.1} |",
+                track.n_frames(),
+                s.n_segments(),
+                s.cost
+            )?;
+            eprintln!("performer ×{reps}: exhaustive {wall:.3} s");
+        }
+    }
+    Ok(())
+}
+
 fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     let params = SynthParams {
         scale: Scale::UnitScale { unit_scale: 1.0 },
@@ -52,33 +130,44 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     writeln!(
         md,
         "## Synthesis timing harness\n\nFull `mp_concrete::synthesize` (default parameters: fixed λ = 1600, W = 60, \
-         stationary/line/circle) of a seeded synthetic 13-joint 2D track \
-         (`mp_concrete::synthetic::synthetic_track(T, 7)`), release build, {} rayon threads.\n",
+         stationary/line/circle, Euclidean error; exact branch-and-bound segmentation, sequential, then the chosen \
+         segments fitted on the rayon pool) of a seeded synthetic 13-joint 2D track \
+         (`mp_concrete::synthetic::synthetic_track(T, 7)`), release build, {} rayon threads. \
+         CPU = user + system seconds of the process (other jobs sharing the machine inflate wall time, not CPU time).\n",
         rayon::current_num_threads()
     )?;
     writeln!(
         md,
-        "| frames T | runs | median time (s) | frames / s | segments |"
+        "| frames T | runs | median time (s) | median CPU (s) | frames / s | segments |"
     )?;
-    writeln!(md, "|---:|---:|---:|---:|---:|")?;
+    writeln!(md, "|---:|---:|---:|---:|---:|---:|")?;
     let mut times: Vec<(usize, f64)> = Vec::new();
     for &n in &a.sizes {
         let track = synthetic_track(n, 7)?;
         let runs = if n >= 100_000 { 1 } else { a.runs.max(1) };
         let mut ts = Vec::with_capacity(runs);
+        let mut cs = Vec::with_capacity(runs);
         let mut segs = 0;
         for _ in 0..runs {
+            let c0 = cpu_seconds();
             let t0 = Instant::now();
             let p = synthesize(&track, &params)?;
             ts.push(t0.elapsed().as_secs_f64());
+            if let (Some(a), Some(b)) = (cpu_seconds(), c0) {
+                cs.push(a - b);
+            }
             segs = p.n_segments();
         }
         ts.sort_by(f64::total_cmp);
+        cs.sort_by(f64::total_cmp);
         let med = ts[ts.len() / 2];
+        let cpu = cs
+            .get(cs.len() / 2)
+            .map_or("–".into(), |c| format!("{c:.2}"));
         eprintln!("T = {n}: {med:.3} s ({runs} runs), {segs} segments");
         writeln!(
             md,
-            "| {n} | {runs} | {med:.3} | {:.0} | {segs} |",
+            "| {n} | {runs} | {med:.3} | {cpu} | {:.0} | {segs} |",
             n as f64 / med
         )?;
         times.push((n, med));
@@ -94,6 +183,7 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     if let (Some(a1), Some(a10)) = (get(1_000), get(10_000)) {
         writeln!(md, "Scaling time(10k) / time(1k) = **{:.2}**.", a10 / a1)?;
     }
+    harness_performer(md)?;
     Ok(())
 }
 
