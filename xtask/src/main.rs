@@ -9,6 +9,7 @@ mod eval_intervals;
 mod eval_loops;
 mod eval_pose;
 mod eval_refine;
+mod eval_video;
 mod models;
 mod pyenv;
 mod setup;
@@ -57,6 +58,10 @@ enum Eval {
     Forecast(eval_forecast::EvalForecastArgs),
     /// Learned motion refinement: injected flaws (MPJPE), generated motion (FID, accuracy, diversity, multimodality), ablation.
     Refine(eval_refine::EvalRefineArgs),
+    /// Program-guided frame interpolation at 2×, 4×, 8× vs linear blending and FFmpeg minterpolate (KD of arms, PSNR, SSIM).
+    Interpolation(eval_video::EvalInterpolationArgs),
+    /// Video prediction by unrolling the last loop on pixels vs constant and nearest-neighbour frames (KD, PSNR, SSIM).
+    VideoPredict(eval_video::EvalVideoPredictArgs),
 }
 
 fn main() {
@@ -70,6 +75,8 @@ fn main() {
             Eval::Pose(a) => eval_pose::run(&a),
             Eval::Forecast(a) => eval_forecast::run(&a),
             Eval::Refine(a) => eval_refine::run(&a),
+            Eval::Interpolation(a) => eval_video::run_interpolation(&a),
+            Eval::VideoPredict(a) => eval_video::run_video_predict(&a),
         },
         Command::Setup(a) => setup::run(&a),
         Command::Models(a) => models::run(&a),

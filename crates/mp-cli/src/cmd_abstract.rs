@@ -131,14 +131,14 @@ impl From<Method> for ForecastMethod {
 /// Arguments of `mp predict`.
 #[derive(Args, Debug)]
 pub struct PredictArgs {
-    /// Input track.
+    /// Input track, or a video (continued for --seconds into -o OUT.mp4).
     pub track: PathBuf,
     /// Number of observed frames (from the start).
-    #[arg(long)]
-    pub observe: usize,
+    #[arg(long, required_unless_present = "seconds")]
+    pub observe: Option<usize>,
     /// Number of frames to predict.
-    #[arg(long)]
-    pub horizon: usize,
+    #[arg(long, required_unless_present = "seconds")]
+    pub horizon: Option<usize>,
     /// Method.
     #[arg(long, value_enum, default_value = ForecastMethod::default().as_str())]
     pub method: Method,
@@ -149,6 +149,8 @@ pub struct PredictArgs {
     pub opts: AnalysisOpts,
     #[command(flatten)]
     pub forecast: crate::cmd_forecast::ForecastOpts,
+    #[command(flatten)]
+    pub video: crate::cmd_video::VideoPredictOpts,
 }
 
 /// `mp abstract`: the abstract program of a track, written and summarised.
@@ -258,6 +260,17 @@ pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
 /// `mp predict`: the frames after the observed ones, by the chosen method
 /// (`mp_forecast::predict`), with their KD to the actual frames when the track has them.
 pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
+    if mp_pipeline::is_video(&a.track) {
+        return crate::cmd_video::predict_video_cmd(
+            &a.track,
+            a.video.seconds,
+            a.method.into(),
+            a.output.as_deref(),
+        );
+    }
+    let (Some(observe), Some(horizon)) = (a.observe, a.horizon) else {
+        anyhow::bail!("a track input needs --observe and --horizon");
+    };
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
     let mut opts = PredictOptions {
         method: a.method.into(),
@@ -266,7 +279,7 @@ pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
         ..PredictOptions::default()
     };
     opts.loop_params.analysis = a.opts.params();
-    let p = mp_forecast::predict(&track, a.observe, a.horizon, &opts)?;
+    let p = mp_forecast::predict(&track, observe, horizon, &opts)?;
     if let Some(text) = p.explanation() {
         eprintln!("{text}");
     }

@@ -12,6 +12,7 @@ mod cmd_grammar;
 mod cmd_pose;
 mod cmd_refine;
 mod cmd_run;
+mod cmd_video;
 mod progress;
 
 use clap::{Parser, Subcommand};
@@ -44,8 +45,12 @@ enum Command {
     Extend(cmd_abstract::ExtendArgs),
     /// Stochastic execution of an abstract program with a seed.
     Sample(cmd_abstract::SampleArgs),
-    /// Predict future frames of a track.
+    /// Predict future frames of a track, or continue a video by unrolling its last loop (--seconds).
     Predict(cmd_abstract::PredictArgs),
+    /// Repeat a counted loop of a video more or fewer times, on its own frames.
+    Edit(cmd_video::EditArgs),
+    /// Raise a video's frame rate 2, 4 or 8 times with frames guided by the motion program.
+    Interpolate(cmd_video::InterpolateArgs),
     /// The "statue" frame: after which the learned forecaster's accuracy improves most.
     Statue(cmd_forecast::StatueArgs),
     /// Write the procedural performer (jumping jacks, squats, arm circles, a swing) as a track.
@@ -66,18 +71,20 @@ enum Command {
 
 fn main() {
     let cli = Cli::parse();
+    progress::install_ctrl_c();
     let result: anyhow::Result<()> = match cli.command {
         Command::Extract(a) => cmd_pose::extract_cmd(&a),
         Command::Overlay(a) => cmd_pose::overlay_cmd(&a),
         Command::Fit(a) => cmd_concrete::fit(&a),
         Command::Execute(a) => cmd_concrete::execute(&a),
-    progress::install_ctrl_c();
         Command::Stats(a) => cmd_concrete::stats(&a),
         Command::Abstract(a) => cmd_abstract::abstract_cmd(&a),
         Command::Loops(a) => cmd_abstract::loops_cmd(&a),
         Command::Extend(a) => cmd_abstract::extend_cmd(&a),
         Command::Sample(a) => cmd_abstract::sample_cmd(&a),
         Command::Predict(a) => cmd_abstract::predict_cmd(&a),
+        Command::Edit(a) => cmd_video::edit_cmd(&a),
+        Command::Interpolate(a) => cmd_video::interpolate_cmd(&a),
         Command::Statue(a) => cmd_forecast::statue_cmd(&a),
         Command::Performer(a) => cmd_demo::performer_cmd(&a),
         Command::Demo(a) => cmd_demo::demo_cmd(&a),

@@ -276,21 +276,28 @@ impl VideoReader {
 
     /// Starts decoding a video already probed.
     pub fn from_info(info: VideoInfo) -> Result<Self> {
+        Self::spawn(info, None)
+    }
+
+    /// Starts decoding a video through an FFmpeg filter graph (`-vf`), e.g.
+    /// `minterpolate=fps=60`; `info` describes the filtered frames (the
+    /// filter must keep the frame size; `info.fps` is their rate).
+    pub fn with_filter(info: VideoInfo, filter: &str) -> Result<Self> {
+        Self::spawn(info, Some(filter))
+    }
+
+    fn spawn(info: VideoInfo, filter: Option<&str>) -> Result<Self> {
         let path = info.path.clone();
-        let mut child = Command::new("ffmpeg")
-            .args(["-v", "error", "-nostdin", "-i"])
+        let mut cmd = Command::new("ffmpeg");
+        cmd.args(["-v", "error", "-nostdin", "-i"])
             .arg(&path)
-            .args([
-                "-map",
-                "0:v:0",
-                "-fps_mode",
-                "passthrough",
-                "-f",
-                "rawvideo",
-                "-pix_fmt",
-                "rgb24",
-                "-",
-            ])
+            .args(["-map", "0:v:0"]);
+        match filter {
+            Some(f) => cmd.arg("-vf").arg(f),
+            None => cmd.args(["-fps_mode", "passthrough"]),
+        };
+        let mut child = cmd
+            .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())

@@ -1,0 +1,671 @@
+//! `mp interpolate`: in-between frames guided by the motion program.
+//!
+//! A first pass runs the pose model over the video (as `mp run` does) and
+//! fits the concrete program to the keypoints (`mp_pipeline::concrete_program`,
+//! the product's parameters). A second pass streams the frames two at a
+//! time: for the in-between time `i + j/k` the program gives the pose
+//! (plus the detected keypoints' offset from the program, interpolated
+//! linearly between the two frames), and both neighbouring frames are
+//! warped towards that pose and blended with weights `1 − j/k` and `j/k`.
+//!
+//! The warp is backward: each keypoint, and points along each bone, say
+//! where the pixel at its new position comes from; a smooth displacement
+//! field (Gaussian-weighted average of those displacements, fading to zero
+//! a few widths away from the body, σ = [`InterpParams::sigma_frac`] of the
+//! person's size) moves the rest, evaluated on a coarse grid and bilinearly
+//! upsampled; pixels are sampled bilinearly. Frames without a person are
+//! blended linearly.
+//!
+//! Baselines: [`InterpMethod::Linear`] (blending) and
+//! [`InterpMethod::Minterpolate`] (FFmpeg's motion-compensated
+//! `minterpolate` filter, `mi_mode=mci`).
+
+use std::path::{Path, PathBuf};
+
+use mp_concrete::{Program, Transition};
+use mp_geom::{CancelToken, Track};
+use mp_pipeline::{Input, Keep, Params, Silent};
+use mp_pose::video::VideoReader;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::error::{Result, VideoError};
+use crate::motion::MIN_CONFIDENCE;
+use crate::plan::{blend, AtomicVideo, RenderParams};
+
+/// The supported factors.
+pub const FACTORS: [usize; 3] = [2, 4, 8];
+
+/// How the in-between frames are made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub enum InterpMethod {
+    /// Warp both neighbours towards the program's pose, then blend (ours).
+    #[default]
+    Program,
+    /// Blend the neighbours.
+    Linear,
+    /// FFmpeg's `minterpolate` filter (motion-compensated).
+    Minterpolate,
+}
+
+impl InterpMethod {
+    /// Name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            InterpMethod::Program => "program",
+            InterpMethod::Linear => "linear",
+            InterpMethod::Minterpolate => "minterpolate",
+        }
+    }
+}
+
+/// Parameters of the program-guided warp.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InterpParams {
+    /// Width of a keypoint's influence, as a fraction of the person's size
+    /// (the larger side of the keypoints' box). Default 0.08.
+    pub sigma_frac: f64,
+    /// The displacement fades to zero this many widths from the body. Default 2.5.
+    pub decay_sigmas: f64,
+    /// Grid step (pixels) of the displacement field. Default 4.
+    pub grid: usize,
+    /// Points per bone besides its joints. Default 3.
+    pub bone_samples: usize,
+    /// Half-thickness of the body mask (warped pixels inside, background
+    /// outside), as a fraction of the person's size. Default 0.1.
+    pub body_radius_frac: f64,
+    /// Encoding.
+    pub render: RenderParams,
+}
+
+impl Default for InterpParams {
+    fn default() -> Self {
+        InterpParams {
+            sigma_frac: 0.08,
+            decay_sigmas: 2.5,
+            grid: 4,
+            bone_samples: 3,
+            body_radius_frac: 0.1,
+            render: RenderParams::default(),
+        }
+    }
+}
+
+impl InterpParams {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.sigma_frac.is_finite() && self.sigma_frac > 0.0 && self.sigma_frac <= 1.0) {
+            return Err(VideoError::param("sigma_frac", "must be in (0, 1]"));
+        }
+        if !(self.decay_sigmas.is_finite() && self.decay_sigmas > 0.0) {
+            return Err(VideoError::param("decay_sigmas", "must be > 0"));
+        }
+        if !(1..=64).contains(&self.grid) {
+            return Err(VideoError::param("grid", "must be in 1..=64"));
+        }
+        if !(self.body_radius_frac.is_finite()
+            && self.body_radius_frac > 0.0
+            && self.body_radius_frac <= 1.0)
+        {
+            return Err(VideoError::param("body_radius_frac", "must be in (0, 1]"));
+        }
+        if self.bone_samples > 32 {
+            return Err(VideoError::param("bone_samples", "must be at most 32"));
+        }
+        Ok(())
+    }
+}
+
+/// What an interpolation did.
+#[derive(Debug, Clone, Serialize)]
+pub struct InterpReport {
+    /// Factor.
+    pub factor: usize,
+    /// Method.
+    pub method: InterpMethod,
+    /// Input frames.
+    pub frames_in: usize,
+    /// Output frames (`(frames_in − 1)·factor + 1`).
+    pub frames_out: usize,
+    /// Input frame rate.
+    pub fps_in: f64,
+    /// Output frame rate.
+    pub fps_out: f64,
+    /// Frames where a person was seen.
+    pub person_frames: usize,
+    /// The output file, once written.
+    pub output: Option<PathBuf>,
+}
+
+/// Errors unless `factor` is one of [`FACTORS`].
+pub fn check_factor(factor: usize) -> Result<()> {
+    if FACTORS.contains(&factor) {
+        Ok(())
+    } else {
+        Err(VideoError::Factor(factor))
+    }
+}
+
+/// The keypoints of a video and the program fitted to them.
+pub struct Guide {
+    /// Keypoints (COCO-17, pixels).
+    pub track: Track,
+    /// The concrete program fitted to them.
+    pub program: Program,
+}
+
+impl Guide {
+    /// Runs the pose model over `input` and fits the program, as `mp run` does.
+    pub fn fit(input: &Path, analysis: &Params) -> Result<Self> {
+        let info = mp_pose::probe(input)?;
+        let (kp, _) = mp_pipeline::keypoints(
+            Input::open(input, None)?,
+            analysis,
+            Keep::default(),
+            &Silent,
+            &CancelToken::new(),
+        )?;
+        let track = kp.track;
+        if track.valid_count() == 0 || track.n_frames() < 2 {
+            return Err(VideoError::NoPerson(input.to_path_buf()));
+        }
+        let frame_px = Some(info.width.max(info.height) as f64);
+        let syn = mp_pipeline::concrete_program(&track, frame_px, analysis)?;
+        Ok(Guide {
+            track,
+            program: syn.program,
+        })
+    }
+
+    fn seen(&self, t: usize, j: usize) -> bool {
+        t < self.track.n_frames() && self.track.is_valid(t, j, MIN_CONFIDENCE)
+    }
+
+    /// Control points `(target, source offset)` for warping frames `i`
+    /// (`.0`) and `i + 1` (`.1`) to time `i + w`, and the person's size.
+    fn controls(&self, i: usize, w: f64, params: &InterpParams) -> Result<Option<Controls>> {
+        let nt = self.track.n_frames();
+        if i + 1 >= nt || i + 1 >= self.program.n_frames() {
+            return Ok(None);
+        }
+        let p = self
+            .program
+            .sample_frames(&[i as f64, i as f64 + w, (i + 1) as f64], Transition::Blend)
+            .map_err(|e| VideoError::Program(e.to_string()))?;
+        let nj = self.track.n_joints().min(p.dim().1);
+        let mut targets = vec![None; nj];
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for j in 0..nj {
+            let (va, vb) = (self.seen(i, j), self.seen(i + 1, j));
+            let ka = [self.track.point(i, j)[0], self.track.point(i, j)[1]];
+            let kb = [self.track.point(i + 1, j)[0], self.track.point(i + 1, j)[1]];
+            let mut t = [0.0; 2];
+            for d in 0..2 {
+                let ra = ka[d] - p[[0, j, d]];
+                let rb = kb[d] - p[[2, j, d]];
+                let r = match (va, vb) {
+                    (true, true) => (1.0 - w) * ra + w * rb,
+                    (true, false) => ra,
+                    (false, true) => rb,
+                    (false, false) => f64::NAN,
+                };
+                t[d] = p[[1, j, d]] + r;
+            }
+            if !(t[0].is_finite() && t[1].is_finite()) {
+                continue;
+            }
+            for (ok, k) in [(va, ka), (vb, kb)] {
+                if ok {
+                    for d in 0..2 {
+                        lo[d] = lo[d].min(k[d]);
+                        hi[d] = hi[d].max(k[d]);
+                    }
+                }
+            }
+            targets[j] = Some((t, va.then_some(ka), vb.then_some(kb)));
+        }
+        if !(lo[0].is_finite() && hi[0].is_finite()) {
+            return Ok(None);
+        }
+        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let mut ca = Vec::new();
+        let mut cb = Vec::new();
+        for (j, tj) in targets.iter().enumerate() {
+            let Some((t, ka, kb)) = tj else { continue };
+            let _ = j;
+            if let Some(k) = ka {
+                ca.push(([t[0], t[1]], [k[0] - t[0], k[1] - t[1]]));
+            }
+            if let Some(k) = kb {
+                cb.push(([t[0], t[1]], [k[0] - t[0], k[1] - t[1]]));
+            }
+        }
+        // Points along the bones.
+        let ns = params.bone_samples;
+        for &(p0, p1) in &self.track.skeleton().bones {
+            let (Some(Some(a)), Some(Some(b))) = (targets.get(p0), targets.get(p1)) else {
+                continue;
+            };
+            for s in 1..=ns {
+                let l = s as f64 / (ns + 1) as f64;
+                let t = [
+                    a.0[0] + l * (b.0[0] - a.0[0]),
+                    a.0[1] + l * (b.0[1] - a.0[1]),
+                ];
+                if let (Some(ka), Some(kb)) = (a.1, b.1) {
+                    let k = [ka[0] + l * (kb[0] - ka[0]), ka[1] + l * (kb[1] - ka[1])];
+                    ca.push((t, [k[0] - t[0], k[1] - t[1]]));
+                }
+                if let (Some(ka), Some(kb)) = (a.2, b.2) {
+                    let k = [ka[0] + l * (kb[0] - ka[0]), ka[1] + l * (kb[1] - ka[1])];
+                    cb.push((t, [k[0] - t[0], k[1] - t[1]]));
+                }
+            }
+        }
+        // The body as segments (bones, torso diagonals, and each joint as a
+        // point) at the target pose and in each frame.
+        let mut pairs: Vec<(usize, usize)> = self.track.skeleton().bones.clone();
+        pairs.extend(TORSO_DIAGONALS);
+        pairs.extend((0..nj).map(|j| (j, j)));
+        let (mut st, mut sa, mut sb) = (Vec::new(), Vec::new(), Vec::new());
+        for (p0, p1) in pairs {
+            let (Some(Some(a)), Some(Some(b))) = (targets.get(p0), targets.get(p1)) else {
+                continue;
+            };
+            st.push((a.0, b.0));
+            if let (Some(x), Some(y)) = (a.1, b.1) {
+                sa.push((x, y));
+            }
+            if let (Some(x), Some(y)) = (a.2, b.2) {
+                sb.push((x, y));
+            }
+        }
+        let sigma = (params.sigma_frac * size).max(2.0);
+        let radius = (params.body_radius_frac * size).max(2.0);
+        Ok(Some(Controls {
+            a: ca,
+            b: cb,
+            sigma,
+            radius,
+            seg_t: st,
+            seg_a: sa,
+            seg_b: sb,
+        }))
+    }
+}
+
+/// COCO-17 shoulder–hip diagonals, so the body mask covers the torso.
+const TORSO_DIAGONALS: [(usize, usize); 2] = [(5, 12), (6, 11)];
+
+type Segment = ([f64; 2], [f64; 2]);
+
+struct Controls {
+    a: Vec<([f64; 2], [f64; 2])>,
+    b: Vec<([f64; 2], [f64; 2])>,
+    sigma: f64,
+    radius: f64,
+    seg_t: Vec<Segment>,
+    seg_a: Vec<Segment>,
+    seg_b: Vec<Segment>,
+}
+
+/// A soft body mask on the grid: 1 within `r` of a segment, fading to 0 at `2r`.
+fn body_mask(segs: &[Segment], r: f64, g: usize, w: usize, h: usize) -> Vec<f32> {
+    let gw = (w - 1) / g + 2;
+    let gh = (h - 1) / g + 2;
+    (0..gw * gh)
+        .into_par_iter()
+        .map(|idx| {
+            let (x, y) = (((idx % gw) * g) as f64, ((idx / gw) * g) as f64);
+            let mut best = f64::INFINITY;
+            for (p, q) in segs {
+                let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+                let l2 = dx * dx + dy * dy;
+                let t = if l2 > 0.0 {
+                    (((x - p[0]) * dx + (y - p[1]) * dy) / l2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let (cx, cy) = (p[0] + t * dx - x, p[1] + t * dy - y);
+                best = best.min(cx * cx + cy * cy);
+            }
+            ((2.0 * r - best.sqrt()) / r).clamp(0.0, 1.0) as f32
+        })
+        .collect()
+}
+
+/// The displacement field of `controls` on a grid of step `g` covering the frame.
+fn field(
+    controls: &[([f64; 2], [f64; 2])],
+    sigma: f64,
+    decay: f64,
+    g: usize,
+    w: usize,
+    h: usize,
+) -> (Vec<[f32; 2]>, usize, usize) {
+    let gw = (w - 1) / g + 2;
+    let gh = (h - 1) / g + 2;
+    let inv = 1.0 / (2.0 * sigma * sigma);
+    let w0 = (-decay * decay / 2.0).exp();
+    let cut = (decay + 2.0) * sigma;
+    let cut2 = cut * cut;
+    let f: Vec<[f32; 2]> = (0..gw * gh)
+        .into_par_iter()
+        .map(|idx| {
+            let (x, y) = (((idx % gw) * g) as f64, ((idx / gw) * g) as f64);
+            let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+            for (t, u) in controls {
+                let d2 = (x - t[0]).powi(2) + (y - t[1]).powi(2);
+                if d2 > cut2 {
+                    continue;
+                }
+                let wt = (-d2 * inv).exp();
+                sx += wt * u[0];
+                sy += wt * u[1];
+                sw += wt;
+            }
+            let den = sw + w0;
+            [(sx / den) as f32, (sy / den) as f32]
+        })
+        .collect();
+    (f, gw, gh)
+}
+
+/// Bilinear sample of a grid of step `g` (`gw` columns) at pixel `(x, y)`.
+#[inline]
+fn grid_at<T: Copy>(
+    f: &[T],
+    gw: usize,
+    g: f32,
+    x: usize,
+    y: usize,
+    lerp: impl Fn(T, T, T, T, f32, f32) -> T,
+) -> T {
+    let (gx, gy) = (x as f32 / g, y as f32 / g);
+    let (x0, y0) = (gx.floor() as usize, gy.floor() as usize);
+    let (tx, ty) = (gx - x0 as f32, gy - y0 as f32);
+    lerp(
+        f[y0 * gw + x0],
+        f[y0 * gw + x0 + 1],
+        f[(y0 + 1) * gw + x0],
+        f[(y0 + 1) * gw + x0 + 1],
+        tx,
+        ty,
+    )
+}
+
+fn lerp1(a: f32, b: f32, c: f32, d: f32, tx: f32, ty: f32) -> f32 {
+    (1.0 - ty) * ((1.0 - tx) * a + tx * b) + ty * ((1.0 - tx) * c + tx * d)
+}
+
+fn lerp2(a: [f32; 2], b: [f32; 2], c: [f32; 2], d: [f32; 2], tx: f32, ty: f32) -> [f32; 2] {
+    [
+        lerp1(a[0], b[0], c[0], d[0], tx, ty),
+        lerp1(a[1], b[1], c[1], d[1], tx, ty),
+    ]
+}
+
+/// Bilinear sample of RGB `src` at `(sx, sy)` (clamped to the frame).
+#[inline]
+fn sample(src: &[u8], w: usize, h: usize, sx: f32, sy: f32, out: &mut [f32; 3]) {
+    let sx = sx.clamp(0.0, (w - 1) as f32);
+    let sy = sy.clamp(0.0, (h - 1) as f32);
+    let (ix, iy) = (sx.floor() as usize, sy.floor() as usize);
+    let (fx, fy) = (sx - ix as f32, sy - iy as f32);
+    let (ix1, iy1) = ((ix + 1).min(w - 1), (iy + 1).min(h - 1));
+    for (ch, o) in out.iter_mut().enumerate() {
+        let p = |xx: usize, yy: usize| src[(yy * w + xx) * 3 + ch] as f32;
+        *o = (1.0 - fy) * ((1.0 - fx) * p(ix, iy) + fx * p(ix1, iy))
+            + fy * ((1.0 - fx) * p(ix, iy1) + fx * p(ix1, iy1));
+    }
+}
+
+/// The frame between `a` (frame `i`) and `b` (frame `i + 1`) at `i + w`.
+///
+/// Inside the body at the target pose, both frames warped towards it and
+/// blended; elsewhere the background: each frame's own pixels, weighted by
+/// time and left out where that frame shows the person.
+fn between(
+    guide: Option<&Guide>,
+    a: &[u8],
+    b: &[u8],
+    i: usize,
+    w: f64,
+    (width, height): (usize, usize),
+    params: &InterpParams,
+) -> Result<Vec<u8>> {
+    let ctl = match guide {
+        Some(g) => g.controls(i, w, params)?,
+        None => None,
+    };
+    let Some(c) = ctl else {
+        return Ok(blend(a, b, w as f32));
+    };
+    let g = params.grid;
+    let gf = g as f32;
+    let d = params.decay_sigmas;
+    let cells = ((width - 1) / g + 2) * ((height - 1) / g + 2);
+    let fa = if c.a.is_empty() {
+        vec![[0.0f32; 2]; cells]
+    } else {
+        field(&c.a, c.sigma, d, g, width, height).0
+    };
+    let fb = if c.b.is_empty() {
+        vec![[0.0f32; 2]; cells]
+    } else {
+        field(&c.b, c.sigma, d, g, width, height).0
+    };
+    let mt = body_mask(&c.seg_t, c.radius, g, width, height);
+    let ma = body_mask(&c.seg_a, c.radius, g, width, height);
+    let mb = body_mask(&c.seg_b, c.radius, g, width, height);
+    let gw = (width - 1) / g + 2;
+    let wf = w as f32;
+    let mut out = vec![0u8; a.len()];
+    out.par_chunks_mut(width * 3)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let (mut pa, mut pb) = ([0.0f32; 3], [0.0f32; 3]);
+            for x in 0..width {
+                let m_t = grid_at(&mt, gw, gf, x, y, lerp1);
+                let m_a = grid_at(&ma, gw, gf, x, y, lerp1);
+                let m_b = grid_at(&mb, gw, gf, x, y, lerp1);
+                // Background: each frame where it does not show the person.
+                let mut ba = (1.0 - wf) * (1.0 - m_a);
+                let mut bb = wf * (1.0 - m_b);
+                if ba + bb < 1e-3 {
+                    ba = 1.0 - wf;
+                    bb = wf;
+                }
+                let (ba, bb) = (ba / (ba + bb), bb / (ba + bb));
+                let p = (y * width + x) * 3;
+                let mut bg = [0.0f32; 3];
+                for ch in 0..3 {
+                    bg[ch] = ba * a[p + ch] as f32 + bb * b[p + ch] as f32;
+                }
+                if m_t > 0.0 {
+                    let ua = grid_at(&fa, gw, gf, x, y, lerp2);
+                    let ub = grid_at(&fb, gw, gf, x, y, lerp2);
+                    sample(
+                        a,
+                        width,
+                        height,
+                        x as f32 + ua[0],
+                        y as f32 + ua[1],
+                        &mut pa,
+                    );
+                    sample(
+                        b,
+                        width,
+                        height,
+                        x as f32 + ub[0],
+                        y as f32 + ub[1],
+                        &mut pb,
+                    );
+                    for ch in 0..3 {
+                        let person = (1.0 - wf) * pa[ch] + wf * pb[ch];
+                        bg[ch] = m_t * person + (1.0 - m_t) * bg[ch];
+                    }
+                }
+                for ch in 0..3 {
+                    row[x * 3 + ch] = bg[ch].round().clamp(0.0, 255.0) as u8;
+                }
+            }
+        });
+    Ok(out)
+}
+
+/// Interpolates `input` by `factor` with `method`, handing each output frame
+/// (RGB) to `sink` in order: the input's frames with `factor − 1` new frames
+/// between each pair. `analysis` are the pipeline's parameters (pose model,
+/// program fitting).
+pub fn interpolate_frames(
+    input: &Path,
+    factor: usize,
+    method: InterpMethod,
+    params: &InterpParams,
+    analysis: &Params,
+    mut sink: impl FnMut(&[u8]) -> Result<()>,
+) -> Result<InterpReport> {
+    check_factor(factor)?;
+    params.validate()?;
+    let info = mp_pose::probe(input)?;
+    let (width, height) = (info.width, info.height);
+    let fps_out = info.fps * factor as f64;
+    if method == InterpMethod::Minterpolate {
+        let mut out_info = info.clone();
+        out_info.fps = fps_out;
+        let n_in = VideoReader::open(input)?.count();
+        let want = n_in.saturating_sub(1) * factor + 1;
+        let filter = format!("minterpolate=fps={fps_out}:mi_mode=mci");
+        let mut n = 0;
+        for f in VideoReader::with_filter(out_info, &filter)?.take(want) {
+            sink(&f?.rgb)?;
+            n += 1;
+        }
+        return Ok(InterpReport {
+            factor,
+            method,
+            frames_in: n_in,
+            frames_out: n,
+            fps_in: info.fps,
+            fps_out,
+            person_frames: 0,
+            output: None,
+        });
+    }
+    let guide = match method {
+        InterpMethod::Program => Some(Guide::fit(input, analysis)?),
+        _ => None,
+    };
+    let person_frames = guide.as_ref().map_or(0, |g| {
+        (0..g.track.n_frames())
+            .filter(|&t| (0..g.track.n_joints()).any(|j| g.seen(t, j)))
+            .count()
+    });
+    let mut prev: Option<Vec<u8>> = None;
+    let (mut n_in, mut n_out) = (0usize, 0usize);
+    for frame in VideoReader::open(input)? {
+        let frame = frame?;
+        if let Some(a) = prev.take() {
+            sink(&a)?;
+            n_out += 1;
+            for j in 1..factor {
+                let w = j as f64 / factor as f64;
+                let f = between(
+                    guide.as_ref(),
+                    &a,
+                    &frame.rgb,
+                    n_in - 1,
+                    w,
+                    (width, height),
+                    params,
+                )?;
+                sink(&f)?;
+                n_out += 1;
+            }
+        }
+        prev = Some(frame.rgb);
+        n_in += 1;
+    }
+    if let Some(a) = prev {
+        sink(&a)?;
+        n_out += 1;
+    }
+    Ok(InterpReport {
+        factor,
+        method,
+        frames_in: n_in,
+        frames_out: n_out,
+        fps_in: info.fps,
+        fps_out,
+        person_frames,
+        output: None,
+    })
+}
+
+/// [`interpolate_frames`] into the video file `output` at `factor` times the
+/// frame rate (written atomically).
+pub fn interpolate_video(
+    input: &Path,
+    factor: usize,
+    method: InterpMethod,
+    params: &InterpParams,
+    analysis: &Params,
+    output: &Path,
+) -> Result<InterpReport> {
+    check_factor(factor)?;
+    let info = mp_pose::probe(input)?;
+    let mut out = AtomicVideo::create(
+        output,
+        info.width,
+        info.height,
+        info.fps * factor as f64,
+        params.render.preset,
+    )?;
+    let mut report = interpolate_frames(input, factor, method, params, analysis, |rgb| {
+        out.write(rgb)
+    })?;
+    out.finish()?;
+    report.output = Some(output.to_path_buf());
+    Ok(report)
+}
+
+/// Writes every `step`-th frame of `input` (the first `max_frames` when
+/// given) losslessly (FFV1 in Matroska) to `output`, at `1/step` of the
+/// frame rate: the input of an interpolation experiment.
+pub fn keep_every(
+    input: &Path,
+    step: usize,
+    max_frames: Option<usize>,
+    output: &Path,
+) -> Result<usize> {
+    if step == 0 {
+        return Err(VideoError::param("step", "must be at least 1"));
+    }
+    let info = mp_pose::probe(input)?;
+    let fps = info.fps / step as f64;
+    let mut cmd = std::process::Command::new("ffmpeg");
+    cmd.args(["-v", "error", "-nostdin", "-y", "-i"])
+        .arg(input)
+        .args(["-map", "0:v:0", "-vf"])
+        .arg(format!("select=not(mod(n\\,{step})),setpts=N/({fps})/TB"))
+        .args(["-fps_mode", "passthrough", "-r"])
+        .arg(format!("{fps}"));
+    if let Some(m) = max_frames {
+        cmd.arg("-frames:v").arg(m.div_ceil(step).to_string());
+    }
+    let out = cmd
+        .args(["-c:v", "ffv1"])
+        .arg(output)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .map_err(|e| VideoError::io(output, e))?;
+    if !out.status.success() {
+        return Err(VideoError::Edit(format!(
+            "ffmpeg could not write {}: {}",
+            output.display(),
+            String::from_utf8_lossy(&out.stderr).trim()
+        )));
+    }
+    Ok(VideoReader::open(output)?.count())
+}

@@ -1,0 +1,39 @@
+//! # mp-video — motion programs on video pixels
+//!
+//! The programs and loops that `mp run` finds in a video, applied to the
+//! video's own frames:
+//!
+//! * [`edit`]: a counted loop repeated more or fewer times (`mp edit`): the
+//!   iteration closest to the loop's mean is repeated or removed, seams are
+//!   placed where pose and pixels match best within a few frames and
+//!   cross-faded.
+//! * [`predict`]: the video continued by unrolling its last loop on pixels
+//!   (`mp predict VIDEO --seconds S`), with the constant (frozen last frame)
+//!   and nearest-neighbour frame baselines.
+//! * [`interpolate`]: in-between frames from the program fitted on the
+//!   frames' keypoints (`mp interpolate`): both neighbouring frames are
+//!   warped towards the program's pose and blended; linear blending and
+//!   FFmpeg's `minterpolate` as baselines.
+//! * [`metrics`]: PSNR and SSIM, on the whole frame or a box.
+//!
+//! Frames stream through FFmpeg pipes (`mp_pose::video`): an output is a
+//! [`plan::Plan`] of source frames (copied or blended) rendered with a
+//! bounded cache of the frames still to be used, and every video is written
+//! to a temporary file in the output's folder, then renamed
+//! ([`plan::AtomicVideo`]).
+
+pub mod edit;
+pub mod error;
+pub mod interpolate;
+pub mod metrics;
+pub mod motion;
+pub mod plan;
+pub mod predict;
+
+pub use edit::{edit_video, plan_edit, EditChange, EditParams, EditReport};
+pub use error::{Result, VideoError};
+pub use interpolate::{interpolate_video, InterpMethod, InterpParams, InterpReport, FACTORS};
+pub use metrics::{psnr, ssim, PixelBox};
+pub use motion::{analyse_video, VideoMotion};
+pub use plan::{AtomicVideo, Plan, PlanFrame};
+pub use predict::{plan_prediction, predict_video, PredictMethod, PredictParams, PredictReport};
