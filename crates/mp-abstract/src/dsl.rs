@@ -355,7 +355,7 @@ impl Lexer {
     fn integer(&mut self, what: &str) -> Result<usize> {
         let at = self.pos;
         let v = self.number()?;
-        if v < 0.0 || v.fract() != 0.0 || v > 1e12 {
+        if v < 0.0 || v.fract() != 0.0 || v > MAX_INTEGER as f64 {
             self.pos = at;
             return self.err(format!("{what} must be a non-negative integer, found {v}"));
         }
@@ -368,7 +368,7 @@ impl Lexer {
     }
     fn point(&mut self, dims: usize) -> Result<Vec<f64>> {
         self.punct('(')?;
-        let mut v = Vec::with_capacity(dims);
+        let mut v = Vec::new();
         loop {
             v.push(self.number()?);
             if self.is_punct(',') {
@@ -407,7 +407,7 @@ fn parse_det(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<DetPrim> 
             return lx.err(format!("expected joint `{name}`, found `{got}`"));
         }
         lx.punct(':')?;
-        let mut v = Vec::with_capacity(3 * dims);
+        let mut v = Vec::new();
         for (i, key) in ["start", "mid", "end"].iter().enumerate() {
             if i > 0 {
                 lx.punct(',')?;
@@ -438,6 +438,10 @@ fn parse_prob(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<ProbPrim
         }
         lx.punct(':')?;
         let c = lx.integer("count")?;
+        if !dist_total_fits(&dist.counts, c) {
+            lx.pos -= 1;
+            return lx.err("duration counts overflow");
+        }
         *dist.counts.entry(v).or_insert(0) += c;
         if lx.is_punct(',') {
             lx.pos += 1;
@@ -450,7 +454,8 @@ fn parse_prob(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<ProbPrim
     lx.punct(')')?;
     lx.punct(')')?;
     lx.punct('{')?;
-    let n = 3 * dims;
+    let n = dims.saturating_mul(3);
+    let n2 = n.saturating_mul(n);
     let mut gs = Vec::with_capacity(joints.len());
     for name in joints {
         let got = lx.ident()?;
@@ -474,18 +479,17 @@ fn parse_prob(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<ProbPrim
         lx.keyword("cov")?;
         lx.punct('=')?;
         lx.punct('[')?;
-        let mut cov = Vec::with_capacity(n * n);
+        let mut cov = Vec::new();
         while !lx.is_punct(']') {
             cov.push(lx.number()?);
             if lx.is_punct(',') {
                 lx.pos += 1;
             }
         }
-        if cov.len() != n * n {
+        if cov.len() != n2 {
             return lx.err(format!(
-                "covariance has {} values, expected {}",
-                cov.len(),
-                n * n
+                "covariance has {} values, expected {n2}",
+                cov.len()
             ));
         }
         lx.punct(']')?;
@@ -497,6 +501,32 @@ fn parse_prob(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<ProbPrim
         duration: dist,
         joints: gs,
     })
+}
+
+/// Largest integer of the text form (durations, counts, iterations, dims).
+pub const MAX_INTEGER: usize = 1_000_000_000_000;
+
+/// Whether adding `c` to the counts keeps their total within `usize`.
+fn dist_total_fits(counts: &std::collections::BTreeMap<usize, usize>, c: usize) -> bool {
+    counts
+        .values()
+        .try_fold(0usize, |a, &x| a.checked_add(x))
+        .and_then(|t| t.checked_add(c))
+        .is_some()
+}
+
+/// Whether `s` reads back as one name in the text form (a joint name):
+/// letters, digits, `_`, `-`, `.` and `|`, not starting like a number.
+pub fn is_name(s: &str) -> bool {
+    let mut chars = s.chars();
+    let Some(first) = chars.next() else {
+        return false;
+    };
+    let second = chars.next();
+    let number_start = first.is_ascii_digit()
+        || ((first == '-' || first == '.')
+            && second.is_some_and(|n| n.is_ascii_digit() || n == '.'));
+    !number_start && s.chars().all(|c| c.is_alphanumeric() || "_-.|".contains(c))
 }
 
 /// Parses the text form back into a program (and validates it).
@@ -523,9 +553,11 @@ pub fn parse(src: &str) -> Result<AbstractProgram> {
     lx.keyword("dims")?;
     lx.punct('=')?;
     let dims = lx.integer("dims")?;
-    if !(1..=3).contains(&dims) {
+    if dims == 0 || (dims > 3 && units != "1") {
         lx.pos -= 1;
-        return lx.err(format!("dims must be 1, 2 or 3, found {dims}"));
+        return lx.err(format!(
+            "dims must be 1, 2 or 3 (any ≥ 1 with units=1), found {dims}"
+        ));
     }
     let unit_scale = if lx.is_punct(',') {
         lx.pos += 1;

@@ -82,10 +82,12 @@ impl From<FreqDist> for Vec<(usize, usize)> {
 }
 
 impl From<Vec<(usize, usize)>> for FreqDist {
+    /// Counts of a repeated value add up (saturating at `usize::MAX`).
     fn from(v: Vec<(usize, usize)>) -> Self {
         let mut counts = BTreeMap::new();
         for (k, c) in v {
-            *counts.entry(k).or_insert(0) += c;
+            let n: &mut usize = counts.entry(k).or_insert(0);
+            *n = n.saturating_add(c);
         }
         FreqDist { counts }
     }
@@ -102,7 +104,9 @@ impl FreqDist {
     }
     /// Total count.
     pub fn total(&self) -> usize {
-        self.counts.values().sum()
+        self.counts
+            .values()
+            .fold(0usize, |a, &c| a.saturating_add(c))
     }
     /// Most frequent value (smallest on ties); `None` when empty.
     pub fn mode(&self) -> Option<usize> {
@@ -120,8 +124,8 @@ impl FreqDist {
         if t == 0 {
             return None;
         }
-        let s: usize = self.counts.iter().map(|(v, c)| v * c).sum();
-        Some(((s as f64 / t as f64).round() as usize).max(1))
+        let s: f64 = self.counts.iter().map(|(&v, &c)| v as f64 * c as f64).sum();
+        Some(((s / t as f64).round() as usize).max(1))
     }
     /// Draws a value with probability proportional to its count, from `u ∈ [0, 1)`.
     pub fn sample_with(&self, u: f64) -> Option<usize> {
@@ -229,6 +233,24 @@ impl AbstractProgram {
                 self.dims
             )));
         }
+        if !matches!(self.units.as_str(), "px" | "m" | "1") {
+            return Err(AbstractError::param(
+                "units",
+                format!("must be px, m or 1, got `{}`", self.units),
+            ));
+        }
+        if self.joints.is_empty() {
+            return Err(AbstractError::Shape("no joints".into()));
+        }
+        if let Some(bad) = self.joints.iter().find(|n| !crate::dsl::is_name(n)) {
+            return Err(AbstractError::param(
+                "joints",
+                format!(
+                    "`{bad}` is not a name (letters, digits, `_`, `-`, `.`, `|`, \
+                     not starting like a number)"
+                ),
+            ));
+        }
         if !(self.unit_scale.is_finite() && self.unit_scale > 0.0) {
             return Err(AbstractError::param(
                 "unit_scale",
@@ -243,11 +265,18 @@ impl AbstractProgram {
         }
         let n = 3 * self.dims;
         let j = self.joints.len();
+        let max = crate::dsl::MAX_INTEGER;
         let check_det = |p: &DetPrim, at: &str| -> Result<()> {
             if p.duration == 0 {
                 return Err(AbstractError::param(
                     "duration",
                     format!("{at}: must be ≥ 1"),
+                ));
+            }
+            if p.duration > max {
+                return Err(AbstractError::param(
+                    "duration",
+                    format!("{at}: must be ≤ {max}, got {}", p.duration),
                 ));
             }
             if p.points.len() != j {
@@ -273,12 +302,33 @@ impl AbstractProgram {
             match s {
                 Stmt::Prim(p) => check_det(p, &format!("statement {si}"))?,
                 Stmt::Loop(l) => {
+                    if l.iterations > max {
+                        return Err(AbstractError::InvalidLoop(format!(
+                            "statement {si}: {} iterations, at most {max}",
+                            l.iterations
+                        )));
+                    }
                     if l.body.is_empty() {
                         return Err(AbstractError::InvalidLoop(format!(
                             "statement {si}: empty loop body"
                         )));
                     }
                     for (bi, b) in l.body.iter().enumerate() {
+                        let total = b
+                            .duration
+                            .counts
+                            .values()
+                            .try_fold(0usize, |a, &c| a.checked_add(c));
+                        if total.is_none() {
+                            return Err(AbstractError::InvalidLoop(format!(
+                                "statement {si}, body {bi}: `duration` counts overflow"
+                            )));
+                        }
+                        if b.duration.counts.iter().any(|(&v, &c)| v > max || c > max) {
+                            return Err(AbstractError::InvalidLoop(format!(
+                                "statement {si}, body {bi}: a `duration` value or count above {max}"
+                            )));
+                        }
                         if b.duration.total() == 0 || b.duration.counts.contains_key(&0) {
                             return Err(AbstractError::InvalidLoop(format!(
                                 "statement {si}, body {bi}: `duration` distribution is empty or has 0"
@@ -324,14 +374,13 @@ impl AbstractProgram {
             .iter()
             .map(|s| match s {
                 Stmt::Prim(p) => p.duration,
-                Stmt::Loop(l) => {
-                    l.iterations
-                        * l.body
-                            .iter()
-                            .map(|b| b.duration.mean_rounded().unwrap_or(1))
-                            .sum::<usize>()
-                }
+                Stmt::Loop(l) => l.iterations.saturating_mul(
+                    l.body
+                        .iter()
+                        .map(|b| b.duration.mean_rounded().unwrap_or(1))
+                        .fold(0usize, usize::saturating_add),
+                ),
             })
-            .sum()
+            .fold(0usize, usize::saturating_add)
     }
 }
