@@ -75,7 +75,7 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
     let params = SynthParams::default();
     writeln!(
         md,
-        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D, default `SynthParams`) repeated to T frames;          `search` is `mp_concrete::synthesize` (exact branch and bound), `exhaustive` the reference          `mp_concrete::segment_exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
+        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D, default `SynthParams`) repeated to T frames; `search` is `mp_concrete::synthesize` (exact branch and bound), `exhaustive` the reference `mp_concrete::segment_exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
     )?;
     writeln!(
         md,
@@ -142,6 +142,7 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     )?;
     writeln!(md, "|---:|---:|---:|---:|---:|---:|")?;
     let mut times: Vec<(usize, f64)> = Vec::new();
+    let mut cpu_times: Vec<(usize, f64)> = Vec::new();
     for &n in &a.sizes {
         let track = synthetic_track(n, 7)?;
         let runs = if n >= 100_000 { 1 } else { a.runs.max(1) };
@@ -171,6 +172,9 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
             n as f64 / med
         )?;
         times.push((n, med));
+        if let Some(c) = cs.get(cs.len() / 2) {
+            cpu_times.push((n, *c));
+        }
     }
     let get = |n: usize| times.iter().find(|(m, _)| *m == n).map(|(_, t)| *t);
     if let (Some(a10), Some(a100)) = (get(10_000), get(100_000)) {
@@ -182,6 +186,14 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     }
     if let (Some(a1), Some(a10)) = (get(1_000), get(10_000)) {
         writeln!(md, "Scaling time(10k) / time(1k) = **{:.2}**.", a10 / a1)?;
+    }
+    let cpu = |n: usize| cpu_times.iter().find(|(m, _)| *m == n).map(|(_, t)| *t);
+    if let (Some(a10), Some(a100)) = (cpu(10_000), cpu(100_000)) {
+        writeln!(
+            md,
+            "Scaling in CPU time: cpu(100k) / cpu(10k) = **{:.2}**.",
+            a100 / a10
+        )?;
     }
     harness_performer(md)?;
     Ok(())
