@@ -213,7 +213,7 @@ const HUGE_DURATION: &[u8] = b"{
 }";
 
 fn json(bytes: &[u8]) -> mp_abstract::Result<AbstractProgram> {
-    program_from_str(std::str::from_utf8(bytes).unwrap(), Path::new("fuzz.json"))
+    program_from_str(&String::from_utf8_lossy(bytes), Path::new("fuzz.json"))
 }
 
 fn text(src: &str) -> mp_abstract::Result<AbstractProgram> {

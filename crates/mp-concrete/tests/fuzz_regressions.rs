@@ -25,7 +25,7 @@ circular_motion(center=(220.56, 175.67), radius=108.23, angle=3.17*t + 777777777
 ";
 
 fn dsl(bytes: &[u8]) -> mp_concrete::Result<Program> {
-    Program::from_dsl(std::str::from_utf8(bytes).unwrap())
+    Program::from_dsl(&String::from_utf8_lossy(bytes))
 }
 
 #[test]
