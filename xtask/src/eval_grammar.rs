@@ -28,6 +28,12 @@
 //!   sentences (grammar only) and, for labelled motions, the mean run length
 //!   of the *labels* of the chosen source segments (how long the synthesis
 //!   stays in one exercise), in segments.
+//!
+//! Then, unless `--no-heldout`, the held-out evaluation
+//! ([`heldout`], `eval_grammar_heldout.rs`): symbols and grammar learned on
+//! all takes of a group but one, the held-out take labelled with the learned
+//! symbols and scored in bits per symbol under the grammar, the FSM and a
+//! unigram model.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -43,6 +49,9 @@ use mp_grammar::sentences::score_partition;
 use mp_grammar::synth::{mean_run_length, ngram_overlap, StitchParams, Synthesis};
 use mp_grammar::{symbol_name, DeriveParams, Fsm, FsmWeighting, PoseDistanceParams, SymbolParams};
 use serde_json::{json, Value};
+
+#[path = "eval_grammar_heldout.rs"]
+mod heldout;
 
 /// Arguments of `cargo xtask eval grammar`.
 #[derive(Args, Debug)]
@@ -71,6 +80,9 @@ pub struct EvalGrammarArgs {
     /// Seed of symbol identification and of the partition search.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Skip the held-out evaluation (learn on all takes but one, score the one left out).
+    #[arg(long)]
+    pub no_heldout: bool,
 }
 
 struct Input {
@@ -285,7 +297,7 @@ impl Acc {
     }
 }
 
-fn symbol_params(features: bool, k: usize, seed: u64) -> SymbolParams {
+pub(crate) fn symbol_params(features: bool, k: usize, seed: u64) -> SymbolParams {
     let mut p = SymbolParams {
         k,
         seed,
@@ -522,7 +534,13 @@ pub fn run(a: &EvalGrammarArgs) -> anyhow::Result<()> {
             }
         }
     }
+    let heldout_rows = if a.no_heldout {
+        Vec::new()
+    } else {
+        heldout::run(a)?
+    };
     let report = json!({
+        "heldout": heldout_rows,
         "data": a.data,
         "frame_step_bvh": a.frame_step,
         "seeds": a.seeds,
@@ -536,7 +554,11 @@ pub fn run(a: &EvalGrammarArgs) -> anyhow::Result<()> {
         }
     }
     mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
-    let md = markdown(&rows);
+    let mut md = markdown(&rows);
+    if !heldout_rows.is_empty() {
+        md.push('\n');
+        md.push_str(&heldout::markdown(&heldout_rows));
+    }
     print!("{md}");
     if let Some(m) = &a.markdown {
         mp_geom::io::write_atomic(m, md.as_bytes())?;

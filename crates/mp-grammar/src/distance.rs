@@ -375,6 +375,36 @@ impl PoseFeatures {
         Ok(self.segment_distance_unchecked(a, b))
     }
 
+    /// Segment distance (eq. 1) between segment `a` of this track and
+    /// segment `b` of `other` (same feature layout, e.g. a new take compared
+    /// with learned medoids). Errors when a segment is empty or outside its
+    /// track, or the feature lengths differ.
+    pub fn segment_distance_to(&self, a: Segment, other: &PoseFeatures, b: Segment) -> Result<f64> {
+        self.check_segment(a)?;
+        other.check_segment(b)?;
+        if self.dim != other.dim || self.stride != other.stride {
+            return Err(GrammarError::Invalid(format!(
+                "feature vectors of {} and {} values cannot be compared",
+                self.dim, other.dim
+            )));
+        }
+        let (la, lb) = (a.len(), b.len());
+        let mut sum = 0.0f64;
+        if la >= lb {
+            for m in 0..la {
+                let k = m * lb / la;
+                sum += (sq_dist(self.row(a.start + m), other.row(b.start + k)) as f64).sqrt();
+            }
+            Ok(sum / la as f64)
+        } else {
+            for m in 0..lb {
+                let k = m * la / lb;
+                sum += (sq_dist(self.row(a.start + k), other.row(b.start + m)) as f64).sqrt();
+            }
+            Ok(sum / lb as f64)
+        }
+    }
+
     /// Checks that a segment is non-empty and inside the track.
     pub fn check_segment(&self, s: Segment) -> Result<()> {
         if s.is_empty() || s.end > self.n_frames {

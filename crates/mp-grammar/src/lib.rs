@@ -17,6 +17,7 @@
 //!   regeneration (§6).
 //! * [`model`], [`data`]: the whole pipeline as JSON files, and motion input.
 
+pub mod assign;
 pub mod data;
 pub mod distance;
 pub mod error;

@@ -1,16 +1,19 @@
 //! `mp grammar …`: terminal symbols, grammar learning and grammar-driven
 //! synthesis (Park, Lee & Lee 2011) from the command line.
 //!
-//! One module per step: [`symbols`], [`learn`] (also `learn-strings`) and
-//! [`synth`].
+//! One module per step: [`symbols`] (also on new motion), [`learn`] (also
+//! `learn-strings`), [`synth`] and [`score`] (code length of a held-out
+//! symbol string).
 
 mod learn;
+mod score;
 mod symbols;
 mod synth;
 
 use clap::{Args, Subcommand};
 
 pub use learn::{LearnArgs, LearnStringsArgs};
+pub use score::ScoreArgs;
 pub use symbols::SymbolsArgs;
 pub use synth::SynthArgs;
 
@@ -25,6 +28,8 @@ pub enum GrammarCmd {
     Synth(SynthArgs),
     /// Learn a grammar with ABL from sentences, one per line, symbols separated by spaces.
     LearnStrings(LearnStringsArgs),
+    /// Code length (bits per symbol) of a symbol string under a learned grammar, its FSM and a unigram model.
+    Score(ScoreArgs),
 }
 
 /// Arguments of `mp grammar`.
@@ -41,5 +46,6 @@ pub fn grammar_cmd(a: &GrammarArgs) -> anyhow::Result<()> {
         GrammarCmd::Learn(x) => learn::learn_cmd(x),
         GrammarCmd::Synth(x) => synth::synth_cmd(x),
         GrammarCmd::LearnStrings(x) => learn::learn_strings_cmd(x),
+        GrammarCmd::Score(x) => score::score_cmd(x),
     }
 }

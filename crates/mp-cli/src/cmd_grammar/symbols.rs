@@ -1,9 +1,11 @@
-//! `mp grammar symbols`: K terminal symbols of a motion (GA + SA).
+//! `mp grammar symbols`: K terminal symbols of a motion (GA + SA), or, with
+//! `--model`, the learned symbols of a model assigned to a new motion.
 
 use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
+use mp_grammar::assign::load_learned_symbols;
 use mp_grammar::data::{read_motions, DEFAULT_FRAME_STEP};
 use mp_grammar::model::find_symbols;
 use mp_grammar::{PoseDistanceParams, SymbolParams};
@@ -20,6 +22,12 @@ pub struct SymbolsArgs {
     /// Output JSON.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Assign the symbols learned in this file (a grammar model or a symbols JSON) to the motion
+    /// instead of searching: segments on the learned cut grid, each labelled with the nearest
+    /// learned medoid. The frame step, distance and segment lengths are the learned ones; the
+    /// search options below are not used.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
     /// Keep every N-th frame of the input (e.g. 4: 120 fps BVH → 30 fps).
     #[arg(long, default_value_t = DEFAULT_FRAME_STEP)]
     pub frame_step: usize,
@@ -51,6 +59,9 @@ pub struct SymbolsArgs {
 
 /// Runs `mp grammar symbols`.
 pub fn symbols_cmd(a: &SymbolsArgs) -> anyhow::Result<()> {
+    if let Some(model) = &a.model {
+        return assign_cmd(a, model);
+    }
     let motion = read_motions(&a.track, a.frame_step)?;
     let mut p = SymbolParams {
         k: a.k,
@@ -77,6 +88,34 @@ pub fn symbols_cmd(a: &SymbolsArgs) -> anyhow::Result<()> {
         s.symbols.k,
         s.symbols.quality.f,
         s.symbols.quality.r,
+        s.symbols.quality.e_prime,
+        s.seconds,
+        a.output.display()
+    );
+    Ok(())
+}
+
+/// `mp grammar symbols --model FILE`: learned symbols on a new motion.
+fn assign_cmd(a: &SymbolsArgs, model: &std::path::Path) -> anyhow::Result<()> {
+    let learned = load_learned_symbols(model)?;
+    let train = learned.source.load(None).with_context(|| {
+        format!(
+            "reading the motion the symbols of {} were found on",
+            model.display()
+        )
+    })?;
+    let motion = read_motions(&a.track, learned.source.frame_step)?;
+    let s = learned.assign(&train, &motion)?;
+    s.save(&a.output)
+        .with_context(|| format!("writing {}", a.output.display()))?;
+    println!("{}", s.text);
+    eprintln!(
+        "{} frames at {:.1} fps → {} segments over the K = {} symbols of {}; E' {:.4}; {:.1} s; wrote {}",
+        s.symbols.n_frames,
+        s.symbols.fps,
+        s.symbols.segments.len(),
+        s.symbols.k,
+        model.display(),
         s.symbols.quality.e_prime,
         s.seconds,
         a.output.display()
