@@ -221,6 +221,7 @@ fn read_wide(
 ) -> Result<Track> {
     // Column role per header cell: (joint, axis 0/1/2 or 3 = confidence).
     let mut names: Vec<String> = Vec::new();
+    let mut index: HashMap<&str, usize> = HashMap::new();
     let mut roles: Vec<Option<(usize, usize)>> = Vec::with_capacity(cols.len());
     let mut has_z = false;
     for c in cols {
@@ -250,22 +251,24 @@ fn read_wide(
                 ))
             }
         };
-        let ji = match names.iter().position(|n| n == joint) {
-            Some(i) => i,
-            None => {
-                names.push(joint.to_string());
-                names.len() - 1
-            }
-        };
+        let ji = *index.entry(joint).or_insert_with(|| {
+            names.push(joint.to_string());
+            names.len() - 1
+        });
         roles.push(Some((ji, axis)));
     }
     if names.is_empty() {
         return Err(GeomError::format(path, "wide CSV has no joint columns"));
     }
     let d = if has_z { 3 } else { 2 };
+    // Which (joint, axis) columns exist, in one pass over the header.
+    let mut present = vec![[false; 4]; names.len()];
+    for &(ji, axis) in roles.iter().flatten() {
+        present[ji][axis] = true;
+    }
     for (ji, name) in names.iter().enumerate() {
         for (axis, axis_name) in ["x", "y", "z"].iter().enumerate().take(d) {
-            if !roles.contains(&Some((ji, axis))) {
+            if !present[ji][axis] {
                 return Err(GeomError::format(
                     path,
                     format!("joint `{name}` lacks its `_{axis_name}` column"),

@@ -183,6 +183,7 @@ pub fn track_from_npz(z: &Npz) -> Result<Track> {
             root,
         }
     } else {
+        check_has_values(t, j, d, &path)?;
         infer_skeleton(&ReadOptions::default(), j, &path)?
     };
     Track::new(pos, conf, fps, units, skeleton)
@@ -400,6 +401,19 @@ pub fn read_track_bincode(path: impl AsRef<Path>) -> Result<Track> {
     track_from_bincode_at(&bytes, path)
 }
 
+/// Refuses positions without values before a skeleton of `j` joints is
+/// inferred: with no frame (or no dimension) the joint count is not backed
+/// by any data and may be anything.
+fn check_has_values(t: usize, j: usize, d: usize, path: &Path) -> Result<()> {
+    if t == 0 || j == 0 || d == 0 {
+        return Err(GeomError::format(
+            path,
+            format!("positions of shape ({t}, {j}, {d}) hold no values"),
+        ));
+    }
+    Ok(())
+}
+
 /// Checks that a skeleton's bones, COCO-17 mapping and root refer to joints in `0..j`.
 fn check_skeleton_indices(sk: &Skeleton, j: usize, path: &Path) -> Result<()> {
     if sk.bones.iter().any(|&(a, b)| a >= j || b >= j)
@@ -444,7 +458,8 @@ pub fn track_from_npy_bytes(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Re
         .to_f64()?
         .into_dimensionality::<Ix3>()
         .map_err(|e| GeomError::format(path, e.to_string()))?;
-    let (_, j, d) = pos.dim();
+    let (t, j, d) = pos.dim();
+    check_has_values(t, j, d, path)?;
     let skeleton = infer_skeleton(opts, j, path)?;
     Track::new(pos, None, opts.fps, opts.units_for(d), skeleton)
         .map_err(|e| GeomError::format(path, e.to_string()))

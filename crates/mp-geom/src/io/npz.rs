@@ -104,6 +104,45 @@ fn parse_descr(descr: &str) -> Option<(DType, bool)> {
     Some((dtype, big))
 }
 
+/// Deepest bracket nesting of a supported `.npy` header: the dict, the shape tuple.
+const MAX_HEADER_NESTING: usize = 2;
+
+/// Refuses headers whose brackets nest deeper than a plain array's (the
+/// header parser takes exponential time on deeply nested or unclosed
+/// brackets). Bytes too short to hold a header are left to the parser.
+fn check_header_nesting(bytes: &[u8], source: &str) -> Result<()> {
+    if bytes.len() < 10 || !bytes.starts_with(b"\x93NUMPY") {
+        return Ok(());
+    }
+    let (len, start) = if bytes[6] == 1 {
+        (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10usize)
+    } else if bytes.len() >= 12 {
+        let l = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+        (usize::try_from(l).unwrap_or(usize::MAX), 12)
+    } else {
+        return Ok(());
+    };
+    let header = &bytes[start..bytes.len().min(start.saturating_add(len))];
+    let mut depth = 0usize;
+    for &b in header {
+        match b {
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                if depth > MAX_HEADER_NESTING {
+                    return Err(GeomError::format(
+                        source,
+                        "not a valid .npy header: brackets nest deeper than a dict holding \
+                         a shape (structured dtypes are not supported)",
+                    ));
+                }
+            }
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// One array read from an `.npy` file (or an `.npz` member), not yet
 /// converted: dtype, shape and the raw element bytes in file order.
 #[derive(Debug, Clone)]
@@ -123,6 +162,7 @@ pub struct NpyArray {
 impl NpyArray {
     /// Parses `.npy` bytes. `source` names the file in error messages.
     pub fn from_bytes(bytes: &[u8], source: &str) -> Result<Self> {
+        check_header_nesting(bytes, source)?;
         let mut cur = Cursor::new(bytes);
         let header = Header::from_reader(&mut cur)
             .map_err(|e| GeomError::format(source, format!("not a valid .npy header: {e}")))?;

@@ -1,0 +1,70 @@
+//! Inputs found by fuzzing (`crates/mp-fuzz`, targets `npy` and `csv`)
+//! that made a track reader abort or stall; each must now be a quick,
+//! typed error or a quick read.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use mp_geom::io::csv::{track_from_csv_str, track_to_csv_string, CsvLayout};
+use mp_geom::io::native::track_from_npy_bytes;
+use mp_geom::io::npz::NpyArray;
+use mp_geom::io::ReadOptions;
+use mp_geom::GeomError;
+
+/// Shape `(8, 99999999999, 0)`: no data, yet a generic skeleton of 10^11
+/// joints was built for it (allocation failure).
+const NPY_EMPTY_HUGE_JOINTS: &[u8] = b"\x93NUMPY\x01\x00\x80\x00{'descr': '<f4', 'fortran_order': False, 'shape': (8, 99999999999,\x090)}                                                         
+";
+
+/// A header opening 41 `{`: the header parser took exponential time.
+const NPY_NESTED_HEADER: &[u8] = b"\x93NUMPY\x01\x00\x94\x00{{{{{{{{{{{{{{{{{{{{{{{{{{{{{{{'descr': '<fT', 'fortran_order': False, 'shape': (2, 3, 2)}                                                         
+";
+
+/// A long CSV whose joint index 8880 makes a track of 8881 joints; writing
+/// it as wide CSV and reading that back was quadratic in the joints.
+const CSV_MANY_JOINTS: &[u8] = b"# a ent
+frame,joint,x,y,z,score
+0,08880,3,888888888888,1,2";
+
+fn quick(start: Instant) {
+    assert!(
+        start.elapsed() < Duration::from_secs(2),
+        "took {:?}",
+        start.elapsed()
+    );
+}
+
+#[test]
+fn npy_without_values_is_an_error() {
+    let start = Instant::now();
+    let e = track_from_npy_bytes(
+        NPY_EMPTY_HUGE_JOINTS,
+        Path::new("f.npy"),
+        &ReadOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(e, GeomError::Format { .. }), "{e}");
+    assert!(e.to_string().contains("hold no values"), "{e}");
+    quick(start);
+}
+
+#[test]
+fn deeply_nested_npy_header_is_an_error() {
+    let start = Instant::now();
+    let e = NpyArray::from_bytes(NPY_NESTED_HEADER, "f.npy").unwrap_err();
+    assert!(e.to_string().contains("nest deeper"), "{e}");
+    quick(start);
+}
+
+#[test]
+fn wide_csv_of_many_joints_reads_back_quickly() {
+    let start = Instant::now();
+    let path = Path::new("f.csv");
+    let opts = ReadOptions::default();
+    let t = track_from_csv_str(&String::from_utf8_lossy(CSV_MANY_JOINTS), path, &opts).unwrap();
+    assert_eq!(t.n_joints(), 8881);
+    let wide = track_to_csv_string(&t, CsvLayout::Wide).unwrap();
+    let u = track_from_csv_str(&wide, path, &opts).unwrap();
+    assert_eq!(u.positions().dim(), t.positions().dim());
+    quick(start);
+}
