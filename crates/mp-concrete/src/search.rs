@@ -486,25 +486,59 @@ fn cheap2(
             circle_lb: want_circle.then_some(q.circle_lb),
         };
     }
-    let (mut es, mut es2, mut el, mut el2, mut ec, mut ec2) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    if rules.stat && q.bbox < rules.bbox_thr {
+        // Stationary wins outright: only its error is needed.
+        let (mut e, mut e2) = (0.0, 0.0);
+        for i in acc.first..=acc.last {
+            let (dx, dy) = (q.mx - pts[i][0], q.my - pts[i][1]);
+            let ds = dx * dx + dy * dy;
+            e += wts[i] * ds.sqrt();
+            e2 += wts[i] * ds;
+        }
+        let c = if rules.squared { e2 } else { e };
+        return Cheap {
+            decided: Some(c),
+            best: c,
+            circle_lb: None,
+        };
+    }
+    // Two frames per step with separate sums (independent lanes the
+    // compiler can pair into vector instructions).
     let t_end = acc.end as f64;
-    for i in acc.first..=acc.last {
-        let w = wts[i];
-        let p = pts[i];
-        let tau = i as f64 - t_end;
+    #[inline(always)]
+    fn frame(q: &Quick, p: [f64; 2], w: f64, tau: f64, s: &mut [f64; 6]) {
         let (dx, dy) = (q.mx - p[0], q.my - p[1]);
         let ds = dx * dx + dy * dy;
-        es += w * ds.sqrt();
-        es2 += w * ds;
+        s[0] += w * ds.sqrt();
+        s[1] += w * ds;
         let (ex, ey) = (q.lx + q.vx * tau - p[0], q.ly + q.vy * tau - p[1]);
         let dl = ex * ex + ey * ey;
-        el += w * dl.sqrt();
-        el2 += w * dl;
+        s[2] += w * dl.sqrt();
+        s[3] += w * dl;
         let (cx, cy) = (p[0] - q.cx, p[1] - q.cy);
         let dc = (cx * cx + cy * cy).sqrt() - q.r;
-        ec += w * dc.abs();
-        ec2 += w * dc * dc;
+        s[4] += w * dc.abs();
+        s[5] += w * dc * dc;
     }
+    let (mut sa, mut sb) = ([0.0f64; 6], [0.0f64; 6]);
+    let mut i = acc.first;
+    let end = acc.last + 1;
+    while i + 1 < end {
+        frame(q, pts[i], wts[i], i as f64 - t_end, &mut sa);
+        frame(q, pts[i + 1], wts[i + 1], (i + 1) as f64 - t_end, &mut sb);
+        i += 2;
+    }
+    if i < end {
+        frame(q, pts[i], wts[i], i as f64 - t_end, &mut sa);
+    }
+    let (es, es2, el, el2, ec, ec2) = (
+        sa[0] + sb[0],
+        sa[1] + sb[1],
+        sa[2] + sb[2],
+        sa[3] + sb[3],
+        sa[4] + sb[4],
+        sa[5] + sb[5],
+    );
     let pick = |e: f64, e2: f64| if rules.squared { e2 } else { e };
     if rules.stat && (q.bbox < rules.bbox_thr || es / acc.sw < rules.mean_res_thr) {
         return Cheap {
