@@ -32,9 +32,15 @@
 //!
 //! Labels found on the same span name the same nonterminal. Two modes:
 //!
-//! * `Equivalence` (default): "shares a span with" is closed transitively
-//!   (union-find over all labels of all hypotheses; each class is named by
-//!   its smallest label, so `S` stays `S`). After the grammar is read (see
+//! * `Equivalence` (default): labels are one class when they sit on the
+//!   same hypothesis or on hypotheses with the same words (the same phrase,
+//!   in any sentence), closed transitively (union-find over all labels of
+//!   all hypotheses; each class is named by its smallest label, so `S` stays
+//!   `S`). Same-words matters: `st` alignments put one label per span, and
+//!   the labels that name one constituent sit on equal phrases of different
+//!   sentences (on the basketball strings below, `r` carries three labels
+//!   and `p m` two; same-span merging alone changes nothing there). After
+//!   the grammar is read (see
 //!   below), nonterminals with identical rule sets are merged — their
 //!   occurrences on right-hand sides renamed, duplicate rules joined (use
 //!   counts added), a unit rule `X → X` that a merge creates dropped (its
@@ -51,7 +57,9 @@
 //! basketball strings (`rfdpm rfdsm rdfsm rdpm rdsm rpm`, `st3` + `branch`)
 //! `FirstMapping` gives 8 nonterminals and 18 rules, with duplicates
 //! (`X4 → p m | s m` beside `X7 → p m`; `X2` and `X6` both derive `r`);
-//! `Equivalence` gives the figures in the test `basketball_six_strings`.
+//! `Equivalence` gives 4 nonterminals and 9 rules (`S → X1 X2 | X3 m`,
+//! `X1 → r | X1 f | X1 d`, `X2 → p m | d X2 | s m`, `X3 → X1 f s`; the
+//! paper's reference ABL: 5 and 11), tested in `basketball_six_strings`.
 //!
 //! # Selection ([`Selection`])
 //!
