@@ -10,7 +10,7 @@
 //! }
 //! ```
 //!
-//! [`print`] writes every number in its shortest round-trip form, so
+//! [`print`](fn@print) writes every number in its shortest round-trip form, so
 //! `parse(&print(&p)) == p` exactly; [`print_pretty`] rounds to a fixed
 //! number of decimals, like the paper's figures.
 
