@@ -482,12 +482,13 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
             let frames: Vec<usize> = (0..horizon).collect();
             let (kd_all, pairs) = kd(&pose, &truth, &frames, None);
             eprintln!(
-                "  {:<9} KD {kd_all:.2} px, PSNR {:.2} dB, SSIM {:.4}, cycle {:?} ({})",
+                "  {:<9} KD {kd_all:.2} px, PSNR {:.2} dB, SSIM {:.4}, cycle {:?} ({}, {})",
                 method.as_str(),
                 mean(&scores.psnr),
                 mean(&scores.ssim),
                 plan.cycle,
-                plan.used.as_str()
+                plan.used.as_str(),
+                plan.source
             );
             vres.insert(
                 method.as_str().into(),
@@ -499,6 +500,7 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
                     "psnr_box_db": num(mean(&scores.psnr_box)),
                     "ssim_box": num(mean(&scores.ssim_box)),
                     "used": plan.used.as_str(),
+                    "source": plan.source,
                     "cycle": [plan.cycle.0, plan.cycle.1],
                     "seconds": num(t0.elapsed().as_secs_f64()),
                 }),

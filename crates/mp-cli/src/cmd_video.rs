@@ -193,16 +193,17 @@ pub fn predict_video_cmd(
     .with_context(|| format!("predicting {}", video.display()))?;
     if r.used != r.method {
         eprintln!(
-            "no counted loop: the {} continuation is used",
+            "no loop or period found: the {} continuation is used",
             r.used.as_str()
         );
     }
     println!(
-        "{} observed + {} predicted frames ({:.2} s, {}; cycle {}..{}) written to {}",
+        "{} observed + {} predicted frames ({:.2} s, {} from the {}; cycle {}..{}) written to {}",
         r.observed,
         r.predicted,
         r.predicted as f64 / r.fps,
         r.used.as_str(),
+        r.source,
         r.cycle.0,
         r.cycle.1,
         output.display()

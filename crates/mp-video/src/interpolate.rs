@@ -72,8 +72,11 @@ pub struct InterpParams {
     /// Points per bone besides its joints. Default 3.
     pub bone_samples: usize,
     /// Half-thickness of the body mask (warped pixels inside, background
-    /// outside), as a fraction of the person's size. Default 0.1.
+    /// outside), as a fraction of the person's size. Default 0.06.
     pub body_radius_frac: f64,
+    /// Inside the body, the weight of the warped frames against plain
+    /// blending. Default 1.
+    pub warp_weight: f64,
     /// Encoding.
     pub render: RenderParams,
 }
@@ -85,7 +88,8 @@ impl Default for InterpParams {
             decay_sigmas: 2.5,
             grid: 4,
             bone_samples: 3,
-            body_radius_frac: 0.1,
+            body_radius_frac: 0.06,
+            warp_weight: 1.0,
             render: RenderParams::default(),
         }
     }
@@ -108,6 +112,9 @@ impl InterpParams {
             && self.body_radius_frac <= 1.0)
         {
             return Err(VideoError::param("body_radius_frac", "must be in (0, 1]"));
+        }
+        if !(0.0..=1.0).contains(&self.warp_weight) {
+            return Err(VideoError::param("warp_weight", "must be in [0, 1]"));
         }
         if self.bone_samples > 32 {
             return Err(VideoError::param("bone_samples", "must be at most 32"));
@@ -460,6 +467,7 @@ fn between(
     let mb = body_mask(&c.seg_b, c.radius, g, width, height);
     let gw = (width - 1) / g + 2;
     let wf = w as f32;
+    let ww = params.warp_weight as f32;
     let mut out = vec![0u8; a.len()];
     out.par_chunks_mut(width * 3)
         .enumerate()
@@ -502,7 +510,8 @@ fn between(
                         &mut pb,
                     );
                     for ch in 0..3 {
-                        let person = (1.0 - wf) * pa[ch] + wf * pb[ch];
+                        let lin = (1.0 - wf) * a[p + ch] as f32 + wf * b[p + ch] as f32;
+                        let person = ww * ((1.0 - wf) * pa[ch] + wf * pb[ch]) + (1.0 - ww) * lin;
                         bg[ch] = m_t * person + (1.0 - m_t) * bg[ch];
                     }
                 }

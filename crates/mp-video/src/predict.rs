@@ -8,7 +8,9 @@
 //! then played again and again, the last [`PredictParams::crossfade`] frames
 //! of each repeat faded into the frames one cycle earlier so that every seam
 //! joins frames that followed each other in the video. Without a counted
-//! loop the nearest-neighbour continuation is used.
+//! loop in the observed frames, the dominant period of the keypoints (else of
+//! the frame thumbnails) is the cycle's length; without any, the
+//! nearest-neighbour continuation is used.
 //!
 //! Baselines (§4.4 of the paper, on frames): [`PredictMethod::Constant`]
 //! holds the last frame; [`PredictMethod::Nearest`] plays on from the
@@ -17,6 +19,7 @@
 
 use std::path::{Path, PathBuf};
 
+use mp_abstract::{estimate_period, PeriodParams};
 use mp_pipeline::Params;
 use serde::Serialize;
 
@@ -82,7 +85,12 @@ pub struct PredictReport {
     pub method: PredictMethod,
     /// The method used (`Nearest` when no loop was counted).
     pub used: PredictMethod,
-    /// The cycle played `[start, end)` (empty for `Constant`).
+    /// Where the cycle's length came from: `counted loop` (the last loop
+    /// of `loops.json`), `autocorrelation period` (no loop counted in the
+    /// observed frames: the dominant period of the keypoints, else of the
+    /// frame thumbnails), `nearest frame` or `last frame`.
+    pub source: &'static str,
+    /// The cycle played `[start, end)` (one frame for `Constant`).
     pub cycle: (usize, usize),
     /// Observed frames.
     pub observed: usize,
@@ -124,6 +132,30 @@ fn nearest_cycle(m: &VideoMotion, min_lag: usize) -> Option<(usize, usize)> {
     best.map(|(j, _)| (j + 1, n))
 }
 
+/// The period of the last loop: the last counted loop's, else the dominant
+/// period of the keypoints (`mp_abstract::estimate_period`), else of the
+/// frame thumbnails.
+fn loop_period(m: &VideoMotion) -> Result<Option<(usize, &'static str)>> {
+    if let Some(iv) = m.counts.intervals.last() {
+        return Ok(Some((iv.period_frames, "counted loop")));
+    }
+    let n = m.n_frames();
+    let from = |t: &mp_geom::Track, p: &PeriodParams| -> Result<Option<usize>> {
+        Ok(estimate_period(t, 0, n.min(t.n_frames()), p)
+            .map_err(|e| VideoError::Edit(format!("period: {e}")))?
+            .map(|e| e.period_frames))
+    };
+    if let Some(p) = from(&m.track, &PeriodParams::default())? {
+        return Ok(Some((p, "autocorrelation period")));
+    }
+    if let Some(th) = &m.thumbnails {
+        if let Some(p) = from(th, &PeriodParams::frames())? {
+            return Ok(Some((p, "autocorrelation period")));
+        }
+    }
+    Ok(None)
+}
+
 /// The predicted frames (only those after the observed ones) of `m` for
 /// `horizon` frames.
 pub fn plan_prediction(
@@ -142,15 +174,21 @@ pub fn plan_prediction(
     let min_lag = ((params.min_lag_s * m.fps()).round() as usize).max(2);
     let mut used = method;
     let mut fade = 0;
+    let mut source = match method {
+        PredictMethod::Loop => "counted loop",
+        PredictMethod::Constant => "last frame",
+        PredictMethod::Nearest => "nearest frame",
+    };
     let cycle = match method {
         PredictMethod::Constant => (n - 1, n),
         PredictMethod::Nearest => nearest_cycle(m, min_lag).unwrap_or((n - 1, n)),
         PredictMethod::Loop => {
             m.require_person()?;
-            match m.counts.intervals.last() {
-                Some(iv) if iv.period_frames >= 2 => {
+            match loop_period(m)? {
+                Some((p, src)) if p >= 2 => {
                     fade = params.crossfade;
-                    let p = iv.period_frames.min(n - 1);
+                    source = src;
+                    let p = p.min(n - 1);
                     // The cycle ends at the video's end; its start is where
                     // the frame before it looks most like the last frame.
                     let s0 = n - p;
@@ -187,9 +225,13 @@ pub fn plan_prediction(
             plan.frames.push(PlanFrame::copy(f.min(n - 1)));
         }
     }
+    if used == PredictMethod::Nearest {
+        source = "nearest frame";
+    }
     Ok(PredictReport {
         method,
         used,
+        source,
         cycle,
         observed: n,
         predicted: horizon,
