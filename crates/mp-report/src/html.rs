@@ -219,13 +219,42 @@ fn listing_html(program: &Program, default_joint: usize) -> String {
     s
 }
 
-fn loops_table(intervals: &[RepetitiveInterval], fps: f64) -> String {
+/// `mp edit` command lines offered for each loop when the input is a video
+/// (`--loop` counts from 0 as in loops.json).
+fn edit_command(title: &str, loop_index: usize) -> Option<String> {
+    const VIDEO: [&str; 6] = ["mp4", "mov", "avi", "webm", "mkv", "m4v"];
+    let (stem, ext) = title.rsplit_once('.')?;
+    if !VIDEO.contains(&ext.to_ascii_lowercase().as_str()) {
+        return None;
+    }
+    let quote = |s: &str| {
+        if s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "._-/".contains(c))
+        {
+            s.to_string()
+        } else {
+            format!("'{}'", s.replace('\'', r"'\''"))
+        }
+    };
+    Some(format!(
+        "mp edit {} --loop {loop_index} --add 1 -o {}",
+        quote(title),
+        quote(&format!("{stem}_loop{loop_index}_plus1.mp4"))
+    ))
+}
+
+fn loops_table(intervals: &[RepetitiveInterval], fps: f64, title: &str) -> String {
     if intervals.is_empty() {
         return r#"<div class="empty">No repetition was detected in this motion.</div>"#.into();
     }
+    let editable = edit_command(title, 0).is_some();
     let mut s = String::from(
-        r#"<table class="loops"><thead><tr><th>loop</th><th>frames</th><th>seconds</th><th>body</th><th>iterations</th><th>count</th></tr></thead><tbody>"#,
+        r#"<table class="loops"><thead><tr><th>loop</th><th>frames</th><th>seconds</th><th>body</th><th>iterations</th><th>count</th>"#,
     );
+    if editable {
+        s.push_str(r#"<th>repeat once more (copy)</th>"#);
+    }
+    s.push_str("</tr></thead><tbody>");
     for (i, iv) in intervals.iter().enumerate() {
         let mut iters = String::from(r#"<div class="iters">"#);
         for k in 0..iv.iterations {
@@ -243,7 +272,7 @@ fn loops_table(intervals: &[RepetitiveInterval], fps: f64) -> String {
         iters.push_str("</div>");
         let _ = write!(
             s,
-            r#"<tr><td>{}</td><td>{}–{}</td><td>{:.2}–{:.2}</td><td>{} primitives</td><td>{iters}</td><td class="count">×{}</td></tr>"#,
+            r#"<tr><td>{}</td><td>{}–{}</td><td>{:.2}–{:.2}</td><td>{} primitives</td><td>{iters}</td><td class="count">×{}</td>"#,
             i + 1,
             iv.start_frame,
             iv.end_frame.saturating_sub(1),
@@ -252,6 +281,10 @@ fn loops_table(intervals: &[RepetitiveInterval], fps: f64) -> String {
             iv.body_size,
             iv.count
         );
+        if let Some(cmd) = edit_command(title, i) {
+            let _ = write!(s, r#"<td><code class="cmd">{}</code></td>"#, esc(&cmd));
+        }
+        s.push_str("</tr>");
     }
     s.push_str("</tbody></table>");
     s
@@ -516,7 +549,7 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
         header = esc(&header(program, NumberFormat::Fixed(2))),
         listing = listing_html(program, default_joint),
         timeline = input.timeline_svg,
-        loops = loops_table(intervals, program.fps),
+        loops = loops_table(intervals, program.fps, input.title),
         abstract_text = esc(input.abstract_text),
         version = env!("CARGO_PKG_VERSION"),
         data = json_for_script(&data)?,
@@ -565,5 +598,32 @@ mod tests {
         assert_eq!(v["frames"], 16);
         assert_eq!(v["kp"].as_array().unwrap().len(), 16 * 2 * 2);
         assert_eq!(v["kinds"][1], "12"); // line, circle
+    }
+
+    #[test]
+    fn video_loops_offer_the_edit_command() {
+        assert_eq!(
+            edit_command("squats.mp4", 0).unwrap(),
+            "mp edit squats.mp4 --loop 0 --add 1 -o squats_loop0_plus1.mp4"
+        );
+        assert_eq!(
+            edit_command("my clip.MOV", 2).unwrap(),
+            "mp edit 'my clip.MOV' --loop 2 --add 1 -o 'my clip_loop2_plus1.mp4'"
+        );
+        assert!(edit_command("track.npz", 0).is_none());
+        let table = loops_table(
+            &[RepetitiveInterval {
+                start_frame: 0,
+                end_frame: 30,
+                body_size: 2,
+                iterations: 2,
+                boundaries: vec![0, 15, 30],
+                count: 2,
+                score: 1.0,
+            }],
+            30.0,
+            "a.mp4",
+        );
+        assert!(table.contains("mp edit a.mp4 --loop 0"), "{table}");
     }
 }
