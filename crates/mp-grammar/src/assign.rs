@@ -321,6 +321,24 @@ mod tests {
     }
 
     #[test]
+    fn cross_track_distance_matches_the_single_track_one() {
+        let f = feats(&[(7, 0.0), (5, 3.0), (9, 1.0)]);
+        for (a, b) in [((0, 7), (7, 12)), ((2, 20), (5, 9)), ((3, 4), (0, 21))] {
+            let (a, b) = (Segment::new(a.0, a.1), Segment::new(b.0, b.1));
+            let d1 = f.segment_distance(a, b).unwrap();
+            let d2 = f.segment_distance_to(a, &f, b).unwrap();
+            let d3 = f.segment_distance_to(b, &f, a).unwrap();
+            assert!(
+                (d1 - d2).abs() < 1e-9 && (d1 - d3).abs() < 1e-9,
+                "{d1} {d2} {d3}"
+            );
+        }
+        assert!(f
+            .segment_distance_to(Segment::new(0, 30), &f, Segment::new(0, 3))
+            .is_err());
+    }
+
+    #[test]
     fn bad_input_is_an_error() {
         let train = feats(&[(10, 0.0), (10, 5.0)]);
         let mut learned = SymbolString {
