@@ -10,7 +10,7 @@
 //! is written.
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mp_pose::video::{VideoReader, VideoWriter};
 
@@ -233,8 +233,7 @@ pub fn render_to_file(
 /// removed and the output is left as it was.
 pub struct AtomicVideo {
     writer: Option<VideoWriter>,
-    temp: PathBuf,
-    target: PathBuf,
+    file: Option<mp_geom::io::PartialFile>,
 }
 
 impl AtomicVideo {
@@ -246,30 +245,12 @@ impl AtomicVideo {
         fps: f64,
         preset: &str,
     ) -> Result<Self> {
-        let dir = match target.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        if !dir.is_dir() {
-            return Err(VideoError::io(
-                &dir,
-                std::io::Error::new(std::io::ErrorKind::NotFound, "no such folder"),
-            ));
-        }
-        let name = target
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "video.mp4".into());
-        let ext = target
-            .extension()
-            .map(|e| e.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "mp4".into());
-        let temp = dir.join(format!(".{name}.partial-{}.{ext}", std::process::id()));
-        let writer = VideoWriter::create_with_preset(&temp, width, height, fps, preset)?;
+        // Registered, so an interrupted process removes it (see `mp_geom::io::PartialFile`).
+        let file = mp_geom::io::PartialFile::new(target)?;
+        let writer = VideoWriter::create_with_preset(file.path(), width, height, fps, preset)?;
         Ok(AtomicVideo {
             writer: Some(writer),
-            temp,
-            target: target.to_path_buf(),
+            file: Some(file),
         })
     }
 
@@ -284,22 +265,20 @@ impl AtomicVideo {
     /// Finishes encoding and renames the file onto the target; returns the
     /// number of frames written.
     pub fn finish(mut self) -> Result<usize> {
-        let writer = self
-            .writer
-            .take()
-            .ok_or_else(|| VideoError::Edit("the encoder is closed".into()))?;
+        let (Some(writer), Some(file)) = (self.writer.take(), self.file.take()) else {
+            return Err(VideoError::Edit("the encoder is closed".into()));
+        };
         let n = writer.finish()?;
-        std::fs::rename(&self.temp, &self.target).map_err(|e| VideoError::io(&self.target, e))?;
+        file.commit()?;
         Ok(n)
     }
 }
 
 impl Drop for AtomicVideo {
     fn drop(&mut self) {
-        if let Some(w) = self.writer.take() {
-            drop(w);
-            let _ = std::fs::remove_file(&self.temp);
-        }
+        // The encoder stops before its temporary file is removed.
+        drop(self.writer.take());
+        drop(self.file.take());
     }
 }
 

@@ -44,8 +44,85 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     let mut reg = in_flight();
     reg.retain(|p| p != &tmp_path);
     written?;
-    tmp.persist(path).map_err(|e| GeomError::io(path, e.error))?;
+    tmp.persist(path)
+        .map_err(|e| GeomError::io(path, e.error))?;
     Ok(())
+}
+
+/// A file that another writer fills (e.g. an encoder process) at a
+/// temporary path in the target's folder, registered like the temporary
+/// files of [`write_atomic`]: [`PartialFile::commit`] renames it onto the
+/// target; dropped uncommitted, or abandoned at an interruption, it is
+/// removed and the target is left as it was.
+#[derive(Debug)]
+pub struct PartialFile {
+    temp: PathBuf,
+    target: PathBuf,
+    committed: bool,
+}
+
+impl PartialFile {
+    /// Registers a temporary path beside `target` (same extension, so tools
+    /// that pick a format by extension keep working). The folder must exist.
+    pub fn new(target: impl AsRef<Path>) -> Result<Self> {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static NEXT: AtomicUsize = AtomicUsize::new(0);
+        let target = target.as_ref().to_path_buf();
+        let dir = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        if !dir.is_dir() {
+            return Err(GeomError::io(
+                &dir,
+                std::io::Error::new(std::io::ErrorKind::NotFound, "no such folder"),
+            ));
+        }
+        let ext = target
+            .extension()
+            .map(|e| format!(".{}", e.to_string_lossy()))
+            .unwrap_or_default();
+        let temp = dir.join(format!(
+            ".mp-tmp-{}-{}{ext}",
+            std::process::id(),
+            NEXT.fetch_add(1, Ordering::Relaxed)
+        ));
+        in_flight().push(temp.clone());
+        Ok(PartialFile {
+            temp,
+            target,
+            committed: false,
+        })
+    }
+
+    /// The temporary path to write to.
+    pub fn path(&self) -> &Path {
+        &self.temp
+    }
+
+    /// The final path.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Renames the finished file onto the target.
+    pub fn commit(mut self) -> Result<()> {
+        let mut reg = in_flight();
+        reg.retain(|p| p != &self.temp);
+        std::fs::rename(&self.temp, &self.target).map_err(|e| GeomError::io(&self.target, e))?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for PartialFile {
+    fn drop(&mut self) {
+        if !self.committed {
+            let mut reg = in_flight();
+            reg.retain(|p| p != &self.temp);
+            let _ = std::fs::remove_file(&self.temp);
+        }
+    }
 }
 
 /// Removes every temporary file that [`write_atomic`] has not yet renamed
@@ -72,6 +149,24 @@ mod tests {
         assert_eq!(std::fs::read(&p).unwrap(), b"new");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
         assert!(in_flight().is_empty());
+    }
+
+    #[test]
+    fn a_partial_file_is_renamed_on_commit_and_removed_on_drop() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("v.mp4");
+        std::fs::write(&target, b"old").unwrap();
+        let p = PartialFile::new(&target).unwrap();
+        assert!(p.path().extension().is_some_and(|e| e == "mp4"));
+        std::fs::write(p.path(), b"half").unwrap();
+        drop(p);
+        assert_eq!(std::fs::read(&target).unwrap(), b"old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        let p = PartialFile::new(&target).unwrap();
+        std::fs::write(p.path(), b"new").unwrap();
+        p.commit().unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
     #[test]

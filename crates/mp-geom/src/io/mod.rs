@@ -28,7 +28,7 @@ pub mod native;
 pub mod npz;
 pub mod openpose;
 
-pub use atomic::{abandon_partial_writes, write_atomic};
+pub use atomic::{abandon_partial_writes, write_atomic, PartialFile};
 pub use native::{track_from_bincode, track_to_bincode};
 
 use std::path::Path;
