@@ -5,16 +5,20 @@
 # all) from the CPU's instruction sets and has no option to restrict them, so
 # emulation is how the suite is shown to hold on such CPUs.
 #
-#   bash scripts/test-avx2.sh [crate ...]    (default: the crates that run models)
+#   bash scripts/test-avx2.sh [crate:test ...]
 #
+# By default, the test targets that run the ONNX models: the pose models'
+# contracts and their accuracy on real frames, the forecaster, the refinement
+# networks and the network wrapper.
 # Emulation is 20–50 times slower than the host; expect tens of minutes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 CPU=${MP_EMULATED_CPU:-EPYC-Rome}
-CRATES=("$@")
-if [ ${#CRATES[@]} -eq 0 ]; then
-  CRATES=(mp-onnx mp-pose mp-forecast mp-refine)
+TARGETS=("$@")
+if [ ${#TARGETS[@]} -eq 0 ]; then
+  TARGETS=(mp-pose:contracts mp-pose:pipeline mp-pose:errors mp-onnx:network
+    mp-forecast:onnx_model mp-refine:nets mp-refine:refine_default)
 fi
 
 if ! command -v qemu-x86_64 >/dev/null; then
@@ -26,10 +30,10 @@ if ! command -v qemu-x86_64 >/dev/null; then
 fi
 bash scripts/setup.sh >/dev/null
 
-args=()
-for c in "${CRATES[@]}"; do args+=(-p "$c"); done
 # The test executables, as cargo builds them.
-mapfile -t bins < <(cargo test "${args[@]}" --no-run --message-format=json 2>/dev/null |
+mapfile -t bins < <(for t in "${TARGETS[@]}"; do
+  cargo test -p "${t%%:*}" --test "${t#*:}" --no-run --message-format=json 2>/dev/null
+done |
   python3 -c '
 import json, sys
 for line in sys.stdin:
