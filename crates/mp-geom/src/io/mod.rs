@@ -136,7 +136,6 @@ pub fn skeleton_from_names(names: &[String]) -> Skeleton {
     Skeleton::custom("custom", names.to_vec(), Vec::new(), None)
 }
 
-
 fn extension(path: &Path) -> String {
     path.extension()
         .and_then(|e| e.to_str())

@@ -115,7 +115,10 @@ fn check_header_nesting(bytes: &[u8], source: &str) -> Result<()> {
         return Ok(());
     }
     let (len, start) = if bytes[6] == 1 {
-        (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10usize)
+        (
+            usize::from(u16::from_le_bytes([bytes[8], bytes[9]])),
+            10usize,
+        )
     } else if bytes.len() >= 12 {
         let l = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
         (usize::try_from(l).unwrap_or(usize::MAX), 12)
