@@ -134,6 +134,39 @@ pub fn selected_joints(skeleton: &mp_geom::Skeleton, sel: JointSelection) -> Vec
     }
 }
 
+/// Coordinate `k` of joint `ji` over `frames[start..end]` into `out` (at
+/// least `end - start` long), missing frames filled by linear interpolation
+/// between the nearest valid frames of the range (edges held; left as they
+/// are when the joint is never valid in the range) — what
+/// [`mp_geom::Track::fill_missing`] does to a slice of the track, without
+/// copying it.
+pub(crate) fn filled_column(
+    track: &mp_geom::Track,
+    ji: usize,
+    k: usize,
+    start: usize,
+    end: usize,
+    out: &mut [f64],
+) {
+    let pos = track.positions();
+    let conf = track.confidence();
+    let valid: Vec<usize> = (0..end - start)
+        .filter(|&ti| conf[[start + ti, ji]] > 0.0)
+        .collect();
+    for (ti, o) in out.iter_mut().enumerate().take(end - start) {
+        *o = if valid.is_empty() || conf[[start + ti, ji]] > 0.0 {
+            pos[[start + ti, ji, k]]
+        } else {
+            match mp_geom::track::bracket(&valid, ti) {
+                Some((a, b, w)) => {
+                    pos[[start + a, ji, k]] * (1.0 - w) + pos[[start + b, ji, k]] * w
+                }
+                None => pos[[start + ti, ji, k]],
+            }
+        };
+    }
+}
+
 /// `frames[start..end]` of the selected joints as a `T × C` matrix (row-major),
 /// missing joints filled by linear interpolation; `None` when no joint is ever valid.
 pub(crate) fn channels(

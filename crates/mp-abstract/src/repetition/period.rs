@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{channels, standardise, JointSelection};
+use super::{filled_column, selected_joints, standardise, JointSelection};
 
 /// Parameters of period estimation (see [`estimate_period`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -122,48 +122,109 @@ pub struct PeriodEstimate {
 /// O(dims · m log m) instead of O(dims · m · lags) and equal up to rounding.
 const DIRECT_PRODUCTS_MAX: usize = 1 << 26;
 
-/// `out[lag] = Σ_t Σ_c v[t, c] · v[t + lag, c]` for `lag < lags`, `v` being
-/// `m` rows of `dims` values.
-fn lagged_products(v: &[f64], m: usize, dims: usize, lags: usize) -> Vec<f64> {
-    let lags = lags.min(m).max(1);
-    if m.saturating_mul(lags).saturating_mul(dims) <= DIRECT_PRODUCTS_MAX {
-        return (0..lags)
-            .map(|lag| {
-                let mut s = 0.0;
-                for ti in 0..m - lag {
-                    for c in 0..dims {
-                        s += v[ti * dims + c] * v[(ti + lag) * dims + c];
-                    }
-                }
-                s
-            })
-            .collect();
-    }
-    lagged_products_fft(v, m, dims, lags)
+/// `Σ_c Σ_t v_c[t] · v_c[t + lag]` for `lag < lags`, accumulated one channel
+/// `v_c` (of `m` values) at a time, so that a signal with many channels (the
+/// 1,024 cells of frame thumbnails) never needs to be held as a whole.
+struct LaggedProducts {
+    m: usize,
+    lags: usize,
+    sums: Vec<f64>,
+    fft: Option<FftProducts>,
 }
 
-/// [`lagged_products`] through the FFT.
-fn lagged_products_fft(v: &[f64], m: usize, dims: usize, lags: usize) -> Vec<f64> {
-    // Wiener–Khinchin: the sum over channels of |FFT(v_c)|², zero-padded to
-    // at least m + lags so that no lag wraps around, transformed back.
-    use rustfft::num_complex::Complex;
-    let len = (m + lags).next_power_of_two();
-    let mut planner = rustfft::FftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(len);
-    let inv = planner.plan_fft_inverse(len);
-    let mut power = vec![Complex::new(0.0, 0.0); len];
-    let mut buf = vec![Complex::new(0.0, 0.0); len];
-    for c in 0..dims {
-        for (ti, b) in buf.iter_mut().enumerate() {
-            *b = Complex::new(if ti < m { v[ti * dims + c] } else { 0.0 }, 0.0);
-        }
-        fwd.process(&mut buf);
-        for (p, b) in power.iter_mut().zip(&buf) {
-            p.re += b.norm_sqr();
+/// The FFT state of [`LaggedProducts`]: the power spectrum summed over the
+/// channels so far (Wiener–Khinchin), zero-padded to at least `m + lags` so
+/// that no lag wraps around.
+struct FftProducts {
+    fwd: std::sync::Arc<dyn rustfft::Fft<f64>>,
+    inv: std::sync::Arc<dyn rustfft::Fft<f64>>,
+    power: Vec<rustfft::num_complex::Complex<f64>>,
+    buf: Vec<rustfft::num_complex::Complex<f64>>,
+}
+
+impl LaggedProducts {
+    /// Products of `lags` lags (at least 1, at most `m`) over channels of `m`
+    /// values; `channels` (how many will be added) picks direct sums or the FFT.
+    fn new(m: usize, lags: usize, channels: usize) -> Self {
+        let lags = lags.min(m).max(1);
+        let direct = m.saturating_mul(lags).saturating_mul(channels) <= DIRECT_PRODUCTS_MAX;
+        Self::with_method(m, lags, !direct)
+    }
+
+    fn with_method(m: usize, lags: usize, fft: bool) -> Self {
+        use rustfft::num_complex::Complex;
+        let lags = lags.min(m).max(1);
+        let fft = fft.then(|| {
+            let len = (m + lags).next_power_of_two();
+            let mut planner = rustfft::FftPlanner::<f64>::new();
+            FftProducts {
+                fwd: planner.plan_fft_forward(len),
+                inv: planner.plan_fft_inverse(len),
+                power: vec![Complex::new(0.0, 0.0); len],
+                buf: vec![Complex::new(0.0, 0.0); len],
+            }
+        });
+        LaggedProducts {
+            m,
+            lags,
+            sums: vec![0.0; lags],
+            fft,
         }
     }
-    inv.process(&mut power);
-    power[..lags].iter().map(|z| z.re / len as f64).collect()
+
+    /// Adds one channel (`m` values).
+    fn add(&mut self, v: &[f64]) {
+        let m = self.m.min(v.len());
+        match &mut self.fft {
+            None => {
+                for (lag, s) in self.sums.iter_mut().enumerate() {
+                    *s += (0..m.saturating_sub(lag))
+                        .map(|t| v[t] * v[t + lag])
+                        .sum::<f64>();
+                }
+            }
+            Some(f) => {
+                use rustfft::num_complex::Complex;
+                for (t, b) in f.buf.iter_mut().enumerate() {
+                    *b = Complex::new(if t < m { v[t] } else { 0.0 }, 0.0);
+                }
+                f.fwd.process(&mut f.buf);
+                for (p, b) in f.power.iter_mut().zip(&f.buf) {
+                    p.re += b.norm_sqr();
+                }
+            }
+        }
+    }
+
+    /// The products by lag.
+    fn finish(self) -> Vec<f64> {
+        match self.fft {
+            None => self.sums,
+            Some(mut f) => {
+                let len = f.power.len() as f64;
+                f.inv.process(&mut f.power);
+                f.power[..self.lags].iter().map(|z| z.re / len).collect()
+            }
+        }
+    }
+}
+
+/// Moving average of `x` over `w` samples, centred, shrinking at the edges
+/// (prefix sums: O(len) whatever `w`).
+fn smooth_into(x: &[f64], w: usize, out: &mut [f64]) {
+    let n = x.len();
+    let mut prefix = Vec::with_capacity(n + 1);
+    prefix.push(0.0);
+    let mut acc = 0.0;
+    for &v in x {
+        acc += v;
+        prefix.push(acc);
+    }
+    for (ti, o) in out.iter_mut().enumerate().take(n) {
+        let lo = ti.saturating_sub(w / 2);
+        let hi = (ti + w - w / 2).min(n);
+        *o = (prefix[hi] - prefix[lo]) / (hi - lo) as f64;
+    }
 }
 
 /// Estimates the dominant period of the motion of `track[start..end]` from the
@@ -182,37 +243,55 @@ pub fn estimate_period(
     params: &PeriodParams,
 ) -> crate::Result<Option<PeriodEstimate>> {
     params.validate()?;
-    let Some((y, n, dims)) = channels(track, start, end, params.joints, false)? else {
+    if start >= end || end > track.n_frames() {
+        return Err(crate::AbstractError::param(
+            "frames",
+            format!("{start}..{end} outside 0..{}", track.n_frames()),
+        ));
+    }
+    let n = end - start;
+    let conf = track.confidence();
+    if !conf
+        .slice(ndarray::s![start..end, ..])
+        .iter()
+        .any(|&c| c > 0.0)
+    {
         return Ok(None);
-    };
+    }
+    let joints = selected_joints(track.skeleton(), params.joints);
+    let d = track.dims();
+    let dims = joints.len() * d;
     if n < 4 || dims == 0 {
         return Ok(None);
     }
     let w = ((params.smooth_s * track.fps()).round() as usize).max(1);
-    // Smoothed positions (centred moving average, shrinking at the edges).
-    let mut sm = vec![0.0; n * dims];
-    for ti in 0..n {
-        let lo = ti.saturating_sub(w / 2);
-        let hi = (ti + w - w / 2).min(n);
-        for c in 0..dims {
-            let s: f64 = (lo..hi).map(|q| y[q * dims + c]).sum();
-            sm[ti * dims + c] = s / (hi - lo) as f64;
-        }
-    }
     let m = n - 1;
-    let mut v = vec![0.0; m * dims];
-    for ti in 0..m {
-        for c in 0..dims {
-            v[ti * dims + c] = sm[(ti + 1) * dims + c] - sm[ti * dims + c];
+    let max_lag = ((m as f64 / params.min_cycles).floor() as usize).min(m);
+    // One channel (joint coordinate) at a time: filled, smoothed (centred
+    // moving average, shrinking at the edges), differenced (which removes
+    // drift and static offsets), standardised or centred, and its lagged
+    // products added. Memory: a few columns of `n` values, whatever the
+    // number of channels.
+    let mut products = LaggedProducts::new(m, max_lag.max(1), dims);
+    let mut column = vec![0.0; n];
+    let mut smoothed = vec![0.0; n];
+    let mut v = vec![0.0; m];
+    for &ji in &joints {
+        for k in 0..d {
+            filled_column(track, ji, k, start, end, &mut column);
+            smooth_into(&column, w, &mut smoothed);
+            for (ti, x) in v.iter_mut().enumerate() {
+                *x = smoothed[ti + 1] - smoothed[ti];
+            }
+            if params.standardise {
+                standardise(&mut v, m, 1);
+            } else {
+                centre_columns(&mut v, m, 1);
+            }
+            products.add(&v);
         }
     }
-    if params.standardise {
-        standardise(&mut v, m, dims);
-    } else {
-        centre_columns(&mut v, m, dims);
-    }
-    let max_lag = ((m as f64 / params.min_cycles).floor() as usize).min(m);
-    let mut r = lagged_products(&v, m, dims, max_lag.max(1));
+    let mut r = products.finish();
     for (lag, rv) in r.iter_mut().enumerate() {
         *rv /= if params.biased { m } else { m - lag } as f64;
     }
@@ -264,6 +343,21 @@ fn centre_columns(v: &mut [f64], m: usize, dims: usize) {
 mod tests {
     use super::*;
 
+    /// Direct sums of `v` (`m` rows of `dims` values, row-major) by lag.
+    fn reference_products(v: &[f64], m: usize, dims: usize, lags: usize) -> Vec<f64> {
+        (0..lags)
+            .map(|lag| {
+                (0..m - lag)
+                    .map(|t| {
+                        (0..dims)
+                            .map(|c| v[t * dims + c] * v[(t + lag) * dims + c])
+                            .sum::<f64>()
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
     #[test]
     fn fft_and_direct_lagged_products_agree() {
         let (m, dims) = (700, 3);
@@ -271,13 +365,70 @@ mod tests {
             .map(|i| ((i as f64) * 0.37).sin() + ((i * i % 17) as f64) * 0.01)
             .collect();
         let lags = 350;
-        let direct = lagged_products(&v, m, dims, lags);
-        assert!(m * lags * dims <= DIRECT_PRODUCTS_MAX);
-        // The FFT path, forced by asking for it on the same data.
-        let fft = lagged_products_fft(&v, m, dims, lags);
-        assert_eq!(direct.len(), fft.len());
-        for (a, b) in direct.iter().zip(&fft) {
-            assert!((a - b).abs() <= 1e-9 * direct[0].abs(), "{a} vs {b}");
+        let reference = reference_products(&v, m, dims, lags);
+        for fft in [false, true] {
+            let mut p = LaggedProducts::with_method(m, lags, fft);
+            for c in 0..dims {
+                let col: Vec<f64> = (0..m).map(|t| v[t * dims + c]).collect();
+                p.add(&col);
+            }
+            let got = p.finish();
+            assert_eq!(got.len(), lags);
+            for (a, b) in reference.iter().zip(&got) {
+                assert!(
+                    (a - b).abs() <= 1e-9 * reference[0].abs(),
+                    "fft {fft}: {a} vs {b}"
+                );
+            }
         }
+        assert!(m * lags * dims <= DIRECT_PRODUCTS_MAX);
+        assert!(LaggedProducts::new(m, lags, dims).fft.is_none());
+        assert!(LaggedProducts::new(100_000, 30_000, 1024).fft.is_some());
+    }
+
+    #[test]
+    fn missing_joints_are_filled_before_the_period_is_read() {
+        // A 0.8 s circle per joint at 30 fps, with every fifth frame of a
+        // joint missing: the estimate equals that of the track whose gaps
+        // were filled beforehand.
+        use mp_geom::{Skeleton, Track, Units};
+        let (n, j) = (300, 4);
+        let mut pos = ndarray::Array3::<f64>::zeros((n, j, 2));
+        let mut conf = ndarray::Array2::<f64>::ones((n, j));
+        for t in 0..n {
+            for ji in 0..j {
+                let a = t as f64 / 24.0 * std::f64::consts::TAU + ji as f64;
+                pos[[t, ji, 0]] = 100.0 + 20.0 * a.cos() + ji as f64;
+                pos[[t, ji, 1]] = 50.0 + 10.0 * a.sin() + 0.01 * ((t * 7 + ji) % 5) as f64;
+                if (t + ji) % 5 == 0 {
+                    conf[[t, ji]] = 0.0;
+                    pos[[t, ji, 0]] = 0.0;
+                }
+            }
+        }
+        let gappy = Track::new(pos, Some(conf), 30.0, Units::Pixels, Skeleton::generic(j)).unwrap();
+        let params = PeriodParams::default();
+        for (a, b) in [(0, n), (40, 260)] {
+            // The range, filled on its own (edges held), all frames valid.
+            let mut filled = gappy.slice_frames(a, b).unwrap();
+            filled.fill_missing();
+            let filled = Track::new(
+                filled.positions().to_owned(),
+                None,
+                30.0,
+                Units::Pixels,
+                Skeleton::generic(j),
+            )
+            .unwrap();
+            let g = estimate_period(&gappy, a, b, &params).unwrap().unwrap();
+            let f = estimate_period(&filled, 0, b - a, &params)
+                .unwrap()
+                .unwrap();
+            assert_eq!(g.period_frames, 24);
+            assert_eq!(g.period_frames, f.period_frames);
+            assert!((g.strength - f.strength).abs() < 1e-12, "{g:?} vs {f:?}");
+        }
+        assert!(estimate_period(&gappy, 10, 10, &params).is_err());
+        assert!(estimate_period(&gappy, 0, n + 1, &params).is_err());
     }
 }
