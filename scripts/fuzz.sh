@@ -8,7 +8,8 @@
 # them); the default is every target, one after the other, for 1,000,000
 # executions each. Seeds come from crates/mp-fuzz/corpus/<target>/, results
 # go to fuzz/out/<target>/ (a second run resumes there). Environment:
-#   FUZZ_SECONDS=N   stop each target after N seconds instead of a count
+#   FUZZ_SECONDS=N   stop each target after N seconds, or at the count when
+#                    one is given too (whichever comes first)
 #   FUZZ_NICE=N      niceness of the fuzzer (default 19)
 # Crashes land in fuzz/out/<target>/default/crashes/; replay one with
 #   fuzz/target/release/<target> < fuzz/out/<target>/default/crashes/<file>
@@ -21,7 +22,7 @@ targets=(concrete_dsl abstract_dsl program_json abstract_json grammar_json gramm
     npz npy csv json_track openpose bvh mpt mpb concepts_json)
 
 what="${1:-all}"
-execs="${2:-1000000}"
+execs="${2:-}"
 if [[ "$what" == "list" ]]; then
     printf '%s\n' "${targets[@]}"
     exit 0
@@ -51,11 +52,9 @@ fi
 for t in "${targets[@]}"; do
     out="fuzz/out/$t"
     mkdir -p "$out"
-    if [[ -n "${FUZZ_SECONDS:-}" ]]; then
-        limit=(-V "$FUZZ_SECONDS")
-    else
-        limit=(-E "$execs")
-    fi
+    limit=()
+    [[ -n "${FUZZ_SECONDS:-}" ]] && limit+=(-V "$FUZZ_SECONDS")
+    [[ -n "$execs" || ${#limit[@]} -eq 0 ]] && limit+=(-E "${execs:-1000000}")
     echo "== $t: ${limit[*]}"
     start=$(date +%s)
     # AFL's exit status is not the target's: crashes are counted below.
