@@ -400,32 +400,7 @@ impl<'a> Chart<'a> {
 
     /// `f[p][b]`: cost of `rhs[..p]` over `w[i..i + b]`.
     fn seq_table(&self, rhs: &[Sym], w: &[u32], i: usize, span: usize) -> Vec<Vec<f64>> {
-        let mut f = vec![vec![f64::INFINITY; span + 1]; rhs.len() + 1];
-        f[0][0] = 0.0;
-        for (p, s) in rhs.iter().enumerate() {
-            for a in 0..=span {
-                let base = f[p][a];
-                if !base.is_finite() {
-                    continue;
-                }
-                match *s {
-                    Sym::T(t) => {
-                        if a < span && w[i + a] == t && base < f[p + 1][a + 1] {
-                            f[p + 1][a + 1] = base;
-                        }
-                    }
-                    Sym::N(x) => {
-                        for (b, slot) in f[p + 1].iter_mut().enumerate().skip(a) {
-                            let v = base + self.best[self.idx(x as usize, i + a, b - a)];
-                            if v < *slot {
-                                *slot = v;
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        f
+        crate::grammar::rhs_span_costs(rhs, w, i, span, |x, s, e| self.best[self.idx(x, s, e - s)])
     }
 
     fn build(
