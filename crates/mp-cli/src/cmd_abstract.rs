@@ -133,11 +133,11 @@ impl From<Method> for ForecastMethod {
 pub struct PredictArgs {
     /// Input track, or a video (continued for --seconds into -o OUT.mp4).
     pub track: PathBuf,
-    /// Number of observed frames (from the start).
-    #[arg(long, required_unless_present = "seconds")]
+    /// Number of observed frames (from the start); a track input needs it.
+    #[arg(long)]
     pub observe: Option<usize>,
-    /// Number of frames to predict.
-    #[arg(long, required_unless_present = "seconds")]
+    /// Number of frames to predict; a track input needs it.
+    #[arg(long)]
     pub horizon: Option<usize>,
     /// Method.
     #[arg(long, value_enum, default_value = ForecastMethod::default().as_str())]
@@ -269,7 +269,9 @@ pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
         );
     }
     let (Some(observe), Some(horizon)) = (a.observe, a.horizon) else {
-        anyhow::bail!("a track input needs --observe and --horizon");
+        anyhow::bail!(
+            "a track input needs --observe N and --horizon H (frames observed from the start, frames predicted)"
+        );
     };
     let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
     let mut opts = PredictOptions {

@@ -119,7 +119,7 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
     );
     for (i, iv) in c.intervals.iter().enumerate() {
         println!(
-            "  interval {}: frames {:>4}..{:<4} ({:.2}–{:.2} s)  {} repetitions, period {:.2} s",
+            "  loop {}: frames {:>4}..{:<4} ({:.2}–{:.2} s)  {} repetitions, period {:.2} s",
             i + 1,
             iv.start_frame,
             iv.end_frame,

@@ -15,9 +15,10 @@ use mp_video::{EditChange, EditParams, InterpMethod, InterpParams, PredictMethod
 pub struct EditArgs {
     /// Input video.
     pub video: PathBuf,
-    /// Which loop, numbered from 0 as in `counted` of `mp run`'s loops.json.
-    #[arg(long = "loop", default_value_t = 0)]
-    pub loop_index: usize,
+    /// Which loop, numbered from 1 as `mp run` and the report print them
+    /// (`counted[I - 1]` of `mp run`'s loops.json).
+    #[arg(long = "loop", default_value_t = 1, value_name = "I")]
+    pub loop_number: usize,
     /// Set the loop's count to N repetitions.
     #[arg(long)]
     pub iterations: Option<usize>,
@@ -56,7 +57,7 @@ pub fn edit_cmd(a: &EditArgs) -> Result<()> {
     };
     let r = mp_video::edit_video(
         &a.video,
-        a.loop_index,
+        a.loop_number,
         change,
         &params,
         &Params::default(),
@@ -70,7 +71,7 @@ pub fn edit_cmd(a: &EditArgs) -> Result<()> {
     let fps = r.fps;
     println!(
         "loop {}: frames {}..{} ({} repetitions); iteration {}..{} closest to the mean",
-        r.loop_index, r.interval.0, r.interval.1, r.count_before, r.iteration.0, r.iteration.1
+        r.loop_number, r.interval.0, r.interval.1, r.count_before, r.iteration.0, r.iteration.1
     );
     println!(
         "{} {} iteration(s) of frames {}..{} (seam cost {:.2}); {} → {} frames ({:.2} → {:.2} s) written to {}",
@@ -168,10 +169,14 @@ pub fn predict_video_cmd(
 ) -> Result<()> {
     use mp_forecast::ForecastMethod as F;
     let Some(seconds) = seconds else {
-        bail!("a video input needs --seconds (how long to continue it)");
+        bail!(
+            "a video input needs --seconds S: how many seconds of video to predict after its end \
+             (e.g. mp predict {} --seconds 2 -o OUT.mp4); --observe/--horizon are for tracks",
+            video.display()
+        );
     };
     let Some(output) = output else {
-        bail!("a video input needs -o OUT.mp4");
+        bail!("a video input needs -o OUT.mp4 (the video followed by the prediction)");
     };
     let method = match method {
         F::Loop => PredictMethod::Loop,

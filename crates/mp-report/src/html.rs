@@ -220,8 +220,8 @@ fn listing_html(program: &Program, default_joint: usize) -> String {
 }
 
 /// `mp edit` command lines offered for each loop when the input is a video
-/// (`--loop` counts from 0 as in loops.json).
-fn edit_command(title: &str, loop_index: usize) -> Option<String> {
+/// (`--loop` is the loop's number as the table shows it, from 1).
+fn edit_command(title: &str, loop_number: usize) -> Option<String> {
     const VIDEO: [&str; 6] = ["mp4", "mov", "avi", "webm", "mkv", "m4v"];
     let (stem, ext) = title.rsplit_once('.')?;
     if !VIDEO.contains(&ext.to_ascii_lowercase().as_str()) {
@@ -237,9 +237,9 @@ fn edit_command(title: &str, loop_index: usize) -> Option<String> {
         }
     };
     Some(format!(
-        "mp edit {} --loop {loop_index} --add 1 -o {}",
+        "mp edit {} --loop {loop_number} --add 1 -o {}",
         quote(title),
-        quote(&format!("{stem}_loop{loop_index}_plus1.mp4"))
+        quote(&format!("{stem}_loop{loop_number}_plus1.mp4"))
     ))
 }
 
@@ -247,7 +247,7 @@ fn loops_table(intervals: &[RepetitiveInterval], fps: f64, title: &str) -> Strin
     if intervals.is_empty() {
         return r#"<div class="empty">No repetition was detected in this motion.</div>"#.into();
     }
-    let editable = edit_command(title, 0).is_some();
+    let editable = edit_command(title, 1).is_some();
     let mut s = String::from(
         r#"<table class="loops"><thead><tr><th>loop</th><th>frames</th><th>seconds</th><th>body</th><th>iterations</th><th>count</th>"#,
     );
@@ -281,7 +281,7 @@ fn loops_table(intervals: &[RepetitiveInterval], fps: f64, title: &str) -> Strin
             iv.body_size,
             iv.count
         );
-        if let Some(cmd) = edit_command(title, i) {
+        if let Some(cmd) = edit_command(title, i + 1) {
             let _ = write!(s, r#"<td><code class="cmd">{}</code></td>"#, esc(&cmd));
         }
         s.push_str("</tr>");
@@ -603,14 +603,14 @@ mod tests {
     #[test]
     fn video_loops_offer_the_edit_command() {
         assert_eq!(
-            edit_command("squats.mp4", 0).unwrap(),
-            "mp edit squats.mp4 --loop 0 --add 1 -o squats_loop0_plus1.mp4"
+            edit_command("squats.mp4", 1).unwrap(),
+            "mp edit squats.mp4 --loop 1 --add 1 -o squats_loop1_plus1.mp4"
         );
         assert_eq!(
             edit_command("my clip.MOV", 2).unwrap(),
             "mp edit 'my clip.MOV' --loop 2 --add 1 -o 'my clip_loop2_plus1.mp4'"
         );
-        assert!(edit_command("track.npz", 0).is_none());
+        assert!(edit_command("track.npz", 1).is_none());
         let table = loops_table(
             &[RepetitiveInterval {
                 start_frame: 0,
@@ -624,6 +624,8 @@ mod tests {
             30.0,
             "a.mp4",
         );
-        assert!(table.contains("mp edit a.mp4 --loop 0"), "{table}");
+        // The command names the loop by the number in the table's first column.
+        assert!(table.contains("<tr><td>1</td>"), "{table}");
+        assert!(table.contains("mp edit a.mp4 --loop 1 "), "{table}");
     }
 }

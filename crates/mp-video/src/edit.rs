@@ -81,8 +81,9 @@ impl EditParams {
 /// What an edit did.
 #[derive(Debug, Clone, Serialize)]
 pub struct EditReport {
-    /// The loop (index in `loops.json`'s `counted`).
-    pub loop_index: usize,
+    /// The loop's number, from 1 as `mp run` and the report print it
+    /// (`loops.json`'s `counted[loop - 1]`).
+    pub loop_number: usize,
     /// The loop's frames `[start, end)`.
     pub interval: (usize, usize),
     /// Its repetitions before the edit.
@@ -218,22 +219,22 @@ fn best_seam(
     best
 }
 
-/// The plan of an edit of `m`'s loop `loop_index`.
+/// The plan of an edit of `m`'s loop number `loop_number` (from 1, as
+/// `mp run` and the report number loops: `counts.intervals[loop_number - 1]`).
 pub fn plan_edit(
     m: &VideoMotion,
-    loop_index: usize,
+    loop_number: usize,
     change: EditChange,
     params: &EditParams,
 ) -> Result<EditReport> {
     params.validate()?;
     m.require_person()?;
     let n = m.n_frames();
-    let iv = m
-        .counts
-        .intervals
-        .get(loop_index)
+    let iv = loop_number
+        .checked_sub(1)
+        .and_then(|i| m.counts.intervals.get(i))
         .ok_or(VideoError::NoLoop {
-            index: loop_index,
+            number: loop_number,
             available: m.counts.intervals.len(),
         })?;
     let k: i64 = match change {
@@ -244,7 +245,7 @@ pub fn plan_edit(
     let iters = iterations(iv);
     if iters.is_empty() {
         return Err(VideoError::Edit(format!(
-            "loop {loop_index} has no full iteration"
+            "loop {loop_number} has no full iteration"
         )));
     }
     let chosen = closest_to_mean(m, &iters, iv.period_frames);
@@ -287,13 +288,13 @@ pub fn plan_edit(
         let kk = (-k) as usize;
         if kk >= iv.count {
             return Err(VideoError::Edit(format!(
-                "cannot remove {kk} of the {} repetitions of loop {loop_index}: at least one must stay",
+                "cannot remove {kk} of the {} repetitions of loop {loop_number}: at least one must stay",
                 iv.count
             )));
         }
         if kk > iters.len() {
             return Err(VideoError::Edit(format!(
-                "loop {loop_index} has {} full iterations, cannot remove {kk}",
+                "loop {loop_number} has {} full iterations, cannot remove {kk}",
                 iters.len()
             )));
         }
@@ -317,7 +318,7 @@ pub fn plan_edit(
         cost = cst;
     }
     Ok(EditReport {
-        loop_index,
+        loop_number,
         interval: (iv.start_frame, iv.end_frame),
         count_before: iv.count,
         change: k,
@@ -332,11 +333,12 @@ pub fn plan_edit(
     })
 }
 
-/// Analyses `input` as `mp run` does (with `analysis`), edits loop
-/// `loop_index` and writes the result to `output` (atomically).
+/// Analyses `input` as `mp run` does (with `analysis`), edits loop number
+/// `loop_number` (from 1, as `mp run` prints it) and writes the result to
+/// `output` (atomically).
 pub fn edit_video(
     input: &Path,
-    loop_index: usize,
+    loop_number: usize,
     change: EditChange,
     params: &EditParams,
     analysis: &Params,
@@ -344,7 +346,7 @@ pub fn edit_video(
 ) -> Result<EditReport> {
     params.validate()?;
     let m = analyse_video(input, analysis, None)?;
-    let mut report = plan_edit(&m, loop_index, change, params)?;
+    let mut report = plan_edit(&m, loop_number, change, params)?;
     let written = render_to_file(input, &report.plan, output, m.fps(), &params.render)?;
     report.frames_out = written;
     report.output = Some(output.to_path_buf());

@@ -18,10 +18,10 @@ pub enum VideoError {
     #[error("program: {0}")]
     Program(String),
     /// The loop asked for does not exist.
-    #[error("no loop {index}: the video has {available} counted loop(s) (numbered from 0 as in loops.json)")]
+    #[error("{}", no_loop_message(*.number, *.available))]
     NoLoop {
-        /// The index asked for.
-        index: usize,
+        /// The loop number asked for (from 1, as `mp run` prints loops).
+        number: usize,
         /// Loops found.
         available: usize,
     },
@@ -87,6 +87,17 @@ impl VideoError {
             source,
         }
     }
+}
+
+fn no_loop_message(number: usize, available: usize) -> String {
+    let have = match available {
+        0 => "the video has no counted loop (`mp run` finds no repetition)".to_string(),
+        1 => "the video has 1 counted loop: --loop 1".to_string(),
+        n => format!("the video has {n} counted loops: --loop 1 to {n}"),
+    };
+    format!(
+        "no loop {number}: {have}; loops are numbered from 1 as `mp run` and the report print them"
+    )
 }
 
 /// Result with [`VideoError`].

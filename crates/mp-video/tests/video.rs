@@ -41,7 +41,7 @@ fn edit_adds_and_removes_one_repetition() {
     let iv = before.counts.intervals[0].clone();
     for (change, k) in [(EditChange::Add(1), 1i64), (EditChange::Remove(1), -1)] {
         let out = dir.path().join(format!("edit{k}.mp4"));
-        let r = edit_video(&video, 0, change, &EditParams::default(), &params, &out).unwrap();
+        let r = edit_video(&video, 1, change, &EditParams::default(), &params, &out).unwrap();
         assert_eq!(r.change, k);
         // Frame count: the repeated iteration's length, up to the seam adjustment.
         let n = frames(&out) as i64;
@@ -199,11 +199,11 @@ fn errors_are_typed() {
         &out,
     )
     .unwrap_err();
-    assert!(matches!(e, VideoError::NoLoop { index: 7, .. }), "{e}");
+    assert!(matches!(e, VideoError::NoLoop { number: 7, .. }), "{e}");
     // Removing every repetition.
     let e = edit_video(
         &input,
-        0,
+        1,
         EditChange::Remove(50),
         &EditParams::default(),
         &params,
@@ -253,7 +253,7 @@ fn a_video_without_a_person_is_an_error() {
     assert!(matches!(e, VideoError::NoPerson(_)), "{e}");
     let e = edit_video(
         &video,
-        0,
+        1,
         EditChange::Add(1),
         &EditParams::default(),
         &params,
