@@ -517,6 +517,45 @@ pub struct DescriptionLength {
     pub total_bits: f64,
 }
 
+/// `f[p][b]`: the least cost of `rhs[..p]` deriving `w[i..i + b]` for
+/// `b ≤ span` (∞ where it cannot): terminals must match and cost nothing, a
+/// nonterminal `x` deriving `w[s..e]` costs `span_cost(x, s, e)`. The inner
+/// step of the chart parsers ([`Grammar::parse`] and the scorer's).
+pub(crate) fn rhs_span_costs(
+    rhs: &[Sym],
+    w: &[u32],
+    i: usize,
+    span: usize,
+    span_cost: impl Fn(usize, usize, usize) -> f64,
+) -> Vec<Vec<f64>> {
+    let mut f = vec![vec![f64::INFINITY; span + 1]; rhs.len() + 1];
+    f[0][0] = 0.0;
+    for (p, s) in rhs.iter().enumerate() {
+        for a in 0..=span {
+            let base = f[p][a];
+            if !base.is_finite() {
+                continue;
+            }
+            match *s {
+                Sym::T(t) => {
+                    if a < span && w[i + a] == t && base < f[p + 1][a + 1] {
+                        f[p + 1][a + 1] = base;
+                    }
+                }
+                Sym::N(x) => {
+                    for (b, slot) in f[p + 1].iter_mut().enumerate().skip(a) {
+                        let v = base + span_cost(x as usize, i + a, i + b);
+                        if v < *slot {
+                            *slot = v;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    f
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -569,43 +608,4 @@ mod tests {
         assert!(Grammar::from_text("S a b", None).is_err());
         assert!(Grammar::from_text("S T -> a", None).is_err());
     }
-}
-
-/// `f[p][b]`: the least cost of `rhs[..p]` deriving `w[i..i + b]` for
-/// `b ≤ span` (∞ where it cannot): terminals must match and cost nothing, a
-/// nonterminal `x` deriving `w[s..e]` costs `span_cost(x, s, e)`. The inner
-/// step of the chart parsers ([`Grammar::parse`] and the scorer's).
-pub(crate) fn rhs_span_costs(
-    rhs: &[Sym],
-    w: &[u32],
-    i: usize,
-    span: usize,
-    span_cost: impl Fn(usize, usize, usize) -> f64,
-) -> Vec<Vec<f64>> {
-    let mut f = vec![vec![f64::INFINITY; span + 1]; rhs.len() + 1];
-    f[0][0] = 0.0;
-    for (p, s) in rhs.iter().enumerate() {
-        for a in 0..=span {
-            let base = f[p][a];
-            if !base.is_finite() {
-                continue;
-            }
-            match *s {
-                Sym::T(t) => {
-                    if a < span && w[i + a] == t && base < f[p + 1][a + 1] {
-                        f[p + 1][a + 1] = base;
-                    }
-                }
-                Sym::N(x) => {
-                    for (b, slot) in f[p + 1].iter_mut().enumerate().skip(a) {
-                        let v = base + span_cost(x as usize, i + a, i + b);
-                        if v < *slot {
-                            *slot = v;
-                        }
-                    }
-                }
-            }
-        }
-    }
-    f
 }
