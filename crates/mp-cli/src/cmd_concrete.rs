@@ -4,7 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use mp_concrete::{dsl, program_stats, ExecParams, Lambda, Program, Transition, UnobservedJoints};
+use mp_concrete::{
+    dsl, program_stats, Continuity, ExecParams, Lambda, Program, Transition, UnobservedJoints,
+};
 use mp_pipeline::Params;
 
 /// Arguments of `mp fit`.
@@ -22,6 +24,10 @@ pub struct FitArgs {
     /// Maximum segment length in frames.
     #[arg(long, default_value_t = Params::default().analysis.synth.max_segment_frames)]
     pub window: usize,
+    /// `c0`: consecutive segments share their boundary pose (the executed
+    /// program has no jump at a boundary); `none`: segments fitted independently.
+    #[arg(long, default_value_t = Params::default().analysis.synth.continuity)]
+    pub continuity: Continuity,
     /// Largest side of the video frame in pixels (sets the scale: frame / 512);
     /// without it the scale comes from the track's extent.
     #[arg(long)]
@@ -75,6 +81,7 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
         params.analysis.synth.lambda = Lambda::fixed(l);
     }
     params.analysis.synth.max_segment_frames = a.window;
+    params.analysis.synth.continuity = a.continuity;
     if a.strict_joints {
         params.analysis.synth.unobserved_joints = UnobservedJoints::Error;
     }

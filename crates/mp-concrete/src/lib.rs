@@ -36,6 +36,7 @@ pub mod exec;
 pub mod interp;
 pub mod program;
 pub mod search;
+pub mod smooth;
 pub mod stats;
 pub mod synth;
 pub mod synthetic;
@@ -45,6 +46,7 @@ pub use error::{ConcreteError, ParseError, Result};
 pub use exec::{ExecParams, Transition};
 pub use interp::{interpolation_experiment, InterpParams, InterpolationResult};
 pub use program::{Program, Segment};
+pub use smooth::{max_boundary_gap, Continuity};
 pub use stats::{program_stats, ProgramStats};
 pub use synth::{
     segment, segment_costs, segment_exhaustive, synthesize, synthesize_detailed, Lambda, Scale,

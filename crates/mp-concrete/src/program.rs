@@ -7,6 +7,7 @@ use mp_geom::{Primitive, PrimitiveKind, Skeleton, Units};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{ConcreteError, Result};
+use crate::smooth::Continuity;
 
 /// One segment of a program: a duration shared by every joint and, for each
 /// joint (in the program's joint order), the primitive it traces.
@@ -39,6 +40,15 @@ pub struct Program {
     pub skeleton: String,
     /// Joint names, in storage order (unique).
     pub joints: Vec<String>,
+    /// Whether consecutive segments share their boundary pose
+    /// ([`Continuity::C0`]: segment `i` at `t = duration` equals segment
+    /// `i + 1` at `t = 0`, as synthesis with [`crate::SynthParams::continuity`]
+    /// writes it) or were fitted independently. A statement about how the
+    /// program was made, not checked by [`Program::validate`]
+    /// ([`crate::max_boundary_gap`] measures it). Absent in files written
+    /// before the field existed: [`Continuity::None`].
+    #[serde(default)]
+    pub continuity: Continuity,
     /// The segments, in time order.
     pub segments: Vec<Segment>,
 }
@@ -230,14 +240,15 @@ impl Program {
     }
 
     /// Encodes the program in the compact binary form (`.mpb`): the framing
-    /// of [`mp_geom::io::binary`] with magic `mp-program` and version 1, then
+    /// of [`mp_geom::io::binary`] with magic `mp-program` and version 2, then
     /// the record `fps: f64`, `units` (variant 0 = px, 1 = m, 2 = unitless),
     /// `dims`, `skeleton`, `joints`, `segments` (each `duration_frames`, then
     /// per joint a primitive: variant 0 stationary `{point}`, 1 line `{start,
     /// velocity}`, 2 circle `{center, radius, angle_start, angle_vel,
-    /// angle_acc, axes}`, 3 spline `{coeffs}`). Numbers are exact `f64`s, so
-    /// [`Program::from_bincode`] gives back an equal program. The program is
-    /// validated first.
+    /// angle_acc, axes}`, 3 spline `{coeffs}`), then `continuity` (variant 0 =
+    /// none, 1 = C0; version 1 files end before it and read as none). Numbers
+    /// are exact `f64`s, so [`Program::from_bincode`] gives back an equal
+    /// program. The program is validated first.
     pub fn to_bincode(&self) -> Result<Vec<u8>> {
         self.validate()?;
         Ok(binary::encode(
@@ -256,7 +267,15 @@ impl Program {
     }
 
     fn from_bincode_at(bytes: &[u8], source: &Path) -> Result<Self> {
-        let rec: ProgramBin = binary::decode(BINARY_MAGIC, BINARY_VERSION, bytes, source)?;
+        let version = bytes
+            .strip_prefix(BINARY_MAGIC)
+            .and_then(|rest| rest.first_chunk::<4>())
+            .map(|v| u32::from_le_bytes(*v));
+        let rec: ProgramBin = if version == Some(1) {
+            binary::decode::<ProgramBinV1>(BINARY_MAGIC, 1, bytes, source)?.into()
+        } else {
+            binary::decode(BINARY_MAGIC, BINARY_VERSION, bytes, source)?
+        };
         let p = Program::try_from(rec)?;
         p.validate()?;
         Ok(p)
@@ -309,8 +328,8 @@ impl Program {
 
 /// Magic bytes that open the binary program format.
 pub const BINARY_MAGIC: &[u8] = b"mp-program";
-/// Version of the binary program format.
-pub const BINARY_VERSION: u32 = 1;
+/// Version of the binary program format (2: with `continuity`; version 1 is still read).
+pub const BINARY_VERSION: u32 = 2;
 
 /// File formats of [`Program::read`] / [`Program::write`], by extension.
 enum Format {
@@ -344,6 +363,32 @@ struct ProgramBin {
     skeleton: String,
     joints: Vec<String>,
     segments: Vec<SegmentBin>,
+    continuity: Continuity,
+}
+
+/// The version-1 record: no `continuity` (read as [`Continuity::None`]).
+#[derive(Serialize, Deserialize)]
+struct ProgramBinV1 {
+    fps: f64,
+    units: Units,
+    dims: u64,
+    skeleton: String,
+    joints: Vec<String>,
+    segments: Vec<SegmentBin>,
+}
+
+impl From<ProgramBinV1> for ProgramBin {
+    fn from(r: ProgramBinV1) -> Self {
+        ProgramBin {
+            fps: r.fps,
+            units: r.units,
+            dims: r.dims,
+            skeleton: r.skeleton,
+            joints: r.joints,
+            segments: r.segments,
+            continuity: Continuity::None,
+        }
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -440,6 +485,7 @@ impl From<&Program> for ProgramBin {
                     primitives: s.primitives.iter().map(PrimitiveBin::from).collect(),
                 })
                 .collect(),
+            continuity: p.continuity,
         }
     }
 }
@@ -458,6 +504,7 @@ impl TryFrom<ProgramBin> for Program {
             dims: size(r.dims, "dims")?,
             skeleton: r.skeleton,
             joints: r.joints,
+            continuity: r.continuity,
             segments: r
                 .segments
                 .into_iter()

@@ -47,6 +47,7 @@ use crate::dp::{segment_table, CostTable, Segmentation};
 use crate::error::{ConcreteError, Result};
 use crate::program::{Program, Segment};
 use crate::search::{segment_search, JointTrack};
+use crate::smooth::{refit_joint, Continuity, JointSeries};
 
 /// Reference pixels of a 512-px frame.
 pub const REFERENCE_FRAME_PX: f64 = 512.0;
@@ -131,6 +132,15 @@ pub struct SynthParams {
     /// What to do with a joint that is observed in no frame at all (e.g. an
     /// all-NaN column, or a joint occluded for a whole clip). Default: error.
     pub unobserved_joints: UnobservedJoints,
+    /// Whether consecutive segments share their boundary pose (the chosen
+    /// segmentation refitted per joint, [`crate::smooth`]). Default: C0.
+    /// Parameters serialised before the field existed read as C0.
+    #[serde(default = "default_continuity")]
+    pub continuity: Continuity,
+}
+
+fn default_continuity() -> Continuity {
+    SynthParams::DEFAULT_CONTINUITY
 }
 
 /// Policy for joints that are observed in no frame of the track.
@@ -154,6 +164,7 @@ impl Default for SynthParams {
             scale: Scale::Auto,
             min_confidence: 0.0,
             unobserved_joints: UnobservedJoints::Error,
+            continuity: Self::DEFAULT_CONTINUITY,
         }
     }
 }
@@ -169,6 +180,9 @@ fn finite_nonneg(name: &'static str, v: f64) -> Result<()> {
 }
 
 impl SynthParams {
+    /// The default of [`SynthParams::continuity`].
+    pub const DEFAULT_CONTINUITY: Continuity = Continuity::C0;
+
     /// Checks every field: λ finite and ≥ 0 (min ≤ max, window ≥ 1 for adaptive),
     /// W ≥ 1, scales finite and > 0, `min_confidence` in [0, 1), at least one primitive kind.
     pub fn validate(&self) -> Result<()> {
@@ -564,6 +578,39 @@ pub fn segment(track: &Track, params: &SynthParams) -> Result<Segmentation> {
     search_prepared(&prep, &fit, track, &lambda, params.max_segment_frames)
 }
 
+/// Refits every joint's primitives of the chosen segmentation so that
+/// consecutive segments share their boundary pose ([`crate::smooth`]).
+fn smooth_segments(
+    prep: &Prepared,
+    fit: &FitParams,
+    track: &Track,
+    bounds: &[usize],
+    mut segments: Vec<Segment>,
+) -> Result<Vec<Segment>> {
+    let per_joint = (0..prep.points.len())
+        .into_par_iter()
+        .map(|ji| {
+            let series = JointSeries {
+                points: prep.points[ji].view(),
+                weights: &prep.weights[ji],
+            };
+            let prims: Vec<Primitive> = segments.iter().map(|s| s.primitives[ji].clone()).collect();
+            refit_joint(&series, bounds, &prims, fit).ok_or_else(|| {
+                ConcreteError::Track(format!(
+                    "joint `{}`: the continuous (C0) refit has no solution (non-finite positions?)",
+                    joint_name(track, ji)
+                ))
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    for (ji, prims) in per_joint.into_iter().enumerate() {
+        for (seg, p) in segments.iter_mut().zip(prims) {
+            seg.primitives[ji] = p;
+        }
+    }
+    Ok(segments)
+}
+
 /// Synthesises a concrete program with all details (segmentation cost, scale, λ).
 pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthesis> {
     params.validate()?;
@@ -584,7 +631,12 @@ pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthe
             })
         })
         .collect::<Result<Vec<_>>>()?;
+    let segments = match params.continuity {
+        Continuity::None => segments,
+        Continuity::C0 => smooth_segments(&prep, &fit, track, &segmentation.boundaries, segments)?,
+    };
     let program = Program {
+        continuity: params.continuity,
         fps: track.fps(),
         units: track.units(),
         dims: track.dims(),

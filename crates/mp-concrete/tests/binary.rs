@@ -17,6 +17,7 @@ fn all_kinds_3d() -> Program {
         dims: 3,
         skeleton: "bvh".into(),
         joints: vec!["hip".into(), "lHand".into()],
+        continuity: mp_concrete::Continuity::C0,
         segments: vec![
             Segment {
                 duration_frames: 12,

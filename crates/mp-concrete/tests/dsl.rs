@@ -92,6 +92,12 @@ fn program() -> impl Strategy<Value = Program> {
                 .enumerate()
                 .map(|(i, n)| format!("{n}{i}"))
                 .collect(),
+            // Both values print and parse (C0 is a header field).
+            continuity: if fps > 30.0 {
+                mp_concrete::Continuity::C0
+            } else {
+                mp_concrete::Continuity::None
+            },
             segments,
         })
 }
@@ -138,6 +144,7 @@ fn paper_program() -> Program {
         dims: 2,
         skeleton: "penn13".into(),
         joints: vec!["right_wrist".into()],
+        continuity: mp_concrete::Continuity::None,
         segments: vec![
             Segment {
                 duration_frames: 7,

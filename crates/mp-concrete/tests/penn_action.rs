@@ -1,7 +1,9 @@
 //! Real data: programs of Penn Action golf swings (paper §4.1 analysis).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::{program_stats, synthesize, Program, Scale, SynthParams, UnobservedJoints};
+use mp_concrete::{
+    program_stats, synthesize, Continuity, Program, Scale, SynthParams, UnobservedJoints,
+};
 use mp_geom::io::datasets::PennAction;
 
 /// Penn Action, or `None` (the running test's skip is recorded).
@@ -13,7 +15,9 @@ fn penn() -> Option<PennAction> {
     Some(PennAction::open(&path).unwrap())
 }
 
-/// The first 6 golf-swing clips of the train split, default parameters, scale from the frame size.
+/// The first 6 golf-swing clips of the train split, default parameters with
+/// independently fitted segments (the paper's programs; `tests/smooth.rs`
+/// covers C0), scale from the frame size.
 #[test]
 fn golf_swings_are_compact_and_accurate() {
     let Some(pa) = penn() else {
@@ -33,6 +37,7 @@ fn golf_swings_are_compact_and_accurate() {
         let params = SynthParams {
             scale: Scale::FrameSize { frame_px },
             unobserved_joints: UnobservedJoints::Ignore,
+            continuity: Continuity::None,
             ..SynthParams::default()
         };
         let p = synthesize(&track, &params).unwrap();

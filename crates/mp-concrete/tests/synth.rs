@@ -38,6 +38,7 @@ fn known_program() -> Program {
         dims: 2,
         skeleton: "generic".into(),
         joints: vec!["j0".into(), "j1".into(), "j2".into()],
+        continuity: mp_concrete::Continuity::None,
         segments: vec![
             Segment {
                 duration_frames: 15,
@@ -69,10 +70,13 @@ fn known_program() -> Program {
 
 /// Pixels at the reference scale; λ = 300 suits 3 joints (the default 1600
 /// is meant for whole skeletons, where the cost sums over 13–17 joints).
+/// Segments fitted independently: the known program jumps at every
+/// boundary, which a C0 program cannot reproduce.
 fn params_px() -> SynthParams {
     SynthParams {
         scale: Scale::UnitScale { unit_scale: 1.0 },
         lambda: Lambda::fixed(300.0),
+        continuity: mp_concrete::Continuity::None,
         ..SynthParams::default()
     }
 }
@@ -247,6 +251,7 @@ fn interpolation_beats_linear_on_circles() {
         dims: 2,
         skeleton: "generic".into(),
         joints: vec!["a".into()],
+        continuity: mp_concrete::Continuity::None,
         segments: vec![Segment {
             duration_frames: 41,
             primitives: vec![arc(200.0, 200.0, 80.0, 0.0, 4.0)],

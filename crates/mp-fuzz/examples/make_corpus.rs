@@ -78,6 +78,11 @@ fn program(dims: usize, joints: &[&str], pattern: &[(usize, usize)]) -> Program 
         dims,
         skeleton: "generic".into(),
         joints: joints.iter().map(|s| s.to_string()).collect(),
+        continuity: if dims == 2 {
+            mp_concrete::Continuity::None
+        } else {
+            mp_concrete::Continuity::C0
+        },
         segments,
     }
 }

@@ -384,6 +384,7 @@ pub(crate) mod tests {
             dims: 2,
             skeleton: "generic".into(),
             joints: vec!["j0".into(), "left_wrist".into()],
+            continuity: mp_concrete::Continuity::None,
             segments: vec![
                 Segment {
                     duration_frames: 10,

@@ -6,6 +6,16 @@ use super::lex::{lex, Tok, Token};
 use super::print::axis_name;
 use crate::error::{ConcreteError, ParseError, Result};
 use crate::program::{Program, Segment};
+use crate::smooth::Continuity;
+
+/// The fields of the program header.
+struct Header {
+    fps: f64,
+    units: Units,
+    dims: usize,
+    skeleton: String,
+    continuity: Continuity,
+}
 
 /// A term `coef * t ^ power` of a polynomial.
 #[derive(Debug, Clone)]
@@ -198,12 +208,12 @@ impl Parser {
         Ok(Term { coef, power, at })
     }
 
-    fn header(&mut self) -> PResult<(f64, Units, usize, String)> {
+    fn header(&mut self) -> PResult<Header> {
         self.keyword("program")?;
         self.expect(Tok::LParen, "`(`")?;
-        let (mut fps, mut units, mut dims, mut skel) = (None, None, None, None);
+        let (mut fps, mut units, mut dims, mut skel, mut cont) = (None, None, None, None, None);
         loop {
-            let (key, kat) = self.ident("`fps`, `units`, `dims` or `skeleton`")?;
+            let (key, kat) = self.ident("`fps`, `units`, `dims`, `skeleton` or `continuity`")?;
             self.expect(Tok::Eq, "`=`")?;
             let dup = match key.as_str() {
                 "fps" => {
@@ -230,10 +240,16 @@ impl Parser {
                     let (s, _) = self.string("a quoted skeleton name")?;
                     skel.replace(s).is_some()
                 }
+                "continuity" => {
+                    let (c, at) = self.ident("`none` or `c0`")?;
+                    let c = Continuity::from_name(&c)
+                        .ok_or_else(|| perr(at, "`none` or `c0`", format!("`{c}`")))?;
+                    cont.replace(c).is_some()
+                }
                 _ => {
                     return Err(perr(
                         kat,
-                        "`fps`, `units`, `dims` or `skeleton`",
+                        "`fps`, `units`, `dims`, `skeleton` or `continuity`",
                         format!("`{key}`"),
                     ))
                 }
@@ -253,12 +269,13 @@ impl Parser {
         self.expect(Tok::RParen, "`,` or `)`")?;
         self.eat(&Tok::Semi);
         let missing = |what: &str| perr(close, format!("`{what}=` in the program header"), "`)`");
-        Ok((
-            fps.ok_or_else(|| missing("fps"))?,
-            units.ok_or_else(|| missing("units"))?,
-            dims.ok_or_else(|| missing("dims"))?,
-            skel.unwrap_or_else(|| "generic".into()),
-        ))
+        Ok(Header {
+            fps: fps.ok_or_else(|| missing("fps"))?,
+            units: units.ok_or_else(|| missing("units"))?,
+            dims: dims.ok_or_else(|| missing("dims"))?,
+            skeleton: skel.unwrap_or_else(|| "generic".into()),
+            continuity: cont.unwrap_or_default(),
+        })
     }
 
     fn args(&mut self) -> PResult<(Vec<Arg>, (usize, usize))> {
@@ -457,7 +474,13 @@ impl Parser {
     }
 
     fn program(&mut self) -> PResult<Program> {
-        let (fps, units, dims, skeleton) = self.header()?;
+        let Header {
+            fps,
+            units,
+            dims,
+            skeleton,
+            continuity,
+        } = self.header()?;
         let mut joints: Vec<String> = Vec::new();
         let mut segments: Vec<Segment> = Vec::new();
         loop {
@@ -534,6 +557,7 @@ impl Parser {
             dims,
             skeleton,
             joints,
+            continuity,
             segments,
         })
     }

@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use mp_geom::Primitive;
 
 use crate::program::Program;
+use crate::smooth::Continuity;
 
 /// How numbers are printed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -139,15 +140,20 @@ fn quote(s: &str) -> String {
     out
 }
 
-/// The header line, e.g. `program(fps=30, units=px, dims=2, skeleton="penn13")`.
+/// The header line, e.g. `program(fps=30, units=px, dims=2, skeleton="penn13", continuity=c0)`
+/// (`continuity` only when it is not `none`).
 pub fn header(p: &Program, nf: NumberFormat) -> String {
     let units = match p.units {
         mp_geom::Units::Pixels => "px",
         mp_geom::Units::Metres => "m",
         mp_geom::Units::Unitless => "unitless",
     };
+    let continuity = match p.continuity {
+        Continuity::None => String::new(),
+        c => format!(", continuity={c}"),
+    };
     format!(
-        "program(fps={}, units={units}, dims={}, skeleton={})",
+        "program(fps={}, units={units}, dims={}, skeleton={}{continuity})",
         fmt_number(p.fps, nf),
         p.dims,
         quote(&p.skeleton)

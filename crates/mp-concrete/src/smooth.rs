@@ -1,0 +1,648 @@
+//! Smooth programs: consecutive segments share their boundary pose (C0).
+//!
+//! With [`Continuity::C0`] the segmentation is the one the DP chose for
+//! independently fitted segments; then, per joint, all of that joint's
+//! primitives are refitted **jointly** so that every segment ends where the
+//! next begins: segment `i` evaluated at `t = duration_i` (the first frame of
+//! segment `i + 1`) equals segment `i + 1` at `t = 0`. Executing such a
+//! program gives a continuous trajectory; the step between the last frame of
+//! a segment and the first frame of the next is the primitive's own last step.
+//!
+//! # The refit
+//!
+//! The unknowns of a joint are its **knots** `v_0 … v_S` (the pose at each
+//! boundary, `D` values each; `v_S` is the end of the last segment extended by
+//! one frame) and, for splines, two interior coefficients per axis. With
+//! `s = t / n` (`n` the segment's duration) each kind keeps its shape:
+//!
+//! * **line**: `p(t) = (1 − s)·v_i + s·v_{i+1}` (start `v_i`, velocity `(v_{i+1} − v_i) / n`);
+//! * **spline**: the line plus `s(1 − s)·(a + b·s)` per axis (still a cubic);
+//! * **circle (2D)**: the fitted arc moved by the similarity (rotation and
+//!   scale, as complex numbers) that maps its chord `p(n) − p(0)` onto
+//!   `v_{i+1} − v_i`: `p(t) = v_i + (v_{i+1} − v_i)·w(t)` with the fixed complex
+//!   `w(t) = (p(t) − p(0)) / (p(n) − p(0))`. The result is a circle with the same
+//!   angular velocity and acceleration, a scaled radius and a turned start angle.
+//!   An arc whose `|w(t)|` exceeds [`MAX_SIMILARITY_GAIN`] (more than about
+//!   240°, or a vanishing chord), and every circle in 3D, is **rigid** instead:
+//!   translated as a whole, `v_{i+1} = v_i + p(n) − p(0)`;
+//! * **stationary**: rigid with a zero chord, `v_{i+1} = v_i` (the held pose
+//!   is the shared knot).
+//!
+//! Every position is linear in the unknowns, so the refit is one weighted
+//! least-squares problem per joint (squared residuals over the observed
+//! frames; a segment where the joint is never observed uses the gap-filled
+//! positions, as the independent fit does). Rigid segments tie their two
+//! knots, which removes one knot; the normal equations are banded (each
+//! segment couples its two knots and its interior coefficients) and are
+//! solved by a banded Cholesky factorisation in `O(S·D³)` per joint. A ridge
+//! of weight [`RIDGE`] towards the independent fits' boundary poses keeps the
+//! system positive definite where a joint has no data at all.
+//!
+//! A rigid segment can be forced far from its data by its neighbours (a held
+//! joint between two different positions). After the solve, a stationary
+//! segment whose mean residual grew by more than `stationary_mean_residual_px`
+//! (the threshold of the stationary rule, 3 px at the 512-px reference) over
+//! its independent fit becomes a line, a rigid circle a cubic spline, and the
+//! joint is solved again (until nothing changes). These are the only changes
+//! of kind.
+//!
+//! The segmentation's cost ([`crate::Synthesis::segmentation`]) stays that of
+//! the independent fits the DP minimised.
+
+use mp_geom::fit::FitParams;
+use mp_geom::Primitive;
+use ndarray::ArrayView2;
+use serde::{Deserialize, Serialize};
+
+/// Whether consecutive segments of a program share their boundary pose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Continuity {
+    /// Segments fitted independently: the pose may jump at a boundary.
+    /// Programs written before the field existed read as this.
+    #[default]
+    None,
+    /// Segment `i` at `t = duration_i` equals segment `i + 1` at `t = 0`, for
+    /// every joint (see the [module docs](self)).
+    C0,
+}
+
+impl Continuity {
+    /// The name used in the DSL header and on the command line (`none`, `c0`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Continuity::None => "none",
+            Continuity::C0 => "c0",
+        }
+    }
+
+    /// Parses [`Continuity::as_str`]'s names.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "none" => Some(Continuity::None),
+            "c0" => Some(Continuity::C0),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for Continuity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for Continuity {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        Continuity::from_name(&s.to_ascii_lowercase())
+            .ok_or_else(|| format!("unknown continuity `{s}` (expected `none` or `c0`)"))
+    }
+}
+
+/// Largest `|w(t)|` (the arc's distance from its start relative to its chord)
+/// for which a 2D circle is refitted by a similarity; beyond it the circle
+/// is moved rigidly. 3 allows arcs up to about 240°.
+pub const MAX_SIMILARITY_GAIN: f64 = 3.0;
+
+/// Weight of the ridge towards the independent fits' boundary poses (per
+/// unknown; a frame of data weighs 1).
+pub const RIDGE: f64 = 1e-6;
+
+/// How one segment of one joint depends on the unknowns.
+#[derive(Debug, Clone)]
+enum Elem {
+    /// `p(t) = v_i + shape(t)`, `v_{i+1} = v_i + shape(n)`; `shape` of length `(n + 1)·D`.
+    Rigid { shape: Vec<f64> },
+    /// Line between the knots.
+    Linear,
+    /// Line plus `s(1 − s)(a + b s)` per axis.
+    Cubic,
+    /// 2D arc: `v_i + (v_{i+1} − v_i)·w(t)`, `w` complex per frame (length `n`).
+    Similar { w: Vec<(f64, f64)> },
+}
+
+/// One joint's data: positions `T × D` (gap-filled) and 0/1 weights.
+pub(crate) struct JointSeries<'a> {
+    pub points: ArrayView2<'a, f64>,
+    pub weights: &'a [f64],
+}
+
+/// Variable layout of one solve.
+struct Layout {
+    /// Per knot: index of its group's first unknown.
+    knot_var: Vec<usize>,
+    /// Per knot: offset from its group's value (rigid chains), `D` values.
+    knot_off: Vec<Vec<f64>>,
+    /// Per segment: index of the first interior unknown (cubic only).
+    interior: Vec<Option<usize>>,
+    /// Number of unknowns.
+    n: usize,
+    /// Half bandwidth of the normal matrix.
+    bw: usize,
+}
+
+fn layout(elems: &[Elem], d: usize) -> Layout {
+    let s = elems.len();
+    let mut knot_var = Vec::with_capacity(s + 1);
+    let mut knot_off = Vec::with_capacity(s + 1);
+    let mut interior = Vec::with_capacity(s);
+    knot_var.push(0);
+    knot_off.push(vec![0.0; d]);
+    let mut n = d;
+    let mut bw = d - 1;
+    for (i, e) in elems.iter().enumerate() {
+        let first = knot_var[i];
+        let mut hi = first + d - 1;
+        if let Elem::Cubic = e {
+            interior.push(Some(n));
+            n += 2 * d;
+            hi = n - 1;
+        } else {
+            interior.push(None);
+        }
+        match e {
+            Elem::Rigid { shape } => {
+                let nn = shape.len() / d - 1;
+                let off: Vec<f64> = (0..d).map(|k| knot_off[i][k] + shape[nn * d + k]).collect();
+                knot_var.push(first);
+                knot_off.push(off);
+            }
+            _ => {
+                knot_var.push(n);
+                knot_off.push(vec![0.0; d]);
+                n += d;
+                hi = n - 1;
+            }
+        }
+        bw = bw.max(hi - first);
+    }
+    Layout {
+        knot_var,
+        knot_off,
+        interior,
+        n,
+        bw,
+    }
+}
+
+/// Symmetric banded matrix (upper band) and right-hand side.
+struct Normal {
+    n: usize,
+    w: usize,
+    h: Vec<f64>,
+    g: Vec<f64>,
+}
+
+impl Normal {
+    fn new(n: usize, bw: usize) -> Self {
+        let w = bw + 1;
+        Normal {
+            n,
+            w,
+            h: vec![0.0; n * w],
+            g: vec![0.0; n],
+        }
+    }
+
+    /// Adds `weight · (Σ coef·z[idx] − y)²` to the objective.
+    fn add_row(&mut self, row: &[(usize, f64)], y: f64, weight: f64) {
+        for &(a, ca) in row {
+            self.g[a] += weight * ca * y;
+            for &(b, cb) in row {
+                if b >= a {
+                    self.h[a * self.w + (b - a)] += weight * ca * cb;
+                }
+            }
+        }
+    }
+
+    /// Solves by banded Cholesky; `None` when the matrix is not positive definite.
+    fn solve(mut self) -> Option<Vec<f64>> {
+        let (n, w) = (self.n, self.w);
+        let bw = w - 1;
+        let h = &mut self.h;
+        for i in 0..n {
+            for j in i..(i + w).min(n) {
+                let mut sum = h[i * w + (j - i)];
+                for k in j.saturating_sub(bw)..i {
+                    sum -= h[k * w + (i - k)] * h[k * w + (j - k)];
+                }
+                if j == i {
+                    if sum.is_nan() || sum <= 0.0 {
+                        return None;
+                    }
+                    h[i * w] = sum.sqrt();
+                } else {
+                    h[i * w + (j - i)] = sum / h[i * w];
+                }
+            }
+        }
+        let b = &mut self.g;
+        for i in 0..n {
+            let mut s = b[i];
+            for k in i.saturating_sub(bw)..i {
+                s -= h[k * w + (i - k)] * b[k];
+            }
+            b[i] = s / h[i * w];
+        }
+        for i in (0..n).rev() {
+            let mut s = b[i];
+            for j in (i + 1)..(i + w).min(n) {
+                s -= h[i * w + (j - i)] * b[j];
+            }
+            b[i] = s / h[i * w];
+        }
+        b.iter().all(|x| x.is_finite()).then_some(self.g)
+    }
+}
+
+/// The element of a fitted primitive over `n` frames of `d` dimensions.
+fn elem_of(p: &Primitive, n: usize, d: usize) -> Elem {
+    let rigid = |p: &Primitive| {
+        let p0 = p.eval(0.0);
+        let mut shape = Vec::with_capacity((n + 1) * d);
+        for t in 0..=n {
+            let pt = p.eval(t as f64);
+            shape.extend(pt.iter().zip(&p0).map(|(a, b)| a - b));
+        }
+        Elem::Rigid { shape }
+    };
+    match p {
+        Primitive::Stationary { .. } => Elem::Rigid {
+            shape: vec![0.0; (n + 1) * d],
+        },
+        Primitive::Line { .. } => Elem::Linear,
+        Primitive::Spline { .. } => Elem::Cubic,
+        Primitive::Circle { .. } if d == 2 => {
+            let p0 = p.eval(0.0);
+            let pn = p.eval(n as f64);
+            let (cx, cy) = (pn[0] - p0[0], pn[1] - p0[1]);
+            let c2 = cx * cx + cy * cy;
+            let scale = p0[0].abs().max(p0[1].abs()).max(1.0);
+            let chord = c2.sqrt();
+            if chord.is_nan() || chord <= 1e-9 * scale {
+                return rigid(p);
+            }
+            let mut w = Vec::with_capacity(n);
+            for t in 0..n {
+                let q = p.eval(t as f64);
+                let (dx, dy) = (q[0] - p0[0], q[1] - p0[1]);
+                // (dx + i dy) / (cx + i cy)
+                let wr = (dx * cx + dy * cy) / c2;
+                let wi = (dy * cx - dx * cy) / c2;
+                if wr.hypot(wi) > MAX_SIMILARITY_GAIN {
+                    return rigid(p);
+                }
+                w.push((wr, wi));
+            }
+            Elem::Similar { w }
+        }
+        Primitive::Circle { .. } => rigid(p),
+    }
+}
+
+/// Per-knot initial poses: the independent fits' boundary poses (mean of the
+/// end of one segment and the start of the next).
+fn initial_knots(prims: &[Primitive], durations: &[usize]) -> Vec<Vec<f64>> {
+    let s = prims.len();
+    let mut out = Vec::with_capacity(s + 1);
+    for i in 0..=s {
+        let a = (i > 0).then(|| prims[i - 1].eval(durations[i - 1] as f64));
+        let b = (i < s).then(|| prims[i].eval(0.0));
+        out.push(match (a, b) {
+            (Some(a), Some(b)) => a.iter().zip(&b).map(|(x, y)| 0.5 * (x + y)).collect(),
+            (Some(a), None) => a,
+            (None, Some(b)) => b,
+            (None, None) => Vec::new(),
+        });
+    }
+    out
+}
+
+/// Solves one joint's knots and interior coefficients for the given elements.
+fn solve(
+    series: &JointSeries<'_>,
+    bounds: &[usize],
+    elems: &[Elem],
+    init: &[Vec<f64>],
+    d: usize,
+) -> Option<(Vec<Vec<f64>>, Vec<f64>)> {
+    let lay = layout(elems, d);
+    let mut ne = Normal::new(lay.n, lay.bw);
+    let mut row: Vec<(usize, f64)> = Vec::with_capacity(4 * d);
+    for (i, e) in elems.iter().enumerate() {
+        let (k0, k1) = (bounds[i], bounds[i + 1]);
+        let n = k1 - k0;
+        let observed = series.weights[k0..k1].iter().any(|&w| w > 0.0);
+        let (va, vb) = (lay.knot_var[i], lay.knot_var[i + 1]);
+        let (oa, ob) = (&lay.knot_off[i], &lay.knot_off[i + 1]);
+        for t in 0..n {
+            let wt = if observed {
+                series.weights[k0 + t]
+            } else {
+                1.0
+            };
+            if wt <= 0.0 {
+                continue;
+            }
+            let s = t as f64 / n as f64;
+            for k in 0..d {
+                row.clear();
+                let x = series.points[[k0 + t, k]];
+                // The constant part of the row goes to the target.
+                let mut c = 0.0;
+                match e {
+                    Elem::Rigid { shape } => {
+                        row.push((va + k, 1.0));
+                        c += oa[k] + shape[t * d + k];
+                    }
+                    Elem::Linear | Elem::Cubic => {
+                        row.push((va + k, 1.0 - s));
+                        row.push((vb + k, s));
+                        c += (1.0 - s) * oa[k] + s * ob[k];
+                        if let (Elem::Cubic, Some(iv)) = (e, lay.interior[i]) {
+                            row.push((iv + k, s * (1.0 - s)));
+                            row.push((iv + d + k, s * s * (1.0 - s)));
+                        }
+                    }
+                    Elem::Similar { w } => {
+                        let (wr, wi) = w[t];
+                        // x = a_x(1 − wr) + a_y·wi + b_x·wr − b_y·wi
+                        // y = −a_x·wi + a_y(1 − wr) + b_x·wi + b_y·wr
+                        let coefs = if k == 0 {
+                            [1.0 - wr, wi, wr, -wi]
+                        } else {
+                            [-wi, 1.0 - wr, wi, wr]
+                        };
+                        row.push((va, coefs[0]));
+                        row.push((va + 1, coefs[1]));
+                        row.push((vb, coefs[2]));
+                        row.push((vb + 1, coefs[3]));
+                        c += coefs[0] * oa[0]
+                            + coefs[1] * oa[1]
+                            + coefs[2] * ob[0]
+                            + coefs[3] * ob[1];
+                    }
+                }
+                ne.add_row(&row, x - c, wt);
+            }
+        }
+    }
+    // Ridge: each group's value towards its first knot's initial pose, interiors towards 0.
+    for (i, &v) in lay.knot_var.iter().enumerate() {
+        if i > 0 && lay.knot_var[i - 1] == v {
+            continue;
+        }
+        for k in 0..d {
+            let y = init[i].get(k).copied().unwrap_or(0.0);
+            ne.add_row(&[(v + k, 1.0)], y, RIDGE);
+        }
+    }
+    for iv in lay.interior.iter().flatten() {
+        for k in 0..2 * d {
+            ne.add_row(&[(iv + k, 1.0)], 0.0, RIDGE);
+        }
+    }
+    let z = ne.solve()?;
+    let knots: Vec<Vec<f64>> = (0..lay.knot_var.len())
+        .map(|i| {
+            (0..d)
+                .map(|k| z[lay.knot_var[i] + k] + lay.knot_off[i][k])
+                .collect()
+        })
+        .collect();
+    let mut interiors = vec![0.0; elems.len() * 2 * d];
+    for (i, iv) in lay.interior.iter().enumerate() {
+        if let Some(iv) = iv {
+            interiors[i * 2 * d..(i + 1) * 2 * d].copy_from_slice(&z[*iv..*iv + 2 * d]);
+        }
+    }
+    Some((knots, interiors))
+}
+
+/// The primitive of segment `i` from the solved knots.
+fn primitive_of(
+    orig: &Primitive,
+    e: &Elem,
+    n: usize,
+    a: &[f64],
+    b: &[f64],
+    interior: &[f64],
+) -> Primitive {
+    let d = a.len();
+    let nf = n as f64;
+    match e {
+        Elem::Linear => Primitive::Line {
+            start: a.to_vec(),
+            velocity: a.iter().zip(b).map(|(x, y)| (y - x) / nf).collect(),
+        },
+        Elem::Cubic => {
+            // Polynomial in s: c0 + c1 s + c2 s² + c3 s³, then in t = n s.
+            let coeffs = (0..d)
+                .map(|k| {
+                    let (ia, ib) = (interior[k], interior[d + k]);
+                    let c0 = a[k];
+                    let c1 = b[k] - a[k] + ia;
+                    let c2 = ib - ia;
+                    let c3 = -ib;
+                    [c3 / (nf * nf * nf), c2 / (nf * nf), c1 / nf, c0]
+                })
+                .collect();
+            Primitive::Spline { coeffs }
+        }
+        Elem::Rigid { .. } => match orig {
+            Primitive::Stationary { .. } => Primitive::Stationary { point: a.to_vec() },
+            other => {
+                let p0 = other.eval(0.0);
+                translate(
+                    other,
+                    &a.iter().zip(&p0).map(|(x, y)| x - y).collect::<Vec<_>>(),
+                )
+            }
+        },
+        Elem::Similar { .. } => similar_circle(orig, n, a, b),
+    }
+}
+
+/// `p` moved by `delta` (circles: the centre; other kinds are never rigid but handled alike).
+fn translate(p: &Primitive, delta: &[f64]) -> Primitive {
+    let add = |v: &[f64]| v.iter().zip(delta).map(|(x, y)| x + y).collect::<Vec<_>>();
+    match p {
+        Primitive::Stationary { point } => Primitive::Stationary { point: add(point) },
+        Primitive::Line { start, velocity } => Primitive::Line {
+            start: add(start),
+            velocity: velocity.clone(),
+        },
+        Primitive::Circle {
+            center,
+            radius,
+            angle_start,
+            angle_vel,
+            angle_acc,
+            axes,
+        } => Primitive::Circle {
+            center: add(center),
+            radius: *radius,
+            angle_start: *angle_start,
+            angle_vel: *angle_vel,
+            angle_acc: *angle_acc,
+            axes: axes.clone(),
+        },
+        Primitive::Spline { coeffs } => Primitive::Spline {
+            coeffs: coeffs
+                .iter()
+                .zip(delta)
+                .map(|(c, dk)| [c[0], c[1], c[2], c[3] + dk])
+                .collect(),
+        },
+    }
+}
+
+/// The 2D circle `orig` mapped by the similarity taking its chord onto `b − a`, starting at `a`.
+fn similar_circle(orig: &Primitive, n: usize, a: &[f64], b: &[f64]) -> Primitive {
+    let Primitive::Circle {
+        center,
+        radius,
+        angle_start,
+        angle_vel,
+        angle_acc,
+        axes,
+    } = orig
+    else {
+        return orig.clone();
+    };
+    let p0 = orig.eval(0.0);
+    let pn = orig.eval(n as f64);
+    let (cx, cy) = (pn[0] - p0[0], pn[1] - p0[1]);
+    let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+    let c2 = cx * cx + cy * cy;
+    // A = (ex + i ey) / (cx + i cy)
+    let ar = (ex * cx + ey * cy) / c2;
+    let ai = (ey * cx - ex * cy) / c2;
+    let (ux, uy) = (center[0] - p0[0], center[1] - p0[1]);
+    let new_center = vec![a[0] + ar * ux - ai * uy, a[1] + ai * ux + ar * uy];
+    let phi = ai.atan2(ar).to_degrees();
+    let mut start = angle_start + phi;
+    start -= 360.0 * ((start - 180.0) / 360.0).ceil();
+    Primitive::Circle {
+        center: new_center,
+        radius: radius * ar.hypot(ai),
+        angle_start: start,
+        angle_vel: *angle_vel,
+        angle_acc: *angle_acc,
+        axes: axes.clone(),
+    }
+}
+
+/// Mean Euclidean residual of `p` on frames `k0..k1` (weights as in the refit).
+fn mean_residual(p: &Primitive, series: &JointSeries<'_>, k0: usize, k1: usize) -> f64 {
+    let observed = series.weights[k0..k1].iter().any(|&w| w > 0.0);
+    let (mut sum, mut wsum) = (0.0, 0.0);
+    let mut buf = vec![0.0; series.points.ncols()];
+    for t in 0..(k1 - k0) {
+        let w = if observed {
+            series.weights[k0 + t]
+        } else {
+            1.0
+        };
+        if w <= 0.0 {
+            continue;
+        }
+        p.eval_into(t as f64, &mut buf);
+        let dd: f64 = buf
+            .iter()
+            .zip(series.points.row(k0 + t).iter())
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum();
+        sum += w * dd.sqrt();
+        wsum += w;
+    }
+    if wsum > 0.0 {
+        sum / wsum
+    } else {
+        0.0
+    }
+}
+
+/// Refits one joint's primitives (one per segment of `bounds`) so that
+/// consecutive ones share their boundary pose. `None` when the normal
+/// equations cannot be solved (non-finite input).
+pub(crate) fn refit_joint(
+    series: &JointSeries<'_>,
+    bounds: &[usize],
+    prims: &[Primitive],
+    fit: &FitParams,
+) -> Option<Vec<Primitive>> {
+    let d = series.points.ncols();
+    if prims.is_empty() || d == 0 || bounds.len() != prims.len() + 1 {
+        return None;
+    }
+    let durations: Vec<usize> = bounds.windows(2).map(|w| w[1] - w[0]).collect();
+    let mut elems: Vec<Elem> = prims
+        .iter()
+        .zip(&durations)
+        .map(|(p, &n)| elem_of(p, n, d))
+        .collect();
+    let init = initial_knots(prims, &durations);
+    let before: Vec<f64> = prims
+        .iter()
+        .enumerate()
+        .map(|(i, p)| mean_residual(p, series, bounds[i], bounds[i + 1]))
+        .collect();
+    let limit = fit.stationary_mean_residual_px * fit.unit_scale;
+    // Each pass turns at least one rigid segment into a flexible one, so this ends.
+    loop {
+        let (knots, interiors) = solve(series, bounds, &elems, &init, d)?;
+        let out: Vec<Primitive> = (0..prims.len())
+            .map(|i| {
+                primitive_of(
+                    &prims[i],
+                    &elems[i],
+                    durations[i],
+                    &knots[i],
+                    &knots[i + 1],
+                    &interiors[i * 2 * d..(i + 1) * 2 * d],
+                )
+            })
+            .collect();
+        let mut changed = false;
+        for (i, e) in elems.iter_mut().enumerate() {
+            if !matches!(e, Elem::Rigid { .. }) {
+                continue;
+            }
+            let after = mean_residual(&out[i], series, bounds[i], bounds[i + 1]);
+            if after > before[i] + limit {
+                *e = match prims[i] {
+                    Primitive::Stationary { .. } => Elem::Linear,
+                    _ => Elem::Cubic,
+                };
+                changed = true;
+            }
+        }
+        if !changed {
+            return Some(out);
+        }
+    }
+}
+
+/// The largest distance, over joints and boundaries, between the end of a
+/// segment (its primitive at `t = duration`) and the start of the next.
+pub fn max_boundary_gap(program: &crate::Program) -> f64 {
+    let mut worst: f64 = 0.0;
+    for pair in program.segments.windows(2) {
+        let n = pair[0].duration_frames as f64;
+        for (p, q) in pair[0].primitives.iter().zip(&pair[1].primitives) {
+            let a = p.eval(n);
+            let b = q.eval(0.0);
+            let dist = a
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| (x - y) * (x - y))
+                .sum::<f64>()
+                .sqrt();
+            worst = worst.max(dist);
+        }
+    }
+    worst
+}
