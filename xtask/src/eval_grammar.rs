@@ -92,14 +92,15 @@ struct Input {
     features: bool,
 }
 
-fn inputs(path: &Path, frame_step: usize) -> anyhow::Result<Vec<Input>> {
+/// The CMU feature files (`*_features10fps.npz`) at `path` (a folder, sorted
+/// by name, or one file); empty when there are none.
+pub(crate) fn feature_files(path: &Path) -> anyhow::Result<Vec<PathBuf>> {
     let is_features = |p: &Path| {
         p.file_name()
             .and_then(|n| n.to_str())
             .is_some_and(|n| n.ends_with("_features10fps.npz"))
     };
-    let mut out = Vec::new();
-    let feature_files: Vec<PathBuf> = if path.is_dir() {
+    Ok(if path.is_dir() {
         let mut v: Vec<PathBuf> = std::fs::read_dir(path)
             .with_context(|| path.display().to_string())?
             .filter_map(|e| e.ok().map(|e| e.path()))
@@ -111,7 +112,12 @@ fn inputs(path: &Path, frame_step: usize) -> anyhow::Result<Vec<Input>> {
         vec![path.to_path_buf()]
     } else {
         Vec::new()
-    };
+    })
+}
+
+fn inputs(path: &Path, frame_step: usize) -> anyhow::Result<Vec<Input>> {
+    let mut out = Vec::new();
+    let feature_files = feature_files(path)?;
     if !feature_files.is_empty() {
         for f in feature_files {
             let c = CmuFeatures::open(&f)?;

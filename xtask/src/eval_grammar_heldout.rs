@@ -13,7 +13,7 @@
 //! reported beside them.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context;
@@ -42,20 +42,7 @@ fn stem(p: &Path) -> String {
 }
 
 fn groups(path: &Path, frame_step: usize) -> anyhow::Result<Vec<Group>> {
-    let is_features = |p: &Path| stem(p).ends_with("_features10fps.npz");
-    let files: Vec<PathBuf> = if path.is_dir() {
-        let mut v: Vec<PathBuf> = std::fs::read_dir(path)
-            .with_context(|| path.display().to_string())?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| is_features(p))
-            .collect();
-        v.sort();
-        v
-    } else if is_features(path) {
-        vec![path.to_path_buf()]
-    } else {
-        Vec::new()
-    };
+    let files = crate::eval_grammar::feature_files(path)?;
     if !files.is_empty() {
         let mut takes = Vec::new();
         for f in files {
