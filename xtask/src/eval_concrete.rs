@@ -7,6 +7,14 @@
 //! ×8: program vs linear interpolation on the dropped frames). Distances are
 //! reported in pixels of a 512-px frame: `px · 512 / max(H, W)` of the clip.
 //!
+//! Programs come from `mp_pipeline::concrete_program` — the function `mp fit`
+//! calls — with `mp_pipeline::Params::default()` and the options given.
+//!
+//! `--compare-continuity`: for every clip the product's program with
+//! independently fitted segments (`--continuity none`) and with shared
+//! boundary poses (`c0`, the default): KD, parameter ratio and the largest
+//! adjacent-frame jump of the input and of each executed program, per action.
+//!
 //! `--sweep`: the rate–distortion frontier instead. For every clip and every
 //! fixed λ of `--sweep-lambdas` (and the product's default parameters), the
 //! program's KD and parameter count; per action the KD (mean over clips) and
@@ -22,8 +30,8 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_concrete::{
-    interpolation_experiment, program_stats, synthesize, InterpParams, Lambda, Scale, SynthParams,
-    Transition,
+    interpolation_experiment, program_stats, Continuity, InterpParams, Lambda, Program,
+    ProgramStats, Transition,
 };
 use mp_geom::io::datasets::PennAction;
 use rayon::prelude::*;
@@ -46,6 +54,12 @@ pub struct EvalConcreteArgs {
     /// Maximum segment length in frames.
     #[arg(long, default_value_t = mp_pipeline::Params::default().analysis.synth.max_segment_frames)]
     pub window: usize,
+    /// Whether consecutive segments share their boundary pose (`c0`) or are fitted independently (`none`).
+    #[arg(long, default_value_t = mp_pipeline::Params::default().analysis.synth.continuity)]
+    pub continuity: Continuity,
+    /// Every clip with `--continuity none` and `c0` (see the module docs) instead of the evaluation.
+    #[arg(long)]
+    pub compare_continuity: bool,
     /// Only these action classes (repeatable).
     #[arg(long)]
     pub action: Vec<String>,
@@ -94,22 +108,28 @@ struct ClipResult {
     seconds: f64,
 }
 
+/// The program `mp fit --frame-size FRAME_PX` writes for a track with these parameters.
+fn fit(
+    track: &mp_geom::Track,
+    frame_px: f64,
+    params: &mp_pipeline::Params,
+) -> anyhow::Result<Program> {
+    Ok(mp_pipeline::concrete_program(track, Some(frame_px), params)?.program)
+}
+
 fn run_clip(
     pa: &PennAction,
     i: usize,
-    base: &SynthParams,
+    base: &mp_pipeline::Params,
     a: &EvalConcreteArgs,
 ) -> anyhow::Result<ClipResult> {
     let info = pa.clip_info(i)?;
     let track = pa.clip(i)?;
     let frame_px = info.height_px.max(info.width_px) as f64;
     let to512 = 512.0 / frame_px;
-    let params = SynthParams {
-        scale: Scale::FrameSize { frame_px },
-        ..base.clone()
-    };
+    let params = base.synth_for(Some(frame_px));
     let t0 = Instant::now();
-    let program = synthesize(&track, &params)?;
+    let program = fit(&track, frame_px, base)?;
     let seconds = t0.elapsed().as_secs_f64();
     let st = program_stats(&program, &track)?;
     let mut interp = BTreeMap::new();
@@ -250,15 +270,11 @@ const PEER: [(&str, f64, f64); 2] = [("golf_swing", 4.86, 0.105), ("jumping_jack
 type SweepRow = (usize, usize, f64);
 
 /// One clip at one setting: (program params, raw params, KD at 512 px).
-fn sweep_clip(pa: &PennAction, i: usize, base: &SynthParams) -> anyhow::Result<SweepRow> {
+fn sweep_clip(pa: &PennAction, i: usize, base: &mp_pipeline::Params) -> anyhow::Result<SweepRow> {
     let info = pa.clip_info(i)?;
     let track = pa.clip(i)?;
     let frame_px = info.height_px.max(info.width_px) as f64;
-    let params = SynthParams {
-        scale: Scale::FrameSize { frame_px },
-        ..base.clone()
-    };
-    let program = synthesize(&track, &params)?;
+    let program = fit(&track, frame_px, base)?;
     let st = program_stats(&program, &track)?;
     Ok((st.params_program, st.params_raw, st.kd * 512.0 / frame_px))
 }
@@ -410,21 +426,18 @@ fn sweep(
     path: &std::path::Path,
 ) -> anyhow::Result<()> {
     let product = {
-        let mut p = mp_pipeline::Params::default().analysis.synth;
-        p.max_segment_frames = a.window;
+        let mut p = mp_pipeline::Params::default();
+        p.analysis.synth.max_segment_frames = a.window;
+        p.analysis.synth.continuity = a.continuity;
         p
     };
-    let mut settings: Vec<(String, SynthParams)> = a
+    let mut settings: Vec<(String, mp_pipeline::Params)> = a
         .sweep_lambdas
         .iter()
         .map(|&l| {
-            (
-                format!("{l}"),
-                SynthParams {
-                    lambda: Lambda::fixed(l),
-                    ..product.clone()
-                },
-            )
+            let mut p = product.clone();
+            p.analysis.synth.lambda = Lambda::fixed(l);
+            (format!("{l}"), p)
         })
         .collect();
     settings.push(("default".into(), product.clone()));
@@ -482,7 +495,7 @@ fn sweep(
         }
         per_setting.push(json!({
             "setting": name,
-            "lambda": serde_json::to_value(params.lambda)?,
+            "lambda": serde_json::to_value(params.analysis.synth.lambda)?,
             "by_action": by_action,
         }));
     }
@@ -494,7 +507,7 @@ fn sweep(
     let report = json!({
         "data": path.display().to_string(),
         "what": "KD (px at 512 px, mean over clips) and parameter ratio (Σ program / Σ raw) per action, for fixed λ (512-px reference scale) and the product's default parameters",
-        "params": serde_json::to_value(&product)?,
+        "params": serde_json::to_value(&product.analysis.synth)?,
         "peer": PEER.iter().map(|(a, kd, r)| json!({"action": a, "kd_px_512": kd, "params_ratio": r})).collect::<Vec<_>>(),
         "settings": per_setting,
         "failed": failed,
@@ -539,12 +552,13 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
             .context("Penn Action not found: pass --data or set MP_DATA_DIR")?,
     };
     let pa = PennAction::open(&path).with_context(|| format!("opening {}", path.display()))?;
-    // The product's synthesis parameters (`mp fit`, `mp run`), with the options given.
-    let mut base = mp_pipeline::Params::default().analysis.synth;
+    // The product's parameters (`mp fit`, `mp run`), with the options given.
+    let mut base = mp_pipeline::Params::default();
     if let Some(l) = a.lambda {
-        base.lambda = Lambda::fixed(l);
+        base.analysis.synth.lambda = Lambda::fixed(l);
     }
-    base.max_segment_frames = a.window;
+    base.analysis.synth.max_segment_frames = a.window;
+    base.analysis.synth.continuity = a.continuity;
     base.validate()?;
     let mut per_action: BTreeMap<&str, usize> = BTreeMap::new();
     let clips: Vec<usize> = pa
@@ -560,6 +574,9 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
         .collect();
     if a.sweep {
         return sweep(a, &pa, &clips, &path);
+    }
+    if a.compare_continuity {
+        return compare_continuity(a, &pa, &clips, &path, &base);
     }
     let bar = ProgressBar::new(clips.len() as u64);
     bar.set_style(
@@ -604,7 +621,7 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
     }
     let report = json!({
         "data": path.display().to_string(),
-        "params": serde_json::to_value(&base)?,
+        "params": serde_json::to_value(&base.analysis.synth)?,
         "interpolation": {
             "steps": a.steps,
             "lambda_per_time": !a.interp_same_lambda,
@@ -628,6 +645,129 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
         "{} clips ({} failed) in {wall:.1} s → {}",
         ok.len(),
         report["failed"].as_array().map_or(0, Vec::len),
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// One clip under one continuity: its action, the program's stats, and the factor to 512-px pixels.
+type ContinuityRow = (String, ProgramStats, f64);
+
+fn continuity_clip(
+    pa: &PennAction,
+    i: usize,
+    params: &mp_pipeline::Params,
+) -> anyhow::Result<ContinuityRow> {
+    let info = pa.clip_info(i)?;
+    let track = pa.clip(i)?;
+    let frame_px = info.height_px.max(info.width_px) as f64;
+    let program = fit(&track, frame_px, params)?;
+    Ok((
+        info.action.clone(),
+        program_stats(&program, &track)?,
+        512.0 / frame_px,
+    ))
+}
+
+/// `--compare-continuity`: the product's programs with and without shared boundary poses.
+fn compare_continuity(
+    a: &EvalConcreteArgs,
+    pa: &PennAction,
+    clips: &[usize],
+    path: &std::path::Path,
+    base: &mp_pipeline::Params,
+) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let modes = [Continuity::None, Continuity::C0];
+    let work: Vec<(usize, usize)> = (0..modes.len())
+        .flat_map(|m| clips.iter().map(move |&c| (m, c)))
+        .collect();
+    let bar = ProgressBar::new(work.len() as u64);
+    let results: Vec<(usize, anyhow::Result<ContinuityRow>)> = work
+        .par_iter()
+        .map(|&(m, c)| {
+            let mut p = base.clone();
+            p.analysis.synth.continuity = modes[m];
+            let r = continuity_clip(pa, c, &p);
+            bar.inc(1);
+            (m, r)
+        })
+        .collect();
+    bar.finish();
+    let wall = t0.elapsed().as_secs_f64();
+    let mut failed = 0usize;
+    // (mode, action) → per-clip rows
+    let mut rows: BTreeMap<(usize, String), Vec<(ProgramStats, f64)>> = BTreeMap::new();
+    for (m, r) in results {
+        match r {
+            Ok((act, st, to512)) => {
+                rows.entry((m, "overall".into()))
+                    .or_default()
+                    .push((st.clone(), to512));
+                rows.entry((m, act)).or_default().push((st, to512));
+            }
+            Err(_) => failed += 1,
+        }
+    }
+    let summarise = |rs: &[(ProgramStats, f64)]| -> Value {
+        let prog: usize = rs.iter().map(|r| r.0.params_program).sum();
+        let raw: usize = rs.iter().map(|r| r.0.params_raw).sum();
+        json!({
+            "clips": rs.len(),
+            "kd_px_512": mean(rs.iter().map(|r| r.0.kd * r.1)),
+            "params_ratio": if raw > 0 { prog as f64 / raw as f64 } else { f64::NAN },
+            "max_jump_raw_px_512": mean(rs.iter().map(|r| r.0.max_jump_raw * r.1)),
+            "max_jump_program_px_512": mean(rs.iter().map(|r| r.0.max_jump_program * r.1)),
+            "clips_program_jump_above_raw": rs.iter().filter(|r| r.0.max_jump_program > r.0.max_jump_raw).count(),
+        })
+    };
+    let mut by_action = serde_json::Map::new();
+    let mut md = String::from(
+        "| action | clips | continuity | KD px@512 | params ratio | max jump raw / program (px@512) | clips with program jump > raw |\n|---|---:|---|---:|---:|---:|---:|\n",
+    );
+    let mut names: Vec<String> = rows.keys().map(|k| k.1.clone()).collect();
+    names.sort();
+    names.dedup();
+    names.retain(|n| n != "overall");
+    names.push("overall".into());
+    for name in &names {
+        let mut entry = serde_json::Map::new();
+        for (m, mode) in modes.iter().enumerate() {
+            let Some(rs) = rows.get(&(m, name.clone())) else {
+                continue;
+            };
+            let v = summarise(rs);
+            md.push_str(&format!(
+                "| {name} | {} | {mode} | {:.2} | {:.3} | {:.1} / {:.1} | {} |\n",
+                num(&v, &["clips"]),
+                num(&v, &["kd_px_512"]),
+                num(&v, &["params_ratio"]),
+                num(&v, &["max_jump_raw_px_512"]),
+                num(&v, &["max_jump_program_px_512"]),
+                num(&v, &["clips_program_jump_above_raw"]),
+            ));
+            entry.insert(mode.to_string(), v);
+        }
+        by_action.insert(name.clone(), Value::Object(entry));
+    }
+    let report = json!({
+        "data": path.display().to_string(),
+        "what": "the product's programs (mp_pipeline::concrete_program, Params::default() with the options given) with independently fitted segments and with shared boundary poses (C0); KD and max adjacent-frame jump in px at 512 px (means over clips), parameter ratio Σ program / Σ raw",
+        "params": serde_json::to_value(&base.analysis.synth)?,
+        "by_action": by_action,
+        "failed": failed,
+        "wall_seconds": wall,
+        "threads": rayon::current_num_threads(),
+    });
+    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())
+        .with_context(|| format!("writing {}", a.out.display()))?;
+    println!("{md}");
+    if let Some(m) = &a.markdown {
+        std::fs::write(m, &md).with_context(|| format!("writing {}", m.display()))?;
+    }
+    eprintln!(
+        "{} clips × 2 ({failed} failed) in {wall:.1} s → {}",
+        clips.len(),
         a.out.display()
     );
     Ok(())

@@ -29,9 +29,12 @@
 //!   is the shared knot).
 //!
 //! Every position is linear in the unknowns, so the refit is one weighted
-//! least-squares problem per joint (squared residuals over the observed
-//! frames; a segment where the joint is never observed uses the gap-filled
-//! positions, as the independent fit does). Rigid segments tie their two
+//! least-squares problem per joint: squared residuals over the observed
+//! frames (weight 1), plus the gap-filled positions (linear between
+//! observations) of the frames where the joint is not observed with weight
+//! [`GAP_WEIGHT`], so that a segment cannot swing far from the track where
+//! nothing pins it (a segment where the joint is never observed uses the
+//! gap-filled positions with weight 1, as the independent fit does). Rigid segments tie their two
 //! knots, which removes one knot; the normal equations are banded (each
 //! segment couples its two knots and its interior coefficients) and are
 //! solved by a banded Cholesky factorisation in `O(S·D³)` per joint. A ridge
@@ -104,6 +107,11 @@ impl std::str::FromStr for Continuity {
 /// for which a 2D circle is refitted by a similarity; beyond it the circle
 /// is moved rigidly. 3 allows arcs up to about 240°.
 pub const MAX_SIMILARITY_GAIN: f64 = 3.0;
+
+/// Weight of a frame where the joint is not observed (the gap-filled
+/// position, interpolated between observations) in a segment where it is
+/// observed elsewhere; an observed frame weighs 1.
+pub const GAP_WEIGHT: f64 = 0.01;
 
 /// Weight of the ridge towards the independent fits' boundary poses (per
 /// unknown; a frame of data weighs 1).
@@ -339,7 +347,7 @@ fn solve(
         let (oa, ob) = (&lay.knot_off[i], &lay.knot_off[i + 1]);
         for t in 0..n {
             let wt = if observed {
-                series.weights[k0 + t]
+                series.weights[k0 + t].max(GAP_WEIGHT)
             } else {
                 1.0
             };

@@ -269,8 +269,8 @@ fn penn_action_golf_swings_c0() {
         pf as f64 / raw as f64,
         pc as f64 / raw as f64
     );
-    // Measured 1.97 → 3.79 px@512 (max jump raw 29.4, independent 111.9, C0
-    // 16.5; parameter ratio 0.120 → 0.133). Bounds: the target for
+    // Measured 1.97 → 3.81 px@512 (max jump raw 29.4, independent 111.9, C0
+    // 16.3; parameter ratio 0.120 → 0.133). Bounds: the target for
     // golf swings (KD ≤ 6.25 px, ≤ 1/6 of the raw parameters) and the
     // measurement with ~20 % margin.
     assert!(kd_c0 / n < 4.5, "C0 KD {:.2}", kd_c0 / n);
