@@ -102,17 +102,25 @@ fn extract(
 /// The concrete program of a track (as `mp fit`): `frame_size` is the
 /// largest side of the video frame in pixels (default: the motion's own
 /// extent sets the scale), `lambda_` a fixed segment penalty at the 512-px
-/// reference (default: adaptive), `max_segment_frames` the longest segment.
+/// reference (default: adaptive), `max_segment_frames` the longest segment,
+/// `continuity` `"c0"` (consecutive segments share their boundary pose) or
+/// `"none"` (segments fitted independently; default: the library's, C0).
 #[pyfunction]
-#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None))]
+#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None))]
 fn fit(
     py: Python<'_>,
     track: &PyTrack,
     frame_size: Option<f64>,
     lambda_: Option<f64>,
     max_segment_frames: Option<usize>,
+    continuity: Option<&str>,
 ) -> PyResult<PyProgram> {
-    let params = params_with(None, None, None, false, lambda_, max_segment_frames)?;
+    let mut params = params_with(None, None, None, false, lambda_, max_segment_frames)?;
+    if let Some(c) = continuity {
+        params.analysis.synth.continuity = c
+            .parse::<mp_concrete::Continuity>()
+            .map_err(errors::ParamError::new_err)?;
+    }
     let t = &track.inner;
     let syn = py
         .detach(|| mp_pipeline::concrete_program(t, frame_size, &params))
