@@ -29,7 +29,7 @@ use mp_geom::Track;
 use mp_pipeline::Params;
 use mp_pose::video::{Frame, FrameSource, VideoReader};
 use mp_pose::{extract, open_estimator, ExtractOptions, SessionParams};
-use mp_video::interpolate::{interpolate_frames, keep_every};
+use mp_video::interpolate::{interpolate_frames, keep_every, Guide};
 use mp_video::plan::render;
 use mp_video::predict::plan_prediction;
 use mp_video::{analyse_video, InterpMethod, InterpParams, PixelBox, PredictMethod, PredictParams};
@@ -63,6 +63,76 @@ pub struct EvalInterpolationArgs {
     /// Output JSON.
     #[arg(long)]
     pub out: PathBuf,
+    /// Settings other than the product's, for choosing defaults on a
+    /// validation set: `warp=field|bones`, `blend_power=P`,
+    /// `body_radius_frac=R`, `sigma_frac=S`, `agree_tau=T`, `max_bulge=B`
+    /// (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// `InterpParams::default()` with the `--set` overrides.
+fn interp_params(set: &[String]) -> anyhow::Result<InterpParams> {
+    let mut p = InterpParams::default();
+    for kv in set {
+        let Some((k, v)) = kv.split_once('=') else {
+            bail!("--set {kv}: expected KEY=VALUE");
+        };
+        match k {
+            "warp" => {
+                p.warp = match v {
+                    "field" => mp_video::Warp::Field,
+                    "bones" => mp_video::Warp::Bones,
+                    _ => bail!("--set warp={v}: field or bones"),
+                }
+            }
+            "blend_power" => p.blend_power = v.parse()?,
+            "body_radius_frac" => p.body_radius_frac = v.parse()?,
+            "sigma_frac" => p.sigma_frac = v.parse()?,
+            "agree_tau" => p.agree_tau = v.parse()?,
+            "max_bulge" => p.max_bulge = v.parse()?,
+            _ => bail!("--set {k}: unknown setting"),
+        }
+    }
+    p.validate()?;
+    Ok(p)
+}
+
+/// KD (px) over elbows and wrists between the truth at the dropped frames
+/// and (a) the program's target poses, (b) the kept frames' keypoints
+/// interpolated linearly: how far the pose the frames are warped to is from
+/// the true pose, before any pixel is moved.
+fn target_kd(
+    guide: &Guide,
+    truth: &Track,
+    k: usize,
+    dropped: &[usize],
+) -> anyhow::Result<(f64, f64)> {
+    let (mut s_t, mut n_t, mut s_l, mut n_l) = (0.0, 0usize, 0.0, 0usize);
+    let g = &guide.track;
+    for &t in dropped {
+        let (i, w) = (t / k, (t % k) as f64 / k as f64);
+        let tp = guide.target_pose(i, w)?;
+        for j in ARM_JOINTS {
+            if t >= truth.n_frames() || !truth.is_valid(t, j, MIN_CONF) {
+                continue;
+            }
+            let q = truth.point(t, j);
+            if let Some(Some(p)) = tp.get(j) {
+                s_t += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                n_t += 1;
+            }
+            if i + 1 < g.n_frames() && g.is_valid(i, j, MIN_CONF) && g.is_valid(i + 1, j, MIN_CONF)
+            {
+                let (a, b) = (g.point(i, j), g.point(i + 1, j));
+                let p = [a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1])];
+                s_l += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                n_l += 1;
+            }
+        }
+    }
+    let m = |s: f64, n: usize| if n > 0 { s / n as f64 } else { f64::NAN };
+    Ok((m(s_t, n_t), m(s_l, n_l)))
 }
 
 /// Arguments of `cargo xtask eval video-predict`.
@@ -215,6 +285,39 @@ fn mean(v: &[f64]) -> f64 {
     }
 }
 
+/// Per method, the mean of its per-video KD over the videos where every
+/// method has one (so the means compare the same videos).
+fn common_kd<K: Ord + Clone>(
+    per_video: &std::collections::BTreeMap<K, std::collections::BTreeMap<String, f64>>,
+    methods: &[K],
+) -> (Vec<f64>, usize) {
+    let Some(first) = methods.first().and_then(|m| per_video.get(m)) else {
+        return (vec![f64::NAN; methods.len()], 0);
+    };
+    let videos: Vec<&String> = first
+        .keys()
+        .filter(|v| {
+            methods.iter().all(|m| {
+                per_video
+                    .get(m)
+                    .and_then(|x| x.get(*v))
+                    .is_some_and(|k| k.is_finite())
+            })
+        })
+        .collect();
+    let means = methods
+        .iter()
+        .map(|m| {
+            let vals: Vec<f64> = videos
+                .iter()
+                .filter_map(|v| per_video.get(m).and_then(|x| x.get(*v)).copied())
+                .collect();
+            mean(&vals)
+        })
+        .collect();
+    (means, videos.len())
+}
+
 fn num(x: f64) -> Value {
     if x.is_finite() {
         json!((x * 10000.0).round() / 10000.0)
@@ -280,13 +383,19 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
         mp_video::interpolate::check_factor(k)?;
     }
     let params = Params::default();
-    let iparams = InterpParams::default();
+    let iparams = interp_params(&a.set)?;
     let tmp = std::env::temp_dir().join(format!("mp-eval-interp-{}", std::process::id()));
     std::fs::create_dir_all(&tmp)?;
     let mut per_video = Map::new();
     // (factor, method) → pooled values.
     let mut pooled: std::collections::BTreeMap<(usize, String), (Vec<f64>, usize, Scores)> =
         Default::default();
+    let mut pooled_target: std::collections::BTreeMap<usize, (Vec<f64>, Vec<f64>)> =
+        Default::default();
+    let mut kd_by: std::collections::BTreeMap<
+        (usize, String),
+        std::collections::BTreeMap<String, f64>,
+    > = Default::default();
     for video in &videos {
         let name = stem(video);
         let (truth, info) = truth_pose(video, a.max_frames)?;
@@ -301,6 +410,23 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
             let n_out = (m - 1) * k + 1;
             let dropped: Vec<usize> = (0..n_out).filter(|t| !t.is_multiple_of(k)).collect();
             let mut fres = Map::new();
+            if methods.contains(&InterpMethod::Program) {
+                // The poses the program-guided frames are warped to, and the
+                // kept keypoints interpolated linearly, against the truth.
+                let mut guide = Guide::fit(&kept, &params)?;
+                guide.max_bulge = iparams.max_bulge;
+                let (kd_target, kd_lin) = target_kd(&guide, &truth, k, &dropped)?;
+                eprintln!(
+                    "{name} ×{k} target poses: KD arms {kd_target:.2} px (linear keypoints {kd_lin:.2} px)"
+                );
+                fres.insert(
+                    "target_pose".into(),
+                    json!({"kd_arms_px": num(kd_target), "kd_arms_linear_keypoints_px": num(kd_lin)}),
+                );
+                let e = pooled_target.entry(k).or_default();
+                e.0.push(kd_target);
+                e.1.push(kd_lin);
+            }
             for &method in &methods {
                 let t0 = Instant::now();
                 eprint!("{name} ×{k} {} … ", method.as_str());
@@ -357,6 +483,10 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                         "seconds": num(t0.elapsed().as_secs_f64()),
                     }),
                 );
+                kd_by
+                    .entry((k, method.as_str().to_string()))
+                    .or_default()
+                    .insert(name.clone(), kd_arms);
                 let e = pooled.entry((k, method.as_str().to_string())).or_default();
                 if kd_arms.is_finite() {
                     e.0.push(kd_arms);
@@ -399,8 +529,42 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
             }),
         );
     }
+    for &k in &a.factors {
+        let keys: Vec<(usize, String)> = methods
+            .iter()
+            .map(|m| (k, m.as_str().to_string()))
+            .collect();
+        let (means, n) = common_kd(&kd_by, &keys);
+        let text: Vec<String> = keys
+            .iter()
+            .zip(&means)
+            .map(|((_, m), x)| format!("{m} {x:.2}"))
+            .collect();
+        println!(
+            "{k:>4}×  KD arms over the {n} videos where every method has one: {}",
+            text.join(", ")
+        );
+        for ((_, m), x) in keys.iter().zip(&means) {
+            if let Some(Value::Object(o)) = summary.get_mut(&format!("x{k}/{m}")) {
+                o.insert("kd_arms_common_px".into(), num(*x));
+                o.insert("kd_common_videos".into(), json!(n));
+            }
+        }
+    }
+    for (k, (t, l)) in &pooled_target {
+        println!(
+            "{k:>4}×  program target poses: KD arms {:.2} px; kept keypoints interpolated linearly {:.2} px",
+            mean(t),
+            mean(l)
+        );
+        summary.insert(
+            format!("x{k}/target_pose"),
+            json!({"kd_arms_px": num(mean(t)), "kd_arms_linear_keypoints_px": num(mean(l))}),
+        );
+    }
     let report = json!({
         "task": "interpolation",
+        "settings": a.set,
         "protocol": "keep every k-th of the first max_frames frames, rebuild the dropped ones, score them against the originals; means over videos of per-video means",
         "max_frames": a.max_frames,
         "factors": a.factors,
@@ -432,6 +596,10 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
     let mut per_video = Map::new();
     let mut pooled: std::collections::BTreeMap<&'static str, (Vec<f64>, Scores)> =
         Default::default();
+    let mut kd_by: std::collections::BTreeMap<
+        &'static str,
+        std::collections::BTreeMap<String, f64>,
+    > = Default::default();
     for video in &videos {
         let name = stem(video);
         let n = VideoReader::open(video)?.count();
@@ -505,6 +673,10 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
                     "seconds": num(t0.elapsed().as_secs_f64()),
                 }),
             );
+            kd_by
+                .entry(method.as_str())
+                .or_default()
+                .insert(name.clone(), kd_all);
             let e = pooled.entry(method.as_str()).or_default();
             if kd_all.is_finite() {
                 e.0.push(kd_all);
@@ -543,6 +715,23 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
                 "videos": s.psnr.len(),
             }),
         );
+    }
+    let keys: Vec<&'static str> = methods.iter().map(|m| m.as_str()).collect();
+    let (means, n_common) = common_kd(&kd_by, &keys);
+    let text: Vec<String> = keys
+        .iter()
+        .zip(&means)
+        .map(|(m, x)| format!("{m} {x:.2}"))
+        .collect();
+    println!(
+        "KD over the {n_common} videos where every method has one: {}",
+        text.join(", ")
+    );
+    for (m, x) in keys.iter().zip(&means) {
+        if let Some(Value::Object(o)) = summary.get_mut(*m) {
+            o.insert("kd_common_px".into(), num(*x));
+            o.insert("kd_common_videos".into(), json!(n_common));
+        }
     }
     let report = json!({
         "task": "video-predict",

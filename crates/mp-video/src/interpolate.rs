@@ -59,6 +59,21 @@ impl InterpMethod {
     }
 }
 
+/// How the person's pixels are moved from a neighbouring frame to the
+/// target pose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub enum Warp {
+    /// A smooth displacement field: the Gaussian-weighted average of the
+    /// displacements of the keypoints and of points along the bones.
+    #[default]
+    Field,
+    /// Each bone moves its pixels with its own transform (along the bone:
+    /// stretched with it; across: the same distance on its rotated normal),
+    /// blended between bones by inverse distance to the bones at the
+    /// target pose (linear blend skinning).
+    Bones,
+}
+
 /// Parameters of the program-guided warp.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InterpParams {
@@ -77,6 +92,23 @@ pub struct InterpParams {
     /// Inside the body, the weight of the warped frames against plain
     /// blending. Default 1.
     pub warp_weight: f64,
+    /// How the pixels of the person are moved to the target pose.
+    pub warp: Warp,
+    /// Inside the body, the two warped frames are weighted `(1 − w)^p` and
+    /// `w^p` (normalised) at time `i + w`: 1 blends by time, larger values
+    /// favour the nearer frame (fewer double limbs where the two warps
+    /// disagree). Default 1.
+    pub blend_power: f64,
+    /// Where the two warped frames disagree by more than about this much
+    /// (mean absolute difference over the channels, 0–255), the plain blend
+    /// of the two frames is used instead (weight `exp(−(d/τ)²)` on the
+    /// warped pixels); 0 turns the check off. Default 0.
+    pub agree_tau: f64,
+    /// Target pose between frames `i` and `i + 1`: the chord between the
+    /// detected keypoints plus the program's bulge away from its own chord,
+    /// cut to this fraction of the keypoints' chord (0: the keypoints
+    /// interpolated linearly; a semicircle bulges 0.5). Default 0.5.
+    pub max_bulge: f64,
     /// Encoding.
     pub render: RenderParams,
 }
@@ -90,6 +122,10 @@ impl Default for InterpParams {
             bone_samples: 3,
             body_radius_frac: 0.06,
             warp_weight: 1.0,
+            warp: Warp::default(),
+            blend_power: 1.0,
+            agree_tau: 0.0,
+            max_bulge: 0.5,
             render: RenderParams::default(),
         }
     }
@@ -115,6 +151,15 @@ impl InterpParams {
         }
         if !(0.0..=1.0).contains(&self.warp_weight) {
             return Err(VideoError::param("warp_weight", "must be in [0, 1]"));
+        }
+        if !(self.blend_power.is_finite() && (1.0..=64.0).contains(&self.blend_power)) {
+            return Err(VideoError::param("blend_power", "must be in [1, 64]"));
+        }
+        if !(self.max_bulge.is_finite() && self.max_bulge >= 0.0) {
+            return Err(VideoError::param("max_bulge", "must be ≥ 0"));
+        }
+        if !(self.agree_tau.is_finite() && self.agree_tau >= 0.0) {
+            return Err(VideoError::param("agree_tau", "must be ≥ 0"));
         }
         if self.bone_samples > 32 {
             return Err(VideoError::param("bone_samples", "must be at most 32"));
@@ -159,6 +204,10 @@ pub struct Guide {
     pub track: Track,
     /// The concrete program fitted to them.
     pub program: Program,
+    /// The program's bulge away from the chord between two frames is cut to
+    /// this fraction of the detected keypoints' chord
+    /// ([`InterpParams::max_bulge`]).
+    pub max_bulge: f64,
 }
 
 impl Guide {
@@ -181,6 +230,7 @@ impl Guide {
         Ok(Guide {
             track,
             program: syn.program,
+            max_bulge: InterpParams::default().max_bulge,
         })
     }
 
@@ -188,9 +238,20 @@ impl Guide {
         t < self.track.n_frames() && self.track.is_valid(t, j, MIN_CONFIDENCE)
     }
 
-    /// Control points `(target, source offset)` for warping frames `i`
-    /// (`.0`) and `i + 1` (`.1`) to time `i + w`, and the person's size.
-    fn controls(&self, i: usize, w: f64, params: &InterpParams) -> Result<Option<Controls>> {
+    /// The pose the in-between frame at time `i + w` (`0 ≤ w ≤ 1`) is warped
+    /// to, per joint (`None` where neither neighbour shows the joint): the
+    /// program executed at that time plus the detected keypoints' offset
+    /// from the program at frames `i` and `i + 1`, interpolated linearly.
+    pub fn target_pose(&self, i: usize, w: f64) -> Result<Vec<Option<[f64; 2]>>> {
+        Ok(self
+            .targets(i, w)?
+            .map(|t| t.iter().map(|x| x.map(|(p, _, _)| p)).collect())
+            .unwrap_or_default())
+    }
+
+    /// Per joint: the target position at `i + w` and the joint in frames `i`
+    /// and `i + 1` where seen; `None` past the end.
+    fn targets(&self, i: usize, w: f64) -> Result<Option<Vec<Option<Target>>>> {
         let nt = self.track.n_frames();
         if i + 1 >= nt || i + 1 >= self.program.n_frames() {
             return Ok(None);
@@ -201,36 +262,63 @@ impl Guide {
             .map_err(|e| VideoError::Program(e.to_string()))?;
         let nj = self.track.n_joints().min(p.dim().1);
         let mut targets = vec![None; nj];
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for j in 0..nj {
             let (va, vb) = (self.seen(i, j), self.seen(i + 1, j));
             let ka = [self.track.point(i, j)[0], self.track.point(i, j)[1]];
             let kb = [self.track.point(i + 1, j)[0], self.track.point(i + 1, j)[1]];
             let mut t = [0.0; 2];
-            for d in 0..2 {
-                let ra = ka[d] - p[[0, j, d]];
-                let rb = kb[d] - p[[2, j, d]];
-                let r = match (va, vb) {
-                    (true, true) => (1.0 - w) * ra + w * rb,
-                    (true, false) => ra,
-                    (false, true) => rb,
-                    (false, false) => f64::NAN,
+            if va && vb {
+                // The chord between the detected keypoints plus the program's
+                // bulge away from its own chord, at most `max_bulge` of the
+                // keypoints' chord long.
+                let mut dev = [0.0; 2];
+                for (d, x) in dev.iter_mut().enumerate() {
+                    *x = p[[1, j, d]] - (1.0 - w) * p[[0, j, d]] - w * p[[2, j, d]];
+                }
+                let chord = ((kb[0] - ka[0]).powi(2) + (kb[1] - ka[1]).powi(2)).sqrt();
+                let len = (dev[0] * dev[0] + dev[1] * dev[1]).sqrt();
+                let cap = self.max_bulge * chord;
+                let scale = if len > cap && len > 0.0 {
+                    cap / len
+                } else {
+                    1.0
                 };
-                t[d] = p[[1, j, d]] + r;
+                for d in 0..2 {
+                    t[d] = (1.0 - w) * ka[d] + w * kb[d] + scale * dev[d];
+                }
+            } else {
+                // Seen in one frame only: held there (the program's value
+                // where the joint was not seen is no measurement).
+                t = match (va, vb) {
+                    (true, false) => ka,
+                    (false, true) => kb,
+                    _ => [f64::NAN; 2],
+                };
             }
             if !(t[0].is_finite() && t[1].is_finite()) {
                 continue;
             }
-            for (ok, k) in [(va, ka), (vb, kb)] {
-                if ok {
-                    for d in 0..2 {
-                        lo[d] = lo[d].min(k[d]);
-                        hi[d] = hi[d].max(k[d]);
-                    }
-                }
-            }
             targets[j] = Some((t, va.then_some(ka), vb.then_some(kb)));
         }
+        Ok(Some(targets))
+    }
+
+    /// Control points `(target, source offset)` for warping frames `i`
+    /// (`.0`) and `i + 1` (`.1`) to time `i + w`, and the person's size.
+    fn controls(&self, i: usize, w: f64, params: &InterpParams) -> Result<Option<Controls>> {
+        let Some(targets) = self.targets(i, w)? else {
+            return Ok(None);
+        };
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for (_, ka, kb) in targets.iter().flatten() {
+            for k in [ka, kb].into_iter().flatten() {
+                for d in 0..2 {
+                    lo[d] = lo[d].min(k[d]);
+                    hi[d] = hi[d].max(k[d]);
+                }
+            }
+        }
+        let nj = targets.len();
         if !(lo[0].is_finite() && hi[0].is_finite()) {
             return Ok(None);
         }
@@ -275,6 +363,7 @@ impl Guide {
         pairs.extend(TORSO_DIAGONALS);
         pairs.extend((0..nj).map(|j| (j, j)));
         let (mut st, mut sa, mut sb) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut bone_a, mut bone_b) = (Vec::new(), Vec::new());
         for (p0, p1) in pairs {
             let (Some(Some(a)), Some(Some(b))) = (targets.get(p0), targets.get(p1)) else {
                 continue;
@@ -282,9 +371,11 @@ impl Guide {
             st.push((a.0, b.0));
             if let (Some(x), Some(y)) = (a.1, b.1) {
                 sa.push((x, y));
+                bone_a.push(((a.0, b.0), (x, y)));
             }
             if let (Some(x), Some(y)) = (a.2, b.2) {
                 sb.push((x, y));
+                bone_b.push(((a.0, b.0), (x, y)));
             }
         }
         let sigma = (params.sigma_frac * size).max(2.0);
@@ -297,9 +388,15 @@ impl Guide {
             seg_t: st,
             seg_a: sa,
             seg_b: sb,
+            bone_a,
+            bone_b,
         }))
     }
 }
+
+/// A joint's target position and its positions in the two neighbouring
+/// frames, where seen.
+type Target = ([f64; 2], Option<[f64; 2]>, Option<[f64; 2]>);
 
 /// COCO-17 shoulder–hip diagonals, so the body mask covers the torso.
 const TORSO_DIAGONALS: [(usize, usize); 2] = [(5, 12), (6, 11)];
@@ -314,6 +411,72 @@ struct Controls {
     seg_t: Vec<Segment>,
     seg_a: Vec<Segment>,
     seg_b: Vec<Segment>,
+    /// (segment at the target pose, the same segment in frame `i`).
+    bone_a: Vec<(Segment, Segment)>,
+    /// (segment at the target pose, the same segment in frame `i + 1`).
+    bone_b: Vec<(Segment, Segment)>,
+}
+
+/// The backward displacement field of a bone warp on a grid of step `g`:
+/// each bone maps a target pixel to the source frame (the position along
+/// the bone scaled with it, the distance across kept on the source bone's
+/// normal; a bone of no length translates), and the bones' maps are
+/// blended with weights `1 / (d² + ε²)²` of the distance `d` to each bone at
+/// the target pose.
+fn bone_field(
+    bones: &[(Segment, Segment)],
+    eps: f64,
+    g: usize,
+    w: usize,
+    h: usize,
+) -> Vec<[f32; 2]> {
+    let gw = (w - 1) / g + 2;
+    let gh = (h - 1) / g + 2;
+    let e2 = eps * eps;
+    (0..gw * gh)
+        .into_par_iter()
+        .map(|idx| {
+            let (x, y) = (((idx % gw) * g) as f64, ((idx / gw) * g) as f64);
+            let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+            for ((t0, t1), (s0, s1)) in bones {
+                let (dx, dy) = (t1[0] - t0[0], t1[1] - t0[1]);
+                let l2 = dx * dx + dy * dy;
+                let (ex, ey) = (s1[0] - s0[0], s1[1] - s0[1]);
+                let m2 = ex * ex + ey * ey;
+                let (src, dist2) = if l2 < 1.0 || m2 < 1.0 {
+                    // A point (or a bone seen end-on): translate with its middle.
+                    let (cx, cy) = ((t0[0] + t1[0]) / 2.0, (t0[1] + t1[1]) / 2.0);
+                    let (ox, oy) = ((s0[0] + s1[0]) / 2.0 - cx, (s0[1] + s1[1]) / 2.0 - cy);
+                    let tc = if l2 > 0.0 {
+                        (((x - t0[0]) * dx + (y - t0[1]) * dy) / l2).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                    let (px, py) = (t0[0] + tc * dx - x, t0[1] + tc * dy - y);
+                    ([x + ox, y + oy], px * px + py * py)
+                } else {
+                    let l = l2.sqrt();
+                    let m = m2.sqrt();
+                    let u = ((x - t0[0]) * dx + (y - t0[1]) * dy) / l2;
+                    // Signed distance across the bone, in pixels.
+                    let v = ((x - t0[0]) * -dy + (y - t0[1]) * dx) / l;
+                    let src = [s0[0] + u * ex + v * -ey / m, s0[1] + u * ey + v * ex / m];
+                    let uc = u.clamp(0.0, 1.0);
+                    let (px, py) = (t0[0] + uc * dx - x, t0[1] + uc * dy - y);
+                    (src, px * px + py * py)
+                };
+                let wt = 1.0 / (dist2 + e2).powi(2);
+                sx += wt * (src[0] - x);
+                sy += wt * (src[1] - y);
+                sw += wt;
+            }
+            if sw > 0.0 {
+                [(sx / sw) as f32, (sy / sw) as f32]
+            } else {
+                [0.0, 0.0]
+            }
+        })
+        .collect()
 }
 
 /// A soft body mask on the grid: 1 within `r` of a segment, fading to 0 at `2r`.
@@ -452,15 +615,19 @@ fn between(
     let gf = g as f32;
     let d = params.decay_sigmas;
     let cells = ((width - 1) / g + 2) * ((height - 1) / g + 2);
-    let fa = if c.a.is_empty() {
-        vec![[0.0f32; 2]; cells]
-    } else {
-        field(&c.a, c.sigma, d, g, width, height).0
+    let warp_field = |pts: &[([f64; 2], [f64; 2])], bones: &[(Segment, Segment)]| match params.warp
+    {
+        Warp::Field if !pts.is_empty() => field(pts, c.sigma, d, g, width, height).0,
+        Warp::Bones if !bones.is_empty() => bone_field(bones, 0.5 * c.radius, g, width, height),
+        _ => vec![[0.0f32; 2]; cells],
     };
-    let fb = if c.b.is_empty() {
-        vec![[0.0f32; 2]; cells]
-    } else {
-        field(&c.b, c.sigma, d, g, width, height).0
+    let fa = warp_field(&c.a, &c.bone_a);
+    let fb = warp_field(&c.b, &c.bone_b);
+    // Weights of the two warped frames inside the body.
+    let (pwa, pwb) = {
+        let p = params.blend_power;
+        let (x, y) = ((1.0 - w).powf(p), w.powf(p));
+        ((x / (x + y)) as f32, (y / (x + y)) as f32)
     };
     let mt = body_mask(&c.seg_t, c.radius, g, width, height);
     let ma = body_mask(&c.seg_a, c.radius, g, width, height);
@@ -468,6 +635,7 @@ fn between(
     let gw = (width - 1) / g + 2;
     let wf = w as f32;
     let ww = params.warp_weight as f32;
+    let tau = params.agree_tau as f32;
     let mut out = vec![0u8; a.len()];
     out.par_chunks_mut(width * 3)
         .enumerate()
@@ -509,9 +677,18 @@ fn between(
                         y as f32 + ub[1],
                         &mut pb,
                     );
+                    let ww = if tau > 0.0 {
+                        let dd =
+                            ((pa[0] - pb[0]).abs() + (pa[1] - pb[1]).abs() + (pa[2] - pb[2]).abs())
+                                / 3.0
+                                / tau;
+                        ww * (-dd * dd).exp()
+                    } else {
+                        ww
+                    };
                     for ch in 0..3 {
                         let lin = (1.0 - wf) * a[p + ch] as f32 + wf * b[p + ch] as f32;
-                        let person = ww * ((1.0 - wf) * pa[ch] + wf * pb[ch]) + (1.0 - ww) * lin;
+                        let person = ww * (pwa * pa[ch] + pwb * pb[ch]) + (1.0 - ww) * lin;
                         bg[ch] = m_t * person + (1.0 - m_t) * bg[ch];
                     }
                 }
@@ -563,7 +740,11 @@ pub fn interpolate_frames(
         });
     }
     let guide = match method {
-        InterpMethod::Program => Some(Guide::fit(input, analysis)?),
+        InterpMethod::Program => {
+            let mut g = Guide::fit(input, analysis)?;
+            g.max_bulge = params.max_bulge;
+            Some(g)
+        }
         _ => None,
     };
     let person_frames = guide.as_ref().map_or(0, |g| {

@@ -32,7 +32,7 @@ pub mod predict;
 
 pub use edit::{edit_video, plan_edit, EditChange, EditParams, EditReport};
 pub use error::{Result, VideoError};
-pub use interpolate::{interpolate_video, InterpMethod, InterpParams, InterpReport, FACTORS};
+pub use interpolate::{interpolate_video, InterpMethod, InterpParams, InterpReport, Warp, FACTORS};
 pub use metrics::{psnr, ssim, PixelBox};
 pub use motion::{analyse_video, VideoMotion};
 pub use plan::{AtomicVideo, Plan, PlanFrame};
