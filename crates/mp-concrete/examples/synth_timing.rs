@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use mp_concrete::synthetic::synthetic_track;
-use mp_concrete::{segment, segment_exhaustive, synthesize, Scale, SynthParams};
+use mp_concrete::{segment, segment_exhaustive, synthesize, Continuity, Scale, SynthParams};
 use mp_geom::performer::{perform, PerformerParams};
 use mp_geom::Track;
 use ndarray::{concatenate, Axis};
@@ -55,9 +55,21 @@ fn main() -> Res<()> {
     let t0 = Instant::now();
     let prog = synthesize(&track, &params)?;
     println!(
-        "performer ×{reps}: T = {}, J = {}: synthesize {:.3} s, {} segments",
+        "performer ×{reps}: T = {}, J = {}: synthesize {:.3} s ({}), {} segments",
         track.n_frames(),
         track.n_joints(),
+        t0.elapsed().as_secs_f64(),
+        params.continuity,
+        prog.n_segments()
+    );
+    let independent = SynthParams {
+        continuity: Continuity::None,
+        ..params.clone()
+    };
+    let t0 = Instant::now();
+    let prog = synthesize(&track, &independent)?;
+    println!(
+        "  with continuity none: {:.3} s, {} segments",
         t0.elapsed().as_secs_f64(),
         prog.n_segments()
     );
