@@ -17,11 +17,15 @@ fn with(continuity: Continuity, base: &SynthParams) -> SynthParams {
     }
 }
 
-/// Every boundary of a C0 program is shared within `1e-9` (relative to the coordinates).
+/// Every boundary of a C0 program is shared within `1e-9` (track units;
+/// coordinates are up to `scale`, so this is about 1e-12 relative).
 fn assert_c0(p: &Program, scale: f64) {
     assert_eq!(p.continuity, Continuity::C0);
     let gap = max_boundary_gap(p);
-    assert!(gap <= 1e-9 * scale, "boundary gap {gap}");
+    assert!(
+        gap <= 1e-9,
+        "boundary gap {gap} (coordinates up to {scale})"
+    );
 }
 
 #[test]
@@ -276,4 +280,64 @@ fn penn_action_golf_swings_c0() {
     assert!(kd_c0 / n < 4.5, "C0 KD {:.2}", kd_c0 / n);
     assert!((pc as f64) < raw as f64 / 6.0, "params {pc} / {raw}");
     assert!(jc <= jr, "C0 jump {jc:.1} vs raw {jr:.1}");
+}
+
+mod random_tracks {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A random walk of velocity per joint (2D or 3D) with noise, some frames missing.
+    fn walk(t: usize, j: usize, d: usize, seed: &[f64], missing_every: usize) -> Track {
+        let mut pos = Array3::zeros((t, j, d));
+        let mut conf = Array2::ones((t, j));
+        for ji in 0..j {
+            let mut p = vec![200.0 + 15.0 * ji as f64; d];
+            let mut v = vec![0.0; d];
+            for ti in 0..t {
+                for k in 0..d {
+                    let s = |o: usize| seed[(ti * 7 + ji * 5 + k * 3 + o) % seed.len()];
+                    v[k] = 0.9 * v[k] + 3.0 * (s(0) - 0.5);
+                    p[k] += v[k];
+                    pos[[ti, ji, k]] = p[k] + 2.0 * (s(1) - 0.5);
+                }
+                if missing_every > 0 && (ti * 3 + ji) % missing_every == 0 {
+                    conf[[ti, ji]] = 0.0;
+                }
+            }
+        }
+        Track::new(pos, Some(conf), 30.0, Units::Pixels, Skeleton::generic(j)).unwrap()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        /// Any track, any λ, both kind sets: the C0 program is valid, keeps the
+        /// segmentation of the independent fits and shares every boundary within 1e-9.
+        #[test]
+        fn c0_shares_every_boundary(
+            t in 12usize..150,
+            j in 1usize..4,
+            three_d in any::<bool>(),
+            lambda in 20.0f64..1000.0,
+            all_kinds in any::<bool>(),
+            missing_every in prop_oneof![Just(0usize), 4usize..13],
+            seed in proptest::collection::vec(0.0f64..1.0, 16..64),
+        ) {
+            let track = walk(t, j, if three_d { 3 } else { 2 }, &seed, missing_every);
+            let mut params = SynthParams {
+                lambda: Lambda::fixed(lambda),
+                scale: Scale::UnitScale { unit_scale: 1.0 },
+                unobserved_joints: UnobservedJoints::Ignore,
+                ..SynthParams::default()
+            };
+            if all_kinds {
+                params.fit.kinds = PrimitiveKind::ALL.to_vec();
+            }
+            let c0 = synthesize(&track, &params).unwrap();
+            let free = synthesize(&track, &with(Continuity::None, &params)).unwrap();
+            c0.validate().unwrap();
+            prop_assert_eq!(c0.boundaries(), free.boundaries());
+            let gap = max_boundary_gap(&c0);
+            prop_assert!(gap <= 1e-9, "boundary gap {}", gap);
+        }
+    }
 }
