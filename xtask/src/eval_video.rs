@@ -413,9 +413,15 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
             if methods.contains(&InterpMethod::Program) {
                 // The poses the program-guided frames are warped to, and the
                 // kept keypoints interpolated linearly, against the truth.
-                let mut guide = Guide::fit(&kept, &params)?;
-                guide.max_bulge = iparams.max_bulge;
-                let (kd_target, kd_lin) = target_kd(&guide, &truth, k, &dropped)?;
+                let guide = Guide::fit(&kept, &params).map(|mut g| {
+                    g.max_bulge = iparams.max_bulge;
+                    g
+                });
+                let (kd_target, kd_lin) = match guide {
+                    Ok(g) => target_kd(&g, &truth, k, &dropped)?,
+                    // No person: the program method fails below and is reported.
+                    Err(_) => (f64::NAN, f64::NAN),
+                };
                 eprintln!(
                     "{name} ×{k} target poses: KD arms {kd_target:.2} px (linear keypoints {kd_lin:.2} px)"
                 );
@@ -449,7 +455,9 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                     t += 1;
                     Ok(())
                 });
-                let pose = ps.finish()?;
+                // A method that failed before its first frame leaves the pose
+                // thread without frames: its error is the one reported.
+                let pose = ps.finish();
                 let r = match r {
                     Ok(r) => r,
                     Err(e) => {
@@ -458,6 +466,7 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                         continue;
                     }
                 };
+                let pose = pose?;
                 let (kd_arms, n_arms) = kd(&pose, &truth, &dropped, Some(&ARM_JOINTS));
                 let (kd_all, _) = kd(&pose, &truth, &dropped, None);
                 eprintln!(

@@ -452,16 +452,26 @@ fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, us
     }
     let pos = track.positions();
     let (_, j, d) = pos.dim();
+    // Speed: the sum of the joints' displacements; the channels of a unitless
+    // feature track (thumbnail cells) are not coordinates of a point, so each
+    // counts on its own (|Δ| per channel).
+    let unitless = track.units() == mp_geom::Units::Unitless;
     let speed: Vec<f64> = (0..n)
         .map(|t| {
             let (a, b) = if t + 1 < n { (t, t + 1) } else { (t - 1, t) };
             let mut s = 0.0;
             for ji in 0..j {
-                let mut q = 0.0;
-                for k in 0..d {
-                    q += (pos[[b, ji, k]] - pos[[a, ji, k]]).powi(2);
+                if unitless {
+                    s += (0..d)
+                        .map(|k| (pos[[b, ji, k]] - pos[[a, ji, k]]).abs())
+                        .sum::<f64>();
+                } else {
+                    let mut q = 0.0;
+                    for k in 0..d {
+                        q += (pos[[b, ji, k]] - pos[[a, ji, k]]).powi(2);
+                    }
+                    s += q.sqrt();
                 }
-                s += q.sqrt();
             }
             s
         })

@@ -111,6 +111,45 @@ fn frames_count_where_no_person_is_found() {
 }
 
 #[test]
+fn frame_signal_counts_the_same_in_either_layout() {
+    // A thumbnail as 64 channels of one value, or as 8 rows of 8 cells (how
+    // `mp_pose::thumbs::thumbnail_track` lays it out): the same channels in the
+    // same order, so the same count, period and intervals. A lead-in of still
+    // frames makes the active span (the speed per channel) matter.
+    let moving = thumbnails(300, 45.0, 64, 3);
+    let mut p = Array3::from_elem((360, 64, 1), 0.0);
+    for t in 0..360 {
+        for k in 0..64 {
+            p[[t, k, 0]] = moving.positions()[[t.saturating_sub(60), k, 0]];
+        }
+    }
+    let flat = Track::new(p.clone(), None, 30.0, Units::Unitless, Skeleton::generic(64)).unwrap();
+    let grid = Track::new(
+        p.into_shape_with_order((360, 8, 8)).unwrap(),
+        None,
+        30.0,
+        Units::Unitless,
+        Skeleton::generic(8),
+    )
+    .unwrap();
+    let params = CountParams::default();
+    let a = count_repetitions(&flat, CountSignal::Frames, &params).unwrap();
+    let b = count_repetitions(&grid, CountSignal::Frames, &params).unwrap();
+    assert!(a.total >= 6, "{a:?}");
+    assert_eq!(a.total, b.total);
+    assert_eq!(a.method, b.method);
+    assert!((a.confidence - b.confidence).abs() < 1e-9);
+    let spans = |c: &mp_abstract::Counts| {
+        c.intervals
+            .iter()
+            .map(|i| (i.start_frame, i.end_frame, i.period_frames))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(spans(&a), spans(&b));
+    assert!(a.intervals[0].start_frame >= 30, "the still lead-in is trimmed: {a:?}");
+}
+
+#[test]
 fn bad_input_and_parameters() {
     assert!(count_signals(None, None, &CountParams::default()).is_err());
     let t = exercise(0, 3, 20, 4, 0.5, 1);

@@ -253,7 +253,7 @@ fn from_video(
     thumbs.truncate(n);
     let thumbnails = if thumbs.len() == n && n > 0 {
         Some(thumbnail_track(
-            &thumbs,
+            thumbs,
             params.pose.thumbnail_size,
             info.fps,
         )?)

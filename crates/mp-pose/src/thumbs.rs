@@ -45,14 +45,17 @@ pub fn grey_thumbnail(frame: &Frame, size: usize) -> Result<Vec<f32>> {
 }
 
 /// Thumbnails of consecutive frames as a unitless feature track: `T` frames ×
-/// `size²` channels × 1 dimension, a generic skeleton, confidence 1.
-pub fn thumbnail_track(thumbs: &[Vec<f32>], size: usize, fps: f64) -> Result<Track> {
+/// `size` rows (the track's "joints", confidence 1) × `size` cells per row
+/// (its dimensions), so the channels run row-major as in the thumbnail. Each
+/// thumbnail is freed once copied: the track is built in the memory of one
+/// copy (8 bytes per cell and frame).
+pub fn thumbnail_track(thumbs: Vec<Vec<f32>>, size: usize, fps: f64) -> Result<Track> {
     let c = size * size;
     if thumbs.is_empty() {
         return Err(PoseError::param("thumbnails", "no frames"));
     }
-    let mut a = Array3::<f64>::zeros((thumbs.len(), c, 1));
-    for (t, th) in thumbs.iter().enumerate() {
+    let mut a = Array3::<f64>::zeros((thumbs.len(), size, size));
+    for (t, th) in thumbs.into_iter().enumerate() {
         if th.len() != c {
             return Err(PoseError::param(
                 "thumbnails",
@@ -63,7 +66,7 @@ pub fn thumbnail_track(thumbs: &[Vec<f32>], size: usize, fps: f64) -> Result<Tra
             ));
         }
         for (k, &v) in th.iter().enumerate() {
-            a[[t, k, 0]] = v as f64;
+            a[[t, k / size, k % size]] = v as f64;
         }
     }
     Ok(Track::new(
@@ -71,7 +74,7 @@ pub fn thumbnail_track(thumbs: &[Vec<f32>], size: usize, fps: f64) -> Result<Tra
         None,
         fps,
         Units::Unitless,
-        Skeleton::generic(c),
+        Skeleton::generic(size),
     )?)
 }
 
@@ -108,11 +111,16 @@ mod tests {
         let t = grey_thumbnail(&fr, 4).unwrap();
         assert_eq!(t.len(), 16);
         assert!(grey_thumbnail(&fr, 0).is_err());
-        let tr = thumbnail_track(&[t.clone(), t], 4, 30.0).unwrap();
-        assert_eq!(tr.positions().dim(), (2, 16, 1));
+        let tr = thumbnail_track(vec![t.clone(), t.clone()], 4, 30.0).unwrap();
+        assert_eq!(tr.positions().dim(), (2, 4, 4));
+        assert_eq!(tr.confidence().dim(), (2, 4));
         assert_eq!(tr.units(), Units::Unitless);
-        let err = thumbnail_track(&[vec![0.0; 3]], 4, 30.0).unwrap_err();
+        // Row-major: cell k is row k / 4, column k % 4.
+        for (k, &v) in t.iter().enumerate() {
+            assert_eq!(tr.positions()[[1, k / 4, k % 4]], v as f64);
+        }
+        let err = thumbnail_track(vec![vec![0.0; 3]], 4, 30.0).unwrap_err();
         assert!(err.to_string().contains("frame 0 has 3 values"), "{err}");
-        assert!(thumbnail_track(&[], 4, 30.0).is_err());
+        assert!(thumbnail_track(Vec::new(), 4, 30.0).is_err());
     }
 }
