@@ -9,6 +9,7 @@ use mp_abstract::Counts;
 use mp_geom::{CancelToken, Track};
 use mp_pipeline::{Input, Keep, Params, Silent};
 use mp_pose::VideoInfo;
+use ndarray::Axis;
 
 use crate::error::{Result, VideoError};
 
@@ -140,13 +141,10 @@ impl VideoMotion {
         if a >= th.n_frames() || b >= th.n_frames() {
             return None;
         }
-        let (pa, pb) = (th.positions(), th.positions());
-        let c = th.n_joints();
-        let mut s = 0.0;
-        for j in 0..c {
-            let d = pa[[a, j, 0]] - pb[[b, j, 0]];
-            s += d * d;
-        }
+        let pos = th.positions();
+        let (fa, fb) = (pos.index_axis(Axis(0), a), pos.index_axis(Axis(0), b));
+        let c = fa.len();
+        let s: f64 = fa.iter().zip(fb.iter()).map(|(x, y)| (x - y).powi(2)).sum();
         Some((s / c.max(1) as f64).sqrt())
     }
 
@@ -179,11 +177,11 @@ impl VideoMotion {
         }
         if let Some(th) = &self.thumbnails {
             if t < th.n_frames() {
-                let c = th.n_joints() as f64;
-                for j in 0..th.n_joints() {
-                    // Scaled so the thumbnail part weighs like the pose part.
-                    f.push(th.positions()[[t, j, 0]] / (self.thumb_scale * c.sqrt()));
-                }
+                let pos = th.positions();
+                let cells = pos.index_axis(Axis(0), t);
+                // Scaled so the thumbnail part weighs like the pose part.
+                let scale = self.thumb_scale * (cells.len() as f64).sqrt();
+                f.extend(cells.iter().map(|v| v / scale));
             }
         }
         f
