@@ -123,7 +123,14 @@ fn frame_signal_counts_the_same_in_either_layout() {
             p[[t, k, 0]] = moving.positions()[[t.saturating_sub(60), k, 0]];
         }
     }
-    let flat = Track::new(p.clone(), None, 30.0, Units::Unitless, Skeleton::generic(64)).unwrap();
+    let flat = Track::new(
+        p.clone(),
+        None,
+        30.0,
+        Units::Unitless,
+        Skeleton::generic(64),
+    )
+    .unwrap();
     let grid = Track::new(
         p.into_shape_with_order((360, 8, 8)).unwrap(),
         None,
@@ -146,7 +153,10 @@ fn frame_signal_counts_the_same_in_either_layout() {
             .collect::<Vec<_>>()
     };
     assert_eq!(spans(&a), spans(&b));
-    assert!(a.intervals[0].start_frame >= 30, "the still lead-in is trimmed: {a:?}");
+    assert!(
+        a.intervals[0].start_frame >= 30,
+        "the still lead-in is trimmed: {a:?}"
+    );
 }
 
 #[test]
