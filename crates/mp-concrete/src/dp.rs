@@ -126,7 +126,16 @@ pub fn segment_dp(
             }
         }
     }
-    if !best[n_frames].is_finite() {
+    backtrack(&best, &arg, window)
+}
+
+/// The segmentation from a DP's optimal costs `best[n]` of frames `0..n`
+/// (`best[0] = 0`) and the start `arg[n]` of the last segment of each optimum;
+/// an error when the whole track has no finite-cost segmentation.
+pub(crate) fn backtrack(best: &[f64], arg: &[usize], window: usize) -> Result<Segmentation> {
+    let n_frames = best.len().saturating_sub(1);
+    let cost = best.get(n_frames).copied().unwrap_or(f64::INFINITY);
+    if !cost.is_finite() {
         return Err(ConcreteError::Track(format!(
             "no finite-cost segmentation of {n_frames} frames with segments of at most {window} frames"
         )));
@@ -140,7 +149,7 @@ pub fn segment_dp(
     b.reverse();
     Ok(Segmentation {
         boundaries: b,
-        cost: best[n_frames],
+        cost,
     })
 }
 

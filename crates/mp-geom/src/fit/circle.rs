@@ -79,6 +79,20 @@ fn bullock(
     Ok(Circle2 { uc, vc, r })
 }
 
+/// Bullock's algebraic circle of points given in centred local coordinates
+/// `coord(i)`, `i < n`, with weights (`None`: all 1) summing to `w_sum`: the
+/// centre `(u_c, v_c)` in those coordinates and the radius, or an error when
+/// the points are collinear or coincident. The circle fit uses it, and so does
+/// `mp-concrete`'s branch-and-bound segmentation (no allocation).
+pub fn bullock_circle(
+    n: usize,
+    weights: Option<&[f64]>,
+    w_sum: f64,
+    coord: impl Fn(usize) -> (f64, f64),
+) -> Result<(f64, f64, f64)> {
+    bullock(n, weights, w_sum, coord).map(|c| (c.uc, c.vc, c.r))
+}
+
 /// Calls `f(i, θᵢ)` for every valid frame with the angle of point `i` around
 /// the centre, in degrees, unwrapped frame to frame.
 fn unwrapped_angles(

@@ -60,6 +60,8 @@ mod circle;
 mod input;
 pub mod prefix;
 
+pub use circle::bullock_circle;
+
 use crate::error::{GeomError, Result};
 use crate::primitive::{Primitive, PrimitiveKind};
 

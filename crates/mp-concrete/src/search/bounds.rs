@@ -1,0 +1,235 @@
+//! O(1) per joint and candidate, from the running moments: the exact
+//! squared stationary and line errors, the Bullock/Kåsa circle and its
+//! algebraic residual, and lower bounds of every kind's error.
+
+use mp_geom::fit::FitParams;
+
+use super::moments::Acc2;
+use super::{Rules, LB_SAFETY};
+
+/// O(1) facts about one joint on one candidate segment.
+#[derive(Clone, Copy, Default)]
+pub(super) struct Quick {
+    /// Lower bound of the joint's cost.
+    pub(super) lb: f64,
+    /// Mean (absolute coordinates).
+    pub(super) mx: f64,
+    pub(super) my: f64,
+    /// Line: value at the segment's local time 0 (frame `n − 1`) and velocity.
+    pub(super) lx: f64,
+    pub(super) ly: f64,
+    pub(super) vx: f64,
+    pub(super) vy: f64,
+    /// Bounding-box diagonal.
+    pub(super) bbox: f64,
+    /// Moving kinds rejected by the span rule.
+    pub(super) reject_moving: bool,
+    /// Circle from the moments is usable for bounds (well conditioned).
+    pub(super) circle_ok: bool,
+    pub(super) cx: f64,
+    pub(super) cy: f64,
+    pub(super) r: f64,
+    /// Lower bound of the circle's radius penalty.
+    pub(super) pen_lb: f64,
+    /// Slack for the circle distance bound (rounding of the centre).
+    pub(super) circle_slack: f64,
+    /// Squared errors of the stationary and line fits.
+    pub(super) sse_stat: f64,
+    pub(super) sse_line: f64,
+    /// Bound on the largest stationary residual.
+    pub(super) max_res_stat: f64,
+    /// O(1) lower bound of the circle's error with penalty.
+    pub(super) circle_lb: f64,
+}
+
+pub(super) fn penalty_lb(fit: &FitParams, r: f64) -> f64 {
+    let a = fit.circle_penalty(r * (1.0 - 1e-8));
+    let b = fit.circle_penalty(r * (1.0 + 1e-8));
+    a.min(b).max(0.0)
+}
+
+/// Lower bound of the error of any constant-speed primitive (a circle with
+/// linear angle moves `s = 2r·|sin(ω/2)|` per frame) from the step lengths:
+/// `‖rᵢ‖ + ‖rᵢ₊₁‖ ≥ |aᵢ − s|`, each residual in at most two pairs, so
+/// `Σ‖rᵢ‖ ≥ ½ min_s Σ|aᵢ − s| ≥ ¼ Σ|aᵢ − ā|` (the median's L1 deviation is at
+/// least half the mean's) `≥ ¼ Σ(aᵢ − ā)² / (a_max − a_min)`; squared norm:
+/// `Σ‖rᵢ‖² ≥ ¼ Σ(aᵢ − ā)²`.
+pub(super) fn speed_lb(acc: &Acc2, squared: bool) -> f64 {
+    if acc.npairs < 2 {
+        return 0.0;
+    }
+    let var = (acc.saa - acc.sa * acc.sa / acc.npairs as f64).max(0.0);
+    let var = var - 1e-12 * acc.saa;
+    if var <= 0.0 {
+        return 0.0;
+    }
+    if squared {
+        0.25 * var
+    } else {
+        let range = acc.amax - acc.amin;
+        if range > 0.0 {
+            0.25 * var / range
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Largest distance from `(px, py)` to a corner of the box.
+pub(super) fn far_corner(lo: [f64; 2], hi: [f64; 2], px: f64, py: f64) -> f64 {
+    let dx = (px - lo[0]).abs().max((hi[0] - px).abs());
+    let dy = (py - lo[1]).abs().max((hi[1] - py).abs());
+    (dx * dx + dy * dy).sqrt()
+}
+
+/// Smallest distance from `(px, py)` to the box (0 inside).
+pub(super) fn near_box(lo: [f64; 2], hi: [f64; 2], px: f64, py: f64) -> f64 {
+    let dx = (lo[0] - px).max(0.0).max(px - hi[0]);
+    let dy = (lo[1] - py).max(0.0).max(py - hi[1]);
+    (dx * dx + dy * dy).sqrt()
+}
+
+/// Euclidean lower bound from a squared error and a bound on the largest residual.
+pub(super) fn euclid_lb(sse: f64, max_res: f64) -> f64 {
+    let sse = sse.max(0.0);
+    let a = sse.sqrt();
+    if max_res > 0.0 && max_res.is_finite() {
+        a.max(sse / max_res)
+    } else {
+        a
+    }
+}
+
+pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams) -> Quick {
+    let w = acc.sw;
+    let mut q = Quick::default();
+    let (mux, muy) = (acc.sx / w, acc.sy / w);
+    q.mx = mux + acc.rx;
+    q.my = muy + acc.ry;
+    let bx = acc.hi[0] - acc.lo[0];
+    let by = acc.hi[1] - acc.lo[1];
+    q.bbox = (bx * bx + by * by).sqrt();
+    // centred second moments (unnormalised)
+    let cxx = (acc.sxx - acc.sx * mux).max(0.0);
+    let cyy = (acc.syy - acc.sy * muy).max(0.0);
+    let cxy = acc.sxy - acc.sx * muy;
+    let mut lb = f64::INFINITY;
+    if rules.stat {
+        let sse = cxx + cyy;
+        q.sse_stat = sse;
+        q.max_res_stat = far_corner(acc.lo, acc.hi, q.mx, q.my);
+        let b = if rules.squared {
+            sse
+        } else {
+            euclid_lb(sse, q.max_res_stat)
+        };
+        lb = lb.min(b);
+    }
+    let (a, b) = (pts[acc.first], pts[acc.last]);
+    let span = ((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1])).sqrt();
+    q.reject_moving = span < rules.span_thr && !rules.only_moving;
+    // line
+    let tbar = acc.st / w;
+    let vtt = acc.stt - acc.st * tbar;
+    if acc.count >= 2 && vtt > 0.0 {
+        q.vx = (acc.stx - acc.st * mux) / vtt;
+        q.vy = (acc.sty - acc.st * muy) / vtt;
+    }
+    q.lx = q.mx - q.vx * tbar;
+    q.ly = q.my - q.vy * tbar;
+    if rules.line && !q.reject_moving {
+        let sse = (cxx - q.vx * q.vx * vtt).max(0.0) + (cyy - q.vy * q.vy * vtt).max(0.0);
+        q.sse_line = sse;
+        let b = if rules.squared {
+            sse
+        } else {
+            // residual per axis over the (t, x) box: corners
+            let tf = acc.first as f64 - acc.end as f64; // local times of the valid frames (≤ 0)
+            let tl = acc.last as f64 - acc.end as f64;
+            let ax = |lo: f64, hi: f64, m: f64, v: f64| {
+                let mut best = 0.0f64;
+                for x in [lo, hi] {
+                    for t in [tf, tl] {
+                        best = best.max((x - m - v * (t - tbar)).abs());
+                    }
+                }
+                best
+            };
+            let rx = ax(acc.lo[0] - acc.rx, acc.hi[0] - acc.rx, mux, q.vx);
+            let ry = ax(acc.lo[1] - acc.ry, acc.hi[1] - acc.ry, muy, q.vy);
+            euclid_lb(sse, (rx * rx + ry * ry).sqrt())
+        };
+        lb = lb.min(b);
+    }
+    // circle
+    if rules.circle && !q.reject_moving && acc.count >= 3 {
+        let mut b = 0.0;
+        let tr = cxx + cyy;
+        let det = cxx * cyy - cxy * cxy;
+        if tr > 0.0 && det > 1e-6 * tr * tr {
+            // centred third moments (unnormalised)
+            let (m1, m2) = (mux, muy);
+            let cxxx = acc.sxxx - 3.0 * m1 * acc.sxx + 3.0 * m1 * m1 * acc.sx - w * m1 * m1 * m1;
+            let cyyy = acc.syyy - 3.0 * m2 * acc.syy + 3.0 * m2 * m2 * acc.sy - w * m2 * m2 * m2;
+            let cxxy = acc.sxxy - 2.0 * m1 * acc.sxy - m2 * acc.sxx
+                + m1 * m1 * acc.sy
+                + 2.0 * m1 * m2 * acc.sx
+                - w * m1 * m1 * m2;
+            let cxyy = acc.sxyy - 2.0 * m2 * acc.sxy - m1 * acc.syy
+                + m2 * m2 * acc.sx
+                + 2.0 * m1 * m2 * acc.sy
+                - w * m1 * m2 * m2;
+            let b1 = 0.5 * (cxxx + cxyy);
+            let b2 = 0.5 * (cyyy + cxxy);
+            let uc = (b1 * cyy - b2 * cxy) / det;
+            let vc = (cxx * b2 - cxy * b1) / det;
+            let r = (uc * uc + vc * vc + tr / w).sqrt();
+            if uc.is_finite() && vc.is_finite() && r.is_finite() && r > 0.0 {
+                q.circle_ok = true;
+                q.cx = q.mx + uc;
+                q.cy = q.my + vc;
+                q.r = r;
+                let scale = (tr / w).sqrt() + r;
+                q.circle_slack = 1e-7 * scale;
+                q.pen_lb = penalty_lb(fit, r);
+                // Kåsa residual K = Σz_c² − 2 a·Σ z_c p_c − W m², m = tr / W
+                let mu2 = m1 * m1 + m2 * m2;
+                let sz = acc.sxx + acc.syy;
+                let szx = acc.sxxx + acc.sxyy;
+                let szy = acc.sxxy + acc.syyy;
+                // Σ z_c² with z_c = z − 2μ·p + |μ|²
+                let smp2 = m1 * m1 * acc.sxx + 2.0 * m1 * m2 * acc.sxy + m2 * m2 * acc.syy;
+                let smp = m1 * acc.sx + m2 * acc.sy;
+                let szc2 = acc.szz - 4.0 * (m1 * szx + m2 * szy) + 2.0 * mu2 * sz + 4.0 * smp2
+                    - 4.0 * mu2 * smp
+                    + mu2 * mu2 * w;
+                let szcx = cxxx + cxyy;
+                let szcy = cxxy + cyyy;
+                let k = szc2 - 2.0 * (uc * szcx + vc * szcy) - tr * tr / w;
+                let k = k - 1e-9 * szc2.abs();
+                let dmax = far_corner(acc.lo, acc.hi, q.cx, q.cy);
+                let dmin = near_box(acc.lo, acc.hi, q.cx, q.cy);
+                if k > 0.0 && dmax.is_finite() {
+                    b = if rules.squared {
+                        k / ((dmax + r) * (dmax + r))
+                    } else {
+                        let amax = (dmax * dmax - r * r).max(r * r - dmin * dmin);
+                        let e1 = k.sqrt() / (dmax + r);
+                        let e2 = if amax > 0.0 {
+                            k / (amax * (dmax + r))
+                        } else {
+                            0.0
+                        };
+                        e1.max(e2)
+                    };
+                    b = (b - w * q.circle_slack).max(0.0);
+                }
+            }
+        }
+        b = b.max(speed_lb(acc, rules.squared)) + q.pen_lb;
+        q.circle_lb = b * LB_SAFETY;
+        lb = lb.min(b);
+    }
+    q.lb = if lb.is_finite() { lb * LB_SAFETY } else { 0.0 };
+    q
+}

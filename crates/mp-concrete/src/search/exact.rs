@@ -1,0 +1,274 @@
+//! O(L) per joint and candidate: the exact stationary and line errors with a
+//! second bound for the circle (one pass), then the exact circle of
+//! [`mp_geom::fit::fit_circle`] where it can still win.
+
+use mp_geom::fit::{bullock_circle, FitParams};
+
+use super::bounds::{euclid_lb, speed_lb, Quick};
+use super::moments::Acc2;
+use super::{Rules, LB_SAFETY};
+
+/// Exact stationary and line errors of one 2D joint and a bound for its circle.
+#[derive(Clone, Copy, Default)]
+pub(super) struct Cheap {
+    /// The joint's cost when already decided (stationary wins outright).
+    pub(super) decided: Option<f64>,
+    /// Best of the stationary and line errors that take part (`+∞` if none).
+    pub(super) best: f64,
+    /// Lower bound of the circle's error with penalty, when a circle takes part.
+    pub(super) circle_lb: Option<f64>,
+}
+
+pub(super) fn cheap2(
+    q: &Quick,
+    acc: &Acc2,
+    pts: &[[f64; 2]],
+    steps: &[f64],
+    wts: &[f64],
+    rules: &Rules,
+) -> Cheap {
+    let want_circle = rules.circle && !q.reject_moving && acc.count >= 3;
+    let want_line = rules.line && !q.reject_moving;
+    if rules.squared {
+        // Squared errors from the moments; the Euclidean mean residual of the
+        // stationary rule from bounds when they decide it.
+        let w = acc.sw;
+        let stat_rule = rules.stat
+            && (q.bbox < rules.bbox_thr || {
+                let hi = (q.sse_stat.max(0.0) / w).sqrt(); // ≥ mean residual (Jensen)
+                let lo = euclid_lb(q.sse_stat, q.max_res_stat) * LB_SAFETY / w;
+                if hi * (1.0 + 1e-9) < rules.mean_res_thr {
+                    true
+                } else if lo >= rules.mean_res_thr {
+                    false
+                } else {
+                    let mut es = 0.0;
+                    for i in acc.first..=acc.last {
+                        let (dx, dy) = (q.mx - pts[i][0], q.my - pts[i][1]);
+                        es += wts[i] * (dx * dx + dy * dy).sqrt();
+                    }
+                    es / w < rules.mean_res_thr
+                }
+            });
+        if stat_rule {
+            return Cheap {
+                decided: Some(q.sse_stat),
+                best: q.sse_stat,
+                circle_lb: None,
+            };
+        }
+        let mut best = f64::INFINITY;
+        if rules.stat {
+            best = q.sse_stat;
+        }
+        if want_line {
+            best = best.min(q.sse_line);
+        }
+        return Cheap {
+            decided: None,
+            best,
+            circle_lb: want_circle.then_some(q.circle_lb),
+        };
+    }
+    if rules.stat && q.bbox < rules.bbox_thr {
+        // Stationary wins outright: only its error is needed.
+        let (mut e, mut e2) = (0.0, 0.0);
+        for i in acc.first..=acc.last {
+            let (dx, dy) = (q.mx - pts[i][0], q.my - pts[i][1]);
+            let ds = dx * dx + dy * dy;
+            e += wts[i] * ds.sqrt();
+            e2 += wts[i] * ds;
+        }
+        let c = if rules.squared { e2 } else { e };
+        return Cheap {
+            decided: Some(c),
+            best: c,
+            circle_lb: None,
+        };
+    }
+    // Two frames per step with separate sums (independent lanes the
+    // compiler can pair into vector instructions).
+    let t_end = acc.end as f64;
+    // Mean step length, for the step-variation bound of the circle.
+    let abar = if acc.npairs > 0 {
+        acc.sa / acc.npairs as f64
+    } else {
+        0.0
+    };
+    #[inline(always)]
+    fn frame(q: &Quick, p: [f64; 2], w: f64, tau: f64, a: f64, abar: f64, s: &mut [f64; 7]) {
+        let (dx, dy) = (q.mx - p[0], q.my - p[1]);
+        let ds = dx * dx + dy * dy;
+        s[0] += w * ds.sqrt();
+        s[1] += w * ds;
+        let (ex, ey) = (q.lx + q.vx * tau - p[0], q.ly + q.vy * tau - p[1]);
+        let dl = ex * ex + ey * ey;
+        s[2] += w * dl.sqrt();
+        s[3] += w * dl;
+        let (cx, cy) = (p[0] - q.cx, p[1] - q.cy);
+        let dc = (cx * cx + cy * cy).sqrt() - q.r;
+        s[4] += w * dc.abs();
+        s[5] += w * dc * dc;
+        // a step of a valid pair (a ≥ 0)
+        s[6] += if a >= 0.0 { (a - abar).abs() } else { 0.0 };
+    }
+    let (mut sa, mut sb) = ([0.0f64; 7], [0.0f64; 7]);
+    let last = acc.last;
+    let step = |i: usize| if i < last { steps[i] } else { -1.0 };
+    let mut i = acc.first;
+    let end = last + 1;
+    while i + 1 < end {
+        frame(q, pts[i], wts[i], i as f64 - t_end, step(i), abar, &mut sa);
+        frame(
+            q,
+            pts[i + 1],
+            wts[i + 1],
+            (i + 1) as f64 - t_end,
+            step(i + 1),
+            abar,
+            &mut sb,
+        );
+        i += 2;
+    }
+    if i < end {
+        frame(q, pts[i], wts[i], i as f64 - t_end, step(i), abar, &mut sa);
+    }
+    let dev = sa[6] + sb[6];
+    let (es, es2, el, el2, ec, ec2) = (
+        sa[0] + sb[0],
+        sa[1] + sb[1],
+        sa[2] + sb[2],
+        sa[3] + sb[3],
+        sa[4] + sb[4],
+        sa[5] + sb[5],
+    );
+    let pick = |e: f64, e2: f64| if rules.squared { e2 } else { e };
+    if rules.stat && (q.bbox < rules.bbox_thr || es / acc.sw < rules.mean_res_thr) {
+        return Cheap {
+            decided: Some(pick(es, es2)),
+            best: pick(es, es2),
+            circle_lb: None,
+        };
+    }
+    let mut best = f64::INFINITY;
+    if rules.stat {
+        best = pick(es, es2);
+    }
+    if want_line {
+        best = best.min(pick(el, el2));
+    }
+    let circle_lb = want_circle.then(|| {
+        let speed = if acc.npairs >= 2 {
+            (0.25 * dev * (1.0 - 1e-9) - 1e-12 * acc.sa).max(0.0)
+        } else {
+            0.0
+        };
+        let speed = if rules.squared {
+            speed_lb(acc, true)
+        } else {
+            speed
+        };
+        if q.circle_ok {
+            let raw = if rules.squared {
+                // Minkowski: ‖(|dᵢ − r|)‖₂ ≥ ‖(|d′ᵢ − r′|)‖₂ − √W·slack
+                (ec2.sqrt() - acc.sw.sqrt() * q.circle_slack)
+                    .max(0.0)
+                    .powi(2)
+            } else {
+                (ec - acc.sw * q.circle_slack).max(0.0)
+            };
+            raw.max(speed) * LB_SAFETY + q.pen_lb
+        } else {
+            speed * LB_SAFETY
+        }
+    });
+    Cheap {
+        decided: None,
+        best,
+        circle_lb,
+    }
+}
+
+/// The circle of [`mp_geom::fit::fit_circle`] (2D, linear angle) with its
+/// error and radius penalty, computed without allocation: Bullock's centre,
+/// unwrapped angles, the least-squares angle line, residuals by rotating the
+/// fitted angle frame to frame. `None` when the points are collinear (the
+/// circle takes no part, as in `fit_best`).
+pub(super) fn circle2(
+    pts: &[[f64; 2]],
+    wts: &[f64],
+    first: usize,
+    last: usize,
+    rules: &Rules,
+    fit: &FitParams,
+) -> Option<f64> {
+    let (mut w_sum, mut mx, mut my) = (0.0, 0.0, 0.0);
+    for i in first..=last {
+        let w = wts[i];
+        if w == 0.0 {
+            continue;
+        }
+        w_sum += w;
+        mx += w * pts[i][0];
+        my += w * pts[i][1];
+    }
+    mx /= w_sum;
+    my /= w_sum;
+    let (uc, vc, r) = bullock_circle(last + 1 - first, Some(&wts[first..=last]), w_sum, |i| {
+        (pts[first + i][0] - mx, pts[first + i][1] - my)
+    })
+    .ok()?;
+    let (cx, cy) = (mx + uc, my + vc);
+    // unwrapped angles (degrees) against segment time, least-squares line
+    let (mut st, mut sth, mut stt, mut stth) = (0.0, 0.0, 0.0, 0.0);
+    let mut prev: Option<f64> = None;
+    let t_ref = ((first + last) / 2) as f64;
+    for i in first..=last {
+        let w = wts[i];
+        if w == 0.0 {
+            continue;
+        }
+        let mut th = (pts[i][1] - cy).atan2(pts[i][0] - cx).to_degrees();
+        if let Some(p) = prev {
+            let turns = (p - th) / 360.0;
+            // `round` is a library call; it is 0 for |turns| < ½.
+            if turns.abs() >= 0.5 {
+                th += 360.0 * turns.round();
+            }
+        }
+        prev = Some(th);
+        let t = i as f64 - t_ref;
+        st += w * t;
+        sth += w * th;
+        stt += w * t * t;
+        stth += w * t * th;
+    }
+    let tbar = st / w_sum;
+    let thbar = sth / w_sum;
+    let vtt = stt - st * tbar;
+    let vel = if vtt > 0.0 {
+        (stth - st * thbar) / vtt
+    } else {
+        0.0
+    };
+    // angle at frame `first`: θ̄ + vel·(t_first − t̄)
+    let th0 = (thbar + vel * (first as f64 - t_ref - tbar)).to_radians();
+    let (mut sn, mut cs) = th0.sin_cos();
+    let (ds, dc) = vel.to_radians().sin_cos();
+    let (mut e, mut e2) = (0.0, 0.0);
+    for i in first..=last {
+        let w = wts[i];
+        if w > 0.0 {
+            let ex = cx + r * cs - pts[i][0];
+            let ey = cy + r * sn - pts[i][1];
+            let d2 = ex * ex + ey * ey;
+            e += w * d2.sqrt();
+            e2 += w * d2;
+        }
+        let (c2, s2) = (cs * dc - sn * ds, sn * dc + cs * ds);
+        cs = c2;
+        sn = s2;
+    }
+    let err = if rules.squared { e2 } else { e } + fit.circle_penalty(r);
+    err.is_finite().then_some(err)
+}

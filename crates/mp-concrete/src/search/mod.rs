@@ -1,0 +1,430 @@
+//! Exact segmentation without a cost table: branch and bound over the DP of
+//! [`crate::dp`], with segment moments updated in O(1) per candidate.
+//!
+//! For every end frame `n` the candidate starts `k = n − 1, n − 2, …, n − W`
+//! are visited from the shortest segment to the longest, so that a good
+//! incumbent `E[n]` is found early. Each joint keeps running moments of its
+//! valid points over `k..n` (count, Σt, Σt², Σx, Σtx, Σx², third and fourth
+//! order in x and y, bounding box, first and last valid frame), with time and
+//! coordinates relative to frame `n − 1`, so adding frame `k` costs O(D) and
+//! the sums stay local (no cancellation between large prefix sums).
+//!
+//! From the moments, in O(1) per joint:
+//!
+//! * the least-squares stationary point and line and their **squared**
+//!   errors, exact;
+//! * the Bullock (algebraic, Kåsa) circle and its algebraic residual
+//!   `K = Σ w (‖x − c‖² − r²)²` (moments up to 4th order), and its radius
+//!   penalty;
+//! * lower bounds of the Euclidean errors: `Σ w‖rᵢ‖ ≥ max(√SSE, SSE / M)`
+//!   where `M` bounds the largest residual (bounding box corners against the
+//!   fitted point or line), and for the circle
+//!   `Σ w |dᵢ − r| ≥ K / (A·(d_max + r))` with `A ≥ max |dᵢ² − r²|`.
+//!
+//! A joint's cost is the error of the kind chosen by the selection rules of
+//! [`mp_geom::fit`], which is at least the smallest error over the kinds
+//! considered; so `E[k] + λ + Σ_j lb_j > E[n]` proves that `k` cannot improve
+//! `E[n]`. Candidates that survive get their stationary and line errors
+//! exactly (one pass over the segment, square roots only) and a second bound
+//! for the circle (`Σ w |dᵢ − r|` + penalty: a point of the circle is at least
+//! `|‖x − c‖ − r|` from `x`); the circle itself (angles, `atan2`) is fitted
+//! only when that bound is below the best of stationary and line, and the
+//! candidate is dropped as soon as its exact partial sum plus the remaining
+//! bounds exceeds the incumbent. Joints are visited in the order of how much
+//! their exact cost has exceeded their O(1) bound so far (re-sorted every 64
+//! end frames), so a losing candidate is usually dropped after a few joints; a
+//! joint's circle is fitted at once only if it could drop the candidate, else
+//! after the other joints, if the candidate still survives. The candidate's
+//! cost is summed in joint order, whatever the visiting order. The costs are those of
+//! [`mp_geom::fit::fit_best`] (same fits, same rules) up to rounding, so the
+//! optimum is the optimum of the exhaustive DP ([`crate::synth::segment_exhaustive`]).
+//!
+//! Joints in 3D, or with the spline kind allowed, use [`fit_best_unchecked`]
+//! for their exact cost (still with the bounds of the other joints and the
+//! early exit).
+//!
+//! Steps, one file each: `moments` (running moments), `bounds` (the O(1)
+//! fits and bounds), `exact` (the one-pass errors and the exact circle);
+//! the search loop is here.
+//!
+//! Memory: `O(T·J·D)` for the points and `O(T)` for the DP; no `T × W` table.
+
+use mp_geom::fit::{fit_best_unchecked, ErrorNorm, FitParams};
+use mp_geom::PrimitiveKind;
+use ndarray::{s, Array2};
+
+use crate::dp::{backtrack, Segmentation};
+use crate::error::{ConcreteError, Result};
+
+mod bounds;
+mod exact;
+mod moments;
+
+use bounds::{quick, Quick};
+use exact::{cheap2, circle2};
+use moments::Acc2;
+
+/// Relative safety factor applied to every lower bound (rounding).
+const LB_SAFETY: f64 = 1.0 - 1e-9;
+
+/// One joint's trajectory, prepared for the search.
+pub(crate) struct JointTrack<'a> {
+    /// `T × D` gap-filled points.
+    pub points: &'a Array2<f64>,
+    /// Weight per frame (1 observed, 0 missing).
+    pub weights: &'a [f64],
+}
+
+/// What the selection rules need, at the track's scale.
+#[derive(Clone, Copy)]
+struct Rules {
+    stat: bool,
+    line: bool,
+    circle: bool,
+    only_moving: bool,
+    bbox_thr: f64,
+    mean_res_thr: f64,
+    span_thr: f64,
+    squared: bool,
+    quadratic: bool,
+}
+
+impl Rules {
+    fn new(fit: &FitParams) -> Self {
+        let s = fit.unit_scale;
+        let has = |k| fit.kinds.contains(&k);
+        Rules {
+            stat: has(PrimitiveKind::Stationary),
+            line: has(PrimitiveKind::Line),
+            circle: has(PrimitiveKind::Circle),
+            only_moving: fit
+                .kinds
+                .iter()
+                .all(|k| matches!(k, PrimitiveKind::Line | PrimitiveKind::Circle)),
+            bbox_thr: fit.stationary_bbox_px * s,
+            mean_res_thr: fit.stationary_mean_residual_px * s,
+            span_thr: fit.min_span_px * s,
+            squared: fit.norm == ErrorNorm::Squared,
+            quadratic: fit.quadratic_angle,
+        }
+    }
+}
+
+/// A joint's cost on `k..n` after the one-pass errors: exact, or the
+/// stationary/line best and a circle still to be fitted.
+enum Stage {
+    /// Exact (`None`: no kind could be fitted).
+    Done(Option<f64>),
+    /// The circle may win: its lower bound and the best other kind.
+    Circle { lb: f64, best: f64 },
+}
+
+/// The cheap stage of one joint's cost on `k..n` (see [`Stage`]).
+#[allow(clippy::too_many_arguments)]
+fn joint_stage(
+    jt: &JointTrack<'_>,
+    pts: Option<&[[f64; 2]]>,
+    steps: &[f64],
+    acc: &Acc2,
+    q: &Quick,
+    rules: &Rules,
+    fit: &FitParams,
+    k: usize,
+    n: usize,
+) -> std::result::Result<Stage, mp_geom::GeomError> {
+    if acc.count == 0 {
+        return Ok(Stage::Done(Some(0.0)));
+    }
+    let p = match pts {
+        Some(p) if !rules.quadratic => p,
+        _ => {
+            let e =
+                fit_best_unchecked(jt.points.slice(s![k..n, ..]), Some(&jt.weights[k..n]), fit)?;
+            return Ok(Stage::Done(Some(e.error)));
+        }
+    };
+    let c = cheap2(q, acc, p, steps, jt.weights, rules);
+    if let Some(d) = c.decided {
+        return Ok(Stage::Done(Some(d)));
+    }
+    match c.circle_lb {
+        Some(lb) if lb < c.best => Ok(Stage::Circle { lb, best: c.best }),
+        _ => Ok(Stage::Done(c.best.is_finite().then_some(c.best))),
+    }
+}
+
+/// The circle stage: the exact cost given the best other kind.
+fn joint_circle(
+    jt: &JointTrack<'_>,
+    pts: &[[f64; 2]],
+    acc: &Acc2,
+    best: f64,
+    rules: &Rules,
+    fit: &FitParams,
+) -> Option<f64> {
+    match circle2(pts, jt.weights, acc.first, acc.last, rules, fit) {
+        Some(e) if e < best => Some(e),
+        _ => best.is_finite().then_some(best),
+    }
+}
+
+fn joint_err(
+    names: &[String],
+    j: usize,
+    k: usize,
+    n: usize,
+    e: impl std::fmt::Display,
+) -> ConcreteError {
+    let name = names.get(j).cloned().unwrap_or_else(|| format!("{j}"));
+    ConcreteError::Track(format!("fitting joint `{name}` on frames {k}..{n}: {e}"))
+}
+
+/// Branch-and-bound DP (see the module docs): the optimal segmentation of
+/// `0..T` with segments of at most `window` frames, `lambda[n − 1]` paid by a
+/// segment ending at `n`.
+pub(crate) fn segment_search(
+    joints: &[JointTrack<'_>],
+    names: &[String],
+    fit: &FitParams,
+    lambda: &[f64],
+    window: usize,
+) -> Result<Segmentation> {
+    let t = lambda.len();
+    if t == 0 {
+        return Err(ConcreteError::Track("cannot segment 0 frames".into()));
+    }
+    if window == 0 {
+        return Err(ConcreteError::param("max_segment_frames", "must be ≥ 1"));
+    }
+    let rules = Rules::new(fit);
+    let spline = fit.kinds.contains(&PrimitiveKind::Spline);
+    let nj = joints.len();
+    // Per joint: 2D fast path data (points with missing frames zeroed).
+    let fast: Vec<Option<Vec<[f64; 2]>>> = joints
+        .iter()
+        .map(|jt| {
+            if jt.points.ncols() != 2 || spline {
+                return None;
+            }
+            Some(
+                jt.points
+                    .outer_iter()
+                    .zip(jt.weights)
+                    .map(|(r, &w)| if w > 0.0 { [r[0], r[1]] } else { [0.0, 0.0] })
+                    .collect(),
+            )
+        })
+        .collect();
+    // Step lengths of consecutive valid frames (−1 where a frame is missing).
+    let steps: Vec<Vec<f64>> = fast
+        .iter()
+        .zip(joints)
+        .map(|(f, jt)| match f {
+            Some(p) => (0..t)
+                .map(|i| {
+                    if i + 1 < t && jt.weights[i] > 0.0 && jt.weights[i + 1] > 0.0 {
+                        let (dx, dy) = (p[i + 1][0] - p[i][0], p[i + 1][1] - p[i][1]);
+                        (dx * dx + dy * dy).sqrt()
+                    } else {
+                        -1.0
+                    }
+                })
+                .collect(),
+            None => Vec::new(),
+        })
+        .collect();
+    let mut best = vec![f64::INFINITY; t + 1];
+    let mut arg = vec![0usize; t + 1];
+    best[0] = 0.0;
+    let mut accs = vec![Acc2::default(); nj];
+    let mut quicks = vec![Quick::default(); nj];
+    let mut lbs = vec![0.0f64; nj];
+    let mut costs = vec![0.0f64; nj];
+    let mut deferred: Vec<(usize, f64, f64)> = Vec::with_capacity(nj);
+    // Joints by how much their exact cost has exceeded their O(1) bound so
+    // far (most first): the candidates that cannot win are dropped sooner.
+    let mut gaps = vec![0.0f64; nj];
+    let mut order: Vec<usize> = (0..nj).collect();
+    for n in 1..=t {
+        if n % 64 == 0 {
+            order.sort_by(|&a, &b| gaps[b].total_cmp(&gaps[a]).then(a.cmp(&b)));
+            for g in gaps.iter_mut() {
+                *g *= 0.5;
+            }
+        }
+        let lo = n.saturating_sub(window);
+        let lam = lambda[n - 1];
+        let mut best_n = f64::INFINITY;
+        let mut arg_n = n - 1;
+        // First the start of the previous frame's last segment (the segment
+        // extended by one frame: usually near the optimum, a strong
+        // incumbent), then every start from the shortest segment up.
+        let seed = arg[n - 1].max(lo);
+        for pass in 0..2 {
+            if pass == 0 && (n < 2 || seed + 1 >= n) {
+                continue;
+            }
+            for (j, acc) in accs.iter_mut().enumerate() {
+                let (rx, ry) = match &fast[j] {
+                    Some(p) => (p[n - 1][0], p[n - 1][1]),
+                    None => (0.0, 0.0),
+                };
+                acc.reset(n - 1, rx, ry);
+            }
+            let stop = if pass == 0 { seed } else { lo };
+            for k in (stop..n).rev() {
+                let tau = k as f64 - (n - 1) as f64;
+                for (j, acc) in accs.iter_mut().enumerate() {
+                    if joints[j].weights[k] > 0.0 {
+                        match &fast[j] {
+                            Some(p) => acc.add(k, tau, p[k][0], p[k][1], steps[j][k]),
+                            None => {
+                                if acc.count == 0 {
+                                    acc.last = k;
+                                }
+                                acc.first = k;
+                                acc.count += 1;
+                            }
+                        }
+                    }
+                }
+                if (pass == 0 && k != seed) || (pass == 1 && k == seed && seed + 1 < n && n >= 2) {
+                    continue;
+                }
+                let base = best[k];
+                if !base.is_finite() {
+                    continue;
+                }
+                // Prune on λ alone (costs are ≥ 0).
+                if base + lam > best_n {
+                    continue;
+                }
+                // O(1) bounds, joints in the current order.
+                let mut lb_sum = 0.0;
+                let mut dead = false;
+                for &j in &order {
+                    let acc = &accs[j];
+                    let lb = if acc.count == 0 {
+                        0.0
+                    } else if let Some(p) = &fast[j] {
+                        quicks[j] = quick(acc, p, &rules, fit);
+                        quicks[j].lb
+                    } else {
+                        0.0
+                    };
+                    lbs[j] = lb;
+                    lb_sum += lb;
+                    if base + (lb_sum + lam) > best_n {
+                        dead = true;
+                        break;
+                    }
+                }
+                if dead {
+                    continue;
+                }
+                // Exact costs joint by joint (circles only where one can
+                // win), dropped as soon as the exact partial sum plus the
+                // remaining bounds exceeds the incumbent.
+                let mut rest = lb_sum;
+                let mut sum = 0.0;
+                deferred.clear();
+                let no_fit = |j: usize| -> Result<f64> {
+                    if best_n.is_finite() {
+                        Ok(f64::INFINITY)
+                    } else {
+                        Err(joint_err(
+                            names,
+                            j,
+                            k,
+                            n,
+                            "no primitive kind could be fitted",
+                        ))
+                    }
+                };
+                for &j in &order {
+                    rest -= lbs[j];
+                    let stage = joint_stage(
+                        &joints[j],
+                        fast[j].as_deref(),
+                        &steps[j],
+                        &accs[j],
+                        &quicks[j],
+                        &rules,
+                        fit,
+                        k,
+                        n,
+                    )
+                    .map_err(|e| joint_err(names, j, k, n, e))?;
+                    let cost = match stage {
+                        Stage::Done(Some(c)) => c,
+                        Stage::Done(None) => no_fit(j)?,
+                        Stage::Circle { lb, best } => {
+                            // Fitted now only if it can drop the candidate;
+                            // otherwise later, if the candidate survives.
+                            if base + (sum + best + rest.max(0.0) + lam) > best_n {
+                                let p = fast[j].as_deref().unwrap_or(&[]);
+                                match joint_circle(&joints[j], p, &accs[j], best, &rules, fit) {
+                                    Some(c) => c,
+                                    None => no_fit(j)?,
+                                }
+                            } else {
+                                deferred.push((j, lb, best));
+                                lb
+                            }
+                        }
+                    };
+                    costs[j] = cost;
+                    let g = cost - lbs[j];
+                    if g.is_finite() {
+                        gaps[j] += g;
+                    }
+                    sum += cost;
+                    if base + (sum + rest.max(0.0) + lam) > best_n {
+                        dead = true;
+                        break;
+                    }
+                }
+                if dead {
+                    continue;
+                }
+                // The deferred circles, those that may rise most first.
+                deferred.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
+                for &(j, lb, best) in &deferred {
+                    let p = fast[j].as_deref().unwrap_or(&[]);
+                    let cost = match joint_circle(&joints[j], p, &accs[j], best, &rules, fit) {
+                        Some(c) => c,
+                        None => no_fit(j)?,
+                    };
+                    costs[j] = cost;
+                    let g = cost - lb;
+                    if g.is_finite() {
+                        gaps[j] += g;
+                    }
+                    sum += cost - lb;
+                    if base + (sum + lam) > best_n {
+                        dead = true;
+                        break;
+                    }
+                }
+                if dead {
+                    continue;
+                }
+                // In joint order, whatever order the bounds took.
+                let total: f64 = costs.iter().sum();
+                let e = base + (total + lam);
+                if e.is_nan() {
+                    return Err(ConcreteError::Track(format!(
+                        "segment cost of frames {k}..{n} is NaN"
+                    )));
+                }
+                if e < best_n || (e == best_n && k < arg_n) {
+                    best_n = e;
+                    arg_n = k;
+                }
+            }
+        }
+        best[n] = best_n;
+        arg[n] = arg_n;
+    }
+    backtrack(&best, &arg, window)
+}
