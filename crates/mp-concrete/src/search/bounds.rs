@@ -100,6 +100,29 @@ pub(super) fn euclid_lb(sse: f64, max_res: f64) -> f64 {
     }
 }
 
+/// An upper bound of `Σ w‖xᵢ − x̄‖⁴` from the moments (the expansion plus a
+/// margin for its rounding).
+fn stat_fourth_ub(acc: &Acc2, m1: f64, m2: f64) -> f64 {
+    let w = acc.sw;
+    let mu2 = m1 * m1 + m2 * m2;
+    let sz = acc.sxx + acc.syy;
+    let szx = acc.sxxx + acc.sxyy;
+    let szy = acc.sxxy + acc.syyy;
+    let smp2 = m1 * m1 * acc.sxx + 2.0 * m1 * m2 * acc.sxy + m2 * m2 * acc.syy;
+    let smp = m1 * acc.sx + m2 * acc.sy;
+    let terms = [
+        acc.szz,
+        -4.0 * (m1 * szx + m2 * szy),
+        2.0 * mu2 * sz,
+        4.0 * smp2,
+        -4.0 * mu2 * smp,
+        mu2 * mu2 * w,
+    ];
+    let sum: f64 = terms.iter().sum();
+    let mag: f64 = terms.iter().map(|t| t.abs()).sum();
+    sum + 1e-9 * mag
+}
+
 pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams) -> Quick {
     let w = acc.sw;
     let mut q = Quick::default();
@@ -121,7 +144,16 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
         let b = if rules.squared {
             sse
         } else {
-            euclid_lb(sse, q.max_res_stat)
+            // Hölder: Σ‖r‖ ≥ (Σ‖r‖²)^{3/2} / (Σ‖r‖⁴)^{1/2}, with an upper
+            // bound of Σ‖r‖⁴ (4th moments about the mean, plus rounding);
+            // the steps: ‖rᵢ‖ + ‖rᵢ₊₁‖ ≥ aᵢ, each residual in two pairs.
+            let r4 = stat_fourth_ub(acc, mux, muy);
+            let holder = if r4 > 0.0 && r4.is_finite() {
+                sse * (sse / r4).sqrt()
+            } else {
+                0.0
+            };
+            euclid_lb(sse, q.max_res_stat).max(holder).max(0.5 * acc.sa)
         };
         lb = lb.min(b);
     }
@@ -157,7 +189,8 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
             };
             let rx = ax(acc.lo[0] - acc.rx, acc.hi[0] - acc.rx, mux, q.vx);
             let ry = ax(acc.lo[1] - acc.ry, acc.hi[1] - acc.ry, muy, q.vy);
-            euclid_lb(sse, (rx * rx + ry * ry).sqrt())
+            // a line moves ‖v‖ per frame: the step-variation bound
+            euclid_lb(sse, (rx * rx + ry * ry).sqrt()).max(speed_lb(acc, false))
         };
         lb = lb.min(b);
     }
