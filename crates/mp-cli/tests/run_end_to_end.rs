@@ -99,7 +99,13 @@ fn png_luma_variance(bytes: &[u8]) -> (u32, u32, f64) {
     (w, h, var)
 }
 
-fn check_outputs(dir: &Path, frames: usize, joints: usize, video: bool) -> (Track, Program) {
+fn check_outputs(
+    dir: &Path,
+    frames: usize,
+    joints: usize,
+    video: bool,
+    frame_px: f64,
+) -> (Track, Program) {
     for f in [
         "track.npz",
         "program.txt",
@@ -174,7 +180,11 @@ fn check_outputs(dir: &Path, frames: usize, joints: usize, video: bool) -> (Trac
     // The program reproduces the keypoints.
     let exec = program.execute().unwrap();
     let kd = mp_geom::metrics::kd(&track, &exec).unwrap();
-    assert!(kd < 10.0, "KD between program and keypoints is {kd:.2} px");
+    // 10 px at the 512-px reference frame.
+    assert!(
+        kd < 10.0 * frame_px / 512.0,
+        "KD between program and keypoints is {kd:.2} px"
+    );
 
     // One plot per joint, SVG and PNG, and pictures that are not blank.
     let plots: Vec<_> = std::fs::read_dir(dir.join("plots"))
@@ -210,7 +220,7 @@ fn run_on_golf_clip_writes_consistent_outputs() {
     let Some(dir) = golf_run() else {
         return;
     };
-    let (track, _) = check_outputs(dir, GOLF_FRAMES, 17, true);
+    let (track, _) = check_outputs(dir, GOLF_FRAMES, 17, true, 492.0);
     assert_eq!(track.skeleton().name, "coco17");
     assert!((track.fps() - 29.97).abs() < 0.01);
     // The overlay video has one frame per analysed frame, at the video's size.
@@ -251,7 +261,7 @@ fn run_on_track_file() {
         stdout.contains("concrete") && stdout.contains("total"),
         "stage timings missing:\n{stdout}"
     );
-    check_outputs(&dir, 90, 33, false);
+    check_outputs(&dir, 90, 33, false, 640.0);
 }
 
 #[test]

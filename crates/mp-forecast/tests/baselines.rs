@@ -194,8 +194,10 @@ fn period_fallback_unrolls_the_last_cycle_of_a_periodic_track() {
     let lu = LoopUnroll::new(LoopUnroll::default_params(), None).unwrap();
     let p = lu.predict(&past, 30).unwrap();
     let c = Constant.predict(&past, 30).unwrap();
+    // (Programs are continuous at segment boundaries by default (C0), which
+    // costs some of the worst-frame accuracy within a cycle.)
     assert!(
-        max_err(&p) < 0.2 * max_err(&c),
+        max_err(&p) < 0.3 * max_err(&c),
         "loop {} vs constant {}",
         max_err(&p),
         max_err(&c)
