@@ -77,9 +77,9 @@ pub struct LoopsArgs {
 pub struct ExtendArgs {
     /// Input abstract program.
     pub program: PathBuf,
-    /// Which loop (0-based, in program order).
-    #[arg(long = "loop", default_value_t = 0)]
-    pub loop_index: usize,
+    /// Which loop, numbered from 1 in program order (as `mp edit`, `mp loops` and the report number loops).
+    #[arg(long = "loop", default_value_t = 1)]
+    pub loop_number: usize,
     /// New number of iterations.
     #[arg(long)]
     pub iters: usize,
@@ -197,7 +197,7 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
     for (i, r) in c.intervals.iter().enumerate() {
         println!(
             "{:>4} {:>8} {:>8} {:>9.2} {:>9.2} {:>9.2} {:>6} {:>10.2}",
-            i,
+            i + 1,
             r.start_frame,
             r.end_frame,
             r.start_frame as f64 / fps,
@@ -228,7 +228,17 @@ fn is_program_path(p: &std::path::Path) -> bool {
 /// (loops replayed as observed) or written.
 pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
     let mut prog = read_program(&a.program)?;
-    set_iterations(&mut prog, a.loop_index, a.iters)?;
+    let index = a.loop_number.checked_sub(1).ok_or_else(|| {
+        anyhow::anyhow!("no loop 0: loops are numbered from 1 (--loop 1 is the first loop)")
+    })?;
+    set_iterations(&mut prog, index, a.iters).map_err(|e| match e {
+        mp_abstract::AbstractError::NotFound(_) => anyhow::anyhow!(
+            "no loop {}: the program has {} loop(s), numbered from 1",
+            a.loop_number,
+            prog.loop_indices().len()
+        ),
+        e => e.into(),
+    })?;
     if is_program_path(&a.output) {
         write_program(&prog, &a.output)?;
     } else {

@@ -1,0 +1,97 @@
+//! Loops are numbered from 1 on the command line: `mp loops` lists them so,
+//! and `mp extend --loop N` takes the same numbers.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
+
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mp"))
+        .args(args)
+        .output()
+        .expect("cannot start mp")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "mp {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn refused(args: &[&str]) -> String {
+    let out = run(args);
+    assert_eq!(out.status.code(), Some(1), "mp {args:?} should fail");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Iteration counts of the loops of an abstract program in JSON, in order.
+fn iterations(json: &str) -> Vec<u64> {
+    let v: serde_json::Value = serde_json::from_str(json).unwrap();
+    v["stmts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|s| s.get("iterations").and_then(|i| i.as_u64()))
+        .collect()
+}
+
+#[test]
+fn loops_are_numbered_from_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |name: &str| tmp.path().join(name).to_string_lossy().into_owned();
+    ok(&["performer", "-o", &p("perf.npz")]);
+    ok(&["abstract", &p("perf.npz"), "-o", &p("abs.json"), "--quiet"]);
+    let before = iterations(&std::fs::read_to_string(p("abs.json")).unwrap());
+    assert!(before.len() >= 2, "the performer has loops: {before:?}");
+
+    // `mp loops`: the first row of the table is interval 1.
+    let table = ok(&["loops", &p("perf.npz")]);
+    let first = table.lines().nth(1).unwrap();
+    assert_eq!(first.split_whitespace().next(), Some("1"), "{table}");
+
+    // `mp extend --loop 2` edits the second loop and nothing else.
+    ok(&[
+        "extend",
+        &p("abs.json"),
+        "--loop",
+        "2",
+        "--iters",
+        "9",
+        "-o",
+        &p("ext.json"),
+    ]);
+    let after = iterations(&std::fs::read_to_string(p("ext.json")).unwrap());
+    assert_eq!(after.len(), before.len());
+    assert_eq!(after[1], 9);
+    assert_eq!(after[0], before[0]);
+
+    let zero = refused(&[
+        "extend",
+        &p("abs.json"),
+        "--loop",
+        "0",
+        "--iters",
+        "2",
+        "-o",
+        &p("x.npz"),
+    ]);
+    assert!(zero.contains("numbered from 1"), "{zero}");
+    let missing = refused(&[
+        "extend",
+        &p("abs.json"),
+        "--loop",
+        "99",
+        "--iters",
+        "2",
+        "-o",
+        &p("x.npz"),
+    ]);
+    assert!(
+        missing.contains("no loop 99") && missing.contains(&format!("{} loop(s)", before.len())),
+        "{missing}"
+    );
+    assert!(!tmp.path().join("x.npz").exists());
+}
