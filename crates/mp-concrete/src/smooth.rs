@@ -463,47 +463,13 @@ fn primitive_of(
             Primitive::Stationary { .. } => Primitive::Stationary { point: a.to_vec() },
             other => {
                 let p0 = other.eval(0.0);
-                translate(
+                Primitive::translated(
                     other,
                     &a.iter().zip(&p0).map(|(x, y)| x - y).collect::<Vec<_>>(),
                 )
             }
         },
         Elem::Similar { .. } => similar_circle(orig, n, a, b),
-    }
-}
-
-/// `p` moved by `delta` (circles: the centre; other kinds are never rigid but handled alike).
-fn translate(p: &Primitive, delta: &[f64]) -> Primitive {
-    let add = |v: &[f64]| v.iter().zip(delta).map(|(x, y)| x + y).collect::<Vec<_>>();
-    match p {
-        Primitive::Stationary { point } => Primitive::Stationary { point: add(point) },
-        Primitive::Line { start, velocity } => Primitive::Line {
-            start: add(start),
-            velocity: velocity.clone(),
-        },
-        Primitive::Circle {
-            center,
-            radius,
-            angle_start,
-            angle_vel,
-            angle_acc,
-            axes,
-        } => Primitive::Circle {
-            center: add(center),
-            radius: *radius,
-            angle_start: *angle_start,
-            angle_vel: *angle_vel,
-            angle_acc: *angle_acc,
-            axes: axes.clone(),
-        },
-        Primitive::Spline { coeffs } => Primitive::Spline {
-            coeffs: coeffs
-                .iter()
-                .zip(delta)
-                .map(|(c, dk)| [c[0], c[1], c[2], c[3] + dk])
-                .collect(),
-        },
     }
 }
 

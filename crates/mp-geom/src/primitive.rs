@@ -159,6 +159,22 @@ impl Primitive {
         }
     }
 
+    /// The same primitive moved by `delta` (one value per dimension): every
+    /// point it passes through, at every time, shifted by `delta`.
+    pub fn translated(&self, delta: &[f64]) -> Primitive {
+        let add = |v: &mut Vec<f64>| v.iter_mut().zip(delta).for_each(|(x, d)| *x += d);
+        let mut q = self.clone();
+        match &mut q {
+            Primitive::Stationary { point } => add(point),
+            Primitive::Line { start, .. } => add(start),
+            Primitive::Circle { center, .. } => add(center),
+            Primitive::Spline { coeffs } => {
+                coeffs.iter_mut().zip(delta).for_each(|(c, d)| c[3] += d)
+            }
+        }
+        q
+    }
+
     /// Position at (fractional) frame `t`.
     pub fn eval(&self, t: f64) -> Vec<f64> {
         let mut out = vec![0.0; self.dims()];
@@ -194,6 +210,40 @@ impl Primitive {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn translated_moves_every_point_by_delta() {
+        let d = [3.0, -2.0];
+        let prims = [
+            Primitive::Stationary {
+                point: vec![1.0, 2.0],
+            },
+            Primitive::Line {
+                start: vec![0.0, 1.0],
+                velocity: vec![0.5, -0.25],
+            },
+            Primitive::Circle {
+                center: vec![4.0, 5.0],
+                radius: 2.0,
+                angle_start: 10.0,
+                angle_vel: 7.0,
+                angle_acc: 0.1,
+                axes: Vec::new(),
+            },
+            Primitive::Spline {
+                coeffs: vec![[0.01, -0.2, 1.0, 3.0], [0.0, 0.1, -1.0, 2.0]],
+            },
+        ];
+        for p in &prims {
+            let q = p.translated(&d);
+            for t in [0.0, 1.5, 7.0] {
+                let (a, b) = (p.eval(t), q.eval(t));
+                for k in 0..2 {
+                    assert!((b[k] - a[k] - d[k]).abs() < 1e-9, "{p:?} at {t}");
+                }
+            }
+        }
+    }
     use super::*;
 
     #[test]
