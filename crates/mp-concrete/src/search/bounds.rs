@@ -100,24 +100,29 @@ pub(super) fn euclid_lb(sse: f64, max_res: f64) -> f64 {
     }
 }
 
-/// An upper bound of `Σ w‖xᵢ − x̄‖⁴` from the moments (the expansion plus a
-/// margin for its rounding).
-fn stat_fourth_ub(acc: &Acc2, m1: f64, m2: f64) -> f64 {
-    let w = acc.sw;
+/// The terms of `Σ w‖xᵢ − μ‖⁴` expanded in the moments, `μ = (m1, m2)`: their
+/// sum is the value (summed in this order, as both callers do).
+fn fourth_about(acc: &Acc2, m1: f64, m2: f64) -> [f64; 6] {
     let mu2 = m1 * m1 + m2 * m2;
     let sz = acc.sxx + acc.syy;
     let szx = acc.sxxx + acc.sxyy;
     let szy = acc.sxxy + acc.syyy;
     let smp2 = m1 * m1 * acc.sxx + 2.0 * m1 * m2 * acc.sxy + m2 * m2 * acc.syy;
     let smp = m1 * acc.sx + m2 * acc.sy;
-    let terms = [
+    [
         acc.szz,
         -4.0 * (m1 * szx + m2 * szy),
         2.0 * mu2 * sz,
         4.0 * smp2,
         -4.0 * mu2 * smp,
-        mu2 * mu2 * w,
-    ];
+        mu2 * mu2 * acc.sw,
+    ]
+}
+
+/// An upper bound of `Σ w‖xᵢ − x̄‖⁴` from the moments (the expansion plus a
+/// margin for its rounding).
+fn stat_fourth_ub(acc: &Acc2, m1: f64, m2: f64) -> f64 {
+    let terms = fourth_about(acc, m1, m2);
     let sum: f64 = terms.iter().sum();
     let mag: f64 = terms.iter().map(|t| t.abs()).sum();
     sum + 1e-9 * mag
@@ -226,16 +231,8 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
                 q.circle_slack = 1e-7 * scale;
                 q.pen_lb = penalty_lb(fit, r);
                 // Kåsa residual K = Σz_c² − 2 a·Σ z_c p_c − W m², m = tr / W
-                let mu2 = m1 * m1 + m2 * m2;
-                let sz = acc.sxx + acc.syy;
-                let szx = acc.sxxx + acc.sxyy;
-                let szy = acc.sxxy + acc.syyy;
                 // Σ z_c² with z_c = z − 2μ·p + |μ|²
-                let smp2 = m1 * m1 * acc.sxx + 2.0 * m1 * m2 * acc.sxy + m2 * m2 * acc.syy;
-                let smp = m1 * acc.sx + m2 * acc.sy;
-                let szc2 = acc.szz - 4.0 * (m1 * szx + m2 * szy) + 2.0 * mu2 * sz + 4.0 * smp2
-                    - 4.0 * mu2 * smp
-                    + mu2 * mu2 * w;
+                let szc2: f64 = fourth_about(acc, m1, m2).iter().sum();
                 let szcx = cxxx + cxyy;
                 let szcy = cxxy + cyyy;
                 let k = szc2 - 2.0 * (uc * szcx + vc * szcy) - tr * tr / w;
