@@ -15,8 +15,8 @@ fi
 VPY=.venv/bin/python
 if ! "$VPY" -c "import maturin, numpy, pytest, ray, pyarrow, pandas, matplotlib" 2>/dev/null; then
   echo "python: installing maturin, numpy, pytest, matplotlib, Ray into .venv"
-  "$VPY" -m pip install -q --upgrade pip
-  "$VPY" -m pip install -q "maturin>=1.9,<2" "numpy>=1.21" pytest matplotlib "ray[data]>=2.40" pyarrow pandas
+  "$VPY" -m pip install -q --no-cache-dir --upgrade pip
+  "$VPY" -m pip install -q --no-cache-dir "maturin>=1.9,<2" "numpy>=1.21" pytest matplotlib "ray[data]>=2.40" pyarrow pandas
 fi
 WHEELS="target/wheels/$PROFILE"
 rm -rf "$WHEELS"

@@ -4,6 +4,9 @@
 # against the same build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# A full run builds every crate once: incremental caches would only take disk.
+export CARGO_INCREMENTAL=0
+bash scripts/disk.sh check
 bash scripts/setup.sh
 cargo fmt --all --check
 cargo clippy --workspace --all-targets --quiet -- -D warnings
@@ -24,3 +27,4 @@ fi
 # The Python package in the dev profile, which shares its compiled crates with the tests above.
 bash scripts/python.sh dev
 MP_BIN="$PWD/target/debug/mp" .venv/bin/python -m pytest -q crates/mp-py/tests 2>&1
+bash scripts/disk.sh report
