@@ -95,7 +95,46 @@ fn main() {
         Command::Concepts(a) => cmd_refine::concepts_cmd(&a),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", error_text(&e));
         std::process::exit(1);
+    }
+}
+
+/// The error and its causes joined by `: `, as anyhow's `{:#}` does, leaving
+/// out a cause whose message the text already holds (library errors that
+/// wrap another often print its message in their own).
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let m = cause.to_string();
+        if text.contains(&m) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&m);
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_text;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("reading x.mp3 as a track: {0}")]
+    struct Wrapping(#[source] std::io::Error);
+
+    #[test]
+    fn a_cause_already_in_the_message_is_printed_once() {
+        let inner = std::io::Error::other("unknown extension `mp3`");
+        let e = anyhow::Error::new(Wrapping(inner)).context("mp run");
+        assert_eq!(
+            error_text(&e),
+            "mp run: reading x.mp3 as a track: unknown extension `mp3`"
+        );
+        let plain = anyhow::anyhow!("inner").context("outer");
+        assert_eq!(error_text(&plain), "outer: inner");
     }
 }
