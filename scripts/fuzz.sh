@@ -11,6 +11,8 @@
 #   FUZZ_SECONDS=N   stop each target after N seconds, or at the count when
 #                    one is given too (whichever comes first)
 #   FUZZ_NICE=N      niceness of the fuzzer (default 19)
+# Time every input of a queue in process (the slowest first):
+#   cargo run --release -p mp-fuzz --example replay -- <target> fuzz/out/<target>/default/queue
 # Crashes land in fuzz/out/<target>/default/crashes/; replay one with
 #   fuzz/target/release/<target> < fuzz/out/<target>/default/crashes/<file>
 set -euo pipefail
