@@ -1,4 +1,5 @@
-//! Inputs found by fuzzing (`crates/mp-fuzz`, targets `npy` and `csv`)
+//! Inputs found by fuzzing (`crates/mp-fuzz`, targets `npy` and `csv`, and one
+//! written after a `csv` input the fuzzer reported as slow)
 //! that made a track reader abort or stall; each must now be a quick,
 //! typed error or a quick read.
 
@@ -67,4 +68,32 @@ fn wide_csv_of_many_joints_reads_back_quickly() {
     let u = track_from_csv_str(&wide, path, &opts).unwrap();
     assert_eq!(u.positions().dim(), t.positions().dim());
     quick(start);
+}
+
+/// Two rows, one naming frame 100 000 and one joint 100 000: each index alone
+/// was within the reader's guard, together they asked for 10^10 cells (the
+/// process aborted on the allocation).
+const CSV_HUGE_FRAME_AND_JOINT: &str = "frame,joint,x,y,score
+100000,0,1,2,1
+0,100000,3,4,1
+";
+
+#[test]
+fn sparse_csv_implying_too_many_cells_is_an_error() {
+    let e = track_from_csv_str(
+        CSV_HUGE_FRAME_AND_JOINT,
+        Path::new("f.csv"),
+        &ReadOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(e, GeomError::Format { .. }), "{e}");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("f.csv") && msg.contains("100000") && msg.contains("10000000"),
+        "{msg}"
+    );
+    // A sparse file within the limit still reads: frame 99 999 of joint 0.
+    let ok = "frame,joint,x,y,score\n99999,0,1,2,1\n0,0,3,4,1\n";
+    let t = track_from_csv_str(ok, Path::new("g.csv"), &ReadOptions::default()).unwrap();
+    assert_eq!((t.n_frames(), t.n_joints()), (100_000, 1));
 }

@@ -36,6 +36,12 @@ use super::{skeleton_from_names, write_atomic, ReadOptions};
 use crate::error::{GeomError, Result};
 use crate::track::Track;
 
+/// The most frame × joint cells a long-form CSV may imply by its largest
+/// frame and joint indices when it has fewer than one row per 100 cells:
+/// 10 million (240 MB of positions in 3D). A file with more rows may imply
+/// up to 100 cells per row.
+pub const MAX_SPARSE_CELLS: usize = 10_000_000;
+
 /// Which CSV layout to write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CsvLayout {
@@ -170,13 +176,18 @@ fn read_long(
     if entries.is_empty() {
         return Err(GeomError::format(path, "CSV has a header but no rows"));
     }
-    // Guard against absurd indices that would allocate huge, almost empty arrays.
-    let limit = 100 * entries.len() + 100_000;
-    if max_frame > limit || max_joint > limit {
+    // Guard against absurd indices that would allocate huge, almost empty
+    // arrays: the frames × joints they imply must stay within
+    // `MAX_SPARSE_CELLS`, or within 100 cells per row of the file.
+    let allowed = entries.len().saturating_mul(100).max(MAX_SPARSE_CELLS);
+    let cells = (max_frame as u128 + 1) * (max_joint as u128 + 1);
+    if cells > allowed as u128 {
         return Err(GeomError::format(
             path,
             format!(
-                "frame index {max_frame} / joint index {max_joint} is implausibly large for {} rows",
+                "frame index {max_frame} and joint index {max_joint} imply {cells} frame × joint \
+                 cells for {} rows; at most {allowed} are allowed ({MAX_SPARSE_CELLS}, or 100 per \
+                 row for longer files)",
                 entries.len()
             ),
         ));
