@@ -49,8 +49,11 @@ pub struct EvalConcreteArgs {
     /// A fixed λ at the 512-px reference scale (the paper's setting; `Lambda::DEFAULT_FIXED`
     /// is 1600) instead of the product's default (`mp_pipeline::Params::default()`: adaptive λ),
     /// which `mp fit` and `mp run` use.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "budget")]
     pub lambda: Option<f64>,
+    /// A parameter budget per clip instead of a price per segment (`mp fit --budget`).
+    #[arg(long)]
+    pub budget: Option<f64>,
     /// Maximum segment length in frames.
     #[arg(long, default_value_t = mp_pipeline::Params::default().analysis.synth.max_segment_frames)]
     pub window: usize,
@@ -556,6 +559,9 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
     let mut base = mp_pipeline::Params::default();
     if let Some(l) = a.lambda {
         base.analysis.synth.lambda = Lambda::fixed(l);
+    }
+    if let Some(b) = a.budget {
+        base.analysis.synth.lambda = Lambda::budget(b);
     }
     base.analysis.synth.max_segment_frames = a.window;
     base.analysis.synth.continuity = a.continuity;

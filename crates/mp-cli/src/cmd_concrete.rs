@@ -19,8 +19,13 @@ pub struct FitArgs {
     pub output: PathBuf,
     /// A fixed segment penalty λ at the 512-px reference scale (the paper's
     /// reference value is 400) instead of the default adaptive λ.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "budget")]
     pub lambda: Option<f64>,
+    /// A parameter budget instead of a price per segment: the most accurate
+    /// program with at most this share of the track's numbers (T·J·D), e.g.
+    /// 0.1 (λ found by bisection: about a dozen fits).
+    #[arg(long)]
+    pub budget: Option<f64>,
     /// Maximum segment length in frames.
     #[arg(long, default_value_t = Params::default().analysis.synth.max_segment_frames)]
     pub window: usize,
@@ -79,6 +84,9 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     let mut params = Params::default();
     if let Some(l) = a.lambda {
         params.analysis.synth.lambda = Lambda::fixed(l);
+    }
+    if let Some(b) = a.budget {
+        params.analysis.synth.lambda = Lambda::budget(b);
     }
     params.analysis.synth.max_segment_frames = a.window;
     params.analysis.synth.continuity = a.continuity;

@@ -44,6 +44,15 @@ fn absurd_sizes_are_errors() {
     ok(&["fit", &p("perf.npz"), "-o", &p("fit.json"), "--quiet"]);
     ok(&["abstract", &p("perf.npz"), "-o", &p("abs.json"), "--quiet"]);
 
+    // A parameter budget outside (0, 1], or below the most compact program.
+    refused(
+        &["fit", &p("perf.npz"), "-o", &p("b.json"), "--budget", "2"],
+        "lambda.ratio",
+    );
+    refused(
+        &["fit", &p("perf.npz"), "-o", &p("b.json"), "--budget", "1e-9"],
+        "most compact program",
+    );
     refused(
         &[
             "execute",

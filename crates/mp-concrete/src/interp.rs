@@ -87,6 +87,8 @@ pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<Inte
             Lambda::Fixed { lambda_ref } => Lambda::Fixed {
                 lambda_ref: lambda_ref / k,
             },
+            // A budget is a share of the (kept) frames' numbers already.
+            Lambda::Budget { ratio } => Lambda::Budget { ratio },
             Lambda::Adaptive {
                 window_frames,
                 min_ref,

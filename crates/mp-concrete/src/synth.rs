@@ -36,6 +36,13 @@
 //!   `λ_ref(f) = clamp(‖C(f)‖_F, min_ref, max_ref)` (default [100, 1600]; a
 //!   window with no such joint gets `max_ref`). A segment `k..n` pays the λ
 //!   of its last frame `n − 1`.
+//! * [`Lambda::Budget`]: a parameter budget instead of a price per segment:
+//!   the program with the smallest fixed λ whose parameters
+//!   ([`Program::n_params`]) are at most `ratio` of the raw numbers `T·J·D`,
+//!   found by bisection on λ (reference scale, [`BUDGET_LAMBDA_RANGE`], steps
+//!   of [`BUDGET_LAMBDA_STEP`]); each step is one synthesis, so this costs
+//!   about a dozen syntheses. A budget below the smallest program's size is an
+//!   error naming both.
 
 use mp_geom::fit::{fit_best_unchecked, ErrorNorm, FitParams};
 use mp_geom::{Primitive, Track};
@@ -63,6 +70,12 @@ pub enum Lambda {
         /// λ in reference px·frames (Euclidean norm). Default 1600.
         lambda_ref: f64,
     },
+    /// The smallest fixed λ whose program has at most `ratio · T·J·D`
+    /// parameters (see the module docs).
+    Budget {
+        /// Program parameters over raw numbers, in (0, 1].
+        ratio: f64,
+    },
     /// λ from the covariance of the keypoints around each frame (see the module docs).
     Adaptive {
         /// Window length in frames (centred on the frame). Default 31.
@@ -89,7 +102,17 @@ impl Lambda {
     pub fn fixed(lambda_ref: f64) -> Self {
         Lambda::Fixed { lambda_ref }
     }
+    /// A parameter budget: at most `ratio` of the raw numbers.
+    pub fn budget(ratio: f64) -> Self {
+        Lambda::Budget { ratio }
+    }
 }
+
+/// The fixed λ (reference scale) a [`Lambda::Budget`] searches between.
+pub const BUDGET_LAMBDA_RANGE: (f64, f64) = (1.0, 1e7);
+/// The bisection of a [`Lambda::Budget`] stops when its bracket is this
+/// narrow (the ratio of its ends).
+pub const BUDGET_LAMBDA_STEP: f64 = 1.02;
 
 impl Default for Lambda {
     fn default() -> Self {
@@ -188,6 +211,14 @@ impl SynthParams {
     pub fn validate(&self) -> Result<()> {
         match self.lambda {
             Lambda::Fixed { lambda_ref } => finite_nonneg("lambda", lambda_ref)?,
+            Lambda::Budget { ratio } => {
+                if !(ratio.is_finite() && ratio > 0.0 && ratio <= 1.0) {
+                    return Err(ConcreteError::param(
+                        "lambda.ratio",
+                        format!("a parameter budget must be in (0, 1], got {ratio}"),
+                    ));
+                }
+            }
             Lambda::Adaptive {
                 window_frames,
                 min_ref,
@@ -347,6 +378,9 @@ pub fn lambda_per_frame(track: &Track, params: &SynthParams, unit_scale: f64) ->
     };
     match params.lambda {
         Lambda::Fixed { lambda_ref } => vec![lambda_ref * factor; t],
+        // Resolved to a fixed λ before any segmentation (`resolve_budget`);
+        // on its own, the upper end of its range (the most compact program).
+        Lambda::Budget { .. } => vec![BUDGET_LAMBDA_RANGE.1 * factor; t],
         Lambda::Adaptive {
             window_frames,
             min_ref,
@@ -532,6 +566,7 @@ fn scaled_fit(params: &SynthParams, unit_scale: f64) -> Result<FitParams> {
 /// with exactly this table.
 pub fn segment_costs(track: &Track, params: &SynthParams) -> Result<CostTable> {
     params.validate()?;
+    let params = &resolve_budget(track, params)?;
     let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
     let unit_scale = params.unit_scale(track);
     let fit = scaled_fit(params, unit_scale)?;
@@ -571,6 +606,7 @@ pub fn segment_exhaustive(track: &Track, params: &SynthParams) -> Result<Segment
 /// The segmentation that [`synthesize`] uses (branch and bound, no cost table).
 pub fn segment(track: &Track, params: &SynthParams) -> Result<Segmentation> {
     params.validate()?;
+    let params = &resolve_budget(track, params)?;
     let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
     let unit_scale = params.unit_scale(track);
     let fit = scaled_fit(params, unit_scale)?;
@@ -614,6 +650,9 @@ fn smooth_segments(
 /// Synthesises a concrete program with all details (segmentation cost, scale, λ).
 pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthesis> {
     params.validate()?;
+    if let Lambda::Budget { ratio } = params.lambda {
+        return synthesize_budget(track, params, ratio).map(|(s, _)| s);
+    }
     let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
     let unit_scale = params.unit_scale(track);
     let fit = scaled_fit(params, unit_scale)?;
@@ -650,6 +689,59 @@ pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthe
         unit_scale,
         lambda,
     })
+}
+
+/// `params` with a [`Lambda::Budget`] replaced by the fixed λ it resolves to.
+fn resolve_budget(track: &Track, params: &SynthParams) -> Result<SynthParams> {
+    Ok(match params.lambda {
+        Lambda::Budget { ratio } => SynthParams {
+            lambda: Lambda::fixed(synthesize_budget(track, params, ratio)?.1),
+            ..params.clone()
+        },
+        _ => params.clone(),
+    })
+}
+
+/// [`Lambda::Budget`]: bisection on a fixed λ (see the module docs); the
+/// synthesis and the λ (reference scale) it used.
+fn synthesize_budget(track: &Track, params: &SynthParams, ratio: f64) -> Result<(Synthesis, f64)> {
+    let raw = (track.n_frames() * track.n_joints() * track.dims()).max(1) as f64;
+    let at = |lambda_ref: f64| {
+        let p = SynthParams {
+            lambda: Lambda::fixed(lambda_ref),
+            ..params.clone()
+        };
+        synthesize_detailed(track, &p).map(|s| {
+            let r = s.program.n_params() as f64 / raw;
+            (s, r)
+        })
+    };
+    let (mut lo, mut hi) = BUDGET_LAMBDA_RANGE;
+    let (first, r_lo) = at(lo)?;
+    if r_lo <= ratio {
+        return Ok((first, lo));
+    }
+    let (mut best, r_hi) = at(hi)?;
+    if r_hi > ratio {
+        return Err(ConcreteError::param(
+            "lambda.ratio",
+            format!(
+                "a parameter budget of {ratio} is below the most compact program of this track \
+                 ({r_hi:.4} of its {raw} numbers at λ = {hi})"
+            ),
+        ));
+    }
+    while hi / lo > BUDGET_LAMBDA_STEP {
+        let mid = (lo * hi).sqrt();
+        let (s, r) = at(mid)?;
+        if r <= ratio {
+            hi = mid;
+            best = s;
+        } else {
+            lo = mid;
+        }
+    }
+    Ok((best, hi))
 }
 
 /// Synthesises a concrete program from a track.

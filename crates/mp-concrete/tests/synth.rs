@@ -196,6 +196,84 @@ fn adaptive_lambda_is_clamped_and_works() {
 }
 
 #[test]
+fn a_parameter_budget_gives_the_finest_program_within_it() {
+    let track = mp_concrete::synthetic::synthetic_track(400, 7).unwrap();
+    let raw = (track.n_frames() * track.n_joints() * track.dims()) as f64;
+    let base = SynthParams {
+        continuity: mp_concrete::Continuity::C0,
+        ..params_px()
+    };
+    let ratio_of = |p: &Program| p.n_params() as f64 / raw;
+    for budget in [0.05, 0.1, 0.2] {
+        let syn = synthesize_detailed(
+            &track,
+            &SynthParams {
+                lambda: Lambda::budget(budget),
+                ..base.clone()
+            },
+        )
+        .unwrap();
+        let r = ratio_of(&syn.program);
+        assert!(r <= budget, "budget {budget}: ratio {r}");
+        // It is the program of the fixed λ it reports (unit scale 1: λ as is).
+        let lambda = syn.lambda[0];
+        assert!(syn.lambda.iter().all(|&l| l == lambda));
+        let fixed = synthesize(
+            &track,
+            &SynthParams {
+                lambda: Lambda::fixed(lambda),
+                ..base.clone()
+            },
+        )
+        .unwrap();
+        assert_eq!(fixed, syn.program);
+        // A 5 % smaller λ (past the bisection's 2 % bracket) no longer fits.
+        let finer = synthesize(
+            &track,
+            &SynthParams {
+                lambda: Lambda::fixed(lambda / 1.05),
+                ..base.clone()
+            },
+        )
+        .unwrap();
+        assert!(
+            ratio_of(&finer) > budget * 0.98,
+            "budget {budget}: λ {lambda} / 1.05 gives {}",
+            ratio_of(&finer)
+        );
+    }
+    // A budget that the finest program of the range (λ = 1) meets gives that
+    // program: the noiseless known program, recovered exactly.
+    let exact = known_program().execute().unwrap();
+    let all = synthesize_detailed(
+        &exact,
+        &SynthParams {
+            lambda: Lambda::budget(0.5),
+            ..base.clone()
+        },
+    )
+    .unwrap();
+    assert_eq!(all.lambda[0], 1.0);
+    assert_eq!(all.program.boundaries(), vec![0, 15, 27, 47]);
+    // A budget below the most compact program, and budgets out of range.
+    for bad in [1e-6, 0.0, -0.1, 1.5, f64::NAN] {
+        let e = synthesize(
+            &track,
+            &SynthParams {
+                lambda: Lambda::budget(bad),
+                ..base.clone()
+            },
+        )
+        .unwrap_err();
+        assert!(
+            matches!(e, ConcreteError::InvalidParam { .. })
+                && e.to_string().contains("lambda.ratio"),
+            "{bad}: {e}"
+        );
+    }
+}
+
+#[test]
 fn execution_at_other_rates() {
     let p = known_program();
     let native = p.execute().unwrap();

@@ -104,9 +104,11 @@ fn extract(
 /// extent sets the scale), `lambda_` a fixed segment penalty at the 512-px
 /// reference (default: adaptive), `max_segment_frames` the longest segment,
 /// `continuity` `"c0"` (consecutive segments share their boundary pose) or
-/// `"none"` (segments fitted independently; default: the library's, C0).
+/// `"none"` (segments fitted independently; default: the library's, C0),
+/// `budget` a parameter budget instead of `lambda_`: the most accurate program
+/// with at most this share of the track's numbers (T·J·D), e.g. 0.1.
 #[pyfunction]
-#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None))]
+#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None, budget=None))]
 fn fit(
     py: Python<'_>,
     track: &PyTrack,
@@ -114,8 +116,18 @@ fn fit(
     lambda_: Option<f64>,
     max_segment_frames: Option<usize>,
     continuity: Option<&str>,
+    budget: Option<f64>,
 ) -> PyResult<PyProgram> {
     let mut params = params_with(None, None, None, false, lambda_, max_segment_frames)?;
+    if let Some(b) = budget {
+        if lambda_.is_some() {
+            return Err(errors::ParamError::new_err(
+                "give either lambda_ or budget, not both",
+            ));
+        }
+        params.analysis.synth.lambda = mp_concrete::Lambda::budget(b);
+        params.validate().map_err(errors::pipeline)?;
+    }
     if let Some(c) = continuity {
         params.analysis.synth.continuity = c
             .parse::<mp_concrete::Continuity>()

@@ -59,6 +59,13 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
     assert c.method == cli["method"] and c.signal == "keypoints"
     # A fixed λ is honoured.
     assert mp.fit(t, lambda_=400.0).n_segments != prog.n_segments
+    # A parameter budget: the same program as `mp fit --budget`, within the budget.
+    small = mp.fit(t, budget=0.05)
+    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "b.txt", "--quiet", "--budget", "0.05")
+    assert small.text == (tmp_path / "b.txt").read_text()
+    assert small.n_params <= 0.05 * t.positions.size
+    with pytest.raises(mp.ParamError):
+        mp.fit(t, budget=1.5)
 
 
 def test_counts_from_video_equal_the_cli(data, mp_bin):
