@@ -50,7 +50,14 @@ fn absurd_sizes_are_errors() {
         "lambda.ratio",
     );
     refused(
-        &["fit", &p("perf.npz"), "-o", &p("b.json"), "--budget", "1e-9"],
+        &[
+            "fit",
+            &p("perf.npz"),
+            "-o",
+            &p("b.json"),
+            "--budget",
+            "1e-9",
+        ],
         "most compact program",
     );
     refused(
