@@ -105,6 +105,25 @@ fn absurd_sizes_are_errors() {
         "-o",
         &p("sym.json"),
     ]);
+    for (flag, param) in [
+        ("--population", "ga.population"),
+        ("--sa-iterations", "sa.iterations"),
+    ] {
+        refused(
+            &[
+                "grammar",
+                "symbols",
+                &p("perf.npz"),
+                "--k",
+                "4",
+                flag,
+                "1000000000000",
+                "-o",
+                &p("x.json"),
+            ],
+            param,
+        );
+    }
     ok(&["grammar", "learn", &p("sym.json"), "-o", &p("gram.json")]);
     refused(
         &[

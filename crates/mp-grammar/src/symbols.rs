@@ -133,6 +133,17 @@ impl Default for SaParams {
 /// distinct units).
 pub const MAX_SYMBOLS: usize = 10_000;
 
+/// The largest GA population [`SymbolParams::validate`] accepts: 10 000
+/// genomes (100 times the paper's; each genome holds one bit per candidate
+/// cut, and every genome is scored each generation).
+pub const MAX_POPULATION: usize = 10_000;
+
+/// The most iterations [`SymbolParams::validate`] accepts for the GA's
+/// generations, the simulated annealing (`iterations`, `max_iterations`) and
+/// k-medoids: 1 million (the defaults are 500, 1 000 / 5 000 and tens), so
+/// that an absurd count is an error rather than a run that never ends.
+pub const MAX_ITERATIONS: usize = 1_000_000;
+
 /// The longest segment window (`candidate_step_frames`, `min_segment_frames`,
 /// `max_segment_frames`) [`SymbolParams::validate`] accepts: 10 million
 /// frames, the most frames a track of one joint may have
@@ -252,6 +263,25 @@ impl SymbolParams {
         let ga = &self.ga;
         if ga.population < 2 {
             return Err(GrammarError::param("ga.population", "must be ≥ 2"));
+        }
+        if ga.population > MAX_POPULATION {
+            return Err(GrammarError::param(
+                "ga.population",
+                format!("{} is too large: at most {MAX_POPULATION}", ga.population),
+            ));
+        }
+        for (name, v) in [
+            ("kmedoids.max_iter", self.kmedoids.max_iter),
+            ("ga.generations", ga.generations),
+            ("sa.iterations", self.sa.iterations),
+            ("sa.max_iterations", self.sa.max_iterations),
+        ] {
+            if v > MAX_ITERATIONS {
+                return Err(GrammarError::param(
+                    name,
+                    format!("{v} is too large: at most {MAX_ITERATIONS}"),
+                ));
+            }
         }
         if ga.elite >= ga.population {
             return Err(GrammarError::param(

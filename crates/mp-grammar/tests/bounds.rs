@@ -1,5 +1,5 @@
 //! Absurd user-given sizes (segments, derivation depth and length, K,
-//! segment windows) are an error naming the parameter, never an allocation
+//! segment windows, GA population, iteration counts) are an error naming the parameter, never an allocation
 //! failure.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
@@ -7,7 +7,8 @@ use mp_geom::{Skeleton, Track, Units};
 use mp_grammar::derive::{derive_at_least, MAX_DEPTH, MAX_TERMINALS};
 use mp_grammar::objective::ClusterQuality;
 use mp_grammar::symbols::{
-    SearchStats, SymbolParams, SymbolSegment, SymbolString, MAX_SEGMENT_FRAMES, MAX_SYMBOLS,
+    GaParams, SaParams, SearchStats, SymbolParams, SymbolSegment, SymbolString, MAX_ITERATIONS,
+    MAX_POPULATION, MAX_SEGMENT_FRAMES, MAX_SYMBOLS,
 };
 use mp_grammar::synth::{MAX_FRAME_JOINTS, MAX_SEGMENTS};
 use mp_grammar::{DeriveParams, Fsm, FsmWeighting, Grammar, GrammarError, StitchParams, Stitcher};
@@ -122,4 +123,39 @@ fn symbol_params_are_bounded() {
         ..SymbolParams::default()
     };
     assert_param(p.validate().unwrap_err(), "candidate_step_frames");
+    // The GA's population (an allocation per genome) and the iteration counts.
+    let p = SymbolParams {
+        ga: GaParams {
+            population: 1_000_000_000_000,
+            ..GaParams::default()
+        },
+        ..SymbolParams::default()
+    };
+    assert_param(p.validate().unwrap_err(), "ga.population");
+    let p = SymbolParams {
+        ga: GaParams {
+            generations: MAX_ITERATIONS + 1,
+            ..GaParams::default()
+        },
+        ..SymbolParams::default()
+    };
+    assert_param(p.validate().unwrap_err(), "ga.generations");
+    let p = SymbolParams {
+        sa: SaParams {
+            iterations: usize::MAX,
+            ..SaParams::default()
+        },
+        ..SymbolParams::default()
+    };
+    assert_param(p.validate().unwrap_err(), "sa.iterations");
+    SymbolParams {
+        ga: GaParams {
+            population: MAX_POPULATION,
+            generations: MAX_ITERATIONS,
+            ..GaParams::default()
+        },
+        ..SymbolParams::default()
+    }
+    .validate()
+    .unwrap();
 }
