@@ -3,7 +3,7 @@
 
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
-use numpy::{PyArray2, PyArray3, PyReadonlyArrayDyn, ToPyArray};
+use numpy::{AllowTypeChange, PyArray2, PyArray3, PyArrayLikeDyn, ToPyArray};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
@@ -64,7 +64,8 @@ fn skeleton_for(
 
 #[pymethods]
 impl PyTrack {
-    /// Builds a track from numpy arrays (copied): `positions` T × J × D
+    /// Builds a track from numpy arrays or nested lists of any numeric type
+    /// and memory layout (copied as float64): `positions` T × J × D
     /// (D = 2 or 3; any D for `units="unitless"`), `confidence` T × J
     /// (default: all 1; NaN positions become missing joints), `fps`,
     /// `skeleton` (a built-in name, default `generic`), `joint_names`,
@@ -72,9 +73,9 @@ impl PyTrack {
     #[staticmethod]
     #[pyo3(signature = (positions, fps, confidence=None, skeleton=None, joint_names=None, units="px"))]
     fn from_numpy(
-        positions: PyReadonlyArrayDyn<'_, f64>,
+        positions: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
         fps: f64,
-        confidence: Option<PyReadonlyArrayDyn<'_, f64>>,
+        confidence: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
         skeleton: Option<&str>,
         joint_names: Option<Vec<String>>,
         units: &str,
@@ -87,11 +88,14 @@ impl PyTrack {
                 p.shape()
             )));
         }
-        let (t, j, d) = (p.shape()[0], p.shape()[1], p.shape()[2]);
+        let (t, j) = (p.shape()[0], p.shape()[1]);
+        // Any memory layout (a transposed or sliced array) is copied into
+        // the standard one.
         let pos: Array3<f64> = p
-            .to_owned()
-            .into_shape_with_order((t, j, d))
-            .map_err(|e| errors::TrackError::new_err(e.to_string()))?;
+            .into_dimensionality::<ndarray::Ix3>()
+            .map_err(|e| errors::TrackError::new_err(e.to_string()))?
+            .as_standard_layout()
+            .into_owned();
         let conf: Option<Array2<f64>> = match confidence {
             Some(c) => {
                 let c = c.as_array();
@@ -102,9 +106,10 @@ impl PyTrack {
                     )));
                 }
                 Some(
-                    c.to_owned()
-                        .into_shape_with_order((t, j))
-                        .map_err(|e| errors::TrackError::new_err(e.to_string()))?,
+                    c.into_dimensionality::<ndarray::Ix2>()
+                        .map_err(|e| errors::TrackError::new_err(e.to_string()))?
+                        .as_standard_layout()
+                        .into_owned(),
                 )
             }
             None => None,

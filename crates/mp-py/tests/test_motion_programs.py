@@ -29,6 +29,17 @@ def test_track_arrays_and_round_trips(performer, tmp_path):
     # numpy in and out.
     u = mp.Track.from_numpy(t.positions, t.fps, confidence=t.confidence, skeleton="coco17")
     np.testing.assert_array_equal(u.positions, t.positions)
+    # float32, integers, a transposed (non-contiguous) array and nested lists read the same.
+    small = np.round(t.positions[:20])
+    for like in (
+        small.astype(np.float32),
+        small.astype(np.int32),
+        np.ascontiguousarray(small.transpose(1, 0, 2)).transpose(1, 0, 2),
+        small.tolist(),
+    ):
+        w = mp.Track.from_numpy(like, t.fps, confidence=t.confidence[:20].astype(np.float32))
+        np.testing.assert_array_equal(w.positions, small)
+        np.testing.assert_array_equal(w.confidence, t.confidence[:20].astype(np.float32))
     # Pickle (through the binary form) and files.
     v = pickle.loads(pickle.dumps(t))
     np.testing.assert_array_equal(v.positions, t.positions)
