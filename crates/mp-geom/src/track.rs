@@ -41,6 +41,11 @@ impl Units {
     }
 }
 
+/// The largest coordinate magnitude a [`Track`] holds: 10^100 (any unit).
+/// Fits and metrics square distances, which overflow beyond about 10^154;
+/// a larger finite coordinate is an error, not a missing joint.
+pub const MAX_COORDINATE: f64 = 1e100;
+
 /// A motion track: positions `T × J × D` (D = 2 pixels or 3 metres),
 /// per-joint confidence in `[0, 1]` (0 = missing), a frame rate and a skeleton.
 ///
@@ -58,7 +63,8 @@ pub struct Track {
 
 impl Track {
     /// Builds a track, checking shapes and turning non-finite positions into
-    /// missing joints (confidence 0). Confidence values are clamped to [0, 1];
+    /// missing joints (confidence 0); a finite coordinate beyond
+    /// ±[`MAX_COORDINATE`] is an error. Confidence values are clamped to [0, 1];
     /// NaN confidence counts as 0.
     pub fn new(
         positions: Array3<f64>,
@@ -112,10 +118,21 @@ impl Track {
         let mut positions = positions;
         for ti in 0..t {
             for ji in 0..j {
-                let finite = positions
-                    .slice(s![ti, ji, ..])
+                let row = positions.slice(s![ti, ji, ..]);
+                if let Some(v) = row
                     .iter()
-                    .all(|v| v.is_finite());
+                    .find(|v| v.is_finite() && v.abs() > MAX_COORDINATE)
+                {
+                    return Err(GeomError::param(
+                        "positions",
+                        format!(
+                            "{v:e} (joint `{}`, frame {ti}) is beyond ±{MAX_COORDINATE:e}: \
+                             squared distances would overflow",
+                            skeleton.joints.get(ji).map_or("?", String::as_str)
+                        ),
+                    ));
+                }
+                let finite = row.iter().all(|v| v.is_finite());
                 if !finite {
                     confidence[[ti, ji]] = 0.0;
                     positions.slice_mut(s![ti, ji, ..]).fill(0.0);

@@ -97,3 +97,19 @@ fn sparse_csv_implying_too_many_cells_is_an_error() {
     let t = track_from_csv_str(ok, Path::new("g.csv"), &ReadOptions::default()).unwrap();
     assert_eq!((t.n_frames(), t.n_joints()), (100_000, 1));
 }
+
+/// A coordinate of 10^300 is finite, so it used to be kept; every fit then
+/// squared it to infinity ("segment cost … is NaN") and counting found
+/// nothing. It is now an error naming the value, the joint and the frame.
+#[test]
+fn coordinates_beyond_the_limit_are_an_error() {
+    let csv = "frame,joint,x,y,score\n0,0,1,2,1\n1,0,1e300,2,1\n";
+    let e = track_from_csv_str(csv, Path::new("f.csv"), &ReadOptions::default()).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("1e300") && msg.contains("frame 1") && msg.contains("1e100"),
+        "{msg}"
+    );
+    let ok = "frame,joint,x,y,score\n0,0,1,2,1\n1,0,1e99,2,1\n";
+    assert!(track_from_csv_str(ok, Path::new("g.csv"), &ReadOptions::default()).is_ok());
+}

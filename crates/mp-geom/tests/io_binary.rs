@@ -270,7 +270,7 @@ proptest! {
         fps in 0.5f64..500.0,
     ) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let specials = [0.0, -0.0, f64::MIN_POSITIVE, 5e-324, f64::MAX, -1e300];
+        let specials = [0.0, -0.0, f64::MIN_POSITIVE, 5e-324, mp_geom::track::MAX_COORDINATE, -1e100];
         let pos = Array3::from_shape_fn((t, j, d), |_| {
             if rng.random_bool(0.2) {
                 specials[rng.random_range(0..specials.len())]
