@@ -606,7 +606,10 @@ pub fn segment_exhaustive(track: &Track, params: &SynthParams) -> Result<Segment
 /// The segmentation that [`synthesize`] uses (branch and bound, no cost table).
 pub fn segment(track: &Track, params: &SynthParams) -> Result<Segmentation> {
     params.validate()?;
-    let params = &resolve_budget(track, params)?;
+    if let Lambda::Budget { ratio } = params.lambda {
+        // The bisection has segmented at the λ it chose already.
+        return synthesize_budget(track, params, ratio).map(|(s, _)| s.segmentation);
+    }
     let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
     let unit_scale = params.unit_scale(track);
     let fit = scaled_fit(params, unit_scale)?;

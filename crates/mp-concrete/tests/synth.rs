@@ -227,6 +227,16 @@ fn a_parameter_budget_gives_the_finest_program_within_it() {
         )
         .unwrap();
         assert_eq!(fixed, syn.program);
+        // `segment` with the budget gives the same segmentation.
+        let seg = mp_concrete::segment(
+            &track,
+            &SynthParams {
+                lambda: Lambda::budget(budget),
+                ..base.clone()
+            },
+        )
+        .unwrap();
+        assert_eq!(seg.boundaries, syn.segmentation.boundaries);
         // A 5 % smaller λ (past the bisection's 2 % bracket) no longer fits.
         let finer = synthesize(
             &track,
