@@ -2,7 +2,7 @@
 //! second bound for the circle (one pass), then the exact circle of
 //! [`mp_geom::fit::fit_circle`] where it can still win.
 
-use mp_geom::fit::{bullock_circle, FitParams};
+use mp_geom::fit::{bullock_circle, unwrapped_angles, FitParams};
 
 use super::bounds::{euclid_lb, speed_lb, Quick};
 use super::moments::Acc2;
@@ -221,28 +221,19 @@ pub(super) fn circle2(
     let (cx, cy) = (mx + uc, my + vc);
     // unwrapped angles (degrees) against segment time, least-squares line
     let (mut st, mut sth, mut stt, mut stth) = (0.0, 0.0, 0.0, 0.0);
-    let mut prev: Option<f64> = None;
     let t_ref = ((first + last) / 2) as f64;
-    for i in first..=last {
-        let w = wts[i];
-        if w == 0.0 {
-            continue;
-        }
-        let mut th = (pts[i][1] - cy).atan2(pts[i][0] - cx).to_degrees();
-        if let Some(p) = prev {
-            let turns = (p - th) / 360.0;
-            // `round` is a library call; it is 0 for |turns| < ½.
-            if turns.abs() >= 0.5 {
-                th += 360.0 * turns.round();
-            }
-        }
-        prev = Some(th);
-        let t = i as f64 - t_ref;
-        st += w * t;
-        sth += w * th;
-        stt += w * t * t;
-        stth += w * t * th;
-    }
+    unwrapped_angles(
+        last + 1 - first,
+        Some(&wts[first..=last]),
+        |i| (pts[first + i][0] - cx, pts[first + i][1] - cy),
+        |i, w, th| {
+            let t = (first + i) as f64 - t_ref;
+            st += w * t;
+            sth += w * th;
+            stt += w * t * t;
+            stth += w * t * th;
+        },
+    );
     let tbar = st / w_sum;
     let thbar = sth / w_sum;
     let vtt = stt - st * tbar;

@@ -93,9 +93,12 @@ pub fn bullock_circle(
     bullock(n, weights, w_sum, coord).map(|c| (c.uc, c.vc, c.r))
 }
 
-/// Calls `f(i, θᵢ)` for every valid frame with the angle of point `i` around
-/// the centre, in degrees, unwrapped frame to frame.
-fn unwrapped_angles(
+/// Calls `f(i, wᵢ, θᵢ)` for every point `i < n` of non-zero weight (`None`:
+/// all 1) with its angle around the centre, in degrees, from its coordinates
+/// relative to the centre `local(i)`, unwrapped point to point. The circle fit
+/// uses it, and so does `mp-concrete`'s branch-and-bound segmentation, so that
+/// both fit the same angles.
+pub fn unwrapped_angles(
     n: usize,
     weights: Option<&[f64]>,
     local: impl Fn(usize) -> (f64, f64),
@@ -110,7 +113,11 @@ fn unwrapped_angles(
         let (a, b) = local(i);
         let mut th = b.atan2(a).to_degrees();
         if let Some(p) = prev {
-            th += 360.0 * ((p - th) / 360.0).round();
+            let turns = (p - th) / 360.0;
+            // `round` is a library call; it is 0 for |turns| < ½.
+            if turns.abs() >= 0.5 {
+                th += 360.0 * turns.round();
+            }
         }
         prev = Some(th);
         f(i, w, th);

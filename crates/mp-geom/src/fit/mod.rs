@@ -60,7 +60,7 @@ mod circle;
 mod input;
 pub mod prefix;
 
-pub use circle::bullock_circle;
+pub use circle::{bullock_circle, unwrapped_angles};
 
 use crate::error::{GeomError, Result};
 use crate::primitive::{Primitive, PrimitiveKind};
