@@ -38,6 +38,86 @@ use serde_json::{json, Map, Value};
 /// COCO-17 elbows and wrists.
 const ARM_JOINTS: [usize; 4] = [7, 8, 9, 10];
 
+/// BlazePose-33 elbows and wrists (the same joints as [`ARM_JOINTS`]).
+const BLAZE_ARM_JOINTS: [usize; 4] = [13, 14, 15, 16];
+
+/// KD with the truth's crops: on each true frame with a pose, the crop the
+/// tracker used there and the elbows and wrists found in it. A rebuilt
+/// frame is scored by running the landmark model on the same crop, so the
+/// difference comes from the pixels alone, not from where each tracker
+/// happens to have placed its crop (on the same pixels, two tracking
+/// histories can give arms 100 px apart).
+struct CropTruth {
+    model: mp_pose::BlazePose,
+    rois: Vec<Option<mp_pose::Roi>>,
+    arms: Vec<[Option<[f64; 2]>; 4]>,
+}
+
+impl CropTruth {
+    /// BlazePose with the product's settings over the first `n` frames.
+    fn start(video: &Path, n: usize) -> anyhow::Result<Option<Self>> {
+        let params = Params::default();
+        let kind = match params.pose.model {
+            mp_pose::ModelChoice::Full => mp_pose::LandmarkModelKind::Full,
+            mp_pose::ModelChoice::Lite => mp_pose::LandmarkModelKind::Lite,
+            mp_pose::ModelChoice::Heavy => mp_pose::LandmarkModelKind::Heavy,
+            mp_pose::ModelChoice::MoveNet => return Ok(None),
+        };
+        let mut model = mp_pose::BlazePose::new(mp_pose::BlazePoseParams {
+            model: kind,
+            session: SessionParams {
+                intra_threads: params.pose.threads,
+                ..Default::default()
+            },
+            recover_s: params.pose.recover_s,
+            ..Default::default()
+        })?;
+        let (mut rois, mut arms) = (Vec::new(), Vec::new());
+        for f in VideoReader::open(video)?.take(n) {
+            let (pose, _) = model.process(&f?)?;
+            match pose {
+                Some(p) => {
+                    rois.push(p.roi);
+                    arms.push(
+                        BLAZE_ARM_JOINTS
+                            .map(|j| (p.visibility[j] > MIN_CONF).then_some(p.keypoints_px[j])),
+                    );
+                }
+                None => {
+                    rois.push(None);
+                    arms.push([None; 4]);
+                }
+            }
+        }
+        Ok(Some(CropTruth { model, rois, arms }))
+    }
+
+    /// Sum of distances and pairs of frame `t` rebuilt as `rgb`.
+    fn score(&mut self, t: usize, rgb: &[u8], w: usize, h: usize) -> anyhow::Result<(f64, usize)> {
+        let Some(Some(roi)) = self.rois.get(t).copied() else {
+            return Ok((0.0, 0));
+        };
+        let view = mp_pose::imageops::RgbView {
+            width: w,
+            height: h,
+            data: rgb,
+        };
+        let out = self.model.landmarks_mut().run(view, &roi)?;
+        let (mut s, mut n) = (0.0, 0usize);
+        for (k, &j) in BLAZE_ARM_JOINTS.iter().enumerate() {
+            let (Some(q), Some(lm)) = (self.arms[t][k], out.landmarks.get(j)) else {
+                continue;
+            };
+            if lm.visibility as f64 > MIN_CONF {
+                let (p, _) = mp_pose::blazepose::landmarks::project(&roi, lm);
+                s += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                n += 1;
+            }
+        }
+        Ok((s, n))
+    }
+}
+
 /// Confidence above which a joint is scored.
 const MIN_CONF: f64 = mp_video::motion::MIN_CONFIDENCE;
 
@@ -63,10 +143,15 @@ pub struct EvalInterpolationArgs {
     /// Output JSON.
     #[arg(long)]
     pub out: PathBuf,
+    /// Also write the pose tracks (COCO-17) of the true frames
+    /// (`<video>_truth.npz`) and of each rebuilt sequence
+    /// (`<video>_x<factor>_<method>.npz`) to this folder.
+    #[arg(long)]
+    pub tracks_dir: Option<PathBuf>,
     /// Settings other than the product's, for choosing defaults on a
     /// validation set: `warp=field|bones`, `blend_power=P`,
-    /// `body_radius_frac=R`, `sigma_frac=S`, `agree_tau=T`, `max_bulge=B`
-    /// (repeatable).
+    /// `body_radius_frac=R`, `sigma_frac=S`, `agree_tau=T`, `max_bulge=B`,
+    /// `recover_s=S` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
 }
@@ -91,6 +176,7 @@ fn interp_params(set: &[String]) -> anyhow::Result<InterpParams> {
             "sigma_frac" => p.sigma_frac = v.parse()?,
             "agree_tau" => p.agree_tau = v.parse()?,
             "max_bulge" => p.max_bulge = v.parse()?,
+            "recover_s" => p.recover_s = v.parse()?,
             _ => bail!("--set {k}: unknown setting"),
         }
     }
@@ -396,10 +482,12 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
         (usize, String),
         std::collections::BTreeMap<String, f64>,
     > = Default::default();
+    let mut crop_by = kd_by.clone();
     for video in &videos {
         let name = stem(video);
         let (truth, info) = truth_pose(video, a.max_frames)?;
         let (w, h) = (info.width, info.height);
+        let mut crops = CropTruth::start(video, a.max_frames)?;
         let mut vres = Map::new();
         for &k in &a.factors {
             let kept = tmp.join(format!("{name}_k{k}.mkv"));
@@ -413,10 +501,7 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
             if methods.contains(&InterpMethod::Program) {
                 // The poses the program-guided frames are warped to, and the
                 // kept keypoints interpolated linearly, against the truth.
-                let guide = Guide::fit(&kept, &params).map(|mut g| {
-                    g.max_bulge = iparams.max_bulge;
-                    g
-                });
+                let guide = Guide::fit(&kept, &params, &iparams);
                 let (kd_target, kd_lin) = match guide {
                     Ok(g) => target_kd(&g, &truth, k, &dropped)?,
                     // No person: the program method fails below and is reported.
@@ -439,6 +524,7 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                 let mut truth_frames = VideoReader::open(video)?;
                 let mut ps = PoseStream::start(w, h, info.fps)?;
                 let mut scores = Scores::default();
+                let (mut crop_sum, mut crop_n) = (0.0, 0usize);
                 let mut t = 0usize;
                 let r = interpolate_frames(&kept, k, method, &iparams, &params, |rgb| {
                     let tf = truth_frames.next().ok_or_else(|| {
@@ -451,6 +537,13 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                         scores
                             .add(rgb, &tf.rgb, w, h, pbox)
                             .map_err(|e| mp_video::VideoError::Edit(e.to_string()))?;
+                        if let Some(c) = crops.as_mut() {
+                            let (s, n) = c
+                                .score(t, rgb, w, h)
+                                .map_err(|e| mp_video::VideoError::Edit(e.to_string()))?;
+                            crop_sum += s;
+                            crop_n += n;
+                        }
                     }
                     t += 1;
                     Ok(())
@@ -467,10 +560,23 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                     }
                 };
                 let pose = pose?;
+                if let Some(d) = &a.tracks_dir {
+                    std::fs::create_dir_all(d)?;
+                    mp_geom::io::write_track(
+                        d.join(format!("{name}_x{k}_{}.npz", method.as_str())),
+                        &pose,
+                    )?;
+                    mp_geom::io::write_track(d.join(format!("{name}_truth.npz")), &truth)?;
+                }
                 let (kd_arms, n_arms) = kd(&pose, &truth, &dropped, Some(&ARM_JOINTS));
                 let (kd_all, _) = kd(&pose, &truth, &dropped, None);
+                let kd_crop = if crop_n > 0 {
+                    crop_sum / crop_n as f64
+                } else {
+                    f64::NAN
+                };
                 eprintln!(
-                    "KD arms {kd_arms:.2} px, PSNR {:.2} dB ({:.2} box), SSIM {:.4} ({:.4} box), {:.1} s",
+                    "KD arms {kd_arms:.2} px ({kd_crop:.2} in the truth's crops), PSNR {:.2} dB ({:.2} box), SSIM {:.4} ({:.4} box), {:.1} s",
                     mean(&scores.psnr),
                     mean(&scores.psnr_box),
                     mean(&scores.ssim),
@@ -482,6 +588,8 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                     json!({
                         "kd_arms_px": num(kd_arms),
                         "kd_arms_pairs": n_arms,
+                        "kd_arms_truth_crops_px": num(kd_crop),
+                        "kd_arms_truth_crops_pairs": crop_n,
                         "kd_all_px": num(kd_all),
                         "psnr_db": num(mean(&scores.psnr)),
                         "ssim": num(mean(&scores.ssim)),
@@ -496,6 +604,10 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                     .entry((k, method.as_str().to_string()))
                     .or_default()
                     .insert(name.clone(), kd_arms);
+                crop_by
+                    .entry((k, method.as_str().to_string()))
+                    .or_default()
+                    .insert(name.clone(), kd_crop);
                 let e = pooled.entry((k, method.as_str().to_string())).or_default();
                 if kd_arms.is_finite() {
                     e.0.push(kd_arms);
@@ -544,19 +656,28 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
             .map(|m| (k, m.as_str().to_string()))
             .collect();
         let (means, n) = common_kd(&kd_by, &keys);
-        let text: Vec<String> = keys
-            .iter()
-            .zip(&means)
-            .map(|((_, m), x)| format!("{m} {x:.2}"))
-            .collect();
+        let (crop_means, crop_n) = common_kd(&crop_by, &keys);
+        let text = |means: &[f64]| -> String {
+            keys.iter()
+                .zip(means)
+                .map(|((_, m), x)| format!("{m} {x:.2}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
         println!(
             "{k:>4}×  KD arms over the {n} videos where every method has one: {}",
-            text.join(", ")
+            text(&means)
         );
-        for ((_, m), x) in keys.iter().zip(&means) {
+        println!(
+            "{k:>4}×  KD arms in the truth's crops, over the {crop_n} videos where every method has one: {}",
+            text(&crop_means)
+        );
+        for (((_, m), x), c) in keys.iter().zip(&means).zip(&crop_means) {
             if let Some(Value::Object(o)) = summary.get_mut(&format!("x{k}/{m}")) {
                 o.insert("kd_arms_common_px".into(), num(*x));
                 o.insert("kd_common_videos".into(), json!(n));
+                o.insert("kd_arms_truth_crops_common_px".into(), num(*c));
+                o.insert("kd_truth_crops_common_videos".into(), json!(crop_n));
             }
         }
     }

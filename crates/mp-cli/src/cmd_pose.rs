@@ -8,7 +8,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use mp_geom::{Track, Units};
 use mp_pose::draw::{contact_sheet, draw_pose, resize, Canvas, ContactSheetParams, DrawStyle};
-use mp_pose::extract::{extract, open_estimator, ExtractOptions, ModelChoice, SmoothingParams};
+use mp_pose::extract::{
+    extract, open_estimator_with, ExtractOptions, ModelChoice, SmoothingParams,
+};
 use mp_pose::video::{open_source, VideoWriter};
 use mp_pose::SessionParams;
 
@@ -35,6 +37,11 @@ pub struct ExtractArgs {
     /// ONNX Runtime threads.
     #[arg(long, default_value_t = SessionParams::default().intra_threads)]
     pub threads: usize,
+    /// BlazePose, video: after the tracked person is lost, the detector runs
+    /// on the same frame and, when it finds no one, the region of the last
+    /// pose is tried again for this many seconds (0: MediaPipe's tracking).
+    #[arg(long, value_name = "SECONDS", default_value_t = mp_pose::BlazePoseParams::default().recover_s)]
+    pub recover: f64,
     /// Only the first N frames.
     #[arg(long)]
     pub max_frames: Option<usize>,
@@ -70,12 +77,13 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
     }
     let source = open_source(&a.video).map_err(pose_err)?;
-    let mut est = open_estimator(
+    let mut est = open_estimator_with(
         model,
         SessionParams {
             intra_threads: a.threads,
             ..Default::default()
         },
+        a.recover,
     )
     .map_err(pose_err)?;
     let total = match (source.frame_count, a.max_frames) {

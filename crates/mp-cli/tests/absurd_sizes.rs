@@ -138,3 +138,18 @@ fn absurd_sizes_are_errors() {
         "segments",
     );
 }
+
+#[test]
+fn a_negative_or_endless_recovery_time_is_an_error() {
+    let video = mp_geom::data_or_return!("golfdb/golf_swing.mp4");
+    let video = video.to_string_lossy().into_owned();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("t.npz").to_string_lossy().into_owned();
+    for bad in ["--recover=-1", "--recover=NaN", "--recover=inf"] {
+        refused(
+            &["extract", &video, "-o", &out, bad, "--quiet"],
+            "recover_s",
+        );
+    }
+    assert!(!tmp.path().join("t.npz").exists());
+}

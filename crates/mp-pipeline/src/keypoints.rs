@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use mp_geom::{CancelToken, Track};
 use mp_pose::decode::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
-use mp_pose::extract::{extract, open_estimator, ExtractOptions};
+use mp_pose::extract::{extract, open_estimator_with, ExtractOptions};
 use mp_pose::thumbs::thumbnail_track;
 use mp_pose::video::{VideoInfo, VideoReader};
 use mp_pose::SessionParams;
@@ -44,26 +44,28 @@ pub struct OverlayFrames {
 /// state is reset for each video).
 #[derive(Default)]
 pub struct ModelSlot {
-    loaded: Option<(ModelChoice, usize, Box<dyn PoseEstimator + Send>)>,
+    loaded: Option<(ModelChoice, usize, u64, Box<dyn PoseEstimator + Send>)>,
 }
 
 impl ModelSlot {
     /// The model for `params`, opened when not loaded yet (or loaded with other settings).
     fn get(&mut self, params: &Params) -> Result<&mut (dyn PoseEstimator + Send)> {
         let (model, threads) = (params.pose.model, params.pose.threads.max(1));
-        let fits = matches!(&self.loaded, Some((m, t, _)) if *m == model && *t == threads);
+        let recover = params.pose.recover_s.to_bits();
+        let fits = matches!(&self.loaded, Some((m, t, r, _)) if *m == model && *t == threads && *r == recover);
         if !fits {
-            let est = open_estimator(
+            let est = open_estimator_with(
                 model,
                 SessionParams {
                     intra_threads: threads,
                     ..Default::default()
                 },
+                params.pose.recover_s,
             )?;
-            self.loaded = Some((model, threads, est));
+            self.loaded = Some((model, threads, recover, est));
         }
         match self.loaded.as_mut() {
-            Some((_, _, est)) => Ok(est.as_mut()),
+            Some((_, _, _, est)) => Ok(est.as_mut()),
             None => Err(PipelineError::stage("loading the pose model", "no model")),
         }
     }

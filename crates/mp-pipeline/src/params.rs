@@ -21,6 +21,10 @@ pub struct PoseParams {
     /// Side of the grey frame thumbnails (cells) that counting reads where
     /// no person is found. Default 32.
     pub thumbnail_size: usize,
+    /// BlazePose: seconds after a lost person during which the region of
+    /// the last pose is tried again (`mp_pose::BlazePoseParams::recover_s`).
+    /// Default 0, MediaPipe's tracking.
+    pub recover_s: f64,
 }
 
 impl Default for PoseParams {
@@ -31,6 +35,7 @@ impl Default for PoseParams {
             all_joints: false,
             max_frames: None,
             thumbnail_size: mp_pose::thumbs::DEFAULT_THUMBNAIL_SIZE,
+            recover_s: mp_pose::BlazePoseParams::default().recover_s,
         }
     }
 }
@@ -97,6 +102,15 @@ impl Params {
             return Err(PipelineError::param(
                 "pose.max_frames",
                 "must be at least 1",
+            ));
+        }
+        if !(self.pose.recover_s.is_finite() && self.pose.recover_s >= 0.0) {
+            return Err(PipelineError::param(
+                "pose.recover_s",
+                format!(
+                    "must be a finite number of seconds ≥ 0, got {}",
+                    self.pose.recover_s
+                ),
             ));
         }
         if !(1..=256).contains(&self.pose.thumbnail_size) {

@@ -62,6 +62,17 @@ pub fn open_estimator(
     model: ModelChoice,
     session: SessionParams,
 ) -> Result<Box<dyn PoseEstimator + Send>> {
+    open_estimator_with(model, session, BlazePoseParams::default().recover_s)
+}
+
+/// [`open_estimator`] with BlazePose's recovery after a lost person
+/// ([`BlazePoseParams::recover_s`], seconds; MoveNet has no tracking and
+/// ignores it).
+pub fn open_estimator_with(
+    model: ModelChoice,
+    session: SessionParams,
+    recover_s: f64,
+) -> Result<Box<dyn PoseEstimator + Send>> {
     let lm = match model {
         ModelChoice::Full => LandmarkModelKind::Full,
         ModelChoice::Lite => LandmarkModelKind::Lite,
@@ -76,6 +87,7 @@ pub fn open_estimator(
     Ok(Box::new(BlazePose::new(BlazePoseParams {
         model: lm,
         session,
+        recover_s,
         ..Default::default()
     })?))
 }

@@ -41,8 +41,8 @@ pub mod video;
 pub use blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
 pub use error::{PoseError, Result};
 pub use extract::{
-    extract, extract_file, open_estimator, ExtractOptions, Extraction, ModelChoice, PoseSmoother,
-    SmoothingParams,
+    extract, extract_file, open_estimator, open_estimator_with, ExtractOptions, Extraction,
+    ModelChoice, PoseSmoother, SmoothingParams,
 };
 pub use imageops::Roi;
 pub use movenet::{MoveNet, MoveNetParams};

@@ -66,8 +66,11 @@ fn read_track(py: Python<'_>, path: PathBuf) -> PyResult<PyTrack> {
 
 /// Keypoints of a video (as `mp extract`, COCO-17 joints unless
 /// `all_joints`): BlazePose `full` (default), `lite`, or `movenet`.
+/// `recover_s` (BlazePose): after the tracked person is lost, the seconds
+/// during which the region of the last pose is tried again (default 0,
+/// MediaPipe's tracking).
 #[pyfunction]
-#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false))]
+#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None))]
 fn extract(
     py: Python<'_>,
     video: PathBuf,
@@ -75,8 +78,13 @@ fn extract(
     max_frames: Option<usize>,
     threads: Option<usize>,
     all_joints: bool,
+    recover_s: Option<f64>,
 ) -> PyResult<PyTrack> {
-    let params = params_with(Some(model), threads, max_frames, all_joints, None, None)?;
+    let mut params = params_with(Some(model), threads, max_frames, all_joints, None, None)?;
+    if let Some(r) = recover_s {
+        params.pose.recover_s = r;
+        params.validate().map_err(errors::pipeline)?;
+    }
     let input = Input::open(&video, None).map_err(errors::pipeline)?;
     if !matches!(input, Input::Video { .. }) {
         return Err(errors::PoseError::new_err(format!(

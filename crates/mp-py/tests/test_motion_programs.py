@@ -107,6 +107,11 @@ def test_extract_a_video(data):
     t = mp.extract(str(video), max_frames=20)
     assert t.n_frames == 20 and t.skeleton == "coco17" and t.units == "px"
     assert (t.confidence > 0.5).mean() > 0.5
+    # The golf swing is tracked throughout: recovery changes nothing there.
+    r = mp.extract(str(video), max_frames=20, recover_s=1.0)
+    assert np.array_equal(r.positions, t.positions)
+    with pytest.raises(mp.ParamError, match="recover_s"):
+        mp.extract(str(video), max_frames=2, recover_s=-1.0)
 
 
 def test_bad_input_raises_clear_exceptions(tmp_path):

@@ -109,6 +109,13 @@ pub struct InterpParams {
     /// cut to this fraction of the keypoints' chord (0: the keypoints
     /// interpolated linearly; a semicircle bulges 0.5). Default 0.5.
     pub max_bulge: f64,
+    /// Pose model on the input: seconds after a lost person during which
+    /// the region of the last pose is tried again
+    /// (`mp_pose::BlazePoseParams::recover_s`). An input to interpolate has
+    /// a low frame rate, where MediaPipe's tracking, which waits for the
+    /// detector on the next frame, loses the person for long stretches.
+    /// Default 1 s.
+    pub recover_s: f64,
     /// Encoding.
     pub render: RenderParams,
 }
@@ -126,6 +133,7 @@ impl Default for InterpParams {
             blend_power: 1.0,
             agree_tau: 0.0,
             max_bulge: 0.5,
+            recover_s: 1.0,
             render: RenderParams::default(),
         }
     }
@@ -160,6 +168,12 @@ impl InterpParams {
         }
         if !(self.agree_tau.is_finite() && self.agree_tau >= 0.0) {
             return Err(VideoError::param("agree_tau", "must be ≥ 0"));
+        }
+        if !(self.recover_s.is_finite() && self.recover_s >= 0.0) {
+            return Err(VideoError::param(
+                "recover_s",
+                "must be a finite number of seconds ≥ 0",
+            ));
         }
         if self.bone_samples > 32 {
             return Err(VideoError::param("bone_samples", "must be at most 32"));
@@ -211,9 +225,13 @@ pub struct Guide {
 }
 
 impl Guide {
-    /// Runs the pose model over `input` and fits the program, as `mp run` does.
-    pub fn fit(input: &Path, analysis: &Params) -> Result<Self> {
+    /// Runs the pose model over `input` and fits the program, as `mp run`
+    /// does, with the pose model's recovery and the bulge cut of `params`.
+    pub fn fit(input: &Path, analysis: &Params, params: &InterpParams) -> Result<Self> {
         let info = mp_pose::probe(input)?;
+        let mut analysis = analysis.clone();
+        analysis.pose.recover_s = params.recover_s;
+        let analysis = &analysis;
         let (kp, _) = mp_pipeline::keypoints(
             Input::open(input, None)?,
             analysis,
@@ -230,7 +248,7 @@ impl Guide {
         Ok(Guide {
             track,
             program: syn.program,
-            max_bulge: InterpParams::default().max_bulge,
+            max_bulge: params.max_bulge,
         })
     }
 
@@ -740,11 +758,7 @@ pub fn interpolate_frames(
         });
     }
     let guide = match method {
-        InterpMethod::Program => {
-            let mut g = Guide::fit(input, analysis)?;
-            g.max_bulge = params.max_bulge;
-            Some(g)
-        }
+        InterpMethod::Program => Some(Guide::fit(input, analysis, params)?),
         _ => None,
     };
     let person_frames = guide.as_ref().map_or(0, |g| {

@@ -19,7 +19,7 @@ use mp_geom::Skeleton;
 
 use crate::error::{PoseError, Result};
 use crate::filter::{OneEuroParams, PointsFilter};
-use crate::imageops::Roi;
+use crate::imageops::{RgbView, Roi};
 use crate::pose::{Pose, PoseEstimator};
 use crate::runtime::{self, ModelFile, SessionParams};
 use crate::video::Frame;
@@ -50,6 +50,14 @@ pub struct BlazePoseParams {
     /// Carry the crop region from frame to frame (video). Default true;
     /// false runs the detector on every frame (still images).
     pub tracking: bool,
+    /// Recovery after the tracked person is lost (video, seconds). When the
+    /// carried region no longer holds a person, the detector runs on the
+    /// same frame instead of the next one; when it finds no one, the region
+    /// of the last pose is tried again, for up to `recover_s` seconds after
+    /// that pose. Default 0: MediaPipe's behaviour (no pose on the frame
+    /// where tracking fails, the detector alone from the next frame). Worth
+    /// it on low frame rates, where the next frame is far away in time.
+    pub recover_s: f64,
     /// One-Euro filter of the auxiliary landmarks that place the next crop.
     pub aux_filter: OneEuroParams,
     /// Time between frames for the filters: `None` (default) uses each
@@ -71,6 +79,7 @@ impl Default for BlazePoseParams {
             roi_scale: 1.25,
             refine: RefineParams::default(),
             tracking: true,
+            recover_s: 0.0,
             aux_filter: OneEuroParams::AUX_LANDMARKS,
             fixed_frame_interval_s: None,
             session: SessionParams::default(),
@@ -96,6 +105,15 @@ impl BlazePoseParams {
             return Err(PoseError::param(
                 "roi_scale",
                 format!("must be > 0, got {}", self.roi_scale),
+            ));
+        }
+        if !(self.recover_s.is_finite() && self.recover_s >= 0.0) {
+            return Err(PoseError::param(
+                "recover_s",
+                format!(
+                    "must be a finite number of seconds ≥ 0, got {}",
+                    self.recover_s
+                ),
             ));
         }
         if let Some(dt) = self.fixed_frame_interval_s {
@@ -134,6 +152,8 @@ pub struct BlazePose {
     landmarks: LandmarkModel,
     name: String,
     next_roi: Option<Roi>,
+    /// Time and region of the last frame with a pose.
+    last_found: Option<(f64, Roi)>,
     aux_filter: PointsFilter,
     frame_size: Option<(usize, usize)>,
 }
@@ -169,6 +189,7 @@ impl BlazePose {
             detector,
             landmarks,
             next_roi: None,
+            last_found: None,
             frame_size: None,
         })
     }
@@ -197,9 +218,88 @@ impl BlazePose {
         (t * 1e9).round() as i64
     }
 
+    fn time_s(&self, frame: &Frame) -> f64 {
+        self.time_ns(frame) as f64 * 1e-9
+    }
+
     fn lose(&mut self) {
         self.next_roi = None;
         self.aux_filter.reset();
+    }
+
+    /// The landmark model on `roi`, kept when the pose presence reaches
+    /// `min_presence`.
+    fn landmarks_in(
+        &mut self,
+        image: RgbView<'_>,
+        roi: Roi,
+        diag: &mut FrameDiagnostics,
+    ) -> Result<Option<(Roi, LandmarkOutput)>> {
+        if !roi.is_valid() {
+            return Ok(None);
+        }
+        diag.roi = Some(roi);
+        let out = self.landmarks.run(image, &roi)?;
+        diag.presence = Some(out.pose_presence);
+        if out.pose_presence.is_nan() || out.pose_presence < self.params.min_presence {
+            return Ok(None);
+        }
+        Ok(Some((roi, out)))
+    }
+
+    /// The detector's best region, when it finds someone.
+    fn detect(&mut self, image: RgbView<'_>, diag: &mut FrameDiagnostics) -> Result<Option<Roi>> {
+        diag.detector_ran = true;
+        let dets = self.detector.detect(image)?;
+        Ok(dets.first().map(|best| {
+            diag.detection_score = Some(best.score);
+            detector::roi_from_points(
+                best.keypoints_px[0],
+                best.keypoints_px[1],
+                self.params.roi_scale,
+            )
+        }))
+    }
+
+    /// Finds the person in `frame`: the carried region, else the detector's,
+    /// else (within `recover_s` of the last pose) the region of the last pose.
+    fn locate(
+        &mut self,
+        frame: &Frame,
+        diag: &mut FrameDiagnostics,
+    ) -> Result<Option<(Roi, LandmarkOutput)>> {
+        let image = frame.view();
+        let recover = self.params.tracking && self.params.recover_s > 0.0;
+        let carried = if self.params.tracking {
+            self.next_roi.take()
+        } else {
+            None
+        };
+        if let Some(roi) = carried {
+            if let Some(found) = self.landmarks_in(image, roi, diag)? {
+                return Ok(Some(found));
+            }
+            if !recover {
+                // MediaPipe: the detector runs from the next frame on.
+                return Ok(None);
+            }
+            // Lost: the next region starts a new track.
+            self.aux_filter.reset();
+        }
+        if let Some(roi) = self.detect(image, diag)? {
+            if let Some(found) = self.landmarks_in(image, roi, diag)? {
+                return Ok(Some(found));
+            }
+        }
+        if recover {
+            if let Some((t_last, roi)) = self.last_found {
+                let age = self.time_s(frame) - t_last;
+                if age.is_finite() && (0.0..=self.params.recover_s).contains(&age) {
+                    return self.landmarks_in(image, roi, diag);
+                }
+            }
+        }
+        Ok(None)
     }
 
     /// Processes one frame; also returns what happened (detector, regions).
@@ -208,43 +308,16 @@ impl BlazePose {
         let size = (frame.width, frame.height);
         if self.frame_size != Some(size) {
             self.lose();
+            self.last_found = None;
             self.frame_size = Some(size);
         }
         let mut diag = FrameDiagnostics::default();
-        let image = frame.view();
-        let carried = if self.params.tracking {
-            self.next_roi.take()
-        } else {
-            None
-        };
-        let roi = match carried {
-            Some(r) => r,
-            None => {
-                diag.detector_ran = true;
-                let dets = self.detector.detect(image)?;
-                let Some(best) = dets.first() else {
-                    self.lose();
-                    return Ok((None, diag));
-                };
-                diag.detection_score = Some(best.score);
-                detector::roi_from_points(
-                    best.keypoints_px[0],
-                    best.keypoints_px[1],
-                    self.params.roi_scale,
-                )
-            }
+        let Some((roi, out)) = self.locate(frame, &mut diag)? else {
+            self.lose();
+            return Ok((None, diag));
         };
         diag.roi = Some(roi);
-        if !roi.is_valid() {
-            self.lose();
-            return Ok((None, diag));
-        }
-        let out = self.landmarks.run(image, &roi)?;
-        diag.presence = Some(out.pose_presence);
-        if out.pose_presence.is_nan() || out.pose_presence < self.params.min_presence {
-            self.lose();
-            return Ok((None, diag));
-        }
+        self.last_found = Some((self.time_s(frame), roi));
         let mut keypoints = Vec::with_capacity(landmarks::NUM_BODY);
         let mut depth = Vec::with_capacity(landmarks::NUM_BODY);
         let mut visibility = Vec::with_capacity(landmarks::NUM_BODY);
@@ -321,6 +394,7 @@ impl PoseEstimator for BlazePose {
     }
     fn reset(&mut self) {
         self.lose();
+        self.last_found = None;
         self.frame_size = None;
     }
 }

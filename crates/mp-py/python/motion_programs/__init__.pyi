@@ -157,6 +157,7 @@ def extract(
     max_frames: Optional[int] = None,
     threads: Optional[int] = None,
     all_joints: bool = False,
+    recover_s: Optional[float] = None,
 ) -> Track: ...
 def fit(
     track: Track,
