@@ -116,6 +116,19 @@ pub struct InterpParams {
     /// kept frames but gave frames whose arms were further from the truth
     /// (KD in the truth's crops 53.1 against 49.3 px) at 0.05 dB less PSNR.
     pub recover_s: f64,
+    /// Check each joint's detected motion against the pixels
+    /// ([`motion_supported`]): where the patch around the joint matches the
+    /// other frame in place better than at the joint's new position, the
+    /// pixels did not move as the keypoints say (a pose-model jump, not
+    /// motion) and that joint's pixels are left where they are. Default off:
+    /// on the validation videos at 8× it raised PSNR by 0.09 dB but the arms'
+    /// KD by 3.2 px.
+    pub pixel_check: bool,
+    /// A joint moves pixels only where the pose model's confidence in it is
+    /// above this in the kept frame (elsewhere it is not seen there).
+    /// Default 0.3, the confidence above which the rest of the toolkit counts
+    /// a joint as seen.
+    pub min_confidence: f64,
     /// Encoding.
     pub render: RenderParams,
 }
@@ -134,6 +147,8 @@ impl Default for InterpParams {
             agree_tau: 0.0,
             max_bulge: 0.5,
             recover_s: 0.0,
+            pixel_check: false,
+            min_confidence: MIN_CONFIDENCE,
             render: RenderParams::default(),
         }
     }
@@ -174,6 +189,9 @@ impl InterpParams {
                 "recover_s",
                 "must be a finite number of seconds ≥ 0",
             ));
+        }
+        if !(0.0..1.0).contains(&self.min_confidence) {
+            return Err(VideoError::param("min_confidence", "must be in [0, 1)"));
         }
         if self.bone_samples > 32 {
             return Err(VideoError::param("bone_samples", "must be at most 32"));
@@ -222,6 +240,8 @@ pub struct Guide {
     /// this fraction of the detected keypoints' chord
     /// ([`InterpParams::max_bulge`]).
     pub max_bulge: f64,
+    /// Confidence above which a joint is seen ([`InterpParams::min_confidence`]).
+    pub min_confidence: f64,
 }
 
 impl Guide {
@@ -249,27 +269,71 @@ impl Guide {
             track,
             program: syn.program,
             max_bulge: params.max_bulge,
+            min_confidence: params.min_confidence,
         })
     }
 
     fn seen(&self, t: usize, j: usize) -> bool {
-        t < self.track.n_frames() && self.track.is_valid(t, j, MIN_CONFIDENCE)
+        t < self.track.n_frames() && self.track.is_valid(t, j, self.min_confidence)
     }
 
     /// The pose the in-between frame at time `i + w` (`0 ≤ w ≤ 1`) is warped
     /// to, per joint (`None` where neither neighbour shows the joint): the
     /// program executed at that time plus the detected keypoints' offset
     /// from the program at frames `i` and `i + 1`, interpolated linearly.
+    ///
+    /// This is the pose before the pixels are consulted: the warp of
+    /// [`interpolate_frames`] also leaves in place the joints whose detected
+    /// motion the pixels do not show ([`InterpParams::pixel_check`]).
     pub fn target_pose(&self, i: usize, w: f64) -> Result<Vec<Option<[f64; 2]>>> {
         Ok(self
-            .targets(i, w)?
-            .map(|t| t.iter().map(|x| x.map(|(p, _, _)| p)).collect())
+            .targets(i, w, None)?
+            .map(|t| t.iter().map(|x| x.map(|t| t.at)).collect())
             .unwrap_or_default())
     }
 
-    /// Per joint: the target position at `i + w` and the joint in frames `i`
-    /// and `i + 1` where seen; `None` past the end.
-    fn targets(&self, i: usize, w: f64) -> Result<Option<Vec<Option<Target>>>> {
+    /// Per joint, whether the pixels of frames `i` (`a`) and `i + 1` (`b`)
+    /// show the joint's detected motion ([`motion_supported`], patches of
+    /// half-size `σ` of the warp); `true` where the joint is not seen in both
+    /// frames or moves by less than a pixel.
+    fn pixel_support(&self, i: usize, frames: &Frames<'_>, params: &InterpParams) -> Vec<bool> {
+        let nj = self.track.n_joints();
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for t in [i, i + 1] {
+            for j in (0..nj).filter(|&j| self.seen(t, j)) {
+                let p = self.track.point(t, j);
+                for d in 0..2 {
+                    lo[d] = lo[d].min(p[d]);
+                    hi[d] = hi[d].max(p[d]);
+                }
+            }
+        }
+        if !(lo[0].is_finite() && hi[0].is_finite()) {
+            return vec![true; nj];
+        }
+        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let r = (params.sigma_frac * size).clamp(2.0, 64.0).round() as usize;
+        (0..nj)
+            .map(|j| {
+                if !(self.seen(i, j) && self.seen(i + 1, j)) {
+                    return true;
+                }
+                let (pa, pb) = (self.track.point(i, j), self.track.point(i + 1, j));
+                let (ka, kb) = ([pa[0], pa[1]], [pb[0], pb[1]]);
+                motion_supported(frames.a, frames.b, frames.size, ka, kb, r)
+            })
+            .collect()
+    }
+
+    /// Per joint: the target at `i + w` and the joint in frames `i` and
+    /// `i + 1` where seen; `None` past the end. A joint whose motion
+    /// `support` says the pixels do not show is moved by nothing.
+    fn targets(
+        &self,
+        i: usize,
+        w: f64,
+        support: Option<&[bool]>,
+    ) -> Result<Option<Vec<Option<Target>>>> {
         let nt = self.track.n_frames();
         if i + 1 >= nt || i + 1 >= self.program.n_frames() {
             return Ok(None);
@@ -316,20 +380,47 @@ impl Guide {
             if !(t[0].is_finite() && t[1].is_finite()) {
                 continue;
             }
-            targets[j] = Some((t, va.then_some(ka), vb.then_some(kb)));
+            let moved = support.is_none_or(|s| s.get(j).copied().unwrap_or(true));
+            targets[j] = Some(if moved {
+                Target {
+                    at: t,
+                    a: va.then_some((ka, t)),
+                    b: vb.then_some((kb, t)),
+                }
+            } else {
+                // Each frame's pixels stay where they are; the body is drawn
+                // on the keypoints' chord.
+                Target {
+                    at: [(1.0 - w) * ka[0] + w * kb[0], (1.0 - w) * ka[1] + w * kb[1]],
+                    a: Some((ka, ka)),
+                    b: Some((kb, kb)),
+                }
+            });
         }
         Ok(Some(targets))
     }
 
     /// Control points `(target, source offset)` for warping frames `i`
     /// (`.0`) and `i + 1` (`.1`) to time `i + w`, and the person's size.
-    fn controls(&self, i: usize, w: f64, params: &InterpParams) -> Result<Option<Controls>> {
-        let Some(targets) = self.targets(i, w)? else {
+    fn controls(
+        &self,
+        i: usize,
+        w: f64,
+        params: &InterpParams,
+        frames: &Frames<'_>,
+    ) -> Result<Option<Controls>> {
+        if i + 1 >= self.track.n_frames() {
+            return Ok(None);
+        }
+        let support = params
+            .pixel_check
+            .then(|| self.pixel_support(i, frames, params));
+        let Some(targets) = self.targets(i, w, support.as_deref())? else {
             return Ok(None);
         };
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for (_, ka, kb) in targets.iter().flatten() {
-            for k in [ka, kb].into_iter().flatten() {
+        for tj in targets.iter().flatten() {
+            for (k, _) in [tj.a, tj.b].into_iter().flatten() {
                 for d in 0..2 {
                     lo[d] = lo[d].min(k[d]);
                     hi[d] = hi[d].max(k[d]);
@@ -343,14 +434,12 @@ impl Guide {
         let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
         let mut ca = Vec::new();
         let mut cb = Vec::new();
-        for (j, tj) in targets.iter().enumerate() {
-            let Some((t, ka, kb)) = tj else { continue };
-            let _ = j;
-            if let Some(k) = ka {
-                ca.push(([t[0], t[1]], [k[0] - t[0], k[1] - t[1]]));
+        for tj in targets.iter().flatten() {
+            if let Some((k, t)) = tj.a {
+                ca.push((t, [k[0] - t[0], k[1] - t[1]]));
             }
-            if let Some(k) = kb {
-                cb.push(([t[0], t[1]], [k[0] - t[0], k[1] - t[1]]));
+            if let Some((k, t)) = tj.b {
+                cb.push((t, [k[0] - t[0], k[1] - t[1]]));
             }
         }
         // Points along the bones.
@@ -359,18 +448,17 @@ impl Guide {
             let (Some(Some(a)), Some(Some(b))) = (targets.get(p0), targets.get(p1)) else {
                 continue;
             };
+            let lerp = |p: [f64; 2], q: [f64; 2], l: f64| {
+                [p[0] + l * (q[0] - p[0]), p[1] + l * (q[1] - p[1])]
+            };
             for s in 1..=ns {
                 let l = s as f64 / (ns + 1) as f64;
-                let t = [
-                    a.0[0] + l * (b.0[0] - a.0[0]),
-                    a.0[1] + l * (b.0[1] - a.0[1]),
-                ];
-                if let (Some(ka), Some(kb)) = (a.1, b.1) {
-                    let k = [ka[0] + l * (kb[0] - ka[0]), ka[1] + l * (kb[1] - ka[1])];
+                if let (Some((ka, ta)), Some((kb, tb))) = (a.a, b.a) {
+                    let (k, t) = (lerp(ka, kb, l), lerp(ta, tb, l));
                     ca.push((t, [k[0] - t[0], k[1] - t[1]]));
                 }
-                if let (Some(ka), Some(kb)) = (a.2, b.2) {
-                    let k = [ka[0] + l * (kb[0] - ka[0]), ka[1] + l * (kb[1] - ka[1])];
+                if let (Some((ka, ta)), Some((kb, tb))) = (a.b, b.b) {
+                    let (k, t) = (lerp(ka, kb, l), lerp(ta, tb, l));
                     cb.push((t, [k[0] - t[0], k[1] - t[1]]));
                 }
             }
@@ -386,14 +474,14 @@ impl Guide {
             let (Some(Some(a)), Some(Some(b))) = (targets.get(p0), targets.get(p1)) else {
                 continue;
             };
-            st.push((a.0, b.0));
-            if let (Some(x), Some(y)) = (a.1, b.1) {
+            st.push((a.at, b.at));
+            if let (Some((x, tx)), Some((y, ty))) = (a.a, b.a) {
                 sa.push((x, y));
-                bone_a.push(((a.0, b.0), (x, y)));
+                bone_a.push(((tx, ty), (x, y)));
             }
-            if let (Some(x), Some(y)) = (a.2, b.2) {
+            if let (Some((x, tx)), Some((y, ty))) = (a.b, b.b) {
                 sb.push((x, y));
-                bone_b.push(((a.0, b.0), (x, y)));
+                bone_b.push(((tx, ty), (x, y)));
             }
         }
         let sigma = (params.sigma_frac * size).max(2.0);
@@ -412,9 +500,69 @@ impl Guide {
     }
 }
 
-/// A joint's target position and its positions in the two neighbouring
-/// frames, where seen.
-type Target = ([f64; 2], Option<[f64; 2]>, Option<[f64; 2]>);
+/// A joint at an in-between time.
+#[derive(Debug, Clone, Copy)]
+struct Target {
+    /// Where the body is drawn (the target pose).
+    at: [f64; 2],
+    /// Where frame `i` shows the joint and where its pixels there go; `None`
+    /// where frame `i` does not show it.
+    a: Option<([f64; 2], [f64; 2])>,
+    /// The same for frame `i + 1`.
+    b: Option<([f64; 2], [f64; 2])>,
+}
+
+/// The two neighbouring frames (RGB) and their size.
+struct Frames<'a> {
+    a: &'a [u8],
+    b: &'a [u8],
+    size: (usize, usize),
+}
+
+/// Whether the pixels of frames `a` and `b` (RGB, `width × height`) show a
+/// patch of half-size `r` moving from `pa` (in `a`) to `pb` (in `b`): the
+/// patch of `a` at `pa` matches `b` at `pb` (sum of absolute differences) at
+/// least as well as the patch at `pa` or the one at `pb` matches the other
+/// frame in place. Uniform patches match everywhere and count as support; a
+/// joint the pose model moved while the pixels stayed does not. Patches are clamped to the frame and sampled on a grid of at most
+/// 17 × 17 points.
+pub fn motion_supported(
+    a: &[u8],
+    b: &[u8],
+    (width, height): (usize, usize),
+    pa: [f64; 2],
+    pb: [f64; 2],
+    r: usize,
+) -> bool {
+    if width == 0 || height == 0 || a.len() < width * height * 3 || b.len() < a.len() {
+        return true;
+    }
+    if (pa[0] - pb[0]).hypot(pa[1] - pb[1]) < 1.0 {
+        return true;
+    }
+    let at = |p: [f64; 2], dx: isize, dy: isize| {
+        let x = (p[0].round() as isize + dx).clamp(0, width as isize - 1) as usize;
+        let y = (p[1].round() as isize + dy).clamp(0, height as isize - 1) as usize;
+        (y * width + x) * 3
+    };
+    let sad = |f: &[u8], p: [f64; 2], g: &[u8], q: [f64; 2]| {
+        let r = r as isize;
+        let step = (r / 8).max(1) as usize;
+        let mut s = 0u64;
+        for dy in (-r..=r).step_by(step) {
+            for dx in (-r..=r).step_by(step) {
+                let (i, k) = (at(p, dx, dy), at(q, dx, dy));
+                for c in 0..3 {
+                    s += f[i + c].abs_diff(g[k + c]) as u64;
+                }
+            }
+        }
+        s
+    };
+    let moved = sad(a, pa, b, pb);
+    let stayed = sad(a, pa, b, pa).max(sad(a, pb, b, pb));
+    moved <= stayed
+}
 
 /// COCO-17 shoulder–hip diagonals, so the body mask covers the torso.
 const TORSO_DIAGONALS: [(usize, usize); 2] = [(5, 12), (6, 11)];
@@ -622,8 +770,13 @@ fn between(
     (width, height): (usize, usize),
     params: &InterpParams,
 ) -> Result<Vec<u8>> {
+    let frames = Frames {
+        a,
+        b,
+        size: (width, height),
+    };
     let ctl = match guide {
-        Some(g) => g.controls(i, w, params)?,
+        Some(g) => g.controls(i, w, params, &frames)?,
         None => None,
     };
     let Some(c) = ctl else {
@@ -872,4 +1025,91 @@ pub fn keep_every(
         )));
     }
     Ok(VideoReader::open(output)?.count())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::motion_supported;
+
+    /// A `w × h` RGB frame: a checkerboard of 4-px cells in a 24-px square
+    /// at `(x0, y0)` on a flat grey background.
+    fn frame(w: usize, h: usize, x0: usize, y0: usize) -> Vec<u8> {
+        let mut f = vec![90u8; w * h * 3];
+        for y in y0..(y0 + 24).min(h) {
+            for x in x0..(x0 + 24).min(w) {
+                let v = if ((x - x0) / 4 + (y - y0) / 4).is_multiple_of(2) {
+                    20
+                } else {
+                    230
+                };
+                f[(y * w + x) * 3..(y * w + x) * 3 + 3].fill(v);
+            }
+        }
+        f
+    }
+
+    #[test]
+    fn motion_the_pixels_show_is_supported() {
+        let (w, h) = (120, 80);
+        let (a, b) = (frame(w, h, 20, 20), frame(w, h, 50, 30));
+        // The square's centre moves with the keypoint.
+        assert!(motion_supported(
+            &a,
+            &b,
+            (w, h),
+            [32.0, 32.0],
+            [62.0, 42.0],
+            8
+        ));
+    }
+
+    #[test]
+    fn a_keypoint_jump_on_still_pixels_is_not_supported() {
+        let (w, h) = (120, 80);
+        let a = frame(w, h, 20, 20);
+        assert!(!motion_supported(
+            &a,
+            &a,
+            (w, h),
+            [32.0, 32.0],
+            [70.0, 50.0],
+            8
+        ));
+        // Less than a pixel, a uniform background, and frames of the wrong
+        // size count as support (nothing to contradict the keypoints).
+        assert!(motion_supported(
+            &a,
+            &a,
+            (w, h),
+            [32.0, 32.0],
+            [32.5, 32.0],
+            8
+        ));
+        let grey = vec![90u8; w * h * 3];
+        assert!(motion_supported(
+            &grey,
+            &grey,
+            (w, h),
+            [5.0, 5.0],
+            [90.0, 60.0],
+            8
+        ));
+        assert!(motion_supported(
+            &a,
+            &a[..10],
+            (w, h),
+            [32.0, 32.0],
+            [70.0, 50.0],
+            8
+        ));
+        // Patches at the border are clamped to the frame.
+        assert!(!motion_supported(
+            &a,
+            &a,
+            (w, h),
+            [0.0, 0.0],
+            [30.0, 30.0],
+            8
+        ));
+    }
 }
