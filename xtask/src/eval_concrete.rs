@@ -69,6 +69,11 @@ pub struct EvalConcreteArgs {
     /// At most this many clips per action (the first ones in the file).
     #[arg(long)]
     pub max_clips_per_action: Option<usize>,
+    /// Which clips: `all`, `validation` (the 1st, 3rd, 5th … clip of each
+    /// action in the file: where defaults are chosen) or `held-out` (the 2nd,
+    /// 4th …: where they are reported).
+    #[arg(long, value_enum, default_value_t = Split::All)]
+    pub split: Split,
     /// Subsampling factors of the interpolation experiment.
     #[arg(long, value_delimiter = ',', default_value = "2,4,8")]
     pub steps: Vec<usize>,
@@ -94,6 +99,45 @@ pub struct EvalConcreteArgs {
     /// SVG plot of the sweep.
     #[arg(long, default_value = "docs/img/concrete_frontier.svg")]
     pub svg: PathBuf,
+    /// The primitive kinds a segment may use (`mp fit --kinds`).
+    #[arg(long, value_delimiter = ',', default_values_t = mp_pipeline::Params::default().analysis.synth.fit.kinds)]
+    pub kinds: Vec<mp_geom::PrimitiveKind>,
+    /// Circles with an angular acceleration (`mp fit --quadratic-angle`).
+    #[arg(long)]
+    pub quadratic_angle: bool,
+}
+
+/// A part of the clips (`--split`).
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Split {
+    /// Every clip.
+    All,
+    /// Odd positions within each action (1st, 3rd, …): for choosing defaults.
+    Validation,
+    /// Even positions within each action (2nd, 4th, …): for reporting them.
+    HeldOut,
+}
+
+impl Split {
+    /// Whether the clip at 0-based position `i` within its action belongs here.
+    fn contains(self, i: usize) -> bool {
+        match self {
+            Split::All => true,
+            Split::Validation => i.is_multiple_of(2),
+            Split::HeldOut => !i.is_multiple_of(2),
+        }
+    }
+}
+
+/// The product's parameters (`mp fit`, `mp run`) with the window, continuity,
+/// kinds and circle options given (λ as the product's unless set later).
+fn product_params(a: &EvalConcreteArgs) -> mp_pipeline::Params {
+    let mut p = mp_pipeline::Params::default();
+    p.analysis.synth.max_segment_frames = a.window;
+    p.analysis.synth.continuity = a.continuity;
+    p.analysis.synth.fit.kinds = a.kinds.clone();
+    p.analysis.synth.fit.quadratic_angle |= a.quadratic_angle;
+    p
 }
 
 #[derive(Debug, Clone, Default)]
@@ -428,12 +472,7 @@ fn sweep(
     clips: &[usize],
     path: &std::path::Path,
 ) -> anyhow::Result<()> {
-    let product = {
-        let mut p = mp_pipeline::Params::default();
-        p.analysis.synth.max_segment_frames = a.window;
-        p.analysis.synth.continuity = a.continuity;
-        p
-    };
+    let product = product_params(a);
     let mut settings: Vec<(String, mp_pipeline::Params)> = a
         .sweep_lambdas
         .iter()
@@ -509,6 +548,7 @@ fn sweep(
     }
     let report = json!({
         "data": path.display().to_string(),
+        "split": format!("{:?}", a.split),
         "what": "KD (px at 512 px, mean over clips) and parameter ratio (Σ program / Σ raw) per action, for fixed λ (512-px reference scale) and the product's default parameters",
         "params": serde_json::to_value(&product.analysis.synth)?,
         "peer": PEER.iter().map(|(a, kd, r)| json!({"action": a, "kd_px_512": kd, "params_ratio": r})).collect::<Vec<_>>(),
@@ -556,21 +596,25 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
     };
     let pa = PennAction::open(&path).with_context(|| format!("opening {}", path.display()))?;
     // The product's parameters (`mp fit`, `mp run`), with the options given.
-    let mut base = mp_pipeline::Params::default();
+    let mut base = product_params(a);
     if let Some(l) = a.lambda {
         base.analysis.synth.lambda = Lambda::fixed(l);
     }
     if let Some(b) = a.budget {
         base.analysis.synth.lambda = Lambda::budget(b);
     }
-    base.analysis.synth.max_segment_frames = a.window;
-    base.analysis.synth.continuity = a.continuity;
     base.validate()?;
     let mut per_action: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut position: BTreeMap<&str, usize> = BTreeMap::new();
     let clips: Vec<usize> = pa
         .clips()
         .iter()
         .filter(|c| a.action.is_empty() || a.action.contains(&c.action))
+        .filter(|c| {
+            let i = position.entry(c.action.as_str()).or_insert(0);
+            *i += 1;
+            a.split.contains(*i - 1)
+        })
         .filter(|c| {
             let n = per_action.entry(c.action.as_str()).or_insert(0);
             *n += 1;
@@ -627,6 +671,7 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
     }
     let report = json!({
         "data": path.display().to_string(),
+        "split": format!("{:?}", a.split),
         "params": serde_json::to_value(&base.analysis.synth)?,
         "interpolation": {
             "steps": a.steps,
@@ -717,11 +762,20 @@ fn compare_continuity(
     }
     let summarise = |rs: &[(ProgramStats, f64)]| -> Value {
         let prog: usize = rs.iter().map(|r| r.0.params_program).sum();
+        let numbers: usize = rs.iter().map(|r| r.0.numbers_program).sum();
         let raw: usize = rs.iter().map(|r| r.0.params_raw).sum();
+        let ratio = |x: usize| {
+            if raw > 0 {
+                x as f64 / raw as f64
+            } else {
+                f64::NAN
+            }
+        };
         json!({
             "clips": rs.len(),
             "kd_px_512": mean(rs.iter().map(|r| r.0.kd * r.1)),
-            "params_ratio": if raw > 0 { prog as f64 / raw as f64 } else { f64::NAN },
+            "params_ratio": ratio(prog),
+            "numbers_ratio": ratio(numbers),
             "max_jump_raw_px_512": mean(rs.iter().map(|r| r.0.max_jump_raw * r.1)),
             "max_jump_program_px_512": mean(rs.iter().map(|r| r.0.max_jump_program * r.1)),
             "clips_program_jump_above_raw": rs.iter().filter(|r| r.0.max_jump_program > r.0.max_jump_raw).count(),
@@ -729,7 +783,7 @@ fn compare_continuity(
     };
     let mut by_action = serde_json::Map::new();
     let mut md = String::from(
-        "| action | clips | continuity | KD px@512 | params ratio | max jump raw / program (px@512) | clips with program jump > raw |\n|---|---:|---|---:|---:|---:|---:|\n",
+        "| action | clips | continuity | KD px@512 | params ratio (numbers written) | max jump raw / program (px@512) | clips with program jump > raw |\n|---|---:|---|---:|---:|---:|---:|\n",
     );
     let mut names: Vec<String> = rows.keys().map(|k| k.1.clone()).collect();
     names.sort();
@@ -744,10 +798,11 @@ fn compare_continuity(
             };
             let v = summarise(rs);
             md.push_str(&format!(
-                "| {name} | {} | {mode} | {:.2} | {:.3} | {:.1} / {:.1} | {} |\n",
+                "| {name} | {} | {mode} | {:.2} | {:.3} ({:.3}) | {:.1} / {:.1} | {} |\n",
                 num(&v, &["clips"]),
                 num(&v, &["kd_px_512"]),
                 num(&v, &["params_ratio"]),
+                num(&v, &["numbers_ratio"]),
                 num(&v, &["max_jump_raw_px_512"]),
                 num(&v, &["max_jump_program_px_512"]),
                 num(&v, &["clips_program_jump_above_raw"]),
@@ -758,6 +813,7 @@ fn compare_continuity(
     }
     let report = json!({
         "data": path.display().to_string(),
+        "split": format!("{:?}", a.split),
         "what": "the product's programs (mp_pipeline::concrete_program, Params::default() with the options given) with independently fitted segments and with shared boundary poses (C0); KD and max adjacent-frame jump in px at 512 px (means over clips), parameter ratio Σ program / Σ raw",
         "params": serde_json::to_value(&base.analysis.synth)?,
         "by_action": by_action,

@@ -7,6 +7,7 @@ use clap::Args;
 use mp_concrete::{
     dsl, program_stats, Continuity, ExecParams, Lambda, Program, Transition, UnobservedJoints,
 };
+use mp_geom::PrimitiveKind;
 use mp_pipeline::Params;
 
 /// Arguments of `mp fit`.
@@ -33,6 +34,14 @@ pub struct FitArgs {
     /// program has no jump at a boundary); `none`: segments fitted independently.
     #[arg(long, default_value_t = Params::default().analysis.synth.continuity)]
     pub continuity: Continuity,
+    /// The primitive kinds a segment may use (comma-separated: stationary,
+    /// line, circle, spline).
+    #[arg(long, value_delimiter = ',', default_values_t = Params::default().analysis.synth.fit.kinds)]
+    pub kinds: Vec<PrimitiveKind>,
+    /// Circles whose angle is quadratic in time (one more parameter: an
+    /// angular acceleration) instead of linear.
+    #[arg(long)]
+    pub quadratic_angle: bool,
     /// Largest side of the video frame in pixels (sets the scale: frame / 512);
     /// without it the scale comes from the track's extent.
     #[arg(long)]
@@ -90,6 +99,8 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     }
     params.analysis.synth.max_segment_frames = a.window;
     params.analysis.synth.continuity = a.continuity;
+    params.analysis.synth.fit.kinds = a.kinds.clone();
+    params.analysis.synth.fit.quadratic_angle |= a.quadratic_angle;
     if a.strict_joints {
         params.analysis.synth.unobserved_joints = UnobservedJoints::Error;
     }
@@ -101,11 +112,12 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     }
     p.write(&a.output)?;
     eprintln!(
-        "{} frames, {} joints → {} segments, {} parameters (raw {}); unit scale {:.4}; wrote {}",
+        "{} frames, {} joints → {} segments, {} parameters ({} numbers written; raw {}); unit scale {:.4}; wrote {}",
         p.n_frames(),
         p.n_joints(),
         p.n_segments(),
         p.n_params(),
+        p.n_numbers(),
         p.n_frames() * p.n_joints() * p.dims,
         syn.unit_scale,
         a.output.display()

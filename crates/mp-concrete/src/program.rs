@@ -96,12 +96,51 @@ impl Program {
 
     /// Number of free parameters of the program: the parameters of every
     /// primitive ([`Primitive::n_params`]) plus one duration per segment
-    /// (durations are shared by all joints, so they are counted once).
+    /// (durations are shared by all joints, so they are counted once), less
+    /// what continuity determines ([`Program::n_shared_params`]).
     pub fn n_params(&self) -> usize {
+        self.n_numbers() - self.n_shared_params()
+    }
+
+    /// Numbers written for the program: the parameters of every primitive
+    /// ([`Primitive::n_params`]) plus one duration per segment, whether or
+    /// not continuity determines some of them.
+    pub fn n_numbers(&self) -> usize {
         self.segments
             .iter()
             .map(|s| 1 + s.primitives.iter().map(Primitive::n_params).sum::<usize>())
             .sum()
+    }
+
+    /// Parameters that continuity determines: in a [`Continuity::C0`]
+    /// program, a primitive that starts where the joint's previous primitive
+    /// ends (within 1e-6 relative) has its start pose given, `D` numbers
+    /// (every kind can start anywhere: the held point, the line's start, the
+    /// circle's centre, the cubic's constant term follow from it). 0 for a
+    /// program with independent segments.
+    pub fn n_shared_params(&self) -> usize {
+        if self.continuity != Continuity::C0 {
+            return 0;
+        }
+        let d = self.dims;
+        let mut shared = 0;
+        for pair in self.segments.windows(2) {
+            let (prev, next) = (&pair[0], &pair[1]);
+            for (a, b) in prev.primitives.iter().zip(&next.primitives) {
+                let end = a.eval(prev.duration_frames as f64);
+                let start = b.eval(0.0);
+                let same = end.len() == d
+                    && start.len() == d
+                    && end
+                        .iter()
+                        .zip(&start)
+                        .all(|(x, y)| (x - y).abs() <= 1e-6 * (1.0 + x.abs().max(y.abs())));
+                if same {
+                    shared += d;
+                }
+            }
+        }
+        shared
     }
 
     /// Number of primitives of each kind, over all joints and segments.

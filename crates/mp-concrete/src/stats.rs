@@ -23,8 +23,14 @@ pub struct ProgramStats {
     pub n_segments: usize,
     /// Primitives by kind over all joints.
     pub kinds: BTreeMap<String, usize>,
-    /// Free parameters of the program ([`Program::n_params`]).
+    /// Free parameters of the program ([`Program::n_params`]: in a C0
+    /// program the start pose of a segment is the previous one's end, so it
+    /// is not counted again).
     pub params_program: usize,
+    /// Numbers written for the program ([`Program::n_numbers`]: every
+    /// primitive's parameters and the durations, continuity or not).
+    #[serde(default)]
+    pub numbers_program: usize,
     /// Numbers in the raw track: `T · J · D`.
     pub params_raw: usize,
     /// Keypoint difference: mean Euclidean distance between the executed
@@ -87,6 +93,7 @@ pub fn program_stats(program: &Program, track: &Track) -> Result<ProgramStats> {
         n_segments: program.n_segments(),
         kinds,
         params_program: program.n_params(),
+        numbers_program: program.n_numbers(),
         params_raw: track.n_frames() * track.n_joints() * track.dims(),
         kd,
         max_jump_raw: jump(track.into())?,

@@ -119,6 +119,36 @@ fn c0_with_all_kinds_missing_frames_and_3d() {
     }
 }
 
+/// A C0 program's free parameters leave out every segment's start pose (the
+/// previous segment's end): `D` numbers per joint and boundary. Independent
+/// programs, and a boundary that a C0-labelled program does not share, count
+/// every number.
+#[test]
+fn c0_start_poses_are_not_free_parameters() {
+    let track = synthetic_track(400, 3).unwrap();
+    let c0 = synthesize(&track, &SynthParams::default()).unwrap();
+    let (s, j, d) = (c0.n_segments(), c0.n_joints(), c0.dims);
+    assert!(s > 3);
+    assert_eq!(c0.n_shared_params(), d * j * (s - 1));
+    assert_eq!(c0.n_params() + d * j * (s - 1), c0.n_numbers());
+    let free = synthesize(&track, &with(Continuity::None, &SynthParams::default())).unwrap();
+    assert_eq!(free.n_shared_params(), 0);
+    assert_eq!(free.n_params(), free.n_numbers());
+    // The same primitives labelled independent: every number counts.
+    let mut relabelled = c0.clone();
+    relabelled.continuity = Continuity::None;
+    assert_eq!(relabelled.n_params(), c0.n_numbers());
+    // One joint moved off the shared pose at the first boundary.
+    let mut broken = c0.clone();
+    if let Some(p) = broken.segments[1].primitives.get_mut(0) {
+        *p = p.translated(&vec![5.0; d]);
+    }
+    assert_eq!(broken.n_shared_params(), d * j * (s - 1) - 2 * d);
+    let st = program_stats(&c0, &track).unwrap();
+    assert_eq!(st.params_program, c0.n_params());
+    assert_eq!(st.numbers_program, c0.n_numbers());
+}
+
 #[test]
 fn continuity_survives_json_dsl_and_binary_and_old_files_load() {
     let track = synthetic_track(200, 5).unwrap();

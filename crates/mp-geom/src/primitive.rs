@@ -42,6 +42,26 @@ impl PrimitiveKind {
     }
 }
 
+impl std::fmt::Display for PrimitiveKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for PrimitiveKind {
+    type Err = String;
+
+    /// The DSL name of a kind (`stationary`, `line`, `circle`, `spline`).
+    fn from_str(s: &str) -> Result<Self, String> {
+        PrimitiveKind::ALL
+            .into_iter()
+            .find(|k| k.as_str() == s.trim())
+            .ok_or_else(|| {
+                format!("unknown primitive kind `{s}` (stationary, line, circle or spline)")
+            })
+    }
+}
+
 /// A motion primitive of one joint, in D = 2 or 3 dimensions.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase")]

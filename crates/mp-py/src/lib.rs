@@ -114,9 +114,13 @@ fn extract(
 /// `continuity` `"c0"` (consecutive segments share their boundary pose) or
 /// `"none"` (segments fitted independently; default: the library's, C0),
 /// `budget` a parameter budget instead of `lambda_`: the most accurate program
-/// with at most this share of the track's numbers (T·J·D), e.g. 0.1.
+/// with at most this share of the track's numbers (T·J·D), e.g. 0.1;
+/// `kinds` the primitive kinds segments may use (default: stationary, line,
+/// circle; `"spline"` adds cubics), `quadratic_angle` circles with an
+/// angular acceleration.
 #[pyfunction]
-#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None, budget=None))]
+#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None, budget=None, kinds=None, quadratic_angle=false))]
+#[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
     track: &PyTrack,
@@ -125,6 +129,8 @@ fn fit(
     max_segment_frames: Option<usize>,
     continuity: Option<&str>,
     budget: Option<f64>,
+    kinds: Option<Vec<String>>,
+    quadratic_angle: bool,
 ) -> PyResult<PyProgram> {
     let mut params = params_with(None, None, None, false, lambda_, max_segment_frames)?;
     if let Some(b) = budget {
@@ -141,6 +147,15 @@ fn fit(
             .parse::<mp_concrete::Continuity>()
             .map_err(errors::ParamError::new_err)?;
     }
+    if let Some(k) = kinds {
+        params.analysis.synth.fit.kinds = k
+            .iter()
+            .map(|s| s.parse::<mp_geom::PrimitiveKind>())
+            .collect::<Result<_, _>>()
+            .map_err(errors::ParamError::new_err)?;
+    }
+    params.analysis.synth.fit.quadratic_angle |= quadratic_angle;
+    params.validate().map_err(errors::pipeline)?;
     let t = &track.inner;
     let syn = py
         .detach(|| mp_pipeline::concrete_program(t, frame_size, &params))

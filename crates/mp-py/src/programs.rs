@@ -124,10 +124,19 @@ impl PyProgram {
         self.inner.n_frames()
     }
 
-    /// Number of parameters (every primitive's parameters plus one duration per segment).
+    /// Number of free parameters: every primitive's parameters plus one
+    /// duration per segment, less the start poses that continuity gives in a
+    /// C0 program.
     #[getter]
     fn n_params(&self) -> usize {
         self.inner.n_params()
+    }
+
+    /// Number of numbers written: every primitive's parameters plus one
+    /// duration per segment, continuity or not.
+    #[getter]
+    fn n_numbers(&self) -> usize {
+        self.inner.n_numbers()
     }
 
     fn __eq__(&self, other: &Self) -> bool {

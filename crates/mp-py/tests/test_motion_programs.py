@@ -68,6 +68,11 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
     assert c.total == cli["total_repetitions"] == 10
     assert [i["count"] for i in c.intervals] == cli["counts"] == [4, 3, 3]
     assert c.method == cli["method"] and c.signal == "keypoints"
+    # Free parameters: a C0 program's start poses are the previous segment's ends.
+    _, j, d = t.positions.shape
+    assert prog.n_numbers - prog.n_params == d * j * (prog.n_segments - 1)
+    independent = mp.fit(t, continuity="none")
+    assert independent.n_params == independent.n_numbers
     # A fixed λ is honoured.
     assert mp.fit(t, lambda_=400.0).n_segments != prog.n_segments
     # A parameter budget: the same program as `mp fit --budget`, within the budget.
@@ -77,6 +82,19 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
     assert small.n_params <= 0.05 * t.positions.size
     with pytest.raises(mp.ParamError):
         mp.fit(t, budget=1.5)
+    # Primitive kinds and circles with an angular acceleration, as `mp fit --kinds`.
+    lines = mp.fit(t, kinds=["stationary", "line"])
+    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "k.txt", "--quiet", "--kinds", "stationary,line")
+    assert lines.text == (tmp_path / "k.txt").read_text()
+    assert "circle" not in lines.text and "spline" not in lines.text
+    assert lines.text != prog.text
+    quad = mp.fit(t, quadratic_angle=True)
+    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "q.txt", "--quiet", "--quadratic-angle")
+    assert quad.text == (tmp_path / "q.txt").read_text()
+    with pytest.raises(mp.ParamError, match="unknown primitive kind"):
+        mp.fit(t, kinds=["ellipse"])
+    with pytest.raises(mp.ParamError):
+        mp.fit(t, kinds=[])
 
 
 def test_counts_from_video_equal_the_cli(data, mp_bin):
