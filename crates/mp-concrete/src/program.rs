@@ -117,9 +117,10 @@ impl Program {
     /// ends (within 1e-6 relative) has its start pose given, `D` numbers
     /// (every kind can start anywhere: the held point, the line's start, the
     /// circle's centre, the cubic's constant term follow from it). 0 for a
-    /// program with independent segments.
+    /// program with independent segments, or one that does not validate
+    /// ([`Program::validate`]: nothing is evaluated then).
     pub fn n_shared_params(&self) -> usize {
-        if self.continuity != Continuity::C0 {
+        if self.continuity != Continuity::C0 || self.validate().is_err() {
             return 0;
         }
         let d = self.dims;

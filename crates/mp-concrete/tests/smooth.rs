@@ -144,6 +144,10 @@ fn c0_start_poses_are_not_free_parameters() {
         *p = p.translated(&vec![5.0; d]);
     }
     assert_eq!(broken.n_shared_params(), d * j * (s - 1) - 2 * d);
+    // A program that does not validate is not evaluated: every number counts.
+    let mut invalid = c0.clone();
+    invalid.segments[1].duration_frames = 0;
+    assert_eq!(invalid.n_params(), invalid.n_numbers());
     let st = program_stats(&c0, &track).unwrap();
     assert_eq!(st.params_program, c0.n_params());
     assert_eq!(st.numbers_program, c0.n_numbers());
