@@ -155,7 +155,6 @@ fn fit(
             .map_err(errors::ParamError::new_err)?;
     }
     params.analysis.synth.fit.quadratic_angle |= quadratic_angle;
-    params.validate().map_err(errors::pipeline)?;
     let t = &track.inner;
     let syn = py
         .detach(|| mp_pipeline::concrete_program(t, frame_size, &params))

@@ -391,7 +391,7 @@ impl Guide {
                 // Each frame's pixels stay where they are; the body is drawn
                 // on the keypoints' chord.
                 Target {
-                    at: [(1.0 - w) * ka[0] + w * kb[0], (1.0 - w) * ka[1] + w * kb[1]],
+                    at: lerp(ka, kb, w),
                     a: Some((ka, ka)),
                     b: Some((kb, kb)),
                 }
@@ -402,20 +402,15 @@ impl Guide {
 
     /// Control points `(target, source offset)` for warping frames `i`
     /// (`.0`) and `i + 1` (`.1`) to time `i + w`, and the person's size.
+    /// `support`: [`Guide::pixel_support`] of the two frames, when checked.
     fn controls(
         &self,
         i: usize,
         w: f64,
         params: &InterpParams,
-        frames: &Frames<'_>,
+        support: Option<&[bool]>,
     ) -> Result<Option<Controls>> {
-        if i + 1 >= self.track.n_frames() {
-            return Ok(None);
-        }
-        let support = params
-            .pixel_check
-            .then(|| self.pixel_support(i, frames, params));
-        let Some(targets) = self.targets(i, w, support.as_deref())? else {
+        let Some(targets) = self.targets(i, w, support)? else {
             return Ok(None);
         };
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -447,9 +442,6 @@ impl Guide {
         for &(p0, p1) in &self.track.skeleton().bones {
             let (Some(Some(a)), Some(Some(b))) = (targets.get(p0), targets.get(p1)) else {
                 continue;
-            };
-            let lerp = |p: [f64; 2], q: [f64; 2], l: f64| {
-                [p[0] + l * (q[0] - p[0]), p[1] + l * (q[1] - p[1])]
             };
             for s in 1..=ns {
                 let l = s as f64 / (ns + 1) as f64;
@@ -500,6 +492,11 @@ impl Guide {
     }
 }
 
+/// The point a fraction `l` of the way from `p` to `q`.
+fn lerp(p: [f64; 2], q: [f64; 2], l: f64) -> [f64; 2] {
+    [p[0] + l * (q[0] - p[0]), p[1] + l * (q[1] - p[1])]
+}
+
 /// A joint at an in-between time.
 #[derive(Debug, Clone, Copy)]
 struct Target {
@@ -524,8 +521,8 @@ struct Frames<'a> {
 /// patch of `a` at `pa` matches `b` at `pb` (sum of absolute differences) at
 /// least as well as the patch at `pa` or the one at `pb` matches the other
 /// frame in place. Uniform patches match everywhere and count as support; a
-/// joint the pose model moved while the pixels stayed does not. Patches are clamped to the frame and sampled on a grid of at most
-/// 17 × 17 points.
+/// joint the pose model moved while the pixels stayed does not. Patches are
+/// clamped to the frame and sampled on a grid of at most 17 × 17 points.
 pub fn motion_supported(
     a: &[u8],
     b: &[u8],
@@ -763,20 +760,16 @@ fn sample(src: &[u8], w: usize, h: usize, sx: f32, sy: f32, out: &mut [f32; 3]) 
 /// time and left out where that frame shows the person.
 fn between(
     guide: Option<&Guide>,
-    a: &[u8],
-    b: &[u8],
+    frames: &Frames<'_>,
     i: usize,
     w: f64,
-    (width, height): (usize, usize),
     params: &InterpParams,
+    support: Option<&[bool]>,
 ) -> Result<Vec<u8>> {
-    let frames = Frames {
-        a,
-        b,
-        size: (width, height),
-    };
+    let (a, b) = (frames.a, frames.b);
+    let (width, height) = frames.size;
     let ctl = match guide {
-        Some(g) => g.controls(i, w, params, &frames)?,
+        Some(g) => g.controls(i, w, params, support)?,
         None => None,
     };
     let Some(c) = ctl else {
@@ -926,16 +919,25 @@ pub fn interpolate_frames(
         if let Some(a) = prev.take() {
             sink(&a)?;
             n_out += 1;
+            let frames = Frames {
+                a: &a,
+                b: &frame.rgb,
+                size: (width, height),
+            };
+            // The pixel check depends on the two frames only: once per pair.
+            let support = match &guide {
+                Some(g) if params.pixel_check => Some(g.pixel_support(n_in - 1, &frames, params)),
+                _ => None,
+            };
             for j in 1..factor {
                 let w = j as f64 / factor as f64;
                 let f = between(
                     guide.as_ref(),
-                    &a,
-                    &frame.rgb,
+                    &frames,
                     n_in - 1,
                     w,
-                    (width, height),
                     params,
+                    support.as_deref(),
                 )?;
                 sink(&f)?;
                 n_out += 1;
