@@ -151,7 +151,7 @@ pub struct EvalInterpolationArgs {
     /// Settings other than the product's, for choosing defaults on a
     /// validation set: `warp=field|bones`, `blend_power=P`,
     /// `body_radius_frac=R`, `sigma_frac=S`, `agree_tau=T`, `max_bulge=B`,
-    /// `recover_s=S`, `pixel_check=true|false`, `min_confidence=C` (repeatable).
+    /// `recover_s=S`, `pixel_check=true|false`, `warp_check=true|false`, `min_confidence=C` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
 }
@@ -178,6 +178,7 @@ fn interp_params(set: &[String]) -> anyhow::Result<InterpParams> {
             "max_bulge" => p.max_bulge = v.parse()?,
             "recover_s" => p.recover_s = v.parse()?,
             "pixel_check" => p.pixel_check = v.parse()?,
+            "warp_check" => p.warp_check = v.parse()?,
             "min_confidence" => p.min_confidence = v.parse()?,
             _ => bail!("--set {k}: unknown setting"),
         }
