@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::guide::Guide;
-use super::warp::{fields, grid_at, lerp1, lerp2, sample};
+use super::warp::{fields, grid_at, lerp1};
 use super::{Frames, InterpParams};
 use crate::error::Result;
 
@@ -85,24 +85,7 @@ pub fn warps_agree(
                 if m <= 0.0 {
                     continue;
                 }
-                let ua = grid_at(&f.fa, gw, gf, x, y, lerp2);
-                let ub = grid_at(&f.fb, gw, gf, x, y, lerp2);
-                sample(
-                    a,
-                    width,
-                    height,
-                    x as f32 + ua[0],
-                    y as f32 + ua[1],
-                    &mut pa,
-                );
-                sample(
-                    b,
-                    width,
-                    height,
-                    x as f32 + ub[0],
-                    y as f32 + ub[1],
-                    &mut pb,
-                );
+                f.sample_both(frames, x, y, g, &mut pa, &mut pb);
                 let p = (y * width + x) * 3;
                 for ch in 0..3 {
                     dw += (m * (pa[ch] - pb[ch]).abs()) as f64;

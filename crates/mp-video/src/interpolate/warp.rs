@@ -217,6 +217,29 @@ pub(super) fn fields(c: &Controls, params: &InterpParams, width: usize, height: 
     }
 }
 
+impl Fields {
+    /// The pixel `(x, y)` of the in-between frame as each of the two frames
+    /// warped shows it (`pa` from `a`, `pb` from `b`).
+    pub(super) fn sample_both(
+        &self,
+        frames: &Frames<'_>,
+        x: usize,
+        y: usize,
+        g: usize,
+        pa: &mut [f32; 3],
+        pb: &mut [f32; 3],
+    ) {
+        let (width, height) = frames.size;
+        let gw = (width - 1) / g + 2;
+        let gf = g as f32;
+        let ua = grid_at(&self.fa, gw, gf, x, y, lerp2);
+        let ub = grid_at(&self.fb, gw, gf, x, y, lerp2);
+        let (xf, yf) = (x as f32, y as f32);
+        sample(frames.a, width, height, xf + ua[0], yf + ua[1], pa);
+        sample(frames.b, width, height, xf + ub[0], yf + ub[1], pb);
+    }
+}
+
 /// The frame between `a` (frame `i`) and `b` (frame `i + 1`) at `i + w`.
 ///
 /// Inside the body at the target pose, both frames warped towards it and
@@ -241,7 +264,8 @@ pub(super) fn between(
     };
     let g = params.grid;
     let gf = g as f32;
-    let Fields { fa, fb, mt, ma, mb } = fields(&c, params, width, height);
+    let f = fields(&c, params, width, height);
+    let (mt, ma, mb) = (&f.mt, &f.ma, &f.mb);
     // Weights of the two warped frames inside the body.
     let (pwa, pwb) = {
         let p = params.blend_power;
@@ -258,9 +282,9 @@ pub(super) fn between(
         .for_each(|(y, row)| {
             let (mut pa, mut pb) = ([0.0f32; 3], [0.0f32; 3]);
             for x in 0..width {
-                let m_t = grid_at(&mt, gw, gf, x, y, lerp1);
-                let m_a = grid_at(&ma, gw, gf, x, y, lerp1);
-                let m_b = grid_at(&mb, gw, gf, x, y, lerp1);
+                let m_t = grid_at(mt, gw, gf, x, y, lerp1);
+                let m_a = grid_at(ma, gw, gf, x, y, lerp1);
+                let m_b = grid_at(mb, gw, gf, x, y, lerp1);
                 // Background: each frame where it does not show the person.
                 let mut ba = (1.0 - wf) * (1.0 - m_a);
                 let mut bb = wf * (1.0 - m_b);
@@ -275,24 +299,7 @@ pub(super) fn between(
                     bg[ch] = ba * a[p + ch] as f32 + bb * b[p + ch] as f32;
                 }
                 if m_t > 0.0 {
-                    let ua = grid_at(&fa, gw, gf, x, y, lerp2);
-                    let ub = grid_at(&fb, gw, gf, x, y, lerp2);
-                    sample(
-                        a,
-                        width,
-                        height,
-                        x as f32 + ua[0],
-                        y as f32 + ua[1],
-                        &mut pa,
-                    );
-                    sample(
-                        b,
-                        width,
-                        height,
-                        x as f32 + ub[0],
-                        y as f32 + ub[1],
-                        &mut pb,
-                    );
+                    f.sample_both(frames, x, y, g, &mut pa, &mut pb);
                     let ww = if tau > 0.0 {
                         let dd =
                             ((pa[0] - pb[0]).abs() + (pa[1] - pb[1]).abs() + (pa[2] - pb[2]).abs())
