@@ -6,9 +6,12 @@
 //!   FFV1), the kept video is interpolated back to the full frame rate by
 //!   each method (`mp_video::interpolate_frames`), and the rebuilt frames are
 //!   scored against the dropped originals: KD of elbows and wrists (the pose
-//!   model run on the rebuilt and on the true frames, px), PSNR and SSIM on
-//!   the whole frame and on the person's box (the true keypoints' box grown
-//!   by 10 %).
+//!   model run on the rebuilt and on the true frames, px) three ways — the
+//!   product's pose model with its tracking over each sequence, the landmark
+//!   model in the crop the tracker used on the true frame (`CropTruth`), and
+//!   the pose model on each frame alone, detector included (`StillTruth`) —
+//!   and PSNR and SSIM on the whole frame and on the person's box (the true
+//!   keypoints' box grown by 10 %).
 //! * video-predict (§4.4 on pixels): the first half of each video is
 //!   observed (`mp_video::analyse_video` on those frames only), the second
 //!   half predicted (`mp_video::plan_prediction`) and scored: KD of the
@@ -56,38 +59,14 @@ struct CropTruth {
 impl CropTruth {
     /// BlazePose with the product's settings over the first `n` frames.
     fn start(video: &Path, n: usize) -> anyhow::Result<Option<Self>> {
-        let params = Params::default();
-        let kind = match params.pose.model {
-            mp_pose::ModelChoice::Full => mp_pose::LandmarkModelKind::Full,
-            mp_pose::ModelChoice::Lite => mp_pose::LandmarkModelKind::Lite,
-            mp_pose::ModelChoice::Heavy => mp_pose::LandmarkModelKind::Heavy,
-            mp_pose::ModelChoice::MoveNet => return Ok(None),
+        let Some(mut model) = product_blazepose(true)? else {
+            return Ok(None);
         };
-        let mut model = mp_pose::BlazePose::new(mp_pose::BlazePoseParams {
-            model: kind,
-            session: SessionParams {
-                intra_threads: params.pose.threads,
-                ..Default::default()
-            },
-            recover_s: params.pose.recover_s,
-            ..Default::default()
-        })?;
         let (mut rois, mut arms) = (Vec::new(), Vec::new());
         for f in VideoReader::open(video)?.take(n) {
             let (pose, _) = model.process(&f?)?;
-            match pose {
-                Some(p) => {
-                    rois.push(p.roi);
-                    arms.push(
-                        BLAZE_ARM_JOINTS
-                            .map(|j| (p.visibility[j] > MIN_CONF).then_some(p.keypoints_px[j])),
-                    );
-                }
-                None => {
-                    rois.push(None);
-                    arms.push([None; 4]);
-                }
-            }
+            rois.push(pose.as_ref().and_then(|p| p.roi));
+            arms.push(arms_of(pose.as_ref()));
         }
         Ok(Some(CropTruth { model, rois, arms }))
     }
@@ -110,6 +89,83 @@ impl CropTruth {
             };
             if lm.visibility as f64 > MIN_CONF {
                 let (p, _) = mp_pose::blazepose::landmarks::project(&roi, lm);
+                s += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                n += 1;
+            }
+        }
+        Ok((s, n))
+    }
+}
+
+/// BlazePose with the product's settings (`Params::default().pose`), its
+/// crop carried from frame to frame or not (`tracking`); `None` when the
+/// product's pose model is MoveNet.
+fn product_blazepose(tracking: bool) -> anyhow::Result<Option<mp_pose::BlazePose>> {
+    let params = Params::default();
+    let kind = match params.pose.model {
+        mp_pose::ModelChoice::Full => mp_pose::LandmarkModelKind::Full,
+        mp_pose::ModelChoice::Lite => mp_pose::LandmarkModelKind::Lite,
+        mp_pose::ModelChoice::Heavy => mp_pose::LandmarkModelKind::Heavy,
+        mp_pose::ModelChoice::MoveNet => return Ok(None),
+    };
+    Ok(Some(mp_pose::BlazePose::new(mp_pose::BlazePoseParams {
+        model: kind,
+        session: SessionParams {
+            intra_threads: params.pose.threads,
+            ..Default::default()
+        },
+        recover_s: params.pose.recover_s,
+        tracking,
+        ..Default::default()
+    })?))
+}
+
+/// The elbows and wrists of a BlazePose result that are seen (confidence > [`MIN_CONF`]).
+fn arms_of(pose: Option<&mp_pose::Pose>) -> [Option<[f64; 2]>; 4] {
+    match pose {
+        Some(p) => {
+            BLAZE_ARM_JOINTS.map(|j| (p.visibility[j] > MIN_CONF).then_some(p.keypoints_px[j]))
+        }
+        None => [None; 4],
+    }
+}
+
+/// KD frame by frame: the pose model on each frame alone (the detector on
+/// every frame, no crop carried from the frame before, as for still
+/// images), on the true frame and on the rebuilt one. Neither sequence's
+/// history decides where the model looks.
+struct StillTruth {
+    model: mp_pose::BlazePose,
+    arms: Vec<[Option<[f64; 2]>; 4]>,
+    fps: f64,
+}
+
+impl StillTruth {
+    /// BlazePose without tracking over the first `n` frames.
+    fn start(video: &Path, n: usize) -> anyhow::Result<Option<Self>> {
+        let Some(mut model) = product_blazepose(false)? else {
+            return Ok(None);
+        };
+        let reader = VideoReader::open(video)?;
+        let fps = reader.info().fps;
+        let mut arms = Vec::new();
+        for f in reader.take(n) {
+            let (pose, _) = model.process(&f?)?;
+            arms.push(arms_of(pose.as_ref()));
+        }
+        Ok(Some(StillTruth { model, arms, fps }))
+    }
+
+    /// Sum of distances and pairs of frame `t` rebuilt as `rgb`.
+    fn score(&mut self, t: usize, rgb: &[u8], w: usize, h: usize) -> anyhow::Result<(f64, usize)> {
+        let Some(truth) = self.arms.get(t).copied() else {
+            return Ok((0.0, 0));
+        };
+        let frame = Frame::new(t, t as f64 / self.fps, w, h, rgb.to_vec())?;
+        let (pose, _) = self.model.process(&frame)?;
+        let (mut s, mut n) = (0.0, 0usize);
+        for (p, q) in arms_of(pose.as_ref()).iter().zip(truth) {
+            if let (Some(p), Some(q)) = (p, q) {
                 s += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
                 n += 1;
             }
@@ -486,11 +542,13 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
         std::collections::BTreeMap<String, f64>,
     > = Default::default();
     let mut crop_by = kd_by.clone();
+    let mut still_by = kd_by.clone();
     for video in &videos {
         let name = stem(video);
         let (truth, info) = truth_pose(video, a.max_frames)?;
         let (w, h) = (info.width, info.height);
         let mut crops = CropTruth::start(video, a.max_frames)?;
+        let mut stills = StillTruth::start(video, a.max_frames)?;
         let mut vres = Map::new();
         for &k in &a.factors {
             let kept = tmp.join(format!("{name}_k{k}.mkv"));
@@ -528,6 +586,7 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                 let mut ps = PoseStream::start(w, h, info.fps)?;
                 let mut scores = Scores::default();
                 let (mut crop_sum, mut crop_n) = (0.0, 0usize);
+                let (mut still_sum, mut still_n) = (0.0, 0usize);
                 let mut t = 0usize;
                 let r = interpolate_frames(&kept, k, method, &iparams, &params, |rgb| {
                     let tf = truth_frames.next().ok_or_else(|| {
@@ -546,6 +605,13 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                                 .map_err(|e| mp_video::VideoError::Edit(e.to_string()))?;
                             crop_sum += s;
                             crop_n += n;
+                        }
+                        if let Some(c) = stills.as_mut() {
+                            let (s, n) = c
+                                .score(t, rgb, w, h)
+                                .map_err(|e| mp_video::VideoError::Edit(e.to_string()))?;
+                            still_sum += s;
+                            still_n += n;
                         }
                     }
                     t += 1;
@@ -573,13 +639,11 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                 }
                 let (kd_arms, n_arms) = kd(&pose, &truth, &dropped, Some(&ARM_JOINTS));
                 let (kd_all, _) = kd(&pose, &truth, &dropped, None);
-                let kd_crop = if crop_n > 0 {
-                    crop_sum / crop_n as f64
-                } else {
-                    f64::NAN
-                };
+                let ratio = |s: f64, n: usize| if n > 0 { s / n as f64 } else { f64::NAN };
+                let kd_crop = ratio(crop_sum, crop_n);
+                let kd_still = ratio(still_sum, still_n);
                 eprintln!(
-                    "KD arms {kd_arms:.2} px ({kd_crop:.2} in the truth's crops), PSNR {:.2} dB ({:.2} box), SSIM {:.4} ({:.4} box), {:.1} s",
+                    "KD arms {kd_arms:.2} px ({kd_crop:.2} in the truth's crops, {kd_still:.2} frame by frame), PSNR {:.2} dB ({:.2} box), SSIM {:.4} ({:.4} box), {:.1} s",
                     mean(&scores.psnr),
                     mean(&scores.psnr_box),
                     mean(&scores.ssim),
@@ -593,6 +657,8 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                         "kd_arms_pairs": n_arms,
                         "kd_arms_truth_crops_px": num(kd_crop),
                         "kd_arms_truth_crops_pairs": crop_n,
+                        "kd_arms_frame_by_frame_px": num(kd_still),
+                        "kd_arms_frame_by_frame_pairs": still_n,
                         "kd_all_px": num(kd_all),
                         "psnr_db": num(mean(&scores.psnr)),
                         "ssim": num(mean(&scores.ssim)),
@@ -611,6 +677,10 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                     .entry((k, method.as_str().to_string()))
                     .or_default()
                     .insert(name.clone(), kd_crop);
+                still_by
+                    .entry((k, method.as_str().to_string()))
+                    .or_default()
+                    .insert(name.clone(), kd_still);
                 let e = pooled.entry((k, method.as_str().to_string())).or_default();
                 if kd_arms.is_finite() {
                     e.0.push(kd_arms);
@@ -660,6 +730,7 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
             .collect();
         let (means, n) = common_kd(&kd_by, &keys);
         let (crop_means, crop_n) = common_kd(&crop_by, &keys);
+        let (still_means, still_n) = common_kd(&still_by, &keys);
         let text = |means: &[f64]| -> String {
             keys.iter()
                 .zip(means)
@@ -675,12 +746,18 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
             "{k:>4}×  KD arms in the truth's crops, over the {crop_n} videos where every method has one: {}",
             text(&crop_means)
         );
-        for (((_, m), x), c) in keys.iter().zip(&means).zip(&crop_means) {
+        println!(
+            "{k:>4}×  KD arms frame by frame, over the {still_n} videos where every method has one: {}",
+            text(&still_means)
+        );
+        for ((((_, m), x), c), f) in keys.iter().zip(&means).zip(&crop_means).zip(&still_means) {
             if let Some(Value::Object(o)) = summary.get_mut(&format!("x{k}/{m}")) {
                 o.insert("kd_arms_common_px".into(), num(*x));
                 o.insert("kd_common_videos".into(), json!(n));
                 o.insert("kd_arms_truth_crops_common_px".into(), num(*c));
                 o.insert("kd_truth_crops_common_videos".into(), json!(crop_n));
+                o.insert("kd_arms_frame_by_frame_common_px".into(), num(*f));
+                o.insert("kd_frame_by_frame_common_videos".into(), json!(still_n));
             }
         }
     }
