@@ -380,7 +380,9 @@ impl<'g> Deriver<'g> {
     }
 }
 
-fn pick_weighted(weights: &[f64], rng: &mut ChaCha8Rng) -> usize {
+/// An index drawn with probability proportional to its weight (roulette
+/// selection); 0 when the weights sum to nothing.
+pub(crate) fn pick_weighted(weights: &[f64], rng: &mut ChaCha8Rng) -> usize {
     let total: f64 = weights.iter().sum();
     if total.is_nan() || total <= 0.0 {
         return 0;

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use super::cluster::{Grid, PairCache};
 use super::{SearchStats, SymbolParams};
+use crate::derive::pick_weighted;
 use crate::distance::{PoseFeatures, Segment};
 use crate::error::Result;
 use crate::kmedoids::{first_k, DenseMatrix};
@@ -205,17 +206,7 @@ pub(super) fn run_ga(
         let f_min = fit[order[order.len() - 1]];
         let base = f_min - 0.1 * (f_max - f_min);
         let weights: Vec<f64> = fit.iter().map(|&f| (f - base).max(0.0) + 1e-300).collect();
-        let total: f64 = weights.iter().sum();
-        let pick = |rng: &mut ChaCha8Rng| -> usize {
-            let mut x = rng.random::<f64>() * total;
-            for (i, w) in weights.iter().enumerate() {
-                if x < *w {
-                    return i;
-                }
-                x -= w;
-            }
-            weights.len() - 1
-        };
+        let pick = |rng: &mut ChaCha8Rng| pick_weighted(&weights, rng);
         let mut next: Vec<Vec<bool>> = order[..ga.elite].iter().map(|&i| pop[i].clone()).collect();
         while next.len() < ga.population {
             let a = pick(rng);
