@@ -20,10 +20,7 @@ use serde_json::{json, Value};
 use mp_geom::skeleton::BLAZEPOSE_TO_COCO17;
 use mp_pose::extract::{extract, ExtractOptions, ModelChoice, SmoothingParams};
 use mp_pose::video::{open_source, read_image};
-use mp_pose::{
-    BlazePose, BlazePoseParams, LandmarkModelKind, MoveNet, MoveNetParams, PoseEstimator,
-    SessionParams,
-};
+use mp_pose::{BlazePose, BlazePoseParams, MoveNet, MoveNetParams, PoseEstimator, SessionParams};
 
 #[derive(clap::Args, Debug)]
 pub struct EvalPoseArgs {
@@ -113,19 +110,14 @@ fn open(model: ModelChoice, threads: usize, tracking: bool) -> Result<Box<dyn Po
         intra_threads: threads,
         ..Default::default()
     };
-    let lm = match model {
-        ModelChoice::Full => LandmarkModelKind::Full,
-        ModelChoice::Lite => LandmarkModelKind::Lite,
-        ModelChoice::Heavy => LandmarkModelKind::Heavy,
-        ModelChoice::MoveNet => {
-            return Ok(Box::new(
-                MoveNet::new(MoveNetParams {
-                    session,
-                    ..Default::default()
-                })
-                .map_err(|e| anyhow::anyhow!("{e}"))?,
-            ))
-        }
+    let Some(lm) = model.landmark_model() else {
+        return Ok(Box::new(
+            MoveNet::new(MoveNetParams {
+                session,
+                ..Default::default()
+            })
+            .map_err(|e| anyhow::anyhow!("{e}"))?,
+        ));
     };
     Ok(Box::new(
         BlazePose::new(BlazePoseParams {

@@ -57,18 +57,21 @@ struct CropTruth {
 }
 
 impl CropTruth {
-    /// BlazePose with the product's settings over the first `n` frames.
-    fn start(video: &Path, n: usize) -> anyhow::Result<Option<Self>> {
-        let Some(mut model) = product_blazepose(true)? else {
-            return Ok(None);
-        };
-        let (mut rois, mut arms) = (Vec::new(), Vec::new());
-        for f in VideoReader::open(video)?.take(n) {
-            let (pose, _) = model.process(&f?)?;
-            rois.push(pose.as_ref().and_then(|p| p.roi));
-            arms.push(arms_of(pose.as_ref()));
-        }
-        Ok(Some(CropTruth { model, rois, arms }))
+    /// BlazePose with the product's settings, before the first frame.
+    fn new() -> anyhow::Result<Option<Self>> {
+        Ok(product_blazepose(true)?.map(|model| CropTruth {
+            model,
+            rois: Vec::new(),
+            arms: Vec::new(),
+        }))
+    }
+
+    /// The next true frame.
+    fn push_truth(&mut self, f: &Frame) -> anyhow::Result<()> {
+        let (pose, _) = self.model.process(f)?;
+        self.rois.push(pose.as_ref().and_then(|p| p.roi));
+        self.arms.push(arms_of(pose.as_ref()));
+        Ok(())
     }
 
     /// Sum of distances and pairs of frame `t` rebuilt as `rgb`.
@@ -82,18 +85,13 @@ impl CropTruth {
             data: rgb,
         };
         let out = self.model.landmarks_mut().run(view, &roi)?;
-        let (mut s, mut n) = (0.0, 0usize);
-        for (k, &j) in BLAZE_ARM_JOINTS.iter().enumerate() {
-            let (Some(q), Some(lm)) = (self.arms[t][k], out.landmarks.get(j)) else {
-                continue;
-            };
-            if lm.visibility as f64 > MIN_CONF {
-                let (p, _) = mp_pose::blazepose::landmarks::project(&roi, lm);
-                s += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
-                n += 1;
-            }
-        }
-        Ok((s, n))
+        let found = BLAZE_ARM_JOINTS.map(|j| {
+            out.landmarks
+                .get(j)
+                .filter(|lm| lm.visibility as f64 > MIN_CONF)
+                .map(|lm| mp_pose::blazepose::landmarks::project(&roi, lm).0)
+        });
+        Ok(arm_distances(&found, &self.arms[t]))
     }
 }
 
@@ -102,11 +100,8 @@ impl CropTruth {
 /// product's pose model is MoveNet.
 fn product_blazepose(tracking: bool) -> anyhow::Result<Option<mp_pose::BlazePose>> {
     let params = Params::default();
-    let kind = match params.pose.model {
-        mp_pose::ModelChoice::Full => mp_pose::LandmarkModelKind::Full,
-        mp_pose::ModelChoice::Lite => mp_pose::LandmarkModelKind::Lite,
-        mp_pose::ModelChoice::Heavy => mp_pose::LandmarkModelKind::Heavy,
-        mp_pose::ModelChoice::MoveNet => return Ok(None),
+    let Some(kind) = params.pose.model.landmark_model() else {
+        return Ok(None);
     };
     Ok(Some(mp_pose::BlazePose::new(mp_pose::BlazePoseParams {
         model: kind,
@@ -141,19 +136,20 @@ struct StillTruth {
 }
 
 impl StillTruth {
-    /// BlazePose without tracking over the first `n` frames.
-    fn start(video: &Path, n: usize) -> anyhow::Result<Option<Self>> {
-        let Some(mut model) = product_blazepose(false)? else {
-            return Ok(None);
-        };
-        let reader = VideoReader::open(video)?;
-        let fps = reader.info().fps;
-        let mut arms = Vec::new();
-        for f in reader.take(n) {
-            let (pose, _) = model.process(&f?)?;
-            arms.push(arms_of(pose.as_ref()));
-        }
-        Ok(Some(StillTruth { model, arms, fps }))
+    /// BlazePose without tracking, before the first frame.
+    fn new(fps: f64) -> anyhow::Result<Option<Self>> {
+        Ok(product_blazepose(false)?.map(|model| StillTruth {
+            model,
+            arms: Vec::new(),
+            fps,
+        }))
+    }
+
+    /// The next true frame.
+    fn push_truth(&mut self, f: &Frame) -> anyhow::Result<()> {
+        let (pose, _) = self.model.process(f)?;
+        self.arms.push(arms_of(pose.as_ref()));
+        Ok(())
     }
 
     /// Sum of distances and pairs of frame `t` rebuilt as `rgb`.
@@ -163,15 +159,18 @@ impl StillTruth {
         };
         let frame = Frame::new(t, t as f64 / self.fps, w, h, rgb.to_vec())?;
         let (pose, _) = self.model.process(&frame)?;
-        let (mut s, mut n) = (0.0, 0usize);
-        for (p, q) in arms_of(pose.as_ref()).iter().zip(truth) {
-            if let (Some(p), Some(q)) = (p, q) {
-                s += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
-                n += 1;
-            }
-        }
-        Ok((s, n))
+        Ok(arm_distances(&arms_of(pose.as_ref()), &truth))
     }
+}
+
+/// Sum of distances and number of the joints seen in both `a` and `b`.
+fn arm_distances(a: &[Option<[f64; 2]>; 4], b: &[Option<[f64; 2]>; 4]) -> (f64, usize) {
+    a.iter()
+        .zip(b)
+        .filter_map(|(p, q)| Some((p.as_ref()?, q.as_ref()?)))
+        .fold((0.0, 0), |(s, n), (p, q)| {
+            (s + (p[0] - q[0]).hypot(p[1] - q[1]), n + 1)
+        })
 }
 
 /// Confidence above which a joint is scored.
@@ -491,15 +490,38 @@ impl Scores {
     }
 }
 
-/// The pose of the first `n` frames of a video.
-fn truth_pose(video: &Path, n: usize) -> anyhow::Result<(Track, mp_pose::VideoInfo)> {
+/// The true frames' poses, decoded once: the product's pose model over the
+/// first `n` frames, and the references of the truth's crops and of the
+/// frame-by-frame KD (`None` for a MoveNet product).
+struct Truth {
+    track: Track,
+    info: mp_pose::VideoInfo,
+    crops: Option<CropTruth>,
+    stills: Option<StillTruth>,
+}
+
+fn truth_pose(video: &Path, n: usize) -> anyhow::Result<Truth> {
     let reader = VideoReader::open(video)?;
     let info = reader.info().clone();
     let mut ps = PoseStream::start(info.width, info.height, info.fps)?;
+    let mut crops = CropTruth::new()?;
+    let mut stills = StillTruth::new(info.fps)?;
     for f in reader.take(n) {
-        ps.push(&f?.rgb)?;
+        let f = f?;
+        if let Some(c) = crops.as_mut() {
+            c.push_truth(&f)?;
+        }
+        if let Some(c) = stills.as_mut() {
+            c.push_truth(&f)?;
+        }
+        ps.push(&f.rgb)?;
     }
-    Ok((ps.finish()?, info))
+    Ok(Truth {
+        track: ps.finish()?,
+        info,
+        crops,
+        stills,
+    })
 }
 
 fn parse_interp(m: &str) -> anyhow::Result<InterpMethod> {
@@ -545,10 +567,13 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
     let mut still_by = kd_by.clone();
     for video in &videos {
         let name = stem(video);
-        let (truth, info) = truth_pose(video, a.max_frames)?;
+        let Truth {
+            track: truth,
+            info,
+            mut crops,
+            mut stills,
+        } = truth_pose(video, a.max_frames)?;
         let (w, h) = (info.width, info.height);
-        let mut crops = CropTruth::start(video, a.max_frames)?;
-        let mut stills = StillTruth::start(video, a.max_frames)?;
         let mut vres = Map::new();
         for &k in &a.factors {
             let kept = tmp.join(format!("{name}_k{k}.mkv"));

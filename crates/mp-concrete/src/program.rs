@@ -124,18 +124,17 @@ impl Program {
             return 0;
         }
         let d = self.dims;
+        let (mut end, mut start) = (vec![0.0; d], vec![0.0; d]);
         let mut shared = 0;
         for pair in self.segments.windows(2) {
             let (prev, next) = (&pair[0], &pair[1]);
             for (a, b) in prev.primitives.iter().zip(&next.primitives) {
-                let end = a.eval(prev.duration_frames as f64);
-                let start = b.eval(0.0);
-                let same = end.len() == d
-                    && start.len() == d
-                    && end
-                        .iter()
-                        .zip(&start)
-                        .all(|(x, y)| (x - y).abs() <= 1e-6 * (1.0 + x.abs().max(y.abs())));
+                a.eval_into(prev.duration_frames as f64, &mut end);
+                b.eval_into(0.0, &mut start);
+                let same = end
+                    .iter()
+                    .zip(&start)
+                    .all(|(x, y)| (x - y).abs() <= 1e-6 * (1.0 + x.abs().max(y.abs())));
                 if same {
                     shared += d;
                 }

@@ -45,6 +45,15 @@ impl ModelChoice {
             )),
         }
     }
+    /// The BlazePose landmark model of this choice; `None` for MoveNet.
+    pub fn landmark_model(self) -> Option<LandmarkModelKind> {
+        match self {
+            ModelChoice::Full => Some(LandmarkModelKind::Full),
+            ModelChoice::Lite => Some(LandmarkModelKind::Lite),
+            ModelChoice::Heavy => Some(LandmarkModelKind::Heavy),
+            ModelChoice::MoveNet => None,
+        }
+    }
     /// Short name.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -73,16 +82,11 @@ pub fn open_estimator_with(
     session: SessionParams,
     recover_s: f64,
 ) -> Result<Box<dyn PoseEstimator + Send>> {
-    let lm = match model {
-        ModelChoice::Full => LandmarkModelKind::Full,
-        ModelChoice::Lite => LandmarkModelKind::Lite,
-        ModelChoice::Heavy => LandmarkModelKind::Heavy,
-        ModelChoice::MoveNet => {
-            return Ok(Box::new(MoveNet::new(MoveNetParams {
-                session,
-                ..Default::default()
-            })?))
-        }
+    let Some(lm) = model.landmark_model() else {
+        return Ok(Box::new(MoveNet::new(MoveNetParams {
+            session,
+            ..Default::default()
+        })?));
     };
     Ok(Box::new(BlazePose::new(BlazePoseParams {
         model: lm,

@@ -60,20 +60,20 @@ pub fn motion_supported(
 /// frames unwarped. A warp that follows the person's motion brings the two
 /// frames together; one driven by keypoints on the background or jumping
 /// between frames pulls them apart. `true` where there is nothing to warp.
+/// `support` leaves joints in place as in the in-between frames
+/// ([`InterpParams::pixel_check`]; `None`: every joint moves).
 pub fn warps_agree(
     guide: &Guide,
     frames: &Frames<'_>,
     i: usize,
     params: &InterpParams,
+    support: Option<&[bool]>,
 ) -> Result<bool> {
-    let Some(c) = guide.controls(i, 0.5, params, None)? else {
+    let Some(c) = guide.controls(i, 0.5, params, support)? else {
         return Ok(true);
     };
     let (a, b) = (frames.a, frames.b);
     let (width, height) = frames.size;
-    let g = params.grid;
-    let gf = g as f32;
-    let gw = (width - 1) / g + 2;
     let f = fields(&c, params, width, height);
     let (warped, plain) = (0..height)
         .into_par_iter()
@@ -81,11 +81,11 @@ pub fn warps_agree(
             let (mut pa, mut pb) = ([0.0f32; 3], [0.0f32; 3]);
             let (mut dw, mut dp) = (0.0f64, 0.0f64);
             for x in 0..width {
-                let m = grid_at(&f.mt, gw, gf, x, y, lerp1);
+                let m = grid_at(&f.mt, f.gw, f.gf, x, y, lerp1);
                 if m <= 0.0 {
                     continue;
                 }
-                f.sample_both(frames, x, y, g, &mut pa, &mut pb);
+                f.sample_both(frames, x, y, &mut pa, &mut pb);
                 let p = (y * width + x) * 3;
                 for ch in 0..3 {
                     dw += (m * (pa[ch] - pb[ch]).abs()) as f64;
@@ -231,7 +231,7 @@ mod tests {
             size: (w, h),
         };
         let g = guide(40.0, 52.0, 20.0);
-        assert!(warps_agree(&g, &moving, 0, &params).unwrap());
+        assert!(warps_agree(&g, &moving, 0, &params, None).unwrap());
         // The pixels stay while the keypoints move: the warp pulls the two
         // frames apart.
         let still = Frames {
@@ -239,9 +239,9 @@ mod tests {
             b: &a,
             size: (w, h),
         };
-        assert!(!warps_agree(&g, &still, 0, &params).unwrap());
+        assert!(!warps_agree(&g, &still, 0, &params, None).unwrap());
         // Keypoints that stay on still pixels: nothing moves, they agree.
         let g = guide(40.0, 40.0, 20.0);
-        assert!(warps_agree(&g, &still, 0, &params).unwrap());
+        assert!(warps_agree(&g, &still, 0, &params, None).unwrap());
     }
 }

@@ -326,7 +326,12 @@ pub fn interpolate_frames(
                 _ => None,
             };
             let pair_guide = match &guide {
-                Some(g) if params.warp_check && !warps_agree(g, &frames, n_in - 1, params)? => None,
+                Some(g)
+                    if params.warp_check
+                        && !warps_agree(g, &frames, n_in - 1, params, support.as_deref())? =>
+                {
+                    None
+                }
                 g => g.as_ref(),
             };
             for j in 1..factor {

@@ -196,6 +196,10 @@ pub(super) struct Fields {
     pub(super) mt: Vec<f32>,
     pub(super) ma: Vec<f32>,
     pub(super) mb: Vec<f32>,
+    /// Columns of the grid.
+    pub(super) gw: usize,
+    /// Grid step in pixels.
+    pub(super) gf: f32,
 }
 
 pub(super) fn fields(c: &Controls, params: &InterpParams, width: usize, height: usize) -> Fields {
@@ -214,6 +218,8 @@ pub(super) fn fields(c: &Controls, params: &InterpParams, width: usize, height: 
         mt: body_mask(&c.seg_t, c.radius, g, width, height),
         ma: body_mask(&c.seg_a, c.radius, g, width, height),
         mb: body_mask(&c.seg_b, c.radius, g, width, height),
+        gw: (width - 1) / g + 2,
+        gf: g as f32,
     }
 }
 
@@ -225,15 +231,12 @@ impl Fields {
         frames: &Frames<'_>,
         x: usize,
         y: usize,
-        g: usize,
         pa: &mut [f32; 3],
         pb: &mut [f32; 3],
     ) {
         let (width, height) = frames.size;
-        let gw = (width - 1) / g + 2;
-        let gf = g as f32;
-        let ua = grid_at(&self.fa, gw, gf, x, y, lerp2);
-        let ub = grid_at(&self.fb, gw, gf, x, y, lerp2);
+        let ua = grid_at(&self.fa, self.gw, self.gf, x, y, lerp2);
+        let ub = grid_at(&self.fb, self.gw, self.gf, x, y, lerp2);
         let (xf, yf) = (x as f32, y as f32);
         sample(frames.a, width, height, xf + ua[0], yf + ua[1], pa);
         sample(frames.b, width, height, xf + ub[0], yf + ub[1], pb);
@@ -262,17 +265,14 @@ pub(super) fn between(
     let Some(c) = ctl else {
         return Ok(blend(a, b, w as f32));
     };
-    let g = params.grid;
-    let gf = g as f32;
     let f = fields(&c, params, width, height);
-    let (mt, ma, mb) = (&f.mt, &f.ma, &f.mb);
+    let (mt, ma, mb, gw, gf) = (&f.mt, &f.ma, &f.mb, f.gw, f.gf);
     // Weights of the two warped frames inside the body.
     let (pwa, pwb) = {
         let p = params.blend_power;
         let (x, y) = ((1.0 - w).powf(p), w.powf(p));
         ((x / (x + y)) as f32, (y / (x + y)) as f32)
     };
-    let gw = (width - 1) / g + 2;
     let wf = w as f32;
     let ww = params.warp_weight as f32;
     let tau = params.agree_tau as f32;
@@ -299,7 +299,7 @@ pub(super) fn between(
                     bg[ch] = ba * a[p + ch] as f32 + bb * b[p + ch] as f32;
                 }
                 if m_t > 0.0 {
-                    f.sample_both(frames, x, y, g, &mut pa, &mut pb);
+                    f.sample_both(frames, x, y, &mut pa, &mut pb);
                     let ww = if tau > 0.0 {
                         let dd =
                             ((pa[0] - pb[0]).abs() + (pa[1] - pb[1]).abs() + (pa[2] - pb[2]).abs())
