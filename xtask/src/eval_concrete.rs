@@ -31,7 +31,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_concrete::{
     interpolation_experiment, program_stats, Continuity, InterpParams, Lambda, Program,
-    ProgramStats, Transition,
+    ProgramStats, RefitNorm, Transition,
 };
 use mp_geom::io::datasets::PennAction;
 use rayon::prelude::*;
@@ -60,6 +60,9 @@ pub struct EvalConcreteArgs {
     /// Whether consecutive segments share their boundary pose (`c0`) or are fitted independently (`none`).
     #[arg(long, default_value_t = mp_pipeline::Params::default().analysis.synth.continuity)]
     pub continuity: Continuity,
+    /// What the C0 refit minimises (`mp fit --refit-norm`).
+    #[arg(long, default_value_t = mp_pipeline::Params::default().analysis.synth.refit_norm)]
+    pub refit_norm: RefitNorm,
     /// Every clip with `--continuity none` and `c0` (see the module docs) instead of the evaluation.
     #[arg(long)]
     pub compare_continuity: bool,
@@ -135,6 +138,7 @@ fn product_params(a: &EvalConcreteArgs) -> mp_pipeline::Params {
     let mut p = mp_pipeline::Params::default();
     p.analysis.synth.max_segment_frames = a.window;
     p.analysis.synth.continuity = a.continuity;
+    p.analysis.synth.refit_norm = a.refit_norm;
     p.analysis.synth.fit.kinds = a.kinds.clone();
     p.analysis.synth.fit.quadratic_angle |= a.quadratic_angle;
     p

@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use mp_concrete::{
-    dsl, program_stats, Continuity, ExecParams, Lambda, Program, Transition, UnobservedJoints,
+    dsl, program_stats, Continuity, ExecParams, Lambda, Program, RefitNorm, Transition,
+    UnobservedJoints,
 };
 use mp_geom::PrimitiveKind;
 use mp_pipeline::Params;
@@ -34,6 +35,11 @@ pub struct FitArgs {
     /// program has no jump at a boundary); `none`: segments fitted independently.
     #[arg(long, default_value_t = Params::default().analysis.synth.continuity)]
     pub continuity: Continuity,
+    /// What the C0 refit minimises per joint: `squared` residuals (least
+    /// squares) or their `euclidean` lengths (the error the segmentation
+    /// minimises; reweighted least squares).
+    #[arg(long, default_value_t = Params::default().analysis.synth.refit_norm)]
+    pub refit_norm: RefitNorm,
     /// The primitive kinds a segment may use (comma-separated: stationary,
     /// line, circle, spline).
     #[arg(long, value_delimiter = ',', default_values_t = Params::default().analysis.synth.fit.kinds)]
@@ -99,6 +105,7 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     }
     params.analysis.synth.max_segment_frames = a.window;
     params.analysis.synth.continuity = a.continuity;
+    params.analysis.synth.refit_norm = a.refit_norm;
     params.analysis.synth.fit.kinds = a.kinds.clone();
     params.analysis.synth.fit.quadratic_angle |= a.quadratic_angle;
     if a.strict_joints {

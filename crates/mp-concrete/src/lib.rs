@@ -46,7 +46,7 @@ pub use error::{ConcreteError, ParseError, Result};
 pub use exec::{ExecParams, Transition};
 pub use interp::{interpolation_experiment, InterpParams, InterpolationResult};
 pub use program::{Program, Segment};
-pub use smooth::{max_boundary_gap, Continuity};
+pub use smooth::{max_boundary_gap, Continuity, RefitNorm};
 pub use stats::{program_stats, ProgramStats};
 pub use synth::{
     segment, segment_costs, segment_exhaustive, synthesize, synthesize_detailed, Lambda, Scale,

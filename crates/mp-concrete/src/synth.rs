@@ -54,7 +54,7 @@ use crate::dp::{segment_table, CostTable, Segmentation};
 use crate::error::{ConcreteError, Result};
 use crate::program::{Program, Segment};
 use crate::search::{segment_search, JointTrack};
-use crate::smooth::{refit_joint, Continuity, JointSeries};
+use crate::smooth::{refit_joint, Continuity, JointSeries, RefitNorm};
 
 /// Reference pixels of a 512-px frame.
 pub const REFERENCE_FRAME_PX: f64 = 512.0;
@@ -160,6 +160,9 @@ pub struct SynthParams {
     /// Parameters serialised before the field existed read as C0.
     #[serde(default = "default_continuity")]
     pub continuity: Continuity,
+    /// What the C0 refit minimises ([`crate::smooth`]). Default: squared residuals.
+    #[serde(default)]
+    pub refit_norm: RefitNorm,
 }
 
 fn default_continuity() -> Continuity {
@@ -188,6 +191,7 @@ impl Default for SynthParams {
             min_confidence: 0.0,
             unobserved_joints: UnobservedJoints::Error,
             continuity: Self::DEFAULT_CONTINUITY,
+            refit_norm: RefitNorm::Squared,
         }
     }
 }
@@ -622,6 +626,7 @@ pub fn segment(track: &Track, params: &SynthParams) -> Result<Segmentation> {
 fn smooth_segments(
     prep: &Prepared,
     fit: &FitParams,
+    norm: RefitNorm,
     track: &Track,
     bounds: &[usize],
     mut segments: Vec<Segment>,
@@ -634,7 +639,7 @@ fn smooth_segments(
                 weights: &prep.weights[ji],
             };
             let prims: Vec<Primitive> = segments.iter().map(|s| s.primitives[ji].clone()).collect();
-            refit_joint(&series, bounds, &prims, fit).ok_or_else(|| {
+            refit_joint(&series, bounds, &prims, fit, norm).ok_or_else(|| {
                 ConcreteError::Track(format!(
                     "joint `{}`: the continuous (C0) refit has no solution (non-finite positions?)",
                     joint_name(track, ji)
@@ -675,7 +680,14 @@ pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthe
         .collect::<Result<Vec<_>>>()?;
     let segments = match params.continuity {
         Continuity::None => segments,
-        Continuity::C0 => smooth_segments(&prep, &fit, track, &segmentation.boundaries, segments)?,
+        Continuity::C0 => smooth_segments(
+            &prep,
+            &fit,
+            params.refit_norm,
+            track,
+            &segmentation.boundaries,
+            segments,
+        )?,
     };
     let program = Program {
         continuity: params.continuity,

@@ -117,9 +117,10 @@ fn extract(
 /// with at most this share of the track's numbers (T·J·D), e.g. 0.1;
 /// `kinds` the primitive kinds segments may use (default: stationary, line,
 /// circle; `"spline"` adds cubics), `quadratic_angle` circles with an
-/// angular acceleration.
+/// angular acceleration, `refit_norm` what the C0 refit minimises
+/// (`"squared"` residuals, the default, or their `"euclidean"` lengths).
 #[pyfunction]
-#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None, budget=None, kinds=None, quadratic_angle=false))]
+#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None, budget=None, kinds=None, quadratic_angle=false, refit_norm=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
@@ -131,6 +132,7 @@ fn fit(
     budget: Option<f64>,
     kinds: Option<Vec<String>>,
     quadratic_angle: bool,
+    refit_norm: Option<&str>,
 ) -> PyResult<PyProgram> {
     let mut params = params_with(None, None, None, false, lambda_, max_segment_frames)?;
     if let Some(b) = budget {
@@ -155,6 +157,11 @@ fn fit(
             .map_err(errors::ParamError::new_err)?;
     }
     params.analysis.synth.fit.quadratic_angle |= quadratic_angle;
+    if let Some(n) = refit_norm {
+        params.analysis.synth.refit_norm = n
+            .parse::<mp_concrete::RefitNorm>()
+            .map_err(errors::ParamError::new_err)?;
+    }
     let t = &track.inner;
     let syn = py
         .detach(|| mp_pipeline::concrete_program(t, frame_size, &params))

@@ -95,6 +95,15 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
         mp.fit(t, kinds=["ellipse"])
     with pytest.raises(mp.ParamError):
         mp.fit(t, kinds=[])
+    # The C0 refit under the Euclidean norm, as `mp fit --refit-norm euclidean`:
+    # the same segments, primitives moved.
+    euc = mp.fit(t, refit_norm="euclidean")
+    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "e.txt", "--quiet", "--refit-norm", "euclidean")
+    assert euc.text == (tmp_path / "e.txt").read_text()
+    assert euc.n_segments == prog.n_segments
+    assert euc.text != prog.text
+    with pytest.raises(mp.ParamError, match="unknown refit norm"):
+        mp.fit(t, refit_norm="manhattan")
 
 
 def test_counts_from_video_equal_the_cli(data, mp_bin):
