@@ -399,11 +399,7 @@ fn solve(
         let (va, vb) = (lay.knot_var[i], lay.knot_var[i + 1]);
         let (oa, ob) = (&lay.knot_off[i], &lay.knot_off[i + 1]);
         for t in 0..n {
-            let wt = if observed {
-                series.weights[k0 + t].max(GAP_WEIGHT)
-            } else {
-                1.0
-            } * reweight.map_or(1.0, |r| r[k0 + t]);
+            let wt = refit_weight(series, observed, k0 + t) * reweight.map_or(1.0, |r| r[k0 + t]);
             if wt <= 0.0 {
                 continue;
             }
@@ -585,6 +581,33 @@ fn similar_circle(orig: &Primitive, n: usize, a: &[f64], b: &[f64]) -> Primitive
     }
 }
 
+/// A frame's weight in the refit: its 0/1 weight raised to [`GAP_WEIGHT`]
+/// in a segment where the joint is observed somewhere (`observed`), 1 in a
+/// segment where it never is.
+fn refit_weight(series: &JointSeries<'_>, observed: bool, i: usize) -> f64 {
+    if observed {
+        series.weights[i].max(GAP_WEIGHT)
+    } else {
+        1.0
+    }
+}
+
+/// Distance between `p` at segment time `t` and the joint's position at frame `i`.
+fn distance_at(
+    p: &Primitive,
+    t: usize,
+    series: &JointSeries<'_>,
+    i: usize,
+    buf: &mut [f64],
+) -> f64 {
+    p.eval_into(t as f64, buf);
+    buf.iter()
+        .zip(series.points.row(i).iter())
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        .sqrt()
+}
+
 /// Mean Euclidean residual of `p` on frames `k0..k1` (weights as in the refit).
 fn mean_residual(p: &Primitive, series: &JointSeries<'_>, k0: usize, k1: usize) -> f64 {
     let observed = series.weights[k0..k1].iter().any(|&w| w > 0.0);
@@ -599,13 +622,7 @@ fn mean_residual(p: &Primitive, series: &JointSeries<'_>, k0: usize, k1: usize) 
         if w <= 0.0 {
             continue;
         }
-        p.eval_into(t as f64, &mut buf);
-        let dd: f64 = buf
-            .iter()
-            .zip(series.points.row(k0 + t).iter())
-            .map(|(a, b)| (a - b) * (a - b))
-            .sum();
-        sum += w * dd.sqrt();
+        sum += w * distance_at(p, t, series, k0 + t, &mut buf);
         wsum += w;
     }
     if wsum > 0.0 {
@@ -637,19 +654,8 @@ fn residual_lengths(
         let (k0, k1) = (bounds[i], bounds[i + 1]);
         let observed = series.weights[k0..k1].iter().any(|&w| w > 0.0);
         for t in 0..(k1 - k0) {
-            let w = if observed {
-                series.weights[k0 + t].max(GAP_WEIGHT)
-            } else {
-                1.0
-            };
-            p.eval_into(t as f64, &mut buf);
-            let dd: f64 = buf
-                .iter()
-                .zip(series.points.row(k0 + t).iter())
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum();
-            out[k0 + t] = dd.sqrt();
-            total += w * out[k0 + t];
+            out[k0 + t] = distance_at(p, t, series, k0 + t, &mut buf);
+            total += refit_weight(series, observed, k0 + t) * out[k0 + t];
         }
     }
     total
