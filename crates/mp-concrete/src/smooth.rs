@@ -50,14 +50,18 @@
 //! of kind.
 //!
 //! With [`RefitNorm::Euclidean`] each solve above is followed by
-//! iteratively reweighted least squares: every frame's weight is multiplied
-//! by `f / max(‖rᵢ‖, f)` (its residual in the previous solve, `f` =
-//! [`IRLS_FLOOR_PX`] reference pixels), which lowers `Σ w‖rᵢ‖` at every
-//! step (a majorise–minimise step of the Euclidean error, as in Weiszfeld's
-//! algorithm). It stops when a step gains less than 0.1 % or after
-//! [`IRLS_STEPS`] solves and keeps the best solution, so its Euclidean
-//! error is never above the least-squares refit's. The default is
-//! [`RefitNorm::Squared`].
+//! iteratively reweighted least squares: every observed frame's weight is
+//! multiplied by `c·f / max(‖rᵢ‖, f)` (its residual in the previous solve, `f` =
+//! [`IRLS_FLOOR_PX`] reference pixels, `c` fixed so that the observed frames
+//! weigh 1 on average in the first reweighted solve, as in the least-squares
+//! one); gap-filled frames keep their weight (they are not data, and without
+//! `c` the interpolated positions would outweigh the data).
+//! Each step lowers the Euclidean error of the observed frames (Huber's loss
+//! with its corner at `f`, the Euclidean error above it) plus the
+//! least-squares terms of the gap-filled frames: a majorise–minimise step,
+//! as in Weiszfeld's algorithm. It stops when a step gains less than 0.1 %
+//! or after [`IRLS_STEPS`] solves and keeps the best solution. The default
+//! is [`RefitNorm::Squared`].
 //!
 //! The segmentation's cost ([`crate::Synthesis::segmentation`]) stays that of
 //! the independent fits the DP minimised.
@@ -639,12 +643,17 @@ pub const IRLS_STEPS: usize = 20;
 /// reweighted solves.
 pub const IRLS_FLOOR_PX: f64 = 0.05;
 
-/// Per-frame residual lengths of `prims` on the joint's frames (0 where
-/// the frame takes no part in the refit) and their weighted sum.
-fn residual_lengths(
+/// Per-frame residual lengths of `prims` (into `out`) and the objective the
+/// reweighted solves lower: `c·Σ 2f·ρ_f(‖rᵢ‖)` over the observed frames (Huber's
+/// loss with its corner at `f`: `‖r‖²` below it, `2f‖r‖ − f²` above, so the
+/// Euclidean error up to a constant for residuals above `f`) plus the
+/// least-squares terms of the gap-filled frames, with their refit weights.
+fn irls_objective(
     series: &JointSeries<'_>,
     bounds: &[usize],
     prims: &[Primitive],
+    f: f64,
+    c: f64,
     out: &mut [f64],
 ) -> f64 {
     let d = series.points.ncols();
@@ -654,17 +663,23 @@ fn residual_lengths(
         let (k0, k1) = (bounds[i], bounds[i + 1]);
         let observed = series.weights[k0..k1].iter().any(|&w| w > 0.0);
         for t in 0..(k1 - k0) {
-            out[k0 + t] = distance_at(p, t, series, k0 + t, &mut buf);
-            total += refit_weight(series, observed, k0 + t) * out[k0 + t];
+            let r = distance_at(p, t, series, k0 + t, &mut buf);
+            out[k0 + t] = r;
+            total += if series.weights[k0 + t] > 0.0 {
+                c * if r <= f { r * r } else { 2.0 * f * r - f * f }
+            } else {
+                refit_weight(series, observed, k0 + t) * r * r
+            };
         }
     }
     total
 }
 
-/// The refit under the Euclidean norm: iteratively reweighted least squares
-/// (each frame weighted by `1 / max(‖rᵢ‖, floor)` from the previous solve),
-/// which lowers `Σ w‖rᵢ‖` (the error the segmentation minimised) at every
-/// step; it stops when a step gains less than 0.1 % or after
+/// The refit under the Euclidean norm: iteratively reweighted least squares.
+/// Each observed frame's weight is multiplied by `c·f / max(‖rᵢ‖, f)` from the
+/// previous solve (see the module docs for `c`); gap-filled frames keep their
+/// least-squares weight (they are not data). Each solve lowers [`irls_objective`] (a majorise–minimise
+/// step). It stops when a step gains less than 0.1 % or after
 /// [`IRLS_STEPS`], and keeps the best solution seen.
 fn reweighted(
     series: &JointSeries<'_>,
@@ -680,18 +695,36 @@ fn reweighted(
     let floor = IRLS_FLOOR_PX * fit.unit_scale;
     let mut res = vec![0.0; t];
     let mut best = start;
-    let mut best_err = residual_lengths(series, bounds, &best, &mut res);
+    irls_objective(series, bounds, &best, floor, 1.0, &mut res);
+    // Observed frames weigh 1 on average in the first reweighted solve, as
+    // in the least-squares one, against the gap-filled frames.
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (r, &obs) in res.iter().zip(series.weights) {
+        if obs > 0.0 {
+            sum += floor / r.max(floor);
+            n += 1;
+        }
+    }
+    if n == 0 || sum <= 0.0 {
+        return best;
+    }
+    let c = n as f64 / sum;
+    let mut best_err = irls_objective(series, bounds, &best, floor, c, &mut res);
     let mut weights = vec![0.0; t];
     for _ in 0..IRLS_STEPS {
-        for (w, r) in weights.iter_mut().zip(&res) {
-            *w = floor / r.max(floor);
+        for ((w, r), &obs) in weights.iter_mut().zip(&res).zip(series.weights) {
+            *w = if obs > 0.0 {
+                c * floor / r.max(floor)
+            } else {
+                1.0
+            };
         }
         let Some((knots, interiors)) = solve(series, bounds, elems, init, d, Some(&weights)) else {
             break;
         };
         let cand = primitives_of(prims, elems, &durations, &knots, &interiors);
         let mut cand_res = vec![0.0; t];
-        let err = residual_lengths(series, bounds, &cand, &mut cand_res);
+        let err = irls_objective(series, bounds, &cand, floor, c, &mut cand_res);
         if err.is_nan() || err >= best_err {
             break;
         }
@@ -835,8 +868,16 @@ mod tests {
         let sq = refit_joint(&series, &bounds, &prims, &fit, RefitNorm::Squared).unwrap();
         let eu = refit_joint(&series, &bounds, &prims, &fit, RefitNorm::Euclidean).unwrap();
         let mut res = vec![0.0; pts.nrows()];
-        let e_sq = residual_lengths(&series, &bounds, &sq, &mut res);
-        let e_eu = residual_lengths(&series, &bounds, &eu, &mut res);
+        // Σ‖rᵢ‖ over the observed frames (`res` keeps the last one's residuals).
+        let mut observed_sum = |p: &[Primitive]| {
+            irls_objective(&series, &bounds, p, 0.0, 1.0, &mut res);
+            (0..pts.nrows())
+                .filter(|&i| weights[i] > 0.0)
+                .map(|i| res[i])
+                .sum::<f64>()
+        };
+        let e_sq = observed_sum(&sq);
+        let e_eu = observed_sum(&eu);
         // The spikes pull the least-squares lines; the Euclidean refit lies
         // on the clean frames (their noise is at most 0.15 per axis).
         assert!(e_eu < 0.8 * e_sq, "Σ‖r‖ {e_eu} vs least squares {e_sq}");
