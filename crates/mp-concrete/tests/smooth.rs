@@ -3,8 +3,8 @@
 
 use mp_concrete::synthetic::synthetic_track;
 use mp_concrete::{
-    max_boundary_gap, program_stats, synthesize, Continuity, Lambda, Program, Scale, SynthParams,
-    UnobservedJoints,
+    max_boundary_gap, program_stats, synthesize, Continuity, Lambda, Program, RefitNorm, Scale,
+    SynthParams, UnobservedJoints,
 };
 use mp_geom::io::datasets::PennAction;
 use mp_geom::{Primitive, PrimitiveKind, Skeleton, Track, Units};
@@ -344,8 +344,9 @@ mod random_tracks {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(48))]
-        /// Any track, any λ, both kind sets: the C0 program is valid, keeps the
-        /// segmentation of the independent fits and shares every boundary within 1e-9.
+        /// Any track, any λ, both kind sets, both refit norms: the C0 program is
+        /// valid, keeps the segmentation of the independent fits and shares every
+        /// boundary within 1e-9.
         #[test]
         fn c0_shares_every_boundary(
             t in 12usize..150,
@@ -353,6 +354,7 @@ mod random_tracks {
             three_d in any::<bool>(),
             lambda in 20.0f64..1000.0,
             all_kinds in any::<bool>(),
+            euclidean in any::<bool>(),
             missing_every in prop_oneof![Just(0usize), 4usize..13],
             seed in proptest::collection::vec(0.0f64..1.0, 16..64),
         ) {
@@ -361,6 +363,7 @@ mod random_tracks {
                 lambda: Lambda::fixed(lambda),
                 scale: Scale::UnitScale { unit_scale: 1.0 },
                 unobserved_joints: UnobservedJoints::Ignore,
+                refit_norm: if euclidean { RefitNorm::Euclidean } else { RefitNorm::Squared },
                 ..SynthParams::default()
             };
             if all_kinds {
