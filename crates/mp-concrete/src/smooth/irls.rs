@@ -16,32 +16,35 @@ pub const IRLS_STEPS: usize = 20;
 /// reweighted solves.
 pub const IRLS_FLOOR_PX: f64 = 0.05;
 
-/// Per-frame residual lengths of `prims` (into `out`) and the objective the
-/// reweighted solves lower: `c·Σ 2f·ρ_f(‖rᵢ‖)` over the observed frames (Huber's
-/// loss with its corner at `f`: `‖r‖²` below it, `2f‖r‖ − f²` above, so the
-/// Euclidean error up to a constant for residuals above `f`) plus the
-/// least-squares terms of the gap-filled frames, with their refit weights.
-fn irls_objective(
+/// Per-frame residual lengths of `prims` on the joint's frames (into `out`).
+fn residual_lengths(
     series: &JointSeries<'_>,
     bounds: &[usize],
     prims: &[Primitive],
-    f: f64,
-    c: f64,
     out: &mut [f64],
-) -> f64 {
-    let d = series.points.ncols();
-    let mut buf = vec![0.0; d];
-    let mut total = 0.0;
+) {
+    let mut buf = vec![0.0; series.points.ncols()];
     for (i, p) in prims.iter().enumerate() {
-        let (k0, k1) = (bounds[i], bounds[i + 1]);
-        let observed = series.weights[k0..k1].iter().any(|&w| w > 0.0);
-        for t in 0..(k1 - k0) {
-            let r = distance_at(p, t, series, k0 + t, &mut buf);
-            out[k0 + t] = r;
-            total += if series.weights[k0 + t] > 0.0 {
+        for (t, k) in (bounds[i]..bounds[i + 1]).enumerate() {
+            out[k] = distance_at(p, t, series, k, &mut buf);
+        }
+    }
+}
+
+/// The objective the reweighted solves lower, from the residual lengths:
+/// `c·Σ 2f·ρ_f(‖rᵢ‖)` over the observed frames (Huber's loss with its corner
+/// at `f`: `‖r‖²` below it, `2f‖r‖ − f²` above, so the Euclidean error up to
+/// a constant for residuals above `f`) plus the least-squares terms of the
+/// gap-filled frames, with their refit weights.
+fn objective(series: &JointSeries<'_>, bounds: &[usize], res: &[f64], f: f64, c: f64) -> f64 {
+    let mut total = 0.0;
+    for seg in bounds.windows(2) {
+        let observed = series.weights[seg[0]..seg[1]].iter().any(|&w| w > 0.0);
+        for (k, &r) in res.iter().enumerate().take(seg[1]).skip(seg[0]) {
+            total += if series.weights[k] > 0.0 {
                 c * if r <= f { r * r } else { 2.0 * f * r - f * f }
             } else {
-                refit_weight(series, observed, k0 + t) * r * r
+                refit_weight(series, observed, k) * r * r
             };
         }
     }
@@ -51,12 +54,14 @@ fn irls_objective(
 /// The refit under the Euclidean norm: iteratively reweighted least squares.
 /// Each observed frame's weight is multiplied by `c·f / max(‖rᵢ‖, f)` from the
 /// previous solve (see the module docs for `c`); gap-filled frames keep their
-/// least-squares weight (they are not data). Each solve lowers [`irls_objective`] (a majorise–minimise
-/// step). It stops when a step gains less than 0.1 % or after
-/// [`IRLS_STEPS`], and keeps the best solution seen.
+/// least-squares weight (they are not data). Each solve lowers [`objective`]
+/// (a majorise–minimise step). It stops when a step gains less than 0.1 % or
+/// after [`IRLS_STEPS`], and keeps the best solution seen.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn reweighted(
     series: &JointSeries<'_>,
     bounds: &[usize],
+    durations: &[usize],
     elems: &[Elem],
     init: &[Vec<f64>],
     fit: &FitParams,
@@ -64,11 +69,10 @@ pub(super) fn reweighted(
     start: Vec<Primitive>,
 ) -> Vec<Primitive> {
     let (t, d) = series.points.dim();
-    let durations: Vec<usize> = bounds.windows(2).map(|w| w[1] - w[0]).collect();
     let floor = IRLS_FLOOR_PX * fit.unit_scale;
     let mut res = vec![0.0; t];
     let mut best = start;
-    irls_objective(series, bounds, &best, floor, 1.0, &mut res);
+    residual_lengths(series, bounds, &best, &mut res);
     // Observed frames weigh 1 on average in the first reweighted solve, as
     // in the least-squares one, against the gap-filled frames.
     let (mut sum, mut n) = (0.0, 0usize);
@@ -82,8 +86,9 @@ pub(super) fn reweighted(
         return best;
     }
     let c = n as f64 / sum;
-    let mut best_err = irls_objective(series, bounds, &best, floor, c, &mut res);
+    let mut best_err = objective(series, bounds, &res, floor, c);
     let mut weights = vec![0.0; t];
+    let mut cand_res = vec![0.0; t];
     for _ in 0..IRLS_STEPS {
         for ((w, r), &obs) in weights.iter_mut().zip(&res).zip(series.weights) {
             *w = if obs > 0.0 {
@@ -95,16 +100,16 @@ pub(super) fn reweighted(
         let Some((knots, interiors)) = solve(series, bounds, elems, init, d, Some(&weights)) else {
             break;
         };
-        let cand = primitives_of(prims, elems, &durations, &knots, &interiors);
-        let mut cand_res = vec![0.0; t];
-        let err = irls_objective(series, bounds, &cand, floor, c, &mut cand_res);
+        let cand = primitives_of(prims, elems, durations, &knots, &interiors);
+        residual_lengths(series, bounds, &cand, &mut cand_res);
+        let err = objective(series, bounds, &cand_res, floor, c);
         if err.is_nan() || err >= best_err {
             break;
         }
         let gain = (best_err - err) / best_err.max(f64::MIN_POSITIVE);
         best = cand;
         best_err = err;
-        res = cand_res;
+        std::mem::swap(&mut res, &mut cand_res);
         if gain < 1e-3 {
             break;
         }
@@ -169,7 +174,7 @@ mod tests {
         let mut res = vec![0.0; pts.nrows()];
         // Σ‖rᵢ‖ over the observed frames (`res` keeps the last one's residuals).
         let mut observed_sum = |p: &[Primitive]| {
-            irls_objective(&series, &bounds, p, 0.0, 1.0, &mut res);
+            residual_lengths(&series, &bounds, p, &mut res);
             (0..pts.nrows())
                 .filter(|&i| weights[i] > 0.0)
                 .map(|i| res[i])

@@ -275,7 +275,7 @@ pub(crate) fn refit_joint(
         let (knots, interiors) = solve(series, bounds, &elems, &init, d, None)?;
         let mut out = primitives_of(prims, &elems, &durations, &knots, &interiors);
         if norm == RefitNorm::Euclidean {
-            out = reweighted(series, bounds, &elems, &init, fit, prims, out);
+            out = reweighted(series, bounds, &durations, &elems, &init, fit, prims, out);
         }
         let mut changed = false;
         for (i, e) in elems.iter_mut().enumerate() {
