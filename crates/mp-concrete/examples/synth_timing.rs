@@ -7,7 +7,9 @@
 use std::time::Instant;
 
 use mp_concrete::synthetic::synthetic_track;
-use mp_concrete::{segment, segment_exhaustive, synthesize, Continuity, Scale, SynthParams};
+use mp_concrete::{
+    segment, segment_exhaustive, segment_with_stats, synthesize, Continuity, Scale, SynthParams,
+};
 use mp_geom::performer::{perform, PerformerParams};
 use mp_geom::Track;
 use ndarray::{concatenate, Axis};
@@ -61,6 +63,21 @@ fn main() -> Res<()> {
         t0.elapsed().as_secs_f64(),
         params.continuity,
         prog.n_segments()
+    );
+    // The search's work (the same on every machine).
+    let (_, st) = segment_with_stats(&track, &params)?;
+    println!(
+        "  search: {} candidates, {} dropped on λ, {} by the O(1) bounds, {} survivors \
+         ({} dropped exactly; {:.1} joints each, {} frames), {} circle fits ({} frames)",
+        st.candidates,
+        st.pruned_lambda,
+        st.pruned_bounds,
+        st.survivors,
+        st.dropped_exact,
+        st.joints_per_survivor(),
+        st.exact_frames,
+        st.circle_fits,
+        st.circle_frames
     );
     let independent = SynthParams {
         continuity: Continuity::None,

@@ -46,9 +46,10 @@ pub use error::{ConcreteError, ParseError, Result};
 pub use exec::{ExecParams, Transition};
 pub use interp::{interpolation_experiment, InterpParams, InterpolationResult};
 pub use program::{Program, Segment};
+pub use search::SearchStats;
 pub use smooth::{max_boundary_gap, Continuity, RefitNorm};
 pub use stats::{program_stats, ProgramStats};
 pub use synth::{
-    segment, segment_costs, segment_exhaustive, synthesize, synthesize_detailed, Lambda, Scale,
-    SynthParams, Synthesis, UnobservedJoints,
+    segment, segment_costs, segment_exhaustive, segment_with_stats, synthesize,
+    synthesize_detailed, Lambda, Scale, SynthParams, Synthesis, UnobservedJoints,
 };

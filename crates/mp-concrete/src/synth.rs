@@ -53,7 +53,7 @@ use serde::{Deserialize, Serialize};
 use crate::dp::{segment_table, CostTable, Segmentation};
 use crate::error::{ConcreteError, Result};
 use crate::program::{Program, Segment};
-use crate::search::{segment_search, JointTrack};
+use crate::search::{segment_search, JointTrack, SearchStats};
 use crate::smooth::{refit_joint, Continuity, JointSeries, RefitNorm};
 
 /// Reference pixels of a 512-px frame.
@@ -585,7 +585,7 @@ fn search_prepared(
     track: &Track,
     lambda: &[f64],
     window: usize,
-) -> Result<Segmentation> {
+) -> Result<(Segmentation, SearchStats)> {
     let joints: Vec<JointTrack<'_>> = prep
         .points
         .iter()
@@ -614,10 +614,25 @@ pub fn segment(track: &Track, params: &SynthParams) -> Result<Segmentation> {
         // The bisection has segmented at the λ it chose already.
         return synthesize_budget(track, params, ratio).map(|(s, _)| s.segmentation);
     }
+    segment_with_stats(track, params).map(|(s, _)| s)
+}
+
+/// [`segment`] and the work its search did ([`SearchStats`]). With a
+/// [`Lambda::Budget`], the search at the fixed λ the budget chose (the
+/// bisection's other searches are not counted).
+pub fn segment_with_stats(
+    track: &Track,
+    params: &SynthParams,
+) -> Result<(Segmentation, SearchStats)> {
+    params.validate()?;
+    let mut params = params.clone();
+    if let Lambda::Budget { ratio } = params.lambda {
+        params.lambda = Lambda::fixed(synthesize_budget(track, &params, ratio)?.1);
+    }
     let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
     let unit_scale = params.unit_scale(track);
-    let fit = scaled_fit(params, unit_scale)?;
-    let lambda = lambda_per_frame(track, params, unit_scale);
+    let fit = scaled_fit(&params, unit_scale)?;
+    let lambda = lambda_per_frame(track, &params, unit_scale);
     search_prepared(&prep, &fit, track, &lambda, params.max_segment_frames)
 }
 
@@ -665,7 +680,8 @@ pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthe
     let unit_scale = params.unit_scale(track);
     let fit = scaled_fit(params, unit_scale)?;
     let lambda = lambda_per_frame(track, params, unit_scale);
-    let segmentation = search_prepared(&prep, &fit, track, &lambda, params.max_segment_frames)?;
+    let (segmentation, _) =
+        search_prepared(&prep, &fit, track, &lambda, params.max_segment_frames)?;
     let segments = segmentation
         .boundaries
         .windows(2)

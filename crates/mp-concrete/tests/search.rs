@@ -4,7 +4,9 @@
 
 use mp_concrete::dp::Segmentation;
 use mp_concrete::synthetic::synthetic_track;
-use mp_concrete::{segment, segment_costs, segment_exhaustive, Lambda, Scale, SynthParams};
+use mp_concrete::{
+    segment, segment_costs, segment_exhaustive, segment_with_stats, Lambda, Scale, SynthParams,
+};
 use mp_geom::fit::ErrorNorm;
 use mp_geom::{PrimitiveKind, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
@@ -155,6 +157,35 @@ fn synthetic_track_same_optimum() {
         ..SynthParams::default()
     };
     same_optimum(&track, &auto);
+}
+
+/// The search's counts add up: every candidate is dropped on λ, by the
+/// bounds, in the exact stage, or was the best so far for its end frame (at
+/// least one per end frame); every segment's end frame saw the candidate
+/// that won; and the counts are those of the same search run twice.
+#[test]
+fn search_stats_account_for_every_candidate() {
+    let track = synthetic_track(600, 7).unwrap();
+    let params = px_params(1600.0, 60);
+    let (seg, st) = segment_with_stats(&track, &params).unwrap();
+    assert_eq!(seg, segment(&track, &params).unwrap());
+    let t = track.n_frames() as u64;
+    // n − 1 … n − W for every end frame n (fewer at the start).
+    let expected: u64 = (1..=t).map(|n| n.min(60)).sum();
+    assert_eq!(st.candidates, expected);
+    assert_eq!(
+        st.candidates,
+        st.pruned_lambda + st.pruned_bounds + st.survivors
+    );
+    let improved = st.survivors - st.dropped_exact;
+    assert!(improved >= t, "{improved} improvements for {t} end frames");
+    assert!(st.pruned_lambda > 0 && st.pruned_bounds > 0, "{st:?}");
+    let j = track.n_joints() as u64;
+    assert!(st.exact_joints >= improved * j && st.exact_joints <= st.survivors * j);
+    assert!(st.exact_frames >= st.exact_joints && st.exact_frames <= st.exact_joints * 60);
+    assert!(st.circle_frames >= 3 * st.circle_fits && st.circle_frames <= 60 * st.circle_fits);
+    assert!(st.joints_per_survivor() >= 1.0 && st.joints_per_survivor() <= j as f64);
+    assert_eq!(segment_with_stats(&track, &params).unwrap().1, st);
 }
 
 /// Real tracks: Penn Action clips of several actions (occluded joints, both

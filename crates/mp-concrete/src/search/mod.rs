@@ -68,6 +68,41 @@ use bounds::{quick, Quick};
 use exact::{cheap2, circle2};
 use moments::Acc2;
 
+/// The work one search did: the same track and parameters give the same
+/// counts on every machine, so they measure the bounds and the visiting
+/// order where timings are noisy.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SearchStats {
+    /// Candidate segments `(k, n)` visited (at most `W` per end frame).
+    pub candidates: u64,
+    /// Dropped on `E[k] + λ` alone.
+    pub pruned_lambda: u64,
+    /// Dropped by the O(1) bounds of the joints.
+    pub pruned_bounds: u64,
+    /// Left for the exact stage (`candidates − pruned_lambda − pruned_bounds`).
+    pub survivors: u64,
+    /// Survivors dropped during the exact stage (the rest were each the
+    /// best so far for their end frame).
+    pub dropped_exact: u64,
+    /// One-pass joint evaluations in the exact stage, and the frames they read.
+    pub exact_joints: u64,
+    pub exact_frames: u64,
+    /// Exact circle fits, and the frames they read.
+    pub circle_fits: u64,
+    pub circle_frames: u64,
+}
+
+impl SearchStats {
+    /// Exact joint evaluations per survivor (0 without survivors).
+    pub fn joints_per_survivor(&self) -> f64 {
+        if self.survivors == 0 {
+            0.0
+        } else {
+            self.exact_joints as f64 / self.survivors as f64
+        }
+    }
+}
+
 /// Relative safety factor applied to every lower bound (rounding).
 const LB_SAFETY: f64 = 1.0 - 1e-9;
 
@@ -192,7 +227,7 @@ pub(crate) fn segment_search(
     fit: &FitParams,
     lambda: &[f64],
     window: usize,
-) -> Result<Segmentation> {
+) -> Result<(Segmentation, SearchStats)> {
     let t = lambda.len();
     if t == 0 {
         return Err(ConcreteError::Track("cannot segment 0 frames".into()));
@@ -249,6 +284,7 @@ pub(crate) fn segment_search(
     // far (most first): the candidates that cannot win are dropped sooner.
     let mut gaps = vec![0.0f64; nj];
     let mut order: Vec<usize> = (0..nj).collect();
+    let mut stats = SearchStats::default();
     for n in 1..=t {
         if n % 64 == 0 {
             order.sort_by(|&a, &b| gaps[b].total_cmp(&gaps[a]).then(a.cmp(&b)));
@@ -295,12 +331,11 @@ pub(crate) fn segment_search(
                 if (pass == 0 && k != seed) || (pass == 1 && k == seed && seed + 1 < n && n >= 2) {
                     continue;
                 }
+                stats.candidates += 1;
                 let base = best[k];
-                if !base.is_finite() {
-                    continue;
-                }
                 // Prune on λ alone (costs are ≥ 0).
-                if base + lam > best_n {
+                if !base.is_finite() || base + lam > best_n {
+                    stats.pruned_lambda += 1;
                     continue;
                 }
                 // O(1) bounds, joints in the current order.
@@ -324,8 +359,10 @@ pub(crate) fn segment_search(
                     }
                 }
                 if dead {
+                    stats.pruned_bounds += 1;
                     continue;
                 }
+                stats.survivors += 1;
                 // Exact costs joint by joint (circles only where one can
                 // win), dropped as soon as the exact partial sum plus the
                 // remaining bounds exceeds the incumbent.
@@ -347,6 +384,8 @@ pub(crate) fn segment_search(
                 };
                 for &j in &order {
                     rest -= lbs[j];
+                    stats.exact_joints += 1;
+                    stats.exact_frames += span_frames(&accs[j], k, n, fast[j].is_some());
                     let stage = joint_stage(
                         &joints[j],
                         fast[j].as_deref(),
@@ -367,6 +406,8 @@ pub(crate) fn segment_search(
                             // otherwise later, if the candidate survives.
                             if base + (sum + best + rest.max(0.0) + lam) > best_n {
                                 let p = fast[j].as_deref().unwrap_or(&[]);
+                                stats.circle_fits += 1;
+                                stats.circle_frames += span_frames(&accs[j], k, n, true);
                                 match joint_circle(&joints[j], p, &accs[j], best, &rules, fit) {
                                     Some(c) => c,
                                     None => no_fit(j)?,
@@ -389,12 +430,15 @@ pub(crate) fn segment_search(
                     }
                 }
                 if dead {
+                    stats.dropped_exact += 1;
                     continue;
                 }
                 // The deferred circles, those that may rise most first.
                 deferred.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
                 for &(j, lb, best) in &deferred {
                     let p = fast[j].as_deref().unwrap_or(&[]);
+                    stats.circle_fits += 1;
+                    stats.circle_frames += span_frames(&accs[j], k, n, true);
                     let cost = match joint_circle(&joints[j], p, &accs[j], best, &rules, fit) {
                         Some(c) => c,
                         None => no_fit(j)?,
@@ -411,6 +455,7 @@ pub(crate) fn segment_search(
                     }
                 }
                 if dead {
+                    stats.dropped_exact += 1;
                     continue;
                 }
                 // In joint order, whatever order the bounds took.
@@ -430,5 +475,17 @@ pub(crate) fn segment_search(
         best[n] = best_n;
         arg[n] = arg_n;
     }
-    backtrack(&best, &arg, window)
+    Ok((backtrack(&best, &arg, window)?, stats))
+}
+
+/// Frames an exact evaluation of a joint on `k..n` reads: its valid span on
+/// the 2D fast path, the whole segment otherwise.
+fn span_frames(acc: &Acc2, k: usize, n: usize, fast: bool) -> u64 {
+    if acc.count == 0 {
+        0
+    } else if !fast {
+        (n - k) as u64
+    } else {
+        (acc.last + 1 - acc.first) as u64
+    }
 }
