@@ -40,6 +40,10 @@ pub(super) struct Quick {
     pub(super) max_res_stat: f64,
     /// O(1) lower bound of the circle's error with penalty.
     pub(super) circle_lb: f64,
+    /// O(1) lower bounds of the stationary and line errors (`+∞` where the
+    /// kind takes no part), before the safety factor.
+    pub(super) stat_lb: f64,
+    pub(super) line_lb: f64,
 }
 
 pub(super) fn penalty_lb(fit: &FitParams, r: f64) -> f64 {
@@ -130,7 +134,11 @@ fn stat_fourth_ub(acc: &Acc2, m1: f64, m2: f64) -> f64 {
 
 pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams) -> Quick {
     let w = acc.sw;
-    let mut q = Quick::default();
+    let mut q = Quick {
+        stat_lb: f64::INFINITY,
+        line_lb: f64::INFINITY,
+        ..Quick::default()
+    };
     let (mux, muy) = (acc.sx / w, acc.sy / w);
     q.mx = mux + acc.rx;
     q.my = muy + acc.ry;
@@ -160,6 +168,7 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
             };
             euclid_lb(sse, q.max_res_stat).max(holder).max(0.5 * acc.sa)
         };
+        q.stat_lb = b;
         lb = lb.min(b);
     }
     let (a, b) = (pts[acc.first], pts[acc.last]);
@@ -197,6 +206,7 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
             // a line moves ‖v‖ per frame: the step-variation bound
             euclid_lb(sse, (rx * rx + ry * ry).sqrt()).max(speed_lb(acc, false))
         };
+        q.line_lb = b;
         lb = lb.min(b);
     }
     // circle

@@ -17,6 +17,10 @@ pub(super) struct Cheap {
     pub(super) best: f64,
     /// Lower bound of the circle's error with penalty, when a circle takes part.
     pub(super) circle_lb: Option<f64>,
+    /// The Euclidean errors of the one pass (`NaN` where not computed): the
+    /// stationary point, the line, and the distance to the moments' circle
+    /// (`Σ w |‖x − c‖ − r|`), for [`super::carry`].
+    pub(super) errors: [f64; 3],
 }
 
 pub(super) fn cheap2(
@@ -55,6 +59,7 @@ pub(super) fn cheap2(
                 decided: Some(q.sse_stat),
                 best: q.sse_stat,
                 circle_lb: None,
+                errors: [f64::NAN; 3],
             };
         }
         let mut best = f64::INFINITY;
@@ -68,6 +73,7 @@ pub(super) fn cheap2(
             decided: None,
             best,
             circle_lb: want_circle.then_some(q.circle_lb),
+            errors: [f64::NAN; 3],
         };
     }
     if rules.stat && q.bbox < rules.bbox_thr {
@@ -84,6 +90,7 @@ pub(super) fn cheap2(
             decided: Some(c),
             best: c,
             circle_lb: None,
+            errors: [e, f64::NAN, f64::NAN],
         };
     }
     // Two frames per step with separate sums (independent lanes the
@@ -148,6 +155,7 @@ pub(super) fn cheap2(
             decided: Some(pick(es, es2)),
             best: pick(es, es2),
             circle_lb: None,
+            errors: [es, el, if q.circle_ok { ec } else { f64::NAN }],
         };
     }
     let mut best = f64::INFINITY;
@@ -186,7 +194,34 @@ pub(super) fn cheap2(
         decided: None,
         best,
         circle_lb,
+        errors: [es, el, if q.circle_ok { ec } else { f64::NAN }],
     }
+}
+
+/// An exact circle of [`circle2`]: its cost and what [`super::carry`]
+/// needs to carry its error to a neighbouring segment.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct CircleFit {
+    /// Error with the radius penalty (the joint's cost if the circle wins).
+    pub(super) cost: f64,
+    /// Euclidean error without the penalty.
+    pub(super) error: f64,
+    pub(super) center: [f64; 2],
+    pub(super) radius: f64,
+    /// Angle (radians) at frame `first` and per frame.
+    pub(super) angle0: f64,
+    pub(super) angle_vel: f64,
+    pub(super) first: usize,
+    /// Smallest distance of a valid point to the centre.
+    pub(super) d_min: f64,
+    /// Largest step between consecutive unwrapped angles (radians).
+    pub(super) max_step: f64,
+    /// Unwrapped angles (radians) of the first and last valid frames, and
+    /// their directions from the centre (unit vectors).
+    pub(super) angle_first: f64,
+    pub(super) angle_last: f64,
+    pub(super) dir_first: [f64; 2],
+    pub(super) dir_last: [f64; 2],
 }
 
 /// The circle of [`mp_geom::fit::fit_circle`] (2D, linear angle) with its
@@ -201,7 +236,7 @@ pub(super) fn circle2(
     last: usize,
     rules: &Rules,
     fit: &FitParams,
-) -> Option<f64> {
+) -> Option<CircleFit> {
     let (mut w_sum, mut mx, mut my) = (0.0, 0.0, 0.0);
     for i in first..=last {
         let w = wts[i];
@@ -222,11 +257,18 @@ pub(super) fn circle2(
     // unwrapped angles (degrees) against segment time, least-squares line
     let (mut st, mut sth, mut stt, mut stth) = (0.0, 0.0, 0.0, 0.0);
     let t_ref = ((first + last) / 2) as f64;
+    let (mut prev, mut max_step, mut th_first) = (f64::NAN, 0.0f64, f64::NAN);
     unwrapped_angles(
         last + 1 - first,
         Some(&wts[first..=last]),
         |i| (pts[first + i][0] - cx, pts[first + i][1] - cy),
         |i, w, th| {
+            if prev.is_nan() {
+                th_first = th;
+            } else {
+                max_step = max_step.max((th - prev).abs());
+            }
+            prev = th;
             let t = (first + i) as f64 - t_ref;
             st += w * t;
             sth += w * th;
@@ -246,12 +288,20 @@ pub(super) fn circle2(
     let th0 = (thbar + vel * (first as f64 - t_ref - tbar)).to_radians();
     let (mut sn, mut cs) = th0.sin_cos();
     let (ds, dc) = vel.to_radians().sin_cos();
-    let (mut e, mut e2) = (0.0, 0.0);
+    let (mut e, mut e2, mut dc2) = (0.0, 0.0, f64::INFINITY);
+    let unit = |i: usize| {
+        let (px, py) = (pts[i][0] - cx, pts[i][1] - cy);
+        let d = (px * px + py * py).sqrt();
+        [px / d, py / d]
+    };
+    let (dir_first, dir_last) = (unit(first), unit(last));
     for i in first..=last {
         let w = wts[i];
         if w > 0.0 {
-            let ex = cx + r * cs - pts[i][0];
-            let ey = cy + r * sn - pts[i][1];
+            let (px, py) = (pts[i][0] - cx, pts[i][1] - cy);
+            dc2 = dc2.min(px * px + py * py);
+            let ex = r * cs - px;
+            let ey = r * sn - py;
             let d2 = ex * ex + ey * ey;
             e += w * d2.sqrt();
             e2 += w * d2;
@@ -260,6 +310,21 @@ pub(super) fn circle2(
         cs = c2;
         sn = s2;
     }
-    let err = if rules.squared { e2 } else { e } + fit.circle_penalty(r);
-    err.is_finite().then_some(err)
+    let error = if rules.squared { e2 } else { e };
+    let cost = error + fit.circle_penalty(r);
+    cost.is_finite().then_some(CircleFit {
+        cost,
+        error,
+        center: [cx, cy],
+        radius: r,
+        angle0: th0,
+        angle_vel: vel.to_radians(),
+        first,
+        d_min: dc2.sqrt(),
+        max_step: max_step.to_radians(),
+        angle_first: th_first.to_radians(),
+        angle_last: prev.to_radians(),
+        dir_first,
+        dir_last,
+    })
 }

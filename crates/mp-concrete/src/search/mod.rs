@@ -43,15 +43,22 @@
 //! [`mp_geom::fit::fit_best`] (same fits, same rules) up to rounding, so the
 //! optimum is the optimum of the exhaustive DP ([`crate::synth::segment_exhaustive`]).
 //!
+//! What the exact stage measures is kept for the next candidates (per joint,
+//! a ring of `W + 2` candidates): a candidate one frame longer than a
+//! measured one — the same start at the next end frame, or the previous start
+//! at the same end frame — gets each kind's bound raised by the triangle
+//! inequality from the measured error (`carry`, Euclidean norm, 2D joints).
+//!
 //! Joints in 3D, or with the spline kind allowed, use [`fit_best_unchecked`]
 //! for their exact cost (still with the bounds of the other joints and the
 //! early exit).
 //!
 //! Steps, one file each: `moments` (running moments), `bounds` (the O(1)
-//! fits and bounds), `exact` (the one-pass errors and the exact circle);
-//! the search loop is here.
+//! fits and bounds), `carry` (bounds carried from a measured neighbour),
+//! `exact` (the one-pass errors and the exact circle); the search loop is here.
 //!
-//! Memory: `O(T·J·D)` for the points and `O(T)` for the DP; no `T × W` table.
+//! Memory: `O(T·J·D)` for the points, `O(T)` for the DP and `O(W·J)` for
+//! what is carried; no `T × W` table.
 
 use mp_geom::fit::{fit_best_unchecked, ErrorNorm, FitParams};
 use mp_geom::PrimitiveKind;
@@ -61,11 +68,13 @@ use crate::dp::{backtrack, Segmentation};
 use crate::error::{ConcreteError, Result};
 
 mod bounds;
+mod carry;
 mod exact;
 mod moments;
 
 use bounds::{quick, Quick};
-use exact::{cheap2, circle2};
+use carry::{carried, Known};
+use exact::{cheap2, circle2, CircleFit};
 use moments::Acc2;
 
 /// The work one search did: the same track and parameters give the same
@@ -158,6 +167,10 @@ enum Stage {
     Circle { lb: f64, best: f64 },
 }
 
+/// A joint's [`Stage`] and the one pass's Euclidean errors where it ran
+/// (for [`carry`]).
+type Staged = (Stage, Option<[f64; 3]>);
+
 /// The cheap stage of one joint's cost on `k..n` (see [`Stage`]).
 #[allow(clippy::too_many_arguments)]
 fn joint_stage(
@@ -170,26 +183,28 @@ fn joint_stage(
     fit: &FitParams,
     k: usize,
     n: usize,
-) -> std::result::Result<Stage, mp_geom::GeomError> {
+) -> std::result::Result<Staged, mp_geom::GeomError> {
     if acc.count == 0 {
-        return Ok(Stage::Done(Some(0.0)));
+        return Ok((Stage::Done(Some(0.0)), None));
     }
     let p = match pts {
         Some(p) if !rules.quadratic => p,
         _ => {
             let e =
                 fit_best_unchecked(jt.points.slice(s![k..n, ..]), Some(&jt.weights[k..n]), fit)?;
-            return Ok(Stage::Done(Some(e.error)));
+            return Ok((Stage::Done(Some(e.error)), None));
         }
     };
     let c = cheap2(q, acc, p, steps, jt.weights, rules);
+    let errors = (!rules.squared).then_some(c.errors);
     if let Some(d) = c.decided {
-        return Ok(Stage::Done(Some(d)));
+        return Ok((Stage::Done(Some(d)), errors));
     }
-    match c.circle_lb {
-        Some(lb) if lb < c.best => Ok(Stage::Circle { lb, best: c.best }),
-        _ => Ok(Stage::Done(c.best.is_finite().then_some(c.best))),
-    }
+    let stage = match c.circle_lb {
+        Some(lb) if lb < c.best => Stage::Circle { lb, best: c.best },
+        _ => Stage::Done(c.best.is_finite().then_some(c.best)),
+    };
+    Ok((stage, errors))
 }
 
 /// The circle stage: the exact cost given the best other kind.
@@ -200,11 +215,13 @@ fn joint_circle(
     best: f64,
     rules: &Rules,
     fit: &FitParams,
-) -> Option<f64> {
-    match circle2(pts, jt.weights, acc.first, acc.last, rules, fit) {
-        Some(e) if e < best => Some(e),
+) -> (Option<f64>, Option<CircleFit>) {
+    let cf = circle2(pts, jt.weights, acc.first, acc.last, rules, fit);
+    let cost = match cf {
+        Some(c) if c.cost < best => Some(c.cost),
         _ => best.is_finite().then_some(best),
-    }
+    };
+    (cost, cf)
 }
 
 fn joint_err(
@@ -285,6 +302,10 @@ pub(crate) fn segment_search(
     let mut gaps = vec![0.0f64; nj];
     let mut order: Vec<usize> = (0..nj).collect();
     let mut stats = SearchStats::default();
+    // What the exact stage measured, per joint, on the candidates of this
+    // end frame and the previous one (slot `k mod (W + 2)`).
+    let ring = window + 2;
+    let mut known = vec![Known::NONE; nj * ring];
     for n in 1..=t {
         if n % 64 == 0 {
             order.sort_by(|&a, &b| gaps[b].total_cmp(&gaps[a]).then(a.cmp(&b)));
@@ -347,7 +368,39 @@ pub(crate) fn segment_search(
                         0.0
                     } else if let Some(p) = &fast[j] {
                         quicks[j] = quick(acc, p, &rules, fit);
-                        quicks[j].lb
+                        let q = &quicks[j];
+                        let w = joints[j].weights;
+                        let a = carried(&known[j * ring + k % ring], acc, q, p, w, &rules, k, n);
+                        let b = carried(
+                            &known[j * ring + (k + 1) % ring],
+                            acc,
+                            q,
+                            p,
+                            w,
+                            &rules,
+                            k,
+                            n,
+                        );
+                        if a.iter().chain(&b).any(|&v| v > 0.0) {
+                            let circle = rules.circle && !q.reject_moving && acc.count >= 3;
+                            let kinds = [
+                                q.stat_lb.max(a[0]).max(b[0]),
+                                q.line_lb.max(a[1]).max(b[1]),
+                                if circle {
+                                    q.circle_lb.max(a[2]).max(b[2])
+                                } else {
+                                    f64::INFINITY
+                                },
+                            ];
+                            let m = kinds.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+                            if m.is_finite() {
+                                q.lb.max(m * LB_SAFETY)
+                            } else {
+                                q.lb
+                            }
+                        } else {
+                            q.lb
+                        }
                     } else {
                         0.0
                     };
@@ -386,7 +439,7 @@ pub(crate) fn segment_search(
                     rest -= lbs[j];
                     stats.exact_joints += 1;
                     stats.exact_frames += span_frames(&accs[j], k, n, fast[j].is_some());
-                    let stage = joint_stage(
+                    let (stage, errors) = joint_stage(
                         &joints[j],
                         fast[j].as_deref(),
                         &steps[j],
@@ -398,6 +451,10 @@ pub(crate) fn segment_search(
                         n,
                     )
                     .map_err(|e| joint_err(names, j, k, n, e))?;
+                    let slot = j * ring + k % ring;
+                    if let Some(errors) = errors {
+                        known[slot] = Known::new(k, n, errors, &quicks[j]);
+                    }
                     let cost = match stage {
                         Stage::Done(Some(c)) => c,
                         Stage::Done(None) => no_fit(j)?,
@@ -408,11 +465,18 @@ pub(crate) fn segment_search(
                                 let p = fast[j].as_deref().unwrap_or(&[]);
                                 stats.circle_fits += 1;
                                 stats.circle_frames += span_frames(&accs[j], k, n, true);
-                                match joint_circle(&joints[j], p, &accs[j], best, &rules, fit) {
+                                let (c, cf) =
+                                    joint_circle(&joints[j], p, &accs[j], best, &rules, fit);
+                                if errors.is_some() {
+                                    known[slot].circle = cf;
+                                }
+                                match c {
                                     Some(c) => c,
                                     None => no_fit(j)?,
                                 }
                             } else {
+                                // Provisionally its largest known bound.
+                                let lb = lb.max(lbs[j]);
                                 deferred.push((j, lb, best));
                                 lb
                             }
@@ -439,7 +503,12 @@ pub(crate) fn segment_search(
                     let p = fast[j].as_deref().unwrap_or(&[]);
                     stats.circle_fits += 1;
                     stats.circle_frames += span_frames(&accs[j], k, n, true);
-                    let cost = match joint_circle(&joints[j], p, &accs[j], best, &rules, fit) {
+                    let (c, cf) = joint_circle(&joints[j], p, &accs[j], best, &rules, fit);
+                    let slot = j * ring + k % ring;
+                    if known[slot].k == k && known[slot].n == n {
+                        known[slot].circle = cf;
+                    }
+                    let cost = match c {
                         Some(c) => c,
                         None => no_fit(j)?,
                     };

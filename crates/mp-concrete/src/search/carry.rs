@@ -1,0 +1,376 @@
+//! Lower bounds carried over from a neighbouring candidate (Euclidean norm,
+//! 2D joints).
+//!
+//! When the exact stage has evaluated a joint on a segment one frame shorter
+//! than the candidate — `k..n−1` (the same start, the previous end frame) or
+//! `k+1..n` (the same end frame, the previous start) — each kind's error
+//! there is known exactly, with the model it was measured against (`f_old`).
+//! The candidate's model `f_new` of that kind is another one, but by the
+//! triangle inequality, over the frames the two segments share,
+//!
+//! `Σ‖xᵢ − f_new(tᵢ)‖ ≥ Σ‖xᵢ − f_old(tᵢ)‖ − Σ‖f_new(tᵢ) − f_old(tᵢ)‖`,
+//!
+//! and the new frame adds its own distance to `f_new`. The last sum is
+//! bounded in O(1):
+//!
+//! * stationary point and line: both models come from the moments; the line's
+//!   difference is linear in time, `Σ‖a + b·(tᵢ − t̄)‖ ≤ n‖a‖ + ‖b‖·√(n·S)`;
+//! * the distance to the moments' circle (a bound of the circle's error):
+//!   `n·(‖Δc‖ + |Δr|)`;
+//! * the exact circle: centre and radius from the moments (within the
+//!   rounding slack of the exact fit's), and its least-squares angle line.
+//!   Moving the centre by `Δc` turns every point's angle by at most
+//!   `ε = asin(Δc / d_min)` (`d_min`: the old fit's smallest distance to its
+//!   centre), which moves the fitted line by at most `ε(1 + |t − t̄|·M/S)` at
+//!   time `t` (`M = Σ|tᵢ − t̄| ≤ √(n·S)`); the new frame's angle residual
+//!   `e` against the old line moves it by `e·h(t)` (the least-squares hat
+//!   function). So `Σ|Δφᵢ| ≤ ε(n_old + n) + |e|(1 + |t_new − t̄|·√(n/S))`,
+//!   and `‖f_new − f_old‖ ≤ ‖Δc‖ + |Δr| + r_old·|Δφ|`. The bound holds only
+//!   while the unwrapping of the angles cannot change (the old largest step
+//!   plus `2ε`, and the new frame's step plus `ε`, below π); otherwise the
+//!   circle keeps its O(1) bound.
+//!
+//! A kind's bound is the larger of its O(1) bound and the carried one; the
+//! joint's bound is the smallest over the kinds that take part.
+
+use std::f64::consts::PI;
+
+use super::bounds::Quick;
+use super::exact::CircleFit;
+use super::moments::Acc2;
+use super::Rules;
+
+/// What the exact stage measured for one joint on the segment `k..n`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Known {
+    pub(super) k: usize,
+    pub(super) n: usize,
+    /// Euclidean errors of the stationary point, the line and the distance
+    /// to the moments' circle (`NaN`: not measured).
+    pub(super) errors: [f64; 3],
+    /// The models they were measured against: the mean, the line's value at
+    /// frame `n − 1` and its velocity, the moments' circle.
+    pub(super) mean: [f64; 2],
+    pub(super) line_end: [f64; 2],
+    pub(super) line_vel: [f64; 2],
+    pub(super) circle_m: [f64; 3],
+    /// The exact circle, where it was fitted.
+    pub(super) circle: Option<CircleFit>,
+}
+
+impl Known {
+    /// Nothing known (matches no candidate).
+    pub(super) const NONE: Known = Known {
+        k: usize::MAX,
+        n: usize::MAX,
+        errors: [f64::NAN; 3],
+        mean: [0.0; 2],
+        line_end: [0.0; 2],
+        line_vel: [0.0; 2],
+        circle_m: [0.0; 3],
+        circle: None,
+    };
+
+    /// What the one pass measured on `k..n`, with the O(1) models of `q`.
+    pub(super) fn new(k: usize, n: usize, errors: [f64; 3], q: &Quick) -> Self {
+        Known {
+            k,
+            n,
+            errors,
+            mean: [q.mx, q.my],
+            line_end: [q.lx, q.ly],
+            line_vel: [q.vx, q.vy],
+            circle_m: [q.cx, q.cy, q.r],
+            circle: None,
+        }
+    }
+}
+
+fn norm(a: f64, b: f64) -> f64 {
+    (a * a + b * b).sqrt()
+}
+
+/// An upper bound of `asin(x)` for `0 ≤ x < 1` (`x / √(1 − x²)`, the
+/// tangent of the angle); `None` from 1 on (or NaN).
+fn asin_ub(x: f64) -> Option<f64> {
+    let c = 1.0 - x * x;
+    (x < 1.0 && c > 0.0).then(|| x / c.sqrt())
+}
+
+/// Lower bounds `[stationary, line, circle with penalty]` of the joint's
+/// errors on `k..n` carried from `old` (`0` where nothing carries; the
+/// caller takes the larger of these and the O(1) bounds).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn carried(
+    old: &Known,
+    acc: &Acc2,
+    q: &Quick,
+    pts: &[[f64; 2]],
+    wts: &[f64],
+    rules: &Rules,
+    k: usize,
+    n: usize,
+) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    if rules.squared || acc.count == 0 {
+        return out;
+    }
+    // The new frame and whether the old segment ended (`false`) or started
+    // (`true`) next to it.
+    let (new, at_start) = if old.k == k && old.n + 1 == n {
+        (n - 1, false)
+    } else if old.k == k + 1 && old.n == n {
+        (k, true)
+    } else {
+        return out;
+    };
+    let new_valid = wts[new] > 0.0;
+    let n_new = acc.count as f64;
+    let n_old = n_new - if new_valid { 1.0 } else { 0.0 };
+    if n_old < 1.0 {
+        return out;
+    }
+    let p = pts[new];
+    // Local times (frame − (n − 1)) of the valid frames: the candidate's
+    // moments, less the new frame for the old ones.
+    let tau_new = new as f64 - (n - 1) as f64;
+    let (st_old, stt_old) = if new_valid {
+        (acc.st - tau_new, acc.stt - tau_new * tau_new)
+    } else {
+        (acc.st, acc.stt)
+    };
+    let [e_stat, e_line, e_rad] = old.errors;
+    if e_stat.is_finite() {
+        let d = n_old * norm(q.mx - old.mean[0], q.my - old.mean[1]);
+        let own = if new_valid {
+            norm(p[0] - q.mx, p[1] - q.my)
+        } else {
+            0.0
+        };
+        out[0] = (e_stat - d + own).max(0.0);
+    }
+    if e_line.is_finite() {
+        // Both lines at the old frames' mean time, and their velocities.
+        let tbar = st_old / n_old;
+        let s_old = (stt_old - st_old * tbar).max(0.0);
+        let shift = (n - 1) as f64 - (old.n - 1) as f64;
+        let ax = (q.lx + q.vx * tbar) - (old.line_end[0] + old.line_vel[0] * (tbar + shift));
+        let ay = (q.ly + q.vy * tbar) - (old.line_end[1] + old.line_vel[1] * (tbar + shift));
+        let b = norm(q.vx - old.line_vel[0], q.vy - old.line_vel[1]);
+        let d = n_old * norm(ax, ay) + b * (n_old * s_old).sqrt();
+        let own = if new_valid {
+            norm(
+                p[0] - (q.lx + q.vx * tau_new),
+                p[1] - (q.ly + q.vy * tau_new),
+            )
+        } else {
+            0.0
+        };
+        out[1] = (e_line - d + own).max(0.0);
+    }
+    if !q.circle_ok {
+        return out;
+    }
+    let slack = q.circle_slack;
+    // The new frame's distance to any circle within the slack of the moments'.
+    let d_new = norm(p[0] - q.cx, p[1] - q.cy);
+    let own = if new_valid {
+        ((d_new - q.r).abs() - 2.0 * slack).max(0.0)
+    } else {
+        0.0
+    };
+    let mut circle = 0.0f64;
+    if e_rad.is_finite() {
+        let [cx, cy, r] = old.circle_m;
+        let d = n_old * (norm(q.cx - cx, q.cy - cy) + (q.r - r).abs() + 2.0 * slack);
+        circle = circle.max(e_rad - d + own);
+    }
+    if let Some(cf) = &old.circle {
+        if let Some(b) = carried_circle(cf, acc, q, p, new, new_valid, at_start, n_old, n) {
+            circle = circle.max(b + own);
+        }
+    }
+    out[2] = circle.max(0.0) + q.pen_lb;
+    out
+}
+
+/// The exact circle's part of [`carried`] (without the new frame's own
+/// distance), `None` where the unwrapping could change.
+#[allow(clippy::too_many_arguments)]
+fn carried_circle(
+    cf: &CircleFit,
+    acc: &Acc2,
+    q: &Quick,
+    p: [f64; 2],
+    new: usize,
+    new_valid: bool,
+    at_start: bool,
+    n_old: f64,
+    n: usize,
+) -> Option<f64> {
+    let slack = q.circle_slack;
+    let dc = norm(q.cx - cf.center[0], q.cy - cf.center[1]) + slack;
+    let dr = (q.r - cf.radius).abs() + slack;
+    let eps = asin_ub(dc / cf.d_min)?;
+    // (Comparisons false for NaN.)
+    let unwrap_kept = cf.max_step + 2.0 * eps < PI;
+    if !unwrap_kept {
+        return None;
+    }
+    let n_new = acc.count as f64;
+    let tbar = acc.st / acc.sw;
+    let s = acc.stt - acc.st * tbar;
+    let spread = s > 0.0;
+    if !spread {
+        return None;
+    }
+    let mut dphi = eps * (n_old + n_new);
+    if new_valid {
+        let d_new = norm(p[0] - q.cx, p[1] - q.cy);
+        // The new frame's angle about the exact centre is within `eps_new`
+        // of its angle about the moments' centre.
+        let eps_new = asin_ub(slack / d_new)?;
+        let (neighbour, dir) = if at_start {
+            (cf.angle_first, cf.dir_first)
+        } else {
+            (cf.angle_last, cf.dir_last)
+        };
+        // Its angle from the neighbour's direction: at most π/2 times the
+        // chord between the two unit vectors (no `atan2`).
+        let chord = norm(
+            (p[0] - q.cx) / d_new - dir[0],
+            (p[1] - q.cy) / d_new - dir[1],
+        );
+        let step = 0.5 * PI * chord;
+        let same_branch = step + eps + eps_new < PI;
+        if !same_branch {
+            return None;
+        }
+        let line_old = cf.angle0 + cf.angle_vel * (new as f64 - cf.first as f64);
+        let e = step + (neighbour - line_old).abs() + eps_new;
+        let tau_new = new as f64 - (n - 1) as f64;
+        dphi += e * (1.0 + (tau_new - tbar).abs() * (n_new / s).sqrt());
+    }
+    let d = n_old * (dc + dr) + cf.radius * dphi;
+    Some(cf.error - d)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+    use super::*;
+    use crate::search::bounds::quick;
+    use crate::search::exact::{cheap2, circle2};
+    use mp_geom::fit::FitParams;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Arcs at varying angular speed (back and forth, full turns), lines
+    /// and pauses, with noise and missing frames.
+    fn track(rng: &mut ChaCha8Rng, t: usize) -> (Vec<[f64; 2]>, Vec<f64>) {
+        let mut pts = Vec::with_capacity(t);
+        let (mut ang, mut vel) = (rng.random_range(-3.0..3.0), 0.0f64);
+        let (c, r) = ([300.0, 250.0], rng.random_range(20.0..150.0));
+        let noise = rng.random_range(0.0..6.0);
+        for i in 0..t {
+            vel = 0.8 * vel + rng.random_range(-0.08..0.08);
+            if i % 40 < 8 {
+                vel *= 0.3; // a pause
+            }
+            ang += vel;
+            pts.push([
+                c[0] + r * ang.cos() + noise * rng.random_range(-1.0..1.0) + 0.3 * i as f64,
+                c[1] + r * ang.sin() + noise * rng.random_range(-1.0..1.0),
+            ]);
+        }
+        let wts: Vec<f64> = (0..t)
+            .map(|_| if rng.random_bool(0.1) { 0.0 } else { 1.0 })
+            .collect();
+        for (p, &w) in pts.iter_mut().zip(&wts) {
+            if w == 0.0 {
+                *p = [0.0, 0.0];
+            }
+        }
+        (pts, wts)
+    }
+
+    fn acc_of(pts: &[[f64; 2]], wts: &[f64], steps: &[f64], k: usize, n: usize) -> Acc2 {
+        let mut acc = Acc2::default();
+        acc.reset(n - 1, pts[n - 1][0], pts[n - 1][1]);
+        for i in (k..n).rev() {
+            if wts[i] > 0.0 {
+                let tau = i as f64 - (n - 1) as f64;
+                acc.add(i, tau, pts[i][0], pts[i][1], steps[i]);
+            }
+        }
+        acc
+    }
+
+    /// Every carried bound is below the exact error of its kind on the
+    /// candidate, from both neighbours, on thousands of segments.
+    #[test]
+    fn carried_bounds_are_below_the_exact_errors() {
+        let fit = FitParams::default();
+        let rules = Rules::new(&fit);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (mut checked, mut circles_carried) = (0, 0);
+        for _ in 0..40 {
+            let t = 90;
+            let (pts, wts) = track(&mut rng, t);
+            let steps: Vec<f64> = (0..t)
+                .map(|i| {
+                    if i + 1 < t && wts[i] > 0.0 && wts[i + 1] > 0.0 {
+                        let (dx, dy) = (pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]);
+                        (dx * dx + dy * dy).sqrt()
+                    } else {
+                        -1.0
+                    }
+                })
+                .collect();
+            let measure = |k: usize, n: usize| {
+                let acc = acc_of(&pts, &wts, &steps, k, n);
+                if acc.count < 3 {
+                    return None;
+                }
+                let q = quick(&acc, &pts, &rules, &fit);
+                let c = cheap2(&q, &acc, &pts, &steps, &wts, &rules);
+                let mut known = Known::new(k, n, c.errors, &q);
+                known.circle = circle2(&pts, &wts, acc.first, acc.last, &rules, &fit);
+                Some((acc, q, known))
+            };
+            for n in 4..=t {
+                for k in n.saturating_sub(40)..n - 2 {
+                    let Some((acc, q, new)) = measure(k, n) else {
+                        continue;
+                    };
+                    let olds = [measure(k, n - 1), measure(k + 1, n)];
+                    for (_, _, old) in olds.iter().flatten() {
+                        let b = carried(old, &acc, &q, &pts, &wts, &rules, k, n);
+                        let [es, el, _] = new.errors;
+                        let tol = |e: f64| 1e-9 * (1.0 + e.abs());
+                        if es.is_finite() {
+                            assert!(b[0] <= es + tol(es), "stat {k}..{n}: {} > {es}", b[0]);
+                        }
+                        if el.is_finite() {
+                            assert!(b[1] <= el + tol(el), "line {k}..{n}: {} > {el}", b[1]);
+                        }
+                        if let Some(cf) = &new.circle {
+                            assert!(
+                                b[2] <= cf.cost + tol(cf.cost),
+                                "circle {k}..{n}: {} > {}",
+                                b[2],
+                                cf.cost
+                            );
+                            if old.circle.is_some() && b[2] > q.pen_lb + 1e-9 {
+                                circles_carried += 1;
+                            }
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 50_000, "{checked}");
+        assert!(circles_carried > 10_000, "{circles_carried}");
+    }
+}
