@@ -117,7 +117,7 @@ pub(super) fn carried(
     }
     // The new frame and whether the old segment ended (`false`) or started
     // (`true`) next to it.
-    let (new, at_start) = if old.k == k && old.n + 1 == n {
+    let (new, at_start) = if old.k == k && n > 0 && old.n == n - 1 {
         (n - 1, false)
     } else if old.k == k + 1 && old.n == n {
         (k, true)
