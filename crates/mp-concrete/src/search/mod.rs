@@ -44,10 +44,11 @@
 //! optimum is the optimum of the exhaustive DP ([`crate::synth::segment_exhaustive`]).
 //!
 //! What the exact stage measures is kept for the next candidates (per joint,
-//! a ring of `W + 2` candidates): a candidate one frame longer than a
-//! measured one — the same start at the next end frame, or the previous start
-//! at the same end frame — gets each kind's bound raised by the triangle
-//! inequality from the measured error (`carry`, Euclidean norm, 2D joints).
+//! a ring of `W + 2` candidates, the latest measurement of each start): a
+//! candidate that contains a measured segment — the same start with an end
+//! frame up to 4 frames later, or the previous start at the same end frame —
+//! gets each kind's bound raised by the triangle inequality from the measured
+//! error (`carry`, Euclidean norm, 2D joints).
 //!
 //! Joints in 3D, or with the spline kind allowed, use [`fit_best_unchecked`]
 //! for their exact cost (still with the bounds of the other joints and the
