@@ -609,11 +609,12 @@ pub fn segment_exhaustive(track: &Track, params: &SynthParams) -> Result<Segment
 
 /// The segmentation that [`synthesize`] uses (branch and bound, no cost table).
 pub fn segment(track: &Track, params: &SynthParams) -> Result<Segmentation> {
-    params.validate()?;
     if let Lambda::Budget { ratio } = params.lambda {
+        params.validate()?;
         // The bisection has segmented at the λ it chose already.
         return synthesize_budget(track, params, ratio).map(|(s, _)| s.segmentation);
     }
+    // (Validates the parameters.)
     segment_with_stats(track, params).map(|(s, _)| s)
 }
 

@@ -38,7 +38,8 @@ pub(super) struct Quick {
     pub(super) sse_line: f64,
     /// Bound on the largest stationary residual.
     pub(super) max_res_stat: f64,
-    /// O(1) lower bound of the circle's error with penalty.
+    /// O(1) lower bound of the circle's error with penalty, after the safety
+    /// factor (`+∞` where the circle takes no part).
     pub(super) circle_lb: f64,
     /// O(1) lower bounds of the stationary and line errors (`+∞` where the
     /// kind takes no part), before the safety factor.
@@ -137,6 +138,7 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
     let mut q = Quick {
         stat_lb: f64::INFINITY,
         line_lb: f64::INFINITY,
+        circle_lb: f64::INFINITY,
         ..Quick::default()
     };
     let (mux, muy) = (acc.sx / w, acc.sy / w);

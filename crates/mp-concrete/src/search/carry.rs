@@ -41,7 +41,7 @@ use std::f64::consts::PI;
 use super::bounds::Quick;
 use super::exact::CircleFit;
 use super::moments::Acc2;
-use super::Rules;
+use super::{Rules, LB_SAFETY};
 
 /// What the exact stage measured for one joint on the segment `k..n`.
 #[derive(Clone, Copy, Debug)]
@@ -103,6 +103,37 @@ fn asin_ub(x: f64) -> Option<f64> {
 /// How many frames longer than a measured segment a candidate may be, at
 /// its end, and still get bounds carried from it.
 pub(super) const MAX_GAP: usize = 4;
+
+/// The joint's lower bound on `k..n`: for each kind that takes part, the
+/// larger of its O(1) bound (`q`) and what carries from `olds`; the smallest
+/// over the kinds, and never below `q.lb`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn joint_lb(
+    olds: [&Known; 2],
+    acc: &Acc2,
+    q: &Quick,
+    pts: &[[f64; 2]],
+    wts: &[f64],
+    rules: &Rules,
+    k: usize,
+    n: usize,
+) -> f64 {
+    let [a, b] = olds.map(|old| carried(old, acc, q, pts, wts, rules, k, n));
+    if !a.iter().chain(&b).any(|&v| v > 0.0) {
+        return q.lb;
+    }
+    let kinds = [
+        q.stat_lb.max(a[0]).max(b[0]),
+        q.line_lb.max(a[1]).max(b[1]),
+        q.circle_lb.max(a[2]).max(b[2]),
+    ];
+    let m = kinds.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+    if m.is_finite() {
+        q.lb.max(m * LB_SAFETY)
+    } else {
+        q.lb
+    }
+}
 
 /// Lower bounds `[stationary, line, circle with penalty]` of the joint's
 /// errors on `k..n` carried from `old` (`0` where nothing carries; the

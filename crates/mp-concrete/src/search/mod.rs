@@ -74,8 +74,8 @@ mod exact;
 mod moments;
 
 use bounds::{quick, Quick};
-use carry::{carried, Known};
-use exact::{cheap2, circle2, CircleFit};
+use carry::{joint_lb, Known};
+use exact::{cheap2, circle2};
 use moments::Acc2;
 
 /// The work one search did: the same track and parameters give the same
@@ -208,7 +208,10 @@ fn joint_stage(
     Ok((stage, errors))
 }
 
-/// The circle stage: the exact cost given the best other kind.
+/// The circle stage: the exact cost given the best other kind. Counted in
+/// `stats`; the fit is kept in `known` when that holds this candidate's
+/// one-pass errors (for [`carry`]).
+#[allow(clippy::too_many_arguments)]
 fn joint_circle(
     jt: &JointTrack<'_>,
     pts: &[[f64; 2]],
@@ -216,13 +219,21 @@ fn joint_circle(
     best: f64,
     rules: &Rules,
     fit: &FitParams,
-) -> (Option<f64>, Option<CircleFit>) {
+    stats: &mut SearchStats,
+    known: &mut Known,
+    k: usize,
+    n: usize,
+) -> Option<f64> {
+    stats.circle_fits += 1;
+    stats.circle_frames += span_frames(acc, k, n, true);
     let cf = circle2(pts, jt.weights, acc.first, acc.last, rules, fit);
-    let cost = match cf {
+    if known.k == k && known.n == n {
+        known.circle = cf;
+    }
+    match cf {
         Some(c) if c.cost < best => Some(c.cost),
         _ => best.is_finite().then_some(best),
-    };
-    (cost, cf)
+    }
 }
 
 fn joint_err(
@@ -369,39 +380,11 @@ pub(crate) fn segment_search(
                         0.0
                     } else if let Some(p) = &fast[j] {
                         quicks[j] = quick(acc, p, &rules, fit);
-                        let q = &quicks[j];
-                        let w = joints[j].weights;
-                        let a = carried(&known[j * ring + k % ring], acc, q, p, w, &rules, k, n);
-                        let b = carried(
+                        let olds = [
+                            &known[j * ring + k % ring],
                             &known[j * ring + (k + 1) % ring],
-                            acc,
-                            q,
-                            p,
-                            w,
-                            &rules,
-                            k,
-                            n,
-                        );
-                        if a.iter().chain(&b).any(|&v| v > 0.0) {
-                            let circle = rules.circle && !q.reject_moving && acc.count >= 3;
-                            let kinds = [
-                                q.stat_lb.max(a[0]).max(b[0]),
-                                q.line_lb.max(a[1]).max(b[1]),
-                                if circle {
-                                    q.circle_lb.max(a[2]).max(b[2])
-                                } else {
-                                    f64::INFINITY
-                                },
-                            ];
-                            let m = kinds.iter().fold(f64::INFINITY, |m, &v| m.min(v));
-                            if m.is_finite() {
-                                q.lb.max(m * LB_SAFETY)
-                            } else {
-                                q.lb
-                            }
-                        } else {
-                            q.lb
-                        }
+                        ];
+                        joint_lb(olds, acc, &quicks[j], p, joints[j].weights, &rules, k, n)
                     } else {
                         0.0
                     };
@@ -464,13 +447,18 @@ pub(crate) fn segment_search(
                             // otherwise later, if the candidate survives.
                             if base + (sum + best + rest.max(0.0) + lam) > best_n {
                                 let p = fast[j].as_deref().unwrap_or(&[]);
-                                stats.circle_fits += 1;
-                                stats.circle_frames += span_frames(&accs[j], k, n, true);
-                                let (c, cf) =
-                                    joint_circle(&joints[j], p, &accs[j], best, &rules, fit);
-                                if errors.is_some() {
-                                    known[slot].circle = cf;
-                                }
+                                let c = joint_circle(
+                                    &joints[j],
+                                    p,
+                                    &accs[j],
+                                    best,
+                                    &rules,
+                                    fit,
+                                    &mut stats,
+                                    &mut known[slot],
+                                    k,
+                                    n,
+                                );
                                 match c {
                                     Some(c) => c,
                                     None => no_fit(j)?,
@@ -502,13 +490,19 @@ pub(crate) fn segment_search(
                 deferred.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
                 for &(j, lb, best) in &deferred {
                     let p = fast[j].as_deref().unwrap_or(&[]);
-                    stats.circle_fits += 1;
-                    stats.circle_frames += span_frames(&accs[j], k, n, true);
-                    let (c, cf) = joint_circle(&joints[j], p, &accs[j], best, &rules, fit);
                     let slot = j * ring + k % ring;
-                    if known[slot].k == k && known[slot].n == n {
-                        known[slot].circle = cf;
-                    }
+                    let c = joint_circle(
+                        &joints[j],
+                        p,
+                        &accs[j],
+                        best,
+                        &rules,
+                        fit,
+                        &mut stats,
+                        &mut known[slot],
+                        k,
+                        n,
+                    );
                     let cost = match c {
                         Some(c) => c,
                         None => no_fit(j)?,
