@@ -121,24 +121,26 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
     }
     writeln!(
         md,
-        "\nThe search's work on the same tracks (`mp_concrete::segment_with_stats`; counts, the same on every machine): candidates (start, end) visited, dropped on `E[k] + λ`, dropped by the O(1) bounds, survivors, exact joint evaluations per survivor and the frames they read, exact circle fits and their frames:\n"
+        "\nThe search's work on the same tracks (`mp_concrete::segment_with_stats`; counts, the same on every machine): candidates (start, end) visited, dropped on `E[k] + λ`, dropped by the O(1) bounds, survivors, survivors dropped on the single-precision pass and the frames it read, exact joint evaluations per survivor and the frames they read, exact circle fits and their frames:\n"
     )?;
     writeln!(
         md,
-        "| track | candidates | dropped on λ | dropped by bounds | survivors | joints / survivor | frames read | circle fits | circle frames |"
+        "| track | candidates | dropped on λ | dropped by bounds | survivors | dropped in single precision | single-precision frames | exact joints / survivor | exact frames | circle fits | circle frames |"
     )?;
-    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     for reps in [2usize, 18] {
         let track = repeated_performer(reps)?;
         let (_, st) = mp_concrete::segment_with_stats(&track, &params)?;
         writeln!(
             md,
-            "| performer ×{reps} ({} frames) | {} | {} | {} | {} | {:.1} | {} | {} | {} |",
+            "| performer ×{reps} ({} frames) | {} | {} | {} | {} | {} | {} | {:.1} | {} | {} | {} |",
             track.n_frames(),
             st.candidates,
             st.pruned_lambda,
             st.pruned_bounds,
             st.survivors,
+            st.dropped_coarse,
+            st.coarse_frames,
             st.joints_per_survivor(),
             st.exact_frames,
             st.circle_fits,

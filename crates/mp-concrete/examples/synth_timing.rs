@@ -68,11 +68,15 @@ fn main() -> Res<()> {
     let (_, st) = segment_with_stats(&track, &params)?;
     println!(
         "  search: {} candidates, {} dropped on λ, {} by the O(1) bounds, {} survivors \
-         ({} dropped exactly; {:.1} joints each, {} frames), {} circle fits ({} frames)",
+         ({} dropped in single precision, {} joints, {} frames; {} dropped exactly; \
+         {:.1} exact joints each, {} frames), {} circle fits ({} frames)",
         st.candidates,
         st.pruned_lambda,
         st.pruned_bounds,
         st.survivors,
+        st.dropped_coarse,
+        st.coarse_joints,
+        st.coarse_frames,
         st.dropped_exact,
         st.joints_per_survivor(),
         st.exact_frames,

@@ -160,7 +160,7 @@ fn synthetic_track_same_optimum() {
 }
 
 /// The search's counts add up: every candidate is dropped on λ, by the
-/// bounds, in the exact stage, or was the best so far for its end frame (at
+/// bounds, on the single-precision bounds, in the exact stage, or was the best so far for its end frame (at
 /// least one per end frame); every segment's end frame saw the candidate
 /// that won; and the counts are those of the same search run twice.
 #[test]
@@ -177,12 +177,18 @@ fn search_stats_account_for_every_candidate() {
         st.candidates,
         st.pruned_lambda + st.pruned_bounds + st.survivors
     );
-    let improved = st.survivors - st.dropped_exact;
+    let improved = st.survivors - st.dropped_coarse - st.dropped_exact;
     assert!(improved >= t, "{improved} improvements for {t} end frames");
     assert!(st.pruned_lambda > 0 && st.pruned_bounds > 0, "{st:?}");
     let j = track.n_joints() as u64;
     assert!(st.exact_joints >= improved * j && st.exact_joints <= st.survivors * j);
     assert!(st.exact_frames >= st.exact_joints && st.exact_frames <= st.exact_joints * 60);
+    // Every survivor gets at least one single-precision joint pass before
+    // any exact one pass (2D, Euclidean: every joint has them), and most are
+    // dropped there.
+    assert!(st.coarse_joints >= st.survivors && st.coarse_joints <= st.survivors * j);
+    assert!(st.coarse_frames >= st.coarse_joints && st.coarse_frames <= st.coarse_joints * 60);
+    assert!(st.dropped_coarse > st.dropped_exact, "{st:?}");
     assert!(st.circle_frames >= 3 * st.circle_fits && st.circle_frames <= 60 * st.circle_fits);
     assert!(st.joints_per_survivor() >= 1.0 && st.joints_per_survivor() <= j as f64);
     assert_eq!(segment_with_stats(&track, &params).unwrap().1, st);

@@ -1,11 +1,12 @@
 //! Lower bounds carried over from a neighbouring candidate (Euclidean norm,
 //! 2D joints).
 //!
-//! When the exact stage has evaluated a joint on a segment contained in the
+//! When the one pass has evaluated a joint on a segment contained in the
 //! candidate — `k..n−m` (the same start, an end frame `m ≤` [`MAX_GAP`]
 //! earlier) or `k+1..n` (the same end frame, the previous start) — each
-//! kind's error there is known exactly, with the model it was measured
-//! against (`f_old`). The candidate's model `f_new` of that kind is another
+//! kind's error there is known, exactly or as a lower bound (the
+//! single-precision pass of [`super::coarse`]), with the model it was
+//! measured against (`f_old`). The candidate's model `f_new` of that kind is another
 //! one, but by the triangle inequality, over the frames the two segments
 //! share,
 //!
@@ -43,13 +44,13 @@ use super::exact::CircleFit;
 use super::moments::Acc2;
 use super::{Rules, LB_SAFETY};
 
-/// What the exact stage measured for one joint on the segment `k..n`.
+/// What the one pass measured for one joint on the segment `k..n`.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Known {
     pub(super) k: usize,
     pub(super) n: usize,
     /// Euclidean errors of the stationary point, the line and the distance
-    /// to the moments' circle (`NaN`: not measured).
+    /// to the moments' circle, exact or lower bounds (`NaN`: not measured).
     pub(super) errors: [f64; 3],
     /// The models they were measured against: the mean, the line's value at
     /// frame `n − 1` and its velocity, the moments' circle.
@@ -300,50 +301,10 @@ mod tests {
     use super::*;
     use crate::search::bounds::quick;
     use crate::search::exact::{cheap2, circle2};
+    use crate::search::testutil::{acc_of, steps_of, track};
     use mp_geom::fit::FitParams;
-    use rand::{Rng, SeedableRng};
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-
-    /// Arcs at varying angular speed (back and forth, full turns), lines
-    /// and pauses, with noise and missing frames.
-    fn track(rng: &mut ChaCha8Rng, t: usize) -> (Vec<[f64; 2]>, Vec<f64>) {
-        let mut pts = Vec::with_capacity(t);
-        let (mut ang, mut vel) = (rng.random_range(-3.0..3.0), 0.0f64);
-        let (c, r) = ([300.0, 250.0], rng.random_range(20.0..150.0));
-        let noise = rng.random_range(0.0..6.0);
-        for i in 0..t {
-            vel = 0.8 * vel + rng.random_range(-0.08..0.08);
-            if i % 40 < 8 {
-                vel *= 0.3; // a pause
-            }
-            ang += vel;
-            pts.push([
-                c[0] + r * ang.cos() + noise * rng.random_range(-1.0..1.0) + 0.3 * i as f64,
-                c[1] + r * ang.sin() + noise * rng.random_range(-1.0..1.0),
-            ]);
-        }
-        let wts: Vec<f64> = (0..t)
-            .map(|_| if rng.random_bool(0.1) { 0.0 } else { 1.0 })
-            .collect();
-        for (p, &w) in pts.iter_mut().zip(&wts) {
-            if w == 0.0 {
-                *p = [0.0, 0.0];
-            }
-        }
-        (pts, wts)
-    }
-
-    fn acc_of(pts: &[[f64; 2]], wts: &[f64], steps: &[f64], k: usize, n: usize) -> Acc2 {
-        let mut acc = Acc2::default();
-        acc.reset(n - 1, pts[n - 1][0], pts[n - 1][1]);
-        for i in (k..n).rev() {
-            if wts[i] > 0.0 {
-                let tau = i as f64 - (n - 1) as f64;
-                acc.add(i, tau, pts[i][0], pts[i][1], steps[i]);
-            }
-        }
-        acc
-    }
 
     /// Every carried bound is below the exact error of its kind on the
     /// candidate, from a segment ending 1 to `MAX_GAP` frames earlier and
@@ -357,16 +318,7 @@ mod tests {
         for _ in 0..40 {
             let t = 90;
             let (pts, wts) = track(&mut rng, t);
-            let steps: Vec<f64> = (0..t)
-                .map(|i| {
-                    if i + 1 < t && wts[i] > 0.0 && wts[i + 1] > 0.0 {
-                        let (dx, dy) = (pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]);
-                        (dx * dx + dy * dy).sqrt()
-                    } else {
-                        -1.0
-                    }
-                })
-                .collect();
+            let steps = steps_of(&pts, &wts);
             let measure = |k: usize, n: usize| {
                 let acc = acc_of(&pts, &wts, &steps, k, n);
                 if acc.count < 3 {

@@ -165,36 +165,45 @@ pub(super) fn cheap2(
     if want_line {
         best = best.min(pick(el, el2));
     }
-    let circle_lb = want_circle.then(|| {
-        let speed = if acc.npairs >= 2 {
-            (0.25 * dev * (1.0 - 1e-9) - 1e-12 * acc.sa).max(0.0)
-        } else {
-            0.0
-        };
-        let speed = if rules.squared {
-            speed_lb(acc, true)
-        } else {
-            speed
-        };
-        if q.circle_ok {
-            let raw = if rules.squared {
-                // Minkowski: ‖(|dᵢ − r|)‖₂ ≥ ‖(|d′ᵢ − r′|)‖₂ − √W·slack
-                (ec2.sqrt() - acc.sw.sqrt() * q.circle_slack)
-                    .max(0.0)
-                    .powi(2)
-            } else {
-                (ec - acc.sw * q.circle_slack).max(0.0)
-            };
-            raw.max(speed) * LB_SAFETY + q.pen_lb
-        } else {
-            speed * LB_SAFETY
-        }
-    });
+    let circle_lb = want_circle.then(|| circle_bound(q, acc, rules, ec, ec2, dev));
     Cheap {
         decided: None,
         best,
         circle_lb,
         errors: [es, el, if q.circle_ok { ec } else { f64::NAN }],
+    }
+}
+
+/// Lower bound of the circle's error with penalty from the one pass's sums:
+/// `ec` (`Σ w |‖x − c‖ − r|` to the moments' circle), `ec2` (its squares, for
+/// the squared norm) and `dev` (`Σ|aᵢ − ā|` over the step lengths).
+pub(super) fn circle_bound(
+    q: &Quick,
+    acc: &Acc2,
+    rules: &Rules,
+    ec: f64,
+    ec2: f64,
+    dev: f64,
+) -> f64 {
+    let speed = if rules.squared {
+        speed_lb(acc, true)
+    } else if acc.npairs >= 2 {
+        (0.25 * dev * (1.0 - 1e-9) - 1e-12 * acc.sa).max(0.0)
+    } else {
+        0.0
+    };
+    if q.circle_ok {
+        let raw = if rules.squared {
+            // Minkowski: ‖(|dᵢ − r|)‖₂ ≥ ‖(|d′ᵢ − r′|)‖₂ − √W·slack
+            (ec2.sqrt() - acc.sw.sqrt() * q.circle_slack)
+                .max(0.0)
+                .powi(2)
+        } else {
+            (ec - acc.sw * q.circle_slack).max(0.0)
+        };
+        raw.max(speed) * LB_SAFETY + q.pen_lb
+    } else {
+        speed * LB_SAFETY
     }
 }
 

@@ -29,7 +29,7 @@
 //! [`mp_geom::fit`], which is at least the smallest error over the kinds
 //! considered; so `E[k] + λ + Σ_j lb_j > E[n]` proves that `k` cannot improve
 //! `E[n]`. Candidates that survive get their stationary and line errors
-//! exactly (one pass over the segment, square roots only) and a second bound
+//! (one pass over the segment, square roots only) and a second bound
 //! for the circle (`Σ w |dᵢ − r|` + penalty: a point of the circle is at least
 //! `|‖x − c‖ − r|` from `x`); the circle itself (angles, `atan2`) is fitted
 //! only when that bound is below the best of stationary and line, and the
@@ -39,11 +39,19 @@
 //! end frames), so a losing candidate is usually dropped after a few joints; a
 //! joint's circle is fitted at once only if it could drop the candidate, else
 //! after the other joints, if the candidate still survives. The candidate's
-//! cost is summed in joint order, whatever the visiting order. The costs are those of
+//! cost is summed in joint order, whatever the visiting order.
+//!
+//! That pass runs twice, cheap first (Euclidean norm, 2D joints): in single
+//! precision over lanes the compiler vectorises, each sum lowered by a bound
+//! of its rounding error (`coarse`), so that the joint's cost from it is a
+//! lower bound (with the exact circle where one was fitted); only a
+//! candidate that survives every joint's single-precision bound gets the
+//! exact double-precision pass of each joint, and its exact cost. The costs are those of
 //! [`mp_geom::fit::fit_best`] (same fits, same rules) up to rounding, so the
 //! optimum is the optimum of the exhaustive DP ([`crate::synth::segment_exhaustive`]).
 //!
-//! What the exact stage measures is kept for the next candidates (per joint,
+//! What the one pass measures (its single-precision lower bounds, then the
+//! exact errors where they follow) is kept for the next candidates (per joint,
 //! a ring of `W + 2` candidates, the latest measurement of each start): a
 //! candidate that contains a measured segment — the same start with an end
 //! frame up to 4 frames later, or the previous start at the same end frame —
@@ -56,7 +64,8 @@
 //!
 //! Steps, one file each: `moments` (running moments), `bounds` (the O(1)
 //! fits and bounds), `carry` (bounds carried from a measured neighbour),
-//! `exact` (the one-pass errors and the exact circle); the search loop is here.
+//! `coarse` (the single-precision pass), `exact` (the one-pass errors and
+//! the exact circle); the search loop is here.
 //!
 //! Memory: `O(T·J·D)` for the points, `O(T)` for the DP and `O(W·J)` for
 //! what is carried; no `T × W` table.
@@ -70,11 +79,15 @@ use crate::error::{ConcreteError, Result};
 
 mod bounds;
 mod carry;
+mod coarse;
 mod exact;
 mod moments;
+#[cfg(test)]
+mod testutil;
 
 use bounds::{quick, Quick};
 use carry::{joint_lb, Known};
+use coarse::{coarse_stage, Coarse};
 use exact::{cheap2, circle2};
 use moments::Acc2;
 
@@ -91,9 +104,14 @@ pub struct SearchStats {
     pub pruned_bounds: u64,
     /// Left for the exact stage (`candidates − pruned_lambda − pruned_bounds`).
     pub survivors: u64,
+    /// Survivors dropped by the single-precision bounds (`coarse`).
+    pub dropped_coarse: u64,
     /// Survivors dropped during the exact stage (the rest were each the
     /// best so far for their end frame).
     pub dropped_exact: u64,
+    /// Single-precision joint evaluations, and the frames they read.
+    pub coarse_joints: u64,
+    pub coarse_frames: u64,
     /// One-pass joint evaluations in the exact stage, and the frames they read.
     pub exact_joints: u64,
     pub exact_frames: u64,
@@ -208,9 +226,10 @@ fn joint_stage(
     Ok((stage, errors))
 }
 
-/// The circle stage: the exact cost given the best other kind. Counted in
-/// `stats`; the fit is kept in `known` when that holds this candidate's
-/// one-pass errors (for [`carry`]).
+/// The circle stage: the joint's cost given the best other kind (`best`,
+/// exact or a lower bound), and the circle's own exact cost (`+∞` where no
+/// circle fits). Counted in `stats`; the fit is kept in `known` when that
+/// holds this candidate's one-pass errors (for [`carry`]).
 #[allow(clippy::too_many_arguments)]
 fn joint_circle(
     jt: &JointTrack<'_>,
@@ -223,16 +242,23 @@ fn joint_circle(
     known: &mut Known,
     k: usize,
     n: usize,
-) -> Option<f64> {
+) -> (Option<f64>, f64) {
     stats.circle_fits += 1;
     stats.circle_frames += span_frames(acc, k, n, true);
     let cf = circle2(pts, jt.weights, acc.first, acc.last, rules, fit);
     if known.k == k && known.n == n {
         known.circle = cf;
     }
-    match cf {
-        Some(c) if c.cost < best => Some(c.cost),
-        _ => best.is_finite().then_some(best),
+    let own = cf.map_or(f64::INFINITY, |c| c.cost);
+    (with_circle(own, best), own)
+}
+
+/// A joint's cost from the circle's own cost and the best other kind's.
+fn with_circle(circle: f64, best: f64) -> Option<f64> {
+    if circle < best {
+        Some(circle)
+    } else {
+        best.is_finite().then_some(best)
     }
 }
 
@@ -301,6 +327,16 @@ pub(crate) fn segment_search(
             None => Vec::new(),
         })
         .collect();
+    // Per joint: the single-precision copy (Euclidean norm, fast path).
+    let coarse: Vec<Option<Coarse>> = fast
+        .iter()
+        .zip(joints)
+        .zip(&steps)
+        .map(|((f, jt), st)| match f {
+            Some(p) if !rules.squared && !rules.quadratic => Some(Coarse::new(p, jt.weights, st)),
+            _ => None,
+        })
+        .collect();
     let mut best = vec![f64::INFINITY; t + 1];
     let mut arg = vec![0usize; t + 1];
     best[0] = 0.0;
@@ -309,6 +345,11 @@ pub(crate) fn segment_search(
     let mut lbs = vec![0.0f64; nj];
     let mut costs = vec![0.0f64; nj];
     let mut deferred: Vec<(usize, f64, f64)> = Vec::with_capacity(nj);
+    // Per joint, for the candidate in hand: the exact circle's own cost
+    // where it was fitted (`NaN`: not fitted), and whether its cost so far is
+    // a single-precision bound.
+    let mut circ = vec![f64::NAN; nj];
+    let mut bounded = vec![false; nj];
     // Joints by how much their exact cost has exceeded their O(1) bound so
     // far (most first): the candidates that cannot win are dropped sooner.
     let mut gaps = vec![0.0f64; nj];
@@ -400,11 +441,14 @@ pub(crate) fn segment_search(
                     continue;
                 }
                 stats.survivors += 1;
-                // Exact costs joint by joint (circles only where one can
-                // win), dropped as soon as the exact partial sum plus the
-                // remaining bounds exceeds the incumbent.
+                // Costs joint by joint (circles only where one can win),
+                // dropped as soon as the partial sum plus the remaining
+                // bounds exceeds the incumbent: first with single-precision
+                // bounds of the one-pass errors where there are (`coarse`),
+                // then, if the candidate survives, exactly.
                 let mut rest = lb_sum;
                 let mut sum = 0.0;
+                let mut any_coarse = false;
                 deferred.clear();
                 let no_fit = |j: usize| -> Result<f64> {
                     if best_n.is_finite() {
@@ -421,20 +465,34 @@ pub(crate) fn segment_search(
                 };
                 for &j in &order {
                     rest -= lbs[j];
-                    stats.exact_joints += 1;
-                    stats.exact_frames += span_frames(&accs[j], k, n, fast[j].is_some());
-                    let (stage, errors) = joint_stage(
-                        &joints[j],
-                        fast[j].as_deref(),
-                        &steps[j],
-                        &accs[j],
-                        &quicks[j],
-                        &rules,
-                        fit,
-                        k,
-                        n,
-                    )
-                    .map_err(|e| joint_err(names, j, k, n, e))?;
+                    circ[j] = f64::NAN;
+                    bounded[j] = false;
+                    let (stage, errors) = match (&coarse[j], accs[j].count) {
+                        (Some(c), 1..) => {
+                            stats.coarse_joints += 1;
+                            stats.coarse_frames += span_frames(&accs[j], k, n, true);
+                            bounded[j] = true;
+                            any_coarse = true;
+                            let (stage, errors) = coarse_stage(c, &quicks[j], &accs[j], &rules);
+                            (stage, Some(errors))
+                        }
+                        _ => {
+                            stats.exact_joints += 1;
+                            stats.exact_frames += span_frames(&accs[j], k, n, fast[j].is_some());
+                            joint_stage(
+                                &joints[j],
+                                fast[j].as_deref(),
+                                &steps[j],
+                                &accs[j],
+                                &quicks[j],
+                                &rules,
+                                fit,
+                                k,
+                                n,
+                            )
+                            .map_err(|e| joint_err(names, j, k, n, e))?
+                        }
+                    };
                     let slot = j * ring + k % ring;
                     if let Some(errors) = errors {
                         known[slot] = Known::new(k, n, errors, &quicks[j]);
@@ -447,7 +505,7 @@ pub(crate) fn segment_search(
                             // otherwise later, if the candidate survives.
                             if base + (sum + best + rest.max(0.0) + lam) > best_n {
                                 let p = fast[j].as_deref().unwrap_or(&[]);
-                                let c = joint_circle(
+                                let (c, own) = joint_circle(
                                     &joints[j],
                                     p,
                                     &accs[j],
@@ -459,6 +517,7 @@ pub(crate) fn segment_search(
                                     k,
                                     n,
                                 );
+                                circ[j] = own;
                                 match c {
                                     Some(c) => c,
                                     None => no_fit(j)?,
@@ -482,16 +541,12 @@ pub(crate) fn segment_search(
                         break;
                     }
                 }
-                if dead {
-                    stats.dropped_exact += 1;
-                    continue;
-                }
                 // The deferred circles, those that may rise most first.
                 deferred.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
-                for &(j, lb, best) in &deferred {
+                for &(j, lb, best) in deferred.iter().take(if dead { 0 } else { nj }) {
                     let p = fast[j].as_deref().unwrap_or(&[]);
                     let slot = j * ring + k % ring;
-                    let c = joint_circle(
+                    let (c, own) = joint_circle(
                         &joints[j],
                         p,
                         &accs[j],
@@ -503,6 +558,7 @@ pub(crate) fn segment_search(
                         k,
                         n,
                     );
+                    circ[j] = own;
                     let cost = match c {
                         Some(c) => c,
                         None => no_fit(j)?,
@@ -513,6 +569,70 @@ pub(crate) fn segment_search(
                         gaps[j] += g;
                     }
                     sum += cost - lb;
+                    if base + (sum + lam) > best_n {
+                        dead = true;
+                        break;
+                    }
+                }
+                if dead {
+                    if any_coarse {
+                        stats.dropped_coarse += 1;
+                    } else {
+                        stats.dropped_exact += 1;
+                    }
+                    continue;
+                }
+                // The exact one-pass costs where the first stage had bounds.
+                for j in (0..nj).filter(|&j| bounded[j]) {
+                    stats.exact_joints += 1;
+                    stats.exact_frames += span_frames(&accs[j], k, n, true);
+                    let (stage, errors) = joint_stage(
+                        &joints[j],
+                        fast[j].as_deref(),
+                        &steps[j],
+                        &accs[j],
+                        &quicks[j],
+                        &rules,
+                        fit,
+                        k,
+                        n,
+                    )
+                    .map_err(|e| joint_err(names, j, k, n, e))?;
+                    let slot = j * ring + k % ring;
+                    if let Some(errors) = errors {
+                        // (Keeping the exact circle fitted in the first stage.)
+                        known[slot].errors = errors;
+                    }
+                    let cost = match stage {
+                        Stage::Done(Some(c)) => c,
+                        Stage::Done(None) => no_fit(j)?,
+                        Stage::Circle { best, .. } => {
+                            let own = if circ[j].is_nan() {
+                                let p = fast[j].as_deref().unwrap_or(&[]);
+                                joint_circle(
+                                    &joints[j],
+                                    p,
+                                    &accs[j],
+                                    best,
+                                    &rules,
+                                    fit,
+                                    &mut stats,
+                                    &mut known[slot],
+                                    k,
+                                    n,
+                                )
+                                .1
+                            } else {
+                                circ[j]
+                            };
+                            match with_circle(own, best) {
+                                Some(c) => c,
+                                None => no_fit(j)?,
+                            }
+                        }
+                    };
+                    sum += cost - costs[j];
+                    costs[j] = cost;
                     if base + (sum + lam) > best_n {
                         dead = true;
                         break;
