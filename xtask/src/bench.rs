@@ -127,7 +127,10 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
         md,
         "| track | candidates | dropped on λ | dropped by bounds | survivors | dropped in single precision | single-precision frames | exact joints / survivor | exact frames | circle fits | circle frames |"
     )?;
-    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    writeln!(
+        md,
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    )?;
     for reps in [2usize, 18] {
         let track = repeated_performer(reps)?;
         let (_, st) = mp_concrete::segment_with_stats(&track, &params)?;
