@@ -571,21 +571,48 @@ fn scaled_fit(params: &SynthParams, unit_scale: f64) -> Result<FitParams> {
 pub fn segment_costs(track: &Track, params: &SynthParams) -> Result<CostTable> {
     params.validate()?;
     let params = &resolve_budget(track, params)?;
+    let su = setup(track, params)?;
+    cost_table(
+        &su.prep,
+        &su.fit,
+        track,
+        &su.lambda,
+        params.max_segment_frames,
+    )
+}
+
+/// What every segmentation of a track starts from.
+struct Setup {
+    /// The joints' points and weights.
+    prep: Prepared,
+    /// The fit parameters at the track's scale.
+    fit: FitParams,
+    unit_scale: f64,
+    /// λ per frame (track units).
+    lambda: Vec<f64>,
+}
+
+/// The [`Setup`] of `track` (`params` validated, a budget resolved).
+fn setup(track: &Track, params: &SynthParams) -> Result<Setup> {
     let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
     let unit_scale = params.unit_scale(track);
     let fit = scaled_fit(params, unit_scale)?;
     let lambda = lambda_per_frame(track, params, unit_scale);
-    cost_table(&prep, &fit, track, &lambda, params.max_segment_frames)
+    Ok(Setup {
+        prep,
+        fit,
+        unit_scale,
+        lambda,
+    })
 }
 
 /// The optimal segmentation by branch and bound over the DP ([`crate::search`]).
 fn search_prepared(
-    prep: &Prepared,
-    fit: &FitParams,
+    su: &Setup,
     track: &Track,
-    lambda: &[f64],
     window: usize,
 ) -> Result<(Segmentation, SearchStats)> {
+    let (prep, fit, lambda) = (&su.prep, &su.fit, &su.lambda);
     let joints: Vec<JointTrack<'_>> = prep
         .points
         .iter()
@@ -626,15 +653,8 @@ pub fn segment_with_stats(
     params: &SynthParams,
 ) -> Result<(Segmentation, SearchStats)> {
     params.validate()?;
-    let mut params = params.clone();
-    if let Lambda::Budget { ratio } = params.lambda {
-        params.lambda = Lambda::fixed(synthesize_budget(track, &params, ratio)?.1);
-    }
-    let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
-    let unit_scale = params.unit_scale(track);
-    let fit = scaled_fit(&params, unit_scale)?;
-    let lambda = lambda_per_frame(track, &params, unit_scale);
-    search_prepared(&prep, &fit, track, &lambda, params.max_segment_frames)
+    let params = &resolve_budget(track, params)?;
+    search_prepared(&setup(track, params)?, track, params.max_segment_frames)
 }
 
 /// Refits every joint's primitives of the chosen segmentation so that
@@ -677,12 +697,14 @@ pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthe
     if let Lambda::Budget { ratio } = params.lambda {
         return synthesize_budget(track, params, ratio).map(|(s, _)| s);
     }
-    let prep = prepare(track, params.min_confidence, params.unobserved_joints)?;
-    let unit_scale = params.unit_scale(track);
-    let fit = scaled_fit(params, unit_scale)?;
-    let lambda = lambda_per_frame(track, params, unit_scale);
-    let (segmentation, _) =
-        search_prepared(&prep, &fit, track, &lambda, params.max_segment_frames)?;
+    let su = setup(track, params)?;
+    let (segmentation, _) = search_prepared(&su, track, params.max_segment_frames)?;
+    let Setup {
+        prep,
+        fit,
+        unit_scale,
+        lambda,
+    } = su;
     let segments = segmentation
         .boundaries
         .windows(2)
