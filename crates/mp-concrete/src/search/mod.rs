@@ -463,6 +463,24 @@ pub(crate) fn segment_search(
                         ))
                     }
                 };
+                let exact_stage = |j: usize| {
+                    joint_stage(
+                        &joints[j],
+                        fast[j].as_deref(),
+                        &steps[j],
+                        &accs[j],
+                        &quicks[j],
+                        &rules,
+                        fit,
+                        k,
+                        n,
+                    )
+                    .map_err(|e| joint_err(names, j, k, n, e))
+                };
+                let fit_circle = |j: usize, best: f64, st: &mut SearchStats, kn: &mut Known| {
+                    let p = fast[j].as_deref().unwrap_or(&[]);
+                    joint_circle(&joints[j], p, &accs[j], best, &rules, fit, st, kn, k, n)
+                };
                 for &j in &order {
                     rest -= lbs[j];
                     circ[j] = f64::NAN;
@@ -479,18 +497,7 @@ pub(crate) fn segment_search(
                         _ => {
                             stats.exact_joints += 1;
                             stats.exact_frames += span_frames(&accs[j], k, n, fast[j].is_some());
-                            joint_stage(
-                                &joints[j],
-                                fast[j].as_deref(),
-                                &steps[j],
-                                &accs[j],
-                                &quicks[j],
-                                &rules,
-                                fit,
-                                k,
-                                n,
-                            )
-                            .map_err(|e| joint_err(names, j, k, n, e))?
+                            exact_stage(j)?
                         }
                     };
                     let slot = j * ring + k % ring;
@@ -504,19 +511,7 @@ pub(crate) fn segment_search(
                             // Fitted now only if it can drop the candidate;
                             // otherwise later, if the candidate survives.
                             if base + (sum + best + rest.max(0.0) + lam) > best_n {
-                                let p = fast[j].as_deref().unwrap_or(&[]);
-                                let (c, own) = joint_circle(
-                                    &joints[j],
-                                    p,
-                                    &accs[j],
-                                    best,
-                                    &rules,
-                                    fit,
-                                    &mut stats,
-                                    &mut known[slot],
-                                    k,
-                                    n,
-                                );
+                                let (c, own) = fit_circle(j, best, &mut stats, &mut known[slot]);
                                 circ[j] = own;
                                 match c {
                                     Some(c) => c,
@@ -544,20 +539,8 @@ pub(crate) fn segment_search(
                 // The deferred circles, those that may rise most first.
                 deferred.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
                 for &(j, lb, best) in deferred.iter().take(if dead { 0 } else { nj }) {
-                    let p = fast[j].as_deref().unwrap_or(&[]);
                     let slot = j * ring + k % ring;
-                    let (c, own) = joint_circle(
-                        &joints[j],
-                        p,
-                        &accs[j],
-                        best,
-                        &rules,
-                        fit,
-                        &mut stats,
-                        &mut known[slot],
-                        k,
-                        n,
-                    );
+                    let (c, own) = fit_circle(j, best, &mut stats, &mut known[slot]);
                     circ[j] = own;
                     let cost = match c {
                         Some(c) => c,
@@ -586,18 +569,7 @@ pub(crate) fn segment_search(
                 for j in (0..nj).filter(|&j| bounded[j]) {
                     stats.exact_joints += 1;
                     stats.exact_frames += span_frames(&accs[j], k, n, true);
-                    let (stage, errors) = joint_stage(
-                        &joints[j],
-                        fast[j].as_deref(),
-                        &steps[j],
-                        &accs[j],
-                        &quicks[j],
-                        &rules,
-                        fit,
-                        k,
-                        n,
-                    )
-                    .map_err(|e| joint_err(names, j, k, n, e))?;
+                    let (stage, errors) = exact_stage(j)?;
                     let slot = j * ring + k % ring;
                     if let Some(errors) = errors {
                         // (Keeping the exact circle fitted in the first stage.)
@@ -608,20 +580,7 @@ pub(crate) fn segment_search(
                         Stage::Done(None) => no_fit(j)?,
                         Stage::Circle { best, .. } => {
                             let own = if circ[j].is_nan() {
-                                let p = fast[j].as_deref().unwrap_or(&[]);
-                                joint_circle(
-                                    &joints[j],
-                                    p,
-                                    &accs[j],
-                                    best,
-                                    &rules,
-                                    fit,
-                                    &mut stats,
-                                    &mut known[slot],
-                                    k,
-                                    n,
-                                )
-                                .1
+                                fit_circle(j, best, &mut stats, &mut known[slot]).1
                             } else {
                                 circ[j]
                             };
