@@ -102,12 +102,14 @@ pub struct SearchStats {
     pub pruned_lambda: u64,
     /// Dropped by the O(1) bounds of the joints.
     pub pruned_bounds: u64,
-    /// Left for the exact stage (`candidates − pruned_lambda − pruned_bounds`).
+    /// Left for the one-pass stages (`candidates − pruned_lambda − pruned_bounds`).
     pub survivors: u64,
-    /// Survivors dropped by the single-precision bounds (`coarse`).
+    /// Survivors dropped on the single-precision bounds (`coarse`, with the
+    /// exact circles fitted there).
     pub dropped_coarse: u64,
-    /// Survivors dropped during the exact stage (the rest were each the
-    /// best so far for their end frame).
+    /// Survivors dropped on exact costs (the rest, `survivors −
+    /// dropped_coarse − dropped_exact`, were each the best so far for their
+    /// end frame).
     pub dropped_exact: u64,
     /// Single-precision joint evaluations, and the frames they read.
     pub coarse_joints: u64,
@@ -537,8 +539,11 @@ pub(crate) fn segment_search(
                     }
                 }
                 // The deferred circles, those that may rise most first.
+                if dead {
+                    deferred.clear();
+                }
                 deferred.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
-                for &(j, lb, best) in deferred.iter().take(if dead { 0 } else { nj }) {
+                for &(j, lb, best) in &deferred {
                     let slot = j * ring + k % ring;
                     let (c, own) = fit_circle(j, best, &mut stats, &mut known[slot]);
                     circ[j] = own;
