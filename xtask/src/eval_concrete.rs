@@ -52,8 +52,13 @@ pub struct EvalConcreteArgs {
     #[arg(long, conflicts_with = "budget")]
     pub lambda: Option<f64>,
     /// A parameter budget per clip instead of a price per segment (`mp fit --budget`).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "lambda_spread")]
     pub budget: Option<f64>,
+    /// λ from the local spread held for this many seconds (`mp fit
+    /// --lambda-spread`, `Lambda::Spread`) instead of the default adaptive λ;
+    /// also the sweep's "default" setting.
+    #[arg(long, conflicts_with = "lambda")]
+    pub lambda_spread: Option<f64>,
     /// Maximum segment length in frames.
     #[arg(long, default_value_t = mp_pipeline::Params::default().analysis.synth.max_segment_frames)]
     pub window: usize,
@@ -141,6 +146,9 @@ fn product_params(a: &EvalConcreteArgs) -> mp_pipeline::Params {
     p.analysis.synth.refit_norm = a.refit_norm;
     p.analysis.synth.fit.kinds = a.kinds.clone();
     p.analysis.synth.fit.quadratic_angle |= a.quadratic_angle;
+    if let Some(s) = a.lambda_spread {
+        p.analysis.synth.lambda = Lambda::spread(s);
+    }
     p
 }
 

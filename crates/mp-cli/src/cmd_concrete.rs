@@ -21,13 +21,18 @@ pub struct FitArgs {
     pub output: PathBuf,
     /// A fixed segment penalty λ at the 512-px reference scale (the paper's
     /// reference value is 400) instead of the default adaptive λ.
-    #[arg(long, conflicts_with = "budget")]
+    #[arg(long, conflicts_with_all = ["budget", "lambda_spread"])]
     pub lambda: Option<f64>,
     /// A parameter budget instead of a price per segment: the most accurate
     /// program with at most this share of the track's numbers (T·J·D), e.g.
     /// 0.1 (λ found by bisection: about a dozen fits).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "lambda_spread")]
     pub budget: Option<f64>,
+    /// λ from the spread of the keypoints around each frame held for this
+    /// many seconds (px·frames, e.g. 1), instead of the default adaptive λ
+    /// (which takes the spread's square, px², as it is).
+    #[arg(long)]
+    pub lambda_spread: Option<f64>,
     /// Maximum segment length in frames.
     #[arg(long, default_value_t = Params::default().analysis.synth.max_segment_frames)]
     pub window: usize,
@@ -102,6 +107,9 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     }
     if let Some(b) = a.budget {
         params.analysis.synth.lambda = Lambda::budget(b);
+    }
+    if let Some(s) = a.lambda_spread {
+        params.analysis.synth.lambda = Lambda::spread(s);
     }
     params.analysis.synth.max_segment_frames = a.window;
     params.analysis.synth.continuity = a.continuity;

@@ -98,6 +98,19 @@ pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<Inte
                 min_ref: min_ref / k,
                 max_ref: max_ref / k,
             },
+            // (The kept track's rate is divided by the factor: `seconds`
+            // stay seconds.)
+            Lambda::Spread {
+                seconds,
+                window_frames,
+                min_ref,
+                max_ref,
+            } => Lambda::Spread {
+                seconds,
+                window_frames: window_frames.div_ceil(step).max(1),
+                min_ref: min_ref / k,
+                max_ref: max_ref / k,
+            },
         };
     }
     let program = synthesize(&kept, &params)?;

@@ -36,6 +36,11 @@
 //!   `λ_ref(f) = clamp(‖C(f)‖_F, min_ref, max_ref)` (default [100, 1600]; a
 //!   window with no such joint gets `max_ref`). A segment `k..n` pays the λ
 //!   of its last frame `n − 1`.
+//! * [`Lambda::Spread`]: like `Adaptive`, in the cost's own units:
+//!   `λ_ref(f) = clamp(√‖C(f)‖_F · seconds · fps, min_ref, max_ref)` — the
+//!   spread of the keypoints around the frame (reference px) held for
+//!   `seconds` (frames at the track's rate), where `Adaptive` takes the
+//!   covariance (px²) as it is. A segment pays the λ of its last frame.
 //! * [`Lambda::Budget`]: a parameter budget instead of a price per segment:
 //!   the program with the smallest fixed λ whose parameters
 //!   ([`Program::n_params`]) are at most `ratio` of the raw numbers `T·J·D`,
@@ -76,6 +81,18 @@ pub enum Lambda {
         /// Program parameters over raw numbers, in (0, 1].
         ratio: f64,
     },
+    /// λ from the spread of the keypoints around each frame, in px·frames
+    /// (see the module docs).
+    Spread {
+        /// How long an error of the local spread is worth one segment. Default 1.
+        seconds: f64,
+        /// Window length in frames (centred on the frame). Default 31.
+        window_frames: usize,
+        /// Lower clamp (reference scale). Default 100.
+        min_ref: f64,
+        /// Upper clamp (reference scale). Default 1600.
+        max_ref: f64,
+    },
     /// λ from the covariance of the keypoints around each frame (see the module docs).
     Adaptive {
         /// Window length in frames (centred on the frame). Default 31.
@@ -105,6 +122,15 @@ impl Lambda {
     /// A parameter budget: at most `ratio` of the raw numbers.
     pub fn budget(ratio: f64) -> Self {
         Lambda::Budget { ratio }
+    }
+    /// λ from the local spread held for `seconds` (window 31, clamp [100, 1600]).
+    pub fn spread(seconds: f64) -> Self {
+        Lambda::Spread {
+            seconds,
+            window_frames: 31,
+            min_ref: 100.0,
+            max_ref: 1600.0,
+        }
     }
 }
 
@@ -196,6 +222,22 @@ impl Default for SynthParams {
     }
 }
 
+/// The window and clamp of an adaptive λ rule.
+fn check_window_clamp(window_frames: usize, min_ref: f64, max_ref: f64) -> Result<()> {
+    finite_nonneg("lambda.min_ref", min_ref)?;
+    finite_nonneg("lambda.max_ref", max_ref)?;
+    if min_ref > max_ref {
+        return Err(ConcreteError::param(
+            "lambda.min_ref",
+            format!("{min_ref} is above lambda.max_ref {max_ref}"),
+        ));
+    }
+    if window_frames == 0 {
+        return Err(ConcreteError::param("lambda.window_frames", "must be ≥ 1"));
+    }
+    Ok(())
+}
+
 fn finite_nonneg(name: &'static str, v: f64) -> Result<()> {
     if !v.is_finite() || v < 0.0 {
         return Err(ConcreteError::param(
@@ -223,22 +265,26 @@ impl SynthParams {
                     ));
                 }
             }
+            Lambda::Spread {
+                seconds,
+                window_frames,
+                min_ref,
+                max_ref,
+            } => {
+                if !(seconds.is_finite() && seconds > 0.0) {
+                    return Err(ConcreteError::param(
+                        "lambda.seconds",
+                        format!("must be a positive number of seconds, got {seconds}"),
+                    ));
+                }
+                check_window_clamp(window_frames, min_ref, max_ref)?;
+            }
             Lambda::Adaptive {
                 window_frames,
                 min_ref,
                 max_ref,
             } => {
-                finite_nonneg("lambda.min_ref", min_ref)?;
-                finite_nonneg("lambda.max_ref", max_ref)?;
-                if min_ref > max_ref {
-                    return Err(ConcreteError::param(
-                        "lambda.min_ref",
-                        format!("{min_ref} is above lambda.max_ref {max_ref}"),
-                    ));
-                }
-                if window_frames == 0 {
-                    return Err(ConcreteError::param("lambda.window_frames", "must be ≥ 1"));
-                }
+                check_window_clamp(window_frames, min_ref, max_ref)?;
             }
         }
         if self.max_segment_frames == 0 {
@@ -393,6 +439,20 @@ pub fn lambda_per_frame(track: &Track, params: &SynthParams, unit_scale: f64) ->
             .into_iter()
             .map(|c| c.map_or(max_ref, |c| c.clamp(min_ref, max_ref)) * factor)
             .collect(),
+        Lambda::Spread {
+            seconds,
+            window_frames,
+            min_ref,
+            max_ref,
+        } => {
+            let frames = seconds * track.fps();
+            adaptive_lambda_ref(track, params.min_confidence, window_frames, unit_scale)
+                .into_iter()
+                .map(|c| {
+                    c.map_or(max_ref, |c| (c.sqrt() * frames).clamp(min_ref, max_ref)) * factor
+                })
+                .collect()
+        }
     }
 }
 

@@ -195,6 +195,59 @@ fn adaptive_lambda_is_clamped_and_works() {
     assert_eq!(syn.program.boundaries(), vec![0, 15, 27, 47]);
 }
 
+/// `Lambda::Spread` is the square root of the adaptive rule's covariance
+/// norm held for `seconds · fps` frames, clamped: twice the seconds or twice
+/// the frame rate, twice the λ; a longer hold, fewer segments.
+#[test]
+fn spread_lambda_is_the_local_spread_held_for_a_time() {
+    let track = known_program().execute().unwrap();
+    let open = |lambda| SynthParams {
+        lambda,
+        ..params_px()
+    };
+    let wide = |seconds| Lambda::Spread {
+        seconds,
+        window_frames: 31,
+        min_ref: 0.0,
+        max_ref: 1e12,
+    };
+    let lambda_of =
+        |track: &Track, lambda| synthesize_detailed(track, &open(lambda)).unwrap().lambda;
+    let adaptive = lambda_of(
+        &track,
+        Lambda::Adaptive {
+            window_frames: 31,
+            min_ref: 0.0,
+            max_ref: 1e12,
+        },
+    );
+    let fps = track.fps();
+    let spread = lambda_of(&track, wide(0.5));
+    assert_eq!(spread.len(), track.n_frames());
+    for (s, a) in spread.iter().zip(&adaptive) {
+        let want = a.sqrt() * 0.5 * fps;
+        assert!((s - want).abs() <= 1e-9 * want, "{s} vs {want}");
+    }
+    let fast = track.clone().with_fps(2.0 * fps).unwrap();
+    let doubled = lambda_of(&fast, wide(0.5));
+    let longer = lambda_of(&track, wide(1.0));
+    for ((s, d), l) in spread.iter().zip(&doubled).zip(&longer) {
+        assert!((d - 2.0 * s).abs() <= 1e-9 * d && (l - 2.0 * s).abs() <= 1e-9 * l);
+    }
+    // The default clamp, and the number of segments falling as the hold grows.
+    let segments = |seconds: f64| {
+        let syn = synthesize_detailed(&track, &open(Lambda::spread(seconds))).unwrap();
+        assert!(syn.lambda.iter().all(|&l| (100.0..=1600.0).contains(&l)));
+        syn.program.n_segments()
+    };
+    assert!(
+        segments(0.2) > segments(2.0),
+        "{} vs {}",
+        segments(0.2),
+        segments(2.0)
+    );
+}
+
 #[test]
 fn a_parameter_budget_gives_the_finest_program_within_it() {
     let track = mp_concrete::synthetic::synthetic_track(400, 7).unwrap();
@@ -443,6 +496,27 @@ fn bad_input_is_a_typed_error() {
             ..SynthParams::default()
         },
         "lambda.min_ref",
+    );
+    for seconds in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        bad(
+            SynthParams {
+                lambda: Lambda::spread(seconds),
+                ..SynthParams::default()
+            },
+            "lambda.seconds",
+        );
+    }
+    bad(
+        SynthParams {
+            lambda: Lambda::Spread {
+                seconds: 1.0,
+                window_frames: 0,
+                min_ref: 100.0,
+                max_ref: 1600.0,
+            },
+            ..SynthParams::default()
+        },
+        "lambda.window_frames",
     );
     bad(
         SynthParams {

@@ -118,9 +118,11 @@ fn extract(
 /// `kinds` the primitive kinds segments may use (default: stationary, line,
 /// circle; `"spline"` adds cubics), `quadratic_angle` circles with an
 /// angular acceleration, `refit_norm` what the C0 refit minimises
-/// (`"squared"` residuals, the default, or their `"euclidean"` lengths).
+/// (`"squared"` residuals, the default, or their `"euclidean"` lengths),
+/// `lambda_spread` λ from the local spread held for this many seconds
+/// instead of the adaptive λ (as `mp fit --lambda-spread`).
 #[pyfunction]
-#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None, budget=None, kinds=None, quadratic_angle=false, refit_norm=None))]
+#[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None, budget=None, kinds=None, quadratic_angle=false, refit_norm=None, lambda_spread=None))]
 #[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
@@ -133,15 +135,21 @@ fn fit(
     kinds: Option<Vec<String>>,
     quadratic_angle: bool,
     refit_norm: Option<&str>,
+    lambda_spread: Option<f64>,
 ) -> PyResult<PyProgram> {
     let mut params = params_with(None, None, None, false, lambda_, max_segment_frames)?;
+    let rules = [lambda_.is_some(), budget.is_some(), lambda_spread.is_some()];
+    if rules.iter().filter(|&&r| r).count() > 1 {
+        return Err(errors::ParamError::new_err(
+            "give at most one of lambda_, budget and lambda_spread",
+        ));
+    }
     if let Some(b) = budget {
-        if lambda_.is_some() {
-            return Err(errors::ParamError::new_err(
-                "give either lambda_ or budget, not both",
-            ));
-        }
         params.analysis.synth.lambda = mp_concrete::Lambda::budget(b);
+        params.validate().map_err(errors::pipeline)?;
+    }
+    if let Some(s) = lambda_spread {
+        params.analysis.synth.lambda = mp_concrete::Lambda::spread(s);
         params.validate().map_err(errors::pipeline)?;
     }
     if let Some(c) = continuity {

@@ -82,6 +82,16 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
     assert small.n_params <= 0.05 * t.positions.size
     with pytest.raises(mp.ParamError):
         mp.fit(t, budget=1.5)
+    # λ from the local spread held for a time, as `mp fit --lambda-spread`.
+    spread = mp.fit(t, lambda_spread=1.0)
+    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "s.txt", "--quiet", "--lambda-spread", "1")
+    assert spread.text == (tmp_path / "s.txt").read_text()
+    assert spread.text != prog.text
+    assert mp.fit(t, lambda_spread=2.0).n_params < spread.n_params
+    with pytest.raises(mp.ParamError, match="lambda.seconds"):
+        mp.fit(t, lambda_spread=0.0)
+    with pytest.raises(mp.ParamError, match="at most one"):
+        mp.fit(t, lambda_spread=1.0, budget=0.1)
     # Primitive kinds and circles with an angular acceleration, as `mp fit --kinds`.
     lines = mp.fit(t, kinds=["stationary", "line"])
     run_cli(mp_bin, "fit", performer, "-o", tmp_path / "k.txt", "--quiet", "--kinds", "stationary,line")
