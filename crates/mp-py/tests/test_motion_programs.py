@@ -87,7 +87,9 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
     run_cli(mp_bin, "fit", performer, "-o", tmp_path / "s.txt", "--quiet", "--lambda-spread", "1")
     assert spread.text == (tmp_path / "s.txt").read_text()
     assert spread.text != prog.text
-    assert mp.fit(t, lambda_spread=2.0).n_params < spread.n_params
+    # A shorter hold: a lower price per segment, more segments and parameters.
+    short = mp.fit(t, lambda_spread=0.1)
+    assert short.n_segments > spread.n_segments and short.n_params > spread.n_params
     with pytest.raises(mp.ParamError, match="lambda.seconds"):
         mp.fit(t, lambda_spread=0.0)
     with pytest.raises(mp.ParamError, match="at most one"):
