@@ -60,6 +60,31 @@ fn absurd_sizes_are_errors() {
         ],
         "most compact program",
     );
+    // A spread λ held for no time, or given with another λ rule.
+    refused(
+        &[
+            "fit",
+            &p("perf.npz"),
+            "-o",
+            &p("s.json"),
+            "--lambda-spread",
+            "0",
+        ],
+        "lambda.seconds",
+    );
+    let both = run(&[
+        "fit",
+        &p("perf.npz"),
+        "-o",
+        &p("s.json"),
+        "--lambda-spread",
+        "1",
+        "--budget",
+        "0.1",
+    ]);
+    let stderr = String::from_utf8_lossy(&both.stderr);
+    assert_eq!(both.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("cannot be used with"), "{stderr}");
     refused(
         &[
             "execute",
