@@ -16,7 +16,9 @@
 //!   segment; the rounding of the inputs, the differences, the squares and
 //!   the square root add up to less than `12·2⁻²⁴·B`);
 //! * the sums are within `(L + 64)·2⁻²³` of the sum of their terms, relative
-//!   (each lane adds at most `L/8 + 1` terms).
+//!   (each lane adds at most `L/8 + 1` terms);
+//! * a sum that overflows `f32` (the distance to a nearly straight arc's huge
+//!   circle can, even in pixels) bounds nothing and counts as 0.
 //!
 //! The joint's bound is the smallest over the kinds that take part, with the
 //! stationary point alone where its bounding box decides it (the rule that
