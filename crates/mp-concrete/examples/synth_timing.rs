@@ -2,7 +2,10 @@
 //! `RAYON_NUM_THREADS=1`): the procedural performer (COCO-17, 567 frames)
 //! repeated `reps` times, and the synthetic 13-joint track.
 //!
-//! `cargo run --release -p mp-concrete --example synth_timing -- [reps] [synthetic T…] [--reference]`
+//! `cargo run --release -p mp-concrete --example synth_timing -- [reps] [synthetic T…] [--reference]
+//! [--squared λ] [--spread seconds]`: `--spread` prices segments as the
+//! product does (`Lambda::Spread`, the Euclidean refit) instead of the fixed
+//! λ of `SynthParams::default()`.
 
 use std::time::Instant;
 
@@ -40,10 +43,15 @@ fn main() -> Res<()> {
         .position(|a| a == "--squared")
         .and_then(|i| args.get(i + 1))
         .and_then(|v| v.parse().ok());
+    let spread: Option<f64> = args
+        .iter()
+        .position(|a| a == "--spread")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok());
     let nums: Vec<usize> = args
         .iter()
         .enumerate()
-        .filter(|(i, _)| *i == 0 || args[i - 1] != "--squared")
+        .filter(|(i, _)| *i == 0 || (args[i - 1] != "--squared" && args[i - 1] != "--spread"))
         .filter_map(|(_, a)| a.parse().ok())
         .collect();
     let reps = nums.first().copied().unwrap_or(18);
@@ -53,6 +61,10 @@ fn main() -> Res<()> {
     if let Some(l) = squared {
         params.fit.norm = mp_geom::fit::ErrorNorm::Squared;
         params.lambda = mp_concrete::Lambda::fixed(l);
+    }
+    if let Some(sec) = spread {
+        params.lambda = mp_concrete::Lambda::spread(sec);
+        params.refit_norm = mp_concrete::RefitNorm::Euclidean;
     }
     let t0 = Instant::now();
     let prog = synthesize(&track, &params)?;
