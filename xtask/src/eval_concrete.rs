@@ -47,16 +47,16 @@ pub struct EvalConcreteArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// A fixed λ at the 512-px reference scale (the paper's setting; `Lambda::DEFAULT_FIXED`
-    /// is 1600) instead of the product's default (`mp_pipeline::Params::default()`: adaptive λ),
-    /// which `mp fit` and `mp run` use.
+    /// is 1600) instead of the product's default (`mp_pipeline::Params::default()`: the local
+    /// spread held for one second), which `mp fit` and `mp run` use.
     #[arg(long, conflicts_with = "budget")]
     pub lambda: Option<f64>,
     /// A parameter budget per clip instead of a price per segment (`mp fit --budget`).
     #[arg(long, conflicts_with = "lambda_spread")]
     pub budget: Option<f64>,
     /// λ from the local spread held for this many seconds (`mp fit
-    /// --lambda-spread`, `Lambda::Spread`) instead of the default adaptive λ;
-    /// also the sweep's "default" setting.
+    /// --lambda-spread`, `Lambda::Spread`; the default holds it for one
+    /// second); also the sweep's "default" setting.
     #[arg(long, conflicts_with = "lambda")]
     pub lambda_spread: Option<f64>,
     /// Maximum segment length in frames.

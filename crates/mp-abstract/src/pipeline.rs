@@ -21,10 +21,16 @@ use crate::synth::{synthesize, translate};
 
 /// Parameters of the whole track → abstract-program analysis.
 ///
-/// The default segmentation uses the adaptive λ (paper §3.1: "in practice, we
-/// adaptively choose λ at runtime to match the range of the keypoint motion"):
-/// with the fixed reference λ, short or small repetitions (a rope jump of a
-/// dozen frames) are swallowed by a single primitive and no loop can be seen.
+/// The default segmentation chooses λ from the motion (paper §3.1: "in
+/// practice, we adaptively choose λ at runtime to match the range of the
+/// keypoint motion"): with the fixed reference λ, short or small repetitions
+/// (a rope jump of a dozen frames) are swallowed by a single primitive and no
+/// loop can be seen. The rule is [`Lambda::Spread`](mp_concrete::Lambda::Spread)
+/// with one second ([`Self::DEFAULT_SPREAD_SECONDS`]): a new segment is worth
+/// the local spread of the keypoints held for one second, so λ keeps its
+/// meaning across frame rates and body sizes. The C0 refit minimises the
+/// Euclidean error ([`RefitNorm::Euclidean`](mp_concrete::RefitNorm::Euclidean)),
+/// the norm the segmentation itself minimises.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AbstractParams {
     /// Concrete synthesis (segmentation, fitting, scale rule).
@@ -37,7 +43,8 @@ impl Default for AbstractParams {
     fn default() -> Self {
         AbstractParams {
             synth: SynthParams {
-                lambda: mp_concrete::Lambda::adaptive(),
+                lambda: mp_concrete::Lambda::spread(Self::DEFAULT_SPREAD_SECONDS),
+                refit_norm: mp_concrete::RefitNorm::Euclidean,
                 ..SynthParams::default()
             },
             loops: LoopParams::default(),
@@ -46,6 +53,11 @@ impl Default for AbstractParams {
 }
 
 impl AbstractParams {
+    /// How long the local spread of the keypoints is held to price one
+    /// segment in the default λ (chosen on the validation half of the Penn
+    /// Action clips; see RESULTS.md, "Rate–distortion frontier").
+    pub const DEFAULT_SPREAD_SECONDS: f64 = 1.0;
+
     /// Checks every field: the synthesis parameters ([`SynthParams::validate`])
     /// and the loop parameters ([`LoopParams::validate`]; their `unit_scale`
     /// is not checked since the analysis replaces it).

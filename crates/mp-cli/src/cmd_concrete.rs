@@ -20,7 +20,7 @@ pub struct FitArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// A fixed segment penalty λ at the 512-px reference scale (the paper's
-    /// reference value is 400) instead of the default adaptive λ.
+    /// reference value is 400) instead of the default λ from the motion.
     #[arg(long, conflicts_with_all = ["budget", "lambda_spread"])]
     pub lambda: Option<f64>,
     /// A parameter budget instead of a price per segment: the most accurate
@@ -29,8 +29,7 @@ pub struct FitArgs {
     #[arg(long, conflicts_with = "lambda_spread")]
     pub budget: Option<f64>,
     /// λ from the spread of the keypoints around each frame held for this
-    /// many seconds (px·frames, e.g. 1), instead of the default adaptive λ
-    /// (which takes the spread's square, px², as it is).
+    /// many seconds (px·frames); the default holds it for one second.
     #[arg(long)]
     pub lambda_spread: Option<f64>,
     /// Maximum segment length in frames.

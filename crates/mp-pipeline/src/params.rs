@@ -62,7 +62,8 @@ impl Default for OutputParams {
 /// `mp abstract`, `mp loops`, the evaluations and the Python package use.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Params {
-    /// Concrete synthesis (adaptive λ) and loop detection. The scale rule
+    /// Concrete synthesis (λ from the local spread of the keypoints held
+    /// for one second, Euclidean C0 refit) and loop detection. The scale rule
     /// ([`SynthParams::scale`]) is replaced per input: the frame size of a
     /// video (or the one given for a track), else the motion's own extent.
     pub analysis: AbstractParams,

@@ -21,9 +21,14 @@ fn euclidean_refit_keeps_unobserved_segments_in_place() {
     };
     let track = mp_geom::io::read_track(&path).unwrap();
     let mut params = Params::default();
-    let sq = mp_pipeline::concrete_program(&track, None, &params).unwrap();
-    params.analysis.synth.refit_norm = RefitNorm::Euclidean;
+    assert_eq!(
+        params.analysis.synth.refit_norm,
+        RefitNorm::Euclidean,
+        "the default"
+    );
     let eu = mp_pipeline::concrete_program(&track, None, &params).unwrap();
+    params.analysis.synth.refit_norm = RefitNorm::Squared;
+    let sq = mp_pipeline::concrete_program(&track, None, &params).unwrap();
     assert_eq!(sq.program.boundaries(), eu.program.boundaries());
     let (s, e) = (
         program_stats(&sq.program, &track).unwrap(),

@@ -110,7 +110,7 @@ fn extract(
 /// The concrete program of a track (as `mp fit`): `frame_size` is the
 /// largest side of the video frame in pixels (default: the motion's own
 /// extent sets the scale), `lambda_` a fixed segment penalty at the 512-px
-/// reference (default: adaptive), `max_segment_frames` the longest segment,
+/// reference (default: the local spread held for one second), `max_segment_frames` the longest segment,
 /// `continuity` `"c0"` (consecutive segments share their boundary pose) or
 /// `"none"` (segments fitted independently; default: the library's, C0),
 /// `budget` a parameter budget instead of `lambda_`: the most accurate program
@@ -118,9 +118,9 @@ fn extract(
 /// `kinds` the primitive kinds segments may use (default: stationary, line,
 /// circle; `"spline"` adds cubics), `quadratic_angle` circles with an
 /// angular acceleration, `refit_norm` what the C0 refit minimises
-/// (`"squared"` residuals, the default, or their `"euclidean"` lengths),
+/// (`"squared"` residuals or their `"euclidean"` lengths, the default),
 /// `lambda_spread` λ from the local spread held for this many seconds
-/// instead of the adaptive λ (as `mp fit --lambda-spread`).
+/// (default 1; as `mp fit --lambda-spread`).
 #[pyfunction]
 #[pyo3(signature = (track, frame_size=None, lambda_=None, max_segment_frames=None, continuity=None, budget=None, kinds=None, quadratic_angle=false, refit_norm=None, lambda_spread=None))]
 #[allow(clippy::too_many_arguments)]

@@ -82,14 +82,14 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
     assert small.n_params <= 0.05 * t.positions.size
     with pytest.raises(mp.ParamError):
         mp.fit(t, budget=1.5)
-    # λ from the local spread held for a time, as `mp fit --lambda-spread`.
-    spread = mp.fit(t, lambda_spread=1.0)
-    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "s.txt", "--quiet", "--lambda-spread", "1")
+    # λ from the local spread held for a time, as `mp fit --lambda-spread`;
+    # the default holds it for one second.
+    assert mp.fit(t, lambda_spread=1.0).text == prog.text
+    spread = mp.fit(t, lambda_spread=0.25)
+    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "s.txt", "--quiet", "--lambda-spread", "0.25")
     assert spread.text == (tmp_path / "s.txt").read_text()
-    assert spread.text != prog.text
     # A shorter hold: a lower price per segment, more segments and parameters.
-    short = mp.fit(t, lambda_spread=0.1)
-    assert short.n_segments > spread.n_segments and short.n_params > spread.n_params
+    assert spread.n_segments > prog.n_segments and spread.n_params > prog.n_params
     with pytest.raises(mp.ParamError, match="lambda.seconds"):
         mp.fit(t, lambda_spread=0.0)
     with pytest.raises(mp.ParamError, match="at most one"):
@@ -107,13 +107,14 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
         mp.fit(t, kinds=["ellipse"])
     with pytest.raises(mp.ParamError):
         mp.fit(t, kinds=[])
-    # The C0 refit under the Euclidean norm, as `mp fit --refit-norm euclidean`:
-    # the same segments, primitives moved.
-    euc = mp.fit(t, refit_norm="euclidean")
-    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "e.txt", "--quiet", "--refit-norm", "euclidean")
-    assert euc.text == (tmp_path / "e.txt").read_text()
-    assert euc.n_segments == prog.n_segments
-    assert euc.text != prog.text
+    # The C0 refit under the Euclidean norm is the default; least squares, as
+    # `mp fit --refit-norm squared`: the same segments, primitives moved.
+    assert mp.fit(t, refit_norm="euclidean").text == prog.text
+    sq = mp.fit(t, refit_norm="squared")
+    run_cli(mp_bin, "fit", performer, "-o", tmp_path / "e.txt", "--quiet", "--refit-norm", "squared")
+    assert sq.text == (tmp_path / "e.txt").read_text()
+    assert sq.n_segments == prog.n_segments
+    assert sq.text != prog.text
     with pytest.raises(mp.ParamError, match="unknown refit norm"):
         mp.fit(t, refit_norm="manhattan")
 
