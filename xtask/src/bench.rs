@@ -69,24 +69,32 @@ fn repeated_performer(reps: usize) -> anyhow::Result<mp_geom::Track> {
     )?)
 }
 
-/// The 17-joint performer at 10,206 frames (default parameters: adaptive scale, λ = 1600),
-/// and the exhaustive reference DP against the search at 1,134 frames.
+/// The 17-joint performer at 10,206 frames (default `SynthParams`: scale from
+/// the track, λ = 1600; and the analysis default that `mp fit` and `mp run`
+/// use, the spread λ with the Euclidean refit), and the exhaustive reference
+/// DP against the search at 1,134 frames.
 fn harness_performer(md: &mut String) -> anyhow::Result<()> {
-    let params = SynthParams::default();
+    let analysis = mp_pipeline::Params::default().analysis.synth;
+    // (track repetitions, parameters, their label, the exhaustive reference too)
+    let runs = [
+        (2usize, SynthParams::default(), "`SynthParams`", true),
+        (18, SynthParams::default(), "`SynthParams`", false),
+        (18, analysis, "analysis", false),
+    ];
     writeln!(
         md,
-        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D, default `SynthParams`) repeated to T frames; `search` is `mp_concrete::synthesize` (exact branch and bound), `exhaustive` the reference `mp_concrete::segment_exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
+        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D) repeated to T frames, with the default `SynthParams` (fixed λ = 1600) and with the analysis default that `mp fit` and `mp run` use (`mp_pipeline::Params::default()`: λ from the local spread held for one second, the Euclidean C0 refit); `search` is `mp_concrete::synthesize` (exact branch and bound), `exhaustive` the reference `mp_concrete::segment_exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
     )?;
     writeln!(
         md,
-        "| track | method | wall (s) | CPU (s) | segments | cost |"
+        "| track | parameters | method | wall (s) | CPU (s) | segments | cost |"
     )?;
-    writeln!(md, "|---|---|---:|---:|---:|---:|")?;
-    for (reps, exhaustive) in [(2usize, true), (18, false)] {
-        let track = repeated_performer(reps)?;
+    writeln!(md, "|---|---|---|---:|---:|---:|---:|")?;
+    for (reps, params, label, exhaustive) in &runs {
+        let track = repeated_performer(*reps)?;
         let c0 = cpu_seconds();
         let t0 = Instant::now();
-        let syn = mp_concrete::synthesize_detailed(&track, &params)?;
+        let syn = mp_concrete::synthesize_detailed(&track, params)?;
         let (wall, cpu) = (
             t0.elapsed().as_secs_f64(),
             cpu_seconds().zip(c0).map(|(a, b)| a - b),
@@ -94,16 +102,16 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
         let cpu = cpu.map_or("–".into(), |c| format!("{c:.2}"));
         writeln!(
             md,
-            "| performer ×{reps} ({} frames, 17 joints) | search | {wall:.3} | {cpu} | {} | {:.1} |",
+            "| performer ×{reps} ({} frames, 17 joints) | {label} | search | {wall:.3} | {cpu} | {} | {:.1} |",
             track.n_frames(),
             syn.program.n_segments(),
             syn.segmentation.cost
         )?;
-        eprintln!("performer ×{reps}: search {wall:.3} s");
-        if exhaustive {
+        eprintln!("performer ×{reps} ({label}): search {wall:.3} s");
+        if *exhaustive {
             let c0 = cpu_seconds();
             let t0 = Instant::now();
-            let s = segment_exhaustive(&track, &params)?;
+            let s = segment_exhaustive(&track, params)?;
             let (wall, cpu) = (
                 t0.elapsed().as_secs_f64(),
                 cpu_seconds().zip(c0).map(|(a, b)| a - b),
@@ -111,7 +119,7 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
             let cpu = cpu.map_or("–".into(), |c| format!("{c:.2}"));
             writeln!(
                 md,
-                "| performer ×{reps} ({} frames, 17 joints) | exhaustive | {wall:.3} | {cpu} | {} | {:.1} |",
+                "| performer ×{reps} ({} frames, 17 joints) | {label} | exhaustive | {wall:.3} | {cpu} | {} | {:.1} |",
                 track.n_frames(),
                 s.n_segments(),
                 s.cost
@@ -125,18 +133,18 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
     )?;
     writeln!(
         md,
-        "| track | candidates | dropped on λ | dropped by bounds | survivors | dropped in single precision | single-precision frames | exact joints / survivor | exact frames | circle fits | circle frames |"
+        "| track | parameters | candidates | dropped on λ | dropped by bounds | survivors | dropped in single precision | single-precision frames | exact joints / survivor | exact frames | circle fits | circle frames |"
     )?;
     writeln!(
         md,
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     )?;
-    for reps in [2usize, 18] {
-        let track = repeated_performer(reps)?;
-        let (_, st) = mp_concrete::segment_with_stats(&track, &params)?;
+    for (reps, params, label, _) in &runs {
+        let track = repeated_performer(*reps)?;
+        let (_, st) = mp_concrete::segment_with_stats(&track, params)?;
         writeln!(
             md,
-            "| performer ×{reps} ({} frames) | {} | {} | {} | {} | {} | {} | {:.1} | {} | {} | {} |",
+            "| performer ×{reps} ({} frames) | {label} | {} | {} | {} | {} | {} | {} | {:.1} | {} | {} | {} |",
             track.n_frames(),
             st.candidates,
             st.pruned_lambda,
