@@ -89,28 +89,11 @@ pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<Inte
             },
             // A budget is a share of the (kept) frames' numbers already.
             Lambda::Budget { ratio } => Lambda::Budget { ratio },
-            Lambda::Adaptive {
-                window_frames,
-                min_ref,
-                max_ref,
-            } => Lambda::Adaptive {
-                window_frames: window_frames.div_ceil(step).max(1),
-                min_ref: min_ref / k,
-                max_ref: max_ref / k,
-            },
-            // (The kept track's rate is divided by the factor: `seconds`
-            // stay seconds.)
-            Lambda::Spread {
-                seconds,
-                window_frames,
-                min_ref,
-                max_ref,
-            } => Lambda::Spread {
-                seconds,
-                window_frames: window_frames.div_ceil(step).max(1),
-                min_ref: min_ref / k,
-                max_ref: max_ref / k,
-            },
+            // (A spread's `seconds` stay seconds: the kept track's rate is
+            // divided by the factor.)
+            rule @ (Lambda::Adaptive { .. } | Lambda::Spread { .. }) => {
+                rule.map_window_clamp(|w, lo, hi| (w.div_ceil(step).max(1), lo / k, hi / k))
+            }
         };
     }
     let program = synthesize(&kept, &params)?;

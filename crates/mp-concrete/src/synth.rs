@@ -132,6 +132,62 @@ impl Lambda {
             max_ref: 1600.0,
         }
     }
+
+    /// The window (frames) and clamp (reference scale) of a rule read from
+    /// the keypoints around each frame (`Adaptive`, `Spread`).
+    pub(crate) fn window_clamp(&self) -> Option<(usize, f64, f64)> {
+        match *self {
+            Lambda::Adaptive {
+                window_frames,
+                min_ref,
+                max_ref,
+            }
+            | Lambda::Spread {
+                window_frames,
+                min_ref,
+                max_ref,
+                ..
+            } => Some((window_frames, min_ref, max_ref)),
+            Lambda::Fixed { .. } | Lambda::Budget { .. } => None,
+        }
+    }
+
+    /// The same rule with its window and clamp mapped by `f` (other rules
+    /// unchanged).
+    pub(crate) fn map_window_clamp(
+        self,
+        f: impl FnOnce(usize, f64, f64) -> (usize, f64, f64),
+    ) -> Self {
+        match self {
+            Lambda::Adaptive {
+                window_frames,
+                min_ref,
+                max_ref,
+            } => {
+                let (window_frames, min_ref, max_ref) = f(window_frames, min_ref, max_ref);
+                Lambda::Adaptive {
+                    window_frames,
+                    min_ref,
+                    max_ref,
+                }
+            }
+            Lambda::Spread {
+                seconds,
+                window_frames,
+                min_ref,
+                max_ref,
+            } => {
+                let (window_frames, min_ref, max_ref) = f(window_frames, min_ref, max_ref);
+                Lambda::Spread {
+                    seconds,
+                    window_frames,
+                    min_ref,
+                    max_ref,
+                }
+            }
+            other => other,
+        }
+    }
 }
 
 /// The fixed λ (reference scale) a [`Lambda::Budget`] searches between.
@@ -265,27 +321,18 @@ impl SynthParams {
                     ));
                 }
             }
-            Lambda::Spread {
-                seconds,
-                window_frames,
-                min_ref,
-                max_ref,
-            } => {
+            Lambda::Spread { seconds, .. } => {
                 if !(seconds.is_finite() && seconds > 0.0) {
                     return Err(ConcreteError::param(
                         "lambda.seconds",
                         format!("must be a positive number of seconds, got {seconds}"),
                     ));
                 }
-                check_window_clamp(window_frames, min_ref, max_ref)?;
             }
-            Lambda::Adaptive {
-                window_frames,
-                min_ref,
-                max_ref,
-            } => {
-                check_window_clamp(window_frames, min_ref, max_ref)?;
-            }
+            Lambda::Adaptive { .. } => {}
+        }
+        if let Some((window_frames, min_ref, max_ref)) = self.lambda.window_clamp() {
+            check_window_clamp(window_frames, min_ref, max_ref)?;
         }
         if self.max_segment_frames == 0 {
             return Err(ConcreteError::param("max_segment_frames", "must be ≥ 1"));
@@ -435,21 +482,24 @@ pub fn lambda_per_frame(track: &Track, params: &SynthParams, unit_scale: f64) ->
             window_frames,
             min_ref,
             max_ref,
-        } => adaptive_lambda_ref(track, params.min_confidence, window_frames, unit_scale)
-            .into_iter()
-            .map(|c| c.map_or(max_ref, |c| c.clamp(min_ref, max_ref)) * factor)
-            .collect(),
-        Lambda::Spread {
-            seconds,
+        }
+        | Lambda::Spread {
             window_frames,
             min_ref,
             max_ref,
+            ..
         } => {
-            let frames = seconds * track.fps();
+            // `Adaptive` prices a segment at the covariance's norm (px²),
+            // `Spread` at its square root (px) held for `seconds` of frames.
+            let hold = match params.lambda {
+                Lambda::Spread { seconds, .. } => Some(seconds * track.fps()),
+                _ => None,
+            };
             adaptive_lambda_ref(track, params.min_confidence, window_frames, unit_scale)
                 .into_iter()
                 .map(|c| {
-                    c.map_or(max_ref, |c| (c.sqrt() * frames).clamp(min_ref, max_ref)) * factor
+                    let price = |c: f64| hold.map_or(c, |frames| c.sqrt() * frames);
+                    c.map_or(max_ref, |c| price(c).clamp(min_ref, max_ref)) * factor
                 })
                 .collect()
         }

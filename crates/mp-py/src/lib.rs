@@ -144,13 +144,12 @@ fn fit(
             "give at most one of lambda_, budget and lambda_spread",
         ));
     }
+    // (Checked with every other parameter by `concrete_program`.)
     if let Some(b) = budget {
         params.analysis.synth.lambda = mp_concrete::Lambda::budget(b);
-        params.validate().map_err(errors::pipeline)?;
     }
     if let Some(s) = lambda_spread {
         params.analysis.synth.lambda = mp_concrete::Lambda::spread(s);
-        params.validate().map_err(errors::pipeline)?;
     }
     if let Some(c) = continuity {
         params.analysis.synth.continuity = c

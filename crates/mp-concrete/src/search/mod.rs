@@ -538,10 +538,10 @@ pub(crate) fn segment_search(
                         break;
                     }
                 }
-                // The deferred circles, those that may rise most first.
                 if dead {
                     deferred.clear();
                 }
+                // The deferred circles, those that may rise most first.
                 deferred.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
                 for &(j, lb, best) in &deferred {
                     let slot = j * ring + k % ring;
