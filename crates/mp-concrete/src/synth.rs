@@ -473,37 +473,26 @@ pub fn lambda_per_frame(track: &Track, params: &SynthParams, unit_scale: f64) ->
         ErrorNorm::Euclidean => unit_scale,
         ErrorNorm::Squared => unit_scale * unit_scale,
     };
-    match params.lambda {
-        Lambda::Fixed { lambda_ref } => vec![lambda_ref * factor; t],
-        // Resolved to a fixed λ before any segmentation (`resolve_budget`);
-        // on its own, the upper end of its range (the most compact program).
-        Lambda::Budget { .. } => vec![BUDGET_LAMBDA_RANGE.1 * factor; t],
-        Lambda::Adaptive {
-            window_frames,
-            min_ref,
-            max_ref,
-        }
-        | Lambda::Spread {
-            window_frames,
-            min_ref,
-            max_ref,
-            ..
-        } => {
-            // `Adaptive` prices a segment at the covariance's norm (px²),
-            // `Spread` at its square root (px) held for `seconds` of frames.
-            let hold = match params.lambda {
-                Lambda::Spread { seconds, .. } => Some(seconds * track.fps()),
-                _ => None,
-            };
-            adaptive_lambda_ref(track, params.min_confidence, window_frames, unit_scale)
-                .into_iter()
-                .map(|c| {
-                    let price = |c: f64| hold.map_or(c, |frames| c.sqrt() * frames);
-                    c.map_or(max_ref, |c| price(c).clamp(min_ref, max_ref)) * factor
-                })
-                .collect()
-        }
-    }
+    let Some((window_frames, min_ref, max_ref)) = params.lambda.window_clamp() else {
+        return match params.lambda {
+            Lambda::Fixed { lambda_ref } => vec![lambda_ref * factor; t],
+            // A budget is resolved to a fixed λ before any segmentation
+            // (`resolve_budget`); on its own, the upper end of its range
+            // (the most compact program).
+            _ => vec![BUDGET_LAMBDA_RANGE.1 * factor; t],
+        };
+    };
+    // `Adaptive` prices a segment at the covariance's norm (px²), `Spread` at
+    // its square root (px) held for `seconds` of frames.
+    let hold = match params.lambda {
+        Lambda::Spread { seconds, .. } => Some(seconds * track.fps()),
+        _ => None,
+    };
+    let price = |c: f64| hold.map_or(c, |frames| c.sqrt() * frames);
+    adaptive_lambda_ref(track, params.min_confidence, window_frames, unit_scale)
+        .into_iter()
+        .map(|c| c.map_or(max_ref, |c| price(c).clamp(min_ref, max_ref)) * factor)
+        .collect()
 }
 
 /// ‖mean-over-joints covariance‖_F per frame in reference px² (`None` where no joint has 2 valid frames).
