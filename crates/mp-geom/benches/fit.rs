@@ -1,5 +1,6 @@
 //! Single primitive fits on 30-frame segments (the inner loop of the
-//! segmentation DP), in 2D and 3D, plus the O(1) prefix-sum path.
+//! segmentation DP), in 2D and 3D, plus the O(1) prefix-sum path and the
+//! circle fit's angles.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use std::hint::black_box;
@@ -80,5 +81,29 @@ fn bench_fits(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_fits);
+/// The circle fit's angles: 1,024 points, the C library's `atan2` one by one
+/// against the batch of `mp_geom::fit::atan` (four lanes, AVX2 where the CPU
+/// has it).
+fn bench_atan2(c: &mut Criterion) {
+    let n = 1024;
+    let ys: Vec<f64> = (0..n).map(|i| ((i * 7919) % 1000) as f64 - 500.0).collect();
+    let xs: Vec<f64> = (0..n)
+        .map(|i| ((i * 104_729) % 997) as f64 - 498.0)
+        .collect();
+    let mut out = vec![0.0; n];
+    let mut g = c.benchmark_group("atan2_1024");
+    g.bench_function("libm", |b| {
+        b.iter(|| {
+            for ((o, &y), &x) in out.iter_mut().zip(&ys).zip(&xs) {
+                *o = black_box(y).atan2(x);
+            }
+        })
+    });
+    g.bench_function("batch", |b| {
+        b.iter(|| mp_geom::fit::atan::atan2_into(black_box(&ys), &xs, &mut out))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench_fits, bench_atan2);
 criterion_main!(benches);

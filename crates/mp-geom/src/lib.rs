@@ -19,6 +19,7 @@ pub mod cancel;
 pub mod error;
 pub mod fit;
 pub mod io;
+pub mod lanes;
 pub mod metrics;
 pub mod paths;
 pub mod performer;

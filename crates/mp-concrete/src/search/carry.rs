@@ -40,7 +40,7 @@
 use std::f64::consts::PI;
 
 use super::bounds::Quick;
-use super::exact::CircleFit;
+use super::circle::CircleFit;
 use super::moments::Acc2;
 use super::{Rules, LB_SAFETY};
 
@@ -300,7 +300,8 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
     use super::*;
     use crate::search::bounds::quick;
-    use crate::search::exact::{cheap2, circle2};
+    use crate::search::circle::{circle2, CircleScratch};
+    use crate::search::exact::cheap2;
     use crate::search::testutil::{acc_of, steps_of, track};
     use mp_geom::fit::FitParams;
     use rand::SeedableRng;
@@ -315,6 +316,7 @@ mod tests {
         let rules = Rules::new(&fit);
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let (mut checked, mut circles_carried) = (0, 0);
+        let sc = std::cell::RefCell::new(CircleScratch::default());
         for _ in 0..40 {
             let t = 90;
             let (pts, wts) = track(&mut rng, t);
@@ -327,7 +329,15 @@ mod tests {
                 let q = quick(&acc, &pts, &rules, &fit);
                 let c = cheap2(&q, &acc, &pts, &steps, &wts, &rules);
                 let mut known = Known::new(k, n, c.errors, &q);
-                known.circle = circle2(&pts, &wts, acc.first, acc.last, &rules, &fit);
+                known.circle = circle2(
+                    &pts,
+                    &wts,
+                    acc.first,
+                    acc.last,
+                    &rules,
+                    &fit,
+                    &mut sc.borrow_mut(),
+                );
                 Some((acc, q, known))
             };
             for n in 4..=t {

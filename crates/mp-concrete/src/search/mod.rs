@@ -64,8 +64,9 @@
 //!
 //! Steps, one file each: `moments` (running moments), `bounds` (the O(1)
 //! fits and bounds), `carry` (bounds carried from a measured neighbour),
-//! `coarse` (the single-precision pass), `exact` (the one-pass errors and
-//! the exact circle); the search loop is here.
+//! `coarse` (the single-precision pass), `exact` (the one-pass errors),
+//! `circle` (the exact circle, four frames at a time); the search loop is
+//! here.
 //!
 //! Memory: `O(T·J·D)` for the points, `O(T)` for the DP and `O(W·J)` for
 //! what is carried; no `T × W` table.
@@ -79,6 +80,7 @@ use crate::error::{ConcreteError, Result};
 
 mod bounds;
 mod carry;
+mod circle;
 mod coarse;
 mod exact;
 mod moments;
@@ -87,8 +89,9 @@ mod testutil;
 
 use bounds::{quick, Quick};
 use carry::{joint_lb, Known};
+use circle::{circle2, CircleScratch};
 use coarse::{coarse_stage, Coarse};
-use exact::{cheap2, circle2};
+use exact::cheap2;
 use moments::Acc2;
 
 /// The work one search did: the same track and parameters give the same
@@ -242,12 +245,13 @@ fn joint_circle(
     fit: &FitParams,
     stats: &mut SearchStats,
     known: &mut Known,
+    scratch: &mut CircleScratch,
     k: usize,
     n: usize,
 ) -> (Option<f64>, f64) {
     stats.circle_fits += 1;
     stats.circle_frames += span_frames(acc, k, n, true);
-    let cf = circle2(pts, jt.weights, acc.first, acc.last, rules, fit);
+    let cf = circle2(pts, jt.weights, acc.first, acc.last, rules, fit, scratch);
     if known.k == k && known.n == n {
         known.circle = cf;
     }
@@ -357,6 +361,7 @@ pub(crate) fn segment_search(
     let mut gaps = vec![0.0f64; nj];
     let mut order: Vec<usize> = (0..nj).collect();
     let mut stats = SearchStats::default();
+    let mut scratch = CircleScratch::default();
     // What the exact stage measured, per joint, on the candidates of this
     // end frame and the previous one (slot `k mod (W + 2)`).
     let ring = window + 2;
@@ -479,9 +484,13 @@ pub(crate) fn segment_search(
                     )
                     .map_err(|e| joint_err(names, j, k, n, e))
                 };
-                let fit_circle = |j: usize, best: f64, st: &mut SearchStats, kn: &mut Known| {
+                let fit_circle = |j: usize,
+                                  best: f64,
+                                  st: &mut SearchStats,
+                                  kn: &mut Known,
+                                  sc: &mut CircleScratch| {
                     let p = fast[j].as_deref().unwrap_or(&[]);
-                    joint_circle(&joints[j], p, &accs[j], best, &rules, fit, st, kn, k, n)
+                    joint_circle(&joints[j], p, &accs[j], best, &rules, fit, st, kn, sc, k, n)
                 };
                 for &j in &order {
                     rest -= lbs[j];
@@ -513,7 +522,8 @@ pub(crate) fn segment_search(
                             // Fitted now only if it can drop the candidate;
                             // otherwise later, if the candidate survives.
                             if base + (sum + best + rest.max(0.0) + lam) > best_n {
-                                let (c, own) = fit_circle(j, best, &mut stats, &mut known[slot]);
+                                let (c, own) =
+                                    fit_circle(j, best, &mut stats, &mut known[slot], &mut scratch);
                                 circ[j] = own;
                                 match c {
                                     Some(c) => c,
@@ -545,7 +555,7 @@ pub(crate) fn segment_search(
                 deferred.sort_by(|a, b| (b.2 - b.1).total_cmp(&(a.2 - a.1)));
                 for &(j, lb, best) in &deferred {
                     let slot = j * ring + k % ring;
-                    let (c, own) = fit_circle(j, best, &mut stats, &mut known[slot]);
+                    let (c, own) = fit_circle(j, best, &mut stats, &mut known[slot], &mut scratch);
                     circ[j] = own;
                     let cost = match c {
                         Some(c) => c,
@@ -585,7 +595,7 @@ pub(crate) fn segment_search(
                         Stage::Done(None) => no_fit(j)?,
                         Stage::Circle { best, .. } => {
                             let own = if circ[j].is_nan() {
-                                fit_circle(j, best, &mut stats, &mut known[slot]).1
+                                fit_circle(j, best, &mut stats, &mut known[slot], &mut scratch).1
                             } else {
                                 circ[j]
                             };

@@ -16,6 +16,7 @@
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use ndarray::ArrayView2;
 
+use super::atan;
 use super::input::{self, wt, Summary};
 use super::FitParams;
 use crate::error::{GeomError, Result};
@@ -40,23 +41,38 @@ fn bullock(
     w_sum: f64,
     coord: impl Fn(usize) -> (f64, f64),
 ) -> Result<Circle2> {
-    let (mut suu, mut suv, mut svv) = (0.0, 0.0, 0.0);
-    let (mut suuu, mut suvv, mut svvv, mut svuu) = (0.0, 0.0, 0.0, 0.0);
+    let mut m = [0.0; 7];
     for i in 0..n {
         let w = wt(weights, i);
         if w == 0.0 {
             continue;
         }
         let (u, v) = coord(i);
-        let (uu, vv) = (u * u, v * v);
-        suu += w * uu;
-        suv += w * u * v;
-        svv += w * vv;
-        suuu += w * uu * u;
-        suvv += w * u * vv;
-        svvv += w * vv * v;
-        svuu += w * v * uu;
+        for (s, t) in m.iter_mut().zip(bullock_terms(w, u, v)) {
+            *s += t;
+        }
     }
+    bullock_solve(&m, w_sum)
+}
+
+/// One point's terms of the sums that Bullock's fit solves from (see
+/// [`bullock_from_sums`]).
+#[inline(always)]
+pub fn bullock_terms(w: f64, u: f64, v: f64) -> [f64; 7] {
+    let (uu, vv) = (u * u, v * v);
+    [
+        w * uu,
+        w * u * v,
+        w * vv,
+        w * uu * u,
+        w * u * vv,
+        w * vv * v,
+        w * v * uu,
+    ]
+}
+
+fn bullock_solve(m: &[f64; 7], w_sum: f64) -> Result<Circle2> {
+    let [suu, suv, svv, suuu, suvv, svvv, svuu] = *m;
     let inv = 1.0 / w_sum;
     let (suu, suv, svv) = (suu * inv, suv * inv, svv * inv);
     let b1 = 0.5 * (suuu + suvv) * inv;
@@ -77,6 +93,13 @@ fn bullock(
         ));
     }
     Ok(Circle2 { uc, vc, r })
+}
+
+/// Bullock's circle from the sums of [`bullock_terms`] over centred points
+/// with weights summing to `w_sum`, as [`bullock_circle`] (for callers that
+/// sum the terms their own way).
+pub fn bullock_from_sums(sums: &[f64; 7], w_sum: f64) -> Result<(f64, f64, f64)> {
+    bullock_solve(sums, w_sum).map(|c| (c.uc, c.vc, c.r))
 }
 
 /// Bullock's algebraic circle of points given in centred local coordinates
@@ -104,24 +127,58 @@ pub fn unwrapped_angles(
     local: impl Fn(usize) -> (f64, f64),
     mut f: impl FnMut(usize, f64, f64),
 ) {
+    // Points in batches, their angles at once (vector code, see `atan`).
+    const BATCH: usize = 64;
+    let (mut idx, mut xs, mut ys, mut th) =
+        ([0usize; BATCH], [0.0; BATCH], [0.0; BATCH], [0.0; BATCH]);
     let mut prev: Option<f64> = None;
-    for i in 0..n {
-        let w = wt(weights, i);
-        if w == 0.0 {
-            continue;
-        }
-        let (a, b) = local(i);
-        let mut th = b.atan2(a).to_degrees();
-        if let Some(p) = prev {
-            let turns = (p - th) / 360.0;
-            // `round` is a library call; it is 0 for |turns| < ½.
-            if turns.abs() >= 0.5 {
-                th += 360.0 * turns.round();
+    let mut i = 0;
+    while i < n {
+        let mut m = 0;
+        while i < n && m < BATCH {
+            if wt(weights, i) != 0.0 {
+                let (a, b) = local(i);
+                idx[m] = i;
+                xs[m] = a;
+                ys[m] = b;
+                m += 1;
             }
+            i += 1;
         }
-        prev = Some(th);
-        f(i, w, th);
+        atan::atan2_into(&ys[..m], &xs[..m], &mut th[..m]);
+        prev = unwrap_degrees(prev, &mut th[..m]);
+        for (&i, &a) in idx[..m].iter().zip(&th[..m]) {
+            f(i, wt(weights, i), a);
+        }
     }
+}
+
+/// Turns angles in radians into degrees unwrapped point to point, in
+/// place: each differs from its predecessor (`prev` before the first) by at
+/// most 180°. Returns the last angle. [`unwrapped_angles`] uses it, and so
+/// does `mp-concrete`'s search.
+///
+/// The whole turns between consecutive raw angles are independent of each
+/// other; only their running count is carried from point to point (an
+/// addition), so long batches do not wait on a division and a rounding per
+/// point.
+#[inline]
+pub fn unwrap_degrees(prev: Option<f64>, angles: &mut [f64]) -> Option<f64> {
+    // Whole turns in `t` (0 below half a turn; `round` is a library call on
+    // some targets).
+    let whole = |t: f64| if t.abs() >= 0.5 { t.round() } else { 0.0 };
+    let (first, rest) = angles.split_first_mut()?;
+    let raw0 = first.to_degrees();
+    let mut turns = prev.map_or(0.0, |p| whole((p - raw0) / 360.0));
+    *first = raw0 + 360.0 * turns;
+    let mut last_raw = raw0;
+    for a in rest.iter_mut() {
+        let raw = a.to_degrees();
+        turns += whole((last_raw - raw) / 360.0);
+        last_raw = raw;
+        *a = raw + 360.0 * turns;
+    }
+    angles.last().copied()
 }
 
 /// Fits `θ(t) = acc·t² + vel·t + start` to the unwrapped angles.

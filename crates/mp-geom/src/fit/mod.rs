@@ -20,19 +20,19 @@
 //!   `Σ wᵢ ‖p(i) − xᵢ‖`, with [`ErrorNorm::Squared`] it is `Σ wᵢ ‖p(i) − xᵢ‖²`
 //!   (for 0/1 weights these are the plain sums over the valid frames).
 //! * **Bad input** is a typed error, never a NaN result: no frames →
-//!   [`GeomError::TooShort`](crate::GeomError::TooShort); all weights 0 →
-//!   [`GeomError::NoData`](crate::GeomError::NoData); a non-finite coordinate
+//!   [`GeomError::TooShort`]; all weights 0 →
+//!   [`GeomError::NoData`]; a non-finite coordinate
 //!   in a frame of weight > 0, or a non-finite weight →
-//!   [`GeomError::NonFinite`](crate::GeomError::NonFinite) naming the frame;
+//!   [`GeomError::NonFinite`] naming the frame;
 //!   a negative weight or an invalid [`FitParams`] field →
-//!   [`GeomError::InvalidParam`](crate::GeomError::InvalidParam); a weight
-//!   slice of the wrong length or `D = 0` → [`GeomError::Shape`](crate::GeomError::Shape).
+//!   [`GeomError::InvalidParam`]; a weight
+//!   slice of the wrong length or `D = 0` → [`GeomError::Shape`].
 //! * **Dimensions.** Stationary, line and spline accept any `D ≥ 1`; circles
 //!   need `D = 2` or `3`.
 //! * **Circles** need 3 valid frames
-//!   ([`GeomError::TooShort`](crate::GeomError::TooShort) otherwise) and points
+//!   ([`GeomError::TooShort`] otherwise) and points
 //!   that are not collinear or coincident
-//!   ([`GeomError::NoData`](crate::GeomError::NoData) otherwise).
+//!   ([`GeomError::NoData`] otherwise).
 //!
 //! ## Selection ([`fit_best`])
 //!
@@ -56,11 +56,14 @@
 use ndarray::ArrayView2;
 use serde::{Deserialize, Serialize};
 
+pub mod atan;
 mod circle;
 mod input;
 pub mod prefix;
 
-pub use circle::{bullock_circle, unwrapped_angles};
+pub use circle::{
+    bullock_circle, bullock_from_sums, bullock_terms, unwrap_degrees, unwrapped_angles,
+};
 
 use crate::error::{GeomError, Result};
 use crate::primitive::{Primitive, PrimitiveKind};

@@ -1,0 +1,382 @@
+//! The exact circle of one 2D joint on a candidate segment, where it can
+//! still win: the fit of [`mp_geom::fit::fit_circle`] (Bullock's centre, the
+//! angles about it unwrapped point to point, the least-squares line of the
+//! angle against time) with its error and radius penalty.
+//!
+//! It is the search's most frequent O(L) step, so it runs over the
+//! segment's valid frames gathered into reused buffers, in passes without
+//! branches that become vector instructions (AVX2 where the CPU has it,
+//! checked at run time): the mean, Bullock's sums, the angles
+//! ([`mp_geom::fit::atan`]), the unwrapping (the one sequential step), the
+//! angle line's sums, and the residuals, with the fitted angle rotated by
+//! four frames' turn in four interleaved chains. Every sum runs in four lanes
+//! of fixed assignment (frame index mod 4), so the result is the same on
+//! every CPU; it is that of `fit_circle` up to rounding.
+
+use mp_geom::fit::atan::atan2_lanes;
+use mp_geom::fit::{bullock_from_sums, unwrap_degrees, FitParams};
+#[cfg(target_arch = "x86_64")]
+use mp_geom::lanes::Avx2;
+use mp_geom::lanes::{has_avx2, F64x4, Portable};
+
+use super::Rules;
+
+/// An exact circle of [`circle2`]: its cost and what [`super::carry`]
+/// needs to carry its error to a neighbouring segment.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct CircleFit {
+    /// Error with the radius penalty (the joint's cost if the circle wins).
+    pub(super) cost: f64,
+    /// Euclidean error without the penalty.
+    pub(super) error: f64,
+    pub(super) center: [f64; 2],
+    pub(super) radius: f64,
+    /// Angle (radians) at frame `first` and per frame.
+    pub(super) angle0: f64,
+    pub(super) angle_vel: f64,
+    pub(super) first: usize,
+    /// Smallest distance of a valid point to the centre.
+    pub(super) d_min: f64,
+    /// Largest step between consecutive unwrapped angles (radians).
+    pub(super) max_step: f64,
+    /// Unwrapped angles (radians) of the first and last valid frames, and
+    /// their directions from the centre (unit vectors).
+    pub(super) angle_first: f64,
+    pub(super) angle_last: f64,
+    pub(super) dir_first: [f64; 2],
+    pub(super) dir_last: [f64; 2],
+}
+
+/// Reused buffers of [`circle2`]: the frames of the segment.
+#[derive(Default)]
+pub(super) struct CircleScratch {
+    /// Coordinates and weight.
+    x: Vec<f64>,
+    y: Vec<f64>,
+    w: Vec<f64>,
+    /// Coordinates about the centre, then the angles.
+    u: Vec<f64>,
+    v: Vec<f64>,
+    th: Vec<f64>,
+}
+
+/// Lanes of every sum.
+const L: usize = 4;
+
+/// The circle of [`mp_geom::fit::fit_circle`] (2D, linear angle) on the
+/// valid frames of `first..=last`, with its error and radius penalty. `None`
+/// when the points are collinear (the circle takes no part, as in
+/// `fit_best`).
+pub(super) fn circle2(
+    pts: &[[f64; 2]],
+    wts: &[f64],
+    first: usize,
+    last: usize,
+    rules: &Rules,
+    fit: &FitParams,
+    sc: &mut CircleScratch,
+) -> Option<CircleFit> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if has_avx2() {
+            // SAFETY: the CPU has AVX2 (checked just above), the only
+            // requirement of a `target_feature(enable = "avx2")` function.
+            return unsafe { circle2_avx2(pts, wts, first, last, rules, fit, sc) };
+        }
+    }
+    circle2_body::<Portable>(pts, wts, first, last, rules, fit, sc)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn circle2_avx2(
+    pts: &[[f64; 2]],
+    wts: &[f64],
+    first: usize,
+    last: usize,
+    rules: &Rules,
+    fit: &FitParams,
+    sc: &mut CircleScratch,
+) -> Option<CircleFit> {
+    circle2_body::<Avx2>(pts, wts, first, last, rules, fit, sc)
+}
+
+/// Rotates `(c, s)` by the angle of `(rc, rs)`.
+#[inline(always)]
+fn rot<V: F64x4>((c, s): (V, V), (rc, rs): (V, V)) -> (V, V) {
+    (c.mul(rc).sub(s.mul(rs)), s.mul(rc).add(c.mul(rs)))
+}
+
+#[inline(always)]
+fn circle2_body<V: F64x4>(
+    pts: &[[f64; 2]],
+    wts: &[f64],
+    first: usize,
+    last: usize,
+    rules: &Rules,
+    fit: &FitParams,
+    sc: &mut CircleScratch,
+) -> Option<CircleFit> {
+    // The segment's frames (missing ones zeroed, of weight 0), padded to
+    // whole chunks with frames of weight 0.
+    let len = last + 1 - first;
+    let padded = len.div_ceil(L) * L;
+    for b in [
+        &mut sc.x, &mut sc.y, &mut sc.w, &mut sc.u, &mut sc.v, &mut sc.th,
+    ] {
+        b.clear();
+        b.resize(padded, 0.0);
+    }
+    for (i, (p, &w)) in pts[first..=last].iter().zip(&wts[first..=last]).enumerate() {
+        sc.x[i] = p[0];
+        sc.y[i] = p[1];
+        sc.w[i] = w;
+    }
+    let (x, _) = sc.x.as_chunks::<L>();
+    let (y, _) = sc.y.as_chunks::<L>();
+    let (w, _) = sc.w.as_chunks::<L>();
+    let chunks = || {
+        x.iter()
+            .zip(y)
+            .zip(w)
+            .map(|((x, y), w)| (V::load(x), V::load(y), V::load(w)))
+    };
+    // Bullock's centre, on coordinates about the mean.
+    let zero = V::splat(0.0);
+    let (mut aw, mut ax, mut ay) = (zero, zero, zero);
+    for (xc, yc, wc) in chunks() {
+        aw = aw.add(wc);
+        ax = ax.add(wc.mul(xc));
+        ay = ay.add(wc.mul(yc));
+    }
+    let w_sum = aw.total();
+    let (mx, my) = (ax.total() / w_sum, ay.total() / w_sum);
+    let (vmx, vmy) = (V::splat(mx), V::splat(my));
+    let mut sums = [zero; 7];
+    for (xc, yc, wc) in chunks() {
+        // The terms of `mp_geom::fit::bullock_terms`, lane by lane.
+        let (u, v) = (xc.sub(vmx), yc.sub(vmy));
+        let (uu, vv) = (u.mul(u), v.mul(v));
+        let terms = [
+            wc.mul(uu),
+            wc.mul(u).mul(v),
+            wc.mul(vv),
+            wc.mul(uu).mul(u),
+            wc.mul(u).mul(vv),
+            wc.mul(vv).mul(v),
+            wc.mul(v).mul(uu),
+        ];
+        for (s, t) in sums.iter_mut().zip(terms) {
+            *s = s.add(t);
+        }
+    }
+    let mut totals = [0.0; 7];
+    for (t, s) in totals.iter_mut().zip(&sums) {
+        *t = s.total();
+    }
+    let (uc, vc, r) = bullock_from_sums(&totals, w_sum).ok()?;
+    let (cx, cy) = (mx + uc, my + vc);
+    let (vcx, vcy) = (V::splat(cx), V::splat(cy));
+    // Angles about the centre (of every frame; a missing one takes its
+    // predecessor's, so it adds no turn), unwrapped, in degrees.
+    {
+        let (u, _) = sc.u.as_chunks_mut::<L>();
+        let (v, _) = sc.v.as_chunks_mut::<L>();
+        let (th, _) = sc.th.as_chunks_mut::<L>();
+        for ((((uo, vo), to), xc), yc) in u
+            .iter_mut()
+            .zip(v.iter_mut())
+            .zip(th.iter_mut())
+            .zip(x)
+            .zip(y)
+        {
+            let (a, b) = (V::load(xc).sub(vcx), V::load(yc).sub(vcy));
+            *uo = a.to_array();
+            *vo = b.to_array();
+            *to = atan2_lanes(b, a).to_array();
+        }
+    }
+    // (Frames `first` and `last` are valid.)
+    for i in 1..len {
+        if sc.w[i] == 0.0 {
+            sc.th[i] = sc.th[i - 1];
+        }
+    }
+    unwrap_degrees(None, &mut sc.th[..len]);
+    let mut max_step = 0.0f64;
+    for p in sc.th[..len].windows(2) {
+        let d = (p[1] - p[0]).abs();
+        max_step = if d > max_step { d } else { max_step };
+    }
+    let (th, _) = sc.th[..padded].as_chunks::<L>();
+    // The least-squares angle line, time about the segment's middle frame.
+    let t_ref = ((first + last) / 2 - first) as f64;
+    let mut tt = V::load(&[-t_ref, 1.0 - t_ref, 2.0 - t_ref, 3.0 - t_ref]);
+    let four = V::splat(L as f64);
+    let mut ls = [zero; 4];
+    for (hc, wc) in th.iter().zip(w) {
+        let (h, wv) = (V::load(hc), V::load(wc));
+        let wt = wv.mul(tt);
+        ls[0] = ls[0].add(wt);
+        ls[1] = ls[1].add(wv.mul(h));
+        ls[2] = ls[2].add(wt.mul(tt));
+        ls[3] = ls[3].add(wt.mul(h));
+        tt = tt.add(four);
+    }
+    let (st, sth, stt, stth) = (ls[0].total(), ls[1].total(), ls[2].total(), ls[3].total());
+    let tbar = st / w_sum;
+    let thbar = sth / w_sum;
+    let vtt = stt - st * tbar;
+    let vel = if vtt > 0.0 {
+        (stth - st * thbar) / vtt
+    } else {
+        0.0
+    };
+    // angle at frame `first`: θ̄ + vel·(t_first − t̄)
+    let th0 = (thbar + vel * (-t_ref - tbar)).to_radians();
+    let vel_r = vel.to_radians();
+    // Residuals: frame `first + i` at angle th0 + vel·i, lane `i mod 4`
+    // rotated by 4·vel per step from its own start.
+    let (s0, c0) = th0.sin_cos();
+    let (s1, c1) = vel_r.sin_cos();
+    let mut start = [(c0, s0); L];
+    for l in 1..L {
+        let (c, s) = start[l - 1];
+        start[l] = (c * c1 - s * s1, s * c1 + c * s1);
+    }
+    let (c2, s2) = (c1 * c1 - s1 * s1, s1 * c1 + c1 * s1);
+    let step4 = (V::splat(c2 * c2 - s2 * s2), V::splat(s2 * c2 + c2 * s2));
+    let (mut c4, mut s4) = ([0.0; L], [0.0; L]);
+    for (l, &(c, s)) in start.iter().enumerate() {
+        c4[l] = c;
+        s4[l] = s;
+    }
+    let mut cs = (V::load(&c4), V::load(&s4));
+    let (u, _) = sc.u.as_chunks::<L>();
+    let (v, _) = sc.v.as_chunks::<L>();
+    let vr = V::splat(r);
+    let (mut e, mut e2, mut dmin2) = (zero, zero, V::splat(f64::INFINITY));
+    for ((uc, vc), wc) in u.iter().zip(v).zip(w) {
+        let (a, b, wv) = (V::load(uc), V::load(vc), V::load(wc));
+        let (ex, ey) = (vr.mul(cs.0).sub(a), vr.mul(cs.1).sub(b));
+        let d2 = ex.mul(ex).add(ey.mul(ey));
+        e = e.add(wv.mul(d2.sqrt()));
+        e2 = e2.add(wv.mul(d2));
+        let dd = a.mul(a).add(b.mul(b));
+        // (A valid frame nearer than the nearest so far.)
+        let nearer = V::select(wv.gt(zero), dmin2.gt(dd), zero);
+        dmin2 = V::select(nearer, dd, dmin2);
+        cs = rot(cs, step4);
+    }
+    let (e, e2) = (e.total(), e2.total());
+    let dmin2 = dmin2
+        .to_array()
+        .iter()
+        .fold(f64::INFINITY, |m, &d| m.min(d));
+    let (u, v) = (&sc.u, &sc.v);
+    let unit = |k: usize| {
+        let d = (u[k] * u[k] + v[k] * v[k]).sqrt();
+        [u[k] / d, v[k] / d]
+    };
+    let error = if rules.squared { e2 } else { e };
+    let cost = error + fit.circle_penalty(r);
+    cost.is_finite().then_some(CircleFit {
+        cost,
+        error,
+        center: [cx, cy],
+        radius: r,
+        angle0: th0,
+        angle_vel: vel_r,
+        first,
+        d_min: dmin2.sqrt(),
+        max_step: max_step.to_radians(),
+        angle_first: sc.th[0].to_radians(),
+        angle_last: sc.th[len - 1].to_radians(),
+        dir_first: unit(0),
+        dir_last: unit(len - 1),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+    use super::*;
+    use crate::search::testutil::track;
+    use mp_geom::fit::fit_circle;
+    use mp_geom::Primitive;
+    use ndarray::Array2;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// The cost of `fit_circle` (error plus radius penalty) on thousands of
+    /// segments with missing frames, to rounding; `None` exactly where it
+    /// fails on collinear points.
+    #[test]
+    fn matches_fit_circle() {
+        let fit = FitParams::default();
+        let rules = Rules::new(&fit);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut sc = CircleScratch::default();
+        let mut checked = 0;
+        for _ in 0..20 {
+            let t = 80;
+            let (pts, wts) = track(&mut rng, t);
+            for first in (0..t).filter(|&i| wts[i] > 0.0) {
+                for last in (first + 2..t.min(first + 61)).filter(|&i| wts[i] > 0.0) {
+                    let ours = circle2(&pts, &wts, first, last, &rules, &fit, &mut sc);
+                    let seg =
+                        Array2::from_shape_fn((last + 1 - first, 2), |(i, d)| pts[first + i][d]);
+                    let reference = fit_circle(seg.view(), Some(&wts[first..=last]), &fit)
+                        .ok()
+                        .map(|f| match f.primitive {
+                            Primitive::Circle { radius, .. } => {
+                                f.error + fit.circle_penalty(radius)
+                            }
+                            _ => panic!("not a circle"),
+                        });
+                    match (ours, reference) {
+                        (Some(c), Some(r)) => {
+                            let tol = 1e-9 * (1.0 + r.abs());
+                            assert!(
+                                (c.cost - r).abs() <= tol,
+                                "{first}..={last}: {} vs {r}",
+                                c.cost
+                            );
+                            checked += 1;
+                        }
+                        (None, None) => {}
+                        (a, b) => panic!("{first}..={last}: {a:?} vs {b:?}"),
+                    }
+                }
+            }
+        }
+        assert!(checked > 40_000, "{checked}");
+    }
+
+    /// Nanoseconds per frame of `circle2` (`cargo test --release -p mp-concrete
+    /// circle2_speed -- --ignored --nocapture`); prints, asserts nothing.
+    #[test]
+    #[ignore]
+    fn circle2_speed() {
+        let fit = FitParams::default();
+        let rules = Rules::new(&fit);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut sc = CircleScratch::default();
+        let t = 400;
+        let (pts, wts) = track(&mut rng, t);
+        for _ in 0..5 {
+            let (mut frames, mut acc) = (0usize, 0.0);
+            let t0 = std::time::Instant::now();
+            for first in (0..t - 40).filter(|&i| wts[i] > 0.0) {
+                for last in (first + 10..first + 40).filter(|&i| wts[i] > 0.0) {
+                    if let Some(c) = circle2(&pts, &wts, first, last, &rules, &fit, &mut sc) {
+                        acc += c.cost;
+                    }
+                    frames += last + 1 - first;
+                }
+            }
+            let dt = t0.elapsed().as_secs_f64();
+            println!("{:.2} ns per frame ({acc})", dt * 1e9 / frames as f64);
+        }
+    }
+}
