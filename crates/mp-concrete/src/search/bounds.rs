@@ -142,6 +142,9 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
         ..Quick::default()
     };
     let (mux, muy) = (acc.sx / w, acc.sy / w);
+    // (Divisions are the costly part: where it is safe, a divisor is
+    // inverted once. The mean stays a division, as in the fits.)
+    let iw = 1.0 / w;
     q.mx = mux + acc.rx;
     q.my = muy + acc.ry;
     let bx = acc.hi[0] - acc.lo[0];
@@ -180,9 +183,16 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
     let tbar = acc.st / w;
     let vtt = acc.stt - acc.st * tbar;
     if acc.count >= 2 && vtt > 0.0 {
-        q.vx = (acc.stx - acc.st * mux) / vtt;
-        q.vy = (acc.sty - acc.st * muy) / vtt;
+        let ivtt = 1.0 / vtt;
+        q.vx = (acc.stx - acc.st * mux) * ivtt;
+        q.vy = (acc.sty - acc.st * muy) * ivtt;
     }
+    // The step-variation bound (Euclidean), shared by the line and the circle.
+    let speed = if rules.squared {
+        0.0
+    } else {
+        speed_lb(acc, false)
+    };
     q.lx = q.mx - q.vx * tbar;
     q.ly = q.my - q.vy * tbar;
     if rules.line && !q.reject_moving {
@@ -206,7 +216,7 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
             let rx = ax(acc.lo[0] - acc.rx, acc.hi[0] - acc.rx, mux, q.vx);
             let ry = ax(acc.lo[1] - acc.ry, acc.hi[1] - acc.ry, muy, q.vy);
             // a line moves ‖v‖ per frame: the step-variation bound
-            euclid_lb(sse, (rx * rx + ry * ry).sqrt()).max(speed_lb(acc, false))
+            euclid_lb(sse, (rx * rx + ry * ry).sqrt()).max(speed)
         };
         q.line_lb = b;
         lb = lb.min(b);
@@ -231,15 +241,17 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
                 - w * m1 * m2 * m2;
             let b1 = 0.5 * (cxxx + cxyy);
             let b2 = 0.5 * (cyyy + cxxy);
-            let uc = (b1 * cyy - b2 * cxy) / det;
-            let vc = (cxx * b2 - cxy * b1) / det;
-            let r = (uc * uc + vc * vc + tr / w).sqrt();
+            let idet = 1.0 / det;
+            let uc = (b1 * cyy - b2 * cxy) * idet;
+            let vc = (cxx * b2 - cxy * b1) * idet;
+            let trw = tr * iw;
+            let r = (uc * uc + vc * vc + trw).sqrt();
             if uc.is_finite() && vc.is_finite() && r.is_finite() && r > 0.0 {
                 q.circle_ok = true;
                 q.cx = q.mx + uc;
                 q.cy = q.my + vc;
                 q.r = r;
-                let scale = (tr / w).sqrt() + r;
+                let scale = trw.sqrt() + r;
                 q.circle_slack = 1e-7 * scale;
                 q.pen_lb = penalty_lb(fit, r);
                 // Kåsa residual K = Σz_c² − 2 a·Σ z_c p_c − W m², m = tr / W
@@ -247,7 +259,7 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
                 let szc2: f64 = fourth_about(acc, m1, m2).iter().sum();
                 let szcx = cxxx + cxyy;
                 let szcy = cxxy + cyyy;
-                let k = szc2 - 2.0 * (uc * szcx + vc * szcy) - tr * tr / w;
+                let k = szc2 - 2.0 * (uc * szcx + vc * szcy) - tr * trw;
                 let k = k - 1e-9 * szc2.abs();
                 let dmax = far_corner(acc.lo, acc.hi, q.cx, q.cy);
                 let dmin = near_box(acc.lo, acc.hi, q.cx, q.cy);
@@ -268,7 +280,12 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
                 }
             }
         }
-        b = b.max(speed_lb(acc, rules.squared)) + q.pen_lb;
+        let speed = if rules.squared {
+            speed_lb(acc, true)
+        } else {
+            speed
+        };
+        b = b.max(speed) + q.pen_lb;
         q.circle_lb = b * LB_SAFETY;
         lb = lb.min(b);
     }

@@ -6,8 +6,9 @@
 //! incumbent `E[n]` is found early. Each joint keeps running moments of its
 //! valid points over `k..n` (count, Σt, Σt², Σx, Σtx, Σx², third and fourth
 //! order in x and y, bounding box, first and last valid frame), with time and
-//! coordinates relative to frame `n − 1`, so adding frame `k` costs O(D) and
-//! the sums stay local (no cancellation between large prefix sums).
+//! coordinates relative to frame `n − 1` (its point, or the last valid point
+//! before it where it is missing), so adding frame `k` costs O(D) and the
+//! sums stay local (no cancellation between large prefix sums).
 //!
 //! From the moments, in O(1) per joint:
 //!
@@ -92,7 +93,7 @@ use carry::{joint_lb, Known};
 use circle::{circle2, CircleScratch};
 use coarse::{coarse_stage, Coarse};
 use exact::cheap2;
-use moments::Acc2;
+use moments::{anchors, Acc2};
 
 /// The work one search did: the same track and parameters give the same
 /// counts on every machine, so they measure the bounds and the visiting
@@ -315,6 +316,12 @@ pub(crate) fn segment_search(
             )
         })
         .collect();
+    // Per joint: the points the moments are taken about (see `moments::anchors`).
+    let anchor: Vec<Option<Vec<[f64; 2]>>> = fast
+        .iter()
+        .zip(joints)
+        .map(|(f, jt)| f.as_ref().map(|p| anchors(p, jt.weights)))
+        .collect();
     // Step lengths of consecutive valid frames (−1 where a frame is missing).
     let steps: Vec<Vec<f64>> = fast
         .iter()
@@ -386,8 +393,8 @@ pub(crate) fn segment_search(
                 continue;
             }
             for (j, acc) in accs.iter_mut().enumerate() {
-                let (rx, ry) = match &fast[j] {
-                    Some(p) => (p[n - 1][0], p[n - 1][1]),
+                let (rx, ry) = match &anchor[j] {
+                    Some(a) => (a[n - 1][0], a[n - 1][1]),
                     None => (0.0, 0.0),
                 };
                 acc.reset(n - 1, rx, ry);

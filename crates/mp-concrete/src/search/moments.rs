@@ -1,6 +1,29 @@
 //! Running moments of one 2D joint over the candidate segment, updated in
 //! O(1) when the segment's start moves one frame back.
 
+/// Per frame, the point the moments of segments ending there are taken
+/// about: the frame's own point, or where it is missing the last valid point
+/// before it (the first valid point of the track before that one), so the
+/// sums stay local even at a missing frame far from the origin (missing
+/// points are zeroed). All zeros if no frame is valid.
+pub(super) fn anchors(pts: &[[f64; 2]], wts: &[f64]) -> Vec<[f64; 2]> {
+    let first = pts
+        .iter()
+        .zip(wts)
+        .find(|(_, &w)| w > 0.0)
+        .map_or([0.0, 0.0], |(p, _)| *p);
+    let mut last = first;
+    pts.iter()
+        .zip(wts)
+        .map(|(p, &w)| {
+            if w > 0.0 {
+                last = *p;
+            }
+            last
+        })
+        .collect()
+}
+
 /// Running moments of one 2D joint over `k..n`, relative to `(t, x) = (n − 1, ref)`.
 #[derive(Clone, Copy, Default)]
 pub(super) struct Acc2 {

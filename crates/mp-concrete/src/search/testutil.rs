@@ -3,7 +3,7 @@
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use super::moments::Acc2;
+use super::moments::{anchors, Acc2};
 
 /// Arcs at varying angular speed (back and forth, full turns), lines
 /// and pauses, with noise and missing frames.
@@ -37,7 +37,8 @@ pub(super) fn track(rng: &mut ChaCha8Rng, t: usize) -> (Vec<[f64; 2]>, Vec<f64>)
 /// The running moments of `k..n` as the search builds them.
 pub(super) fn acc_of(pts: &[[f64; 2]], wts: &[f64], steps: &[f64], k: usize, n: usize) -> Acc2 {
     let mut acc = Acc2::default();
-    acc.reset(n - 1, pts[n - 1][0], pts[n - 1][1]);
+    let a = anchors(pts, wts)[n - 1];
+    acc.reset(n - 1, a[0], a[1]);
     for i in (k..n).rev() {
         if wts[i] > 0.0 {
             let tau = i as f64 - (n - 1) as f64;
