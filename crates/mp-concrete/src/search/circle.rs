@@ -353,6 +353,59 @@ mod tests {
         assert!(checked > 40_000, "{checked}");
     }
 
+    /// The moments' circle of the O(1) stage is the exact fit's (centre and
+    /// radius within the slack the bounds allow for) 10⁵ px from the origin,
+    /// on segments that end on a missing frame too.
+    #[test]
+    fn moments_circle_is_the_exact_circle_far_from_the_origin() {
+        use crate::search::bounds::quick;
+        use crate::search::testutil::{acc_of, steps_of};
+        let fit = FitParams::default();
+        let rules = Rules::new(&fit);
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let mut sc = CircleScratch::default();
+        let (mut checked, mut missing_end) = (0, 0);
+        for _ in 0..10 {
+            let t = 90;
+            let (mut pts, wts) = track(&mut rng, t);
+            for (p, &w) in pts.iter_mut().zip(&wts) {
+                if w > 0.0 {
+                    *p = [p[0] + 1e5, p[1] - 1e5];
+                }
+            }
+            let steps = steps_of(&pts, &wts);
+            for n in 4..=t {
+                for k in n.saturating_sub(40)..n - 2 {
+                    let acc = acc_of(&pts, &wts, &steps, k, n);
+                    if acc.count < 3 {
+                        continue;
+                    }
+                    let q = quick(&acc, &pts, &rules, &fit);
+                    let exact = circle2(&pts, &wts, acc.first, acc.last, &rules, &fit, &mut sc);
+                    let (Some(c), true) = (exact, q.circle_ok) else {
+                        continue;
+                    };
+                    let off = ((q.cx - c.center[0]).powi(2) + (q.cy - c.center[1]).powi(2)).sqrt();
+                    let tol = q.circle_slack;
+                    assert!(
+                        off <= tol && (q.r - c.radius).abs() <= tol,
+                        "{k}..{n}: centre off by {off}, radius {} vs {} (slack {tol})",
+                        q.r,
+                        c.radius
+                    );
+                    checked += 1;
+                    if wts[n - 1] == 0.0 {
+                        missing_end += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            checked > 10_000 && missing_end > 500,
+            "{checked} {missing_end}"
+        );
+    }
+
     /// Nanoseconds per frame of `circle2` (`cargo test --release -p mp-concrete
     /// circle2_speed -- --ignored --nocapture`); prints, asserts nothing.
     #[test]
