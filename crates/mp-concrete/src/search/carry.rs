@@ -300,7 +300,7 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
     use super::*;
     use crate::search::bounds::quick;
-    use crate::search::circle::{circle2, CircleScratch};
+    use crate::search::circle::{circle2, CircleScratch, Span};
     use crate::search::exact::cheap2;
     use crate::search::testutil::{acc_of, steps_of, track};
     use mp_geom::fit::FitParams;
@@ -329,15 +329,13 @@ mod tests {
                 let q = quick(&acc, &pts, &rules, &fit);
                 let c = cheap2(&q, &acc, &pts, &steps, &wts, &rules);
                 let mut known = Known::new(k, n, c.errors, &q);
-                known.circle = circle2(
-                    &pts,
-                    &wts,
-                    acc.first,
-                    acc.last,
-                    &rules,
-                    &fit,
-                    &mut sc.borrow_mut(),
-                );
+                let span = Span {
+                    pts: &pts,
+                    wts: &wts,
+                    first: acc.first,
+                    last: acc.last,
+                };
+                known.circle = circle2(span, &rules, &fit, &mut sc.borrow_mut());
                 Some((acc, q, known))
             };
             for n in 4..=t {

@@ -63,15 +63,21 @@ pub(super) struct CircleScratch {
 /// Lanes of every sum.
 const L: usize = 4;
 
+/// One joint's frames `first..=last` (both valid) as the exact circle reads
+/// them: points (missing ones zeroed) and weights of the whole track.
+#[derive(Clone, Copy)]
+pub(super) struct Span<'a> {
+    pub(super) pts: &'a [[f64; 2]],
+    pub(super) wts: &'a [f64],
+    pub(super) first: usize,
+    pub(super) last: usize,
+}
+
 /// The circle of [`mp_geom::fit::fit_circle`] (2D, linear angle) on the
-/// valid frames of `first..=last`, with its error and radius penalty. `None`
-/// when the points are collinear (the circle takes no part, as in
-/// `fit_best`).
+/// valid frames of the span, with its error and radius penalty. `None` when
+/// the points are collinear (the circle takes no part, as in `fit_best`).
 pub(super) fn circle2(
-    pts: &[[f64; 2]],
-    wts: &[f64],
-    first: usize,
-    last: usize,
+    span: Span<'_>,
     rules: &Rules,
     fit: &FitParams,
     sc: &mut CircleScratch,
@@ -81,24 +87,21 @@ pub(super) fn circle2(
         if has_avx2() {
             // SAFETY: the CPU has AVX2 (checked just above), the only
             // requirement of a `target_feature(enable = "avx2")` function.
-            return unsafe { circle2_avx2(pts, wts, first, last, rules, fit, sc) };
+            return unsafe { circle2_avx2(span, rules, fit, sc) };
         }
     }
-    circle2_body::<Portable>(pts, wts, first, last, rules, fit, sc)
+    circle2_body::<Portable>(span, rules, fit, sc)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn circle2_avx2(
-    pts: &[[f64; 2]],
-    wts: &[f64],
-    first: usize,
-    last: usize,
+    span: Span<'_>,
     rules: &Rules,
     fit: &FitParams,
     sc: &mut CircleScratch,
 ) -> Option<CircleFit> {
-    circle2_body::<Avx2>(pts, wts, first, last, rules, fit, sc)
+    circle2_body::<Avx2>(span, rules, fit, sc)
 }
 
 /// Rotates `(c, s)` by the angle of `(rc, rs)`.
@@ -109,14 +112,17 @@ fn rot<V: F64x4>((c, s): (V, V), (rc, rs): (V, V)) -> (V, V) {
 
 #[inline(always)]
 fn circle2_body<V: F64x4>(
-    pts: &[[f64; 2]],
-    wts: &[f64],
-    first: usize,
-    last: usize,
+    span: Span<'_>,
     rules: &Rules,
     fit: &FitParams,
     sc: &mut CircleScratch,
 ) -> Option<CircleFit> {
+    let Span {
+        pts,
+        wts,
+        first,
+        last,
+    } = span;
     // The segment's frames (missing ones zeroed, of weight 0), padded to
     // whole chunks with frames of weight 0.
     let len = last + 1 - first;
@@ -323,7 +329,13 @@ mod tests {
             let (pts, wts) = track(&mut rng, t);
             for first in (0..t).filter(|&i| wts[i] > 0.0) {
                 for last in (first + 2..t.min(first + 61)).filter(|&i| wts[i] > 0.0) {
-                    let ours = circle2(&pts, &wts, first, last, &rules, &fit, &mut sc);
+                    let span = Span {
+                        pts: &pts,
+                        wts: &wts,
+                        first,
+                        last,
+                    };
+                    let ours = circle2(span, &rules, &fit, &mut sc);
                     let seg =
                         Array2::from_shape_fn((last + 1 - first, 2), |(i, d)| pts[first + i][d]);
                     let reference = fit_circle(seg.view(), Some(&wts[first..=last]), &fit)
@@ -381,7 +393,13 @@ mod tests {
                         continue;
                     }
                     let q = quick(&acc, &pts, &rules, &fit);
-                    let exact = circle2(&pts, &wts, acc.first, acc.last, &rules, &fit, &mut sc);
+                    let span = Span {
+                        pts: &pts,
+                        wts: &wts,
+                        first: acc.first,
+                        last: acc.last,
+                    };
+                    let exact = circle2(span, &rules, &fit, &mut sc);
                     let (Some(c), true) = (exact, q.circle_ok) else {
                         continue;
                     };
@@ -404,32 +422,5 @@ mod tests {
             checked > 10_000 && missing_end > 500,
             "{checked} {missing_end}"
         );
-    }
-
-    /// Nanoseconds per frame of `circle2` (`cargo test --release -p mp-concrete
-    /// circle2_speed -- --ignored --nocapture`); prints, asserts nothing.
-    #[test]
-    #[ignore]
-    fn circle2_speed() {
-        let fit = FitParams::default();
-        let rules = Rules::new(&fit);
-        let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let mut sc = CircleScratch::default();
-        let t = 400;
-        let (pts, wts) = track(&mut rng, t);
-        for _ in 0..5 {
-            let (mut frames, mut acc) = (0usize, 0.0);
-            let t0 = std::time::Instant::now();
-            for first in (0..t - 40).filter(|&i| wts[i] > 0.0) {
-                for last in (first + 10..first + 40).filter(|&i| wts[i] > 0.0) {
-                    if let Some(c) = circle2(&pts, &wts, first, last, &rules, &fit, &mut sc) {
-                        acc += c.cost;
-                    }
-                    frames += last + 1 - first;
-                }
-            }
-            let dt = t0.elapsed().as_secs_f64();
-            println!("{:.2} ns per frame ({acc})", dt * 1e9 / frames as f64);
-        }
     }
 }

@@ -90,7 +90,7 @@ mod testutil;
 
 use bounds::{quick, Quick};
 use carry::{joint_lb, Known};
-use circle::{circle2, CircleScratch};
+use circle::{circle2, CircleScratch, Span};
 use coarse::{coarse_stage, Coarse};
 use exact::cheap2;
 use moments::{anchors, Acc2};
@@ -252,7 +252,13 @@ fn joint_circle(
 ) -> (Option<f64>, f64) {
     stats.circle_fits += 1;
     stats.circle_frames += span_frames(acc, k, n, true);
-    let cf = circle2(pts, jt.weights, acc.first, acc.last, rules, fit, scratch);
+    let span = Span {
+        pts,
+        wts: jt.weights,
+        first: acc.first,
+        last: acc.last,
+    };
+    let cf = circle2(span, rules, fit, scratch);
     if known.k == k && known.n == n {
         known.circle = cf;
     }
