@@ -155,8 +155,8 @@ pub fn unwrapped_angles(
 
 /// Turns angles in radians into degrees unwrapped point to point, in
 /// place: each differs from its predecessor (`prev` before the first) by at
-/// most 180°. Returns the last angle. [`unwrapped_angles`] uses it, and so
-/// does `mp-concrete`'s search.
+/// most 180°. Returns the last angle (`prev` for no angles).
+/// [`unwrapped_angles`] uses it, and so does `mp-concrete`'s search.
 ///
 /// The whole turns between consecutive raw angles are independent of each
 /// other; only their running count is carried from point to point (an
@@ -167,7 +167,10 @@ pub fn unwrap_degrees(prev: Option<f64>, angles: &mut [f64]) -> Option<f64> {
     // Whole turns in `t` (0 below half a turn; `round` is a library call on
     // some targets).
     let whole = |t: f64| if t.abs() >= 0.5 { t.round() } else { 0.0 };
-    let (first, rest) = angles.split_first_mut()?;
+    // (An empty batch keeps the angle before it.)
+    let Some((first, rest)) = angles.split_first_mut() else {
+        return prev;
+    };
     let raw0 = first.to_degrees();
     let mut turns = prev.map_or(0.0, |p| whole((p - raw0) / 360.0));
     *first = raw0 + 360.0 * turns;
@@ -326,4 +329,68 @@ pub(crate) fn fit(
         angle_acc,
         axes: vec![u.iter().copied().collect(), v.iter().copied().collect()],
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The point-to-point unwrapping, one point at a time.
+    fn reference(pts: &[(f64, f64)], w: &[f64]) -> Vec<(usize, f64)> {
+        let mut out = Vec::new();
+        let mut prev: Option<f64> = None;
+        for (i, (&(a, b), &wi)) in pts.iter().zip(w).enumerate() {
+            if wi == 0.0 {
+                continue;
+            }
+            let mut th = atan::atan2(b, a).to_degrees();
+            if let Some(p) = prev {
+                let turns = (p - th) / 360.0;
+                if turns.abs() >= 0.5 {
+                    th += 360.0 * turns.round();
+                }
+            }
+            prev = Some(th);
+            out.push((i, th));
+        }
+        out
+    }
+
+    /// A spiral over several turns, both ways, with a gap longer than a
+    /// batch: the batched unwrapping gives the one-point-at-a-time angles.
+    #[test]
+    fn batches_unwrap_like_one_point_at_a_time() {
+        let n = 400;
+        let pts: Vec<(f64, f64)> = (0..n)
+            .map(|i| {
+                let t = i as f64;
+                let th = 0.2 * t - 0.0012 * t * t; // forward, then back
+                ((5.0 + 0.1 * t) * th.cos(), (5.0 + 0.1 * t) * th.sin())
+            })
+            .collect();
+        let w: Vec<f64> = (0..n)
+            .map(|i| {
+                if (150..230).contains(&i) || i % 7 == 3 {
+                    0.0
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let mut got = Vec::new();
+        unwrapped_angles(n, Some(&w), |i| pts[i], |i, _, th| got.push((i, th)));
+        let want = reference(&pts, &w);
+        assert_eq!(got.len(), want.len());
+        for (g, r) in got.iter().zip(&want) {
+            assert_eq!(g.0, r.0);
+            assert!(
+                (g.1 - r.1).abs() <= 1e-9 * (1.0 + r.1.abs()),
+                "{g:?} vs {r:?}"
+            );
+        }
+        let span = want.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max)
+            - want.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+        assert!(span > 720.0, "the spiral turns more than twice: {span}");
+        assert_eq!(unwrap_degrees(Some(725.0), &mut []), Some(725.0));
+    }
 }
