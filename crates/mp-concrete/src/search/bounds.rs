@@ -292,3 +292,88 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
     q.lb = if lb.is_finite() { lb * LB_SAFETY } else { 0.0 };
     q
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+    use super::*;
+    use crate::search::testutil::{acc_of, steps_of, track};
+    use mp_geom::fit::{fit_best_unchecked, fit_kind};
+    use mp_geom::{Primitive, PrimitiveKind};
+    use ndarray::Array2;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// Every O(1) bound is below the error it bounds — the joint's cost
+    /// under the selection rules, and each kind's own error (the circle's
+    /// with its radius penalty) — on tracks in pixels, far from the origin,
+    /// in metres and spread wide, with missing frames (up to rounding, see
+    /// below).
+    #[test]
+    fn bounds_are_below_the_exact_errors() {
+        let fit = FitParams::default();
+        let rules = Rules::new(&fit);
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let (mut checked, mut circles) = (0, 0);
+        for (scale, offset) in [(1.0, 0.0), (1.0, 1e5), (1e-3, 0.0), (40.0, -3e4)] {
+            for _ in 0..4 {
+                let t = 100;
+                let (mut pts, wts) = track(&mut rng, t);
+                for (p, &w) in pts.iter_mut().zip(&wts) {
+                    if w > 0.0 {
+                        *p = [p[0] * scale + offset, p[1] * scale - offset];
+                    }
+                }
+                let steps = steps_of(&pts, &wts);
+                let arr = Array2::from_shape_fn((t, 2), |(i, a)| pts[i][a]);
+                for n in 2..=t {
+                    for k in n.saturating_sub(50)..n - 1 {
+                        let acc = acc_of(&pts, &wts, &steps, k, n);
+                        if acc.count == 0 {
+                            continue;
+                        }
+                        let q = quick(&acc, &pts, &rules, &fit);
+                        let seg = arr.slice(ndarray::s![k..n, ..]);
+                        let w = Some(&wts[k..n]);
+                        // (Up to rounding: a square root of a rounded sum of
+                        // squares, √SSE, is off by up to √(ε·Σx²), 10⁻⁴ px here.)
+                        let below = |lb: f64, e: f64| lb <= e * (1.0 + 1e-9) + 1e-4 * scale;
+                        let cost = fit_best_unchecked(seg, w, &fit).unwrap().error;
+                        assert!(below(q.lb, cost), "joint {k}..{n}: {} > {cost}", q.lb);
+                        let kind = |kd| fit_kind(kd, seg, w, &fit).ok();
+                        let e = kind(PrimitiveKind::Stationary).unwrap().error;
+                        assert!(below(q.stat_lb * LB_SAFETY, e), "stationary {k}..{n}");
+                        if q.reject_moving {
+                            checked += 1;
+                            continue;
+                        }
+                        if let Some(f) = kind(PrimitiveKind::Line) {
+                            assert!(
+                                below(q.line_lb * LB_SAFETY, f.error),
+                                "line {k}..{n}: {} > {}",
+                                q.line_lb,
+                                f.error
+                            );
+                        }
+                        if acc.count >= 3 {
+                            if let Some(f) = kind(PrimitiveKind::Circle) {
+                                let Primitive::Circle { radius, .. } = f.primitive else {
+                                    panic!("not a circle");
+                                };
+                                let e = f.error + fit.circle_penalty(radius);
+                                assert!(
+                                    below(q.circle_lb, e),
+                                    "circle {k}..{n}: {} > {e}",
+                                    q.circle_lb
+                                );
+                                circles += 1;
+                            }
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 50_000 && circles > 30_000, "{checked} {circles}");
+    }
+}
