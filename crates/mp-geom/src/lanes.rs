@@ -12,14 +12,35 @@
 //! bits, from the comparisons); [`F64x4::select`] reads only the sign bit,
 //! so any value works as a mask on its own sign.
 
-/// Four `f64` lanes (see the module docs).
-pub trait F64x4: Copy {
-    fn splat(v: f64) -> Self;
-    fn load(a: &[f64; 4]) -> Self;
-    fn to_array(self) -> [f64; 4];
+/// Additions, subtractions and multiplications: a formula written against
+/// this runs on one `f64` and on four lanes alike (the same operations in
+/// the same order, so the same bits).
+pub trait Arith: Copy {
     fn add(self, o: Self) -> Self;
     fn sub(self, o: Self) -> Self;
     fn mul(self, o: Self) -> Self;
+}
+
+impl Arith for f64 {
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        self + o
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        self - o
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        self * o
+    }
+}
+
+/// Four `f64` lanes (see the module docs).
+pub trait F64x4: Arith {
+    fn splat(v: f64) -> Self;
+    fn load(a: &[f64; 4]) -> Self;
+    fn to_array(self) -> [f64; 4];
     fn div(self, o: Self) -> Self;
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
@@ -63,6 +84,21 @@ fn mask(b: bool) -> f64 {
     }
 }
 
+impl Arith for Portable {
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        self.zip(o, |a, b| a + b)
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        self.zip(o, |a, b| a - b)
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        self.zip(o, |a, b| a * b)
+    }
+}
+
 impl F64x4 for Portable {
     #[inline(always)]
     fn splat(v: f64) -> Self {
@@ -75,18 +111,6 @@ impl F64x4 for Portable {
     #[inline(always)]
     fn to_array(self) -> [f64; 4] {
         self.0
-    }
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        self.zip(o, |a, b| a + b)
-    }
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        self.zip(o, |a, b| a - b)
-    }
-    #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        self.zip(o, |a, b| a * b)
     }
     #[inline(always)]
     fn div(self, o: Self) -> Self {
@@ -140,7 +164,7 @@ pub use avx::Avx2;
 mod avx {
     use std::arch::x86_64::*;
 
-    use super::F64x4;
+    use super::{Arith, F64x4};
 
     /// [`F64x4`] in one AVX register. Use it only inside a function
     /// compiled with `#[target_feature(enable = "avx2")]`, called after
@@ -151,6 +175,21 @@ mod avx {
     // SAFETY (every `unsafe` block below): the intrinsics need AVX, which
     // the caller's `target_feature(enable = "avx2")` function provides (see
     // the type's docs); loads and stores read and write whole `[f64; 4]`.
+    impl Arith for Avx2 {
+        #[inline(always)]
+        fn add(self, o: Self) -> Self {
+            Avx2(unsafe { _mm256_add_pd(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn sub(self, o: Self) -> Self {
+            Avx2(unsafe { _mm256_sub_pd(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn mul(self, o: Self) -> Self {
+            Avx2(unsafe { _mm256_mul_pd(self.0, o.0) })
+        }
+    }
+
     impl F64x4 for Avx2 {
         #[inline(always)]
         fn splat(v: f64) -> Self {
@@ -165,18 +204,6 @@ mod avx {
             let mut a = [0.0; 4];
             unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
             a
-        }
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            Avx2(unsafe { _mm256_add_pd(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            Avx2(unsafe { _mm256_sub_pd(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            Avx2(unsafe { _mm256_mul_pd(self.0, o.0) })
         }
         #[inline(always)]
         fn div(self, o: Self) -> Self {

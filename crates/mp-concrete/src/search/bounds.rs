@@ -187,12 +187,9 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
         q.vx = (acc.stx - acc.st * mux) * ivtt;
         q.vy = (acc.sty - acc.st * muy) * ivtt;
     }
-    // The step-variation bound (Euclidean), shared by the line and the circle.
-    let speed = if rules.squared {
-        0.0
-    } else {
-        speed_lb(acc, false)
-    };
+    // The step-variation bound, shared by the line (Euclidean norm only) and
+    // the circle.
+    let speed = speed_lb(acc, rules.squared);
     q.lx = q.mx - q.vx * tbar;
     q.ly = q.my - q.vy * tbar;
     if rules.line && !q.reject_moving {
@@ -280,11 +277,6 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
                 }
             }
         }
-        let speed = if rules.squared {
-            speed_lb(acc, true)
-        } else {
-            speed
-        };
         b = b.max(speed) + q.pen_lb;
         q.circle_lb = b * LB_SAFETY;
         lb = lb.min(b);
@@ -297,7 +289,7 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
     use super::*;
-    use crate::search::testutil::{acc_of, steps_of, track};
+    use crate::search::testutil::{acc_of, moved, steps_of, track};
     use mp_geom::fit::{fit_best_unchecked, fit_kind};
     use mp_geom::{Primitive, PrimitiveKind};
     use ndarray::Array2;
@@ -319,11 +311,7 @@ mod tests {
             for _ in 0..4 {
                 let t = 100;
                 let (mut pts, wts) = track(&mut rng, t);
-                for (p, &w) in pts.iter_mut().zip(&wts) {
-                    if w > 0.0 {
-                        *p = [p[0] * scale + offset, p[1] * scale - offset];
-                    }
-                }
+                moved(&mut pts, &wts, scale, offset);
                 let steps = steps_of(&pts, &wts);
                 let arr = Array2::from_shape_fn((t, 2), |(i, a)| pts[i][a]);
                 for n in 2..=t {

@@ -14,10 +14,10 @@
 //! every CPU; it is that of `fit_circle` up to rounding.
 
 use mp_geom::fit::atan::atan2_lanes;
-use mp_geom::fit::{bullock_from_sums, unwrap_degrees, FitParams};
+use mp_geom::fit::{bullock_from_sums, bullock_terms, unwrap_degrees, FitParams};
 #[cfg(target_arch = "x86_64")]
 use mp_geom::lanes::Avx2;
-use mp_geom::lanes::{has_avx2, F64x4, Portable};
+use mp_geom::lanes::{has_avx2, Arith, F64x4, Portable};
 
 use super::Rules;
 
@@ -106,7 +106,7 @@ fn circle2_avx2(
 
 /// Rotates `(c, s)` by the angle of `(rc, rs)`.
 #[inline(always)]
-fn rot<V: F64x4>((c, s): (V, V), (rc, rs): (V, V)) -> (V, V) {
+fn rot<T: Arith>((c, s): (T, T), (rc, rs): (T, T)) -> (T, T) {
     (c.mul(rc).sub(s.mul(rs)), s.mul(rc).add(c.mul(rs)))
 }
 
@@ -160,18 +160,7 @@ fn circle2_body<V: F64x4>(
     let (vmx, vmy) = (V::splat(mx), V::splat(my));
     let mut sums = [zero; 7];
     for (xc, yc, wc) in chunks() {
-        // The terms of `mp_geom::fit::bullock_terms`, lane by lane.
-        let (u, v) = (xc.sub(vmx), yc.sub(vmy));
-        let (uu, vv) = (u.mul(u), v.mul(v));
-        let terms = [
-            wc.mul(uu),
-            wc.mul(u).mul(v),
-            wc.mul(vv),
-            wc.mul(uu).mul(u),
-            wc.mul(u).mul(vv),
-            wc.mul(vv).mul(v),
-            wc.mul(v).mul(uu),
-        ];
+        let terms = bullock_terms(wc, xc.sub(vmx), yc.sub(vmy));
         for (s, t) in sums.iter_mut().zip(terms) {
             *s = s.add(t);
         }
@@ -245,19 +234,15 @@ fn circle2_body<V: F64x4>(
     // rotated by 4·vel per step from its own start.
     let (s0, c0) = th0.sin_cos();
     let (s1, c1) = vel_r.sin_cos();
-    let mut start = [(c0, s0); L];
+    let step1 = (c1, s1);
+    let (mut cos, mut sin) = ([c0; L], [s0; L]);
     for l in 1..L {
-        let (c, s) = start[l - 1];
-        start[l] = (c * c1 - s * s1, s * c1 + c * s1);
+        (cos[l], sin[l]) = rot((cos[l - 1], sin[l - 1]), step1);
     }
-    let (c2, s2) = (c1 * c1 - s1 * s1, s1 * c1 + c1 * s1);
-    let step4 = (V::splat(c2 * c2 - s2 * s2), V::splat(s2 * c2 + c2 * s2));
-    let (mut c4, mut s4) = ([0.0; L], [0.0; L]);
-    for (l, &(c, s)) in start.iter().enumerate() {
-        c4[l] = c;
-        s4[l] = s;
-    }
-    let mut cs = (V::load(&c4), V::load(&s4));
+    let step2 = rot(step1, step1);
+    let (c4, s4) = rot(step2, step2);
+    let step4 = (V::splat(c4), V::splat(s4));
+    let mut cs = (V::load(&cos), V::load(&sin));
     let (u, _) = sc.u.as_chunks::<L>();
     let (v, _) = sc.v.as_chunks::<L>();
     let vr = V::splat(r);
@@ -371,7 +356,7 @@ mod tests {
     #[test]
     fn moments_circle_is_the_exact_circle_far_from_the_origin() {
         use crate::search::bounds::quick;
-        use crate::search::testutil::{acc_of, steps_of};
+        use crate::search::testutil::{acc_of, moved, steps_of};
         let fit = FitParams::default();
         let rules = Rules::new(&fit);
         let mut rng = ChaCha8Rng::seed_from_u64(9);
@@ -380,11 +365,7 @@ mod tests {
         for _ in 0..10 {
             let t = 90;
             let (mut pts, wts) = track(&mut rng, t);
-            for (p, &w) in pts.iter_mut().zip(&wts) {
-                if w > 0.0 {
-                    *p = [p[0] + 1e5, p[1] - 1e5];
-                }
-            }
+            moved(&mut pts, &wts, 1.0, 1e5);
             let steps = steps_of(&pts, &wts);
             for n in 4..=t {
                 for k in n.saturating_sub(40)..n - 2 {

@@ -266,7 +266,7 @@ mod tests {
     use super::*;
     use crate::search::bounds::quick;
     use crate::search::exact::cheap2;
-    use crate::search::testutil::{acc_of, steps_of, track};
+    use crate::search::testutil::{acc_of, moved, steps_of, track};
     use mp_geom::fit::{fit_best_unchecked, FitParams};
     use ndarray::Array2;
     use rand::SeedableRng;
@@ -294,11 +294,7 @@ mod tests {
             for _ in 0..6 {
                 let t = 120;
                 let (mut pts, wts) = track(&mut rng, t);
-                for (p, &w) in pts.iter_mut().zip(&wts) {
-                    if w > 0.0 {
-                        *p = [p[0] * scale + offset, p[1] * scale - offset];
-                    }
-                }
+                moved(&mut pts, &wts, scale, offset);
                 let steps = steps_of(&pts, &wts);
                 let c = Coarse::new(&pts, &wts, &steps);
                 let arr = Array2::from_shape_fn((t, 2), |(i, a)| pts[i][a]);

@@ -34,6 +34,16 @@ pub(super) fn track(rng: &mut ChaCha8Rng, t: usize) -> (Vec<[f64; 2]>, Vec<f64>)
     (pts, wts)
 }
 
+/// `track`'s points scaled by `scale` and moved by `(offset, −offset)`;
+/// missing frames stay zeroed.
+pub(super) fn moved(pts: &mut [[f64; 2]], wts: &[f64], scale: f64, offset: f64) {
+    for (p, &w) in pts.iter_mut().zip(wts) {
+        if w > 0.0 {
+            *p = [p[0] * scale + offset, p[1] * scale - offset];
+        }
+    }
+}
+
 /// The running moments of `k..n` as the search builds them.
 pub(super) fn acc_of(pts: &[[f64; 2]], wts: &[f64], steps: &[f64], k: usize, n: usize) -> Acc2 {
     let mut acc = Acc2::default();

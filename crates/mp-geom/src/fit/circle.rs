@@ -20,6 +20,7 @@ use super::atan;
 use super::input::{self, wt, Summary};
 use super::FitParams;
 use crate::error::{GeomError, Result};
+use crate::lanes::Arith;
 use crate::primitive::Primitive;
 
 /// Relative threshold on `det / trace²` of the 2 × 2 scatter matrix (and on
@@ -56,18 +57,18 @@ fn bullock(
 }
 
 /// One point's terms of the sums that Bullock's fit solves from (see
-/// [`bullock_from_sums`]).
+/// [`bullock_from_sums`]), for one point or four lanes of points.
 #[inline(always)]
-pub fn bullock_terms(w: f64, u: f64, v: f64) -> [f64; 7] {
-    let (uu, vv) = (u * u, v * v);
+pub fn bullock_terms<T: Arith>(w: T, u: T, v: T) -> [T; 7] {
+    let (uu, vv) = (u.mul(u), v.mul(v));
     [
-        w * uu,
-        w * u * v,
-        w * vv,
-        w * uu * u,
-        w * u * vv,
-        w * vv * v,
-        w * v * uu,
+        w.mul(uu),
+        w.mul(u).mul(v),
+        w.mul(vv),
+        w.mul(uu).mul(u),
+        w.mul(u).mul(vv),
+        w.mul(vv).mul(v),
+        w.mul(v).mul(uu),
     ]
 }
 
