@@ -20,8 +20,8 @@ pub(super) struct Quick {
     pub(super) ly: f64,
     pub(super) vx: f64,
     pub(super) vy: f64,
-    /// Bounding-box diagonal.
-    pub(super) bbox: f64,
+    /// The bounding box's diagonal is below the stationary rule's threshold.
+    pub(super) small_box: bool,
     /// Moving kinds rejected by the span rule.
     pub(super) reject_moving: bool,
     /// Circle from the moments is usable for bounds (well conditioned).
@@ -36,7 +36,8 @@ pub(super) struct Quick {
     /// Squared errors of the stationary and line fits.
     pub(super) sse_stat: f64,
     pub(super) sse_line: f64,
-    /// Bound on the largest stationary residual.
+    /// Bound on the largest stationary residual (squared norm only: the
+    /// Euclidean bound does not need it).
     pub(super) max_res_stat: f64,
     /// O(1) lower bound of the circle's error with penalty, after the safety
     /// factor (`+∞` where the circle takes no part).
@@ -63,35 +64,54 @@ pub(super) fn speed_lb(acc: &Acc2, squared: bool) -> f64 {
     if acc.npairs < 2 {
         return 0.0;
     }
-    let var = (acc.saa - acc.sa * acc.sa / acc.npairs as f64).max(0.0);
-    let var = var - 1e-12 * acc.saa;
-    if var <= 0.0 {
+    // `np·Σ(aᵢ − ā)²`, without a division.
+    let np = acc.npairs as f64;
+    let var_np = (acc.saa * np - acc.sa * acc.sa).max(0.0) - 1e-12 * acc.saa * np;
+    if var_np <= 0.0 {
         return 0.0;
     }
     if squared {
-        0.25 * var
+        0.25 * var_np / np
     } else {
         let range = acc.amax - acc.amin;
         if range > 0.0 {
-            0.25 * var / range
+            0.25 * var_np / (np * range)
         } else {
             0.0
         }
     }
 }
 
-/// Largest distance from `(px, py)` to a corner of the box.
-pub(super) fn far_corner(lo: [f64; 2], hi: [f64; 2], px: f64, py: f64) -> f64 {
-    let dx = (px - lo[0]).abs().max((hi[0] - px).abs());
-    let dy = (py - lo[1]).abs().max((hi[1] - py).abs());
-    (dx * dx + dy * dy).sqrt()
+/// `√sq < thr`, without the square root unless `sq` is within 10⁻¹⁰ of
+/// `thr²` (the same answer: the square root is correctly rounded).
+pub(super) fn root_below(sq: f64, thr: f64) -> bool {
+    let t2 = thr * thr;
+    if sq >= 0.0 && sq < t2 * (1.0 - 1e-10) {
+        true
+    } else if sq > t2 * (1.0 + 1e-10) {
+        false
+    } else {
+        sq.sqrt() < thr
+    }
 }
 
-/// Smallest distance from `(px, py)` to the box (0 inside).
-pub(super) fn near_box(lo: [f64; 2], hi: [f64; 2], px: f64, py: f64) -> f64 {
+/// Largest squared distance from `(px, py)` to a corner of the box.
+pub(super) fn far_corner2(lo: [f64; 2], hi: [f64; 2], px: f64, py: f64) -> f64 {
+    let dx = (px - lo[0]).abs().max((hi[0] - px).abs());
+    let dy = (py - lo[1]).abs().max((hi[1] - py).abs());
+    dx * dx + dy * dy
+}
+
+/// Largest distance from `(px, py)` to a corner of the box.
+pub(super) fn far_corner(lo: [f64; 2], hi: [f64; 2], px: f64, py: f64) -> f64 {
+    far_corner2(lo, hi, px, py).sqrt()
+}
+
+/// Smallest squared distance from `(px, py)` to the box (0 inside).
+pub(super) fn near_box2(lo: [f64; 2], hi: [f64; 2], px: f64, py: f64) -> f64 {
     let dx = (lo[0] - px).max(0.0).max(px - hi[0]);
     let dy = (lo[1] - py).max(0.0).max(py - hi[1]);
-    (dx * dx + dy * dy).sqrt()
+    dx * dx + dy * dy
 }
 
 /// Euclidean lower bound from a squared error and a bound on the largest residual.
@@ -102,6 +122,17 @@ pub(super) fn euclid_lb(sse: f64, max_res: f64) -> f64 {
         a.max(sse / max_res)
     } else {
         a
+    }
+}
+
+/// [`euclid_lb`] from the largest residual's square, with one square root
+/// and a division only where it wins (`SSE / M ≥ √SSE` iff `SSE ≥ M²`).
+fn euclid_lb2(sse: f64, max_res2: f64) -> f64 {
+    let sse = sse.max(0.0);
+    if sse >= max_res2 && max_res2 > 0.0 && max_res2.is_finite() {
+        sse / max_res2.sqrt()
+    } else {
+        sse.sqrt()
     }
 }
 
@@ -124,10 +155,9 @@ fn fourth_about(acc: &Acc2, m1: f64, m2: f64) -> [f64; 6] {
     ]
 }
 
-/// An upper bound of `Σ w‖xᵢ − x̄‖⁴` from the moments (the expansion plus a
-/// margin for its rounding).
-fn stat_fourth_ub(acc: &Acc2, m1: f64, m2: f64) -> f64 {
-    let terms = fourth_about(acc, m1, m2);
+/// An upper bound of `Σ w‖xᵢ − x̄‖⁴` from [`fourth_about`]'s terms (their
+/// sum plus a margin for its rounding).
+fn stat_fourth_ub(terms: &[f64; 6]) -> f64 {
     let sum: f64 = terms.iter().sum();
     let mag: f64 = terms.iter().map(|t| t.abs()).sum();
     sum + 1e-9 * mag
@@ -149,36 +179,40 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
     q.my = muy + acc.ry;
     let bx = acc.hi[0] - acc.lo[0];
     let by = acc.hi[1] - acc.lo[1];
-    q.bbox = (bx * bx + by * by).sqrt();
+    q.small_box = root_below(bx * bx + by * by, rules.bbox_thr);
     // centred second moments (unnormalised)
     let cxx = (acc.sxx - acc.sx * mux).max(0.0);
     let cyy = (acc.syy - acc.sy * muy).max(0.0);
     let cxy = acc.sxy - acc.sx * muy;
     let mut lb = f64::INFINITY;
+    // Σ w‖xᵢ − x̄‖⁴'s terms, for Hölder's bound and the Kåsa residual.
+    let fourth = fourth_about(acc, mux, muy);
     if rules.stat {
         let sse = cxx + cyy;
         q.sse_stat = sse;
-        q.max_res_stat = far_corner(acc.lo, acc.hi, q.mx, q.my);
         let b = if rules.squared {
+            q.max_res_stat = far_corner(acc.lo, acc.hi, q.mx, q.my);
             sse
         } else {
             // Hölder: Σ‖r‖ ≥ (Σ‖r‖²)^{3/2} / (Σ‖r‖⁴)^{1/2}, with an upper
             // bound of Σ‖r‖⁴ (4th moments about the mean, plus rounding);
             // the steps: ‖rᵢ‖ + ‖rᵢ₊₁‖ ≥ aᵢ, each residual in two pairs.
-            let r4 = stat_fourth_ub(acc, mux, muy);
+            // (Since Σ‖r‖⁴ ≤ M²·Σ‖r‖² ≤ (Σ‖r‖²)² for the largest residual
+            // M, Hölder's bound is at least `euclid_lb`'s √SSE and SSE / M.)
+            let r4 = stat_fourth_ub(&fourth);
             let holder = if r4 > 0.0 && r4.is_finite() {
                 sse * (sse / r4).sqrt()
             } else {
-                0.0
+                euclid_lb(sse, far_corner(acc.lo, acc.hi, q.mx, q.my))
             };
-            euclid_lb(sse, q.max_res_stat).max(holder).max(0.5 * acc.sa)
+            holder.max(0.5 * acc.sa)
         };
         q.stat_lb = b;
         lb = lb.min(b);
     }
     let (a, b) = (pts[acc.first], pts[acc.last]);
-    let span = ((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1])).sqrt();
-    q.reject_moving = span < rules.span_thr && !rules.only_moving;
+    let span2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]);
+    q.reject_moving = root_below(span2, rules.span_thr) && !rules.only_moving;
     // line
     let tbar = acc.st / w;
     let vtt = acc.stt - acc.st * tbar;
@@ -213,7 +247,7 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
             let rx = ax(acc.lo[0] - acc.rx, acc.hi[0] - acc.rx, mux, q.vx);
             let ry = ax(acc.lo[1] - acc.ry, acc.hi[1] - acc.ry, muy, q.vy);
             // a line moves ‖v‖ per frame: the step-variation bound
-            euclid_lb(sse, (rx * rx + ry * ry).sqrt()).max(speed)
+            euclid_lb2(sse, rx * rx + ry * ry).max(speed)
         };
         q.line_lb = b;
         lb = lb.min(b);
@@ -253,25 +287,27 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
                 q.pen_lb = penalty_lb(fit, r);
                 // Kåsa residual K = Σz_c² − 2 a·Σ z_c p_c − W m², m = tr / W
                 // Σ z_c² with z_c = z − 2μ·p + |μ|²
-                let szc2: f64 = fourth_about(acc, m1, m2).iter().sum();
+                let szc2: f64 = fourth.iter().sum();
                 let szcx = cxxx + cxyy;
                 let szcy = cxxy + cyyy;
                 let k = szc2 - 2.0 * (uc * szcx + vc * szcy) - tr * trw;
                 let k = k - 1e-9 * szc2.abs();
-                let dmax = far_corner(acc.lo, acc.hi, q.cx, q.cy);
-                let dmin = near_box(acc.lo, acc.hi, q.cx, q.cy);
+                let dmax2 = far_corner2(acc.lo, acc.hi, q.cx, q.cy);
+                let dmax = dmax2.sqrt();
                 if k > 0.0 && dmax.is_finite() {
+                    let d = dmax + r;
                     b = if rules.squared {
-                        k / ((dmax + r) * (dmax + r))
+                        k / (d * d)
                     } else {
-                        let amax = (dmax * dmax - r * r).max(r * r - dmin * dmin);
-                        let e1 = k.sqrt() / (dmax + r);
-                        let e2 = if amax > 0.0 {
-                            k / (amax * (dmax + r))
+                        // The larger of √K / D and K / (A·D): the second
+                        // iff K ≥ A².
+                        let dmin2 = near_box2(acc.lo, acc.hi, q.cx, q.cy);
+                        let amax = (dmax2 - r * r).max(r * r - dmin2);
+                        if amax > 0.0 && k >= amax * amax {
+                            k / (amax * d)
                         } else {
-                            0.0
-                        };
-                        e1.max(e2)
+                            k.sqrt() / d
+                        }
                     };
                     b = (b - w * q.circle_slack).max(0.0);
                 }
@@ -293,8 +329,49 @@ mod tests {
     use mp_geom::fit::{fit_best_unchecked, fit_kind};
     use mp_geom::{Primitive, PrimitiveKind};
     use ndarray::Array2;
-    use rand::SeedableRng;
+    use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// The rules' comparisons without square roots give the answers of the
+    /// square roots, at and around the threshold, for NaN, 0 and infinity;
+    /// and `euclid_lb2` is `euclid_lb` of the square root.
+    #[test]
+    fn squared_comparisons_agree_with_square_roots() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut cases = 0;
+        for thr in [5.0, 0.005, 1.0 / 3.0, 7e3, 0.0, f64::INFINITY] {
+            let t2 = thr * thr;
+            let mut sqs = vec![0.0, t2, f64::NAN, f64::INFINITY, f64::MIN_POSITIVE];
+            // The neighbours of thr² and of every float whose root is thr.
+            let mut v = t2;
+            for _ in 0..64 {
+                v = v.next_down();
+                sqs.push(v);
+            }
+            let mut v = t2;
+            for _ in 0..64 {
+                v = v.next_up();
+                sqs.push(v);
+            }
+            for _ in 0..10_000 {
+                sqs.push(t2 * rng.random_range(0.5..1.5));
+            }
+            for sq in sqs {
+                assert_eq!(root_below(sq, thr), sq.sqrt() < thr, "√{sq} < {thr}");
+                cases += 1;
+            }
+        }
+        for _ in 0..10_000 {
+            let sse = rng.random_range(0.0..100.0f64);
+            let m2 = sse * rng.random_range(0.0..2.0f64);
+            let (a, b) = (euclid_lb2(sse, m2), euclid_lb(sse, m2.sqrt()));
+            assert!(
+                (a - b).abs() <= 4.0 * f64::EPSILON * b,
+                "{sse} {m2}: {a} vs {b}"
+            );
+        }
+        assert!(cases > 60_000);
+    }
 
     /// Every O(1) bound is below the error it bounds — the joint's cost
     /// under the selection rules, and each kind's own error (the circle's

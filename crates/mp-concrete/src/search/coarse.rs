@@ -242,7 +242,7 @@ pub(super) fn coarse_stage(c: &Coarse, q: &Quick, acc: &Acc2, rules: &Rules) -> 
     };
     let dev = lower(total(3), len * TERM_ERR * (acc.amax.max(0.0) + abar));
     let errors = [es, el, ec];
-    if rules.stat && q.bbox < rules.bbox_thr {
+    if rules.stat && q.small_box {
         return (Stage::Done(Some(es)), errors);
     }
     let mut best = f64::INFINITY;

@@ -36,7 +36,7 @@ pub(super) fn cheap2(
         // stationary rule from bounds when they decide it.
         let w = acc.sw;
         let stat_rule = rules.stat
-            && (q.bbox < rules.bbox_thr || {
+            && (q.small_box || {
                 let hi = (q.sse_stat.max(0.0) / w).sqrt(); // ≥ mean residual (Jensen)
                 let lo = euclid_lb(q.sse_stat, q.max_res_stat) * LB_SAFETY / w;
                 if hi * (1.0 + 1e-9) < rules.mean_res_thr {
@@ -74,7 +74,7 @@ pub(super) fn cheap2(
             errors: [f64::NAN; 3],
         };
     }
-    if rules.stat && q.bbox < rules.bbox_thr {
+    if rules.stat && q.small_box {
         // Stationary wins outright: only its error is needed.
         let (mut e, mut e2) = (0.0, 0.0);
         for i in acc.first..=acc.last {
@@ -148,7 +148,7 @@ pub(super) fn cheap2(
         sa[5] + sb[5],
     );
     let pick = |e: f64, e2: f64| if rules.squared { e2 } else { e };
-    if rules.stat && (q.bbox < rules.bbox_thr || es / acc.sw < rules.mean_res_thr) {
+    if rules.stat && (q.small_box || es / acc.sw < rules.mean_res_thr) {
         return Cheap {
             decided: Some(pick(es, es2)),
             best: pick(es, es2),
