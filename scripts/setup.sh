@@ -3,7 +3,15 @@
 #   - Debian packages: pkg-config, FFmpeg (video decoding), Chromium (report test), DejaVu fonts
 #   - ONNX Runtime's shared library and the pose models (`cargo xtask setup`)
 # Idempotent: what is already there is skipped.
+#
+#   bash scripts/setup.sh        # builds the set-up tool in cargo's release profile, as `mp` is built
+#   bash scripts/setup.sh dev    # in the dev profile, whose compiled crates `cargo test` reuses
 set -euo pipefail
+PROFILE="${1:-release}"
+case "$PROFILE" in
+  release|dev) ;;
+  *) echo "setup: unknown profile '$PROFILE' (release or dev)" >&2; exit 2 ;;
+esac
 cd "$(dirname "$0")/.."
 
 PKGS=(pkg-config ffmpeg chromium fonts-dejavu-core)
@@ -20,4 +28,8 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 # ONNX Runtime (from PyPI's onnxruntime wheel) and the pose models, into .cache/
-cargo xtask setup
+if [ "$PROFILE" = dev ]; then
+  cargo run --quiet --package xtask -- setup
+else
+  cargo xtask setup
+fi

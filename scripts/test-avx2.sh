@@ -28,7 +28,7 @@ if ! command -v qemu-x86_64 >/dev/null; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends qemu-user >/dev/null
 fi
-bash scripts/setup.sh >/dev/null
+bash scripts/setup.sh dev >/dev/null
 
 # The test executables, as cargo builds them.
 mapfile -t bins < <(for t in "${TARGETS[@]}"; do

@@ -7,7 +7,8 @@ cd "$(dirname "$0")/.."
 # A full run builds every crate once: incremental caches would only take disk.
 export CARGO_INCREMENTAL=0
 bash scripts/disk.sh check
-bash scripts/setup.sh
+# (The set-up tool in the dev profile: the tests below reuse its compiled crates.)
+bash scripts/setup.sh dev
 cargo fmt --all --check
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 # Tests that need the shared data sets (../shared/data or MP_DATA_DIR) or a model the set-up
