@@ -19,9 +19,10 @@
 //!   penalty;
 //! * lower bounds of the Euclidean errors: `Σ w‖rᵢ‖ ≥ max(√SSE, SSE / M)`
 //!   where `M` bounds the largest residual (bounding box corners against the
-//!   fitted point or line); for the stationary point also Hölder's
+//!   fitted point or line); for the stationary point instead Hölder's
 //!   `Σ‖rᵢ‖ ≥ SSE^{3/2} / (Σ‖rᵢ‖⁴)^{1/2}` (4th moments about the mean, exact
-//!   when the residuals are of equal size) and `½ Σ aᵢ` over the step lengths
+//!   when the residuals are of equal size, and at least both of those) and
+//!   `½ Σ aᵢ` over the step lengths
 //!   `aᵢ` of consecutive frames; for the line (constant speed, like the
 //!   circle) the step-variation bound; for the circle
 //!   `Σ w |dᵢ − r| ≥ K / (A·(d_max + r))` with `A ≥ max |dᵢ² − r²|`.
