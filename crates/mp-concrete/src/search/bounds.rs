@@ -85,14 +85,17 @@ pub(super) fn speed_lb(acc: &Acc2, squared: bool) -> f64 {
 /// `√sq < thr`, without the square root unless `sq` is within 10⁻¹⁰ of
 /// `thr²` (the same answer: the square root is correctly rounded).
 pub(super) fn root_below(sq: f64, thr: f64) -> bool {
-    let t2 = thr * thr;
-    if sq >= 0.0 && sq < t2 * (1.0 - 1e-10) {
-        true
-    } else if sq > t2 * (1.0 + 1e-10) {
-        false
-    } else {
-        sq.sqrt() < thr
+    // (Negative or NaN operands take the square root.)
+    if thr >= 0.0 && sq >= 0.0 {
+        let t2 = thr * thr;
+        if sq < t2 * (1.0 - 1e-10) {
+            return true;
+        }
+        if sq > t2 * (1.0 + 1e-10) {
+            return false;
+        }
     }
+    sq.sqrt() < thr
 }
 
 /// Largest squared distance from `(px, py)` to a corner of the box.
@@ -333,15 +336,33 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     /// The rules' comparisons without square roots give the answers of the
-    /// square roots, at and around the threshold, for NaN, 0 and infinity;
+    /// square roots, at and around the threshold, for NaN, ±0, negative
+    /// values and infinity;
     /// and `euclid_lb2` is `euclid_lb` of the square root.
     #[test]
     fn squared_comparisons_agree_with_square_roots() {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let mut cases = 0;
-        for thr in [5.0, 0.005, 1.0 / 3.0, 7e3, 0.0, f64::INFINITY] {
+        for thr in [
+            5.0,
+            0.005,
+            1.0 / 3.0,
+            7e3,
+            0.0,
+            f64::INFINITY,
+            -5.0,
+            f64::NAN,
+        ] {
             let t2 = thr * thr;
-            let mut sqs = vec![0.0, t2, f64::NAN, f64::INFINITY, f64::MIN_POSITIVE];
+            let mut sqs = vec![
+                0.0,
+                -0.0,
+                -1.0,
+                t2,
+                f64::NAN,
+                f64::INFINITY,
+                f64::MIN_POSITIVE,
+            ];
             // The neighbours of thr² and of every float whose root is thr.
             let mut v = t2;
             for _ in 0..64 {
