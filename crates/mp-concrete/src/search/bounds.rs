@@ -140,7 +140,7 @@ fn euclid_lb2(sse: f64, max_res2: f64) -> f64 {
 }
 
 /// The terms of `Σ w‖xᵢ − μ‖⁴` expanded in the moments, `μ = (m1, m2)`: their
-/// sum is the value (summed in this order, as both callers do).
+/// sum (in this order) is the value.
 fn fourth_about(acc: &Acc2, m1: f64, m2: f64) -> [f64; 6] {
     let mu2 = m1 * m1 + m2 * m2;
     let sz = acc.sxx + acc.syy;
@@ -156,14 +156,6 @@ fn fourth_about(acc: &Acc2, m1: f64, m2: f64) -> [f64; 6] {
         -4.0 * mu2 * smp,
         mu2 * mu2 * acc.sw,
     ]
-}
-
-/// An upper bound of `Σ w‖xᵢ − x̄‖⁴` from [`fourth_about`]'s terms (their
-/// sum plus a margin for its rounding).
-fn stat_fourth_ub(terms: &[f64; 6]) -> f64 {
-    let sum: f64 = terms.iter().sum();
-    let mag: f64 = terms.iter().map(|t| t.abs()).sum();
-    sum + 1e-9 * mag
 }
 
 pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams) -> Quick {
@@ -188,8 +180,9 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
     let cyy = (acc.syy - acc.sy * muy).max(0.0);
     let cxy = acc.sxy - acc.sx * muy;
     let mut lb = f64::INFINITY;
-    // Σ w‖xᵢ − x̄‖⁴'s terms, for Hölder's bound and the Kåsa residual.
+    // Σ w‖xᵢ − x̄‖⁴ from its terms, for Hölder's bound and the Kåsa residual.
     let fourth = fourth_about(acc, mux, muy);
+    let fourth_sum: f64 = fourth.iter().sum();
     if rules.stat {
         let sse = cxx + cyy;
         q.sse_stat = sse;
@@ -202,7 +195,8 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
             // the steps: ‖rᵢ‖ + ‖rᵢ₊₁‖ ≥ aᵢ, each residual in two pairs.
             // (Since Σ‖r‖⁴ ≤ M²·Σ‖r‖² ≤ (Σ‖r‖²)² for the largest residual
             // M, Hölder's bound is at least `euclid_lb`'s √SSE and SSE / M.)
-            let r4 = stat_fourth_ub(&fourth);
+            // (An upper bound of Σ‖r‖⁴: the sum plus a margin for its rounding.)
+            let r4 = fourth_sum + 1e-9 * fourth.iter().map(|t| t.abs()).sum::<f64>();
             let holder = if r4 > 0.0 && r4.is_finite() {
                 sse * (sse / r4).sqrt()
             } else {
@@ -290,7 +284,7 @@ pub(super) fn quick(acc: &Acc2, pts: &[[f64; 2]], rules: &Rules, fit: &FitParams
                 q.pen_lb = penalty_lb(fit, r);
                 // Kåsa residual K = Σz_c² − 2 a·Σ z_c p_c − W m², m = tr / W
                 // Σ z_c² with z_c = z − 2μ·p + |μ|²
-                let szc2: f64 = fourth.iter().sum();
+                let szc2 = fourth_sum;
                 let szcx = cxxx + cxyy;
                 let szcy = cxxy + cyyy;
                 let k = szc2 - 2.0 * (uc * szcx + vc * szcy) - tr * trw;
