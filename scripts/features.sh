@@ -5,6 +5,8 @@
 # Exits 1 and names each dependency whose features differ.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# One collation for sort, join and the grouping below.
+export LC_ALL=C
 # "name version" → its feature sets (host and target builds may differ), one line per package.
 features() {
   cargo tree --quiet "$@" --prefix none --format '{p}|{f}' |
