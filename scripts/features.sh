@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Checks that the packages built on their own (the set-up tool `xtask`, the Python extension
-# `mp-py`, the `mp` binary) resolve every dependency with the features of `cargo test --workspace`,
-# so that their builds and the tests' share compiled crates (see crates/mp-workspace-hack).
+# Checks that the packages built on their own, those that depend on crates/mp-workspace-hack (the
+# set-up tool `xtask`, the Python extension `mp-py`, the `mp` binary), resolve every dependency
+# with the features of `cargo test --workspace`, so that their builds and the tests' share
+# compiled crates.
 # Exits 1 and names each dependency whose features differ.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,8 +20,11 @@ features() {
 ws=$(mktemp)
 trap 'rm -f "$ws" "$ws.p"' EXIT
 features --workspace --edges normal,build,dev > "$ws"
+# The packages that depend on the hack crate.
+packages=$(cargo tree --quiet --invert mp-workspace-hack --edges normal --depth 1 --prefix none \
+  --format '{p}' | tail -n +2 | awk '{ print $1 }' | sort -u)
 status=0
-for p in xtask mp-py mp-cli; do
+for p in $packages; do
   features --package "$p" --edges normal,build > "$ws.p"
   # Packages in both graphs whose feature sets differ.
   diff=$(join -t'|' "$ws.p" "$ws" | awk -F'|' '$2 != $3 { print "  " $1 ": " $2 " (the workspace: " $3 ")" }')
@@ -31,5 +35,5 @@ for p in xtask mp-py mp-cli; do
     status=1
   fi
 done
-[ "$status" -eq 0 ] && echo "features: xtask, mp-py and mp-cli resolve their dependencies as the workspace's tests do"
+[ "$status" -eq 0 ] && echo "features:" $packages "resolve their dependencies as the workspace's tests do"
 exit "$status"
