@@ -17,6 +17,7 @@ use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{s, Array1, Array2, Array3};
 use serde::{Deserialize, Serialize};
 
+use super::write_npz_file;
 use crate::error::{RefineError, Result};
 use crate::motion::{
     bvh_to_msr20, canonicalize, to_features, DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, MSR_JOINTS,
@@ -431,14 +432,7 @@ impl FlawSet {
         z.add("joints", &ndarray::arr0(MSR_JOINTS as i64))?;
         z.add_strings("flaws", &self.flaws, &[self.flaws.len()])?;
         z.add_strings("source", &self.source, &[self.source.len()])?;
-        let bytes = z.finish()?;
-        if let Some(dir) = path.parent() {
-            if !dir.as_os_str().is_empty() {
-                std::fs::create_dir_all(dir).map_err(|e| GeomError::io(dir, e))?;
-            }
-        }
-        mp_geom::io::write_atomic(path, &bytes)?;
-        Ok(())
+        write_npz_file(path, z)
     }
 }
 
@@ -446,14 +440,6 @@ impl FlawSet {
 mod tests {
     use super::*;
     use crate::motion::HIP_CENTRE;
-
-    /// The shared MSR Action3D file, or returns from the test (recording
-    /// the skip) where it is absent.
-    macro_rules! msr_or_return {
-        () => {
-            MsrAction3D::open(mp_geom::data_or_return!(MsrAction3D::FILE)).unwrap()
-        };
-    }
 
     #[test]
     fn canonical_mask_flags_the_frames_whose_support_changed() {

@@ -18,6 +18,15 @@
 //! [`canonical_mask`], [`changed_joints`]) — is in `flaw_set` and
 //! re-exported here.
 
+/// The shared MSR Action3D file, or returns from the test (recording the
+/// skip) where it is absent.
+#[cfg(test)]
+macro_rules! msr_or_return {
+    () => {
+        MsrAction3D::open(mp_geom::data_or_return!(MsrAction3D::FILE)).unwrap()
+    };
+}
+
 mod flaw_set;
 
 use std::path::{Path, PathBuf};
@@ -39,6 +48,18 @@ use crate::segment::{segment_track, SegmentParams};
 use crate::Concepts;
 
 pub use flaw_set::{build_flaw_set, canonical_mask, changed_joints, FlawSet, FlawSetParams};
+
+/// Writes a finished archive to `path` atomically, creating its folder.
+fn write_npz_file(path: &Path, z: NpzOut) -> Result<()> {
+    let bytes = z.finish()?;
+    if let Some(dir) = path.parent() {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir).map_err(|e| GeomError::io(dir, e))?;
+        }
+    }
+    mp_geom::io::write_atomic(path, &bytes)?;
+    Ok(())
+}
 
 /// Parameters of [`build_training_set`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -361,14 +382,7 @@ impl TrainingSet {
         )?;
         z.add("joints", &ndarray::arr0(MSR_JOINTS as i64))?;
         z.add_strings("source", &self.source, &[self.source.len()])?;
-        let bytes = z.finish()?;
-        if let Some(dir) = path.parent() {
-            if !dir.as_os_str().is_empty() {
-                std::fs::create_dir_all(dir).map_err(|e| GeomError::io(dir, e))?;
-            }
-        }
-        mp_geom::io::write_atomic(path, &bytes)?;
-        Ok(())
+        write_npz_file(path, z)
     }
 }
 
@@ -377,14 +391,6 @@ mod tests {
     use super::*;
     use crate::concepts::ClusterMethod;
     use mp_geom::io::npz::Npz;
-
-    /// The shared MSR Action3D file, or returns from the test (recording
-    /// the skip) where it is absent.
-    macro_rules! msr_or_return {
-        () => {
-            MsrAction3D::open(mp_geom::data_or_return!(MsrAction3D::FILE)).unwrap()
-        };
-    }
 
     fn small_params(seed: u64) -> DatasetParams {
         DatasetParams {
