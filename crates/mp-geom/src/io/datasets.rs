@@ -11,20 +11,23 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use ndarray::{s, Array1, Array2, Array3, Ix1, Ix2, Ix3};
+use ndarray::{s, Array1, Array2, Array3, Array4, Ix2};
 
 use super::npz::Npz;
 use crate::error::{GeomError, Result};
 use crate::skeleton::Skeleton;
 use crate::track::{Track, Units};
 
-fn dim<D: ndarray::Dimension>(
-    a: ndarray::ArrayD<f64>,
-    path: &Path,
+/// The array `name` of `z`, checked against `shape` (`None`: any size) and
+/// given its static dimensionality.
+fn shaped<D: ndarray::Dimension>(
+    z: &Npz,
     name: &str,
+    shape: &[Option<usize>],
 ) -> Result<ndarray::Array<f64, D>> {
-    a.into_dimensionality::<D>()
-        .map_err(|e| GeomError::format(path, format!("array `{name}`: {e}")))
+    z.array_f64_shaped(name, shape)?
+        .into_dimensionality::<D>()
+        .map_err(|e| GeomError::format(z.path(), format!("array `{name}`: {e}")))
 }
 
 /// Reads `offsets (C+1,)` and checks it partitions `n_rows`.
@@ -138,22 +141,10 @@ impl PennAction {
     pub fn open(path: impl AsRef<Path>) -> Result<Self> {
         let z = Npz::open(path)?;
         let path = z.path().to_path_buf();
-        let keypoints: Array3<f64> = dim(
-            z.array_f64_shaped("keypoints", &[None, Some(13), Some(2)])?,
-            &path,
-            "keypoints",
-        )?;
+        let keypoints: Array3<f64> = shaped(&z, "keypoints", &[None, Some(13), Some(2)])?;
         let f = keypoints.dim().0;
-        let visibility: Array2<f64> = dim(
-            z.array_f64_shaped("visibility", &[Some(f), Some(13)])?,
-            &path,
-            "visibility",
-        )?;
-        let bbox: Array2<f64> = dim(
-            z.array_f64_shaped("bbox", &[Some(f), Some(4)])?,
-            &path,
-            "bbox",
-        )?;
+        let visibility: Array2<f64> = shaped(&z, "visibility", &[Some(f), Some(13)])?;
+        let bbox: Array2<f64> = shaped(&z, "bbox", &[Some(f), Some(4)])?;
         let rows = read_offsets(&z, f)?;
         let c = rows.len();
         let action = z.strings("action")?;
@@ -299,9 +290,8 @@ impl AistPlusPlus {
     pub fn open(path: impl AsRef<Path>) -> Result<Self> {
         let z = Npz::open(path)?;
         let path = z.path().to_path_buf();
-        let kp = z.array_f64_shaped("keypoints2d", &[None, None, Some(17), Some(3)])?;
-        let sh = kp.shape().to_vec();
-        let (v, t) = (sh[0], sh[1]);
+        let kp: Array4<f64> = shaped(&z, "keypoints2d", &[None, None, Some(17), Some(3)])?;
+        let (v, t, _, _) = kp.dim();
         let ts: Vec<i64> = z.array_i64("timestamps")?.iter().copied().collect();
         check_len(&ts, t, "timestamps", &path).map_err(|_| {
             GeomError::format(&path, format!("{} timestamps for {t} frames", ts.len()))
@@ -309,26 +299,14 @@ impl AistPlusPlus {
         let fps = fps_from_timestamps_us(&ts)
             .ok_or_else(|| GeomError::format(&path, "timestamps are not strictly increasing"))?;
         let det_scores = if z.contains("det_scores") {
-            Some(dim::<Ix2>(
-                z.array_f64_shaped("det_scores", &[Some(v), Some(t)])?,
-                &path,
-                "det_scores",
-            )?)
+            Some(shaped::<Ix2>(&z, "det_scores", &[Some(v), Some(t)])?)
         } else {
             None
         };
         let mut views = Vec::with_capacity(v);
         for vi in 0..v {
-            let pos = dim::<Ix3>(
-                kp.slice(s![vi, .., .., 0..2]).into_dyn().to_owned(),
-                &path,
-                "keypoints2d",
-            )?;
-            let conf = dim::<Ix2>(
-                kp.slice(s![vi, .., .., 2]).into_dyn().to_owned(),
-                &path,
-                "keypoints2d",
-            )?;
+            let pos = kp.slice(s![vi, .., .., 0..2]).to_owned();
+            let conf = kp.slice(s![vi, .., .., 2]).to_owned();
             views.push(Track::new(
                 pos,
                 Some(conf),
@@ -416,17 +394,9 @@ impl MsrAction3D {
     pub fn open(path: impl AsRef<Path>) -> Result<Self> {
         let z = Npz::open(path)?;
         let path = z.path().to_path_buf();
-        let joints: Array3<f64> = dim(
-            z.array_f64_shaped("joints", &[None, Some(20), Some(3)])?,
-            &path,
-            "joints",
-        )?;
+        let joints: Array3<f64> = shaped(&z, "joints", &[None, Some(20), Some(3)])?;
         let f = joints.dim().0;
-        let conf: Array2<f64> = dim(
-            z.array_f64_shaped("conf", &[Some(f), Some(20)])?,
-            &path,
-            "conf",
-        )?;
+        let conf: Array2<f64> = shaped(&z, "conf", &[Some(f), Some(20)])?;
         let rows = read_offsets(&z, f)?;
         let c = rows.len();
         let int_list = |name: &str| -> Result<Vec<u32>> {
@@ -594,7 +564,7 @@ impl CmuFeatures {
     /// Decodes an opened npz.
     pub fn from_npz(z: &Npz) -> Result<Self> {
         let path = z.path().to_path_buf();
-        let x: Array2<f64> = dim(z.array_f64_shaped("X", &[None, None])?, &path, "X")?;
+        let x: Array2<f64> = shaped(z, "X", &[None, None])?;
         let (t, c) = x.dim();
         let labels: Vec<i64> = z.array_i64("labels")?.iter().copied().collect();
         if labels.len() != t {
@@ -682,41 +652,17 @@ impl MediaPipeReference {
         let path = z.path().to_path_buf();
         let sfx = if smooth { "_smooth" } else { "" };
         let key = |k: &str| format!("{k}{sfx}");
-        let lm: Array3<f64> = dim(
-            z.array_f64_shaped(&key("landmarks_px"), &[None, Some(33), Some(2)])?,
-            &path,
-            "landmarks_px",
-        )?;
+        let lm: Array3<f64> = shaped(z, &key("landmarks_px"), &[None, Some(33), Some(2)])?;
         let t = lm.dim().0;
-        let vis: Array2<f64> = dim(
-            z.array_f64_shaped(&key("visibility"), &[Some(t), Some(33)])?,
-            &path,
-            "visibility",
-        )?;
-        let world: Array3<f64> = dim(
-            z.array_f64_shaped(&key("world"), &[Some(t), Some(33), Some(3)])?,
-            &path,
-            "world",
-        )?;
-        let zz: Array2<f64> = dim(
-            z.array_f64_shaped(&key("z"), &[Some(t), Some(33)])?,
-            &path,
-            "z",
-        )?;
+        let vis: Array2<f64> = shaped(z, &key("visibility"), &[Some(t), Some(33)])?;
+        let world: Array3<f64> = shaped(z, &key("world"), &[Some(t), Some(33), Some(3)])?;
+        let zz: Array2<f64> = shaped(z, &key("z"), &[Some(t), Some(33)])?;
         let presence: Array2<f64> = if z.contains(&key("presence")) {
-            dim(
-                z.array_f64_shaped(&key("presence"), &[Some(t), Some(33)])?,
-                &path,
-                "presence",
-            )?
+            shaped(z, &key("presence"), &[Some(t), Some(33)])?
         } else {
             Array2::from_elem((t, 33), f64::NAN)
         };
-        let found_a: Array1<f64> = dim::<Ix1>(
-            z.array_f64_shaped(&key("found"), &[Some(t)])?,
-            &path,
-            "found",
-        )?;
+        let found_a: Array1<f64> = shaped(z, &key("found"), &[Some(t)])?;
         let found: Vec<bool> = found_a.iter().map(|&v| v != 0.0).collect();
         let fps = z.scalar_f64("fps")?;
         let width = z.scalar_f64("width")?;
