@@ -6,6 +6,8 @@
 //! exclusive) *including* the per-segment penalty λ. With a maximum segment
 //! length `W` the recurrence takes `O(T·W)` evaluations of `cost`.
 
+use rayon::prelude::*;
+
 use crate::error::{ConcreteError, Result};
 
 /// A segmentation of frames `0..T` and its total cost.
@@ -59,6 +61,27 @@ impl CostTable {
             }
         }
         t
+    }
+    /// Fills the table from a fallible function, one row (end frame) per
+    /// task on the rayon pool; the first error stops the fill and is returned.
+    pub fn try_from_fn_parallel<E: Send>(
+        n_frames: usize,
+        window: usize,
+        cost: impl Fn(usize, usize) -> std::result::Result<f64, E> + Sync,
+    ) -> std::result::Result<Self, E> {
+        let mut t = Self::new(n_frames, window);
+        t.rows_mut()
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .enumerate()
+            .try_for_each(|(row, cells)| {
+                let n = row + 1;
+                for len in 1..=window.min(n) {
+                    cells[len - 1] = cost(n - len, n)?;
+                }
+                Ok(())
+            })?;
+        Ok(t)
     }
     /// Number of frames T.
     pub fn n_frames(&self) -> usize {

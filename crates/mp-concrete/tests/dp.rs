@@ -36,8 +36,28 @@ proptest! {
         prop_assert_eq!(&dp.boundaries, &bf.boundaries);
         // The table version agrees.
         let table = CostTable::from_fn(t, w, cost);
-        prop_assert_eq!(segment_table(&table).unwrap(), dp);
+        prop_assert_eq!(segment_table(&table).unwrap(), dp.clone());
+        // So does the table filled in parallel, cell for cell.
+        let par = CostTable::try_from_fn_parallel(t, w, |k, n| Ok::<f64, ()>(cost(k, n))).unwrap();
+        for n in 1..=t {
+            for k in 0..n {
+                prop_assert_eq!(par.get(k, n).to_bits(), table.get(k, n).to_bits());
+            }
+        }
+        prop_assert_eq!(segment_table(&par).unwrap(), dp);
     }
+}
+
+#[test]
+fn a_failing_cost_stops_the_parallel_fill() {
+    let r = CostTable::try_from_fn_parallel(50, 8, |k, n| {
+        if (k, n) == (30, 33) {
+            Err(format!("segment {k}..{n} cannot be fitted"))
+        } else {
+            Ok(1.0)
+        }
+    });
+    assert_eq!(r.unwrap_err(), "segment 30..33 cannot be fitted");
 }
 
 #[test]

@@ -340,27 +340,15 @@ pub fn transition_costs(track: &Track, params: &SegmentParams) -> Result<CostTab
     let fit = fit_params(params.norm);
     let n_int = track.n_frames() - 1;
     let window = params.max_transition_frames.min(n_int).max(1);
-    let mut table = CostTable::new(n_int, window);
     let min_len = params.min_transition_frames;
-    table
-        .rows_mut()
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .enumerate()
-        .try_for_each(|(row, cells)| -> Result<()> {
-            let n = row + 1;
-            for len in 1..=window.min(n) {
-                let k = n - len;
-                if len < min_len && !(k == 0 && n == n_int) {
-                    // Too short, unless it is the whole (short) sequence.
-                    continue;
-                }
-                let (_, e) = transition_fit(&data, &fit, params, k, n)?;
-                cells[len - 1] = e + params.lambda;
-            }
-            Ok(())
-        })?;
-    Ok(table)
+    CostTable::try_from_fn_parallel(n_int, window, |k, n| {
+        if n - k < min_len && !(k == 0 && n == n_int) {
+            // Too short, unless it is the whole (short) sequence.
+            return Ok(f64::INFINITY);
+        }
+        let (_, e) = transition_fit(&data, &fit, params, k, n)?;
+        Ok(e + params.lambda)
+    })
 }
 
 /// Segments a track into anchors and transitions (see the module docs).

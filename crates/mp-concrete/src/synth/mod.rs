@@ -149,22 +149,9 @@ fn cost_table(
     lambda: &[f64],
     window: usize,
 ) -> Result<CostTable> {
-    let t = track.n_frames();
-    let mut table = CostTable::new(t, window);
-    table
-        .rows_mut()
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .enumerate()
-        .try_for_each(|(row, cells)| -> Result<()> {
-            let n = row + 1;
-            for len in 1..=window.min(n) {
-                let k = n - len;
-                cells[len - 1] = segment_cost(prep, fit, track, k, n)? + lambda[n - 1];
-            }
-            Ok(())
-        })?;
-    Ok(table)
+    CostTable::try_from_fn_parallel(track.n_frames(), window, |k, n| {
+        Ok(segment_cost(prep, fit, track, k, n)? + lambda[n - 1])
+    })
 }
 
 /// Fits the primitives of one segment for every joint. A joint unobserved in
