@@ -7,7 +7,8 @@ cd "$(dirname "$0")/.."
 # A full run builds every crate once: incremental caches would only take disk.
 export CARGO_INCREMENTAL=0
 bash scripts/disk.sh check
-# The packages built on their own resolve the tests' dependency features (shared builds).
+# The packages built on their own and each crate's own tests resolve the workspace tests'
+# dependency features (shared builds).
 bash scripts/features.sh
 # (The set-up tool in the dev profile: the tests below reuse its compiled crates.)
 bash scripts/setup.sh dev

@@ -491,27 +491,14 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
     println!("factor  method         KD arms (px)  PSNR (dB)  SSIM    PSNR box  SSIM box  videos");
     for ((k, m), (kds, n, s)) in &pooled {
         println!(
-            "{:>4}×  {:<13}  {:>12.2}  {:>9.2}  {:.4}  {:>8.2}  {:.4}    {}",
+            "{:>4}×  {:<13}  {:>12.2}  {}    {}",
             k,
             m,
             mean(kds),
-            mean(&s.psnr),
-            mean(&s.ssim),
-            mean(&s.psnr_box),
-            mean(&s.ssim_box),
+            s.columns(),
             n
         );
-        summary.insert(
-            format!("x{k}/{m}"),
-            json!({
-                "kd_arms_px": num(mean(kds)),
-                "psnr_db": num(mean(&s.psnr)),
-                "ssim": num(mean(&s.ssim)),
-                "psnr_box_db": num(mean(&s.psnr_box)),
-                "ssim_box": num(mean(&s.ssim_box)),
-                "videos": n,
-            }),
-        );
+        summary.insert(format!("x{k}/{m}"), s.summary("kd_arms_px", mean(kds), *n));
     }
     for &k in &a.factors {
         let keys: Vec<(usize, String)> = methods

@@ -227,6 +227,29 @@ fn num(x: f64) -> Value {
 }
 
 impl Scores {
+    /// The pooled means as table columns: PSNR, SSIM, PSNR and SSIM on the box.
+    fn columns(&self) -> String {
+        format!(
+            "{:>9.2}  {:.4}  {:>8.2}  {:.4}",
+            mean(&self.psnr),
+            mean(&self.ssim),
+            mean(&self.psnr_box),
+            mean(&self.ssim_box)
+        )
+    }
+
+    /// The pooled means as JSON, beside a KD under `kd_key` and the video count.
+    fn summary(&self, kd_key: &str, kd: f64, videos: usize) -> Value {
+        let mut o = serde_json::Map::new();
+        o.insert(kd_key.into(), num(kd));
+        o.insert("psnr_db".into(), num(mean(&self.psnr)));
+        o.insert("ssim".into(), num(mean(&self.ssim)));
+        o.insert("psnr_box_db".into(), num(mean(&self.psnr_box)));
+        o.insert("ssim_box".into(), num(mean(&self.ssim_box)));
+        o.insert("videos".into(), json!(videos));
+        Value::Object(o)
+    }
+
     fn add(
         &mut self,
         out: &[u8],

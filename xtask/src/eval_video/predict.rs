@@ -143,26 +143,13 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
     println!("method     KD (px)  PSNR (dB)  SSIM    PSNR box  SSIM box  videos");
     for (m, (kds, s)) in &pooled {
         println!(
-            "{:<9}  {:>7.2}  {:>9.2}  {:.4}  {:>8.2}  {:.4}    {}",
+            "{:<9}  {:>7.2}  {}    {}",
             m,
             mean(kds),
-            mean(&s.psnr),
-            mean(&s.ssim),
-            mean(&s.psnr_box),
-            mean(&s.ssim_box),
+            s.columns(),
             s.psnr.len()
         );
-        summary.insert(
-            (*m).into(),
-            json!({
-                "kd_px": num(mean(kds)),
-                "psnr_db": num(mean(&s.psnr)),
-                "ssim": num(mean(&s.ssim)),
-                "psnr_box_db": num(mean(&s.psnr_box)),
-                "ssim_box": num(mean(&s.ssim_box)),
-                "videos": s.psnr.len(),
-            }),
-        );
+        summary.insert((*m).into(), s.summary("kd_px", mean(kds), s.psnr.len()));
     }
     let keys: Vec<&'static str> = methods.iter().map(|m| m.as_str()).collect();
     let (means, n_common) = common_kd(&kd_by, &keys);
