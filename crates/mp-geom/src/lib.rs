@@ -6,8 +6,10 @@
 //!   BVH hierarchies as data, with bones and the mapping to COCO-17;
 //!   [`skeleton_map`]: mappings between skeletons (COCO-17 / BlazePose-33 →
 //!   Penn-13, BlazePose-33 world landmarks → MSR-20) and back.
+//! * [`People`]: several tracked people in one video (a [`Person`] per
+//!   steady id, each with a [`Track`] over their span), and the main person.
 //! * [`io`]: readers for the data sets and common keypoint formats, writers
-//!   for the project's own npz + JSON formats.
+//!   for the project's own npz + JSON formats (of a track or of people).
 //! * [`fit`]: primitive fitting (stationary, line, circle, cubic spline) in 2D
 //!   and 3D; each fit reports its error and executes at fractional time.
 //! * [`metrics`]: KD, PCK, MPJPE, PA-MPJPE, DTW, max adjacent-frame jump.
@@ -22,6 +24,7 @@ pub mod io;
 pub mod lanes;
 pub mod metrics;
 pub mod paths;
+pub mod people;
 pub mod performer;
 pub mod primitive;
 pub mod skeleton;
@@ -30,6 +33,7 @@ pub mod track;
 
 pub use cancel::CancelToken;
 pub use error::{GeomError, Result};
+pub use people::{People, Person, PersonId};
 pub use primitive::{Primitive, PrimitiveKind};
 pub use skeleton::Skeleton;
 pub use track::{Track, Units};

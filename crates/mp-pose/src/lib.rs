@@ -6,6 +6,9 @@
 //!   model, 33 keypoints, world coordinates in metres) with the same crop,
 //!   tracking and filtering steps as MediaPipe's legacy Pose solution.
 //! * [`movenet`]: MoveNet SinglePose Lightning (COCO-17, whole frame).
+//! * [`people`]: several people per video: the detector over tiles of the
+//!   frame, one landmark crop per person, a tracker that keeps each
+//!   person's id and drops crops the detector does not confirm.
 //! * [`pose::PoseEstimator`]: the trait both implement.
 //! * [`extract()`]: a whole video to an `mp_geom::Track` (pixels, and metres for
 //!   BlazePose), frames without a person marked with confidence 0.
@@ -33,6 +36,7 @@ pub mod extract;
 pub mod filter;
 pub mod imageops;
 pub mod movenet;
+pub mod people;
 pub mod pose;
 pub mod runtime;
 pub mod thumbs;
@@ -47,6 +51,9 @@ pub use extract::{
 pub use imageops::Roi;
 pub use movenet::{MoveNet, MoveNetParams};
 pub use mp_onnx::{OnnxError, SessionParams};
+pub use people::{
+    extract_people, MultiPose, MultiPoseParams, PeopleExtraction, PeopleParams, PersonId,
+};
 pub use pose::{Pose, PoseEstimator};
 pub use runtime::ModelFile;
 pub use video::{open_source, probe, read_image, Frame, FrameSource, VideoInfo, VideoReader};

@@ -5,6 +5,8 @@
 //!   CMU mocap features, MediaPipe reference keypoints).
 //! * [`native`]: the project's own track formats (`.npz`, `.json` and the
 //!   compact binary `.mpt`), which read back identically.
+//! * [`people`]: the same three formats for several tracked people
+//!   ([`People`]); their single-track view is the main person.
 //! * [`binary`]: the binary framing (magic, version, bincode record) shared
 //!   by `.mpt` tracks and `.mpb` programs.
 //! * [`csv`]: long (`frame,joint,x,y[,z][,confidence]`) and wide
@@ -14,7 +16,8 @@
 //! * [`bvh`]: BVH motion capture (hierarchy + channels, forward kinematics,
 //!   slicing, concatenation, writing).
 //! * [`read_track`] / [`write_track`]: one entry point that picks the format
-//!   from the extension and the content.
+//!   from the extension and the content; [`read_people`] / [`write_people`]
+//!   the same for people (any single-track file reads as one person).
 //!
 //! Every write goes to a temporary file in the destination folder that is
 //! renamed into place, so a crash never leaves a half-written file.
@@ -27,13 +30,16 @@ pub mod datasets;
 pub mod native;
 pub mod npz;
 pub mod openpose;
+pub mod people;
 
 pub use atomic::{abandon_partial_writes, write_atomic, PartialFile};
 pub use native::{track_from_bincode, track_to_bincode};
+pub use people::people_to_npz_bytes;
 
 use std::path::Path;
 
 use crate::error::{GeomError, Result};
+use crate::people::People;
 use crate::skeleton::Skeleton;
 use crate::track::{Track, Units};
 
@@ -151,21 +157,44 @@ pub fn read_track(path: impl AsRef<Path>) -> Result<Track> {
 /// Reads one track, choosing the format from the extension and content:
 ///
 /// * a folder: OpenPose `*_keypoints.json` files;
-/// * `.npz`: the project's format (has `positions`), the MediaPipe reference
+/// * `.npz`: the project's format (has `positions`; a people file's
+///   single-track arrays hold the main person), the MediaPipe reference
 ///   (`landmarks_px`) or the CMU features (`X` + `labels`); multi-clip data
 ///   sets (Penn Action, MSR, AIST++) are refused with a pointer to
 ///   [`datasets`];
 /// * `.npy`: a `(T, J, D)` array;
-/// * `.json`: the project's format, an AlphaPose result list, or a single
-///   OpenPose frame;
+/// * `.json`: the project's format, a people file (the main person's track
+///   over the whole video), an AlphaPose result list, or a single OpenPose
+///   frame;
 /// * `.csv`: long or wide CSV;
 /// * `.bvh`: BVH, forward kinematics to joint positions;
-/// * `.mpt`: the project's binary form ([`track_from_bincode`]).
+/// * `.mpt`: the project's binary form ([`track_from_bincode`]), or a people
+///   file (the main person's track over the whole video).
+///
+/// A people file with nobody in it is an error ("no person in this file").
 pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
     let path = path.as_ref();
+    match read_any(path, opts, false)? {
+        Content::Track(t) => Ok(*t),
+        Content::People(p) => people::main_track_of(&p, path),
+    }
+}
+
+/// What a file holds: one track, or people.
+enum Content {
+    Track(Box<Track>),
+    People(People),
+}
+
+/// Reads a file as [`read_track_with`] describes, keeping people JSON and
+/// `.mpt` files as people; a people npz too when `people_npz` is set (else
+/// its single-track arrays are read).
+fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<Content> {
     opts.validate()?;
     if path.is_dir() {
-        return openpose::read_openpose_dir(path, opts);
+        return Ok(Content::Track(Box::new(openpose::read_openpose_dir(
+            path, opts,
+        )?)));
     }
     if !path.exists() {
         return Err(GeomError::io(
@@ -173,10 +202,20 @@ pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Tra
             std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or folder"),
         ));
     }
-    match extension(path).as_str() {
+    let track = match extension(path).as_str() {
         "npz" => {
             let z = npz::Npz::open(path)?;
-            if z.contains("positions") {
+            if people::is_people_npz(&z) {
+                if people_npz {
+                    return people::people_from_npz(&z).map(Content::People);
+                }
+                // The single-track arrays hold the main person; a file of
+                // nobody has none.
+                if !z.contains("positions") {
+                    return Err(people::no_person(path));
+                }
+                native::track_from_npz(&z)
+            } else if z.contains("positions") {
                 native::track_from_npz(&z)
             } else if z.contains("landmarks_px") {
                 Ok(datasets::MediaPipeReference::from_npz(&z, false)?.image)
@@ -209,6 +248,8 @@ pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Tra
                 .map_err(|e| GeomError::format(path, format!("invalid JSON: {e}")))?;
             if value.get("format").and_then(|f| f.as_str()) == Some(native::JSON_FORMAT) {
                 native::track_from_json_value(value, path)
+            } else if people::is_people_json(&value) {
+                return people::people_from_json_value(value, path).map(Content::People);
             } else if value.is_array() {
                 openpose::alphapose_from_value(&value, path, opts)
             } else if value.get("people").is_some() {
@@ -216,12 +257,19 @@ pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Tra
             } else {
                 Err(GeomError::format(
                     path,
-                    "JSON is neither an mp track, an AlphaPose result list nor an OpenPose frame",
+                    "JSON is neither an mp track, mp people, an AlphaPose result list nor an \
+                     OpenPose frame",
                 ))
             }
         }
         "csv" => csv::read_csv(path, opts),
-        "mpt" => native::read_track_bincode(path),
+        "mpt" => {
+            let bytes = std::fs::read(path).map_err(|e| GeomError::io(path, e))?;
+            if people::is_people_bincode(&bytes) {
+                return people::people_from_bincode_at(&bytes, path).map(Content::People);
+            }
+            native::track_from_bincode_at(&bytes, path)
+        }
         "bvh" => {
             let b = bvh::Bvh::read(path)?;
             b.to_track(&bvh::BvhTrackParams {
@@ -235,6 +283,43 @@ pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Tra
             format!(
                 "unknown track file extension `{other}` (npz, npy, json, csv, bvh, mpt or a folder)"
             ),
+        )),
+    }?;
+    Ok(Content::Track(Box::new(track)))
+}
+
+/// Reads people with default [`ReadOptions`]. See [`read_people_with`].
+pub fn read_people(path: impl AsRef<Path>) -> Result<People> {
+    read_people_with(path, &ReadOptions::default())
+}
+
+/// Reads the people of a video: a people file ([`people`]: `.npz` with
+/// `mp_people_version`, `.json` with `"format": "mp-people"`, `.mpt` with
+/// magic `mp-people`) as it is; any other file [`read_track_with`] reads
+/// (a single-track npz, JSON, CSV, BVH, …) as one person with id 1
+/// covering the whole track ([`People::from_track`]).
+pub fn read_people_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<People> {
+    let path = path.as_ref();
+    match read_any(path, opts, true)? {
+        Content::People(p) => Ok(p),
+        Content::Track(t) => {
+            People::from_track(*t).map_err(|e| GeomError::format(path, e.to_string()))
+        }
+    }
+}
+
+/// Writes people in the project's format chosen by extension: `.npz`
+/// (compressed), `.json` or `.mpt` (binary); see [`people`]. Atomic
+/// (temporary file + rename).
+pub fn write_people(path: impl AsRef<Path>, people: &People) -> Result<()> {
+    let path = path.as_ref();
+    match extension(path).as_str() {
+        "npz" => people::write_people_npz(path, people),
+        "json" => people::write_people_json(path, people),
+        "mpt" => people::write_people_bincode(path, people),
+        other => Err(GeomError::format(
+            path,
+            format!("cannot write people as `{other}` (use .npz, .json or .mpt)"),
         )),
     }
 }

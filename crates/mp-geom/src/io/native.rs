@@ -26,6 +26,9 @@
 //! bones, coco17, root}`, `shape: [T, J, D]`, `positions` (`T·J·D` f64,
 //! row-major) and `confidence` (`T·J` f64, row-major). See
 //! [`track_to_bincode`] / [`track_from_bincode`].
+//!
+//! Several tracked people have their own formats in [`super::people`],
+//! whose npz holds the main person in the arrays above.
 
 use std::path::Path;
 
@@ -50,8 +53,14 @@ pub const BINARY_VERSION: u32 = 1;
 
 /// Encodes a track as compressed npz bytes.
 pub fn track_to_npz_bytes(track: &Track) -> Result<Vec<u8>> {
-    let sk = track.skeleton();
     let mut out = NpzOut::new(true);
+    add_track_arrays(&mut out, track)?;
+    out.finish()
+}
+
+/// Adds the arrays of the npz track format to an archive being built.
+pub(crate) fn add_track_arrays(out: &mut NpzOut, track: &Track) -> Result<()> {
+    let sk = track.skeleton();
     out.add("positions", &track.positions())?;
     out.add("confidence", &track.confidence())?;
     out.add("fps", &arr0(track.fps()))?;
@@ -72,7 +81,7 @@ pub fn track_to_npz_bytes(track: &Track) -> Result<Vec<u8>> {
     out.add("coco17", &coco)?;
     out.add("root", &arr0(sk.root.map_or(-1, |r| r as i64)))?;
     out.add("mp_track_version", &arr0(FORMAT_VERSION))?;
-    out.finish()
+    Ok(())
 }
 
 /// Writes a track as npz (atomic).
@@ -207,9 +216,19 @@ struct TrackDoc {
 
 /// Encodes a track as JSON text.
 pub fn track_to_json_string(track: &Track) -> Result<String> {
+    serde_json::to_string(&track_doc(track)).map_err(|e| GeomError::format("json", e.to_string()))
+}
+
+/// Encodes a track as a JSON value (the object [`track_to_json_string`]
+/// writes), for documents that embed tracks.
+pub(crate) fn track_to_json_value(track: &Track) -> Result<serde_json::Value> {
+    serde_json::to_value(track_doc(track)).map_err(|e| GeomError::format("json", e.to_string()))
+}
+
+fn track_doc(track: &Track) -> TrackDoc {
     let pos = track.positions();
     let conf = track.confidence();
-    let doc = TrackDoc {
+    TrackDoc {
         format: JSON_FORMAT.into(),
         version: FORMAT_VERSION,
         fps: track.fps(),
@@ -220,8 +239,7 @@ pub fn track_to_json_string(track: &Track) -> Result<String> {
             .map(|f| f.outer_iter().map(|p| p.to_vec()).collect())
             .collect(),
         confidence: conf.outer_iter().map(|c| c.to_vec()).collect(),
-    };
-    serde_json::to_string(&doc).map_err(|e| GeomError::format("json", e.to_string()))
+    }
 }
 
 /// Writes a track as JSON (atomic).
@@ -322,8 +340,10 @@ pub fn track_from_json_str(text: &str, path: &Path) -> Result<Track> {
     track_from_json_value(value, path)
 }
 
+/// The binary track record (after the framing), also embedded in the
+/// binary people form.
 #[derive(Serialize, Deserialize)]
-struct TrackBin {
+pub(crate) struct TrackBin {
     fps: f64,
     units: Units,
     skeleton: Skeleton,
@@ -332,19 +352,25 @@ struct TrackBin {
     confidence: Vec<f64>,
 }
 
+impl TrackBin {
+    /// The record of a track.
+    pub(crate) fn of(track: &Track) -> Self {
+        let (t, j, d) = track.positions().dim();
+        TrackBin {
+            fps: track.fps(),
+            units: track.units(),
+            skeleton: track.skeleton().clone(),
+            shape: [t as u64, j as u64, d as u64],
+            positions: track.positions().iter().copied().collect(),
+            confidence: track.confidence().iter().copied().collect(),
+        }
+    }
+}
+
 /// Encodes a track in the compact binary form (`.mpt`): exact `f64`s,
 /// skeleton included; [`track_from_bincode`] gives back an equal track.
 pub fn track_to_bincode(track: &Track) -> Result<Vec<u8>> {
-    let (t, j, d) = track.positions().dim();
-    let rec = TrackBin {
-        fps: track.fps(),
-        units: track.units(),
-        skeleton: track.skeleton().clone(),
-        shape: [t as u64, j as u64, d as u64],
-        positions: track.positions().iter().copied().collect(),
-        confidence: track.confidence().iter().copied().collect(),
-    };
-    binary::encode(BINARY_MAGIC, BINARY_VERSION, &rec)
+    binary::encode(BINARY_MAGIC, BINARY_VERSION, &TrackBin::of(track))
 }
 
 /// Decodes a track written by [`track_to_bincode`]. Corrupt or truncated
@@ -358,6 +384,12 @@ pub fn track_from_bincode(bytes: &[u8]) -> Result<Track> {
 /// [`track_from_bincode`] naming `path` in errors.
 pub fn track_from_bincode_at(bytes: &[u8], path: &Path) -> Result<Track> {
     let rec: TrackBin = binary::decode(BINARY_MAGIC, BINARY_VERSION, bytes, path)?;
+    track_from_record(rec, path)
+}
+
+/// Validates a decoded [`TrackBin`] and builds its track; `path` names the
+/// source in errors.
+pub(crate) fn track_from_record(rec: TrackBin, path: &Path) -> Result<Track> {
     let bad = |reason: String| GeomError::format(path, reason);
     let [t, j, d] = rec.shape;
     let dim = |v: u64, what: &str| {

@@ -307,8 +307,15 @@ impl PoseDetector {
 
     /// Detects people in an image; best first, in image pixels.
     pub fn detect(&mut self, image: RgbView<'_>) -> Result<Vec<ImageDetection>> {
+        self.detect_in(image, &Roi::letterbox(image.width, image.height))
+    }
+
+    /// Detects people in one square region of an image (a tile, or the
+    /// crop around a tracked person), read at the detector's input size;
+    /// what lies outside the image reads black. Best first, in image pixels.
+    pub fn detect_in(&mut self, image: RgbView<'_>, region: &Roi) -> Result<Vec<ImageDetection>> {
         let n = DETECTOR_INPUT;
-        let letterbox = Roi::letterbox(image.width, image.height);
+        let letterbox = *region;
         crop_u8(image, &letterbox, n, n, Border::Zero, &mut self.crop);
         let mut input = std::mem::take(&mut self.input);
         to_f32(&self.crop, 2.0 / 255.0, -1.0, &mut input);

@@ -127,7 +127,7 @@ impl BlazePoseParams {
         Ok(())
     }
 
-    fn model_path(&self, file: ModelFile) -> Result<PathBuf> {
+    pub(crate) fn model_path(&self, file: ModelFile) -> Result<PathBuf> {
         match &self.model_dir {
             Some(d) => {
                 let p = d.join(file.file_name());
@@ -318,63 +318,22 @@ impl BlazePose {
         };
         diag.roi = Some(roi);
         self.last_found = Some((self.time_s(frame), roi));
-        let mut keypoints = Vec::with_capacity(landmarks::NUM_BODY);
-        let mut depth = Vec::with_capacity(landmarks::NUM_BODY);
-        let mut visibility = Vec::with_capacity(landmarks::NUM_BODY);
-        let mut presence = Vec::with_capacity(landmarks::NUM_BODY);
-        let mut world = Vec::with_capacity(landmarks::NUM_BODY);
-        for k in 0..landmarks::NUM_BODY {
-            let (Some(lm), Some(w)) = (out.landmarks.get(k), out.world.get(k)) else {
-                return Err(PoseError::Contract {
-                    model: self.name.clone(),
-                    reason: format!("landmark {k} missing from the model output"),
-                });
-            };
-            let (p, z) = landmarks::project(&roi, lm);
-            keypoints.push(p);
-            depth.push(z);
-            visibility.push(lm.visibility as f64);
-            presence.push(lm.presence as f64);
-            world.push(landmarks::rotate_world(&roi, w));
-        }
-        // Auxiliary landmarks -> next crop.
-        let aux = |k: usize| -> Result<[f64; 3]> {
-            let lm = out.landmarks.get(k).ok_or_else(|| PoseError::Contract {
-                model: self.name.clone(),
-                reason: format!("auxiliary landmark {k} missing from the model output"),
-            })?;
-            let (p, z) = landmarks::project(&roi, lm);
-            Ok([p[0], p[1], z])
-        };
-        let mut aux_pts = [aux(AUX_CENTER)?, aux(AUX_SCALE)?];
-        let dx = aux_pts[1][0] - aux_pts[0][0];
-        let dy = aux_pts[1][1] - aux_pts[0][1];
-        // Size of the unscaled region from the raw auxiliary points: (width + height) / 2.
-        let object_scale = 2.0 * (dx * dx + dy * dy).sqrt();
         let t = self.time_ns(frame);
-        self.aux_filter.apply(t, object_scale, &mut aux_pts);
-        let next = detector::roi_from_points(
-            [aux_pts[0][0], aux_pts[0][1]],
-            [aux_pts[1][0], aux_pts[1][1]],
+        let (mut pose, next) = pose_in_roi(
+            &self.name,
+            roi,
+            &out,
+            &mut self.aux_filter,
+            t,
             self.params.roi_scale,
-        );
+        )?;
+        pose.detector_ran = diag.detector_ran;
         if self.params.tracking && next.is_valid() {
             self.next_roi = Some(next);
             diag.next_roi = Some(next);
         } else {
             self.next_roi = None;
         }
-        let pose = Pose {
-            keypoints_px: keypoints,
-            depth_px: Some(depth),
-            visibility,
-            presence,
-            world_m: Some(world),
-            score: out.pose_presence as f64,
-            object_scale_px: object_scale,
-            roi: Some(roi),
-            detector_ran: diag.detector_ran,
-        };
         Ok((Some(pose), diag))
     }
 }
@@ -397,4 +356,69 @@ impl PoseEstimator for BlazePose {
         self.last_found = None;
         self.frame_size = None;
     }
+}
+
+/// The pose of a landmark output computed in `roi` (keypoints in image
+/// pixels, depth, visibility, presence, world coordinates), and the region
+/// for the next frame placed by the two auxiliary landmarks after the
+/// One-Euro `aux_filter` (at `time_ns`, scaled by the person's size).
+pub(crate) fn pose_in_roi(
+    model: &str,
+    roi: Roi,
+    out: &LandmarkOutput,
+    aux_filter: &mut PointsFilter,
+    time_ns: i64,
+    roi_scale: f64,
+) -> Result<(Pose, Roi)> {
+    let mut keypoints = Vec::with_capacity(landmarks::NUM_BODY);
+    let mut depth = Vec::with_capacity(landmarks::NUM_BODY);
+    let mut visibility = Vec::with_capacity(landmarks::NUM_BODY);
+    let mut presence = Vec::with_capacity(landmarks::NUM_BODY);
+    let mut world = Vec::with_capacity(landmarks::NUM_BODY);
+    for k in 0..landmarks::NUM_BODY {
+        let (Some(lm), Some(w)) = (out.landmarks.get(k), out.world.get(k)) else {
+            return Err(PoseError::Contract {
+                model: model.to_string(),
+                reason: format!("landmark {k} missing from the model output"),
+            });
+        };
+        let (p, z) = landmarks::project(&roi, lm);
+        keypoints.push(p);
+        depth.push(z);
+        visibility.push(lm.visibility as f64);
+        presence.push(lm.presence as f64);
+        world.push(landmarks::rotate_world(&roi, w));
+    }
+    // Auxiliary landmarks -> next crop.
+    let aux = |k: usize| -> Result<[f64; 3]> {
+        let lm = out.landmarks.get(k).ok_or_else(|| PoseError::Contract {
+            model: model.to_string(),
+            reason: format!("auxiliary landmark {k} missing from the model output"),
+        })?;
+        let (p, z) = landmarks::project(&roi, lm);
+        Ok([p[0], p[1], z])
+    };
+    let mut aux_pts = [aux(AUX_CENTER)?, aux(AUX_SCALE)?];
+    let dx = aux_pts[1][0] - aux_pts[0][0];
+    let dy = aux_pts[1][1] - aux_pts[0][1];
+    // Size of the unscaled region from the raw auxiliary points: (width + height) / 2.
+    let object_scale = 2.0 * (dx * dx + dy * dy).sqrt();
+    aux_filter.apply(time_ns, object_scale, &mut aux_pts);
+    let next = detector::roi_from_points(
+        [aux_pts[0][0], aux_pts[0][1]],
+        [aux_pts[1][0], aux_pts[1][1]],
+        roi_scale,
+    );
+    let pose = Pose {
+        keypoints_px: keypoints,
+        depth_px: Some(depth),
+        visibility,
+        presence,
+        world_m: Some(world),
+        score: out.pose_presence as f64,
+        object_scale_px: object_scale,
+        roi: Some(roi),
+        detector_ran: false,
+    };
+    Ok((pose, next))
 }

@@ -1,0 +1,230 @@
+//! A whole video to the keypoints of every person in it.
+//!
+//! Poses are collected per track while the video plays; a track's poses
+//! belong to a person once the tracker gives it an id, poses the tracker takes
+//! back (a crop no detection confirmed) are removed, and tracks that never got
+//! an id are forgotten. People are numbered 1, 2, … in the order they first
+//! appear.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::Instant;
+
+use mp_geom::{People, Person, Track, Units};
+use ndarray::{Array2, Array3};
+
+use super::{MultiPose, TrackEvent};
+use crate::error::{PoseError, Result};
+use crate::extract::{ExtractOptions, PoseSmoother};
+use crate::video::FrameSource;
+
+/// What [`extract_people`] found.
+#[derive(Debug, Clone)]
+pub struct PeopleExtraction {
+    /// Every person's keypoints (pixels, BlazePose-33), numbered by first appearance.
+    pub people: People,
+    /// People with a pose on each frame.
+    pub people_per_frame: Vec<usize>,
+    /// Detector runs over the whole video.
+    pub detector_runs: usize,
+    /// Milliseconds spent in the estimator per frame (no decoding).
+    pub estimate_ms: Vec<f64>,
+    /// Milliseconds for the whole run, decoding included.
+    pub total_ms: f64,
+    /// Frame size.
+    pub width: usize,
+    /// Frame size.
+    pub height: usize,
+    /// The limit on people tracked at once.
+    pub max_people: usize,
+    /// The most people found on one frame (tracked, plus those refused).
+    pub most_seen: usize,
+    /// People not tracked because `max_people` were, and the first frame where that happened.
+    pub refused: (usize, Option<usize>),
+}
+
+impl PeopleExtraction {
+    /// Fraction of frames with at least one person.
+    pub fn found_fraction(&self) -> f64 {
+        if self.people_per_frame.is_empty() {
+            return 0.0;
+        }
+        self.people_per_frame.iter().filter(|&&n| n > 0).count() as f64
+            / self.people_per_frame.len() as f64
+    }
+
+    /// Frames per second of the estimator alone (median per-frame time).
+    pub fn estimator_fps(&self) -> f64 {
+        let mut v = self.estimate_ms.clone();
+        if v.is_empty() {
+            return 0.0;
+        }
+        v.sort_by(f64::total_cmp);
+        let med = v[v.len() / 2];
+        if med > 0.0 {
+            1000.0 / med
+        } else {
+            0.0
+        }
+    }
+
+    /// A sentence for the user when more people were in view than are
+    /// tracked at once.
+    pub fn warning(&self) -> Option<String> {
+        let (n, first) = self.refused;
+        (n > 0).then(|| {
+            format!(
+                "{} people were in view at once{}, more than max_people = {}: only {} were tracked at a time (raise max_people to follow more)",
+                self.most_seen,
+                first.map(|f| format!(" (first on frame {f})")).unwrap_or_default(),
+                self.max_people,
+                self.max_people
+            )
+        })
+    }
+}
+
+/// The poses of one track: frame index, keypoints `(x, y)` and visibility.
+#[derive(Default)]
+struct Collected {
+    id: Option<u32>,
+    frames: Vec<(usize, Vec<[f64; 2]>, Vec<f64>)>,
+    smoother: Option<PoseSmoother>,
+}
+
+/// Runs the multi-person estimator over every frame of `source`.
+/// `progress(done, total)` is called after each frame.
+pub fn extract_people(
+    mut source: FrameSource,
+    estimator: &mut MultiPose,
+    options: &ExtractOptions,
+    mut progress: impl FnMut(usize, Option<usize>),
+) -> Result<PeopleExtraction> {
+    if let Some(s) = &options.smoothing {
+        s.validate()?;
+    }
+    estimator.reset();
+    let skeleton = estimator.skeleton();
+    let j = skeleton.len();
+    let total = match (source.frame_count, options.max_frames) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, None) => a,
+        (None, b) => b,
+    };
+    let start = Instant::now();
+    let mut tracks: HashMap<u64, Collected> = HashMap::new();
+    let mut per_frame = Vec::new();
+    let mut estimate_ms = Vec::new();
+    let mut detector_runs = 0usize;
+    while options.max_frames.is_none_or(|m| per_frame.len() < m) {
+        let Some(frame) = source.frames.next() else {
+            break;
+        };
+        let frame = frame?;
+        let t0 = Instant::now();
+        let r = estimator.process(&frame)?;
+        estimate_ms.push(t0.elapsed().as_secs_f64() * 1000.0);
+        detector_runs += r.detector_runs;
+        let f = frame.index;
+        for mut tp in r.poses {
+            if tp.pose.keypoints_px.len() != j || tp.pose.visibility.len() != j {
+                return Err(PoseError::BadFrame {
+                    frame: f,
+                    reason: format!(
+                        "{} returned {} keypoints, its skeleton has {j}",
+                        estimator.name(),
+                        tp.pose.keypoints_px.len()
+                    ),
+                });
+            }
+            let c = tracks.entry(tp.key).or_default();
+            if let Some(sp) = options.smoothing {
+                let restart = c.frames.last().is_none_or(|l| l.0 + 1 != f);
+                if restart || c.smoother.is_none() {
+                    c.smoother = Some(PoseSmoother::new(sp)?);
+                }
+                if let Some(sm) = c.smoother.as_mut() {
+                    sm.apply(frame.timestamp_s, &mut tp.pose);
+                }
+            }
+            c.frames.push((f, tp.pose.keypoints_px, tp.pose.visibility));
+        }
+        for e in r.events {
+            match e {
+                TrackEvent::Confirmed { key, id, .. } => {
+                    tracks.entry(key).or_default().id = Some(id);
+                }
+                TrackEvent::Dropped { key, keep_until } => {
+                    if let Some(c) = tracks.get_mut(&key) {
+                        c.frames.retain(|x| x.0 <= keep_until);
+                        c.smoother = None;
+                    }
+                }
+                TrackEvent::Ended { key } => {
+                    if tracks.get(&key).is_some_and(|c| c.id.is_none()) {
+                        tracks.remove(&key);
+                    }
+                }
+            }
+        }
+        per_frame.push(0);
+        progress(per_frame.len(), total);
+    }
+    let total_ms = start.elapsed().as_secs_f64() * 1000.0;
+    let n = per_frame.len();
+    if n == 0 {
+        return Err(PoseError::Video {
+            path: Path::new("(input)").to_path_buf(),
+            reason: "no frames".into(),
+        });
+    }
+    // People with an id and a pose, by first appearance.
+    let mut kept: Vec<Collected> = tracks
+        .into_values()
+        .filter(|c| c.id.is_some() && !c.frames.is_empty())
+        .collect();
+    kept.sort_by_key(|c| (c.frames[0].0, c.id));
+    let mut people = Vec::with_capacity(kept.len());
+    for (k, c) in kept.into_iter().enumerate() {
+        let first = c.frames[0].0;
+        let last = c.frames.last().map_or(first, |l| l.0);
+        let len = last - first + 1;
+        let mut pos = Array3::<f64>::zeros((len, j, 2));
+        let mut conf = Array2::<f64>::zeros((len, j));
+        for (f, kps, vis) in &c.frames {
+            let ti = f - first;
+            if let Some(slot) = per_frame.get_mut(*f) {
+                *slot += 1;
+            }
+            for q in 0..j {
+                if kps[q].iter().all(|v| v.is_finite()) && vis[q].is_finite() {
+                    pos[[ti, q, 0]] = kps[q][0];
+                    pos[[ti, q, 1]] = kps[q][1];
+                    conf[[ti, q]] = vis[q].clamp(0.0, 1.0);
+                }
+            }
+        }
+        let track = Track::new(pos, Some(conf), source.fps, Units::Pixels, skeleton.clone())?;
+        people.push(Person {
+            id: k as u32 + 1,
+            first_frame: first,
+            track,
+        });
+    }
+    let people = People::new(n, source.fps, people)?;
+    let (refused, most_seen) = estimator
+        .tracker()
+        .map_or(((0, None), 0), |t| (t.refused(), t.most_seen()));
+    Ok(PeopleExtraction {
+        people,
+        people_per_frame: per_frame,
+        detector_runs,
+        estimate_ms,
+        total_ms,
+        width: source.width,
+        height: source.height,
+        max_people: estimator.params().people.max_people,
+        most_seen,
+        refused,
+    })
+}
