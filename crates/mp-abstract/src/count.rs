@@ -240,6 +240,22 @@ impl Counts {
         }
     }
 
+    /// The same counts placed `offset` frames later in a recording of
+    /// `frames` frames (a person's counts, made on the frames where they were
+    /// seen, in the frames of the whole video).
+    pub fn shifted(&self, offset: usize, frames: usize) -> Counts {
+        let mut c = self.clone();
+        for iv in &mut c.intervals {
+            iv.start_frame += offset;
+            iv.end_frame += offset;
+            for b in &mut iv.boundaries {
+                *b += offset;
+            }
+        }
+        c.frames = frames;
+        c
+    }
+
     /// The intervals as [`RepetitiveInterval`]s.
     pub fn repetitive_intervals(&self) -> Vec<RepetitiveInterval> {
         self.intervals.iter().map(|i| i.to_interval()).collect()

@@ -67,6 +67,8 @@ pub struct LoopsArgs {
     pub track: PathBuf,
     #[command(flatten)]
     pub opts: AnalysisOpts,
+    #[command(flatten)]
+    pub people: crate::cmd_run::PeopleOpts,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -175,7 +177,8 @@ pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
 /// `mp loops`: the repetition counts `mp run` writes (intervals, counts, the
 /// signal and method that decided), from a track or a video.
 pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
-    let params = a.opts.pipeline_params();
+    let mut params = a.opts.pipeline_params();
+    a.people.apply(&mut params)?;
     let input = mp_pipeline::Input::open(&a.track, a.opts.frame_size)?;
     let out = mp_pipeline::analyse_input(
         input,
@@ -185,7 +188,7 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
     )?;
     let c = &out.counts;
     if a.json {
-        let v = mp_pipeline::output::loops_json(&out.keypoints.track, c, out.analysis.as_ref());
+        let v = mp_pipeline::output::loops_json(&out);
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
@@ -216,6 +219,7 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
         c.method.as_str(),
         c.confidence
     );
+    crate::cmd_run::print_people(&out);
     Ok(())
 }
 

@@ -41,6 +41,8 @@ pub struct BatchArgs {
     /// Largest side of the video frame in pixels, for track inputs (scale = frame / 512); default: from each motion's extent.
     #[arg(long)]
     pub frame_size: Option<f64>,
+    #[command(flatten)]
+    pub people: crate::cmd_run::PeopleOpts,
     /// Do not write the overlay videos.
     #[arg(long)]
     pub no_video: bool,
@@ -62,6 +64,7 @@ impl BatchArgs {
         p.params.pose.max_frames = self.max_frames;
         p.params.pose.all_joints = self.all_joints;
         p.params.output.overlay_video = !self.no_video;
+        self.people.apply(&mut p.params)?;
         p.validate()?;
         Ok(p)
     }

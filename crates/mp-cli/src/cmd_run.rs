@@ -19,6 +19,8 @@ pub struct RunArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub pose: PoseOpts,
+    #[command(flatten)]
+    pub people: PeopleOpts,
     /// Largest side of the video frame in pixels, for track input (scale = frame / 512); default: from the motion's extent.
     #[arg(long)]
     pub frame_size: Option<f64>,
@@ -58,10 +60,35 @@ impl PoseOpts {
     }
 }
 
+/// Options for videos with several people.
+#[derive(Args, Debug, Clone)]
+pub struct PeopleOpts {
+    /// Whose motion is analysed: all (everyone seen long enough; the main person's results are the top-level ones), main, or a person's id.
+    #[arg(long, default_value = "all")]
+    pub person: String,
+    /// Most people tracked at once.
+    #[arg(long, default_value_t = Params::default().pose.tracker.max_people)]
+    pub max_people: usize,
+    /// Follow one person with MediaPipe's single-person pipeline instead of tracking everyone.
+    #[arg(long)]
+    pub single_person: bool,
+}
+
+impl PeopleOpts {
+    /// Sets the people parameters of `p`.
+    pub fn apply(&self, p: &mut Params) -> Result<()> {
+        p.person.choice = mp_pipeline::PersonChoice::parse(&self.person)?;
+        p.pose.tracker.max_people = self.max_people;
+        p.pose.people = !self.single_person;
+        Ok(())
+    }
+}
+
 /// `mp run`.
 pub fn run_cmd(a: &RunArgs) -> Result<()> {
     let mut params = Params::default();
     a.pose.apply(&mut params)?;
+    a.people.apply(&mut params)?;
     params.output.overlay_video = !a.no_video;
     let input = Input::open(&a.input, a.frame_size)?;
     let summary = run_or_exit(input, &a.out, &params, a.quiet)?;
@@ -129,6 +156,7 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
             iv.period_frames as f64 / fps
         );
     }
+    print_people(o);
     println!();
     println!("{}", stage_table(s));
     if let Some(r) = &s.report {
@@ -144,6 +172,51 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
             .collect::<Vec<_>>()
             .join(", ")
     );
+}
+
+/// One line per tracked person (when people were tracked), and the warning
+/// about people beyond `max_people`.
+pub fn print_people(o: &mp_pipeline::Outcome) {
+    if let Some(w) = &o.keypoints.warning {
+        eprintln!("note: {w}");
+    }
+    if o.people.is_empty() {
+        return;
+    }
+    let fps = o.keypoints.track.fps();
+    println!(
+        "{} {} tracked:",
+        o.people.len(),
+        if o.people.len() == 1 {
+            "person"
+        } else {
+            "people"
+        }
+    );
+    for p in &o.people {
+        let what = match &p.counts {
+            Some(c) => format!(
+                "{} repetition{} ({}, {}, confidence {:.2})",
+                c.total,
+                if c.total == 1 { "" } else { "s" },
+                c.signal.as_str(),
+                c.method.as_str(),
+                c.confidence
+            ),
+            None => "seen too briefly to analyse".to_string(),
+        };
+        println!(
+            "  person {}{}: frames {}–{} ({:.1}–{:.1} s, found in {}) · {}",
+            p.id,
+            if p.main { " (main)" } else { "" },
+            p.first_frame,
+            p.last_frame,
+            p.first_frame as f64 / fps,
+            p.last_frame as f64 / fps,
+            p.frames_found,
+            what
+        );
+    }
 }
 
 /// The stage-timing table.

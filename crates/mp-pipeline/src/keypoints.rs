@@ -4,22 +4,31 @@
 //! thumbnails of every frame (and, when an overlay video is wanted and they
 //! fit in memory, full-size copies); a second FFmpeg process writes reduced
 //! JPEG copies for the report alongside.
+//!
+//! With several people ([`crate::PoseParams::people`], the default for
+//! BlazePose) every person is tracked; the track of the analysis is the
+//! main person's (`mp_geom::People::main_person`, or the one asked for) over
+//! the whole video. When two or more people are analysed, each one's frame
+//! signal is read from grey thumbnails of their own box (a second decoding
+//! pass), not of the whole frame.
 
 use std::path::Path;
 use std::time::Instant;
 
-use mp_geom::{CancelToken, Track};
+use mp_geom::{CancelToken, People, Person, PersonId, Track};
 use mp_pose::decode::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
 use mp_pose::extract::{extract, open_estimator_with, ExtractOptions};
-use mp_pose::thumbs::thumbnail_track;
+use mp_pose::thumbs::{grey_thumbnail_region, thumbnail_track};
+use mp_pose::video::FrameSource;
 use mp_pose::video::{VideoInfo, VideoReader};
 use mp_pose::SessionParams;
+use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams};
 use mp_pose::{ModelChoice, PoseEstimator};
 use mp_report::{FrameStore, FrameStoreParams};
 
 use crate::error::{PipelineError, Result};
 use crate::input::Input;
-use crate::params::Params;
+use crate::params::{Params, PersonChoice};
 use crate::progress::{check, Observer, Stage, StageTime, Timings};
 
 /// Full-size frames kept in memory during the pose pass for the overlay
@@ -45,9 +54,38 @@ pub struct OverlayFrames {
 #[derive(Default)]
 pub struct ModelSlot {
     loaded: Option<(ModelChoice, usize, u64, Box<dyn PoseEstimator + Send>)>,
+    multi: Option<MultiPose>,
 }
 
 impl ModelSlot {
+    /// The multi-person estimator for `params`, opened when not loaded yet
+    /// (or loaded with other settings).
+    fn get_multi(&mut self, params: &Params) -> Result<&mut MultiPose> {
+        let lm = params.pose.model.landmark_model().ok_or_else(|| {
+            PipelineError::param(
+                "pose.model",
+                "several people need BlazePose (full, lite or heavy)",
+            )
+        })?;
+        let want = MultiPoseParams {
+            pose: BlazePoseParams {
+                model: lm,
+                session: SessionParams {
+                    intra_threads: params.pose.threads.max(1),
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+            people: params.pose.tracker.clone(),
+        };
+        if self.multi.as_ref().is_none_or(|m| *m.params() != want) {
+            self.multi = Some(MultiPose::new(want)?);
+        }
+        self.multi
+            .as_mut()
+            .ok_or_else(|| PipelineError::stage("loading the pose model", "no model"))
+    }
+
     /// The model for `params`, opened when not loaded yet (or loaded with other settings).
     fn get(&mut self, params: &Params) -> Result<&mut (dyn PoseEstimator + Send)> {
         let (model, threads) = (params.pose.model, params.pose.threads.max(1));
@@ -89,6 +127,18 @@ pub struct Keypoints {
     pub frame_px: Option<f64>,
     /// Name of the pose model, for video.
     pub model: Option<String>,
+    /// Every person in the video, in the track's skeleton (several-people
+    /// tracking); `None` for a track file and the single-person pipeline.
+    pub people: Option<People>,
+    /// The person `track` follows, when people are tracked and someone was found.
+    pub person: Option<PersonId>,
+    /// The people analysed besides `person`, each with grey thumbnails of
+    /// their own box over their own frames when two or more people are
+    /// analysed (`None` otherwise).
+    pub others: Vec<(PersonId, Option<Track>)>,
+    /// A sentence for the user about the people in view (more than
+    /// `max_people`), when there is one.
+    pub warning: Option<String>,
     /// Reduced frame copies for the report.
     pub frames: Option<FrameStore>,
     /// Frames for the overlay video.
@@ -156,6 +206,10 @@ pub(crate) fn keypoints_timed(
                 frame_size,
                 frame_px,
                 model: None,
+                people: None,
+                person: None,
+                others: Vec::new(),
+                warning: None,
                 frames: None,
                 overlay: None,
             })
@@ -207,19 +261,13 @@ fn from_video(
     )?;
     let observer = timings.observer();
     observer.started(Stage::Pose, expected);
-    let ex = slot.get(params).and_then(|est| {
-        let ex = extract(
-            source,
-            est,
-            &ExtractOptions {
-                max_frames,
-                ..Default::default()
-            },
-            |done, _| observer.progress(Stage::Pose, done),
-        )?;
-        Ok((ex, est.name().to_string()))
-    });
-    // The frame source is gone once `extract` returns, so the decoder stops too.
+    let multi = params.pose.people && params.pose.model.landmark_model().is_some();
+    let ex = if multi {
+        pose_people(source, slot, params, |d| observer.progress(Stage::Pose, d))
+    } else {
+        pose_single(source, slot, params, |d| observer.progress(Stage::Pose, d))
+    };
+    // The frame source is gone once the pose pass returns, so the decoder stops too.
     let decoded = decoder
         .join()
         .map_err(|_| PipelineError::stage("decoding", "the decoding thread panicked"))?;
@@ -231,8 +279,8 @@ fn from_video(
         })
         .transpose()?;
     check(cancel)?;
-    let (ex, model_name) = ex?;
-    let n = ex.track.n_frames();
+    let posed = ex?;
+    let n = posed.n_frames;
     timings.push(Stage::Decode, decoded.decode, n);
     let frames = match copies {
         Some(c) => {
@@ -243,17 +291,17 @@ fn from_video(
         None => None,
     };
     timings.push(Stage::Pose, wall, n);
-    let found = ex.found_fraction();
-    let mut track = ex.track;
-    if !params.pose.all_joints
-        && track.skeleton().name != "coco17"
-        && track.skeleton().maps_to_coco17()
-    {
-        track = track.to_coco17()?;
-    }
+    let coco = |t: Track| -> Result<Track> {
+        if !params.pose.all_joints && t.skeleton().name != "coco17" && t.skeleton().maps_to_coco17()
+        {
+            Ok(t.to_coco17()?)
+        } else {
+            Ok(t)
+        }
+    };
     let mut thumbs = decoded.thumbnails;
     thumbs.truncate(n);
-    let thumbnails = if thumbs.len() == n && n > 0 {
+    let whole_frame = if thumbs.len() == n && n > 0 {
         Some(thumbnail_track(
             thumbs,
             params.pose.thumbnail_size,
@@ -261,6 +309,45 @@ fn from_video(
         )?)
     } else {
         None
+    };
+    let (track, found, people, person, others, thumbnails) = match posed.people {
+        None => {
+            let track = coco(posed.track)?;
+            (track, posed.found, None, None, Vec::new(), whole_frame)
+        }
+        Some(people) => {
+            let people = people_to_coco(people, &coco)?;
+            let (top, rest) = chosen_people(&people, params)?;
+            let track = match top {
+                Some(id) => people.full_track(id)?,
+                None => coco(posed.track)?,
+            };
+            let found = mp_abstract::count::found_fraction(&track);
+            let mut analysed: Vec<PersonId> = top.into_iter().collect();
+            analysed.extend(&rest);
+            let (thumbnails, others) = if analysed.len() >= 2 {
+                let t1 = Instant::now();
+                let mut boxes = box_thumbnails(path, &people, &analysed, n, params, cancel)?;
+                timings.push(Stage::Decode, t1.elapsed(), n);
+                let top_thumbs = top.and_then(|id| boxes.remove(&id));
+                let others = rest
+                    .iter()
+                    .map(|id| {
+                        let th = match (boxes.remove(id), people.get(*id)) {
+                            (Some(th), Some(p)) => {
+                                Some(th.slice_frames(p.first_frame, p.last_frame() + 1)?)
+                            }
+                            _ => None,
+                        };
+                        Ok((*id, th))
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                (top_thumbs.or(whole_frame), others)
+            } else {
+                (whole_frame, rest.iter().map(|id| (*id, None)).collect())
+            };
+            (track, found, Some(people), top, others, thumbnails)
+        }
     };
     let overlay = keep.overlay.then(|| OverlayFrames {
         info: info.clone(),
@@ -272,15 +359,24 @@ fn from_video(
         .unwrap_or_default();
     Ok(Keypoints {
         description: format!(
-            "video {} · {}×{} at {:.2} fps · {} frames · {} ({} joints) · person found in {:.0}% of frames",
+            "video {} · {}×{} at {:.2} fps · {} frames · {} ({} joints) · {}",
             name,
             info.width,
             info.height,
             info.fps,
             n,
-            model_name,
+            posed.model,
             track.n_joints(),
-            100.0 * found
+            match (&people, person) {
+                (Some(p), Some(id)) => format!(
+                    "{} {} tracked · person {id} found in {:.0}% of frames",
+                    p.len(),
+                    if p.len() == 1 { "person" } else { "people" },
+                    100.0 * found
+                ),
+                (Some(_), None) => "nobody found".to_string(),
+                (None, _) => format!("person found in {:.0}% of frames", 100.0 * found),
+            }
         ),
         title: name,
         track,
@@ -288,10 +384,185 @@ fn from_video(
         found_fraction: found,
         frame_size: Some((info.width, info.height)),
         frame_px: Some(info.width.max(info.height) as f64),
-        model: Some(model_name),
+        model: Some(posed.model),
+        people,
+        person,
+        others,
+        warning: posed.warning,
         frames,
         overlay,
     })
+}
+
+/// What the pose pass gave.
+struct Posed {
+    /// The single-person track, or an empty track of the people's skeleton.
+    track: Track,
+    found: f64,
+    people: Option<People>,
+    n_frames: usize,
+    model: String,
+    warning: Option<String>,
+}
+
+fn pose_single(
+    source: FrameSource,
+    slot: &mut ModelSlot,
+    params: &Params,
+    progress: impl Fn(usize),
+) -> Result<Posed> {
+    let est = slot.get(params)?;
+    let ex = extract(
+        source,
+        est,
+        &ExtractOptions {
+            max_frames: params.pose.max_frames,
+            ..Default::default()
+        },
+        |done, _| progress(done),
+    )?;
+    Ok(Posed {
+        n_frames: ex.track.n_frames(),
+        found: ex.found_fraction(),
+        track: ex.track,
+        people: None,
+        model: est.name().to_string(),
+        warning: None,
+    })
+}
+
+fn pose_people(
+    source: FrameSource,
+    slot: &mut ModelSlot,
+    params: &Params,
+    progress: impl Fn(usize),
+) -> Result<Posed> {
+    let fps = source.fps;
+    let est = slot.get_multi(params)?;
+    let ex = extract_people(
+        source,
+        est,
+        &ExtractOptions {
+            max_frames: params.pose.max_frames,
+            ..Default::default()
+        },
+        |done, _| progress(done),
+    )?;
+    let n = ex.people.n_frames();
+    let skeleton = est.skeleton();
+    let empty = Track::new(
+        ndarray::Array3::zeros((n, skeleton.len(), 2)),
+        Some(ndarray::Array2::zeros((n, skeleton.len()))),
+        fps,
+        mp_geom::Units::Pixels,
+        skeleton,
+    )?;
+    Ok(Posed {
+        track: empty,
+        found: ex.found_fraction(),
+        n_frames: n,
+        model: est.name().to_string(),
+        warning: ex.warning(),
+        people: Some(ex.people),
+    })
+}
+
+/// Every person's track through `coco` (COCO-17 unless all joints are kept).
+fn people_to_coco(people: People, coco: &dyn Fn(Track) -> Result<Track>) -> Result<People> {
+    let (n, fps) = (people.n_frames(), people.fps());
+    let list = people
+        .into_people()
+        .into_iter()
+        .map(|p| {
+            Ok(Person {
+                id: p.id,
+                first_frame: p.first_frame,
+                track: coco(p.track)?,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(People::new(n, fps, list)?)
+}
+
+/// The person whose results are the top-level ones, and the others to analyse
+/// ([`crate::PersonParams`]).
+pub fn chosen_people(
+    people: &People,
+    params: &Params,
+) -> Result<(Option<PersonId>, Vec<PersonId>)> {
+    let main = people.main_person().map(|p| p.id);
+    match params.person.choice {
+        PersonChoice::Id(id) => {
+            if people.get(id).is_none() {
+                let ids: Vec<String> = people.people().iter().map(|p| p.id.to_string()).collect();
+                return Err(PipelineError::param(
+                    "person",
+                    if ids.is_empty() {
+                        format!("there is no person {id}: nobody was found in the video")
+                    } else {
+                        format!(
+                            "there is no person {id}; the people found are {}",
+                            ids.join(", ")
+                        )
+                    },
+                ));
+            }
+            Ok((Some(id), Vec::new()))
+        }
+        PersonChoice::Main => Ok((main, Vec::new())),
+        PersonChoice::All => {
+            let min_frames = params.person.min_seen_s * people.fps();
+            let rest = people
+                .people()
+                .iter()
+                .filter(|p| Some(p.id) != main && p.frames_found() as f64 >= min_frames)
+                .map(|p| p.id)
+                .collect();
+            Ok((main, rest))
+        }
+    }
+}
+
+/// Share of a person's mean box added on every side for their thumbnails
+/// (arms and legs reach past the mean box during a repetition).
+pub const BOX_MARGIN: f64 = 0.25;
+
+/// Grey thumbnails of each person's own (mean) box over the whole video, from
+/// a second decoding pass.
+fn box_thumbnails(
+    path: &Path,
+    people: &People,
+    ids: &[PersonId],
+    n: usize,
+    params: &Params,
+    cancel: &CancelToken,
+) -> Result<std::collections::HashMap<PersonId, Track>> {
+    let size = params.pose.thumbnail_size;
+    let regions: Vec<(PersonId, [f64; 4])> = ids
+        .iter()
+        .filter_map(|id| {
+            let b = people.get(*id)?.mean_box()?;
+            let (mx, my) = (BOX_MARGIN * (b[2] - b[0]), BOX_MARGIN * (b[3] - b[1]));
+            Some((*id, [b[0] - mx, b[1] - my, b[2] + mx, b[3] + my]))
+        })
+        .collect();
+    let mut thumbs: Vec<Vec<Vec<f32>>> = vec![Vec::with_capacity(n); regions.len()];
+    let reader = VideoReader::open(path)?;
+    let fps = reader.info().fps;
+    for frame in reader.take(n) {
+        check(cancel)?;
+        let frame = frame?;
+        for (k, (_, r)) in regions.iter().enumerate() {
+            thumbs[k].push(grey_thumbnail_region(&frame, size, *r)?);
+        }
+    }
+    let mut out = std::collections::HashMap::new();
+    for ((id, _), th) in regions.into_iter().zip(thumbs) {
+        if th.len() == n {
+            out.insert(id, thumbnail_track(th, size, fps)?);
+        }
+    }
+    Ok(out)
 }
 
 /// What the JPEG thread hands back.

@@ -52,12 +52,38 @@ pub use input::{is_video, Input, VIDEO_EXTENSIONS};
 pub use keypoints::{keypoints, Keep, Keypoints, ModelSlot};
 pub use mp_abstract::{Analysis, CountMethod, CountSignal, CountedInterval, Counts};
 pub use mp_geom::CancelToken;
-pub use params::{OutputParams, Params, PoseParams};
+pub use params::{OutputParams, Params, PersonChoice, PersonParams, PoseParams};
 pub use progress::{Observer, Silent, Stage, StageTime};
 
 use mp_report::pictures::Analysed;
 use mp_report::{Card, OutputDir};
 use progress::{check, Timings};
+
+/// One person's results (several-people tracking).
+#[derive(Debug, Clone)]
+pub struct PersonOutcome {
+    /// The person's id.
+    pub id: mp_geom::PersonId,
+    /// Whether this person's results are the top-level ones.
+    pub main: bool,
+    /// First and last video frame where the person was tracked.
+    pub first_frame: usize,
+    /// Last video frame (inclusive).
+    pub last_frame: usize,
+    /// Frames with a pose.
+    pub frames_found: usize,
+    /// Mean box `[x0, y0, x1, y1]` in pixels.
+    pub mean_box: Option<[f64; 4]>,
+    /// Video frame of the analysis' first frame: 0 for the main person
+    /// (analysed over the whole video), `first_frame` for the others
+    /// (analysed over their own frames).
+    pub offset: usize,
+    /// Programs and loops (frames from `offset`); `None` when the person was
+    /// not analysed (seen too briefly) or had no pose.
+    pub analysis: Option<Analysis>,
+    /// Repetition counts in video frames; `None` when not analysed.
+    pub counts: Option<Counts>,
+}
 
 /// What an analysis produced.
 pub struct Outcome {
@@ -68,6 +94,9 @@ pub struct Outcome {
     pub analysis: Option<Analysis>,
     /// Repetition counts.
     pub counts: Counts,
+    /// Every person tracked (several-people tracking; empty for a track file
+    /// and the single-person pipeline), in id order.
+    pub people: Vec<PersonOutcome>,
     /// Time per stage.
     pub stages: Vec<StageTime>,
     /// Wall time of the whole run.
@@ -193,13 +222,94 @@ fn finish_analysis(
     };
     let counts = analysis::count_timed(&kp.track, kp.thumbnails.as_ref(), params, timings)?;
     check(cancel)?;
+    let people = people_outcomes(&kp, analysis.as_ref(), &counts, params, timings, cancel)?;
     Ok(Outcome {
         keypoints: kp,
         analysis,
         counts,
+        people,
         stages: std::mem::take(&mut timings.stages),
         total: start.elapsed(),
     })
+}
+
+/// Every tracked person's entry: the main person's from the top-level
+/// results, the other analysed people's from their own frames (in parallel).
+fn people_outcomes(
+    kp: &Keypoints,
+    analysis: Option<&Analysis>,
+    counts: &Counts,
+    params: &Params,
+    timings: &mut Timings<'_>,
+    cancel: &CancelToken,
+) -> Result<Vec<PersonOutcome>> {
+    use rayon::prelude::*;
+    let Some(people) = &kp.people else {
+        return Ok(Vec::new());
+    };
+    let n = people.n_frames();
+    let frame_px = kp.frame_px;
+    let t0 = Instant::now();
+    let analysed: Vec<(mp_geom::PersonId, Option<Analysis>, Counts)> = kp
+        .others
+        .par_iter()
+        .map(|(id, thumbs)| {
+            let p = people.get(*id).ok_or_else(|| {
+                PipelineError::stage("analysing people", format!("no person {id}"))
+            })?;
+            let track = &p.track;
+            if cancel.is_cancelled() || track.n_frames() < 2 {
+                return Ok(None);
+            }
+            let an = if track.valid_count() > 0 {
+                Some(analysis::analyse(
+                    track,
+                    frame_px,
+                    params,
+                    &mut Timings::new(&Silent),
+                    cancel,
+                )?)
+            } else {
+                None
+            };
+            let c = analysis::count(track, thumbs.as_ref(), params)?;
+            Ok(Some((*id, an, c.shifted(p.first_frame, n))))
+        })
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect();
+    check(cancel)?;
+    if !kp.others.is_empty() {
+        timings.push(Stage::People, t0.elapsed(), n);
+    }
+    let out = people
+        .people()
+        .iter()
+        .map(|p| {
+            let main = kp.person == Some(p.id);
+            let (offset, an, c) = if main {
+                (0, analysis.cloned(), Some(counts.clone()))
+            } else {
+                match analysed.iter().find(|a| a.0 == p.id) {
+                    Some((_, an, c)) => (p.first_frame, an.clone(), Some(c.clone())),
+                    None => (p.first_frame, None, None),
+                }
+            };
+            PersonOutcome {
+                id: p.id,
+                main,
+                first_frame: p.first_frame,
+                last_frame: p.last_frame(),
+                frames_found: p.frames_found(),
+                mean_box: p.mean_box(),
+                offset,
+                analysis: an,
+                counts: c,
+            }
+        })
+        .collect();
+    Ok(out)
 }
 
 /// The whole pipeline into `out_dir`: `track.npz`, `program.txt/.json`,
@@ -252,8 +362,7 @@ pub(crate) fn run_with(
     let out = OutputDir::create_with_cancel(out_dir, cancel.clone())
         .map_err(PipelineError::from_report)?;
     let track = &outcome.keypoints.track;
-    let mut files =
-        output::write_analysis(&out, track, outcome.analysis.as_ref(), &outcome.counts)?;
+    let mut files = output::write_analysis(&out, &outcome)?;
     let mut report = None;
     if let (Some(an), true) = (outcome.analysis.as_ref(), params.output.report) {
         let executed = an

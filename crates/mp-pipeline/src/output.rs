@@ -2,7 +2,7 @@
 //! video and report — every file written through the folder's staging area,
 //! so a cancelled run leaves only complete files.
 
-use mp_abstract::{Analysis, Counts};
+use mp_abstract::Analysis;
 use mp_geom::{CancelToken, Track};
 use mp_pose::video::{VideoReader, VideoWriter};
 use mp_report::draw::{draw_skeleton, SkeletonStyle, View};
@@ -13,6 +13,7 @@ use serde_json::json;
 
 use crate::error::{PipelineError, Result};
 use crate::keypoints::OverlayFrames;
+use crate::Outcome;
 
 /// x264 preset of the overlay video (about twice as fast as the default
 /// preset, and smaller files on this kind of footage).
@@ -20,15 +21,47 @@ pub const OVERLAY_PRESET: &str = "veryfast";
 
 /// The content of `loops.json`: the counts a user gets (`total_repetitions`,
 /// one entry of `intervals` and `counts` per counted interval, the signal and
-/// method that decided, a confidence) and the loops of the abstract program.
-pub fn loops_json(
-    track: &Track,
-    counts: &Counts,
-    analysis: Option<&Analysis>,
-) -> serde_json::Value {
+/// method that decided, a confidence) and the loops of the abstract program,
+/// for the top-level person (`person`: the main person, or the one asked
+/// for); then `people`, one entry per tracked person (empty for a track file
+/// and the single-person pipeline): `id`, `main`, `first_frame`,
+/// `last_frame`, `frames_found`, `box` (mean box `[x0, y0, x1, y1]`, px),
+/// `analysed`, and for those analysed `total_repetitions`, `counts`,
+/// `intervals`, `signal`, `method`, `confidence` (frames of the video).
+pub fn loops_json(outcome: &Outcome) -> serde_json::Value {
+    let track = &outcome.keypoints.track;
+    let counts = &outcome.counts;
+    let people: Vec<serde_json::Value> = outcome
+        .people
+        .iter()
+        .map(|p| {
+            let mut v = json!({
+                "id": p.id,
+                "main": p.main,
+                "first_frame": p.first_frame,
+                "last_frame": p.last_frame,
+                "frames_found": p.frames_found,
+                "box": p.mean_box,
+                "analysed": p.counts.is_some(),
+            });
+            if let (Some(c), Some(obj)) = (&p.counts, v.as_object_mut()) {
+                obj.insert("total_repetitions".into(), json!(c.total));
+                obj.insert(
+                    "counts".into(),
+                    json!(c.intervals.iter().map(|i| i.count).collect::<Vec<_>>()),
+                );
+                obj.insert("intervals".into(), json!(c.repetitive_intervals()));
+                obj.insert("signal".into(), json!(c.signal.as_str()));
+                obj.insert("method".into(), json!(c.method.as_str()));
+                obj.insert("confidence".into(), json!(c.confidence));
+            }
+            v
+        })
+        .collect();
     json!({
         "fps": track.fps(),
         "frames": track.n_frames(),
+        "person": outcome.keypoints.person,
         "total_repetitions": counts.total,
         "counts": counts.intervals.iter().map(|i| i.count).collect::<Vec<_>>(),
         "intervals": counts.repetitive_intervals(),
@@ -36,44 +69,67 @@ pub fn loops_json(
         "signal": counts.signal.as_str(),
         "confidence": counts.confidence,
         "counted": counts.intervals,
-        "program_loops": analysis.map(|a| a.intervals.clone()).unwrap_or_default(),
+        "program_loops": outcome.analysis.as_ref().map(|a| a.intervals.clone()).unwrap_or_default(),
+        "people": people,
     })
 }
 
-/// Writes `track.npz`, `loops.json` and, when there is an analysis,
-/// `program.txt`, `program.json`, `abstract.txt` and `abstract.json`.
+/// Writes `track.npz` (with every tracked person along a person axis when
+/// people were tracked: `mp_geom::io::people`), `loops.json` and, when there
+/// is an analysis, `program.txt`, `program.json`, `abstract.txt` and
+/// `abstract.json`; for every other analysed person the programs go to
+/// `people/<id>/` (over the person's own frames, from `first_frame`).
 /// Returns the files written.
-pub fn write_analysis(
-    out: &OutputDir,
-    track: &Track,
-    analysis: Option<&Analysis>,
-    counts: &Counts,
-) -> Result<Vec<String>> {
+pub fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<String>> {
+    let track = &outcome.keypoints.track;
     let mut files = Vec::new();
     let mut put = |rel: &str, bytes: &[u8]| -> Result<()> {
         out.write(rel, bytes).map_err(PipelineError::from_report)?;
         files.push(rel.to_string());
         Ok(())
     };
-    put(
-        "track.npz",
-        &mp_geom::io::native::track_to_npz_bytes(track)?,
-    )?;
-    if let Some(an) = analysis {
-        put("program.txt", an.concrete.to_dsl().as_bytes())?;
-        put("program.json", an.concrete.to_json()?.as_bytes())?;
+    let top_is_main = match (&outcome.keypoints.people, outcome.keypoints.person) {
+        (Some(p), Some(id)) => p.main_person().map(|m| m.id) == Some(id),
+        _ => false,
+    };
+    match &outcome.keypoints.people {
+        Some(people) if top_is_main => {
+            put("track.npz", &mp_geom::io::people_to_npz_bytes(people)?)?
+        }
+        _ => put(
+            "track.npz",
+            &mp_geom::io::native::track_to_npz_bytes(track)?,
+        )?,
+    }
+    let mut programs = |dir: &str, an: &Analysis| -> Result<()> {
         put(
-            "abstract.txt",
+            &format!("{dir}program.txt"),
+            an.concrete.to_dsl().as_bytes(),
+        )?;
+        put(
+            &format!("{dir}program.json"),
+            an.concrete.to_json()?.as_bytes(),
+        )?;
+        put(
+            &format!("{dir}abstract.txt"),
             mp_abstract::dsl::print(&an.program).as_bytes(),
         )?;
         put(
-            "abstract.json",
+            &format!("{dir}abstract.json"),
             serde_json::to_string_pretty(&an.program)?.as_bytes(),
-        )?;
+        )
+    };
+    if let Some(an) = &outcome.analysis {
+        programs("", an)?;
+    }
+    for p in outcome.people.iter().filter(|p| !p.main) {
+        if let Some(an) = &p.analysis {
+            programs(&format!("people/{}/", p.id), an)?;
+        }
     }
     put(
         "loops.json",
-        serde_json::to_string_pretty(&loops_json(track, counts, analysis))?.as_bytes(),
+        serde_json::to_string_pretty(&loops_json(outcome))?.as_bytes(),
     )?;
     Ok(files)
 }

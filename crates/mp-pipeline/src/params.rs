@@ -2,6 +2,7 @@
 
 use mp_abstract::{AbstractParams, CountParams};
 use mp_concrete::{Scale, SynthParams, UnobservedJoints};
+use mp_geom::PersonId;
 pub use mp_pose::ModelChoice;
 
 use crate::error::{PipelineError, Result};
@@ -25,6 +26,13 @@ pub struct PoseParams {
     /// the last pose is tried again (`mp_pose::BlazePoseParams::recover_s`).
     /// Default 0, MediaPipe's tracking.
     pub recover_s: f64,
+    /// Track every person in view (BlazePose: `mp_pose::MultiPose`, the
+    /// detector over tiles of the frame and a person tracker). Default true.
+    /// False runs MediaPipe's single-person pipeline, which follows one
+    /// person (the first the detector finds); MoveNet is always single-person.
+    pub people: bool,
+    /// The person tracker (`max_people`, detection rates, confirmation).
+    pub tracker: mp_pose::PeopleParams,
 }
 
 impl Default for PoseParams {
@@ -36,6 +44,60 @@ impl Default for PoseParams {
             max_frames: None,
             thumbnail_size: mp_pose::thumbs::DEFAULT_THUMBNAIL_SIZE,
             recover_s: mp_pose::BlazePoseParams::default().recover_s,
+            people: true,
+            tracker: mp_pose::PeopleParams::default(),
+        }
+    }
+}
+
+/// Whose motion is analysed when several people are in view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PersonChoice {
+    /// Everyone seen long enough; the main person's results are the
+    /// top-level ones. Default.
+    #[default]
+    All,
+    /// Only the main person (`mp_geom::People::main_person`).
+    Main,
+    /// Only this person, whose results are then the top-level ones.
+    Id(PersonId),
+}
+
+impl PersonChoice {
+    /// Parses `all`, `main` or a person's id.
+    pub fn parse(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "all" => Ok(PersonChoice::All),
+            "main" => Ok(PersonChoice::Main),
+            other => other
+                .parse::<PersonId>()
+                .map(PersonChoice::Id)
+                .map_err(|_| {
+                    PipelineError::param(
+                        "person",
+                        format!("expected all, main or a person's id (1, 2, …), got `{s}`"),
+                    )
+                }),
+        }
+    }
+}
+
+/// Several people: whom to analyse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PersonParams {
+    /// Whose motion is analysed. Default [`PersonChoice::All`].
+    pub choice: PersonChoice,
+    /// Seconds a person must be found in for their own program and count
+    /// (the main person always gets them). Default 2: two repetitions of most
+    /// exercises, and longer than a passer-by crossing the frame.
+    pub min_seen_s: f64,
+}
+
+impl Default for PersonParams {
+    fn default() -> Self {
+        PersonParams {
+            choice: PersonChoice::All,
+            min_seen_s: 2.0,
         }
     }
 }
@@ -73,6 +135,8 @@ pub struct Params {
     pub pose: PoseParams,
     /// Pictures, report, overlay.
     pub output: OutputParams,
+    /// Whom to analyse when several people are in view.
+    pub person: PersonParams,
 }
 
 impl Default for Params {
@@ -86,6 +150,7 @@ impl Default for Params {
             count: CountParams::default(),
             pose: PoseParams::default(),
             output: OutputParams::default(),
+            person: PersonParams::default(),
         }
     }
 }
@@ -112,6 +177,22 @@ impl Params {
                     "must be a finite number of seconds ≥ 0, got {}",
                     self.pose.recover_s
                 ),
+            ));
+        }
+        self.pose.tracker.validate()?;
+        if !(self.person.min_seen_s.is_finite() && self.person.min_seen_s >= 0.0) {
+            return Err(PipelineError::param(
+                "person.min_seen_s",
+                format!(
+                    "must be a finite number of seconds ≥ 0, got {}",
+                    self.person.min_seen_s
+                ),
+            ));
+        }
+        if self.person.choice == PersonChoice::Id(0) {
+            return Err(PipelineError::param(
+                "person",
+                "ids start at 1 (people are numbered 1, 2, … in order of appearance)",
             ));
         }
         if !(1..=256).contains(&self.pose.thumbnail_size) {

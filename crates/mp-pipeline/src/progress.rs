@@ -22,6 +22,8 @@ pub enum Stage {
     Abstract,
     /// Repetition counting.
     Count,
+    /// Programs and counts of the other people in view (in parallel).
+    People,
     /// Plots, timeline and contact sheet.
     Pictures,
     /// Overlay video.
@@ -40,6 +42,7 @@ impl Stage {
             Stage::Concrete => "concrete",
             Stage::Abstract => "abstract",
             Stage::Count => "count",
+            Stage::People => "people",
             Stage::Pictures => "pictures",
             Stage::Overlay => "overlay",
             Stage::Report => "report",
@@ -55,6 +58,7 @@ impl Stage {
             Stage::Concrete => "segmentation and primitive fits",
             Stage::Abstract => "abstract program and loops",
             Stage::Count => "repetition intervals and counts",
+            Stage::People => "programs and counts of the other people, in parallel",
             Stage::Pictures => "plots (SVG + PNG), timeline, contact sheet",
             Stage::Overlay => "own thread, alongside pictures + report; draw + H.264",
             Stage::Report => "HTML page with the frames embedded",

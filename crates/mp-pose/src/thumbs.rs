@@ -44,6 +44,48 @@ pub fn grey_thumbnail(frame: &Frame, size: usize) -> Result<Vec<f32>> {
         .collect())
 }
 
+/// [`grey_thumbnail`] of one region of the frame, `[x0, y0, x1, y1]` in
+/// pixels (clamped to the frame): a person's own box, so that the pixels of
+/// the people beside them stay out of their signal. A region with no pixel in
+/// the frame gives zeros.
+pub fn grey_thumbnail_region(frame: &Frame, size: usize, region: [f64; 4]) -> Result<Vec<f32>> {
+    frame.validate()?;
+    if size == 0 {
+        return Err(PoseError::param("thumbnail size", "must be at least 1"));
+    }
+    if region.iter().any(|v| !v.is_finite()) {
+        return Err(PoseError::param(
+            "thumbnail region",
+            format!("must be finite, got {region:?}"),
+        ));
+    }
+    let (w, h) = (frame.width, frame.height);
+    let clamp = |v: f64, n: usize| (v.round().max(0.0) as usize).min(n);
+    let (x0, x1) = (clamp(region[0], w), clamp(region[2], w));
+    let (y0, y1) = (clamp(region[1], h), clamp(region[3], h));
+    let mut sum = vec![0.0f64; size * size];
+    let mut count = vec![0u32; size * size];
+    if x1 > x0 && y1 > y0 {
+        let (rw, rh) = (x1 - x0, y1 - y0);
+        let col: Vec<usize> = (0..rw).map(|x| x * size / rw).collect();
+        for y in y0..y1 {
+            let row = ((y - y0) * size / rh) * size;
+            let line = &frame.rgb[(y * w + x0) * 3..(y * w + x1) * 3];
+            for (x, px) in line.chunks_exact(3).enumerate() {
+                let l = 0.299 * px[0] as f64 + 0.587 * px[1] as f64 + 0.114 * px[2] as f64;
+                let c = row + col[x];
+                sum[c] += l;
+                count[c] += 1;
+            }
+        }
+    }
+    Ok(sum
+        .iter()
+        .zip(&count)
+        .map(|(&s, &n)| if n > 0 { (s / n as f64) as f32 } else { 0.0 })
+        .collect())
+}
+
 /// Thumbnails of consecutive frames as a unitless feature track: `T` frames ×
 /// `size` rows (the track's "joints", confidence 1) × `size` cells per row
 /// (its dimensions), so the channels run row-major as in the thumbnail. Each
@@ -103,6 +145,20 @@ mod tests {
         // Luma weights: pure red is 0.299 · 255.
         let red = grey_thumbnail(&frame(5, 7, |_, _| [255, 0, 0]), 3).unwrap();
         assert!(red.iter().all(|&v| (v - 76.245).abs() < 1e-3), "{red:?}");
+    }
+
+    #[test]
+    fn a_region_reads_only_its_own_pixels() {
+        // Left half white, right half black: the right half's thumbnail is black,
+        // the whole frame's region equals the whole-frame thumbnail.
+        let fr = frame(8, 6, |x, _| if x < 4 { [255; 3] } else { [0; 3] });
+        let right = grey_thumbnail_region(&fr, 2, [4.0, 0.0, 8.0, 6.0]).unwrap();
+        assert!(right.iter().all(|v| v.abs() < 1e-3), "{right:?}");
+        let whole = grey_thumbnail_region(&fr, 2, [-10.0, -10.0, 100.0, 100.0]).unwrap();
+        assert_eq!(whole, grey_thumbnail(&fr, 2).unwrap());
+        let outside = grey_thumbnail_region(&fr, 2, [20.0, 20.0, 30.0, 30.0]).unwrap();
+        assert_eq!(outside, vec![0.0; 4]);
+        assert!(grey_thumbnail_region(&fr, 2, [f64::NAN, 0.0, 1.0, 1.0]).is_err());
     }
 
     #[test]
