@@ -7,6 +7,7 @@ mod eval_forecast;
 mod eval_grammar;
 mod eval_intervals;
 mod eval_loops;
+mod eval_people;
 mod eval_pose;
 mod eval_refine;
 mod eval_video;
@@ -48,6 +49,8 @@ enum Eval {
     Count(eval_count::EvalCountArgs),
     /// Repetition detection, counting and prediction by unrolling (CMU mocap6, AIST++, Penn Action, QUVA).
     Loops(eval_loops::EvalLoopsArgs),
+    /// Several people in one video: composites of one-person videos side by side and crossing.
+    People(eval_people::EvalPeopleArgs),
     /// Motion grammars: symbols (purity, NMI), grammars (rules, DL), synthesis vs the FSM baseline.
     Grammar(eval_grammar::EvalGrammarArgs),
     /// Concrete programs on Penn Action: primitives, parameters, KD, jumps, interpolation.
@@ -71,6 +74,7 @@ fn main() {
             Eval::Concrete(a) => eval_concrete::run(&a),
             Eval::Count(a) => eval_count::run(&a),
             Eval::Loops(a) => eval_loops::run(&a),
+            Eval::People(a) => eval_people::run(&a),
             Eval::Grammar(a) => eval_grammar::run(&a),
             Eval::Pose(a) => eval_pose::run(&a),
             Eval::Forecast(a) => eval_forecast::run(&a),

@@ -19,7 +19,7 @@ use mp_pose::SessionParams;
 pub struct ExtractArgs {
     /// Input video (anything FFmpeg decodes) or still image (.png, .jpg).
     pub video: PathBuf,
-    /// Output track (.npz, .json or .csv).
+    /// Output track (.npz, .json, .mpt or .csv); with several people, npz, JSON and .mpt hold everyone (the npz's single-track arrays hold the main person), CSV the main person.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Pose model: full, lite (BlazePose-33) or movenet (COCO-17).
@@ -45,6 +45,14 @@ pub struct ExtractArgs {
     /// Only the first N frames.
     #[arg(long)]
     pub max_frames: Option<usize>,
+    /// Follow one person with MediaPipe's single-person pipeline instead of
+    /// tracking everyone in view (BlazePose, video; `--world`, MoveNet and
+    /// still images are always single-person).
+    #[arg(long)]
+    pub single_person: bool,
+    /// Most people tracked at once.
+    #[arg(long, default_value_t = mp_pose::PeopleParams::default().max_people)]
+    pub max_people: usize,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
@@ -75,6 +83,13 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
     if a.world && model == ModelChoice::MoveNet {
         bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
+    }
+    let people = !a.single_person
+        && !a.world
+        && model.landmark_model().is_some()
+        && mp_pipeline::is_video(&a.video);
+    if people {
+        return extract_people_cmd(a, model);
     }
     let source = open_source(&a.video).map_err(pose_err)?;
     let mut est = open_estimator_with(
@@ -128,6 +143,109 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
             ex.estimator_fps(),
             a.output.display()
         );
+    }
+    Ok(())
+}
+
+/// `mp extract` on a video with several-people tracking: every person with
+/// their id (npz with a person axis, JSON or `.mpt`; a CSV holds the main
+/// person only).
+fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
+    let source = open_source(&a.video).map_err(pose_err)?;
+    let Some(lm) = model.landmark_model() else {
+        bail!("several people need BlazePose (full or lite)");
+    };
+    let mut est = mp_pose::MultiPose::new(mp_pose::MultiPoseParams {
+        pose: mp_pose::BlazePoseParams {
+            model: lm,
+            session: SessionParams {
+                intra_threads: a.threads,
+                ..Default::default()
+            },
+            recover_s: a.recover,
+            ..Default::default()
+        },
+        people: mp_pose::PeopleParams {
+            max_people: a.max_people,
+            ..Default::default()
+        },
+    })
+    .map_err(pose_err)?;
+    let total = match (source.frame_count, a.max_frames) {
+        (Some(n), Some(m)) => Some(n.min(m)),
+        (n, None) => n,
+        (None, m) => m,
+    };
+    let pb = progress_bar(total, a.quiet);
+    pb.set_message(est.name().to_string());
+    let opts = ExtractOptions {
+        smoothing: a.smooth.then(SmoothingParams::default),
+        max_frames: a.max_frames,
+        ..ExtractOptions::default()
+    };
+    let ex = mp_pose::extract_people(source, &mut est, &opts, |done, _| {
+        pb.set_position(done as u64)
+    })
+    .map_err(pose_err)
+    .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
+    pb.finish_and_clear();
+    let mut people = ex.people.clone();
+    if a.coco17 {
+        let (n, fps) = (people.n_frames(), people.fps());
+        let list = people
+            .into_people()
+            .into_iter()
+            .map(|p| {
+                Ok(mp_geom::Person {
+                    track: p.track.to_coco17().context("mapping to COCO-17")?,
+                    ..p
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        people = mp_geom::People::new(n, fps, list)?;
+    }
+    let csv = a
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    if csv {
+        let track = people
+            .main_track()
+            .with_context(|| format!("nobody was found in {}", a.video.display()))?;
+        mp_geom::io::write_track(&a.output, &track)
+    } else {
+        mp_geom::io::write_people(&a.output, &people)
+    }
+    .with_context(|| format!("writing {}", a.output.display()))?;
+    if let Some(w) = ex.warning() {
+        eprintln!("note: {w}");
+    }
+    if !a.quiet {
+        println!(
+            "{}: {} frames at {:.3} fps, {} {} tracked (someone in {:.1}% of frames), {:.1} frames/s → {}",
+            a.video.display(),
+            people.n_frames(),
+            people.fps(),
+            people.len(),
+            if people.len() == 1 { "person" } else { "people" },
+            100.0 * ex.found_fraction(),
+            ex.estimator_fps(),
+            a.output.display()
+        );
+        for p in people.people() {
+            println!(
+                "  person {}{}: frames {}–{} (found in {})",
+                p.id,
+                if people.main_person().map(|m| m.id) == Some(p.id) {
+                    " (main)"
+                } else {
+                    ""
+                },
+                p.first_frame,
+                p.last_frame(),
+                p.frames_found()
+            );
+        }
     }
     Ok(())
 }

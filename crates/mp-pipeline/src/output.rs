@@ -134,13 +134,46 @@ pub fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<String>>
     Ok(files)
 }
 
+/// Colours of the people besides the top-level one in the overlay (by id,
+/// in turn): Okabe and Ito's colour-blind-safe palette.
+pub const PERSON_COLOURS: [[u8; 3]; 7] = [
+    [230, 159, 0],
+    [86, 180, 233],
+    [0, 158, 115],
+    [240, 228, 66],
+    [0, 114, 178],
+    [213, 94, 0],
+    [204, 121, 167],
+];
+
+/// The colour of a person's skeleton in the overlay.
+pub fn person_colour(id: mp_geom::PersonId) -> [u8; 3] {
+    PERSON_COLOURS[(id as usize).saturating_sub(1) % PERSON_COLOURS.len()]
+}
+
+/// Every tracked person but the top-level one, over the whole video, with
+/// their colour.
+pub fn other_people(kp: &crate::Keypoints) -> Vec<([u8; 3], Track)> {
+    let Some(people) = &kp.people else {
+        return Vec::new();
+    };
+    people
+        .people()
+        .iter()
+        .filter(|p| Some(p.id) != kp.person)
+        .filter_map(|p| Some((person_colour(p.id), people.full_track(p.id).ok()?)))
+        .collect()
+}
+
 /// Encodes every analysed frame with the keypoints and the executed program
-/// drawn on it into `overlay.mp4`; `progress` is called after each frame.
+/// drawn on it into `overlay.mp4`, and the other people (`others`) each in
+/// their own colour; `progress` is called after each frame.
 pub fn write_overlay(
     out: &OutputDir,
     src: OverlayFrames,
     track: &Track,
     executed: &Track,
+    others: &[([u8; 3], Track)],
     progress: &dyn Fn(usize),
 ) -> Result<()> {
     let cancel: &CancelToken = out.cancel_token();
@@ -156,6 +189,13 @@ pub fn write_overlay(
     let mut draw = |index: usize, rgb: &[u8]| -> Result<()> {
         check_cancel(cancel).map_err(PipelineError::from_report)?;
         let mut pm = rgb_to_pixmap(rgb, width, height)?;
+        for (colour, other) in others {
+            let style = SkeletonStyle {
+                color: Some(*colour),
+                ..kp_style
+            };
+            draw_skeleton(&mut pm, other, index, &view, &style);
+        }
         draw_skeleton(&mut pm, executed, index, &view, &prog_style);
         draw_skeleton(&mut pm, track, index, &view, &kp_style);
         writer.write(&pixmap_to_rgb(&pm))?;

@@ -69,7 +69,13 @@ fn a_bar_lift_in_the_dark_counts_from_the_frames() {
         "counted {}, labelled {truth}",
         c.total
     );
-    assert!(out.keypoints.found_fraction < 0.05);
+    // The backlit performer is found on a few frames only (the last 2 s):
+    // too few for the keypoints to decide.
+    assert!(
+        out.keypoints.found_fraction < 0.2,
+        "{}",
+        out.keypoints.found_fraction
+    );
 }
 
 #[test]
