@@ -72,6 +72,8 @@ struct Source {
     width: usize,
     /// Frames of the panel at the composite's frame rate.
     frames: usize,
+    /// Share of frames where the single-person pipeline finds the person.
+    found: f64,
 }
 
 fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(String, PathBuf, usize)>> {
@@ -356,6 +358,7 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
             truth: *truth,
             width,
             frames: (dur * a.fps).round() as usize,
+            found: 0.0,
         };
         eprint!("{name}: ");
         if a.no_single {
@@ -368,7 +371,10 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
             )?
             .0;
             if one.found_fraction >= 0.5 {
-                sources.push(src);
+                sources.push(Source {
+                    found: one.found_fraction,
+                    ..src
+                });
             }
             eprintln!(
                 "person found on {:.0} % of frames",
@@ -380,7 +386,7 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
         let one = &single.keypoints;
         let found = one.found_fraction;
         if found >= 0.5 {
-            sources.push(src);
+            sources.push(Source { found, ..src });
         }
         let multi = analyse(path, &params)?;
         // Keypoints of both paths on the frames where both found the person.
@@ -497,10 +503,13 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
         .sum::<f64>()
         / k;
 
-    // Crossings.
+    // Crossings, of the people the single-person pipeline finds most often
+    // (a crossing tests the ids, not the finding of a hard pose).
+    let mut steady: Vec<&Source> = sources.iter().collect();
+    steady.sort_by(|x, y| y.found.total_cmp(&x.found).then(x.name.cmp(&y.name)));
     let mut crossings = Vec::new();
     for i in 0..a.crossings.min(n / 2) {
-        let (sa, sb) = (&sources[2 * i], &sources[2 * i + 1]);
+        let (sa, sb) = (steady[2 * i], steady[2 * i + 1]);
         let file = a.work.join(format!("cross_{}_{}.mp4", sa.name, sb.name));
         crossing(sa, sb, &file, a.height, a.fps)?;
         let o = analyse(&file, &params)?;

@@ -8,9 +8,10 @@
 //! With several people ([`crate::PoseParams::people`], the default for
 //! BlazePose) every person is tracked; the track of the analysis is the
 //! main person's (`mp_geom::People::main_person`, or the one asked for) over
-//! the whole video. When two or more people are analysed, each one's frame
-//! signal is read from grey thumbnails of their own box (a second decoding
-//! pass), not of the whole frame.
+//! the whole video. Each analysed person's frame signal is read from grey
+//! thumbnails of their own box (a second decoding pass), not of the whole
+//! frame, so that the people beside them stay out of it; the whole frame is
+//! read only when nobody is found.
 
 use std::path::Path;
 use std::time::Instant;
@@ -113,7 +114,8 @@ impl ModelSlot {
 pub struct Keypoints {
     /// The keypoints (COCO-17 unless all joints were asked for).
     pub track: Track,
-    /// Grey thumbnails of the video frames as a unitless feature track.
+    /// Grey thumbnails as a unitless feature track: of the tracked person's own box
+    /// when people are tracked and someone was found, else of the whole frames.
     pub thumbnails: Option<Track>,
     /// Fraction of frames with a person (1 for a track).
     pub found_fraction: f64,
@@ -133,8 +135,7 @@ pub struct Keypoints {
     /// The person `track` follows, when people are tracked and someone was found.
     pub person: Option<PersonId>,
     /// The people analysed besides `person`, each with grey thumbnails of
-    /// their own box over their own frames when two or more people are
-    /// analysed (`None` otherwise).
+    /// their own box over their own frames.
     pub others: Vec<(PersonId, Option<Track>)>,
     /// A sentence for the user about the people in view (more than
     /// `max_people`), when there is one.
@@ -325,7 +326,7 @@ fn from_video(
             let found = mp_abstract::count::found_fraction(&track);
             let mut analysed: Vec<PersonId> = top.into_iter().collect();
             analysed.extend(&rest);
-            let (thumbnails, others) = if analysed.len() >= 2 {
+            let (thumbnails, others) = if !analysed.is_empty() {
                 let t1 = Instant::now();
                 let mut boxes = box_thumbnails(path, &people, &analysed, n, params, cancel)?;
                 timings.push(Stage::Decode, t1.elapsed(), n);

@@ -124,9 +124,9 @@ pub fn pipeline(e: mp_pipeline::PipelineError) -> PyErr {
         P::MissingInput(_) | P::Track { .. } | P::Geom(_) | P::TooShort(_) => {
             TrackError::new_err(msg)
         }
-        P::Param { .. } | P::Concrete(mp_concrete::ConcreteError::InvalidParam { .. }) => {
-            ParamError::new_err(msg)
-        }
+        P::Param { .. }
+        | P::Concrete(mp_concrete::ConcreteError::InvalidParam { .. })
+        | P::Pose(mp_pose::PoseError::InvalidParam { .. }) => ParamError::new_err(msg),
         P::Pose(_) => PoseError::new_err(msg),
         P::Concrete(_) => ProgramError::new_err(msg),
         P::Abstract(_) => AbstractError::new_err(msg),

@@ -8,6 +8,7 @@
 //! `maturin build` (see `crates/mp-py/pyproject.toml`).
 
 mod errors;
+mod people;
 mod programs;
 mod run;
 mod track;
@@ -17,6 +18,7 @@ use std::path::PathBuf;
 use mp_pipeline::{CancelToken, Input, Keep, Params, Silent};
 use pyo3::prelude::*;
 
+use people::PyPeople;
 use programs::{PyAbstract, PyCounts, PyProgram};
 use track::PyTrack;
 
@@ -66,24 +68,41 @@ fn read_track(py: Python<'_>, path: PathBuf) -> PyResult<PyTrack> {
 
 /// Keypoints of a video (as `mp extract`, COCO-17 joints unless
 /// `all_joints`): BlazePose `full` (default), `lite`, or `movenet`.
-/// `recover_s` (BlazePose): after the tracked person is lost, the seconds
-/// during which the region of the last pose is tried again (default 0,
-/// MediaPipe's tracking).
+/// `recover_s` (BlazePose, `single_person`): after the tracked person is
+/// lost, the seconds during which the region of the last pose is tried again
+/// (default 0, MediaPipe's tracking). Every person in view is tracked (at
+/// most `max_people` at once) unless `single_person` (MediaPipe's
+/// single-person pipeline); the `Track` returned is the main person's over
+/// the whole video, or with `people=True` every tracked person, as `People`
+/// (the keypoint stage of `mp run`).
 #[pyfunction]
-#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None))]
-fn extract(
-    py: Python<'_>,
+#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false))]
+#[allow(clippy::too_many_arguments)]
+fn extract<'py>(
+    py: Python<'py>,
     video: PathBuf,
     model: &str,
     max_frames: Option<usize>,
     threads: Option<usize>,
     all_joints: bool,
     recover_s: Option<f64>,
-) -> PyResult<PyTrack> {
+    people: bool,
+    max_people: Option<usize>,
+    single_person: bool,
+) -> PyResult<Bound<'py, PyAny>> {
     let mut params = params_with(Some(model), threads, max_frames, all_joints, None, None)?;
     if let Some(r) = recover_s {
         params.pose.recover_s = r;
-        params.validate().map_err(errors::pipeline)?;
+    }
+    people::apply(&mut params, None, max_people, single_person)?;
+    // The track of the main person needs no one else's analysis (nor the
+    // second decoding pass that reads their boxes).
+    params.person.choice = mp_pipeline::PersonChoice::Main;
+    if people && (single_person || params.pose.model.landmark_model().is_none()) {
+        return Err(errors::ParamError::new_err(
+            "people=True needs the people tracker: a BlazePose model (full, lite or heavy) \
+             without single_person",
+        ));
     }
     let input = Input::open(&video, None).map_err(errors::pipeline)?;
     if !matches!(input, Input::Video { .. }) {
@@ -104,7 +123,14 @@ fn extract(
             )
         })
         .map_err(errors::pipeline)?;
-    Ok(PyTrack::new(kp.track))
+    if people {
+        let p = match kp.people {
+            Some(p) => p,
+            None => mp_geom::People::from_track(kp.track).map_err(errors::geom)?,
+        };
+        return Ok(Bound::new(py, PyPeople::new(p))?.into_any());
+    }
+    Ok(Bound::new(py, PyTrack::new(kp.track))?.into_any())
 }
 
 /// The concrete program of a track (as `mp fit`): `frame_size` is the
@@ -195,21 +221,30 @@ fn abstract_program(
 /// Repetition counts (as `mp loops` and `mp run`): of a `Track` (from its
 /// keypoints), or of a video or track file given by its path (a video is
 /// decoded and run through the pose model, and its frames are read too).
+/// For a video, every person in view is tracked (at most `max_people` at
+/// once; `single_person`: MediaPipe's single-person pipeline) and `person`
+/// chooses whose counts are the top-level ones: `"all"` (default: the main
+/// person's, and everyone seen long enough gets their own in
+/// `Counts.people`), `"main"` or a person's id.
 #[pyfunction]
-#[pyo3(signature = (source, thumbnails=None))]
+#[pyo3(signature = (source, thumbnails=None, person=None, max_people=None, single_person=false))]
 fn count(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
     thumbnails: Option<&PyTrack>,
+    person: Option<&Bound<'_, PyAny>>,
+    max_people: Option<usize>,
+    single_person: bool,
 ) -> PyResult<PyCounts> {
-    let params = Params::default();
+    let mut params = Params::default();
+    people::apply(&mut params, person, max_people, single_person)?;
     if let Ok(t) = source.cast::<PyTrack>() {
         let t = &t.get().inner;
         let th = thumbnails.map(|x| &x.inner);
         let c = py
             .detach(|| mp_pipeline::count(t, th, &params))
             .map_err(errors::pipeline)?;
-        return Ok(PyCounts { inner: c });
+        return Ok(PyCounts::of_counts(c));
     }
     let path: PathBuf = source.extract().map_err(|_| {
         errors::ParamError::new_err("count() takes a Track or the path of a video or track file")
@@ -220,7 +255,7 @@ fn count(
             mp_pipeline::analyse_input(input, &params, &Silent, &CancelToken::new())
         })
         .map_err(errors::pipeline)?;
-    Ok(PyCounts { inner: out.counts })
+    Ok(PyCounts::of_outcome(&out))
 }
 
 /// The future of a track (as `mp predict`): `horizon` frames after its
@@ -287,12 +322,15 @@ fn refine(
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     m.add_class::<PyTrack>()?;
+    m.add_class::<PyPeople>()?;
+    m.add_class::<people::PyPerson>()?;
     m.add_class::<PyProgram>()?;
     m.add_class::<PyAbstract>()?;
     m.add_class::<PyCounts>()?;
     m.add_class::<run::PySummary>()?;
     m.add_class::<run::PyAnalyser>()?;
     m.add_function(wrap_pyfunction!(read_track, m)?)?;
+    m.add_function(wrap_pyfunction!(people::read_people, m)?)?;
     m.add_function(wrap_pyfunction!(extract, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(abstract_program, m)?)?;

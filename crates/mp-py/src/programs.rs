@@ -3,6 +3,8 @@
 
 use mp_abstract::{Analysis, Counts};
 use mp_concrete::{ExecParams, Program};
+use mp_geom::PersonId;
+use mp_pipeline::Outcome;
 use numpy::{PyArray3, ToPyArray};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -212,14 +214,99 @@ impl PyAbstract {
 /// Repetition counts: `total`, `intervals` (dicts with `start_frame`,
 /// `end_frame`, `period_frames`, `count`, `cycles`, `boundaries`,
 /// `confidence`), the `signal` (`keypoints` or `frames`) and `method`
-/// (`period`, `intervals`, `none`) that decided, and a `confidence`.
+/// (`period`, `intervals`, `none`) that decided, and a `confidence`; for a
+/// video with several people tracked, `person` (whose counts these are) and
+/// `people` (every tracked person's entry of `loops.json`).
 #[pyclass(name = "Counts", module = "motion_programs", frozen)]
 pub struct PyCounts {
     pub(crate) inner: Counts,
+    /// The entries of `loops.json`'s `people` list.
+    people: Vec<serde_json::Value>,
+    /// The person the counts follow.
+    person: Option<PersonId>,
+}
+
+/// The keys of a person's entry that only analysed people have; the others
+/// get them as None, so every entry has the same keys.
+const ANALYSED_KEYS: [&str; 6] = [
+    "total_repetitions",
+    "counts",
+    "intervals",
+    "signal",
+    "method",
+    "confidence",
+];
+
+/// Every tracked person's entry, as `loops.json`'s `people` list (the same
+/// function writes it), each with every key.
+pub(crate) fn people_entries(outcome: &Outcome) -> Vec<serde_json::Value> {
+    let mut v = mp_pipeline::output::loops_json(outcome);
+    let list = match v.get_mut("people").map(serde_json::Value::take) {
+        Some(serde_json::Value::Array(list)) => list,
+        _ => Vec::new(),
+    };
+    list.into_iter()
+        .map(|mut e| {
+            if let Some(obj) = e.as_object_mut() {
+                for k in ANALYSED_KEYS {
+                    obj.entry(k).or_insert(serde_json::Value::Null);
+                }
+            }
+            e
+        })
+        .collect()
+}
+
+/// JSON values as Python objects (dicts, lists, numbers, None).
+pub(crate) fn to_python<'py>(
+    py: Python<'py>,
+    value: &serde_json::Value,
+) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value).map_err(|e| errors::MpError::new_err(e.to_string()))?;
+    py.import("json")?.getattr("loads")?.call1((text,))
+}
+
+impl PyCounts {
+    /// Counts of a track (no people).
+    pub(crate) fn of_counts(inner: Counts) -> Self {
+        PyCounts {
+            inner,
+            people: Vec::new(),
+            person: None,
+        }
+    }
+
+    /// The top-level counts of an analysis, with every tracked person's entry.
+    pub(crate) fn of_outcome(outcome: &Outcome) -> Self {
+        PyCounts {
+            inner: outcome.counts.clone(),
+            people: people_entries(outcome),
+            person: outcome.keypoints.person,
+        }
+    }
 }
 
 #[pymethods]
 impl PyCounts {
+    /// Every tracked person of a video (empty for a track and the
+    /// single-person pipeline): dicts with `id`, `main`, `first_frame`,
+    /// `last_frame`, `frames_found`, `box` (mean box `[x0, y0, x1, y1]`,
+    /// px), `analysed`, and `total_repetitions`, `counts`, `intervals`,
+    /// `signal`, `method`, `confidence` (None for people not analysed: seen
+    /// too briefly); frames are the video's. The entries of `loops.json`.
+    #[getter]
+    fn people<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &serde_json::Value::Array(self.people.clone()))
+    }
+
+    /// The id of the person these counts follow (the main person unless
+    /// another was asked for); None for a track and the single-person
+    /// pipeline.
+    #[getter]
+    fn person(&self) -> Option<PersonId> {
+        self.person
+    }
+
     /// Total repetitions.
     #[getter]
     fn total(&self) -> usize {
@@ -281,8 +368,13 @@ impl PyCounts {
     }
 
     fn __repr__(&self) -> String {
+        let people = if self.people.is_empty() {
+            String::new()
+        } else {
+            format!(", people={}", self.people.len())
+        };
         format!(
-            "Counts(total={}, signal='{}', method='{}', confidence={:.2}, intervals={})",
+            "Counts(total={}, signal='{}', method='{}', confidence={:.2}, intervals={}{people})",
             self.inner.total,
             self.inner.signal.as_str(),
             self.inner.method.as_str(),

@@ -12,17 +12,32 @@ use pyo3::prelude::*;
 use pyo3::types::PyList;
 
 use crate::errors;
+use crate::people::PyPeople;
 use crate::programs::{PyAbstract, PyCounts, PyProgram};
 use crate::track::PyTrack;
 
 /// What `run` produced: `counts`, `track`, `program` and `abstract_program`
 /// (None when no person was found in any frame), `report` (path or None),
 /// `files` (relative to the output folder), `stages` (name, seconds,
-/// frames), `seconds` (wall time).
+/// frames), `seconds` (wall time); for a video with several people tracked,
+/// `person` (whose results these are), `people` (every tracked person's
+/// entry of `loops.json`), `tracked` (their keypoints, `People`) and
+/// `program_of(id)` / `abstract_program_of(id)`.
 #[pyclass(name = "Summary", module = "motion_programs", frozen)]
 pub struct PySummary {
     inner: RunSummary,
     out_dir: Option<PathBuf>,
+}
+
+impl PySummary {
+    fn person_analysis(&self, id: mp_geom::PersonId) -> Option<&mp_pipeline::Analysis> {
+        self.inner
+            .outcome
+            .people
+            .iter()
+            .find(|p| p.id == id)
+            .and_then(|p| p.analysis.as_ref())
+    }
 }
 
 #[pymethods]
@@ -30,9 +45,49 @@ impl PySummary {
     /// Repetition counts (what `loops.json` holds).
     #[getter]
     fn counts(&self) -> PyCounts {
-        PyCounts {
-            inner: self.inner.outcome.counts.clone(),
-        }
+        PyCounts::of_outcome(&self.inner.outcome)
+    }
+
+    /// Every tracked person (empty for a track and the single-person
+    /// pipeline): the dicts of `Counts.people`, `loops.json`'s `people` list.
+    #[getter]
+    fn people<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let list = crate::programs::people_entries(&self.inner.outcome);
+        crate::programs::to_python(py, &serde_json::Value::Array(list))
+    }
+
+    /// The id of the person the top-level results follow, or None (a track,
+    /// the single-person pipeline, nobody found).
+    #[getter]
+    fn person(&self) -> Option<mp_geom::PersonId> {
+        self.inner.outcome.keypoints.person
+    }
+
+    /// Every tracked person's keypoints (`People`), or None (a track, the
+    /// single-person pipeline).
+    #[getter]
+    fn tracked(&self) -> Option<PyPeople> {
+        self.inner
+            .outcome
+            .keypoints
+            .people
+            .clone()
+            .map(PyPeople::new)
+    }
+
+    /// The concrete program of person `id` (over their own frames, from
+    /// their `first_frame`; the main person's over the whole video), or
+    /// None when they were not analysed.
+    fn program_of(&self, id: mp_geom::PersonId) -> Option<PyProgram> {
+        self.person_analysis(id).map(|a| PyProgram {
+            inner: a.concrete.clone(),
+        })
+    }
+
+    /// The abstract program of person `id` (see `program_of`), or None.
+    fn abstract_program_of(&self, id: mp_geom::PersonId) -> Option<PyAbstract> {
+        self.person_analysis(id)
+            .map(|a| PyAbstract { inner: a.clone() })
     }
 
     /// The keypoints.
@@ -122,9 +177,12 @@ impl PySummary {
 /// The whole pipeline into `out_dir` (as `mp run`): keypoints (for a video),
 /// programs, counts, pictures, `overlay.mp4` (video only, unless
 /// `overlay_video=False`) and `report.html` (unless `report=False`).
-/// `source` is a video or track file path, or a `Track`.
+/// `source` is a video or track file path, or a `Track`. For a video, every
+/// person in view is tracked (at most `max_people`; `single_person`:
+/// MediaPipe's single-person pipeline) and `person` (`"all"`, the default,
+/// `"main"` or an id) chooses whom to analyse, as `mp run --person`.
 #[pyfunction]
-#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=true, report=true))]
+#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=true, report=true, person=None, max_people=None, single_person=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     py: Python<'_>,
@@ -137,10 +195,14 @@ pub fn run(
     frame_size: Option<f64>,
     overlay_video: bool,
     report: bool,
+    person: Option<&Bound<'_, PyAny>>,
+    max_people: Option<usize>,
+    single_person: bool,
 ) -> PyResult<PySummary> {
     let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
     params.output.overlay_video = overlay_video;
     params.output.report = report;
+    crate::people::apply(&mut params, person, max_people, single_person)?;
     let input = input_of(source, frame_size)?;
     let dir = out_dir.clone();
     let s = py
@@ -179,7 +241,8 @@ pub struct PyAnalyser {
 #[pymethods]
 impl PyAnalyser {
     #[new]
-    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=true, report=true))]
+    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=true, report=true, person=None, max_people=None, single_person=false))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         model: Option<&str>,
         threads: Option<usize>,
@@ -187,10 +250,14 @@ impl PyAnalyser {
         all_joints: bool,
         overlay_video: bool,
         report: bool,
+        person: Option<&Bound<'_, PyAny>>,
+        max_people: Option<usize>,
+        single_person: bool,
     ) -> PyResult<Self> {
         let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
         params.output.overlay_video = overlay_video;
         params.output.report = report;
+        crate::people::apply(&mut params, person, max_people, single_person)?;
         Ok(PyAnalyser {
             inner: Mutex::new(Analyser::new(params).map_err(errors::pipeline)?),
         })

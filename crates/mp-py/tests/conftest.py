@@ -3,6 +3,7 @@
 import os
 import pathlib
 import subprocess
+import sys
 
 import pytest
 
@@ -28,14 +29,37 @@ def mp_bin():
     return p
 
 
-@pytest.fixture(scope="session")
-def data():
-    """A function giving the path of a shared data file, or skipping the test."""
+def skip_test(test, needs, why):
+    """Skips the running test because `needs` (a shared data file, a tool) is missing: prints
+    `skipped: {test} needs {needs}` to stderr and appends `{test}\t{needs}` to the file named by
+    MP_SKIP_LOG when set (one write per line, as the Rust tests' `mp_geom::paths::skip_test`)."""
+    print(f"skipped: {test} needs {needs}", file=sys.stderr)
+    log = os.environ.get("MP_SKIP_LOG")
+    if log:
+        try:
+            with open(log, "a", encoding="utf-8") as f:
+                f.write(f"{test}\t{needs}\n")
+        except OSError:
+            pass
+    pytest.skip(why)
+
+
+@pytest.fixture
+def skip_needs(request):
+    """A function skipping the running test because something it needs (a tool) is missing,
+    logging the skip to MP_SKIP_LOG."""
+    return lambda needs, why: skip_test(request.node.nodeid, needs, why)
+
+
+@pytest.fixture
+def data(request):
+    """A function giving the path of a shared data file, or skipping the test (and logging the
+    skip to MP_SKIP_LOG)."""
     d = _data_dir()
 
     def get(rel):
         if d is None or not (d / rel).exists():
-            pytest.skip(f"shared data file `{rel}` not found (../shared/data or MP_DATA_DIR)")
+            skip_test(request.node.nodeid, str(rel), f"shared data file `{rel}` not found (../shared/data or MP_DATA_DIR)")
         return d / rel
 
     return get

@@ -1,5 +1,5 @@
 """The Ray Data pipeline (examples/ray_batch.py) on a local Ray cluster gives the same per-video
-results as `mp batch` on the same videos."""
+and per-person results as `mp batch` on the same videos."""
 
 import importlib.util
 import json
@@ -40,11 +40,12 @@ def test_ray_pipeline_equals_mp_batch(data, mp_bin, tmp_path):
     rb = load_example()
     ray.init(num_cpus=2, include_dashboard=False, ignore_reinit_error=True)
     try:
-        df = rb.analyse_videos(paths, str(tmp_path / "parquet"), workers=2, threads=1)
+        df, people = rb.analyse_videos(paths, str(tmp_path / "parquet"), workers=2, threads=1)
     finally:
         ray.shutdown()
     assert list(df["path"]) == paths
-    assert list((tmp_path / "parquet").glob("*.parquet")), "no Parquet written"
+    assert list((tmp_path / "parquet" / "videos").glob("*.parquet")), "no Parquet of videos written"
+    assert list((tmp_path / "parquet" / "people").glob("*.parquet")), "no Parquet of people written"
     for _, row in df.iterrows():
         item = manifest[str(pathlib.Path(row["path"]).resolve())]
         assert row["status"] == item["status"] == "ok", (row["error"], item.get("error"))
@@ -56,3 +57,21 @@ def test_ray_pipeline_equals_mp_batch(data, mp_bin, tmp_path):
         assert row["program"] == (folder / "program.txt").read_text(), row["path"]
         n, j, d = row["positions_shape"]
         assert n == row["frames"] and len(row["positions"]) == n * j * d
+        # One row per tracked person, as loops.json's `people` list; the main person's are the
+        # video's top-level results, everyone else's programs are under people/<id>/.
+        loops = json.loads((folder / "loops.json").read_text())
+        mine = people[people["path"] == row["path"]]
+        assert list(mine["person"]) == [p["id"] for p in loops["people"]], row["path"]
+        assert len(mine) >= 1 and mine["main"].sum() == 1, row["path"]
+        assert row["person"] == loops["person"] == mine[mine["main"]]["person"].iloc[0]
+        for (_, r), p in zip(mine.iterrows(), loops["people"]):
+            for k in ["main", "first_frame", "last_frame", "frames_found", "analysed"]:
+                assert r[k] == p[k], (row["path"], p["id"], k)
+            assert list(r["box"]) == p["box"], (row["path"], p["id"])
+            if p["analysed"]:
+                assert r["total_repetitions"] == p["total_repetitions"], (row["path"], p["id"])
+                assert json.loads(r["counts"]) == p["counts"], (row["path"], p["id"])
+                prog = folder / "program.txt" if p["main"] else folder / "people" / str(p["id"]) / "program.txt"
+                assert r["program"] == prog.read_text(), (row["path"], p["id"])
+            if p["main"]:
+                assert r["total_repetitions"] == row["total_repetitions"]

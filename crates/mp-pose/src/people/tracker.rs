@@ -20,9 +20,10 @@
 //!    a pose on [`PeopleParams::birth_frames`] frames.
 //! 3. **Duplicates**: two tracks whose regions overlap by more than
 //!    [`PeopleParams::duplicate_iou`] follow one person; the younger loses.
-//! 4. **Lost tracks** keep their id for [`PeopleParams::lost_s`]: a detection
-//!    near where a lost track would be by now (constant velocity of its
-//!    region's centre) brings it back under the same id, after an occlusion
+//! 4. **Lost tracks** keep their id for [`PeopleParams::lost_s`]: the
+//!    detector searches, on every frame, a square around where a lost track
+//!    would be by now (constant velocity of its region's centre), and a
+//!    detection there brings it back under the same id, after an occlusion
 //!    or a crossing.
 //! 5. **At most [`PeopleParams::max_people`]** tracks; births beyond are
 //!    refused and counted ([`Tracker::refused`]).
@@ -59,11 +60,13 @@ pub struct PeopleParams {
     /// Smallest tile side in pixels. Default 224, the detector's input: a
     /// smaller tile would be enlarged, showing no more detail.
     pub min_tile_px: f64,
-    /// Least detector score of a detection that starts a new track (any
-    /// detection above the detector's own threshold confirms an existing
-    /// one). Default 0.75: with many detections a frame, weak ones on
-    /// clutter (machines, furniture) are common, while a person in view
-    /// scores above 0.8 on most frames.
+    /// Least detector score that makes a new track a person: the detection
+    /// that starts it, or one in its own crop (turned upright, as the
+    /// landmark model sees it) while it waits for its id. Any detection above
+    /// the detector's own threshold starts a track and confirms an existing
+    /// one. Default 0.75: with many detections a frame, weak ones on clutter
+    /// (machines, furniture) are common, while a person seen upright scores
+    /// above 0.8 on most frames.
     pub birth_score: f64,
     /// Seconds without a detection after which a track is searched for in
     /// its own crop every frame. Default 0.5.
@@ -73,6 +76,9 @@ pub struct PeopleParams {
     pub confirm_s: f64,
     /// Frames with a pose before a new track gets an id. Default 3.
     pub birth_frames: usize,
+    /// Seconds a new track has to reach `birth_score` before it is
+    /// forgotten. Default 0.5.
+    pub birth_s: f64,
     /// Seconds a lost track keeps its id for a detection to bring it back.
     /// Default 2.
     pub lost_s: f64,
@@ -103,6 +109,7 @@ impl Default for PeopleParams {
             recheck_s: 0.5,
             confirm_s: 1.0,
             birth_frames: 3,
+            birth_s: 0.5,
             lost_s: 2.0,
             match_iou: 0.3,
             revive_iou: 0.2,
@@ -127,6 +134,7 @@ impl PeopleParams {
             ("recheck_s", self.recheck_s),
             ("confirm_s", self.confirm_s),
             ("lost_s", self.lost_s),
+            ("birth_s", self.birth_s),
             ("min_tile_px", self.min_tile_px),
         ];
         for (name, v) in seconds {
@@ -273,7 +281,10 @@ struct Track {
     key: u64,
     id: Option<PersonId>,
     first_frame: usize,
+    first_t: f64,
     hits: usize,
+    /// Whether a detection reached `birth_score` on this track.
+    strong: bool,
     /// Region carried to the next frame; `None` while lost.
     carried: Option<Roi>,
     /// Region of the last pose.
@@ -351,6 +362,9 @@ fn same_person(a: &Roi, b: &Roi, iou: f64) -> bool {
 /// Share of the smaller region inside the larger above which two regions
 /// follow one person.
 pub const CONTAINED: f64 = 0.8;
+
+/// Side of the square searched for a lost person, in sides of their last crop.
+pub const LOST_SEARCH_SCALE: f64 = 1.5;
 
 /// Pairs `(row, column)` of the assignment of rows to columns that maximises
 /// the summed `score`, keeping only pairs whose score reaches `min`.
@@ -519,9 +533,30 @@ impl Tracker {
             runs += 1;
         }
         for (i, _, roi) in &found {
-            if t - self.tracks[*i].confirmed_t > p.recheck_s {
+            let tr = &self.tracks[*i];
+            if t - tr.confirmed_t > p.recheck_s || !tr.strong {
                 cands.extend(sensors.detect(roi)?);
                 runs += 1;
+            }
+        }
+        // A person lost a moment ago is looked for where they would be now,
+        // on every frame, as the single-person pipeline looks for its person
+        // on the frame after losing them.
+        for (i, tr) in self.tracks.iter().enumerate() {
+            let lost = tr.id.is_some() && !found.iter().any(|(k, _, _)| *k == i);
+            if lost && t - tr.last_seen_t <= p.lost_s {
+                let pr = tr.predicted(t);
+                let side = LOST_SEARCH_SCALE * pr.width_px.max(pr.height_px);
+                let region = Roi {
+                    width_px: side,
+                    height_px: side,
+                    rotation_rad: 0.0,
+                    ..pr
+                };
+                if region.is_valid() {
+                    cands.extend(sensors.detect(&region)?);
+                    runs += 1;
+                }
             }
         }
         let cands = merge_candidates(cands, p.detection_iou);
@@ -539,6 +574,7 @@ impl Tracker {
             let tr = &mut self.tracks[found[i].0];
             tr.confirmed_t = t;
             tr.confirmed_frame = f;
+            tr.strong |= cands[j].score >= p.birth_score;
         }
         // A detection that overlaps a found track is that person again.
         for (j, c) in cands.iter().enumerate() {
@@ -586,7 +622,7 @@ impl Tracker {
         // 6. Births.
         let mut refused_now = 0usize;
         for (j, c) in cands.iter().enumerate() {
-            if used[j] || c.score < p.birth_score {
+            if used[j] {
                 continue;
             }
             if found.len() >= p.max_people {
@@ -609,7 +645,9 @@ impl Tracker {
                 key,
                 id: None,
                 first_frame: f,
+                first_t: t,
                 hits: 0,
+                strong: c.score >= p.birth_score,
                 carried: None,
                 last_roi: c.roi,
                 last_seen_t: t,
@@ -648,7 +686,7 @@ impl Tracker {
             tr.last_roi = roi;
             tr.last_seen_t = t;
             tr.carried = seen.next_roi.filter(Roi::is_valid);
-            if tr.id.is_none() && tr.hits >= p.birth_frames {
+            if tr.id.is_none() && tr.hits >= p.birth_frames && tr.strong {
                 let id = self.next_id;
                 self.next_id += 1;
                 tr.id = Some(id);
@@ -687,7 +725,8 @@ impl Tracker {
         while i < self.tracks.len() {
             let tr = &self.tracks[i];
             let lost = !is_found[i];
-            let ends = lost && (tr.id.is_none() || t - tr.last_seen_t > p.lost_s);
+            let weak = tr.id.is_none() && !tr.strong && t - tr.first_t > p.birth_s;
+            let ends = weak || (lost && (tr.id.is_none() || t - tr.last_seen_t > p.lost_s));
             if ends {
                 events.push(TrackEvent::Ended { key: tr.key });
                 self.tracks.remove(i);

@@ -9,6 +9,8 @@ and defaults as the ``mp`` command line tool.
 >>> track = mp.extract("squats.mp4")            # doctest: +SKIP
 >>> program = mp.fit(track)                      # doctest: +SKIP
 >>> mp.count(track).total                        # doctest: +SKIP
+>>> people = mp.extract("gym.mp4", people=True)  # doctest: +SKIP
+>>> [(p.id, p.frames_found) for p in people]     # doctest: +SKIP
 """
 
 from ._native import (  # noqa: F401
@@ -22,6 +24,8 @@ from ._native import (  # noqa: F401
     MpError,
     OutputError,
     ParamError,
+    People,
+    Person,
     PoseError,
     Program,
     ProgramError,
@@ -35,6 +39,7 @@ from ._native import (  # noqa: F401
     grammar_learn,
     grammar_symbols,
     predict,
+    read_people,
     read_track,
     refine,
     RefineError,
@@ -57,6 +62,8 @@ __all__ = [
     "MpError",
     "OutputError",
     "ParamError",
+    "People",
+    "Person",
     "PoseError",
     "Program",
     "ProgramError",
@@ -70,6 +77,7 @@ __all__ = [
     "grammar_learn",
     "grammar_symbols",
     "predict",
+    "read_people",
     "read_track",
     "refine",
     "RefineError",
