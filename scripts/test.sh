@@ -20,6 +20,10 @@ export MP_SKIP_LOG="$PWD/target/skipped-tests.txt"
 mkdir -p target
 rm -f "$MP_SKIP_LOG"
 cargo test --workspace --no-fail-fast 2>&1
+# The Python package in the dev profile, which shares its compiled crates with the tests above.
+bash scripts/python.sh dev
+MP_BIN="$PWD/target/debug/mp" .venv/bin/python -m pytest -q crates/mp-py/tests 2>&1
+# Rust and Python tests that skipped, with what they need.
 if [ -s "$MP_SKIP_LOG" ]; then
     n_models=$(grep -P '\tmodels/' "$MP_SKIP_LOG" | cut -f1 | sort -u | wc -l || true)
     n_data=$(grep -vP '\tmodels/' "$MP_SKIP_LOG" | cut -f1 | sort -u | wc -l || true)
@@ -28,7 +32,4 @@ if [ -s "$MP_SKIP_LOG" ]; then
 else
     echo "tests skipped: 0 (the shared data sets and every model were present)"
 fi
-# The Python package in the dev profile, which shares its compiled crates with the tests above.
-bash scripts/python.sh dev
-MP_BIN="$PWD/target/debug/mp" .venv/bin/python -m pytest -q crates/mp-py/tests 2>&1
 bash scripts/disk.sh report

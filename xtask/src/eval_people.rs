@@ -6,7 +6,7 @@
 //!   side by side, 2 and 3 at a time, scaled to one height and frame rate
 //!   with FFmpeg (a shorter panel holds its last frame). Per panel: the
 //!   count of the panel's main person (of the people whose mean box centre
-//!   lies in the panel, the one `mp_geom::People::main_person`'s rule picks)
+//!   lies in the panel, the one `mp_geom::People::main_person`'s rule picks: who moves most)
 //!   against the label, and the share of the panel's own frames on which one
 //!   id covers it.
 //! * **Crossings**: two videos as panels that slide across each other (the
@@ -232,14 +232,13 @@ fn panel_people(people: &People, x0: f64, x1: f64) -> (Vec<PersonId>, Option<Per
         .iter()
         .filter(|p| centre_x(p).is_some_and(|c| c >= x0 && c < x1))
         .collect();
-    let score = |p: &Person| {
-        let b = p.mean_box().unwrap_or([0.0; 4]);
-        p.frames_found() as f64 * (b[2] - b[0]).hypot(b[3] - b[1])
-    };
-    let main = inside
-        .iter()
-        .max_by(|a, b| score(a).total_cmp(&score(b)).then(b.id.cmp(&a.id)))
-        .map(|p| p.id);
+    let main = People::new(
+        people.n_frames(),
+        people.fps(),
+        inside.iter().map(|p| (*p).clone()).collect(),
+    )
+    .ok()
+    .and_then(|p| p.main_person().map(|m| m.id));
     (inside.iter().map(|p| p.id).collect(), main)
 }
 
@@ -537,7 +536,7 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
     let (mae_s, obo_s) = score_counts("count_single_person");
     let report = json!({
         "kind": "several_people",
-        "definition": "mp_pipeline::analyse_input with Params::default() on composites of labelled one-person videos. Per panel: the count of the panel's main person (of the people whose mean box centre lies in the panel, the largest frames_found × box diagonal) against the label; coverage = share of the panel's own frames on which its best-covering id is found. Crossings: the ids on the left and right before the panels move and after they have swapped places. Single: each video alone, several-people path (default) against the single-person pipeline (pose.people = false).",
+        "definition": "mp_pipeline::analyse_input with Params::default() on composites of labelled one-person videos. Per panel: the count of the panel's main person (of the people whose mean box centre lies in the panel, the one who moves most: People::main_person) against the label; coverage = share of the panel's own frames on which its best-covering id is found. Crossings: the ids on the left and right before the panels move and after they have swapped places. Single: each video alone, several-people path (default) against the single-person pipeline (pose.people = false).",
         "panels": panels_all.len(),
         "panels_within_one": within as f64 / k,
         "panels_count_mae": mae,

@@ -106,7 +106,47 @@ impl Person {
         self.mean_box()
             .map_or(0.0, |[x0, y0, x1, y1]| (x1 - x0).hypot(y1 - y0))
     }
+
+    /// How much the person moves: the path their joints travel, in the
+    /// track's units — the sum over frames `t` of the mean distance of each
+    /// joint from where it was [`ACTIVITY_LAG_S`] earlier, divided by that lag
+    /// in frames (joints with confidence > 0 at both times). Measuring over a
+    /// lag rather than from frame to frame keeps the keypoints' jitter, which
+    /// does not grow with the lag, small beside real motion, which does.
+    pub fn activity(&self) -> f64 {
+        let n = self.track.n_frames();
+        let lag = ((ACTIVITY_LAG_S * self.track.fps()).round() as usize).max(1);
+        if n <= lag {
+            return 0.0;
+        }
+        let (pos, conf) = (self.track.positions(), self.track.confidence());
+        let (j, d) = (self.track.n_joints(), self.track.dims());
+        let mut total = 0.0;
+        for t in lag..n {
+            let (mut sum, mut k) = (0.0, 0usize);
+            for q in 0..j {
+                if conf[[t, q]] > 0.0 && conf[[t - lag, q]] > 0.0 {
+                    let d2: f64 = (0..d)
+                        .map(|c| (pos[[t, q, c]] - pos[[t - lag, q, c]]).powi(2))
+                        .sum();
+                    sum += d2.sqrt();
+                    k += 1;
+                }
+            }
+            if k > 0 {
+                total += sum / k as f64 / lag as f64;
+            }
+        }
+        if total.is_finite() {
+            total
+        } else {
+            0.0
+        }
+    }
 }
+
+/// The lag of [`Person::activity`], seconds.
+pub const ACTIVITY_LAG_S: f64 = 0.2;
 
 /// The people tracked in one video: its length in frames, its frame rate
 /// and one [`Person`] per tracked person, sorted by id.
@@ -270,26 +310,28 @@ impl People {
             .map(|i| &self.people[i])
     }
 
-    /// The main person: the one seen longest and largest, i.e. with the
-    /// largest score
-    ///
-    /// ```text
-    /// frames_found × diagonal of mean_box
-    /// ```
-    ///
-    /// ([`Person::frames_found`], [`Person::mean_box`]), so that the
-    /// performer wins over a passer-by (seen briefly) or a small figure in
-    /// the background. Equal scores go to the smaller id (the one who
-    /// appeared first). `None` when nobody was tracked.
+    /// The main person: the one who moves most, i.e. with the largest
+    /// [`Person::activity`] (the path their joints travel, in the track's
+    /// units), so that the performer wins over a bystander or a trainer
+    /// standing beside them (found as long, but still), a passer-by (moving,
+    /// but briefly) and a small figure in the back (whose motion is small in
+    /// pixels). Equal activities go to the one seen longest and largest
+    /// (`frames_found × diagonal of mean_box`), then to the smaller id.
+    /// `None` when nobody was tracked.
     pub fn main_person(&self) -> Option<&Person> {
-        let mut best: Option<(&Person, f64)> = None;
+        let mut best: Option<(&Person, f64, f64)> = None;
         for p in &self.people {
-            let score = p.frames_found() as f64 * p.mean_diagonal();
-            if best.is_none_or(|(_, b)| score > b) {
-                best = Some((p, score));
+            let a = p.activity();
+            let size = p.frames_found() as f64 * p.mean_diagonal();
+            let better = match best {
+                None => true,
+                Some((_, ba, bs)) => a > ba || (a == ba && size > bs),
+            };
+            if better {
+                best = Some((p, a, size));
             }
         }
-        best.map(|(p, _)| p)
+        best.map(|(p, _, _)| p)
     }
 
     /// The track of person `id` over the whole video (`n_frames` frames):

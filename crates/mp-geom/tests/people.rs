@@ -132,23 +132,61 @@ fn found_frames_and_boxes_skip_confidence_zero() {
     assert_eq!(never.box_at(1), None);
 }
 
+/// A COCO-17 figure of `n` frames whose joints swing `amplitude` pixels once
+/// a second around `(cx, cy)` (an exercise), plus a `jitter` that flips sign
+/// every frame (keypoint noise), and walks `speed` pixels a frame.
+fn mover(n: usize, cx: f64, size: f64, amplitude: f64, jitter: f64, speed: f64) -> Track {
+    let p = Array3::from_shape_fn((n, 17, 2), |(t, j, k)| {
+        let phase = 2.0 * std::f64::consts::PI * t as f64 / 30.0;
+        let swing = amplitude * (phase + j as f64).sin();
+        let noise = if (t + j) % 2 == 0 { jitter } else { -jitter };
+        let u = (j as f64 / 16.0 - 0.5) * size;
+        if k == 0 {
+            cx + u + swing + noise + speed * t as f64
+        } else {
+            200.0 + (j as f64 / 16.0) * size + noise
+        }
+    });
+    Track::new(
+        p,
+        Some(Array2::from_elem((n, 17), 0.8)),
+        30.0,
+        Units::Pixels,
+        Skeleton::coco17(),
+    )
+    .unwrap()
+}
+
 #[test]
-fn main_person_is_seen_longest_and_largest() {
+fn main_person_is_the_one_who_moves_most() {
     let p = crowd();
     assert_eq!(p.main_person().unwrap().id, 2);
-    // A long but small figure loses to a shorter, much larger one…
+    // A trainer standing beside the performer, larger and found as long,
+    // with jittery keypoints, loses to the exercising person.
     let q = People::new(
-        50,
+        300,
         30.0,
         vec![
-            person(1, 0, figure(50, 100.0, 100.0, 10.0, &[])),
-            person(2, 10, figure(20, 300.0, 300.0, 200.0, &[])),
+            person(1, 0, mover(300, 100.0, 250.0, 0.0, 2.0, 0.0)),
+            person(2, 0, mover(300, 400.0, 150.0, 25.0, 2.0, 0.0)),
         ],
     )
     .unwrap();
+    assert!(q.get(2).unwrap().activity() > 5.0 * q.get(1).unwrap().activity());
     assert_eq!(q.main_person().unwrap().id, 2);
-    // …and frames where a person was not found do not count.
+    // A passer-by crossing the frame in a second loses to ten seconds of exercise.
     let r = People::new(
+        300,
+        30.0,
+        vec![
+            person(1, 100, mover(30, 0.0, 200.0, 0.0, 1.0, 20.0)),
+            person(2, 0, mover(300, 400.0, 150.0, 25.0, 1.0, 0.0)),
+        ],
+    )
+    .unwrap();
+    assert_eq!(r.main_person().unwrap().id, 2);
+    // Frames where a person was not found do not count.
+    let s = People::new(
         50,
         30.0,
         vec![
@@ -161,7 +199,7 @@ fn main_person_is_seen_longest_and_largest() {
         ],
     )
     .unwrap();
-    assert_eq!(r.main_person().unwrap().id, 2);
+    assert_eq!(s.main_person().unwrap().id, 2);
 }
 
 #[test]

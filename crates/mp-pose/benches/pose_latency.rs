@@ -1,6 +1,9 @@
 //! Per-frame latency of the pose models (ONNX Runtime, 2 intra-op threads):
-//! detector, landmark full / lite, MoveNet, and a BlazePose tracking frame
-//! (crop from the previous frame's landmarks + landmark model + refinement).
+//! detector, landmark full / lite, MoveNet, a BlazePose tracking frame
+//! (crop from the previous frame's landmarks + landmark model + refinement),
+//! and the several-people estimator at 30 fps on one person and on two (the
+//! frame beside itself), its tile searches and detector checks included at
+//! their rates.
 //!
 //! Needs `cargo xtask setup`; uses frame 0 of the shared golf video (a grey
 //! frame when the shared data is absent).
@@ -15,7 +18,7 @@ use std::time::Duration;
 use mp_pose::blazepose::detector::roi_from_points;
 use mp_pose::blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
 use mp_pose::video::{Frame, VideoReader};
-use mp_pose::{MoveNet, MoveNetParams, PoseEstimator};
+use mp_pose::{MoveNet, MoveNetParams, MultiPose, MultiPoseParams, PoseEstimator};
 
 fn frame() -> Frame {
     mp_geom::paths::data_file("golfdb/golf_swing.mp4")
@@ -23,6 +26,18 @@ fn frame() -> Frame {
         .and_then(|mut r| r.next())
         .and_then(|f| f.ok())
         .unwrap_or_else(|| Frame::new(0, 0.0, 354, 492, vec![128; 354 * 492 * 3]).expect("frame"))
+}
+
+/// The frame and a copy of it side by side: two people.
+fn beside_itself(f: &Frame) -> Frame {
+    let row = f.width * 3;
+    let mut rgb = Vec::with_capacity(2 * f.rgb.len());
+    for y in 0..f.height {
+        let line = &f.rgb[y * row..(y + 1) * row];
+        rgb.extend_from_slice(line);
+        rgb.extend_from_slice(line);
+    }
+    Frame::new(0, 0.0, 2 * f.width, f.height, rgb).expect("frame")
 }
 
 fn bench(c: &mut Criterion) {
@@ -66,6 +81,24 @@ fn bench(c: &mut Criterion) {
         })
     });
     drop(full);
+
+    // Several people: steady state over many frames at 30 fps.
+    let two = beside_itself(&frame);
+    for (name, f0) in [("people_one_person", &frame), ("people_two_people", &two)] {
+        let mut multi = MultiPose::new(MultiPoseParams::default()).expect("MultiPose");
+        let mut k = 0usize;
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let f = Frame {
+                    index: k,
+                    timestamp_s: k as f64 / 30.0,
+                    ..f0.clone()
+                };
+                k += 1;
+                black_box(multi.process(&f).expect("people"))
+            })
+        });
+    }
 
     let mut lite = BlazePose::new(BlazePoseParams {
         model: LandmarkModelKind::Lite,
