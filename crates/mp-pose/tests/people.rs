@@ -1,6 +1,8 @@
 //! Several people: real footage of one person per panel, put side by side
 //! with FFmpeg, through the multi-person estimator and its tracker.
 
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
+
 mod common;
 
 use std::path::{Path, PathBuf};
