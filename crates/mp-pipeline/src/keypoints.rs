@@ -329,7 +329,7 @@ fn from_video(
             let (thumbnails, others) = if !analysed.is_empty() {
                 let t1 = Instant::now();
                 let mut boxes = box_thumbnails(path, &people, &analysed, n, params, cancel)?;
-                timings.push(Stage::Decode, t1.elapsed(), n);
+                timings.push(Stage::Boxes, t1.elapsed(), n);
                 let top_thumbs = top.and_then(|id| boxes.remove(&id));
                 let others = rest
                     .iter()

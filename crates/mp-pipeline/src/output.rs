@@ -135,15 +135,16 @@ pub fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<String>>
 }
 
 /// Colours of the people besides the top-level one in the overlay (by id,
-/// in turn): Okabe and Ito's colour-blind-safe palette.
+/// in turn): Okabe and Ito's colour-blind-safe palette, the colours least
+/// like the top-level skeleton's left/right orange and blue first.
 pub const PERSON_COLOURS: [[u8; 3]; 7] = [
-    [230, 159, 0],
-    [86, 180, 233],
     [0, 158, 115],
-    [240, 228, 66],
-    [0, 114, 178],
-    [213, 94, 0],
     [204, 121, 167],
+    [240, 228, 66],
+    [213, 94, 0],
+    [0, 114, 178],
+    [86, 180, 233],
+    [230, 159, 0],
 ];
 
 /// The colour of a person's skeleton in the overlay.

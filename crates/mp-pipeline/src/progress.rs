@@ -24,6 +24,8 @@ pub enum Stage {
     Count,
     /// Programs and counts of the other people in view (in parallel).
     People,
+    /// Grey thumbnails of each analysed person's own box (a second decoding pass).
+    Boxes,
     /// Plots, timeline and contact sheet.
     Pictures,
     /// Overlay video.
@@ -43,6 +45,7 @@ impl Stage {
             Stage::Abstract => "abstract",
             Stage::Count => "count",
             Stage::People => "people",
+            Stage::Boxes => "boxes",
             Stage::Pictures => "pictures",
             Stage::Overlay => "overlay",
             Stage::Report => "report",
@@ -59,6 +62,7 @@ impl Stage {
             Stage::Abstract => "abstract program and loops",
             Stage::Count => "repetition intervals and counts",
             Stage::People => "programs and counts of the other people, in parallel",
+            Stage::Boxes => "second FFmpeg pass: grey thumbnails of each person's own box",
             Stage::Pictures => "plots (SVG + PNG), timeline, contact sheet",
             Stage::Overlay => "own thread, alongside pictures + report; draw + H.264",
             Stage::Report => "HTML page with the frames embedded",
