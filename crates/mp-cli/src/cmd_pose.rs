@@ -78,6 +78,27 @@ fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {
     pb
 }
 
+/// The progress bar and extraction options of `mp extract`.
+fn progress_and_options(
+    a: &ExtractArgs,
+    frame_count: Option<usize>,
+    name: &str,
+) -> (ProgressBar, ExtractOptions) {
+    let total = match (frame_count, a.max_frames) {
+        (Some(n), Some(m)) => Some(n.min(m)),
+        (n, None) => n,
+        (None, m) => m,
+    };
+    let pb = progress_bar(total, a.quiet);
+    pb.set_message(name.to_string());
+    let opts = ExtractOptions {
+        smoothing: a.smooth.then(SmoothingParams::default),
+        max_frames: a.max_frames,
+        ..ExtractOptions::default()
+    };
+    (pb, opts)
+}
+
 /// `mp extract`: keypoints of a video or image written as a track.
 pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
@@ -101,18 +122,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         a.recover,
     )
     .map_err(pose_err)?;
-    let total = match (source.frame_count, a.max_frames) {
-        (Some(n), Some(m)) => Some(n.min(m)),
-        (n, None) => n,
-        (None, m) => m,
-    };
-    let pb = progress_bar(total, a.quiet);
-    pb.set_message(est.name().to_string());
-    let opts = ExtractOptions {
-        smoothing: a.smooth.then(SmoothingParams::default),
-        max_frames: a.max_frames,
-        ..ExtractOptions::default()
-    };
+    let (pb, opts) = progress_and_options(a, source.frame_count, est.name());
     let ex = extract(source, est.as_mut(), &opts, |done, _| {
         pb.set_position(done as u64)
     })
@@ -171,18 +181,7 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
         },
     })
     .map_err(pose_err)?;
-    let total = match (source.frame_count, a.max_frames) {
-        (Some(n), Some(m)) => Some(n.min(m)),
-        (n, None) => n,
-        (None, m) => m,
-    };
-    let pb = progress_bar(total, a.quiet);
-    pb.set_message(est.name().to_string());
-    let opts = ExtractOptions {
-        smoothing: a.smooth.then(SmoothingParams::default),
-        max_frames: a.max_frames,
-        ..ExtractOptions::default()
-    };
+    let (pb, opts) = progress_and_options(a, source.frame_count, est.name());
     let ex = mp_pose::extract_people(source, &mut est, &opts, |done, _| {
         pb.set_position(done as u64)
     })

@@ -243,17 +243,7 @@ pub struct Extraction {
 impl Extraction {
     /// Frames per second of the estimator alone (median per-frame time).
     pub fn estimator_fps(&self) -> f64 {
-        let mut v = self.estimate_ms.clone();
-        if v.is_empty() {
-            return 0.0;
-        }
-        v.sort_by(f64::total_cmp);
-        let med = v[v.len() / 2];
-        if med > 0.0 {
-            1000.0 / med
-        } else {
-            0.0
-        }
+        median_fps(&self.estimate_ms)
     }
     /// Fraction of frames with a pose.
     pub fn found_fraction(&self) -> f64 {
@@ -262,6 +252,22 @@ impl Extraction {
         } else {
             self.found.iter().filter(|&&f| f).count() as f64 / self.found.len() as f64
         }
+    }
+}
+
+/// Frames per second from per-frame milliseconds: 1000 over the median (0
+/// without frames or time).
+pub fn median_fps(ms: &[f64]) -> f64 {
+    let mut v = ms.to_vec();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let med = v[v.len() / 2];
+    if med > 0.0 {
+        1000.0 / med
+    } else {
+        0.0
     }
 }
 

@@ -19,29 +19,8 @@ pub const DEFAULT_THUMBNAIL_SIZE: usize = 32;
 /// (cell `⌊x · size / width⌋`), so frames of any size work; frames smaller
 /// than the grid leave some cells empty (0).
 pub fn grey_thumbnail(frame: &Frame, size: usize) -> Result<Vec<f32>> {
-    frame.validate()?;
-    if size == 0 {
-        return Err(PoseError::param("thumbnail size", "must be at least 1"));
-    }
-    let (w, h) = (frame.width, frame.height);
-    let mut sum = vec![0.0f64; size * size];
-    let mut count = vec![0u32; size * size];
-    let col: Vec<usize> = (0..w).map(|x| x * size / w).collect();
-    for y in 0..h {
-        let row = (y * size / h) * size;
-        let line = &frame.rgb[y * w * 3..(y + 1) * w * 3];
-        for (x, px) in line.chunks_exact(3).enumerate() {
-            let l = 0.299 * px[0] as f64 + 0.587 * px[1] as f64 + 0.114 * px[2] as f64;
-            let c = row + col[x];
-            sum[c] += l;
-            count[c] += 1;
-        }
-    }
-    Ok(sum
-        .iter()
-        .zip(&count)
-        .map(|(&s, &n)| if n > 0 { (s / n as f64) as f32 } else { 0.0 })
-        .collect())
+    let (w, h) = (frame.width as f64, frame.height as f64);
+    grey_thumbnail_region(frame, size, [0.0, 0.0, w, h])
 }
 
 /// [`grey_thumbnail`] of one region of the frame, `[x0, y0, x1, y1]` in

@@ -55,17 +55,7 @@ impl PeopleExtraction {
 
     /// Frames per second of the estimator alone (median per-frame time).
     pub fn estimator_fps(&self) -> f64 {
-        let mut v = self.estimate_ms.clone();
-        if v.is_empty() {
-            return 0.0;
-        }
-        v.sort_by(f64::total_cmp);
-        let med = v[v.len() / 2];
-        if med > 0.0 {
-            1000.0 / med
-        } else {
-            0.0
-        }
+        crate::extract::median_fps(&self.estimate_ms)
     }
 
     /// A sentence for the user when more people were in view than are
