@@ -136,16 +136,8 @@ fn side_by_side(panels: &[&Source], out: &Path, height: usize, fps: f64) -> anyh
         filter.join(";"),
         "-map".into(),
         "[v]".into(),
-        "-c:v".into(),
-        "libx264".into(),
-        "-preset".into(),
-        "veryfast".into(),
-        "-crf".into(),
-        "20".into(),
-        "-pix_fmt".into(),
-        "yuv420p".into(),
-        out.display().to_string(),
     ]);
+    args.extend(encode_to(out));
     ffmpeg(&args)
 }
 
@@ -175,27 +167,34 @@ fn crossing(a: &Source, b: &Source, out: &Path, height: usize, fps: f64) -> anyh
         format!("[t][pb]overlay=x='{w}-{w}*{ramp}':y=0:shortest=1[v]"),
     ]
     .join(";");
-    ffmpeg(&[
-        "-i".into(),
-        a.path.display().to_string(),
-        "-i".into(),
-        b.path.display().to_string(),
-        "-filter_complex".into(),
-        filter,
-        "-map".into(),
-        "[v]".into(),
-        "-t".into(),
-        format!("{secs:.3}"),
-        "-c:v".into(),
-        "libx264".into(),
-        "-preset".into(),
-        "veryfast".into(),
-        "-crf".into(),
-        "20".into(),
-        "-pix_fmt".into(),
-        "yuv420p".into(),
-        out.display().to_string(),
-    ])
+    ffmpeg(
+        &[
+            "-i".into(),
+            a.path.display().to_string(),
+            "-i".into(),
+            b.path.display().to_string(),
+            "-filter_complex".into(),
+            filter,
+            "-map".into(),
+            "[v]".into(),
+            "-t".into(),
+            format!("{secs:.3}"),
+        ]
+        .into_iter()
+        .chain(encode_to(out))
+        .collect::<Vec<_>>(),
+    )
+}
+
+/// FFmpeg's output arguments of a composite: H.264 (CRF 20), 4:2:0, `out`.
+fn encode_to(out: &Path) -> Vec<String> {
+    [
+        "-c:v", "libx264", "-preset", "veryfast", "-crf", "20", "-pix_fmt", "yuv420p",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .chain([out.display().to_string()])
+    .collect()
 }
 
 fn analyse(path: &Path, params: &Params) -> anyhow::Result<Outcome> {

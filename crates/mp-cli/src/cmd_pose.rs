@@ -188,21 +188,11 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
     .map_err(pose_err)
     .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
     pb.finish_and_clear();
-    let mut people = ex.people.clone();
-    if a.coco17 {
-        let (n, fps) = (people.n_frames(), people.fps());
-        let list = people
-            .into_people()
-            .into_iter()
-            .map(|p| {
-                Ok(mp_geom::Person {
-                    track: p.track.to_coco17().context("mapping to COCO-17")?,
-                    ..p
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
-        people = mp_geom::People::new(n, fps, list)?;
-    }
+    let people = if a.coco17 {
+        ex.people.clone().map_tracks(|t| t.to_coco17())?
+    } else {
+        ex.people.clone()
+    };
     let csv = a
         .output
         .extension()

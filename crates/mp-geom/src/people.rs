@@ -310,6 +310,24 @@ impl People {
             .map(|i| &self.people[i])
     }
 
+    /// The same people with every track passed through `f` (e.g. a mapping
+    /// onto another skeleton); ids and spans are kept, and the result is
+    /// validated as [`People::new`] does.
+    pub fn map_tracks(self, mut f: impl FnMut(Track) -> Result<Track>) -> Result<People> {
+        let (n, fps) = (self.n_frames, self.fps);
+        let list = self
+            .people
+            .into_iter()
+            .map(|p| {
+                Ok(Person {
+                    track: f(p.track)?,
+                    ..p
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        People::new(n, fps, list)
+    }
+
     /// The main person: the one who moves most, i.e. with the largest
     /// [`Person::activity`] (the path their joints travel, in the track's
     /// units), so that the performer wins over a bystander or a trainer

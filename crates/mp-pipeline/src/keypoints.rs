@@ -16,7 +16,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use mp_geom::{CancelToken, People, Person, PersonId, Track};
+use mp_geom::{CancelToken, People, PersonId, Track};
 use mp_pose::decode::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
 use mp_pose::extract::{extract, open_estimator_with, ExtractOptions};
 use mp_pose::thumbs::{grey_thumbnail_region, thumbnail_track};
@@ -292,10 +292,10 @@ fn from_video(
         None => None,
     };
     timings.push(Stage::Pose, wall, n);
-    let coco = |t: Track| -> Result<Track> {
+    let coco = |t: Track| -> mp_geom::Result<Track> {
         if !params.pose.all_joints && t.skeleton().name != "coco17" && t.skeleton().maps_to_coco17()
         {
-            Ok(t.to_coco17()?)
+            t.to_coco17()
         } else {
             Ok(t)
         }
@@ -317,7 +317,7 @@ fn from_video(
             (track, posed.found, None, None, Vec::new(), whole_frame)
         }
         Some(people) => {
-            let people = people_to_coco(people, &coco)?;
+            let people = people.map_tracks(coco)?;
             let (top, rest) = chosen_people(&people, params)?;
             let track = match top {
                 Some(id) => people.full_track(id)?,
@@ -406,6 +406,15 @@ struct Posed {
     warning: Option<String>,
 }
 
+/// The extraction options of the pose pass: all frames or the first
+/// `max_frames`, no smoothing.
+fn extract_options(params: &Params) -> ExtractOptions {
+    ExtractOptions {
+        max_frames: params.pose.max_frames,
+        ..Default::default()
+    }
+}
+
 fn pose_single(
     source: FrameSource,
     slot: &mut ModelSlot,
@@ -413,15 +422,9 @@ fn pose_single(
     progress: impl Fn(usize),
 ) -> Result<Posed> {
     let est = slot.get(params)?;
-    let ex = extract(
-        source,
-        est,
-        &ExtractOptions {
-            max_frames: params.pose.max_frames,
-            ..Default::default()
-        },
-        |done, _| progress(done),
-    )?;
+    let ex = extract(source, est, &extract_options(params), |done, _| {
+        progress(done)
+    })?;
     Ok(Posed {
         n_frames: ex.track.n_frames(),
         found: ex.found_fraction(),
@@ -440,15 +443,9 @@ fn pose_people(
 ) -> Result<Posed> {
     let fps = source.fps;
     let est = slot.get_multi(params)?;
-    let ex = extract_people(
-        source,
-        est,
-        &ExtractOptions {
-            max_frames: params.pose.max_frames,
-            ..Default::default()
-        },
-        |done, _| progress(done),
-    )?;
+    let ex = extract_people(source, est, &extract_options(params), |done, _| {
+        progress(done)
+    })?;
     let n = ex.people.n_frames();
     let skeleton = est.skeleton();
     let empty = Track::new(
@@ -466,23 +463,6 @@ fn pose_people(
         warning: ex.warning(),
         people: Some(ex.people),
     })
-}
-
-/// Every person's track through `coco` (COCO-17 unless all joints are kept).
-fn people_to_coco(people: People, coco: &dyn Fn(Track) -> Result<Track>) -> Result<People> {
-    let (n, fps) = (people.n_frames(), people.fps());
-    let list = people
-        .into_people()
-        .into_iter()
-        .map(|p| {
-            Ok(Person {
-                id: p.id,
-                first_frame: p.first_frame,
-                track: coco(p.track)?,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    Ok(People::new(n, fps, list)?)
 }
 
 /// The person whose results are the top-level ones, and the others to analyse
