@@ -395,11 +395,19 @@ fn interrupted_run_leaves_no_partial_files() {
 
 /// Runs headless Chromium on a page with the given extra arguments.
 fn chromium(page: &Path, profile: &Path, extra: &[&str]) -> Output {
+    chromium_at(page, "", profile, extra)
+}
+
+/// [`chromium`] on the page with a URL fragment (`#person=2`, or empty).
+fn chromium_at(page: &Path, fragment: &str, profile: &Path, extra: &[&str]) -> Output {
     let exe = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
         .into_iter()
         .find(|p| Path::new(p).exists())
         .expect("Chromium not found at /usr/bin/chromium (scripts/setup.sh installs the Debian package)");
-    let url = format!("file://{}", page.canonicalize().unwrap().display());
+    let url = format!(
+        "file://{}{fragment}",
+        page.canonicalize().unwrap().display()
+    );
     Command::new(exe)
         .args([
             "--headless",
@@ -491,4 +499,98 @@ fn report_renders_in_headless_chromium() {
     // The timeline SVG is inline and got its cursor.
     assert!(dom.contains("class=\"mp-timeline\""));
     assert!(dom.contains("fill=\"#facc15\""), "timeline cursor missing");
+}
+
+/// Two exercising people side by side (020_fitness and 027_fitness, 3 s):
+/// the report's people strip has a row each, and a link that names the
+/// other person opens the page on their analysis.
+#[test]
+fn report_picks_the_person_a_link_names() {
+    let test = mp_geom::paths::current_test_name();
+    let Some(a) =
+        mp_geom::paths::data_file_or_skip("quva_repetition/videos/020_fitness.mp4", &test)
+    else {
+        return;
+    };
+    let Some(b) =
+        mp_geom::paths::data_file_or_skip("quva_repetition/videos/027_fitness.mp4", &test)
+    else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let video = tmp.path().join("two.mp4");
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(&a)
+        .arg("-i")
+        .arg(&b)
+        .args([
+            "-filter_complex",
+            "[0:v]fps=30,scale=-2:360,setsar=1[a];[1:v]fps=30,scale=-2:360,setsar=1[b];[a][b]hstack=inputs=2[v]",
+            "-map",
+            "[v]",
+            "-t",
+            "3",
+            "-c:v",
+            "libx264",
+            "-preset",
+            "veryfast",
+            "-pix_fmt",
+            "yuv420p",
+        ])
+        .arg(&video)
+        .status()
+        .expect("ffmpeg runs");
+    assert!(status.success());
+    let dir = tmp.path().join("out");
+    run_ok(
+        mp().arg("run")
+            .arg(&video)
+            .arg("--out")
+            .arg(&dir)
+            .args(["--no-video", "--quiet"]),
+    );
+    let loops: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("loops.json")).unwrap()).unwrap();
+    let people = loops["people"].as_array().unwrap();
+    assert_eq!(people.len(), 2, "{people:?}");
+    let other = people
+        .iter()
+        .find(|p| p["main"] == false)
+        .expect("a person besides the main one")["id"]
+        .as_u64()
+        .unwrap();
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert_eq!(html.matches("<g class=\"row\"").count(), 2);
+    assert_eq!(report_data(&html)["people"].as_array().unwrap().len(), 2);
+
+    let out = chromium_at(
+        &dir.join("report.html"),
+        &format!("#person={other}&frame=45"),
+        &tmp.path().join("p"),
+        &["--dump-dom"],
+    );
+    let dom = String::from_utf8_lossy(&out.stdout);
+    let status = dom
+        .split("<div id=\"mp-status\"")
+        .nth(1)
+        .and_then(|s| s.split("</div>").next())
+        .unwrap_or("");
+    assert!(status.contains("data-errors=\"0\""), "{status}");
+    assert!(status.contains("data-ready=\"1\""), "{status}");
+    assert!(
+        status.contains(&format!("data-person=\"{other}\"")),
+        "the page shows person {other}: {status}"
+    );
+    // The other person's listing is the one shown; the main person's is hidden.
+    let shown: Vec<&str> = dom
+        .split("<div class=\"pp\" data-person=\"")
+        .skip(1)
+        .map(|s| s.split('>').next().unwrap_or(""))
+        .collect();
+    assert!(
+        shown.iter().any(|s| s.starts_with("0\" hidden")),
+        "{shown:?}"
+    );
+    assert!(shown.contains(&"1\""), "{shown:?}");
 }

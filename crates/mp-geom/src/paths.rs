@@ -155,3 +155,33 @@ pub fn workspace_root() -> Option<PathBuf> {
         .filter(|s| !s.is_empty())
         .map(PathBuf::from)
 }
+
+/// Where `scripts/setup.sh` puts public test footage that packages ship
+/// (under the workspace root): `MP_FOOTAGE_DIR` when set.
+pub const FOOTAGE_DIR_IN_WORKSPACE: &str = ".cache/footage";
+
+/// A public test video fetched by the set-up (`.cache/footage/{name}` or
+/// `MP_FOOTAGE_DIR/{name}`), if present.
+pub fn footage_file(name: &str) -> Option<PathBuf> {
+    let mut dirs = Vec::new();
+    if let Some(d) = std::env::var_os("MP_FOOTAGE_DIR").filter(|s| !s.is_empty()) {
+        dirs.push(PathBuf::from(d));
+    }
+    if let Some(root) = workspace_root() {
+        dirs.push(root.join(FOOTAGE_DIR_IN_WORKSPACE));
+    }
+    if let Ok(cwd) = std::env::current_dir() {
+        dirs.extend(cwd.ancestors().map(|a| a.join(FOOTAGE_DIR_IN_WORKSPACE)));
+    }
+    dirs.into_iter().map(|d| d.join(name)).find(|p| p.is_file())
+}
+
+/// For tests: [`footage_file`], or the skip of `test` recorded (as
+/// [`skip_test`], needing `footage/{name}`) and `None`.
+pub fn footage_file_or_skip(name: &str, test: &str) -> Option<PathBuf> {
+    let found = footage_file(name);
+    if found.is_none() {
+        skip_test(test, &format!("footage/{name} (bash scripts/setup.sh)"));
+    }
+    found
+}

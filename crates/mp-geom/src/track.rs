@@ -299,6 +299,15 @@ impl Track {
         Track::new(pos, Some(conf), self.fps, self.units, Skeleton::coco17())
     }
 
+    /// The first and last frames with a joint of confidence > 0 (`None`
+    /// when there is none).
+    pub fn found_span(&self) -> Option<(usize, usize)> {
+        let found = |t: &usize| self.confidence.row(*t).iter().any(|&c| c > 0.0);
+        let first = (0..self.n_frames()).find(found)?;
+        let last = (0..self.n_frames()).rev().find(found)?;
+        Some((first, last))
+    }
+
     /// Number of (frame, joint) entries with confidence > 0.
     pub fn valid_count(&self) -> usize {
         self.confidence.iter().filter(|&&c| c > 0.0).count()
@@ -433,6 +442,20 @@ mod tests {
         assert_eq!(tr.confidence()[[2, 1]], 0.0);
         assert!(tr.positions().iter().all(|v| v.is_finite()));
         assert_eq!(tr.valid_count(), 7);
+    }
+
+    #[test]
+    fn found_span_skips_empty_frames_at_the_ends() {
+        let mut p = Array3::from_elem((5, 2, 2), f64::NAN);
+        p[[1, 0, 0]] = 1.0;
+        p[[1, 0, 1]] = 1.0;
+        p[[3, 1, 0]] = 2.0;
+        p[[3, 1, 1]] = 2.0;
+        let tr = Track::new(p.clone(), None, 30.0, Units::Pixels, Skeleton::generic(2)).unwrap();
+        assert_eq!(tr.found_span(), Some((1, 3)));
+        p.fill(f64::NAN);
+        let empty = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(2)).unwrap();
+        assert_eq!(empty.found_span(), None);
     }
 
     #[test]

@@ -38,6 +38,7 @@ pub mod keypoints;
 pub mod output;
 pub mod params;
 pub mod progress;
+mod report_people;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -443,43 +444,6 @@ pub(crate) fn run_with(
     })
 }
 
-/// One report card per tracked person: their count, frames and the colour
-/// of their skeleton in the overlay (the top-level person keeps the
-/// left/right colours of the plots).
-fn person_cards(people: &[PersonOutcome], fps: f64) -> Vec<Card> {
-    if people.len() < 2 {
-        return Vec::new();
-    }
-    people
-        .iter()
-        .map(|p| {
-            let value = p
-                .counts
-                .as_ref()
-                .map_or("–".to_string(), |c| c.total.to_string());
-            let colour = if p.main {
-                "left/right colours".to_string()
-            } else {
-                let [r, g, b] = output::person_colour(p.id);
-                format!("colour #{r:02x}{g:02x}{b:02x}")
-            };
-            Card::new(
-                format!("person {}{}", p.id, if p.main { " (main)" } else { "" }),
-                value,
-                format!(
-                    "{} · {:.1}–{:.1} s · overlay {colour}",
-                    if p.counts.is_some() {
-                        "repetitions"
-                    } else {
-                        "seen too briefly to count"
-                    },
-                    p.first_frame as f64 / fps,
-                    p.last_frame as f64 / fps,
-                ),
-            )
-        })
-        .collect()
-}
 
 /// Pictures, then the report page (not yet written): files, times, page.
 fn pictures_and_page(
@@ -542,12 +506,14 @@ fn pictures_and_page(
             counts.confidence
         ),
     ));
-    cards.extend(person_cards(people, kp.track.fps()));
+    cards.extend(report_people::person_cards(people, kp.track.fps()));
     for p in people.iter().filter(|p| !p.main && p.analysis.is_some()) {
         linked.push(format!("people/{}/program.txt", p.id));
         linked.push(format!("people/{}/abstract.txt", p.id));
     }
-    let html = mp_report::report_page(a, &kp.description, &cards, &linked)
+    let views = report_people::people_views(kp, people, a.track.n_frames())?;
+    let view = views.as_ref().map(|v| v.view()).transpose()?;
+    let html = mp_report::report_page(a, &kp.description, &cards, &linked, view.as_ref())
         .map_err(PipelineError::from_report)?;
     Ok((pic_files, pic_time, html, t_rep.elapsed()))
 }

@@ -167,8 +167,10 @@ pub fn other_people(kp: &crate::Keypoints) -> Vec<([u8; 3], Track)> {
 }
 
 /// Encodes every analysed frame with the keypoints and the executed program
-/// drawn on it into `overlay.mp4`, and the other people (`others`) each in
-/// their own colour; `progress` is called after each frame.
+/// drawn on it into `overlay.mp4` (the program only between the person's
+/// first and last frames: before and after, it holds their first and last
+/// pose where nobody is), and the other people (`others`) each in their own
+/// colour; `progress` is called after each frame.
 pub fn write_overlay(
     out: &OutputDir,
     src: OverlayFrames,
@@ -186,6 +188,7 @@ pub fn write_overlay(
     let kp_style = SkeletonStyle::default().scaled(s);
     let prog_style = SkeletonStyle::program().scaled(s);
     let view = View::frame(1.0);
+    let span = track.found_span();
     let mut done = 0usize;
     let mut draw = |index: usize, rgb: &[u8]| -> Result<()> {
         check_cancel(cancel).map_err(PipelineError::from_report)?;
@@ -197,7 +200,9 @@ pub fn write_overlay(
             };
             draw_skeleton(&mut pm, other, index, &view, &style);
         }
-        draw_skeleton(&mut pm, executed, index, &view, &prog_style);
+        if span.is_some_and(|(a, b)| (a..=b).contains(&index)) {
+            draw_skeleton(&mut pm, executed, index, &view, &prog_style);
+        }
         draw_skeleton(&mut pm, track, index, &view, &kp_style);
         writer.write(&pixmap_to_rgb(&pm))?;
         done += 1;

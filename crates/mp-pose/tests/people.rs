@@ -186,3 +186,76 @@ fn tracker_parameters_are_checked_before_the_models_open() {
     let err = MultiPose::new(bad).err().expect("refused");
     assert!(err.to_string().contains("max_people"), "{err}");
 }
+
+/// OpenCV's pedestrian scene (`vtest.avi`, 768 × 576, 10 fps; fetched by the
+/// set-up from Debian's opencv-doc): a lamp post with a sign, a tripod and
+/// traffic cones among people walking past. The first 6 s.
+#[test]
+fn a_street_scene_tracks_the_pedestrians_and_nothing_on_the_lamp_post_or_the_tripod() {
+    let test = mp_geom::paths::current_test_name();
+    let Some(video) = mp_geom::paths::footage_file_or_skip("vtest.avi", &test) else {
+        return;
+    };
+    let mut est = MultiPose::new(MultiPoseParams::default()).expect("models open");
+    let ex = extract_people(
+        open_source(&video).expect("video opens"),
+        &mut est,
+        &ExtractOptions {
+            max_frames: Some(60),
+            ..Default::default()
+        },
+        |_, _| {},
+    )
+    .expect("extraction runs");
+    let people = &ex.people;
+    assert_eq!(people.n_frames(), 60);
+    // The three people on the first frame (the centre of their joints,
+    // read off the picture), each found under one id over its first 1.5 s.
+    for (x, y) in [(514.0, 186.0), (267.0, 253.0), (660.0, 272.0)] {
+        let near = |p: &&mp_geom::Person, f: usize| {
+            p.box_at(f).is_some_and(|b| {
+                let (cx, cy) = ((b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0);
+                (cx - x).hypot(cy - y) < 40.0
+            })
+        };
+        let who: Vec<_> = people.people().iter().filter(|p| near(p, 2)).collect();
+        assert_eq!(who.len(), 1, "one person at ({x}, {y}) on frame 2");
+        let covered = (0..15).filter(|&f| who[0].box_at(f).is_some()).count();
+        assert!(
+            covered >= 13,
+            "person at ({x}, {y}): {covered} of 15 frames"
+        );
+    }
+    // Nobody on the objects: no pose box lies half inside the lamp post's
+    // pole, the tripod in the grass or the tripod behind the cones.
+    let objects = [
+        ("pole", [410.0, 20.0, 445.0, 185.0]),
+        ("tripod", [455.0, 335.0, 528.0, 485.0]),
+        ("far tripod", [428.0, 112.0, 468.0, 182.0]),
+    ];
+    for p in people.people() {
+        for f in p.first_frame..=p.last_frame() {
+            let Some(b) = p.box_at(f) else { continue };
+            for (name, o) in objects {
+                let ix = (b[2].min(o[2]) - b[0].max(o[0])).max(0.0);
+                let iy = (b[3].min(o[3]) - b[1].max(o[1])).max(0.0);
+                let area = (b[2] - b[0]) * (b[3] - b[1]);
+                assert!(
+                    ix * iy < 0.5 * area,
+                    "person {} on the {name} on frame {f}: box {b:?}",
+                    p.id
+                );
+            }
+        }
+    }
+    // People walk: every person found for 2 s or more moves.
+    for p in people.people().iter().filter(|p| p.frames_found() >= 20) {
+        let (a, b) = (
+            p.box_at(p.first_frame).unwrap(),
+            p.box_at(p.last_frame()).unwrap(),
+        );
+        let moved = ((a[0] + a[2]) / 2.0 - (b[0] + b[2]) / 2.0)
+            .hypot((a[1] + a[3]) / 2.0 - (b[1] + b[3]) / 2.0);
+        assert!(moved > 20.0, "person {} stays put ({moved:.0} px)", p.id);
+    }
+}

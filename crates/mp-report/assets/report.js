@@ -18,6 +18,23 @@
   var cur = 0, playing = false, speed = 1, loopPlay = true, sel = D.defaultJoint;
   var showKp = true, showProg = true;
 
+  // ---- people: the page shows one person's analysis at a time ---------------
+  // PS[k]: person k's arrays (0: the main person, the page's own data);
+  // OFF: the video frame of the shown person's frame 0.
+  var PEOPLE = D.people || null, PK = 0, OFF = 0;
+  var PS = [{ frames: D.frames, kp: D.kp, conf: D.conf, prog: D.prog, span: D.span, bounds: D.bounds,
+              kinds: D.kinds, intervals: D.intervals, defaultJoint: D.defaultJoint, offset: 0 }];
+  if (PEOPLE) {
+    var blocks = document.querySelectorAll('script.mp-person');
+    for (var bi = 0; bi < blocks.length; bi++) {
+      PS[+blocks[bi].getAttribute('data-person')] = JSON.parse(blocks[bi].textContent);
+    }
+  }
+  function inPerson(el) {
+    if (!PEOPLE || !el) return el;
+    return el.querySelector('.pp[data-person="' + PK + '"]') || el;
+  }
+
   function $(id) { return document.getElementById(id); }
   function clamp(v, a, b) { return v < a ? a : (v > b ? b : v); }
   function segAt(f) {
@@ -111,17 +128,37 @@
       ctx.lineWidth = 1 * dpr; ctx.strokeStyle = 'rgba(15,23,42,.8)'; ctx.stroke();
     }
   }
+  // Another person at video frame F, thinner, in their overlay colour.
+  function drawOther(P, F, colour) {
+    var f = F - (P.offset || 0);
+    if (f < 0 || f >= P.frames) return;
+    ctx.lineCap = 'round';
+    ctx.lineWidth = 2 * Math.max(1, K * 0.8);
+    ctx.strokeStyle = colour;
+    ctx.beginPath();
+    for (var i = 0; i < D.bones.length; i++) {
+      var a = D.bones[i][0], b = D.bones[i][1];
+      if (!(P.conf[f * J + a] > D.minConf) || !(P.conf[f * J + b] > D.minConf)) continue;
+      var pa = pt(P.kp, f, a), pb = pt(P.kp, f, b);
+      ctx.moveTo(pa[0], pa[1]); ctx.lineTo(pb[0], pb[1]);
+    }
+    ctx.stroke();
+  }
   function drawStage() {
     ctx.setTransform(1, 0, 0, 1, 0, 0);
     if (imgs) {
-      var im = img(nearest(cur));
+      var im = img(nearest(cur + OFF));
       if (im && im.complete && im.naturalWidth) ctx.drawImage(im, 0, 0, stage.width, stage.height);
       else { ctx.fillStyle = '#0f172a'; ctx.fillRect(0, 0, stage.width, stage.height); }
     } else {
       ctx.drawImage(bg, 0, 0);
     }
     if (DIM >= 2) {
-      if (showProg) drawSkel(D.prog, cur, true);
+      if (PEOPLE && showKp) {
+        for (var q = 0; q < PS.length; q++) if (q !== PK && PS[q]) drawOther(PS[q], cur + OFF, PEOPLE[q].colour || SIDE[0]);
+      }
+      var inSpan = !D.span || (cur >= D.span[0] && cur <= D.span[1]);
+      if (showProg && inSpan) drawSkel(D.prog, cur, true);
       if (showKp) drawSkel(D.kp, cur, false);
     }
   }
@@ -138,13 +175,13 @@
       }
       var varr = n ? s2 / n - (s / n) * (s / n) : 0;
       stage.setAttribute('data-variance', varr.toFixed(1));
-      if (!imgs || (imgs[nearest(cur)] && imgs[nearest(cur)].complete)) measured = true;
+      if (!imgs || (imgs[nearest(cur + OFF)] && imgs[nearest(cur + OFF)].complete)) measured = true;
     } catch (e) { stage.setAttribute('data-variance', 'unreadable'); }
   }
 
   // ---- listing and joints ---------------------------------------------------
   var listBox = $('listing-box');
-  var lists = listBox.querySelectorAll('ol.listing');
+  var lists = inPerson(listBox).querySelectorAll('ol.listing');
   var jointBtns = $('joints').querySelectorAll('button');
   var activeLi = null, lastSeg = -1, lastSel = -1;
   function selectJoint(j) {
@@ -181,10 +218,12 @@
   });
 
   // ---- timeline -------------------------------------------------------------
-  var tl = document.querySelector('svg.mp-timeline');
-  var tlCursor = null;
-  if (tl) {
-    var SVGNS = 'http://www.w3.org/2000/svg';
+  var SVGNS = 'http://www.w3.org/2000/svg';
+  var tl = null, tlCursor = null;
+  function setupTimeline() {
+    tl = inPerson($('timeline')).querySelector('svg.mp-timeline');
+    if (!tl) { tlCursor = null; return; }
+    if (tl.mpCursor) { tlCursor = tl.mpCursor; return; }
     tlCursor = document.createElementNS(SVGNS, 'rect');
     tlCursor.setAttribute('y', tl.getAttribute('data-top'));
     tlCursor.setAttribute('height', String(+tl.getAttribute('data-bottom') - +tl.getAttribute('data-top')));
@@ -193,14 +232,17 @@
     tlCursor.setAttribute('stroke', '#0f172a');
     tlCursor.setAttribute('stroke-width', '0.6');
     tl.appendChild(tlCursor);
-    tl.addEventListener('click', function (e) {
-      var r = tl.getBoundingClientRect();
-      var vb = tl.viewBox.baseVal;
+    tl.mpCursor = tlCursor;
+    var svg = tl;
+    svg.addEventListener('click', function (e) {
+      var r = svg.getBoundingClientRect();
+      var vb = svg.viewBox.baseVal;
       var x = (e.clientX - r.left) / r.width * vb.width;
-      var x0 = +tl.getAttribute('data-x0'), x1 = +tl.getAttribute('data-x1');
+      var x0 = +svg.getAttribute('data-x0'), x1 = +svg.getAttribute('data-x1');
       seek(Math.floor((x - x0) / (x1 - x0) * T));
     });
   }
+  setupTimeline();
   function updateTimeline() {
     if (!tlCursor) return;
     var x0 = +tl.getAttribute('data-x0'), x1 = +tl.getAttribute('data-x1');
@@ -210,7 +252,7 @@
   }
 
   // ---- loops ----------------------------------------------------------------
-  var loopRows = document.querySelectorAll('table.loops tbody tr');
+  var loopRows = inPerson($('repetitions')).querySelectorAll('table.loops tbody tr');
   function loopAt(f) {
     for (var i = 0; i < D.intervals.length; i++) {
       var iv = D.intervals[i];
@@ -363,8 +405,9 @@
     updateLoops();
     drawPlot();
     scrub.value = String(cur);
-    var t = cur / D.fps;
-    badge.textContent = 'frame ' + cur + ' / ' + (T - 1) + ' \u00b7 ' + t.toFixed(2) + ' s';
+    updateStrip();
+    var t = (cur + OFF) / D.fps;
+    badge.textContent = 'frame ' + (cur + OFF) + ' / ' + (OFF + T - 1) + ' \u00b7 ' + t.toFixed(2) + ' s';
     readout.textContent = 'segment ' + (s + 1) + ' / ' + NS + ' (frames ' + B[s] + '\u2013' + (B[s + 1] - 1) + ') \u00b7 ' +
       D.joints[sel] + ': ' + KN[kindOf(sel, s)];
   }
@@ -416,14 +459,66 @@
     if (best >= 0 && bd < Math.pow(30 * dpr, 2)) selectJoint(best);
   });
 
-  // A link may pick the frame and the joint: report.html#frame=120&joint=right_wrist
+  // ---- people picker and strip -----------------------------------------------
+  var strip = document.querySelector('svg.mp-people'), stripCursor = null;
+  if (strip) {
+    stripCursor = document.createElementNS(SVGNS, 'rect');
+    stripCursor.setAttribute('y', strip.getAttribute('data-top'));
+    stripCursor.setAttribute('height', String(+strip.getAttribute('data-bottom') - +strip.getAttribute('data-top')));
+    stripCursor.setAttribute('width', '2');
+    stripCursor.setAttribute('fill', '#0f172a');
+    strip.appendChild(stripCursor);
+    var rows = strip.querySelectorAll('g.row[data-person]');
+    for (var ri = 0; ri < rows.length; ri++) {
+      (function (g) { g.addEventListener('click', function () { pickPerson(+g.getAttribute('data-person')); }); })(rows[ri]);
+    }
+  }
+  function updateStrip() {
+    if (!stripCursor) return;
+    var x0 = +strip.getAttribute('data-x0'), x1 = +strip.getAttribute('data-x1');
+    stripCursor.setAttribute('x', String(x0 + (cur + OFF) / PS[0].frames * (x1 - x0) - 1));
+  }
+  // Shows person k's analysis (`quiet`: without redrawing, while loading).
+  function pickPerson(k, quiet) {
+    var P = PS[k];
+    if (!P) return;
+    var video = cur + OFF;
+    PK = k;
+    D.frames = P.frames; D.kp = P.kp; D.conf = P.conf; D.prog = P.prog; D.span = P.span;
+    D.bounds = P.bounds; D.kinds = P.kinds; D.intervals = P.intervals; D.defaultJoint = P.defaultJoint;
+    T = P.frames; B = P.bounds; NS = B.length - 1; OFF = P.offset || 0;
+    var pps = document.querySelectorAll('.pp');
+    for (var i = 0; i < pps.length; i++) pps[i].hidden = (+pps[i].getAttribute('data-person') !== k);
+    lists = inPerson(listBox).querySelectorAll('ol.listing');
+    activeLi = null; lastSeg = -1; lastSel = -1;
+    setupTimeline();
+    loopRows = inPerson($('repetitions')).querySelectorAll('table.loops tbody tr');
+    scrub.max = String(T - 1);
+    cur = clamp(video - OFF, 0, T - 1);
+    var pick = $('person');
+    if (pick) pick.value = String(k);
+    var srows = strip ? strip.querySelectorAll('g.row') : [];
+    for (i = 0; i < srows.length; i++) {
+      srows[i].setAttribute('opacity', srows[i].getAttribute('data-person') === String(k) || !srows[i].hasAttribute('data-person') ? '1' : '0.75');
+    }
+    if (!quiet) selectJoint(P.defaultJoint);
+    else sel = P.defaultJoint;
+    status.setAttribute('data-person', String(PEOPLE ? PEOPLE[k].id : ''));
+  }
+  if ($('person')) $('person').addEventListener('change', function (e) { setPlaying(false); pickPerson(+e.target.value); });
+
+  // A link may pick the person, the frame and the joint:
+  // report.html#person=2&frame=120&joint=right_wrist (the frame of the video)
   var hash = {};
   (window.location.hash || '').replace(/^#/, '').split('&').forEach(function (kv) {
     var i = kv.indexOf('=');
     if (i > 0) hash[decodeURIComponent(kv.slice(0, i))] = decodeURIComponent(kv.slice(i + 1));
   });
+  if (PEOPLE && hash.person) {
+    for (var hp = 0; hp < PEOPLE.length; hp++) if (String(PEOPLE[hp].id) === hash.person && PS[hp]) pickPerson(hp, true);
+  }
   if (hash.joint && D.joints.indexOf(hash.joint) >= 0) sel = D.joints.indexOf(hash.joint);
-  if (hash.frame && isFinite(+hash.frame)) cur = clamp(Math.round(+hash.frame), 0, T - 1);
+  if (hash.frame && isFinite(+hash.frame)) cur = clamp(Math.round(+hash.frame) - OFF, 0, T - 1);
   selectJoint(sel);
   measureCanvas();
   status.setAttribute('data-ready', '1');

@@ -22,6 +22,7 @@ use crate::error::{ReportError, Result};
 use crate::frames::FrameStore;
 use crate::plots::{axis_label, check_agree};
 use crate::style::{kind_color, side};
+use crate::people::{people_strip_svg, PeopleView};
 use crate::svg::esc;
 
 const CSS: &str = include_str!("../assets/report.css");
@@ -77,6 +78,9 @@ pub struct ReportInput<'a> {
     pub cards: &'a [Card],
     /// Other output files to link (paths relative to the report).
     pub files: &'a [String],
+    /// Several people: the others, whom the page's picker switches to, and
+    /// the people strip. `None` for one person.
+    pub people: Option<&'a PeopleView<'a>>,
 }
 
 fn kind_index(k: PrimitiveKind) -> usize {
@@ -190,7 +194,7 @@ pub fn standard_cards(
     cards
 }
 
-fn listing_html(program: &Program, default_joint: usize) -> String {
+fn listing_html(program: &Program, default_joint: usize, offset: usize) -> String {
     let bounds = program.boundaries();
     let mut s = String::new();
     for (j, name) in program.joints.iter().enumerate() {
@@ -203,7 +207,7 @@ fn listing_html(program: &Program, default_joint: usize) -> String {
         for (si, (p, dur)) in program.joint_statements(j).into_iter().enumerate() {
             let text = statement(p, dur, NumberFormat::Fixed(2));
             let (fname, rest) = text.split_at(text.find('(').unwrap_or(text.len()));
-            let a = bounds.get(si).copied().unwrap_or(0);
+            let a = bounds.get(si).copied().unwrap_or(0) + offset;
             let _ = write!(
                 s,
                 r#"<li class="st k-{}" data-seg="{si}"><span class="fr">{}–{}</span><code><span class="fn">{}</span>{}</code></li>"#,
@@ -243,7 +247,8 @@ fn edit_command(title: &str, loop_number: usize) -> Option<String> {
     ))
 }
 
-fn loops_table(intervals: &[RepetitiveInterval], fps: f64, title: &str) -> String {
+/// The loops (frames shown from video frame `offset`).
+fn loops_table(intervals: &[RepetitiveInterval], fps: f64, title: &str, offset: usize) -> String {
     if intervals.is_empty() {
         return r#"<div class="empty">No repetition was detected in this motion.</div>"#.into();
     }
@@ -259,8 +264,8 @@ fn loops_table(intervals: &[RepetitiveInterval], fps: f64, title: &str) -> Strin
         let mut iters = String::from(r#"<div class="iters">"#);
         for k in 0..iv.iterations {
             let (a, b) = (
-                iv.boundaries.get(k).copied().unwrap_or(0),
-                iv.boundaries.get(k + 1).copied().unwrap_or(0),
+                iv.boundaries.get(k).copied().unwrap_or(0) + offset,
+                iv.boundaries.get(k + 1).copied().unwrap_or(0) + offset,
             );
             let _ = write!(
                 iters,
@@ -274,10 +279,10 @@ fn loops_table(intervals: &[RepetitiveInterval], fps: f64, title: &str) -> Strin
             s,
             r#"<tr><td>{}</td><td>{}–{}</td><td>{:.2}–{:.2}</td><td>{} primitives</td><td>{iters}</td><td class="count">×{}</td>"#,
             i + 1,
-            iv.start_frame,
-            iv.end_frame.saturating_sub(1),
-            iv.start_frame as f64 / fps,
-            iv.end_frame as f64 / fps,
+            iv.start_frame + offset,
+            (iv.end_frame + offset).saturating_sub(1),
+            (iv.start_frame + offset) as f64 / fps,
+            (iv.end_frame + offset) as f64 / fps,
             iv.body_size,
             iv.count
         );
@@ -333,15 +338,15 @@ pub fn stage_view(input: &ReportInput<'_>) -> ((usize, usize), View) {
     }
 }
 
-/// The report page.
-pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
-    let ReportInput {
-        track,
-        program,
-        executed,
-        intervals,
-        ..
-    } = *input;
+/// The arrays the page's script draws one person with: keypoints,
+/// confidences, the executed program, segment boundaries and kinds, loops
+/// (frames of `track`).
+fn motion_data(
+    track: &Track,
+    program: &Program,
+    executed: &Track,
+    intervals: &[RepetitiveInterval],
+) -> Result<serde_json::Value> {
     check_agree(track, program)?;
     if executed.n_frames() != track.n_frames() || executed.n_joints() != track.n_joints() {
         return Err(ReportError::Mismatch(format!(
@@ -387,6 +392,32 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
                 .collect()
         })
         .collect();
+    Ok(json!({
+        "frames": t,
+        "kp": kp,
+        "conf": conf,
+        "prog": prog,
+        "span": track.found_span().map(|(a, b)| [a, b]),
+        "bounds": program.boundaries(),
+        "kinds": kinds,
+        "intervals": intervals.iter().map(|iv| json!({
+            "start": iv.start_frame, "end": iv.end_frame, "boundaries": iv.boundaries,
+            "count": iv.count, "iterations": iv.iterations, "body": iv.body_size,
+        })).collect::<Vec<_>>(),
+        "defaultJoint": most_moving_joint(track),
+    }))
+}
+
+/// The report page.
+pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
+    let ReportInput {
+        track,
+        program,
+        intervals,
+        ..
+    } = *input;
+    let motion = motion_data(track, program, input.executed, intervals)?;
+    let (_, j, d) = track.positions().dim();
     let sk = track.skeleton();
     let bones: Vec<[usize; 2]> = sk
         .bones
@@ -397,10 +428,9 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
     let sides: Vec<i32> = program.joints.iter().map(|n| side(n)).collect();
     let ((cw, ch), view) = stage_view(input);
     let default_joint = most_moving_joint(track);
-    let data = json!({
+    let mut data = json!({
         "title": input.title,
         "fps": program.fps,
-        "frames": t,
         "dims": d,
         "units": track.units().as_str(),
         "joints": program.joints,
@@ -408,22 +438,73 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
         "sides": sides,
         "canvas": {"w": cw, "h": ch},
         "view": {"scale": view.scale, "dx": view.dx, "dy": view.dy, "flip": view.flip_y},
-        "kp": kp,
-        "conf": conf,
-        "prog": prog,
         "minConf": 0.3,
-        "bounds": program.boundaries(),
-        "kinds": kinds,
         "kindNames": PrimitiveKind::ALL.iter().map(|k| k.as_str()).collect::<Vec<_>>(),
         "kindColors": PrimitiveKind::ALL.iter().map(|k| kind_color(*k)).collect::<Vec<_>>(),
         "axisLabels": (0..d).map(|k| axis_label(k, d, track.units())).collect::<Vec<_>>(),
-        "intervals": intervals.iter().map(|iv| json!({
-            "start": iv.start_frame, "end": iv.end_frame, "boundaries": iv.boundaries,
-            "count": iv.count, "iterations": iv.iterations, "body": iv.body_size,
-        })).collect::<Vec<_>>(),
         "frameIdx": input.frames.map(|f| f.frames.iter().map(|(i, _)| *i).collect::<Vec<_>>()).unwrap_or_default(),
-        "defaultJoint": default_joint,
     });
+    if let (Some(obj), serde_json::Value::Object(m)) = (data.as_object_mut(), motion) {
+        obj.extend(m);
+    }
+    // Several people: the others' arrays, listings, timelines and loops.
+    let mut person_blocks = String::new();
+    let mut listings = listing_html(program, default_joint, 0);
+    let mut timelines = input.timeline_svg.to_string();
+    let mut repetitions = format!(
+        r#"{}<h2 style="margin-top:16px">Abstract program <span class="hint">loops of probabilistic primitives (means shown)</span></h2><pre class="code">{}</pre>"#,
+        loops_table(intervals, program.fps, input.title, 0),
+        esc(input.abstract_text)
+    );
+    let mut people_panel = String::new();
+    if let Some(pv) = input.people {
+        let wrap = |k: usize, html: &str| {
+            format!(
+                r#"<div class="pp" data-person="{k}"{}>{html}</div>"#,
+                if k == 0 { "" } else { " hidden" }
+            )
+        };
+        listings = wrap(0, &listings);
+        timelines = wrap(0, &timelines);
+        repetitions = wrap(0, &repetitions);
+        let mut options = format!(r#"<option value="0">{}</option>"#, esc(&pv.main_label));
+        let mut meta = vec![json!({"id": pv.main_id, "offset": 0, "colour": null})];
+        for (k, p) in pv.others.iter().enumerate() {
+            let k = k + 1;
+            let mut m = motion_data(p.track, p.program, p.executed, &p.intervals)?;
+            if let Some(o) = m.as_object_mut() {
+                o.insert("offset".into(), json!(p.offset));
+            }
+            let _ = write!(
+                person_blocks,
+                r#"<script type="application/json" class="mp-person" data-person="{k}">{}</script>"#,
+                json_for_script(&m)?
+            );
+            let [r, g, b] = p.colour;
+            meta.push(json!({"id": p.id, "offset": p.offset, "colour": format!("#{r:02x}{g:02x}{b:02x}")}));
+            let _ = write!(options, r#"<option value="{k}">{}</option>"#, esc(&p.label));
+            let dj = most_moving_joint(p.track);
+            listings.push_str(&wrap(k, &listing_html(p.program, dj, p.offset)));
+            timelines.push_str(&wrap(k, &p.timeline_svg));
+            repetitions.push_str(&wrap(
+                k,
+                &format!(
+                    r#"{}<h2 style="margin-top:16px">Abstract program <span class="hint">loops of probabilistic primitives (means shown)</span></h2><pre class="code">{}</pre>"#,
+                    loops_table(&p.intervals, program.fps, "", p.offset),
+                    esc(&p.abstract_text)
+                ),
+            ));
+        }
+        if let Some(o) = data.as_object_mut() {
+            o.insert("people".into(), json!(meta));
+        }
+        let n_frames = track.n_frames();
+        let _ = write!(
+            people_panel,
+            r#"<section class="panel" id="people"><h2>People <span class="hint">everyone tracked, in their overlay colour, with their repetitions · pick whom the page shows</span> <select id="person" aria-label="person">{options}</select></h2><div class="timeline-wrap">{}</div></section>"#,
+            people_strip_svg(&pv.rows, n_frames, program.fps)
+        );
+    }
     let frames_json: Vec<String> = input
         .frames
         .map(|f| {
@@ -484,6 +565,7 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
 <header class="top"><h1><span class="brand">mp</span>{title}</h1><div class="sub">{subtitle}</div></header>
 <main>
 <div class="cards">{cards}</div>
+{people_panel}
 <div class="grid2">
 <section class="panel" id="motion">
 <h2>Motion <span class="hint">keypoints in colour, the executed program in pink · click a joint to select it · space plays, ←/→ step</span></h2>
@@ -524,9 +606,7 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
 </section>
 <section class="panel" id="repetitions">
 <h2>Repetitions <span class="hint">loops found in the program, with their iteration count</span></h2>
-{loops}
-<h2 style="margin-top:16px">Abstract program <span class="hint">loops of probabilistic primitives (means shown)</span></h2>
-<pre class="code">{abstract_text}</pre>
+{repetitions}
 </section>
 </div>
 <section class="panel" id="files">
@@ -538,6 +618,7 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
 <div id="mp-status" data-errors="0" data-ready="0">loading</div>
 <script type="application/json" id="mp-data">{data}</script>
 <script type="application/json" id="mp-frames">{frames}</script>
+{person_blocks}
 <script>
 {JS}
 </script>
@@ -547,10 +628,8 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
         title = esc(input.title),
         subtitle = esc(input.subtitle),
         header = esc(&header(program, NumberFormat::Fixed(2))),
-        listing = listing_html(program, default_joint),
-        timeline = input.timeline_svg,
-        loops = loops_table(intervals, program.fps, input.title),
-        abstract_text = esc(input.abstract_text),
+        listing = listings,
+        timeline = timelines,
         version = env!("CARGO_PKG_VERSION"),
         data = json_for_script(&data)?,
         frames = json_for_script(&serde_json::Value::from(frames_json))?,
@@ -580,6 +659,7 @@ mod tests {
             timeline_svg: &tl,
             cards: &cards,
             files: &["program.txt".into()],
+            people: None,
         })
         .unwrap();
         assert!(html.contains("tiny &lt;test&gt;"));
@@ -623,9 +703,10 @@ mod tests {
             }],
             30.0,
             "a.mp4",
+            0,
         );
         // The command names the loop by the number in the table's first column.
-        assert!(table.contains("<tr><td>1</td>"), "{table}");
+        assert!(table.contains("<tr><td>1</td><td>0–29</td>"), "{table}");
         assert!(table.contains("mp edit a.mp4 --loop 1 "), "{table}");
     }
 }

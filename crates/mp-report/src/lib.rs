@@ -7,6 +7,7 @@
 //! * [`draw`]: skeletons on frames or on a blank canvas, contact sheets.
 //! * [`frames`]: reduced JPEG copies of video frames for the report.
 //! * [`html`]: the self-contained report page.
+//! * [`people`]: several people on the page (the picker and the people strip).
 //! * [`pictures`]: every picture of an analysis and its report page, written
 //!   into an output folder.
 //! * [`raster`]: SVG → PNG (resvg, pure Rust), PNG/JPEG encoding.
@@ -22,6 +23,7 @@ pub mod error;
 pub mod frames;
 pub mod html;
 pub mod outdir;
+pub mod people;
 pub mod pictures;
 pub mod plots;
 pub mod raster;
@@ -33,6 +35,7 @@ pub use error::{ReportError, Result};
 pub use frames::{FrameStore, FrameStoreParams};
 pub use html::{report_html, standard_cards, Card, ReportInput};
 pub use outdir::OutputDir;
-pub use pictures::{report_page, write_pictures, Analysed};
+pub use people::{PeopleView, PersonRow, PersonView};
+pub use pictures::{person_view, report_page, write_pictures, Analysed};
 pub use plots::{joint_trajectory_svg, PlotParams};
 pub use timeline::{timeline_svg, TimeAxis, TimelineParams};

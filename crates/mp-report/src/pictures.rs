@@ -15,6 +15,7 @@ use crate::error::{ReportError, Result};
 use crate::frames::FrameStore;
 use crate::html::{report_html, standard_cards, Card, ReportInput};
 use crate::outdir::{check_cancel, OutputDir};
+use crate::people::{PeopleView, PersonView};
 use crate::plots::{joint_trajectory_svg, PlotParams};
 use crate::raster::{pixmap_to_png, rgb_to_pixmap, svg_to_png};
 use crate::timeline::{timeline_svg, TimelineParams};
@@ -184,6 +185,38 @@ fn contact_sheet_of(
     )
 }
 
+/// A person besides the main one for the report's picker: `a` is their
+/// analysis (frames from video frame `offset`; its `frames`, `frame_size`
+/// and `title` are not used).
+pub fn person_view<'a>(
+    id: u32,
+    label: String,
+    colour: [u8; 3],
+    offset: usize,
+    a: &Analysed<'a>,
+) -> Result<PersonView<'a>> {
+    let (timeline, _) = timeline_svg(
+        a.program,
+        a.intervals,
+        &TimelineParams {
+            title: false,
+            ..TimelineParams::default()
+        },
+    )?;
+    Ok(PersonView {
+        id,
+        label,
+        colour,
+        offset,
+        track: a.track,
+        program: a.program,
+        executed: a.executed,
+        abstract_text: print_with(a.abstract_program, &PrintOptions::summary()),
+        intervals: a.intervals.to_vec(),
+        timeline_svg: timeline,
+    })
+}
+
 /// The report page (not yet written): the standard cards plus `extra_cards`,
 /// the abstract program's summary, the timeline, and links to `linked`.
 pub fn report_page(
@@ -191,6 +224,7 @@ pub fn report_page(
     subtitle: &str,
     extra_cards: &[Card],
     linked: &[String],
+    people: Option<&PeopleView<'_>>,
 ) -> Result<String> {
     let mut cards = standard_cards(a.track, a.program, a.executed, a.intervals);
     cards.extend(extra_cards.iter().cloned());
@@ -215,5 +249,6 @@ pub fn report_page(
         timeline_svg: &tl_page,
         cards: &cards,
         files: linked,
+        people,
     })
 }
