@@ -21,7 +21,7 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 
 targets=(concrete_dsl abstract_dsl program_json abstract_json grammar_json grammar_text
-    npz npy csv json_track openpose bvh mpt mpb concepts_json)
+    npz npy csv json_track openpose bvh mpt mpb concepts_json people)
 
 what="${1:-all}"
 execs="${2:-}"

@@ -16,6 +16,13 @@
 //!   path (the default) and through MediaPipe's single-person pipeline: the
 //!   counts of both and the distance between the two paths' keypoints.
 //!
+//! * **Street scene**: OpenCV's pedestrian video (`vtest.avi`, fetched by
+//!   `scripts/setup.sh`): a fixed camera over a path with a lamp post, two
+//!   tripods and traffic cones. Per person and frame, whether their pose box
+//!   lies half or more inside one of the static objects (boxes read off the
+//!   first frame). People walking past cover an object for a moment; a
+//!   skeleton left on one stays: runs of a second or more should be none.
+//!
 //! Videos where the single-person pipeline finds a person on fewer than half
 //! of the frames (a bar lift in the dark) have no person to follow and are
 //! left out of the panels and crossings.
@@ -60,6 +67,84 @@ pub struct EvalPeopleArgs {
     /// Skip the single-person comparison.
     #[arg(long)]
     pub no_single: bool,
+    /// The street scene (default: `vtest.avi` of the set-up's test footage;
+    /// skipped when absent).
+    #[arg(long)]
+    pub street: Option<PathBuf>,
+}
+
+/// Static objects of the street scene (`vtest.avi`, 768 × 576), as boxes
+/// `[x0, y0, x1, y1]` in pixels read off its first frame.
+const STREET_OBJECTS: [(&str, [f64; 4]); 4] = [
+    ("lamp post", [410.0, 20.0, 445.0, 185.0]),
+    ("tripod", [455.0, 335.0, 528.0, 485.0]),
+    ("far tripod", [428.0, 112.0, 468.0, 182.0]),
+    ("cloth on the grass", [65.0, 490.0, 165.0, 535.0]),
+];
+
+/// Scores the street scene: people, frames where a pose box lies half or
+/// more inside a static object, and runs of a second or more of that (a
+/// skeleton left on the object).
+fn score_street(o: &Outcome) -> Value {
+    let Some(people) = &o.keypoints.people else {
+        return json!({"people": 0});
+    };
+    let n = people.n_frames();
+    let mut on_objects = Vec::new();
+    let mut with_someone = 0usize;
+    let mut person_frames = 0usize;
+    for f in 0..n {
+        let here: Vec<&Person> = people.people().iter().filter(|p| found_at(p, f)).collect();
+        with_someone += usize::from(!here.is_empty());
+        person_frames += here.len();
+    }
+    // Runs of consecutive frames of one person on one object: a person
+    // walking past an object covers it for a moment; a skeleton left on it
+    // stays (a run of a second or more).
+    let min_run = people.fps().round().max(1.0) as usize;
+    let mut stuck = Vec::new();
+    for p in people.people() {
+        for (name, o) in STREET_OBJECTS {
+            let mut run: Option<(usize, usize)> = None;
+            let mut close = |run: &mut Option<(usize, usize)>| {
+                if let Some((a, b)) = run.take() {
+                    if b + 1 - a >= min_run {
+                        stuck.push(json!({"person": p.id, "object": name, "frames": [a, b]}));
+                    }
+                }
+            };
+            for f in p.first_frame..=p.last_frame() {
+                let on = p.box_at(f).is_some_and(|b| {
+                    let area = ((b[2] - b[0]) * (b[3] - b[1])).max(1e-9);
+                    let ix = (b[2].min(o[2]) - b[0].max(o[0])).max(0.0);
+                    let iy = (b[3].min(o[3]) - b[1].max(o[1])).max(0.0);
+                    ix * iy >= 0.5 * area
+                });
+                if on {
+                    on_objects.push(json!({"person": p.id, "frame": f, "object": name}));
+                    run = Some(run.map_or((f, f), |(a, _)| (a, f)));
+                } else {
+                    close(&mut run);
+                }
+            }
+            close(&mut run);
+        }
+    }
+    json!({
+        "frames": n,
+        "fps": people.fps(),
+        "people": people.len(),
+        "frames_with_someone": with_someone as f64 / n.max(1) as f64,
+        "people_per_frame": person_frames as f64 / n.max(1) as f64,
+        "frames_on_objects": on_objects.len(),
+        "on_objects": on_objects,
+        "stuck_on_objects": stuck,
+        "main_person": o.keypoints.person,
+        "main_count": o.counts.total,
+        "main_signal": o.counts.signal.as_str(),
+        "counted_people": o.people.iter().filter(|p| p.counts.is_some()).count(),
+        "pose_s": o.stages.iter().filter(|s| s.stage == mp_pipeline::Stage::Pose).map(|s| s.time.as_secs_f64()).sum::<f64>(),
+    })
 }
 
 /// A labelled video and how it is placed in a composite.
@@ -519,6 +604,27 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
         crossings.push(s);
     }
     let kept = crossings.iter().filter(|c| c["kept_ids"] == true).count();
+
+    // The street scene.
+    let street_path = a
+        .street
+        .clone()
+        .or_else(|| mp_geom::paths::footage_file("vtest.avi"));
+    let street = match street_path {
+        Some(path) => {
+            let o = analyse(&path, &params)?;
+            let s = score_street(&o);
+            eprintln!(
+                "street scene: {} people, {} frames with a pose on a static object, {} runs of 1 s or more",
+                s["people"], s["frames_on_objects"], s["stuck_on_objects"].as_array().map_or(0, Vec::len)
+            );
+            s
+        }
+        None => {
+            eprintln!("street scene: no vtest.avi (bash scripts/setup.sh fetches it); skipped");
+            Value::Null
+        }
+    };
     let (mae_m, obo_m) = score_counts("count");
     let sum_of = |key: &str| {
         singles
@@ -549,6 +655,7 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
         "single_keypoints_median_px_worst": px.last(),
         "composites": composites,
         "crossing_results": crossings,
+        "street": street,
         "single": singles,
         "left_out": items.iter().filter(|(name, _, _)| !sources.iter().any(|s| &s.name == name)).map(|x| x.0.clone()).collect::<Vec<_>>(),
         "runtime_s": t0.elapsed().as_secs_f64(),
@@ -563,6 +670,9 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
     if let Value::Object(m) = &mut summary {
         for k in ["composites", "crossing_results", "single"] {
             m.remove(k);
+        }
+        if let Some(Value::Object(street)) = m.get_mut("street") {
+            street.remove("on_objects");
         }
     }
     println!("{}", serde_json::to_string_pretty(&summary)?);

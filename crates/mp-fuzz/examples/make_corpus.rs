@@ -12,7 +12,8 @@ use mp_concrete::{Program, Segment};
 use mp_geom::io::csv::{track_to_csv_string, CsvLayout};
 use mp_geom::io::native::{track_to_bincode, track_to_json_string, track_to_npz_bytes};
 use mp_geom::io::npz::NpzOut;
-use mp_geom::{Primitive, Skeleton, Track, Units};
+use mp_geom::io::people::{people_to_bincode, people_to_json_string, people_to_npz_bytes};
+use mp_geom::{People, Person, Primitive, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
@@ -197,6 +198,71 @@ fn main() -> Res<()> {
         "long_indices.csv",
         "# a comment\nframe,joint,x,y,z,score\n0,0,1,2,3,0.5\n0,1,4,5,6,1\n2,1,,nan,7,0.25\n",
     )?;
+    // People in the three forms: two people whose spans overlap (one
+    // starting after the video's first frame, one ending before its last),
+    // two in 3-D with ids that leave gaps, and a video with nobody in it.
+    let people = [
+        (
+            "two_people",
+            People::new(
+                8,
+                30.0,
+                vec![
+                    Person {
+                        id: 1,
+                        first_frame: 2,
+                        track: track(5, 17, 2, Skeleton::coco17(), Units::Pixels)?,
+                    },
+                    Person {
+                        id: 2,
+                        first_frame: 0,
+                        track: track(4, 17, 2, Skeleton::coco17(), Units::Pixels)?,
+                    },
+                ],
+            )?,
+        ),
+        (
+            "two_people_3d",
+            People::new(
+                4,
+                30.0,
+                vec![
+                    Person {
+                        id: 3,
+                        first_frame: 0,
+                        track: track(4, 3, 3, Skeleton::generic(3), Units::Metres)?,
+                    },
+                    Person {
+                        id: 7,
+                        first_frame: 3,
+                        track: track(1, 3, 3, Skeleton::generic(3), Units::Metres)?,
+                    },
+                ],
+            )?,
+        ),
+        ("nobody", People::new(5, 25.0, Vec::new())?),
+    ];
+    for (name, p) in &people {
+        put(
+            &dir,
+            "people",
+            &format!("{name}.npz"),
+            people_to_npz_bytes(p)?,
+        )?;
+        put(
+            &dir,
+            "people",
+            &format!("{name}.json"),
+            people_to_json_string(p)?,
+        )?;
+        put(
+            &dir,
+            "people",
+            &format!("{name}.mpt"),
+            people_to_bincode(p)?,
+        )?;
+    }
+
     // Other npy dtypes and an npz with strings and integers.
     let mut out = NpzOut::new(false);
     out.add("positions", &Array3::<f64>::zeros((2, 2, 2)))?;

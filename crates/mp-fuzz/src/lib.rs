@@ -30,6 +30,7 @@
 //! | `mpt` | [`mp_geom::io::native::track_from_bincode`] |
 //! | `mpb` | [`mp_concrete::Program::from_bincode`] |
 //! | `concepts_json` | [`mp_refine::Concepts::from_json`] |
+//! | `people` | [`mp_geom::io::people::people_from_npz`], [`mp_geom::io::people::people_from_json_str`], [`mp_geom::io::people::people_from_bincode`] |
 
 use std::path::{Path, PathBuf};
 
@@ -43,8 +44,12 @@ use mp_geom::io::native::{
 };
 use mp_geom::io::npz::{NpyArray, Npz};
 use mp_geom::io::openpose::{alphapose_from_value, openpose_from_frames};
+use mp_geom::io::people::{
+    is_people_bincode, is_people_json, is_people_npz, people_from_bincode, people_from_json_str,
+    people_from_npz, people_to_bincode, people_to_json_string, people_to_npz_bytes,
+};
 use mp_geom::io::ReadOptions;
-use mp_geom::Track;
+use mp_geom::{People, Track};
 use mp_grammar::{strings, Corpus, Grammar, GrammarModel};
 use mp_refine::Concepts;
 
@@ -68,6 +73,7 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("mpt", mpt),
     ("mpb", mpb),
     ("concepts_json", concepts_json),
+    ("people", people),
 ];
 
 /// The target called `name`.
@@ -414,5 +420,172 @@ pub fn concepts_json(data: &[u8]) {
             let _ = c.score(a, &x);
             let _ = ac.nearest(&x);
         }
+    }
+}
+
+/// Values (`n_frames × joints × dims`, summed over people) above which the
+/// `people` target does not call the accessors that build whole-video
+/// arrays ([`People::full_track`], [`People::main_track`] and the npz
+/// writer). The readers accept any `n_frames` that [`People::new`] accepts,
+/// so a small JSON or `.mpt` file can declare a video of 10¹⁸ frames around
+/// a one-frame person, and those arrays cannot be allocated (ndarray panics
+/// or the allocation aborts, in `People::full_track`). Until the readers
+/// bound the video's size, the target skips those calls above the bound.
+const MAX_PEOPLE_VALUES: usize = 1 << 20;
+
+/// Exact equality of two [`People`], bit for bit (NaN-safe), through the
+/// binary form.
+fn same_people(a: &People, b: &People) -> bool {
+    match (people_to_bincode(a), people_to_bincode(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// The first broken invariant of [`People`] (those [`People::new`]
+/// documents), if any.
+fn people_violation(p: &People) -> Option<String> {
+    let n = p.n_frames();
+    if n == 0 {
+        return Some("a video of 0 frames".into());
+    }
+    if !(p.fps().is_finite() && p.fps() > 0.0) {
+        return Some(format!("fps {}", p.fps()));
+    }
+    if p.len() != p.people().len() || p.is_empty() != p.people().is_empty() {
+        return Some("len/is_empty disagree with people()".into());
+    }
+    if let Some(w) = p.people().windows(2).find(|w| w[0].id >= w[1].id) {
+        return Some(format!("ids {} then {}: not ascending", w[0].id, w[1].id));
+    }
+    let first = p.people().first()?;
+    for q in p.people() {
+        let t = &q.track;
+        let end = q.first_frame.checked_add(t.n_frames());
+        if t.n_frames() == 0 || end.is_none_or(|e| e > n) {
+            return Some(format!(
+                "person {}: frames {} + {} outside the video's {n}",
+                q.id,
+                q.first_frame,
+                t.n_frames()
+            ));
+        }
+        if q.last_frame() >= n || q.last_frame() < q.first_frame {
+            return Some(format!("person {}: last frame {}", q.id, q.last_frame()));
+        }
+        if t.fps() != p.fps() {
+            return Some(format!(
+                "person {}: {} fps, video {}",
+                q.id,
+                t.fps(),
+                p.fps()
+            ));
+        }
+        let f = &first.track;
+        if t.skeleton() != f.skeleton() || t.units() != f.units() || t.dims() != f.dims() {
+            return Some(format!("person {}: skeleton, units or dims differ", q.id));
+        }
+        if t.positions().dim() != (t.n_frames(), t.n_joints(), t.dims())
+            || t.confidence().dim() != (t.n_frames(), t.n_joints())
+        {
+            return Some(format!("person {}: array shapes", q.id));
+        }
+        if !t.confidence().iter().all(|c| (0.0..=1.0).contains(c)) {
+            return Some(format!("person {}: confidence outside 0..=1", q.id));
+        }
+        if q.frames_found() > t.n_frames() {
+            return Some(format!(
+                "person {}: found on more frames than its span",
+                q.id
+            ));
+        }
+        if p.get(q.id).map(|r| r.first_frame) != Some(q.first_frame) {
+            return Some(format!("person {}: get() does not find them", q.id));
+        }
+    }
+    None
+}
+
+/// Checks what a reader gave (`form`): the invariants of [`People`], a
+/// round trip through each of the three forms, and the accessors callers
+/// use (the main person, whole-video tracks when they are small enough).
+fn check_people(p: &People, form: &str) {
+    if let Some(v) = people_violation(p) {
+        panic_msg(&format!("{form} reader returned invalid people: {v}"));
+    }
+    match people_to_bincode(p).map(|b| people_from_bincode(&b)) {
+        Ok(Ok(q)) => assert!(same_people(p, &q), "binary round trip of {form} people"),
+        Ok(Err(e)) => panic_msg(&format!("binary people from {form} do not read back: {e}")),
+        Err(e) => panic_msg(&format!("people from {form} do not encode: {e}")),
+    }
+    let path = Path::new("fuzz.json");
+    match people_to_json_string(p).map(|j| people_from_json_str(&j, path)) {
+        Ok(Ok(q)) => assert!(same_people(p, &q), "JSON round trip of {form} people"),
+        Ok(Err(e)) => panic_msg(&format!("JSON people from {form} do not read back: {e}")),
+        Err(e) => panic_msg(&format!("people from {form} do not write as JSON: {e}")),
+    }
+    for q in p.people() {
+        let _ = (q.activity(), q.mean_box(), q.box_at(q.first_frame));
+    }
+    let main = p.main_person();
+    assert_eq!(main.is_none(), p.is_empty(), "main person of {form} people");
+    let values = p.people().iter().try_fold(0usize, |acc, q| {
+        let t = &q.track;
+        p.n_frames()
+            .checked_mul(t.n_joints().max(1))?
+            .checked_mul(t.dims())?
+            .checked_add(acc)
+    });
+    if values.is_none_or(|v| v > MAX_PEOPLE_VALUES) {
+        return;
+    }
+    if let Some(m) = main {
+        match p.main_track() {
+            Ok(t) => assert!(
+                t.n_frames() == p.n_frames() && t.n_joints() == m.track.n_joints(),
+                "main track of {form} people does not cover the video"
+            ),
+            Err(e) => panic_msg(&format!("main track of {form} people: {e}")),
+        }
+    }
+    match people_to_npz_bytes(p).map(|b| Npz::from_bytes(b, "fuzz.npz")) {
+        Ok(Ok(z)) => match people_from_npz(&z) {
+            Ok(q) => assert!(same_people(p, &q), "npz round trip of {form} people"),
+            Err(e) => panic_msg(&format!("npz people from {form} do not read back: {e}")),
+        },
+        Ok(Err(e)) => panic_msg(&format!("written people npz does not open: {e}")),
+        Err(e) => panic_msg(&format!("people from {form} do not encode as npz: {e}")),
+    }
+}
+
+/// The people formats ([`mp_geom::io::people`]), every input through all
+/// three readers: npz ([`people_from_npz`]), JSON ([`people_from_json_str`])
+/// and binary ([`people_from_bincode`]). What one of them reads must also be
+/// recognised by the test `read_people` dispatches on ([`is_people_npz`],
+/// [`is_people_json`], [`is_people_bincode`]), keep the invariants of
+/// [`People`], and read back the same from each of the three writers.
+pub fn people(data: &[u8]) {
+    if let Ok(z) = Npz::from_bytes(data.to_vec(), "fuzz.npz") {
+        let marked = is_people_npz(&z);
+        if let Ok(p) = people_from_npz(&z) {
+            assert!(
+                marked,
+                "people read from an npz without `mp_people_version`"
+            );
+            check_people(&p, "npz");
+        }
+    }
+    if let Some(src) = text(data) {
+        if let Ok(p) = people_from_json_str(src, Path::new("fuzz.json")) {
+            // `read_people` routes JSON to this reader by `is_people_json`.
+            let routed = serde_json::from_str(src).is_ok_and(|v| is_people_json(&v));
+            assert!(routed, "JSON people without `\"format\": \"mp-people\"`");
+            check_people(&p, "JSON");
+        }
+    }
+    let marked = is_people_bincode(data);
+    if let Ok(p) = people_from_bincode(data) {
+        assert!(marked, "binary people without the `mp-people` magic");
+        check_people(&p, "binary");
     }
 }

@@ -172,3 +172,34 @@ fn targets_survive_corpus_and_mutations() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// The people seeds are valid files: each reads with the reader of its
+/// form, so the `people` target checks a result on every seed, not only
+/// errors.
+#[test]
+fn people_seeds_read() {
+    use mp_geom::io::npz::Npz;
+    use mp_geom::io::people::{people_from_bincode, people_from_json_str, people_from_npz};
+
+    let corpus = read_corpus("people");
+    for ext in ["npz", "json", "mpt"] {
+        assert!(
+            corpus.iter().any(|(n, _)| n.ends_with(ext)),
+            "no `.{ext}` seed for target `people`"
+        );
+    }
+    for (name, data) in &corpus {
+        let read = match name.rsplit('.').next() {
+            Some("npz") => {
+                Npz::from_bytes(data.clone(), name.as_str()).and_then(|z| people_from_npz(&z))
+            }
+            Some("json") => std::str::from_utf8(data)
+                .map_err(|e| mp_geom::GeomError::format(name.as_str(), e.to_string()))
+                .and_then(|s| people_from_json_str(s, Path::new(name))),
+            Some("mpt") => people_from_bincode(data),
+            _ => continue,
+        };
+        assert!(read.is_ok(), "seed {name} does not read: {:?}", read.err());
+        assert!(data.len() < 20 * 1024, "seed {name} is over 20 KB");
+    }
+}

@@ -162,8 +162,14 @@ pub struct People {
     people: Vec<Person>,
 }
 
+/// Most values (frames × joints × dimensions) of one person's whole-video
+/// track ([`People::full_track`]): 2²⁸, 2 GiB of coordinates, about 36
+/// hours of 60-fps video of 17 joints in 2D.
+pub const MAX_PEOPLE_VALUES: usize = 1 << 28;
+
 impl People {
-    /// Checks and builds: `n_frames ≥ 1`; `fps` finite and > 0; every
+    /// Checks and builds: `n_frames ≥ 1` and at most [`MAX_PEOPLE_VALUES`]
+    /// values per whole-video track; `fps` finite and > 0; every
     /// person's track has at least one frame and its span
     /// `first_frame .. first_frame + track.n_frames()` lies within
     /// `0..n_frames`; ids are unique; every track's frame rate equals `fps`
@@ -177,6 +183,20 @@ impl People {
             return Err(GeomError::param(
                 "fps",
                 format!("must be finite and > 0, got {fps}"),
+            ));
+        }
+        // A person's whole-video track (`full_track`) holds n_frames × joints
+        // × dims values: a file may not ask for more than MAX_PEOPLE_VALUES.
+        let per_frame = people.first().map_or(1, |p| {
+            p.track.n_joints().max(1).saturating_mul(p.track.dims().max(1))
+        });
+        if n_frames.saturating_mul(per_frame) > MAX_PEOPLE_VALUES {
+            return Err(GeomError::param(
+                "n_frames",
+                format!(
+                    "{n_frames} frames × {per_frame} values per frame is more than the \
+                     {MAX_PEOPLE_VALUES} values a whole-video track may hold"
+                ),
             ));
         }
         people.sort_by_key(|p| p.id);

@@ -1,5 +1,5 @@
-//! Inputs found by fuzzing (`crates/mp-fuzz`, targets `npy` and `csv`, and one
-//! written after a `csv` input the fuzzer reported as slow)
+//! Inputs found by fuzzing (`crates/mp-fuzz`, targets `npy`, `csv` and
+//! `people`, and one written after a `csv` input the fuzzer reported as slow)
 //! that made a track reader abort or stall; each must now be a quick,
 //! typed error or a quick read.
 
@@ -112,4 +112,21 @@ fn coordinates_beyond_the_limit_are_an_error() {
     );
     let ok = "frame,joint,x,y,score\n0,0,1,2,1\n1,0,1e99,2,1\n";
     assert!(track_from_csv_str(ok, Path::new("g.csv"), &ReadOptions::default()).is_ok());
+}
+
+/// A people file (JSON) of 2⁶⁴ − 1 frames holding a short track: it read,
+/// and the main person's whole-video track then overflowed ndarray's shape
+/// (a panic; 10¹² frames aborted on the allocation).
+#[test]
+fn people_file_of_too_many_frames_is_an_error() {
+    let text = r#"{"format":"mp-people","version":1,"n_frames":18446744073709551615,"fps":30.0,"people":[{"id":3,"first_frame":0,"track":{"confidence":[[0.9],[0.9]],"format":"mp-track","fps":30.0,"positions":[[[0.0,25.0]],[[6.25,24.25]]],"skeleton":{"bones":[],"coco17":[],"joints":["j0"],"name":"generic","root":null},"units":"pixels","version":1}}]}"#;
+    for frames in ["18446744073709551615", "1000000000000"] {
+        let text = text.replace("18446744073709551615", frames);
+        let start = Instant::now();
+        let err = mp_geom::io::people::people_from_json_str(&text, Path::new("p.json"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("whole-video track may hold"), "{err}");
+        quick(start);
+    }
 }

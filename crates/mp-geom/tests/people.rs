@@ -337,6 +337,19 @@ fn validation_errors_name_the_problem() {
         "person 1: the track has no frames",
     );
     check(People::from_track(empty_track), "at least 1 frame");
+    // A video longer than a whole-video track may hold (what a corrupt or
+    // hostile file would ask for: the readers build through People::new).
+    check(
+        People::new(usize::MAX, 30.0, vec![person(1, 0, fig())]),
+        "values a whole-video track may hold",
+    );
+    let mut json: serde_json::Value =
+        serde_json::from_str(&people_to_json_string(&crowd()).unwrap()).unwrap();
+    json["n_frames"] = serde_json::json!(u64::MAX);
+    check(
+        people_from_json_str(&json.to_string(), std::path::Path::new("people.json")),
+        "values a whole-video track may hold",
+    );
 }
 
 #[test]
