@@ -188,7 +188,10 @@ impl People {
         // A person's whole-video track (`full_track`) holds n_frames × joints
         // × dims values: a file may not ask for more than MAX_PEOPLE_VALUES.
         let per_frame = people.first().map_or(1, |p| {
-            p.track.n_joints().max(1).saturating_mul(p.track.dims().max(1))
+            p.track
+                .n_joints()
+                .max(1)
+                .saturating_mul(p.track.dims().max(1))
         });
         if n_frames.saturating_mul(per_frame) > MAX_PEOPLE_VALUES {
             return Err(GeomError::param(
