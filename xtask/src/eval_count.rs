@@ -16,15 +16,53 @@ use serde_json::{json, Map, Value};
 /// Arguments of `cargo xtask eval count`.
 #[derive(Args, Debug)]
 pub struct EvalCountArgs {
-    /// A folder of videos (or one video).
-    #[arg(long)]
-    pub videos: PathBuf,
-    /// A folder of labels: `<video stem>.npy`, one entry per repetition.
-    #[arg(long)]
-    pub labels: PathBuf,
+    /// A folder of videos (or one video). Required unless `--synthetic`.
+    #[arg(long, required_unless_present = "synthetic")]
+    pub videos: Option<PathBuf>,
+    /// A folder of labels: `<video stem>.npy`, one entry per repetition. Required unless `--synthetic`.
+    #[arg(long, required_unless_present = "synthetic")]
+    pub labels: Option<PathBuf>,
     /// Output JSON.
     #[arg(long)]
     pub out: PathBuf,
+    /// Count synthetic cases of known count built from the real keypoints of
+    /// the shared data folder instead of videos (`eval_count_synth`).
+    #[arg(long, conflicts_with_all = ["videos", "labels"])]
+    pub synthetic: bool,
+    /// Seed of the synthetic cases.
+    #[arg(long, default_value_t = 0, requires = "synthetic")]
+    pub seed: u64,
+    /// Number of synthetic cases.
+    #[arg(long, default_value_t = 600, requires = "synthetic")]
+    pub cases: usize,
+    /// Changes a field of the counting parameters (`mp_abstract::CountParams`,
+    /// e.g. `mismatch_fraction=0.4`), for choosing a default; the report
+    /// names every change. Without it: the product's defaults.
+    #[arg(long = "count-param", value_name = "KEY=VALUE")]
+    pub count_params: Vec<String>,
+}
+
+/// The product's parameters with `overrides` (`KEY=VALUE`, VALUE as JSON)
+/// applied to the counting parameters.
+pub fn params_with(overrides: &[String]) -> anyhow::Result<Params> {
+    let mut params = Params::default();
+    if overrides.is_empty() {
+        return Ok(params);
+    }
+    let mut count = serde_json::to_value(&params.count)?;
+    for o in overrides {
+        let (k, v) = o
+            .split_once('=')
+            .with_context(|| format!("--count-param {o}: expected KEY=VALUE"))?;
+        let field = count
+            .get_mut(k)
+            .with_context(|| format!("--count-param: no counting parameter `{k}`"))?;
+        *field = serde_json::from_str(v)
+            .with_context(|| format!("--count-param {k}: `{v}` is not a JSON value"))?;
+    }
+    params.count = serde_json::from_value(count)?;
+    params.validate()?;
+    Ok(params)
 }
 
 /// Videos of a folder (or the one given) that have a label file.
@@ -51,16 +89,28 @@ fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(PathBuf, PathBu
 }
 
 pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
+    if a.synthetic {
+        return crate::eval_count_synth::run(
+            &a.out,
+            a.seed,
+            a.cases,
+            &params_with(&a.count_params)?,
+            &a.count_params,
+        );
+    }
+    let (Some(videos), Some(labels)) = (a.videos.as_deref(), a.labels.as_deref()) else {
+        bail!("--videos DIR and --labels DIR are required (or give --synthetic)");
+    };
     let t0 = Instant::now();
-    let items = labelled(&a.videos, &a.labels)?;
+    let items = labelled(videos, labels)?;
     if items.is_empty() {
         bail!(
             "no video in {} has a label file <stem>.npy in {}",
-            a.videos.display(),
-            a.labels.display()
+            videos.display(),
+            labels.display()
         );
     }
-    let params = Params::default();
+    let params = params_with(&a.count_params)?;
     let mut by_video = Map::new();
     let (mut errs, mut obos) = (Vec::new(), Vec::new());
     let (mut frames_total, mut count_s, mut total_s) = (0usize, 0.0f64, 0.0f64);
@@ -124,10 +174,10 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
         "count_ms_per_frame": 1000.0 * count_s / frames_total.max(1) as f64,
         "total_ms_per_frame": 1000.0 * total_s / frames_total.max(1) as f64,
         "frames": frames_total,
-        "definition": "mp_pipeline::analyse_input with Params::default() on each video (what `mp run` writes as loops.json total_repetitions). MAE = mean over videos of |count − true| / true; OBO = fraction with |count − true| ≤ 1. count_ms_per_frame: the counting stage alone (after keypoints); total_ms_per_frame: decoding, pose, programs and counting.",
+        "count_param_overrides": a.count_params, "definition": "mp_pipeline::analyse_input with Params::default() on each video (what `mp run` writes as loops.json total_repetitions). MAE = mean over videos of |count − true| / true; OBO = fraction with |count − true| ≤ 1. count_ms_per_frame: the counting stage alone (after keypoints); total_ms_per_frame: decoding, pose, programs and counting.",
         "leave_one_video_out": leave_one_out(&kept)?,
-        "videos_dir": a.videos.display().to_string(),
-        "labels_dir": a.labels.display().to_string(),
+        "videos_dir": videos.display().to_string(),
+        "labels_dir": labels.display().to_string(),
         "runtime_s": t0.elapsed().as_secs_f64(),
         "by_video": by_video,
     });

@@ -3,6 +3,7 @@
 mod bench;
 mod eval_concrete;
 mod eval_count;
+mod eval_count_synth;
 mod eval_forecast;
 mod eval_grammar;
 mod eval_intervals;
@@ -14,6 +15,9 @@ mod eval_video;
 mod models;
 mod pyenv;
 mod setup;
+mod synth_reps;
+mod synth_select;
+mod synth_sources;
 mod train_forecast;
 mod train_refine;
 

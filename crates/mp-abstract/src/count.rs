@@ -99,6 +99,13 @@ pub struct CountParams {
     /// Keypoints count only where a person is found in at least this fraction
     /// of the frames. Default 0.5.
     pub min_found_fraction: f64,
+    /// Motion at either end of the activity that does not match itself one
+    /// period later or earlier — its distance to those frames, averaged over
+    /// half a period, above this fraction of the typical distance between
+    /// frames half a period apart — is not part of the repetitions and is
+    /// trimmed (0: no trimming). Chosen on the synthetic validation set
+    /// (`cargo xtask eval count --synthetic`).
+    pub mismatch_fraction: f64,
     /// A unitless feature track with more channels than this (frame
     /// thumbnails: 1,024) is pooled into this many channels (means of
     /// consecutive channels: for a row-major thumbnail, runs of cells along
@@ -117,6 +124,7 @@ impl Default for CountParams {
             period_tolerance: 0.25,
             rest_fraction: 0.2,
             min_found_fraction: 0.5,
+            mismatch_fraction: 0.5,
             max_segment_channels: 64,
         }
     }
@@ -141,6 +149,7 @@ impl CountParams {
         unit("min_strength", self.min_strength)?;
         unit("rest_fraction", self.rest_fraction)?;
         unit("min_found_fraction", self.min_found_fraction)?;
+        AbstractError::check_non_negative("mismatch_fraction", self.mismatch_fraction)?;
         AbstractError::check_non_negative("period_tolerance", self.period_tolerance)?;
         if self.max_segment_channels == 0 {
             return Err(AbstractError::param(
@@ -327,6 +336,7 @@ fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Res
             ..
         }) if strength >= params.min_strength => {
             let (a, b) = active_span(signal, period_frames, params.rest_fraction)?;
+            let (a, b) = repeating_span(signal, period_frames, a, b, params.mismatch_fraction);
             let iv = CountedInterval::new(a, b, period_frames, strength);
             Ok(Counts {
                 total: iv.count,
@@ -463,6 +473,128 @@ fn weighted_score(segs: &[PeriodicSegment]) -> f64 {
 /// when its speed (summed over channels, averaged over a centred window of
 /// one period) is below `fraction` of the median over the recording. Falls
 /// back to the whole recording when no frame moves.
+/// Distance between frames `a` and `b` of a track: the sum over joints of
+/// the Euclidean distance, or over the channels of a unitless feature track
+/// of the absolute differences (the same measure as the speed of
+/// [`active_span`]).
+fn frame_distance(track: &Track, a: usize, b: usize) -> f64 {
+    let pos = track.positions();
+    let (_, j, d) = pos.dim();
+    let unitless = track.units() == mp_geom::Units::Unitless;
+    let mut s = 0.0;
+    for ji in 0..j {
+        if unitless {
+            s += (0..d)
+                .map(|k| (pos[[b, ji, k]] - pos[[a, ji, k]]).abs())
+                .sum::<f64>();
+        } else {
+            let mut q = 0.0;
+            for k in 0..d {
+                q += (pos[[b, ji, k]] - pos[[a, ji, k]]).powi(2);
+            }
+            s += q.sqrt();
+        }
+    }
+    s
+}
+
+/// How far from the period (a fraction of it) the next cycle's matching
+/// frame may lie in [`repeating_span`]: human repetitions vary their pace
+/// by this much from cycle to cycle.
+const PERIOD_SLACK: f64 = 0.2;
+
+/// In [`repeating_span`], an end is trimmed only where its mismatch is more
+/// than this multiple of the median mismatch over the activity.
+const MISMATCH_OVER_TYPICAL: f64 = 1.5;
+
+/// The part of `a..b` that repeats at `period`: other motion before or after
+/// the repetitions (a walk into place, a different movement) is active, so
+/// [`active_span`] keeps it, yet it does not match itself one period later.
+///
+/// Each frame's mismatch is its distance to the nearest frame about a period
+/// later or earlier (within [`PERIOD_SLACK`], inside `a..b`), averaged over half a
+/// period; the scale is the median distance between frames half a period
+/// apart (large for a repeating motion, which is far from itself half way
+/// through its cycle). The repetitions start at the first frame whose
+/// mismatch is within `fraction` of that scale or within
+/// [`MISMATCH_OVER_TYPICAL`] times the recording's median mismatch, and end
+/// at the last; the span is kept whole when fewer than two periods remain.
+/// (Requiring half a period or a whole one in a row to match trimmed more of
+/// the synthetic padding but also real cycles that vary: see RESULTS.)
+fn repeating_span(
+    track: &Track,
+    period: usize,
+    a: usize,
+    b: usize,
+    fraction: f64,
+) -> (usize, usize) {
+    let p = period.max(1);
+    if fraction <= 0.0 || b <= a || b - a < 3 * p {
+        return (a, b);
+    }
+    let n = b - a;
+    // People do not keep an exact period: the frame "a period later" is
+    // looked for within ±PERIOD_SLACK of it.
+    let slack = ((p as f64 * PERIOD_SLACK).round() as usize).max(1);
+    let (lo, hi) = (p.saturating_sub(slack).max(1), p + slack);
+    let mismatch: Vec<f64> = (a..b)
+        .map(|t| {
+            let mut best = f64::INFINITY;
+            for lag in lo..=hi {
+                if t + lag < b {
+                    best = best.min(frame_distance(track, t, t + lag));
+                }
+                if t >= a + lag {
+                    best = best.min(frame_distance(track, t - lag, t));
+                }
+            }
+            if best.is_finite() {
+                best
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let half = (p / 2).max(1);
+    let mut far: Vec<f64> = (a..b.saturating_sub(half))
+        .map(|t| frame_distance(track, t, t + half))
+        .collect();
+    if far.is_empty() {
+        return (a, b);
+    }
+    far.sort_by(f64::total_cmp);
+    let scale = far[far.len() / 2];
+    if !(scale.is_finite() && scale > 0.0) {
+        return (a, b);
+    }
+    let mut prefix = vec![0.0; n + 1];
+    for i in 0..n {
+        prefix[i + 1] = prefix[i] + mismatch[i];
+    }
+    let w = half;
+    let smooth = |i: usize| {
+        let lo = i.saturating_sub(w / 2);
+        let hi = (i + w - w / 2).min(n);
+        (prefix[hi] - prefix[lo]) / (hi - lo).max(1) as f64
+    };
+    // Trimmed: motion that is both far from a repetition (above `fraction`
+    // of the half-period scale) and far worse than the recording's own
+    // cycle-to-cycle variation (MISMATCH_OVER_TYPICAL × its median): real
+    // repetitions vary in amplitude and pace, and jitter weighs more on
+    // small movements, so the scale alone would trim them.
+    let smoothed: Vec<f64> = (0..n).map(smooth).collect();
+    let mut sorted = smoothed.clone();
+    sorted.sort_by(f64::total_cmp);
+    let typical = sorted[n / 2];
+    let limit = (fraction * scale).max(MISMATCH_OVER_TYPICAL * typical);
+    let first = (0..n).find(|&i| smoothed[i] <= limit);
+    let last = (0..n).rev().find(|&i| smoothed[i] <= limit);
+    match (first, last) {
+        (Some(i), Some(k)) if k + 1 >= i + 2 * p => (a + i, a + k + 1),
+        _ => (a, b),
+    }
+}
+
 fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, usize)> {
     let n = track.n_frames();
     if fraction <= 0.0 || n < 2 {

@@ -97,6 +97,51 @@ fn a_long_still_tail_is_not_counted() {
 }
 
 #[test]
+fn other_motion_around_the_repetitions_is_not_counted() {
+    // Two seconds of a motion that does not repeat before and after seven
+    // cycles: the count covers only the cycles (without the mismatch trim
+    // it takes the whole active span).
+    let (k, period, pad) = (7usize, 24usize, 60usize);
+    let active = exercise(0, k, period, 12, 0.5, 11);
+    let n = pad + k * period + pad;
+    let mut p = Array3::zeros((n, 12, 2));
+    for t in 0..n {
+        for j in 0..12 {
+            for d in 0..2 {
+                p[[t, j, d]] = if t < pad || t >= pad + k * period {
+                    // A one-off sweep away from the first pose and back,
+                    // at the cycles' own amplitude.
+                    let edge = if t < pad { 0 } else { k * period - 1 };
+                    let u = if t < pad {
+                        (pad - t) as f64 / pad as f64
+                    } else {
+                        (t - pad - k * period) as f64 / pad as f64
+                    };
+                    // Walking away from the first pose (and in from the
+                    // last), faster and faster: nothing in it matches
+                    // itself a period later.
+                    let bend = u * u;
+                    active.positions()[[edge, j, d]]
+                        + 150.0 * bend * if d == 0 { 1.0 } else { -0.5 } * (1.0 + 0.1 * j as f64)
+                } else {
+                    active.positions()[[t - pad, j, d]]
+                };
+            }
+        }
+    }
+    let t = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap();
+    let c = count_repetitions(&t, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert!((c.total as i64 - k as i64).abs() <= 1, "{c:?}");
+    // Without the trim (mismatch_fraction 0) the padding is counted too.
+    let loose = CountParams {
+        mismatch_fraction: 0.0,
+        ..CountParams::default()
+    };
+    let c0 = count_repetitions(&t, CountSignal::Keypoints, &loose).unwrap();
+    assert!(c0.total > k + 1, "{c0:?}");
+}
+
+#[test]
 fn still_and_one_off_motion_count_zero() {
     let still = exercise(90, 0, 30, 12, 0.5, 1);
     let c = count_repetitions(&still, CountSignal::Keypoints, &CountParams::default()).unwrap();
