@@ -444,7 +444,6 @@ pub(crate) fn run_with(
     })
 }
 
-
 /// Pictures, then the report page (not yet written): files, times, page.
 fn pictures_and_page(
     out: &OutputDir,

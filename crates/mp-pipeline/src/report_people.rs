@@ -79,7 +79,7 @@ impl PeopleViews<'_> {
                     p.offset,
                     &a,
                 )
-                    .map_err(PipelineError::from_report)
+                .map_err(PipelineError::from_report)
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(mp_report::PeopleView {
@@ -169,7 +169,11 @@ pub(crate) fn people_views<'a>(
             mp_report::PersonRow {
                 id: p.id,
                 label: person_label(p),
-                colour: if p.main { MAIN_COLOUR } else { output::person_colour(p.id) },
+                colour: if p.main {
+                    MAIN_COLOUR
+                } else {
+                    output::person_colour(p.id)
+                },
                 found,
                 repetitions,
                 pick,
@@ -182,4 +186,3 @@ pub(crate) fn people_views<'a>(
 /// The main person's colour in the people strip (the overlay draws them in
 /// the left/right orange and blue; orange is their left).
 const MAIN_COLOUR: [u8; 3] = [255, 159, 28];
-

@@ -20,9 +20,9 @@ use crate::b64;
 use crate::draw::View;
 use crate::error::{ReportError, Result};
 use crate::frames::FrameStore;
+use crate::people::{people_strip_svg, PeopleView};
 use crate::plots::{axis_label, check_agree};
 use crate::style::{kind_color, side};
-use crate::people::{people_strip_svg, PeopleView};
 use crate::svg::esc;
 
 const CSS: &str = include_str!("../assets/report.css");

@@ -111,7 +111,11 @@ pub fn people_strip_svg(rows: &[PersonRow], n_frames: usize, fps: f64) -> String
             .pick
             .map(|k| format!(r#" data-person="{k}" style="cursor:pointer""#))
             .unwrap_or_default();
-        let _ = write!(s, r#"<g class="row"{pick}><title>{}</title>"#, esc(&r.label));
+        let _ = write!(
+            s,
+            r#"<g class="row"{pick}><title>{}</title>"#,
+            esc(&r.label)
+        );
         let _ = write!(
             s,
             r##"<rect x="0" y="{y}" width="{width}" height="{row_h}" fill="{}"/>"##,
