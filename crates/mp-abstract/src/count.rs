@@ -11,9 +11,11 @@
 //!    (a change of exercise), each interval is counted on its own: its length
 //!    over its period.
 //! 3. Otherwise the recording holds one repetitive activity: when its period
-//!    is strong enough ([`CountParams::min_strength`]) the count is the motion's
-//!    active length (rest at either end trimmed) over the period; when not,
-//!    nothing repeats (a golf swing is one movement).
+//!    is strong enough ([`CountParams::min_strength`]) the count is the length
+//!    of the part that repeats over the period — rest at either end trimmed,
+//!    then motion at either end that does not match itself about a period
+//!    later or earlier ([`CountParams::mismatch_fraction`]); when not, nothing
+//!    repeats (a golf swing is one movement).
 //!
 //! The signal whose repetition is the most certain decides
 //! ([`count_signals`]): keypoints are the primary signal, and frames take
