@@ -602,12 +602,9 @@ fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, us
     if fraction <= 0.0 || n < 2 {
         return Ok((0, n));
     }
-    let pos = track.positions();
-    let (_, j, d) = pos.dim();
     // Speed: the sum of the joints' displacements; the channels of a unitless
     // feature track (thumbnail cells) are not coordinates of a point, so each
-    // counts on its own (|Δ| per channel).
-    let unitless = track.units() == mp_geom::Units::Unitless;
+    // counts on its own (|Δ| per channel): `frame_distance`.
     // Displacements over a quarter period, per frame: keypoint jitter, which
     // does not grow with the lag, stays small beside the motion, which does.
     let lag = (period / 4).clamp(1, n - 1);
@@ -615,21 +612,7 @@ fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, us
         .map(|t| {
             let b = (t + lag).min(n - 1);
             let a = b.saturating_sub(lag);
-            let mut s = 0.0;
-            for ji in 0..j {
-                if unitless {
-                    s += (0..d)
-                        .map(|k| (pos[[b, ji, k]] - pos[[a, ji, k]]).abs())
-                        .sum::<f64>();
-                } else {
-                    let mut q = 0.0;
-                    for k in 0..d {
-                        q += (pos[[b, ji, k]] - pos[[a, ji, k]]).powi(2);
-                    }
-                    s += q.sqrt();
-                }
-            }
-            s / (b - a).max(1) as f64
+            frame_distance(track, a, b) / (b - a).max(1) as f64
         })
         .collect();
     let w = period.max(1);

@@ -185,6 +185,19 @@ fn contact_sheet_of(
     )
 }
 
+/// The timeline as the report page shows it (no title: the page has one).
+fn page_timeline(a: &Analysed<'_>) -> Result<String> {
+    let (svg, _) = timeline_svg(
+        a.program,
+        a.intervals,
+        &TimelineParams {
+            title: false,
+            ..TimelineParams::default()
+        },
+    )?;
+    Ok(svg)
+}
+
 /// A person besides the main one for the report's picker: `a` is their
 /// analysis (frames from video frame `offset`; its `frames`, `frame_size`
 /// and `title` are not used).
@@ -195,14 +208,7 @@ pub fn person_view<'a>(
     offset: usize,
     a: &Analysed<'a>,
 ) -> Result<PersonView<'a>> {
-    let (timeline, _) = timeline_svg(
-        a.program,
-        a.intervals,
-        &TimelineParams {
-            title: false,
-            ..TimelineParams::default()
-        },
-    )?;
+    let timeline = page_timeline(a)?;
     Ok(PersonView {
         id,
         label,
@@ -229,14 +235,7 @@ pub fn report_page(
     let mut cards = standard_cards(a.track, a.program, a.executed, a.intervals);
     cards.extend(extra_cards.iter().cloned());
     let abstract_text = print_with(a.abstract_program, &PrintOptions::summary());
-    let (tl_page, _) = timeline_svg(
-        a.program,
-        a.intervals,
-        &TimelineParams {
-            title: false,
-            ..TimelineParams::default()
-        },
-    )?;
+    let tl_page = page_timeline(a)?;
     report_html(&ReportInput {
         title: a.title,
         subtitle,
