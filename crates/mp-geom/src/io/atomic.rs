@@ -29,8 +29,17 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     };
     let mut tmp = {
         let mut reg = in_flight();
-        let tmp = tempfile::Builder::new()
-            .prefix(".mp-tmp-")
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(".mp-tmp-");
+        // An ordinary file's permissions (0666 less the umask, as
+        // `File::create` gives), not the temporary file's private 0600,
+        // which the rename would keep.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let tmp = builder
             .tempfile_in(&dir)
             .map_err(|e| GeomError::io(&dir, e))?;
         reg.push(tmp.path().to_path_buf());
@@ -149,6 +158,20 @@ mod tests {
         assert_eq!(std::fs::read(&p).unwrap(), b"new");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
         assert!(in_flight().is_empty());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn written_files_have_ordinary_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain.txt");
+        std::fs::File::create(&plain).unwrap();
+        let atomic = dir.path().join("atomic.txt");
+        write_atomic(&atomic, b"x").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        // As `File::create` (0666 less the umask), not a temporary file's 0600.
+        assert_eq!(mode(&atomic), mode(&plain));
     }
 
     #[test]
