@@ -354,8 +354,10 @@ fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Res
     }
 }
 
-/// Counts from the keypoints and, when given, the frame thumbnails of the
-/// same recording, and returns the count of the more certain signal.
+/// Counts from the keypoints (over the frames from the person's first to
+/// their last pose) and, when given, the frame thumbnails of the same
+/// recording (over all of it), and returns the count of the more certain
+/// signal, in the recording's frames.
 /// Keypoints take part only when a person is found in at least
 /// [`CountParams::min_found_fraction`] of the frames; with neither signal
 /// usable the count is 0 with [`CountMethod::None`].
@@ -382,9 +384,22 @@ pub fn count_signals(
     };
     if let Some(k) = keypoints {
         if found_fraction(k) >= params.min_found_fraction {
-            let mut filled = k.clone();
-            filled.fill_missing();
-            consider(count_checked(&filled, CountSignal::Keypoints, params)?);
+            // Counted from the person's first to their last pose: before and
+            // after, their track would only hold those poses (a passer-by, a
+            // person who walks in), which is no repetition; the counts are
+            // given in the recording's frames.
+            let n = k.n_frames();
+            let (mut own, first) = match k.found_span() {
+                Some((a, b)) if (a > 0 || b + 1 < n) && b > a => (k.slice_frames(a, b + 1)?, a),
+                _ => (k.clone(), 0),
+            };
+            own.fill_missing();
+            let c = count_checked(&own, CountSignal::Keypoints, params)?;
+            consider(if own.n_frames() < n {
+                c.shifted(first, n)
+            } else {
+                c
+            });
         }
     }
     if let Some(f) = frames {

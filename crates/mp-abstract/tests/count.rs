@@ -142,6 +142,33 @@ fn other_motion_around_the_repetitions_is_not_counted() {
 }
 
 #[test]
+fn a_person_who_walks_in_is_counted_over_their_own_frames() {
+    // Nobody for 150 frames, then six cycles: the keypoints count the six
+    // cycles, in the recording's frames, and no interval lies before the
+    // person appears (their track holds no pose there).
+    let (lead, k, period) = (150usize, 6usize, 24usize);
+    let active = exercise(0, k, period, 12, 0.5, 21);
+    let n = lead + k * period;
+    let mut p = Array3::from_elem((n, 12, 2), f64::NAN);
+    for t in lead..n {
+        for j in 0..12 {
+            for d in 0..2 {
+                p[[t, j, d]] = active.positions()[[t - lead, j, d]];
+            }
+        }
+    }
+    let t = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap();
+    let params = CountParams {
+        min_found_fraction: 0.3,
+        ..CountParams::default()
+    };
+    let c = count_signals(Some(&t), None, &params).unwrap();
+    assert!((c.total as i64 - k as i64).abs() <= 1, "{c:?}");
+    assert_eq!(c.frames, n);
+    assert!(c.intervals.iter().all(|iv| iv.start_frame + 2 >= lead), "{c:?}");
+}
+
+#[test]
 fn still_and_one_off_motion_count_zero() {
     let still = exercise(90, 0, 30, 12, 0.5, 1);
     let c = count_repetitions(&still, CountSignal::Keypoints, &CountParams::default()).unwrap();
