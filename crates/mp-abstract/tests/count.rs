@@ -165,7 +165,10 @@ fn a_person_who_walks_in_is_counted_over_their_own_frames() {
     let c = count_signals(Some(&t), None, &params).unwrap();
     assert!((c.total as i64 - k as i64).abs() <= 1, "{c:?}");
     assert_eq!(c.frames, n);
-    assert!(c.intervals.iter().all(|iv| iv.start_frame + 2 >= lead), "{c:?}");
+    assert!(
+        c.intervals.iter().all(|iv| iv.start_frame + 2 >= lead),
+        "{c:?}"
+    );
 }
 
 #[test]
