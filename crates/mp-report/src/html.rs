@@ -340,13 +340,14 @@ pub fn stage_view(input: &ReportInput<'_>) -> ((usize, usize), View) {
 
 /// The arrays the page's script draws one person with: keypoints,
 /// confidences, the executed program, segment boundaries and kinds, loops
-/// (frames of `track`).
+/// (frames of `track`), and the joint the page selects first (the one that
+/// moves most).
 fn motion_data(
     track: &Track,
     program: &Program,
     executed: &Track,
     intervals: &[RepetitiveInterval],
-) -> Result<serde_json::Value> {
+) -> Result<(serde_json::Value, usize)> {
     check_agree(track, program)?;
     if executed.n_frames() != track.n_frames() || executed.n_joints() != track.n_joints() {
         return Err(ReportError::Mismatch(format!(
@@ -392,7 +393,8 @@ fn motion_data(
                 .collect()
         })
         .collect();
-    Ok(json!({
+    let default_joint = most_moving_joint(track);
+    let data = json!({
         "frames": t,
         "kp": kp,
         "conf": conf,
@@ -404,8 +406,9 @@ fn motion_data(
             "start": iv.start_frame, "end": iv.end_frame, "boundaries": iv.boundaries,
             "count": iv.count, "iterations": iv.iterations, "body": iv.body_size,
         })).collect::<Vec<_>>(),
-        "defaultJoint": most_moving_joint(track),
-    }))
+        "defaultJoint": default_joint,
+    });
+    Ok((data, default_joint))
 }
 
 /// The report page.
@@ -416,7 +419,7 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
         intervals,
         ..
     } = *input;
-    let motion = motion_data(track, program, input.executed, intervals)?;
+    let (motion, default_joint) = motion_data(track, program, input.executed, intervals)?;
     let (_, j, d) = track.positions().dim();
     let sk = track.skeleton();
     let bones: Vec<[usize; 2]> = sk
@@ -427,7 +430,6 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
         .collect();
     let sides: Vec<i32> = program.joints.iter().map(|n| side(n)).collect();
     let ((cw, ch), view) = stage_view(input);
-    let default_joint = most_moving_joint(track);
     let mut data = json!({
         "title": input.title,
         "fps": program.fps,
@@ -471,7 +473,7 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
         let mut meta = vec![json!({"id": pv.main_id, "offset": 0, "colour": null})];
         for (k, p) in pv.others.iter().enumerate() {
             let k = k + 1;
-            let mut m = motion_data(p.track, p.program, p.executed, &p.intervals)?;
+            let (mut m, dj) = motion_data(p.track, p.program, p.executed, &p.intervals)?;
             if let Some(o) = m.as_object_mut() {
                 o.insert("offset".into(), json!(p.offset));
             }
@@ -483,7 +485,6 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
             let [r, g, b] = p.colour;
             meta.push(json!({"id": p.id, "offset": p.offset, "colour": format!("#{r:02x}{g:02x}{b:02x}")}));
             let _ = write!(options, r#"<option value="{k}">{}</option>"#, esc(&p.label));
-            let dj = most_moving_joint(p.track);
             listings.push_str(&wrap(k, &listing_html(p.program, dj, p.offset)));
             timelines.push_str(&wrap(k, &p.timeline_svg));
             repetitions.push_str(&wrap(
