@@ -40,6 +40,16 @@ pub struct EvalCountArgs {
     /// names every change. Without it: the product's defaults.
     #[arg(long = "count-param", value_name = "KEY=VALUE")]
     pub count_params: Vec<String>,
+    /// Fit the confidence model on the synthetic cases of these seeds
+    /// (comma-separated) and score the cases of `--seed` with it; the
+    /// report gives the coefficients (how `ConfidenceModel::default` is made).
+    #[arg(
+        long = "fit-confidence",
+        value_name = "SEEDS",
+        value_delimiter = ',',
+        requires = "synthetic"
+    )]
+    pub fit_confidence: Vec<u64>,
 }
 
 /// The product's parameters with `overrides` (`KEY=VALUE`, VALUE as JSON)
@@ -96,6 +106,7 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
             a.cases,
             &params_with(&a.count_params)?,
             &a.count_params,
+            &a.fit_confidence,
         );
     }
     let (Some(videos), Some(labels)) = (a.videos.as_deref(), a.labels.as_deref()) else {
@@ -158,6 +169,7 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
             json!({
                 "true_count": truth, "count": c.total, "abs_rel_error": err, "obo": obo,
                 "signal": c.signal.as_str(), "method": c.method.as_str(), "confidence": c.confidence,
+                "periodicity": c.periodicity, "features": c.features,
                 "intervals": c.intervals, "frames": n, "fps": c.fps,
                 "person_found": out.keypoints.found_fraction,
                 "count_ms_per_frame": 1000.0 * stage_s(Stage::Count) / n.max(1) as f64,

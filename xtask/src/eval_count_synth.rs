@@ -20,6 +20,7 @@ struct Scored {
     truth: usize,
     count: usize,
     confidence: f64,
+    features: mp_abstract::CountFeatures,
     json: Value,
 }
 
@@ -33,6 +34,7 @@ fn score(c: &Case, params: &Params) -> anyhow::Result<Scored> {
     let json = json!({
         "id": c.id, "source": c.source, "truth": c.truth, "count": k.total,
         "abs_rel_error": err, "obo": obo, "confidence": k.confidence,
+        "periodicity": k.periodicity, "features": k.features,
         "signal": k.signal.as_str(), "method": k.method.as_str(),
         "frames": c.track.n_frames(), "fps": fps, "seconds_of_motion": c.track.n_frames() as f64 / fps,
         "rep_start_frame": c.rep_start, "rep_end_frame": c.rep_end, "rep_boundaries": c.boundaries,
@@ -50,6 +52,7 @@ fn score(c: &Case, params: &Params) -> anyhow::Result<Scored> {
         truth: c.truth,
         count: k.total,
         confidence: k.confidence,
+        features: k.features,
         json,
     })
 }
@@ -112,6 +115,36 @@ fn reliability(items: &[Scored]) -> Value {
     )
 }
 
+/// The calibration curve over every case: by confidence bin, the share of
+/// cases that repeat (N ≥ 2) and were counted within ±1 — what the
+/// confidence stands for — and the same for confidence ≥ 0.9.
+fn calibration(items: &[Scored]) -> Value {
+    let right = |s: &Scored| s.truth >= 2 && (s.count as i64 - s.truth as i64).abs() <= 1;
+    let mut bins = [(0usize, 0usize, 0.0f64); 10];
+    for s in items {
+        let b = ((s.confidence.clamp(0.0, 1.0) * 10.0).floor() as usize).min(9);
+        bins[b].0 += 1;
+        bins[b].1 += usize::from(right(s));
+        bins[b].2 += s.confidence;
+    }
+    let high: Vec<&Scored> = items.iter().filter(|s| s.confidence >= 0.9).collect();
+    let brier = items
+        .iter()
+        .map(|s| (s.confidence - f64::from(u8::from(right(s)))).powi(2))
+        .sum::<f64>()
+        / items.len().max(1) as f64;
+    json!({
+        "bins": bins.iter().enumerate().map(|(i, &(n, ok, c))| json!({
+            "bin": format!("[{:.1}, {:.1}{}", i as f64 / 10.0, (i + 1) as f64 / 10.0, if i == 9 { "]" } else { ")" }),
+            "cases": n,
+            "mean_confidence": if n > 0 { json!(c / n as f64) } else { Value::Null },
+            "share_right": if n > 0 { json!(ok as f64 / n as f64) } else { Value::Null }})).collect::<Vec<_>>(),
+        "confidence_ge_0_9": {"cases": high.len(),
+            "share_right": if high.is_empty() { Value::Null } else { json!(high.iter().filter(|s| right(s)).count() as f64 / high.len() as f64) }},
+        "brier": brier,
+    })
+}
+
 /// Confidence of the N = 0 and N = 1 cases: how many, the share at ≥ 0.5,
 /// quantiles, and their counts.
 fn non_repetitive(items: &[Scored]) -> Value {
@@ -138,12 +171,16 @@ fn non_repetitive(items: &[Scored]) -> Value {
 
 /// `params`: the product's defaults unless `--count-param` changed them
 /// (for choosing a default; the overrides are written into the report).
+/// With `fit_seeds`, the confidence model is first fitted on the cases of
+/// those seeds ([`crate::fit_confidence`]) and the cases of `seed` are then
+/// scored with it; the report gives the fitted coefficients.
 pub fn run(
     out: &Path,
     seed: u64,
     n_cases: usize,
     params: &Params,
     overrides: &[String],
+    fit_seeds: &[u64],
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let data = mp_geom::paths::data_dir().ok_or_else(|| {
@@ -154,6 +191,31 @@ pub fn run(
         eprintln!("{}: {} clips", s.name, s.clips.len());
     }
     let opts = SynthOpts::default();
+    let mut params = params.clone();
+    let mut fitted = Value::Null;
+    if !fit_seeds.is_empty() {
+        if fit_seeds.contains(&seed) {
+            anyhow::bail!("--seed {seed} is one of the --fit-confidence seeds: score on a seed the fit did not see");
+        }
+        let mut examples = Vec::new();
+        for &s in fit_seeds {
+            let fit_cases = generate(&sources, n_cases, s, &opts);
+            let scored: Vec<Scored> = fit_cases
+                .par_iter()
+                .map(|c| score(c, &params))
+                .collect::<anyhow::Result<_>>()?;
+            examples.extend(
+                scored
+                    .iter()
+                    .map(|x| crate::fit_confidence::Example::new(x.features, x.truth, x.count)),
+            );
+        }
+        let model = crate::fit_confidence::fit(&examples)?;
+        eprintln!("confidence fitted on {} cases: {model:?}", examples.len());
+        fitted = json!({"seeds": fit_seeds, "cases": examples.len(), "model": model});
+        params.count.confidence = model;
+    }
+    let params = &params;
     let cases = generate(&sources, n_cases, seed, &opts);
     let t_gen = t0.elapsed().as_secs_f64();
     eprintln!(
@@ -183,6 +245,8 @@ pub fn run(
         "overall": figures(&all),
         "by_source": by_source,
         "reliability_truth_ge_2": reliability(&scored),
+        "calibration": calibration(&scored),
+        "fitted_confidence": fitted,
         "non_repetitive": non_repetitive(&scored),
         "sources": sources.iter().map(|s| json!({"name": s.name, "clips": s.clips.len(), "units": s.units.as_str(), "skeleton": s.skeleton.name})).collect::<Vec<_>>(),
         "data_dir": data.display().to_string(),

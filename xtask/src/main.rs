@@ -12,6 +12,7 @@ mod eval_people;
 mod eval_pose;
 mod eval_refine;
 mod eval_video;
+mod fit_confidence;
 mod models;
 mod pyenv;
 mod setup;

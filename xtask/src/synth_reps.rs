@@ -1,7 +1,9 @@
 //! Synthetic repetition-counting cases built from real motion, after RepNet's
 //! recipe on keypoints: a cycle of a real clip (a natural near-loop of
 //! 0.5–3 s, its seam cross-faded) repeated N times (2..=20) with per-repetition
-//! jitter of speed (±15 %), amplitude (±10 %) and a slow drift, between 0–3 s
+//! jitter of speed (±15 %), amplitude (±10 %, and ±15 % per joint), a smooth
+//! warp of the phase inside each repetition (±10 %) and a slow drift, with
+//! keypoint noise (σ up to 3 % of the body scale), between 0–3 s
 //! of non-repeating motion of the same source; a share of cases (15 %) hold
 //! no repetition (N = 0: motion played once) or one (N = 1). The truth is N,
 //! with the frames where each repetition starts. Seeded and deterministic:
@@ -85,6 +87,17 @@ pub struct SynthOpts {
     pub drift: f64,
     /// Length of the seam cross-fades, seconds (at least 3 frames).
     pub blend_s: f64,
+    /// Relative amplitude change of each joint in each repetition, ± (on
+    /// top of the repetition's own): no two real repetitions move every
+    /// limb alike.
+    pub joint_amp_jitter: f64,
+    /// Largest shift of a repetition's phase inside it, a fraction of the
+    /// repetition (a smooth warp that is 0 at its ends): one part of a
+    /// real cycle is hurried, another lingered on.
+    pub phase_warp: f64,
+    /// Largest keypoint noise, body scales: each case draws its σ in
+    /// 0..this (as a pose model's jitter), smoothed over 3 frames.
+    pub noise: f64,
 }
 
 impl Default for SynthOpts {
@@ -100,6 +113,9 @@ impl Default for SynthOpts {
             amp_jitter: 0.10,
             drift: 0.1,
             blend_s: 0.1,
+            joint_amp_jitter: 0.15,
+            phase_warp: 0.1,
+            noise: 0.03,
         }
     }
 }
@@ -186,6 +202,16 @@ fn repeat(
     let gains: Vec<f64> = (0..=n_reps)
         .map(|_| 1.0 + rng.uniform(-opts.amp_jitter, opts.amp_jitter))
         .collect();
+    let joint_gains: Vec<Vec<f64>> = (0..n_reps)
+        .map(|_| {
+            (0..j)
+                .map(|_| 1.0 + rng.uniform(-opts.joint_amp_jitter, opts.joint_amp_jitter))
+                .collect()
+        })
+        .collect();
+    let warps: Vec<f64> = (0..n_reps)
+        .map(|_| rng.uniform(-opts.phase_warp, opts.phase_warp))
+        .collect();
     let total: usize = lens.iter().sum();
     let dir: Vec<f64> = (0..d).map(|_| rng.uniform(-1.0, 1.0)).collect();
     let norm = dir.iter().map(|v| v * v).sum::<f64>().sqrt().max(1e-9);
@@ -198,10 +224,14 @@ fn repeat(
     for (r, &m) in lens.iter().enumerate() {
         starts.push(t);
         for q in 0..m {
-            let u = q as f64 * n as f64 / m as f64;
+            // Phase in 0..1, warped smoothly (monotone for |warp| < 1/π).
+            let v = q as f64 / m as f64;
+            let v = (v + warps[r] * (std::f64::consts::PI * v).sin()).clamp(0.0, 1.0);
+            let u = (v * n as f64).min(n as f64 - 1e-9);
             let (i0, f) = (u.floor() as usize, u - u.floor());
             let g = gains[r] + (gains[r + 1] - gains[r]) * q as f64 / m as f64;
             for jj in 0..j {
+                let g = g * joint_gains[r][jj];
                 for k in 0..d {
                     let p = (1.0 - f) * bp[[i0, jj, k]] + f * bp[[i0 + 1, jj, k]];
                     let mk = mean.as_ref().map_or(0.0, |m| m[[jj, k]]);
@@ -213,6 +243,31 @@ fn repeat(
         }
     }
     Reps { pos, conf, starts }
+}
+
+/// Adds keypoint noise of standard deviation about `sigma` to every
+/// coordinate: Gaussian (Box–Muller) white noise averaged over 3 frames and
+/// scaled back to `sigma`, so that it wobbles as a pose model's does.
+fn add_noise(pos: &mut Array3<f64>, sigma: f64, rng: &mut Rng) {
+    let (n, j, d) = pos.dim();
+    if sigma <= 0.0 || n == 0 {
+        return;
+    }
+    let mut gauss = || {
+        let (u1, u2) = (rng.f64().max(1e-12), rng.f64());
+        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+    };
+    let white: Vec<f64> = (0..(n + 2) * j * d).map(|_| gauss()).collect();
+    let at = |t: usize, jj: usize, k: usize| white[(t * j + jj) * d + k];
+    // The mean of 3 independent draws has σ 1/√3: scaled back by √3.
+    let g = sigma * 3f64.sqrt() / 3.0;
+    for t in 0..n {
+        for jj in 0..j {
+            for k in 0..d {
+                pos[[t, jj, k]] += g * (at(t, jj, k) + at(t + 1, jj, k) + at(t + 2, jj, k));
+            }
+        }
+    }
 }
 
 /// Cross-fades the last `w` frames of `pos` into `target` (a pose `J × D`).
@@ -342,6 +397,11 @@ pub fn make_case(src: &Source, id: usize, seed: u64, opts: &SynthOpts) -> Option
     if pos.dim().0 < 4 {
         return None;
     }
+    add_noise(
+        &mut pos,
+        rng.uniform(0.0, opts.noise) * clip.scale,
+        &mut rng,
+    );
     let track = Track::new(pos, Some(conf), fps, src.units, src.skeleton.clone()).ok()?;
     let mut boundaries: Vec<usize> = reps.starts.iter().map(|s| s + rep_start).collect();
     if truth > 0 {

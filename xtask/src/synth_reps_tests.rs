@@ -55,6 +55,9 @@ fn still() -> SynthOpts {
         speed_jitter: 0.0,
         amp_jitter: 0.0,
         drift: 0.0,
+        joint_amp_jitter: 0.0,
+        phase_warp: 0.0,
+        noise: 0.0,
         ..SynthOpts::default()
     }
 }
@@ -132,6 +135,7 @@ fn jittered_reps_return_n_times() {
     let opts = SynthOpts {
         non_rep_share: 0.0,
         drift: 0.0,
+        noise: 0.0,
         ..SynthOpts::default()
     };
     for id in 0..12 {
@@ -255,4 +259,28 @@ fn periodicity_separates_repeats_from_motion_once() {
     let once = motion(90, None);
     assert!(periodicity(&rep.pos, &rep.joints, rep.scale, FPS) > 0.7);
     assert!(periodicity(&once.pos, &once.joints, once.scale, FPS) < 0.2);
+}
+
+/// The keypoint noise is what it says: the same case with and without it
+/// differs by a σ of at most `noise` body scales, and not by nothing.
+#[test]
+fn keypoint_noise_stays_within_its_scale() {
+    let src = source(36.0);
+    let quiet = SynthOpts {
+        noise: 0.0,
+        ..SynthOpts::default()
+    };
+    let mut seen = 0.0f64;
+    for id in 0..8 {
+        let a = make_case(&src, id, 5, &quiet).expect("case");
+        let b = make_case(&src, id, 5, &SynthOpts::default()).expect("case");
+        assert_eq!(a.track.n_frames(), b.track.n_frames());
+        let (pa, pb) = (a.track.positions(), b.track.positions());
+        let m = pa.len() as f64;
+        let sd = ((&pa - &pb).mapv(|v| v * v).sum() / m).sqrt();
+        let scale = src.clips[a.cycle.as_ref().map_or(0, |c| c.1.clip)].scale;
+        assert!(sd <= 0.035 * scale, "case {id}: σ {sd} for scale {scale}");
+        seen = seen.max(sd / scale);
+    }
+    assert!(seen > 0.003, "no noise was added: {seen}");
 }

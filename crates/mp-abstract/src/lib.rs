@@ -27,8 +27,8 @@ pub mod selfmatch;
 pub mod synth;
 
 pub use count::{
-    count_repetitions, count_signals, CountMethod, CountParams, CountSignal, CountedInterval,
-    Counts,
+    count_repetitions, count_signals, ConfidenceModel, CountFeatures, CountMethod, CountParams,
+    CountSignal, CountedInterval, Counts,
 };
 pub use error::{AbstractError, Result};
 pub use loops::{detect_loops, DetectedLoop, LoopParams};

@@ -139,6 +139,50 @@ fn other_motion_around_the_repetitions_is_not_counted() {
     };
     let c0 = count_repetitions(&t, CountSignal::Keypoints, &loose).unwrap();
     assert!(c0.total > k + 1, "{c0:?}");
+    // The count that reaches into the other motion is less certain: its
+    // ends do not match themselves a period away.
+    assert!(
+        c0.features.end_mismatch > c.features.end_mismatch + 0.2,
+        "{:?} vs {:?}",
+        c0.features,
+        c.features
+    );
+    assert!(c0.confidence < c.confidence, "{c0:?} vs {c:?}");
+}
+
+#[test]
+fn confidence_is_high_for_repetitions_and_low_for_what_does_not_repeat() {
+    let reps = exercise(0, 10, 24, 12, 0.5, 3);
+    let c = count_repetitions(&reps, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert_eq!(c.total, 10);
+    assert!(c.confidence > 0.8, "{c:?}");
+    assert!(c.features.cycle_mismatch < 0.2, "{:?}", c.features);
+    // A random walk (a person wandering about) does not repeat.
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let step = Normal::new(0.0, 3.0).unwrap();
+    let n = 300;
+    let mut p = Array3::zeros((n, 12, 2));
+    for t in 1..n {
+        for j in 0..12 {
+            for d in 0..2 {
+                p[[t, j, d]] = p[[t - 1, j, d]] + step.sample(&mut rng);
+            }
+        }
+    }
+    let walk = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap();
+    let w = count_repetitions(&walk, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert!(w.confidence < 0.5, "{w:?}");
+    // A count from frames never carries more than its periodicity.
+    let f = count_repetitions(
+        &thumbnails(300, 30.0, 64, 4),
+        CountSignal::Frames,
+        &CountParams::default(),
+    )
+    .unwrap();
+    assert!(
+        f.total > 0 && f.confidence <= f.periodicity + 1e-12,
+        "{f:?}"
+    );
 }
 
 #[test]

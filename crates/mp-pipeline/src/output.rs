@@ -54,6 +54,7 @@ pub fn loops_json(outcome: &Outcome) -> serde_json::Value {
                 obj.insert("signal".into(), json!(c.signal.as_str()));
                 obj.insert("method".into(), json!(c.method.as_str()));
                 obj.insert("confidence".into(), json!(c.confidence));
+                obj.insert("periodicity".into(), json!(c.periodicity));
             }
             v
         })
@@ -68,6 +69,8 @@ pub fn loops_json(outcome: &Outcome) -> serde_json::Value {
         "method": counts.method.as_str(),
         "signal": counts.signal.as_str(),
         "confidence": counts.confidence,
+        "periodicity": counts.periodicity,
+        "confidence_features": counts.features,
         "counted": counts.intervals,
         "program_loops": outcome.analysis.as_ref().map(|a| a.intervals.clone()).unwrap_or_default(),
         "people": people,

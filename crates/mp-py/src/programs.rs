@@ -228,13 +228,14 @@ pub struct PyCounts {
 
 /// The keys of a person's entry that only analysed people have; the others
 /// get them as None, so every entry has the same keys.
-const ANALYSED_KEYS: [&str; 6] = [
+const ANALYSED_KEYS: [&str; 7] = [
     "total_repetitions",
     "counts",
     "intervals",
     "signal",
     "method",
     "confidence",
+    "periodicity",
 ];
 
 /// Every tracked person's entry, as `loops.json`'s `people` list (the same
@@ -325,10 +326,19 @@ impl PyCounts {
         self.inner.method.as_str()
     }
 
-    /// How periodic the deciding signal is (0..1).
+    /// How likely it is that the motion repeats and that `total` is within
+    /// one of the true count (0..1), calibrated on synthetic repetitions of
+    /// real motion.
     #[getter]
     fn confidence(&self) -> f64 {
         self.inner.confidence
+    }
+
+    /// How periodic the deciding signal is: the autocorrelation of its
+    /// motion at the period (0..1).
+    #[getter]
+    fn periodicity(&self) -> f64 {
+        self.inner.periodicity
     }
 
     /// Frames of the recording.

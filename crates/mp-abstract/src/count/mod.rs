@@ -25,6 +25,12 @@
 
 use serde::{Deserialize, Serialize};
 
+mod confidence;
+mod span;
+
+pub use confidence::{ConfidenceModel, CountFeatures};
+use span::{active_span, cycle_mismatch, repeating_span};
+
 use crate::error::{AbstractError, Result};
 use crate::repetition::{
     estimate_period, segment_repetitions, PeriodEstimate, PeriodParams, PeriodicSegment,
@@ -114,6 +120,8 @@ pub struct CountParams {
     /// its rows) before the interval search, whose cost grows with the
     /// channels; the period is still read from every channel. Default 64.
     pub max_segment_channels: usize,
+    /// How a count's confidence is computed from its [`CountFeatures`].
+    pub confidence: ConfidenceModel,
 }
 
 impl Default for CountParams {
@@ -128,6 +136,7 @@ impl Default for CountParams {
             min_found_fraction: 0.5,
             mismatch_fraction: 0.5,
             max_segment_channels: 64,
+            confidence: ConfidenceModel::default(),
         }
     }
 }
@@ -153,6 +162,7 @@ impl CountParams {
         unit("min_found_fraction", self.min_found_fraction)?;
         AbstractError::check_non_negative("mismatch_fraction", self.mismatch_fraction)?;
         AbstractError::check_non_negative("period_tolerance", self.period_tolerance)?;
+        self.confidence.validate()?;
         if self.max_segment_channels == 0 {
             return Err(AbstractError::param(
                 "max_segment_channels",
@@ -229,11 +239,18 @@ pub struct Counts {
     pub signal: CountSignal,
     /// How the count was reached.
     pub method: CountMethod,
-    /// How certain the repetition is: the periodicity strength of the
-    /// deciding signal over the whole recording (the autocorrelation of its
-    /// motion at the period, 0..1), or for several activities the larger of
-    /// that and the intervals' mean score.
+    /// How likely it is that the motion repeats and that `total` is within
+    /// one of the true number of repetitions (0..1): [`CountParams::confidence`]
+    /// applied to `features`.
     pub confidence: f64,
+    /// How periodic the deciding signal is: the autocorrelation of its motion
+    /// at the period over the whole recording (0..1), or for several
+    /// activities the larger of that and the intervals' mean score.
+    #[serde(default)]
+    pub periodicity: f64,
+    /// What the confidence was computed from.
+    #[serde(default)]
+    pub features: CountFeatures,
     /// Frames of the recording.
     pub frames: usize,
     /// Frame rate.
@@ -241,13 +258,26 @@ pub struct Counts {
 }
 
 impl Counts {
-    fn none(signal: CountSignal, frames: usize, fps: f64, confidence: f64) -> Self {
+    fn none(
+        signal: CountSignal,
+        frames: usize,
+        fps: f64,
+        periodicity: f64,
+        model: &ConfidenceModel,
+    ) -> Self {
+        let features = CountFeatures {
+            periodicity,
+            frames_signal: signal == CountSignal::Frames,
+            ..CountFeatures::default()
+        };
         Counts {
             intervals: Vec::new(),
             total: 0,
             signal,
             method: CountMethod::None,
-            confidence,
+            confidence: model.confidence(&features),
+            periodicity,
+            features,
             frames,
             fps,
         }
@@ -291,7 +321,7 @@ fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Res
     let n = signal.n_frames();
     let fps = signal.fps();
     if n < 4 || signal.valid_count() == 0 {
-        return Ok(Counts::none(kind, n, fps, 0.0));
+        return Ok(Counts::none(kind, n, fps, 0.0, &params.confidence));
     }
     let period_params = match kind {
         CountSignal::Keypoints => &params.period,
@@ -320,13 +350,28 @@ fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Res
             .iter()
             .map(|s| CountedInterval::new(s.start_frame, s.end_frame, s.period_frames, s.score))
             .collect();
-        let confidence = strength.max(weighted_score(&segs).clamp(0.0, 1.0));
+        let periodicity = strength.max(weighted_score(&segs).clamp(0.0, 1.0));
+        let features = CountFeatures {
+            periodicity,
+            cycles: intervals.iter().map(|i| i.cycles).sum(),
+            coverage: intervals
+                .iter()
+                .map(|i| i.end_frame - i.start_frame)
+                .sum::<usize>() as f64
+                / n as f64,
+            cycle_mismatch: intervals_mismatch(signal, &intervals).0,
+            end_mismatch: intervals_mismatch(signal, &intervals).1,
+            frames_signal: kind == CountSignal::Frames,
+            intervals: true,
+        };
         return Ok(Counts {
             total: intervals.iter().map(|i| i.count).sum(),
             intervals,
             signal: kind,
             method: CountMethod::Intervals,
-            confidence,
+            confidence: params.confidence.confidence(&features),
+            periodicity,
+            features,
             frames: n,
             fps,
         });
@@ -340,17 +385,29 @@ fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Res
             let (a, b) = active_span(signal, period_frames, params.rest_fraction)?;
             let (a, b) = repeating_span(signal, period_frames, a, b, params.mismatch_fraction);
             let iv = CountedInterval::new(a, b, period_frames, strength);
+            let mismatch = cycle_mismatch(signal, period_frames, a, b).unwrap_or((1.0, 1.0));
+            let features = CountFeatures {
+                periodicity: strength,
+                cycles: iv.cycles,
+                coverage: (b - a) as f64 / n as f64,
+                cycle_mismatch: mismatch.0,
+                end_mismatch: mismatch.1,
+                frames_signal: kind == CountSignal::Frames,
+                intervals: false,
+            };
             Ok(Counts {
                 total: iv.count,
                 intervals: if iv.count > 0 { vec![iv] } else { Vec::new() },
                 signal: kind,
                 method: CountMethod::Period,
-                confidence: strength,
+                confidence: params.confidence.confidence(&features),
+                periodicity: strength,
+                features,
                 frames: n,
                 fps,
             })
         }
-        _ => Ok(Counts::none(kind, n, fps, strength)),
+        _ => Ok(Counts::none(kind, n, fps, strength, &params.confidence)),
     }
 }
 
@@ -375,7 +432,7 @@ pub fn count_signals(
                 // A count beats no count; between two counts (or two
                 // non-counts) the more periodic signal wins.
                 let (cr, br) = (c.method != CountMethod::None, b.method != CountMethod::None);
-                (cr && !br) || (cr == br && c.confidence > b.confidence)
+                (cr && !br) || (cr == br && c.periodicity > b.periodicity)
             }
         };
         if better {
@@ -414,7 +471,13 @@ pub fn count_signals(
                 .ok_or_else(|| {
                     AbstractError::param("signals", "neither keypoints nor frames were given")
                 })?;
-            Ok(Counts::none(CountSignal::Keypoints, n, fps, 0.0))
+            Ok(Counts::none(
+                CountSignal::Keypoints,
+                n,
+                fps,
+                0.0,
+                &params.confidence,
+            ))
         }
     }
 }
@@ -486,177 +549,23 @@ fn weighted_score(segs: &[PeriodicSegment]) -> f64 {
         / w
 }
 
-/// The frames between the first and the last that move: a frame is rest
-/// when its speed (summed over channels, averaged over a centred window of
-/// one period) is below `fraction` of the median over the recording. Falls
-/// back to the whole recording when no frame moves.
-/// Distance between frames `a` and `b` of a track: the sum over joints of
-/// the Euclidean distance, or over the channels of a unitless feature track
-/// of the absolute differences (the same measure as the speed of
-/// [`active_span`]).
-fn frame_distance(track: &Track, a: usize, b: usize) -> f64 {
-    let pos = track.positions();
-    let (_, j, d) = pos.dim();
-    let unitless = track.units() == mp_geom::Units::Unitless;
-    let mut s = 0.0;
-    for ji in 0..j {
-        if unitless {
-            s += (0..d)
-                .map(|k| (pos[[b, ji, k]] - pos[[a, ji, k]]).abs())
-                .sum::<f64>();
-        } else {
-            let mut q = 0.0;
-            for k in 0..d {
-                q += (pos[[b, ji, k]] - pos[[a, ji, k]]).powi(2);
-            }
-            s += q.sqrt();
+/// Cycle mismatch of several counted intervals, whole and at the ends:
+/// their own ([`cycle_mismatch`]) weighted by length; 1 when none can be
+/// measured.
+fn intervals_mismatch(signal: &Track, intervals: &[CountedInterval]) -> (f64, f64) {
+    let (mut sum, mut ends, mut w) = (0.0, 0.0, 0.0);
+    for iv in intervals {
+        if let Some((m, e)) = cycle_mismatch(signal, iv.period_frames, iv.start_frame, iv.end_frame)
+        {
+            let len = (iv.end_frame - iv.start_frame) as f64;
+            sum += m * len;
+            ends += e * len;
+            w += len;
         }
     }
-    s
-}
-
-/// How far from the period (a fraction of it) the next cycle's matching
-/// frame may lie in [`repeating_span`]: human repetitions vary their pace
-/// by this much from cycle to cycle.
-const PERIOD_SLACK: f64 = 0.2;
-
-/// In [`repeating_span`], an end is trimmed only where its mismatch is more
-/// than this multiple of the median mismatch over the activity.
-const MISMATCH_OVER_TYPICAL: f64 = 1.5;
-
-/// The part of `a..b` that repeats at `period`: other motion before or after
-/// the repetitions (a walk into place, a different movement) is active, so
-/// [`active_span`] keeps it, yet it does not match itself one period later.
-///
-/// Each frame's mismatch is its distance to the nearest frame about a period
-/// later or earlier (within [`PERIOD_SLACK`], inside `a..b`), averaged over half a
-/// period; the scale is the median distance between frames half a period
-/// apart (large for a repeating motion, which is far from itself half way
-/// through its cycle). The repetitions start at the first frame whose
-/// mismatch is within `fraction` of that scale or within
-/// [`MISMATCH_OVER_TYPICAL`] times the recording's median mismatch, and end
-/// at the last; the span is kept whole when fewer than two periods remain.
-/// (Requiring half a period or a whole one in a row to match trimmed more of
-/// the synthetic padding but also real cycles that vary: see RESULTS.)
-fn repeating_span(
-    track: &Track,
-    period: usize,
-    a: usize,
-    b: usize,
-    fraction: f64,
-) -> (usize, usize) {
-    let p = period.max(1);
-    if fraction <= 0.0 || b <= a || b - a < 3 * p {
-        return (a, b);
-    }
-    let n = b - a;
-    // People do not keep an exact period: the frame "a period later" is
-    // looked for within ±PERIOD_SLACK of it.
-    let slack = ((p as f64 * PERIOD_SLACK).round() as usize).max(1);
-    let (lo, hi) = (p.saturating_sub(slack).max(1), p + slack);
-    let mismatch: Vec<f64> = (a..b)
-        .map(|t| {
-            let mut best = f64::INFINITY;
-            for lag in lo..=hi {
-                if t + lag < b {
-                    best = best.min(frame_distance(track, t, t + lag));
-                }
-                if t >= a + lag {
-                    best = best.min(frame_distance(track, t - lag, t));
-                }
-            }
-            if best.is_finite() {
-                best
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let half = (p / 2).max(1);
-    let mut far: Vec<f64> = (a..b.saturating_sub(half))
-        .map(|t| frame_distance(track, t, t + half))
-        .collect();
-    if far.is_empty() {
-        return (a, b);
-    }
-    far.sort_by(f64::total_cmp);
-    let scale = far[far.len() / 2];
-    if !(scale.is_finite() && scale > 0.0) {
-        return (a, b);
-    }
-    let mut prefix = vec![0.0; n + 1];
-    for i in 0..n {
-        prefix[i + 1] = prefix[i] + mismatch[i];
-    }
-    let w = half;
-    let smooth = |i: usize| {
-        let lo = i.saturating_sub(w / 2);
-        let hi = (i + w - w / 2).min(n);
-        (prefix[hi] - prefix[lo]) / (hi - lo).max(1) as f64
-    };
-    // Trimmed: motion that is both far from a repetition (above `fraction`
-    // of the half-period scale) and far worse than the recording's own
-    // cycle-to-cycle variation (MISMATCH_OVER_TYPICAL × its median): real
-    // repetitions vary in amplitude and pace, and jitter weighs more on
-    // small movements, so the scale alone would trim them.
-    let smoothed: Vec<f64> = (0..n).map(smooth).collect();
-    let mut sorted = smoothed.clone();
-    sorted.sort_by(f64::total_cmp);
-    let typical = sorted[n / 2];
-    let limit = (fraction * scale).max(MISMATCH_OVER_TYPICAL * typical);
-    let first = (0..n).find(|&i| smoothed[i] <= limit);
-    let last = (0..n).rev().find(|&i| smoothed[i] <= limit);
-    match (first, last) {
-        (Some(i), Some(k)) if k + 1 >= i + 2 * p => (a + i, a + k + 1),
-        _ => (a, b),
-    }
-}
-
-fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, usize)> {
-    let n = track.n_frames();
-    if fraction <= 0.0 || n < 2 {
-        return Ok((0, n));
-    }
-    // Speed: the sum of the joints' displacements; the channels of a unitless
-    // feature track (thumbnail cells) are not coordinates of a point, so each
-    // counts on its own (|Δ| per channel): `frame_distance`.
-    // Displacements over a quarter period, per frame: keypoint jitter, which
-    // does not grow with the lag, stays small beside the motion, which does.
-    let lag = (period / 4).clamp(1, n - 1);
-    let speed: Vec<f64> = (0..n)
-        .map(|t| {
-            let b = (t + lag).min(n - 1);
-            let a = b.saturating_sub(lag);
-            frame_distance(track, a, b) / (b - a).max(1) as f64
-        })
-        .collect();
-    let w = period.max(1);
-    let mut prefix = vec![0.0; n + 1];
-    for t in 0..n {
-        prefix[t + 1] = prefix[t] + speed[t];
-    }
-    let local: Vec<f64> = (0..n)
-        .map(|t| {
-            let lo = t.saturating_sub(w / 2);
-            let hi = (t + w - w / 2).min(n);
-            (prefix[hi] - prefix[lo]) / (hi - lo).max(1) as f64
-        })
-        .collect();
-    let mut sorted = local.clone();
-    sorted.sort_by(f64::total_cmp);
-    // The activity's level: the median speed, or half the speed of the most
-    // active tenth when the rest is the larger part (a person who stops and
-    // stands for most of the recording).
-    let median = sorted[n / 2];
-    let q90 = sorted[(n * 9 / 10).min(n - 1)];
-    let level = median.max(0.5 * q90);
-    if level.is_nan() || level <= 0.0 {
-        return Ok((0, n));
-    }
-    let first = local.iter().position(|&v| v >= fraction * level);
-    let last = local.iter().rposition(|&v| v >= fraction * level);
-    match (first, last) {
-        (Some(a), Some(b)) if b >= a => Ok((a, b + 1)),
-        _ => Ok((0, n)),
+    if w > 0.0 {
+        (sum / w, ends / w)
+    } else {
+        (1.0, 1.0)
     }
 }

@@ -1,0 +1,231 @@
+//! Where the repetitions of a recording lie: the frames that move
+//! ([`active_span`]), the part of those that repeats at the period
+//! ([`repeating_span`]), and how closely the motion returns to itself one
+//! period later ([`cycle_mismatch`]).
+
+use crate::error::Result;
+use mp_geom::Track;
+
+/// Distance between frames `a` and `b` of a track: the sum over joints of
+/// the Euclidean distance, or over the channels of a unitless feature track
+/// of the absolute differences (the same measure as the speed of
+/// [`active_span`]).
+pub(crate) fn frame_distance(track: &Track, a: usize, b: usize) -> f64 {
+    let pos = track.positions();
+    let (_, j, d) = pos.dim();
+    let unitless = track.units() == mp_geom::Units::Unitless;
+    let mut s = 0.0;
+    for ji in 0..j {
+        if unitless {
+            s += (0..d)
+                .map(|k| (pos[[b, ji, k]] - pos[[a, ji, k]]).abs())
+                .sum::<f64>();
+        } else {
+            let mut q = 0.0;
+            for k in 0..d {
+                q += (pos[[b, ji, k]] - pos[[a, ji, k]]).powi(2);
+            }
+            s += q.sqrt();
+        }
+    }
+    s
+}
+
+/// How far from the period (a fraction of it) the next cycle's matching
+/// frame may lie in [`repeating_span`]: human repetitions vary their pace
+/// by this much from cycle to cycle.
+const PERIOD_SLACK: f64 = 0.2;
+
+/// In [`repeating_span`], an end is trimmed only where its mismatch is more
+/// than this multiple of the median mismatch over the activity.
+const MISMATCH_OVER_TYPICAL: f64 = 1.5;
+
+/// Each frame's distance to the nearest frame about a period later or
+/// earlier (within [`PERIOD_SLACK`], inside `a..b`; infinite where there is
+/// none), and the scale it is measured against: the median distance between
+/// frames half a period apart (large for a repeating motion, which is far
+/// from itself half way through its cycle). `None` when the span holds no
+/// pair half a period apart or the scale is 0 (no motion).
+fn mismatch_profile(track: &Track, p: usize, a: usize, b: usize) -> Option<(Vec<f64>, f64)> {
+    let p = p.max(1);
+    // People do not keep an exact period: the frame "a period later" is
+    // looked for within ±PERIOD_SLACK of it.
+    let slack = ((p as f64 * PERIOD_SLACK).round() as usize).max(1);
+    let (lo, hi) = (p.saturating_sub(slack).max(1), p + slack);
+    let mismatch: Vec<f64> = (a..b)
+        .map(|t| {
+            let mut best = f64::INFINITY;
+            for lag in lo..=hi {
+                if t + lag < b {
+                    best = best.min(frame_distance(track, t, t + lag));
+                }
+                if t >= a + lag {
+                    best = best.min(frame_distance(track, t - lag, t));
+                }
+            }
+            best
+        })
+        .collect();
+    let half = (p / 2).max(1);
+    let mut far: Vec<f64> = (a..b.saturating_sub(half))
+        .map(|t| frame_distance(track, t, t + half))
+        .filter(|d| d.is_finite())
+        .collect();
+    if far.is_empty() {
+        return None;
+    }
+    far.sort_by(f64::total_cmp);
+    let scale = far[far.len() / 2];
+    (scale.is_finite() && scale > 0.0).then_some((mismatch, scale))
+}
+
+/// How closely the motion of `a..b` returns to itself one period later, as
+/// `(whole, ends)`: the median over its frames of the distance to the
+/// nearest frame about a period away, over the distance between frames half
+/// a period apart (both as in [`repeating_span`]), and the larger of the
+/// same median over its first and over its last period. About 0 for an
+/// exact repetition, about 1 or more for motion that does not repeat at this
+/// period; `ends` above `whole` when the span reaches into other motion.
+/// `None` when the span is shorter than a period and a half or does not move.
+pub(crate) fn cycle_mismatch(
+    track: &Track,
+    period: usize,
+    a: usize,
+    b: usize,
+) -> Option<(f64, f64)> {
+    let p = period.max(1);
+    if b <= a || 2 * (b - a) < 3 * p || b > track.n_frames() {
+        return None;
+    }
+    let (mismatch, scale) = mismatch_profile(track, p, a, b)?;
+    let median = |v: &[f64]| {
+        let mut m: Vec<f64> = v.iter().copied().filter(|v| v.is_finite()).collect();
+        if m.is_empty() {
+            return None;
+        }
+        m.sort_by(f64::total_cmp);
+        Some(m[m.len() / 2] / scale)
+    };
+    let whole = median(&mismatch)?;
+    let k = p.min(mismatch.len());
+    let ends = median(&mismatch[..k])
+        .into_iter()
+        .chain(median(&mismatch[mismatch.len() - k..]))
+        .fold(whole, f64::max);
+    (whole.is_finite() && ends.is_finite()).then_some((whole, ends))
+}
+
+/// The part of `a..b` that repeats at `period`: other motion before or after
+/// the repetitions (a walk into place, a different movement) is active, so
+/// [`active_span`] keeps it, yet it does not match itself one period later.
+///
+/// Each frame's mismatch is its distance to the nearest frame about a period
+/// later or earlier (within [`PERIOD_SLACK`], inside `a..b`), averaged over half a
+/// period; the scale is the median distance between frames half a period
+/// apart (large for a repeating motion, which is far from itself half way
+/// through its cycle). The repetitions start at the first frame whose
+/// mismatch is within `fraction` of that scale or within
+/// [`MISMATCH_OVER_TYPICAL`] times the recording's median mismatch, and end
+/// at the last; the span is kept whole when fewer than two periods remain.
+/// (Requiring half a period or a whole one in a row to match trimmed more of
+/// the synthetic padding but also real cycles that vary: see RESULTS.)
+pub(crate) fn repeating_span(
+    track: &Track,
+    period: usize,
+    a: usize,
+    b: usize,
+    fraction: f64,
+) -> (usize, usize) {
+    let p = period.max(1);
+    if fraction <= 0.0 || b <= a || b - a < 3 * p {
+        return (a, b);
+    }
+    let n = b - a;
+    let Some((mismatch, scale)) = mismatch_profile(track, p, a, b) else {
+        return (a, b);
+    };
+    let half = (p / 2).max(1);
+    let mismatch: Vec<f64> = mismatch
+        .into_iter()
+        .map(|m| if m.is_finite() { m } else { 0.0 })
+        .collect();
+    let mut prefix = vec![0.0; n + 1];
+    for i in 0..n {
+        prefix[i + 1] = prefix[i] + mismatch[i];
+    }
+    let w = half;
+    let smooth = |i: usize| {
+        let lo = i.saturating_sub(w / 2);
+        let hi = (i + w - w / 2).min(n);
+        (prefix[hi] - prefix[lo]) / (hi - lo).max(1) as f64
+    };
+    // Trimmed: motion that is both far from a repetition (above `fraction`
+    // of the half-period scale) and far worse than the recording's own
+    // cycle-to-cycle variation (MISMATCH_OVER_TYPICAL × its median): real
+    // repetitions vary in amplitude and pace, and jitter weighs more on
+    // small movements, so the scale alone would trim them.
+    let smoothed: Vec<f64> = (0..n).map(smooth).collect();
+    let mut sorted = smoothed.clone();
+    sorted.sort_by(f64::total_cmp);
+    let typical = sorted[n / 2];
+    let limit = (fraction * scale).max(MISMATCH_OVER_TYPICAL * typical);
+    let first = (0..n).find(|&i| smoothed[i] <= limit);
+    let last = (0..n).rev().find(|&i| smoothed[i] <= limit);
+    match (first, last) {
+        (Some(i), Some(k)) if k + 1 >= i + 2 * p => (a + i, a + k + 1),
+        _ => (a, b),
+    }
+}
+
+/// The frames between the first and the last that move: a frame is rest
+/// when its speed (summed over channels, averaged over a centred window of
+/// one period) is below `fraction` of the median over the recording. Falls
+/// back to the whole recording when no frame moves.
+pub(crate) fn active_span(track: &Track, period: usize, fraction: f64) -> Result<(usize, usize)> {
+    let n = track.n_frames();
+    if fraction <= 0.0 || n < 2 {
+        return Ok((0, n));
+    }
+    // Speed: the sum of the joints' displacements; the channels of a unitless
+    // feature track (thumbnail cells) are not coordinates of a point, so each
+    // counts on its own (|Δ| per channel): `frame_distance`.
+    // Displacements over a quarter period, per frame: keypoint jitter, which
+    // does not grow with the lag, stays small beside the motion, which does.
+    let lag = (period / 4).clamp(1, n - 1);
+    let speed: Vec<f64> = (0..n)
+        .map(|t| {
+            let b = (t + lag).min(n - 1);
+            let a = b.saturating_sub(lag);
+            frame_distance(track, a, b) / (b - a).max(1) as f64
+        })
+        .collect();
+    let w = period.max(1);
+    let mut prefix = vec![0.0; n + 1];
+    for t in 0..n {
+        prefix[t + 1] = prefix[t] + speed[t];
+    }
+    let local: Vec<f64> = (0..n)
+        .map(|t| {
+            let lo = t.saturating_sub(w / 2);
+            let hi = (t + w - w / 2).min(n);
+            (prefix[hi] - prefix[lo]) / (hi - lo).max(1) as f64
+        })
+        .collect();
+    let mut sorted = local.clone();
+    sorted.sort_by(f64::total_cmp);
+    // The activity's level: the median speed, or half the speed of the most
+    // active tenth when the rest is the larger part (a person who stops and
+    // stands for most of the recording).
+    let median = sorted[n / 2];
+    let q90 = sorted[(n * 9 / 10).min(n - 1)];
+    let level = median.max(0.5 * q90);
+    if level.is_nan() || level <= 0.0 {
+        return Ok((0, n));
+    }
+    let first = local.iter().position(|&v| v >= fraction * level);
+    let last = local.iter().rposition(|&v| v >= fraction * level);
+    match (first, last) {
+        (Some(a), Some(b)) if b >= a => Ok((a, b + 1)),
+        _ => Ok((0, n)),
+    }
+}
