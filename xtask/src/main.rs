@@ -6,6 +6,7 @@ mod eval_count;
 mod eval_count_synth;
 mod eval_forecast;
 mod eval_grammar;
+mod eval_inbetween;
 mod eval_intervals;
 mod eval_loops;
 mod eval_people;
@@ -68,6 +69,8 @@ enum Eval {
     Refine(eval_refine::EvalRefineArgs),
     /// Program-guided frame interpolation at 2×, 4×, 8× vs linear blending and FFmpeg minterpolate (KD of arms, PSNR, SSIM).
     Interpolation(eval_video::EvalInterpolationArgs),
+    /// In-between poses of `mp interpolate` on real keypoint tracks (every k-th frame kept) vs linear interpolation.
+    Inbetween(eval_inbetween::EvalInBetweenArgs),
     /// Video prediction by unrolling the last loop on pixels vs constant and nearest-neighbour frames (KD, PSNR, SSIM).
     VideoPredict(eval_video::EvalVideoPredictArgs),
 }
@@ -85,6 +88,7 @@ fn main() {
             Eval::Forecast(a) => eval_forecast::run(&a),
             Eval::Refine(a) => eval_refine::run(&a),
             Eval::Interpolation(a) => eval_video::run_interpolation(&a),
+            Eval::Inbetween(a) => eval_inbetween::run(&a),
             Eval::VideoPredict(a) => eval_video::run_video_predict(&a),
         },
         Command::Setup(a) => setup::run(&a),

@@ -1,7 +1,8 @@
 //! The interpolation experiment: keep every `step`-th frame, synthesise a
 //! program on the kept frames, execute it at the original rate and compare
 //! the dropped frames with the truth, against linear interpolation between
-//! the kept frames.
+//! the kept frames and against the in-between poses `mp interpolate` warps
+//! to ([`crate::InBetweenPoses`] with the default rule).
 //!
 //! Only dropped frames up to the last kept frame are scored (both methods
 //! interpolate there; neither extrapolates), and only observed
@@ -18,6 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{ConcreteError, Result};
 use crate::exec::Transition;
+use crate::inbetween::{InBetween, InBetweenPoses};
 use crate::synth::{synthesize, Lambda, SynthParams};
 
 /// Parameters of [`interpolation_experiment`].
@@ -58,6 +60,12 @@ pub struct InterpolationResult {
     pub kd_program: f64,
     /// Mean distance of linear interpolation to the truth (track units).
     pub kd_linear: f64,
+    /// Mean distance of the in-between poses `mp interpolate` warps to
+    /// ([`InBetweenPoses`] with [`InBetween::default`], on the kept frames
+    /// and this program) to the truth; where neither kept frame around a
+    /// dropped one sees the joint, the linear interpolation across the gap.
+    #[serde(default)]
+    pub kd_inbetween: f64,
 }
 
 /// Runs the experiment for one track and one factor (`step ≥ 2`).
@@ -101,13 +109,27 @@ pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<Inte
     let dropped: Vec<usize> = (0..=last).filter(|f| f % step != 0).collect();
     let frames: Vec<f64> = dropped.iter().map(|&f| f as f64 / step as f64).collect();
     let exec = program.sample_frames(&frames, transition)?;
+    let tween = InBetweenPoses::new(
+        &kept,
+        Some(&program),
+        InBetween::default(),
+        params.min_confidence,
+    )?;
+    let mut between = Vec::with_capacity(dropped.len());
+    for &f in &dropped {
+        between.push(
+            tween
+                .pose(f / step, (f % step) as f64 / step as f64)?
+                .unwrap_or_default(),
+        );
+    }
 
     // Linear interpolation between kept frames where the joint is observed.
     let (j, d) = (track.n_joints(), track.dims());
     let pos = track.positions();
     let conf = track.confidence();
     let min_conf = params.min_confidence;
-    let (mut sum_p, mut sum_l, mut n) = (0.0, 0.0, 0usize);
+    let (mut sum_p, mut sum_l, mut sum_b, mut n) = (0.0, 0.0, 0.0, 0usize);
     for ji in 0..j {
         let valid: Vec<usize> = (0..n_kept)
             .map(|i| i * step)
@@ -123,17 +145,21 @@ pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<Inte
             let Some((a, b, w)) = mp_geom::track::bracket(&valid, f) else {
                 continue;
             };
-            let (mut ep, mut el) = (0.0, 0.0);
+            let tw = between[row].get(ji).and_then(|p| p.as_ref());
+            let (mut ep, mut el, mut eb) = (0.0, 0.0, 0.0);
             for k in 0..d {
                 let truth = pos[[f, ji, k]];
                 let lin = (1.0 - w) * pos[[a, ji, k]] + w * pos[[b, ji, k]];
                 let e1 = exec[[row, ji, k]] - truth;
                 let e2 = lin - truth;
+                let e3 = tw.map_or(lin, |p| p[k]) - truth;
                 ep += e1 * e1;
                 el += e2 * e2;
+                eb += e3 * e3;
             }
             sum_p += ep.sqrt();
             sum_l += el.sqrt();
+            sum_b += eb.sqrt();
             n += 1;
         }
     }
@@ -148,5 +174,6 @@ pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<Inte
         n_segments: program.n_segments(),
         kd_program: sum_p / n as f64,
         kd_linear: sum_l / n as f64,
+        kd_inbetween: sum_b / n as f64,
     })
 }

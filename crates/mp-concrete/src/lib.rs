@@ -11,6 +11,8 @@
 //! * [`Program::execute`] and friends: rendering at any time resolution.
 //! * [`program_stats`], [`interpolation_experiment`]: the measurements of
 //!   the paper's §4.1 and §4.2.
+//! * [`InBetweenPoses`]: the pose between two frames of a track, guided by
+//!   its program (what `mp interpolate` warps in-between frames to).
 //!
 //! ```
 //! use mp_concrete::{synthesize, SynthParams};
@@ -33,6 +35,7 @@ pub mod dp;
 pub mod dsl;
 pub mod error;
 pub mod exec;
+pub mod inbetween;
 pub mod interp;
 pub mod program;
 pub mod search;
@@ -44,6 +47,7 @@ pub mod synthetic;
 pub use dp::{segment_brute_force, segment_dp, CostTable, Segmentation};
 pub use error::{ConcreteError, ParseError, Result};
 pub use exec::{ExecParams, Transition};
+pub use inbetween::{InBetween, InBetweenPoses, Tangents};
 pub use interp::{interpolation_experiment, InterpParams, InterpolationResult};
 pub use program::{Program, Segment};
 pub use search::SearchStats;

@@ -169,8 +169,8 @@ struct ClipResult {
     kd_512: f64,
     jump_raw_512: f64,
     jump_program_512: f64,
-    /// step → (program, linear) KD at 512 px, when the clip is long enough.
-    interp: BTreeMap<usize, (f64, f64)>,
+    /// step → (program, linear, in-between) KD at 512 px, when the clip is long enough.
+    interp: BTreeMap<usize, (f64, f64, f64)>,
     seconds: f64,
 }
 
@@ -212,7 +212,14 @@ fn run_clip(
         };
         // Short clips (fewer than 2 kept frames or nothing to score) are skipped for that factor.
         if let Ok(r) = interpolation_experiment(&track, &ip) {
-            interp.insert(s, (r.kd_program * to512, r.kd_linear * to512));
+            interp.insert(
+                s,
+                (
+                    r.kd_program * to512,
+                    r.kd_linear * to512,
+                    r.kd_inbetween * to512,
+                ),
+            );
         }
     }
     Ok(ClipResult {
@@ -243,7 +250,7 @@ fn summary(rs: &[&ClipResult], steps: &[usize]) -> Value {
     let sum_raw: usize = rs.iter().map(|r| r.params_raw).sum();
     let mut interp = serde_json::Map::new();
     for &s in steps {
-        let v: Vec<(f64, f64)> = rs
+        let v: Vec<(f64, f64, f64)> = rs
             .iter()
             .filter_map(|r| r.interp.get(&s).copied())
             .collect();
@@ -253,6 +260,7 @@ fn summary(rs: &[&ClipResult], steps: &[usize]) -> Value {
                 "clips": v.len(),
                 "kd_program_px_512": mean(v.iter().map(|p| p.0)),
                 "kd_linear_px_512": mean(v.iter().map(|p| p.1)),
+                "kd_inbetween_px_512": mean(v.iter().map(|p| p.2)),
             }),
         );
     }

@@ -181,10 +181,18 @@ pub struct EvalInterpolationArgs {
     pub tracks_dir: Option<PathBuf>,
     /// Settings other than the product's, for choosing defaults on a
     /// validation set: `warp=field|bones`, `blend_power=P`,
-    /// `body_radius_frac=R`, `sigma_frac=S`, `agree_tau=T`, `max_bulge=B`,
+    /// `body_radius_frac=R`, `sigma_frac=S`, `agree_tau=T`, `max_bulge=B` (the earlier
+    /// rule, `inbetween=bulge:B`), `inbetween=RULE` (`mp_concrete::InBetween::parse`),
     /// `recover_s=S`, `pixel_check=true|false`, `warp_check=true|false`, `min_confidence=C` (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Also score the target poses of these in-between rules
+    /// (`mp_concrete::InBetween::parse`) on the same keypoints and program.
+    #[arg(long, value_delimiter = ',')]
+    pub target_rules: Vec<String>,
+    /// Only the target poses (no frames rebuilt): with `program` among the methods.
+    #[arg(long)]
+    pub targets_only: bool,
 }
 
 /// `InterpParams::default()` with the `--set` overrides.
@@ -206,7 +214,12 @@ fn interp_params(set: &[String]) -> anyhow::Result<InterpParams> {
             "body_radius_frac" => p.body_radius_frac = v.parse()?,
             "sigma_frac" => p.sigma_frac = v.parse()?,
             "agree_tau" => p.agree_tau = v.parse()?,
-            "max_bulge" => p.max_bulge = v.parse()?,
+            "max_bulge" => {
+                p.inbetween = mp_concrete::InBetween::Bulge {
+                    max_bulge: v.parse()?,
+                }
+            }
+            "inbetween" => p.inbetween = mp_concrete::InBetween::parse(v)?,
             "recover_s" => p.recover_s = v.parse()?,
             "pixel_check" => p.pixel_check = v.parse()?,
             "warp_check" => p.warp_check = v.parse()?,
@@ -221,14 +234,16 @@ fn interp_params(set: &[String]) -> anyhow::Result<InterpParams> {
 /// KD (px) over elbows and wrists between the truth at the dropped frames
 /// and (a) the program's target poses, (b) the kept frames' keypoints
 /// interpolated linearly: how far the pose the frames are warped to is from
-/// the true pose, before any pixel is moved.
+/// the true pose, before any pixel is moved. Both on the same entries: the
+/// joints the pose model sees in both kept frames around the dropped one
+/// (a joint seen in one of them only is held there by every rule).
 fn target_kd(
     guide: &Guide,
     truth: &Track,
     k: usize,
     dropped: &[usize],
 ) -> anyhow::Result<(f64, f64)> {
-    let (mut s_t, mut n_t, mut s_l, mut n_l) = (0.0, 0usize, 0.0, 0usize);
+    let (mut s_t, mut s_l, mut n) = (0.0, 0.0, 0usize);
     let g = &guide.track;
     for &t in dropped {
         let (i, w) = (t / k, (t % k) as f64 / k as f64);
@@ -237,22 +252,23 @@ fn target_kd(
             if t >= truth.n_frames() || !truth.is_valid(t, j, MIN_CONF) {
                 continue;
             }
-            let q = truth.point(t, j);
-            if let Some(Some(p)) = tp.get(j) {
-                s_t += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
-                n_t += 1;
-            }
-            if i + 1 < g.n_frames() && g.is_valid(i, j, MIN_CONF) && g.is_valid(i + 1, j, MIN_CONF)
+            if !(i + 1 < g.n_frames()
+                && g.is_valid(i, j, MIN_CONF)
+                && g.is_valid(i + 1, j, MIN_CONF))
             {
-                let (a, b) = (g.point(i, j), g.point(i + 1, j));
-                let p = [a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1])];
-                s_l += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
-                n_l += 1;
+                continue;
             }
+            let Some(Some(p)) = tp.get(j) else { continue };
+            let q = truth.point(t, j);
+            let (a, b) = (g.point(i, j), g.point(i + 1, j));
+            let l = [a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1])];
+            s_t += (p[0] - q[0]).hypot(p[1] - q[1]);
+            s_l += (l[0] - q[0]).hypot(l[1] - q[1]);
+            n += 1;
         }
     }
-    let m = |s: f64, n: usize| if n > 0 { s / n as f64 } else { f64::NAN };
-    Ok((m(s_t, n_t), m(s_l, n_l)))
+    let m = |s: f64| if n > 0 { s / n as f64 } else { f64::NAN };
+    Ok((m(s_t), m(s_l)))
 }
 
 /// The true frames' poses, decoded once: the product's pose model over the
@@ -316,6 +332,11 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
     }
     let params = Params::default();
     let iparams = interp_params(&a.set)?;
+    let target_rules: Vec<mp_concrete::InBetween> = a
+        .target_rules
+        .iter()
+        .map(|r| mp_concrete::InBetween::parse(r))
+        .collect::<Result<_, _>>()?;
     let tmp = std::env::temp_dir().join(format!("mp-eval-interp-{}", std::process::id()));
     std::fs::create_dir_all(&tmp)?;
     let mut per_video = Map::new();
@@ -353,8 +374,21 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                 // The poses the program-guided frames are warped to, and the
                 // kept keypoints interpolated linearly, against the truth.
                 let guide = Guide::fit(&kept, &params, &iparams);
+                let mut others = Map::new();
                 let (kd_target, kd_lin) = match guide {
-                    Ok(g) => target_kd(&g, &truth, k, &dropped)?,
+                    Ok(mut g) => {
+                        for r in &target_rules {
+                            g.inbetween = *r;
+                            let (t, _) = target_kd(&g, &truth, k, &dropped)?;
+                            eprintln!(
+                                "{name} ×{k} target poses with {}: KD arms {t:.2} px",
+                                r.label()
+                            );
+                            others.insert(r.label(), num(t));
+                        }
+                        g.inbetween = iparams.inbetween;
+                        target_kd(&g, &truth, k, &dropped)?
+                    }
                     // No person: the program method fails below and is reported.
                     Err(_) => (f64::NAN, f64::NAN),
                 };
@@ -363,13 +397,14 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                 );
                 fres.insert(
                     "target_pose".into(),
-                    json!({"kd_arms_px": num(kd_target), "kd_arms_linear_keypoints_px": num(kd_lin)}),
+                    json!({"kd_arms_px": num(kd_target), "kd_arms_linear_keypoints_px": num(kd_lin),
+                           "kd_arms_px_other_rules": others}),
                 );
                 let e = pooled_target.entry(k).or_default();
                 e.0.push(kd_target);
                 e.1.push(kd_lin);
             }
-            for &method in &methods {
+            for &method in methods.iter().filter(|_| !a.targets_only) {
                 let t0 = Instant::now();
                 eprint!("{name} ×{k} {} … ", method.as_str());
                 let mut truth_frames = VideoReader::open(video)?;

@@ -214,7 +214,7 @@ mod tests {
         Guide {
             track,
             program,
-            max_bulge: 0.5,
+            inbetween: mp_concrete::InBetween::default(),
             min_confidence: 0.3,
         }
     }

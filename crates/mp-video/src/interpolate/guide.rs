@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use mp_concrete::{Program, Transition};
+use mp_concrete::{InBetween, InBetweenPoses, Program};
 use mp_geom::{CancelToken, Track};
 use mp_pipeline::{Input, Keep, Params, Silent};
 
@@ -16,17 +16,16 @@ pub struct Guide {
     pub track: Track,
     /// The concrete program fitted to them.
     pub program: Program,
-    /// The program's bulge away from the chord between two frames is cut to
-    /// this fraction of the detected keypoints' chord
-    /// ([`InterpParams::max_bulge`]).
-    pub max_bulge: f64,
+    /// How the pose between two frames is made ([`InterpParams::inbetween`]).
+    pub inbetween: InBetween,
     /// Confidence above which a joint is seen ([`InterpParams::min_confidence`]).
     pub min_confidence: f64,
 }
 
 impl Guide {
     /// Runs the pose model over `input` and fits the program, as `mp run`
-    /// does, with the pose model's recovery and the bulge cut of `params`.
+    /// does, with the pose model's recovery of `params`; then
+    /// [`Guide::from_track`].
     pub fn fit(input: &Path, analysis: &Params, params: &InterpParams) -> Result<Self> {
         let info = mp_pose::probe(input)?;
         let mut analysis = analysis.clone();
@@ -44,13 +43,48 @@ impl Guide {
             return Err(VideoError::NoPerson(input.to_path_buf()));
         }
         let frame_px = Some(info.width.max(info.height) as f64);
+        Self::from_track(track, frame_px, analysis, params)
+    }
+
+    /// The guide of keypoints already found (the frames of the video to be
+    /// interpolated, `frame_px` its larger side): fits the program with
+    /// `mp_pipeline::concrete_program` and the in-between rule of `params`.
+    /// What [`Guide::fit`] does after the pose model.
+    pub fn from_track(
+        track: Track,
+        frame_px: Option<f64>,
+        analysis: &Params,
+        params: &InterpParams,
+    ) -> Result<Self> {
+        params.validate()?;
+        if track.valid_count() == 0 || track.n_frames() < 2 {
+            return Err(VideoError::param(
+                "track",
+                format!(
+                    "needs at least 2 frames and a seen joint, got {} frames and {} seen keypoints",
+                    track.n_frames(),
+                    track.valid_count()
+                ),
+            ));
+        }
         let syn = mp_pipeline::concrete_program(&track, frame_px, analysis)?;
         Ok(Guide {
             track,
             program: syn.program,
-            max_bulge: params.max_bulge,
+            inbetween: params.inbetween,
             min_confidence: params.min_confidence,
         })
+    }
+
+    /// The in-between poses of the track ([`InBetweenPoses`]).
+    pub fn poses(&self) -> Result<InBetweenPoses<'_>> {
+        InBetweenPoses::new(
+            &self.track,
+            Some(&self.program),
+            self.inbetween,
+            self.min_confidence,
+        )
+        .map_err(|e| VideoError::Program(e.to_string()))
     }
 
     pub(super) fn seen(&self, t: usize, j: usize) -> bool {
@@ -59,8 +93,8 @@ impl Guide {
 
     /// The pose the in-between frame at time `i + w` (`0 ≤ w ≤ 1`) is warped
     /// to, per joint (`None` where neither neighbour shows the joint): the
-    /// program executed at that time plus the detected keypoints' offset
-    /// from the program at frames `i` and `i + 1`, interpolated linearly.
+    /// in-between rule ([`InterpParams::inbetween`], [`InBetweenPoses`])
+    /// between the detected keypoints of frames `i` and `i + 1`.
     ///
     /// This is the pose before the pixels are consulted: the warp of
     /// [`interpolate_frames`] also leaves in place the joints whose detected
@@ -119,49 +153,23 @@ impl Guide {
         w: f64,
         support: Option<&[bool]>,
     ) -> Result<Option<Vec<Option<Target>>>> {
-        let nt = self.track.n_frames();
-        if i + 1 >= nt || i + 1 >= self.program.n_frames() {
+        let Some(pose) = self
+            .poses()?
+            .pose(i, w)
+            .map_err(|e| VideoError::Program(e.to_string()))?
+        else {
             return Ok(None);
-        }
-        let p = self
-            .program
-            .sample_frames(&[i as f64, i as f64 + w, (i + 1) as f64], Transition::Blend)
-            .map_err(|e| VideoError::Program(e.to_string()))?;
-        let nj = self.track.n_joints().min(p.dim().1);
+        };
+        let nj = pose.len();
         let mut targets = vec![None; nj];
-        for j in 0..nj {
+        for (j, tp) in pose.iter().enumerate() {
             let (va, vb) = (self.seen(i, j), self.seen(i + 1, j));
             let ka = [self.track.point(i, j)[0], self.track.point(i, j)[1]];
             let kb = [self.track.point(i + 1, j)[0], self.track.point(i + 1, j)[1]];
-            let mut t = [0.0; 2];
-            if va && vb {
-                // The chord between the detected keypoints plus the program's
-                // bulge away from its own chord, at most `max_bulge` of the
-                // keypoints' chord long.
-                let mut dev = [0.0; 2];
-                for (d, x) in dev.iter_mut().enumerate() {
-                    *x = p[[1, j, d]] - (1.0 - w) * p[[0, j, d]] - w * p[[2, j, d]];
-                }
-                let chord = ((kb[0] - ka[0]).powi(2) + (kb[1] - ka[1]).powi(2)).sqrt();
-                let len = (dev[0] * dev[0] + dev[1] * dev[1]).sqrt();
-                let cap = self.max_bulge * chord;
-                let scale = if len > cap && len > 0.0 {
-                    cap / len
-                } else {
-                    1.0
-                };
-                for d in 0..2 {
-                    t[d] = (1.0 - w) * ka[d] + w * kb[d] + scale * dev[d];
-                }
-            } else {
-                // Seen in one frame only: held there (the program's value
-                // where the joint was not seen is no measurement).
-                t = match (va, vb) {
-                    (true, false) => ka,
-                    (false, true) => kb,
-                    _ => [f64::NAN; 2],
-                };
-            }
+            // Between two seen keypoints the in-between rule; seen in one
+            // frame only, held there ([`InBetweenPoses::pose`]).
+            let Some(tp) = tp else { continue };
+            let t = [tp[0], tp.get(1).copied().unwrap_or(f64::NAN)];
             if !(t[0].is_finite() && t[1].is_finite()) {
                 continue;
             }

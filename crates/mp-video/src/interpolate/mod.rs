@@ -29,6 +29,7 @@
 
 use std::path::{Path, PathBuf};
 
+use mp_concrete::InBetween;
 use mp_pipeline::Params;
 use mp_pose::video::VideoReader;
 use serde::Serialize;
@@ -116,11 +117,13 @@ pub struct InterpParams {
     /// of the two frames is used instead (weight `exp(−(d/τ)²)` on the
     /// warped pixels); 0 turns the check off. Default 0.
     pub agree_tau: f64,
-    /// Target pose between frames `i` and `i + 1`: the chord between the
-    /// detected keypoints plus the program's bulge away from its own chord,
-    /// cut to this fraction of the keypoints' chord (0: the keypoints
-    /// interpolated linearly; a semicircle bulges 0.5). Default 0.5.
-    pub max_bulge: f64,
+    /// Target pose between frames `i` and `i + 1` ([`mp_concrete::InBetweenPoses`]):
+    /// default [`InBetween::default`], a cubic Hermite curve (the program's
+    /// spline primitive over one frame interval) through the two detected
+    /// keypoints with Catmull–Rom velocities from the neighbouring frames. `InBetween::Bulge { max_bulge: 0.5 }` is the earlier default
+    /// (the chord plus the program's bulge away from its own chord, at most
+    /// half the chord).
+    pub inbetween: InBetween,
     /// Pose model on the input: seconds after a lost person during which
     /// the region of the last pose is tried again
     /// (`mp_pose::BlazePoseParams::recover_s`). Default 0, MediaPipe's
@@ -164,7 +167,7 @@ impl Default for InterpParams {
             warp: Warp::default(),
             blend_power: 1.0,
             agree_tau: 0.0,
-            max_bulge: 0.5,
+            inbetween: InBetween::default(),
             recover_s: 0.0,
             pixel_check: false,
             min_confidence: MIN_CONFIDENCE,
@@ -198,9 +201,9 @@ impl InterpParams {
         if !(self.blend_power.is_finite() && (1.0..=64.0).contains(&self.blend_power)) {
             return Err(VideoError::param("blend_power", "must be in [1, 64]"));
         }
-        if !(self.max_bulge.is_finite() && self.max_bulge >= 0.0) {
-            return Err(VideoError::param("max_bulge", "must be ≥ 0"));
-        }
+        self.inbetween
+            .validate()
+            .map_err(|e| VideoError::param("inbetween", e.to_string()))?;
         if !(self.agree_tau.is_finite() && self.agree_tau >= 0.0) {
             return Err(VideoError::param("agree_tau", "must be ≥ 0"));
         }
