@@ -11,6 +11,7 @@ mod eval_loops;
 mod eval_people;
 mod eval_pose;
 mod eval_refine;
+mod eval_refine_cv;
 mod eval_video;
 mod models;
 mod pyenv;
@@ -20,6 +21,7 @@ mod synth_select;
 mod synth_sources;
 mod train_forecast;
 mod train_refine;
+mod train_refine_cv;
 
 use clap::{Parser, Subcommand};
 
