@@ -8,8 +8,9 @@ and calls this script with the training virtual environment's Python.
 Writes into --out: anchor_recognition.onnx, anchor_refinement.onnx,
 transition_generator.onnx, transition_refinement.onnx, generator.onnx,
 evaluator.onnx, flaw_detector.onnx (trained on --flaw-dataset: flawed copies
-of the clips of subjects 1, 3, 5 and the mocap windows; epochs and
-thresholds selected on subject 7), manifest.json and parity.npz (a fixed seeded input batch of 2
+of the clips of the training subjects and the mocap windows, its epoch
+chosen on the selection subjects; --flaw-train-subjects and
+--flaw-select-subjects pick a cross-validation fold), manifest.json and parity.npz (a fixed seeded input batch of 2
 for every network with the PyTorch output; ONNX Runtime must agree within 1e-4).
 The tensor contract is in models/refine/README.md.
 """
@@ -665,6 +666,19 @@ class FlawData:
         self.train = np.nonzero(self.split == 0)[0]
         self.sel = np.nonzero(self.split == 1)[0]
 
+    def use_subjects(self, train, select):
+        """Cross-validation folds: rows of the `train` subjects and the mocap
+        windows (subject -1) train, rows of the `select` subjects choose the
+        epoch; rows of any other subject are not read."""
+        if set(train) & set(select):
+            raise SystemExit(f"train.py: subjects {sorted(set(train) & set(select))} are both training and selection subjects")
+        self.train = np.nonzero(np.isin(self.subject, list(train) + [-1]))[0]
+        self.sel = np.nonzero(np.isin(self.subject, list(select)))[0]
+        for what, rows, subj in (("training", self.train, train), ("selection", self.sel, select)):
+            missing = sorted(set(subj) - {int(s) for s in self.subject[rows]})
+            if missing:
+                raise SystemExit(f"train.py: the flaw dataset holds no clips of {what} subjects {missing}")
+
     def subjects(self, rows):
         """MSR subjects of the rows (mocap windows, subject -1, left out)."""
         return sorted({int(s) for s in self.subject[rows] if s >= 0})
@@ -676,6 +690,62 @@ def prf(prob, y, thr):
     prec = tp / max(float(pred.sum()), 1.0)
     rec = tp / max(float((y > 0.5).sum()), 1.0)
     return prec, rec
+
+
+# Left/right joint pairs of the MSR 20-joint skeleton (shoulders, hips,
+# elbows, wrists, hands, knees, ankles, feet).
+MIRROR_PAIRS = [(0, 1), (4, 5), (7, 8), (9, 10), (11, 12), (13, 14), (15, 16), (17, 18)]
+MIRROR_PERM = list(range(J))
+for _a, _b in MIRROR_PAIRS:
+    MIRROR_PERM[_a], MIRROR_PERM[_b] = _b, _a
+
+
+def mirror_np(motion, mask):
+    """Left-right mirror of canonical clips [B,60,60] (x -> -x, the hip axis of
+    the canonical frame) with their masks [B,60,20]: left and right joints swap,
+    so the mirrored body keeps the canonical convention (left hip at +x)."""
+    p = motion.reshape(*motion.shape[:-1], J, 3)[..., MIRROR_PERM, :].copy()
+    p[..., 0] *= -1.0
+    return p.reshape(motion.shape), mask[..., MIRROR_PERM]
+
+
+def warp_pair_np(motion, mask, rng, strength=0.15):
+    """The same random monotone time warp of clips [B,60,60] and their masks
+    [B,60,20]; a warped frame is flawed when a frame it interpolates (with
+    non-zero weight) is, as in mp_refine::dataset::canonical_mask."""
+    out, mout = np.empty_like(motion), np.empty_like(mask)
+    for i in range(motion.shape[0]):
+        g = np.cumsum(np.exp(rng.normal(0, strength, T - 1)))
+        g = np.concatenate([[0.0], g / g[-1]]) * (T - 1)
+        i0 = np.minimum(np.floor(g).astype(int), T - 1)
+        i1 = np.minimum(i0 + 1, T - 1)
+        w = (g - i0)[:, None]
+        out[i] = (1 - w) * motion[i, i0] + w * motion[i, i1]
+        mout[i] = np.maximum(mask[i, i0] * (w < 1 - 1e-9), mask[i, i1] * (w > 1e-9))
+    return out, mout
+
+
+def augment_flaw_batch(xb, yb, rng, full):
+    """Augmentation of the flaw detector's batches: random yaw (±0.3 rad) and
+    scale; with `full` also body scale 0.85–1.15, left-right mirroring (half
+    the rows) and a random time warp, i.e. a change of speed within the clip
+    (half the rows)."""
+    n = xb.shape[0]
+    if full:
+        xb, yb = xb.numpy().copy(), yb.numpy().copy()
+        m = rng.random(n) < 0.5
+        if m.any():
+            xb[m], yb[m] = mirror_np(xb[m], yb[m])
+        w = rng.random(n) < 0.5
+        if w.any():
+            xb[w], yb[w] = warp_pair_np(xb[w], yb[w], rng)
+        xb, yb = torch.tensor(xb), torch.tensor(yb)
+        lo, hi = 0.85, 1.15
+    else:
+        lo, hi = 0.9, 1.1
+    xb = rot_y(xb, torch.tensor(rng.uniform(-0.3, 0.3, n), dtype=torch.float32))
+    xb = xb * torch.tensor(rng.uniform(lo, hi, (n, 1, 1)), dtype=torch.float32)
+    return xb, yb
 
 
 def train_flaw_detector(data, args, rng, log):
@@ -694,9 +764,8 @@ def train_flaw_detector(data, args, rng, log):
         model.train()
         for b in batches(len(tr), bs, rng):
             i = tr[b]
-            xb = rot_y(x[i], torch.tensor(rng.uniform(-0.3, 0.3, len(i)), dtype=torch.float32))
-            xb = xb * torch.tensor(rng.uniform(0.9, 1.1, (len(i), 1, 1)), dtype=torch.float32)
-            loss = F.binary_cross_entropy_with_logits(model(xb), y[i], pos_weight=pw)
+            xb, yb = augment_flaw_batch(x[i], y[i], rng, args.flaw_augment == "full")
+            loss = F.binary_cross_entropy_with_logits(model(xb), yb, pos_weight=pw)
             opt.zero_grad()
             loss.backward()
             opt.step()
@@ -728,7 +797,8 @@ def train_flaw_detector(data, args, rng, log):
     log.update(train_loss=lt, select_loss=best, selected_epoch=best_ep, select_loss_history=hist,
                select_frame_precision_at_0_5=pf, select_frame_recall_at_0_5=rf,
                select_clean_cells_flagged_at_0_5=clean_flag, pos_weight=float(pw),
-               train_clips=int(len(tr)), select_clips=int(len(se)), epochs=epochs, **metrics)
+               train_clips=int(len(tr)), select_clips=int(len(se)), epochs=epochs,
+               augment=args.flaw_augment, **metrics)
     return model
 
 
@@ -923,6 +993,14 @@ def main():
                     help="positive weight of the flaw detector's BCE (1: calibrated probabilities)")
     ap.add_argument("--flaw-epochs-factor", type=float, default=0.15,
                     help="flaw detector epochs = --epochs × this")
+    ap.add_argument("--flaw-train-subjects", default="",
+                    help="comma-separated MSR subjects whose rows train the flaw detector (with the mocap windows); "
+                         "default: the dataset's own split")
+    ap.add_argument("--flaw-select-subjects", default="",
+                    help="comma-separated MSR subjects whose rows choose the flaw detector's epoch")
+    ap.add_argument("--flaw-augment", choices=["full", "yaw-scale"], default="full",
+                    help="flaw detector augmentation: full = yaw, scale 0.85-1.15, mirrored bodies, time warp; "
+                         "yaw-scale = yaw and scale 0.9-1.1 only")
     args = ap.parse_args()
 
     torch.set_num_threads(args.threads)
@@ -931,6 +1009,11 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     data = Data(args.dataset)
     data.flaw = FlawData(args.flaw_dataset) if args.flaw_dataset else None
+    if args.flaw_train_subjects or args.flaw_select_subjects:
+        if data.flaw is None:
+            raise SystemExit("train.py: --flaw-train-subjects needs --flaw-dataset")
+        ints = lambda v: [int(x) for x in v.split(",") if x]
+        data.flaw.use_subjects(ints(args.flaw_train_subjects), ints(args.flaw_select_subjects))
     print(f"train.py: {len(data.motion)} clips, {len(data.train)} train, {len(data.val)} val", flush=True)
 
     only = [s for s in args.only.split(",") if s]
@@ -1026,6 +1109,7 @@ def main():
                 "optimizer": "Adam",
                 "lr": args.lr * 2,
                 "batch": 64,
+                "augment": args.flaw_augment,
                 "threads": args.threads,
                 "torch": torch.__version__,
             }

@@ -87,6 +87,14 @@ pub struct EvalRefineArgs {
     /// Seed.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Evaluate the cross-validation folds of `cargo xtask train-refine
+    /// --cv-subjects` over these subjects instead (held-out figure per fold).
+    #[arg(long, value_delimiter = ',')]
+    pub cv_subjects: Option<Vec<u32>>,
+    /// The shipped fold (its held-out subject) whose default threshold is
+    /// reported (default: the last of `--cv-subjects`).
+    #[arg(long)]
+    pub cv_ship: Option<u32>,
 }
 
 /// The settings the defaults are chosen from, evaluated on the selection subject.
@@ -261,6 +269,25 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
     let concepts = Concepts::from_json(
         &std::fs::read_to_string(&cpath).with_context(|| format!("reading {}", cpath.display()))?,
     )?;
+    if let Some(subjects) = &a.cv_subjects {
+        let ship = a
+            .cv_ship
+            .unwrap_or(*subjects.last().context("--cv-subjects is empty")?);
+        let base = RefineEvalParams {
+            max_clips: a.max_clips,
+            seed: a.seed,
+            ablation: false,
+            ..RefineEvalParams::default()
+        };
+        let v = crate::eval_refine_cv::run_cv(&data, &concepts, subjects, &base, ship)?;
+        crate::eval_refine_cv::write(&a.out, &v)?;
+        println!(
+            "wrote {} ({:.0} s)",
+            a.out.display(),
+            t0.elapsed().as_secs_f64()
+        );
+        return Ok(());
+    }
     let nets = RefineNets::load(&dir, &SessionParams::default())
         .with_context(|| format!("loading {}", dir.display()))?;
     let trained = match (TrainingSubjects::read(&dir), &a.eval_subjects) {
@@ -441,6 +468,10 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             "detector_precision": r.injected.detector_precision,
             "detector_recall": r.injected.detector_recall,
             "per_flaw": serde_json::to_value(&r.injected.per_flaw)?,
+            "kinds_made_worse": r.injected.per_flaw.iter()
+                .filter(|f| f.mpjpe_after_m > f.mpjpe_before_m)
+                .map(|f| f.flaw.clone())
+                .collect::<Vec<_>>(),
             "units": "metres",
         },
         "generated": {
@@ -495,14 +526,17 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
     );
     for f in &r.injected.per_flaw {
         println!(
-            "  {:<20} {:.2} → {:.2} mm (baseline {:.2}), changed {:.0} %, detector P {:.2} R {:.2}",
+            "  {:<20} {:.2} → {:.2} mm{} (baseline {:.2}), changed {:.0} %, detector P {:.2} R {:.2}, foot slide {:.1} → {:.1} mm/s",
             f.flaw,
             f.mpjpe_before_m * 1e3,
             f.mpjpe_after_m * 1e3,
+            if f.mpjpe_after_m > f.mpjpe_before_m { " (WORSE)" } else { "" },
             f.baseline_after_m * 1e3,
             f.changed_share * 100.0,
             f.detector_precision,
-            f.detector_recall
+            f.detector_recall,
+            f.foot_slide_before * 1e3,
+            f.foot_slide_after * 1e3
         );
     }
     println!(

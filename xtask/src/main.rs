@@ -12,6 +12,7 @@ mod eval_loops;
 mod eval_people;
 mod eval_pose;
 mod eval_refine;
+mod eval_refine_cv;
 mod eval_video;
 mod fit_confidence;
 mod models;
@@ -22,6 +23,7 @@ mod synth_select;
 mod synth_sources;
 mod train_forecast;
 mod train_refine;
+mod train_refine_cv;
 
 use clap::{Parser, Subcommand};
 

@@ -47,6 +47,22 @@ pub struct TrainRefineArgs {
     /// Build the dataset and concepts only.
     #[arg(long)]
     pub dataset_only: bool,
+    /// Flawed copies per clip in the flaw detector's training set.
+    #[arg(long, default_value_t = 20)]
+    pub copies: usize,
+    /// Train the flaw detector in cross-validation folds over these subjects
+    /// (comma separated; fold i scores subject i, chooses its epoch on the
+    /// subject before it and trains on the rest) instead of the fixed split;
+    /// only the flaw detector is trained.
+    #[arg(long, value_delimiter = ',')]
+    pub cv_subjects: Option<Vec<u32>>,
+    /// The fold (its scored subject) whose flaw detector is copied into
+    /// `--out` (default: the last of `--cv-subjects`).
+    #[arg(long)]
+    pub cv_ship: Option<u32>,
+    /// Keep folds already trained for the same subjects (and the flaw set).
+    #[arg(long)]
+    pub cv_reuse: bool,
     /// Extra arguments passed to train.py (e.g. `--only evaluator`).
     #[arg(last = true)]
     pub extra: Vec<String>,
@@ -112,11 +128,29 @@ pub fn run(a: &TrainRefineArgs) -> Result<()> {
     let set = build_training_set(&msr, &bvh, &params)?;
     let ds_path = cache.join("refine_dataset.npz");
     set.write_npz(&ds_path)?;
+    if let Some(subjects) = &a.cv_subjects {
+        let python = training_python(&root, "train-refine")?;
+        ensure_packages(&python, "onnxruntime", &["onnxruntime"], "train-refine", "")?;
+        let base = format!(
+            "cargo xtask train-refine --data {} --epochs {} --seed {} --out {}",
+            a.data
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| msr_path.display().to_string()),
+            a.epochs,
+            a.seed,
+            a.out.display()
+        );
+        return crate::train_refine_cv::run_cv(
+            a, subjects, &root, &msr, &bvh, &ds_path, &out, &python, base,
+        );
+    }
     crate::write_file(out.join("concepts.json"), set.concepts.to_json()?)
         .with_context(|| format!("writing {}", out.join("concepts.json").display()))?;
     let t1 = Instant::now();
     let fparams = FlawSetParams {
         seed: a.seed,
+        copies_per_clip: a.copies,
         ..FlawSetParams::default()
     };
     let flaw_set = build_flaw_set(&msr, &bvh, &fparams)?;

@@ -32,10 +32,10 @@ use crate::baseline::{full_confidence, EvalFlaw};
 use crate::concepts::{anchor_feature, AnchorSample, ClusterMethod, ConceptParams, Concepts};
 use crate::error::{RefineError, Result};
 use crate::eval_split::subjects_of;
-use crate::flaws::{AnchorSource, Flaw, FootSlide};
+use crate::flaws::{foot_joints, AnchorSource, Flaw, FootSlide};
 use crate::motion::{canonicalize, HIP_CENTRE, NET_FRAMES};
 use crate::nets::RefineNets;
-use crate::pipeline::{NetRefineParams, NetRefiner};
+use crate::pipeline::{foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner};
 use crate::quality::QualityParams;
 use crate::segment::{mpjpe_abs, segment_track, SegmentParams};
 
@@ -223,6 +223,12 @@ pub struct InjectedFlawReport {
     pub detector_precision: f64,
     /// Flaw detector: injected frames that were flagged / injected frames.
     pub detector_recall: f64,
+    /// Foot slide of the flawed clips ([`crate::pipeline::foot_slide`]: horizontal
+    /// travel of the feet, track units per second, over the frames where the
+    /// clean clip's feet are in contact).
+    pub foot_slide_before: f64,
+    /// Foot slide of the refined clips (same frames).
+    pub foot_slide_after: f64,
 }
 
 /// Injected-flaw results.
@@ -328,7 +334,8 @@ pub fn evaluate_injected_on(
     }
     let base = crate::baseline::RefineParams::default();
     let nf = params.flaws.len();
-    let mut acc: Vec<[Vec<f64>; 4]> = (0..nf).map(|_| Default::default()).collect();
+    let mut acc: Vec<[Vec<f64>; 6]> = (0..nf).map(|_| Default::default()).collect();
+    let slide_params = FootContactParams::default();
     let mut det: Vec<[f64; 3]> = vec![[0.0; 3]; nf];
     let mut clean_change = Vec::new();
     let mut clean_changed = Vec::new();
@@ -341,6 +348,17 @@ pub fn evaluate_injected_on(
         clean_changed.push(f64::from(u8::from(rc.report.changed())));
         clean_flagged += rc.report.flagged_frames.len();
         clean_frames += clean.n_frames();
+        let feet = foot_joints(&clean);
+        let contacts = foot_contacts(clean.positions(), &feet, clean.fps(), &slide_params)?;
+        let slide = |t: &Track| {
+            foot_slide(
+                t.positions(),
+                &feet,
+                &contacts,
+                clean.fps(),
+                slide_params.up_axis,
+            )
+        };
         for (fi, ef) in params.flaws.iter().enumerate() {
             let Some(inj) = ef.inject_into(&clean, data, i, action, params.seed)? else {
                 continue;
@@ -352,6 +370,8 @@ pub fn evaluate_injected_on(
             a[1].push(mpjpe_abs(&r.track, &clean)?);
             a[2].push(mpjpe_abs(&b.track, &clean)?);
             a[3].push(f64::from(u8::from(r.report.changed())));
+            a[4].push(slide(&inj.track)?);
+            a[5].push(slide(&r.track)?);
             let c = detector_counts(&r.report.flagged_frames, &inj.mask);
             for k in 0..3 {
                 det[fi][k] += c[k];
@@ -376,6 +396,8 @@ pub fn evaluate_injected_on(
             changed_share: nanmean(&a[3]),
             detector_precision: ratio(d[0], d[1]),
             detector_recall: ratio(d[0], d[2]),
+            foot_slide_before: nanmean(&a[4]),
+            foot_slide_after: nanmean(&a[5]),
         })
         .collect();
     let tot = det.iter().fold([0.0; 3], |mut t, d| {

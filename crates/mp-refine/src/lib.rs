@@ -41,6 +41,7 @@ pub mod concepts;
 pub mod dataset;
 pub mod error;
 pub mod eval_ablation;
+pub mod eval_cv;
 pub mod eval_generated;
 pub mod eval_refine;
 pub mod eval_split;

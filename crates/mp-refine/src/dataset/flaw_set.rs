@@ -38,6 +38,8 @@ pub struct FlawSetParams {
     pub train_subjects: Vec<u32>,
     /// Subjects whose clips select thresholds and epochs. Default `[7]`.
     /// Subjects in neither list (the evaluation subject 9) are never read.
+    /// May be empty (a cross-validation set: every subject in
+    /// [`Self::train_subjects`], folds cut by subject later).
     pub select_subjects: Vec<u32>,
     /// Flawed copies per clip. Default 20.
     pub copies_per_clip: usize,
@@ -275,7 +277,10 @@ fn random_flaw(
 /// [`FlawSetParams::train_subjects`] and [`FlawSetParams::select_subjects`]
 /// and the BVH takes in `bvh_paths` (training split). Clips of other
 /// subjects are never read. A wrong anchor "from another clip" takes a clip
-/// of another action of the same split.
+/// of another action of the same subject (mocap windows get none). For
+/// cross-validation every subject can be a training subject with no
+/// selection subject: the rows carry their subject, and the folds are cut
+/// from it (`tools/refine/train.py --flaw-train-subjects`).
 ///
 /// Errors: invalid parameters; a clip or take that cannot be read or
 /// canonicalised (named); no clip at all.
@@ -338,10 +343,12 @@ pub fn build_flaw_set(
     let (mut split, mut subject, mut clip_i) = (Vec::new(), Vec::new(), Vec::new());
     let (mut flaws, mut source) = (Vec::new(), Vec::new());
     for (ci, (track, action, subj, sp, name)) in clean.iter().enumerate() {
-        // Other-action clips of the same split (MSR only) for wrong anchors.
+        // Other-action clips of the same subject (MSR only) for wrong anchors,
+        // so that no row carries a pose of another subject (cross-validation
+        // folds split by subject); mocap windows get the other five kinds.
         let others: Vec<Track> = clean
             .iter()
-            .filter(|o| o.3 == *sp && o.1 != 0 && o.1 != *action)
+            .filter(|o| *subj >= 0 && o.2 == *subj && o.1 != 0 && o.1 != *action)
             .step_by(7)
             .map(|o| o.0.clone())
             .collect();

@@ -5,6 +5,7 @@
 
 use ndarray::{Array2, Array3, ArrayView3};
 
+use super::foot_contact::{guard_refills, hold_slides};
 use super::refill::repair_flagged;
 use super::{check_finite, sigmoid, FlawCell, NetRefiner, RefineReport, RepairedRun};
 use crate::baseline::held_frames;
@@ -29,10 +30,15 @@ impl NetRefiner<'_> {
     /// flagged frames of `pos` (`T × 20 × 3`, the frames `clip` was
     /// resampled from) in place. Returns the flagged cells, the flagged
     /// source frames and the refilled runs.
+    ///
+    /// With `feet` (the track's foot joints by leg and its frame rate) and
+    /// [`super::NetRefineParams::foot_contact`], refills of planted feet are
+    /// guarded and slides of planted feet held ([`super::foot_contact`]).
     pub(super) fn detect_and_repair(
         &self,
         clip: ArrayView3<'_, f64>,
         pos: &mut Array3<f64>,
+        feet: Option<&FeetOf>,
     ) -> Result<FlawFindings> {
         let p = self.params;
         let prob = self.flaw_probabilities(&to_features(clip))?;
@@ -70,7 +76,15 @@ impl NetRefiner<'_> {
         } else {
             flags
         };
-        let runs = repair_flagged(pos, &flags, p.flaw_repair, p.max_repair_run_frames)?;
+        let input = pos.clone();
+        let mut runs = repair_flagged(pos, &flags, p.flaw_repair, p.max_repair_run_frames)?;
+        if let (Some(fc), Some(feet)) = (&p.foot_contact, feet) {
+            let all: Vec<usize> = feet.legs.iter().flatten().copied().collect();
+            if !all.is_empty() && t >= 2 {
+                guard_refills(input.view(), pos, &runs, &all, fc.up_axis);
+                runs.extend(hold_slides(pos, &feet.legs, feet.fps, fc)?);
+            }
+        }
         Ok(FlawFindings {
             cells,
             frames: flagged_frames,
@@ -78,6 +92,13 @@ impl NetRefiner<'_> {
             runs,
         })
     }
+}
+
+/// The foot joints of a track, by leg, and its frame rate.
+#[derive(Debug)]
+pub(super) struct FeetOf {
+    pub(super) legs: Vec<Vec<usize>>,
+    pub(super) fps: f64,
 }
 
 /// What step 0 (flaw detector and held poses) found and refilled.

@@ -57,6 +57,7 @@
 mod anchor_repair;
 mod anchors;
 mod flaw_detection;
+pub mod foot_contact;
 mod nearest_concept;
 mod params;
 mod refill;
@@ -72,6 +73,7 @@ pub use anchors::{anchor_peaks, nearest_concept_thresholds};
 pub use flaw_detection::{
     dilate_flags, hysteresis_flags, promote_frames, source_flags, source_probabilities,
 };
+pub use foot_contact::{foot_contacts, foot_legs, foot_slide, FootContactParams};
 pub use params::{
     AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode, TransitionMethod,
 };
@@ -90,7 +92,7 @@ use crate::motion::{
 };
 use crate::nets::RefineNets;
 use anchor_repair::AnchorRepairs;
-use flaw_detection::FlawFindings;
+use flaw_detection::{FeetOf, FlawFindings};
 
 /// A refined canonical clip.
 #[derive(Debug, Clone, PartialEq)]
@@ -216,7 +218,7 @@ impl<'a> NetRefiner<'a> {
         check_canonical(clip)?;
         let mut x = clip.to_owned();
         let found = if self.params.flaw_detection {
-            self.detect_and_repair(clip, &mut x)?
+            self.detect_and_repair(clip, &mut x, None)?
         } else {
             FlawFindings::default()
         };
@@ -324,7 +326,11 @@ impl<'a> NetRefiner<'a> {
         let found = if self.params.flaw_detection {
             // Step 0 in source frames, so short flaws are not blurred by
             // the 60-frame resampling.
-            let d = self.detect_and_repair(clip.view(), &mut pos)?;
+            let feet = FeetOf {
+                legs: foot_legs(&track.skeleton().joints),
+                fps: track.fps(),
+            };
+            let d = self.detect_and_repair(clip.view(), &mut pos, Some(&feet))?;
             if !d.runs.is_empty() {
                 let repaired = Track::new(
                     pos.clone(),

@@ -4,6 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::foot_contact::FootContactParams;
 use crate::error::{RefineError, Result};
 use crate::segment::SegmentParams;
 
@@ -188,6 +189,14 @@ pub struct NetRefineParams {
     /// a tracked clip. Held runs longer than
     /// [`Self::max_repair_run_frames`] are reported but kept.
     pub held_pose_tolerance: Option<f64>,
+    /// Foot contact in the refill of a track ([`super::foot_contact`]): a
+    /// refill never makes a planted foot travel further horizontally than
+    /// the input did, and planted feet that slide away and back are held.
+    /// `None` switches it off. Default on with
+    /// [`FootContactParams::default`]. Only [`super::NetRefiner::refine_track`]
+    /// uses it (a canonical clip has no frame rate).
+    #[serde(default)]
+    pub foot_contact: Option<FootContactParams>,
 }
 
 impl Default for NetRefineParams {
@@ -215,6 +224,7 @@ impl Default for NetRefineParams {
             flaw_repair: FlawRepair::CubicFit { context: 3 },
             max_repair_run_frames: 6,
             held_pose_tolerance: Some(1e-4),
+            foot_contact: Some(FootContactParams::default()),
         }
     }
 }
@@ -333,6 +343,9 @@ impl NetRefineParams {
         }
         if self.max_repair_run_frames == 0 {
             return Err(RefineError::param("max_repair_run_frames", "must be ≥ 1"));
+        }
+        if let Some(f) = &self.foot_contact {
+            f.validate()?;
         }
         if let Some(v) = self.held_pose_tolerance {
             if !(v.is_finite() && v >= 0.0) {
