@@ -112,6 +112,18 @@ impl RefineError {
             reason: reason.into(),
         }
     }
+
+    /// `Ok` when `v` is finite and above 0, else an invalid `name`.
+    pub fn check_positive(name: &'static str, v: f64) -> Result<(), RefineError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(RefineError::param(
+                name,
+                format!("must be finite and > 0, got {v}"),
+            ))
+        }
+    }
 }
 
 /// Result alias for `mp-refine`.

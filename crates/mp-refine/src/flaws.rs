@@ -126,16 +126,7 @@ impl Flaw {
                 Ok(())
             }
         };
-        let fin = |name: &'static str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(RefineError::param(
-                    name,
-                    format!("must be finite and > 0, got {v}"),
-                ))
-            }
-        };
+        let fin = RefineError::check_positive;
         match self {
             Flaw::Frozen { frames } => pos("frames", *frames),
             Flaw::Jitter { frames, std_m } => {

@@ -100,6 +100,19 @@ fn clip(
     })
 }
 
+/// The part of the next clip of group `key`: the clips of each group go to
+/// validation and held-out in turn.
+fn alternate<K: Ord>(seen: &mut std::collections::BTreeMap<K, usize>, key: K) -> Part {
+    let n = seen.entry(key).or_insert(0);
+    let part = if (*n).is_multiple_of(2) {
+        Part::Validation
+    } else {
+        Part::HeldOut
+    };
+    *n += 1;
+    part
+}
+
 /// Penn Action train split (hand-labelled, ~30 fps): within each action the
 /// 1st, 3rd, … clip is validation, the 2nd, 4th, … held-out (as
 /// `cargo xtask eval concrete --split`).
@@ -108,13 +121,7 @@ fn penn(data: &Path, want: Part) -> anyhow::Result<Vec<Clip>> {
     let mut pos = std::collections::BTreeMap::<String, usize>::new();
     let mut out = Vec::new();
     for (i, c) in pa.clips().iter().enumerate() {
-        let n = pos.entry(c.action.clone()).or_insert(0);
-        let part = if (*n).is_multiple_of(2) {
-            Part::Validation
-        } else {
-            Part::HeldOut
-        };
-        *n += 1;
+        let part = alternate(&mut pos, c.action.clone());
         if !want.admits(part) {
             continue;
         }
@@ -224,13 +231,7 @@ fn msr(data: &Path, want: Part) -> anyhow::Result<Vec<Clip>> {
     let mut pos = std::collections::BTreeMap::<u32, usize>::new();
     let mut out = Vec::new();
     for (i, c) in m.clips().iter().enumerate() {
-        let n = pos.entry(c.action).or_insert(0);
-        let part = if (*n).is_multiple_of(2) {
-            Part::Validation
-        } else {
-            Part::HeldOut
-        };
-        *n += 1;
+        let part = alternate(&mut pos, c.action);
         if !want.admits(part) {
             continue;
         }

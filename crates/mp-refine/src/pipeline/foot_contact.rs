@@ -83,16 +83,7 @@ impl Default for FootContactParams {
 impl FootContactParams {
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
-        let pos = |name: &'static str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(RefineError::param(
-                    name,
-                    format!("must be finite and > 0, got {v}"),
-                ))
-            }
-        };
+        let pos = RefineError::check_positive;
         pos("height_tolerance", self.height_tolerance)?;
         pos("vertical_speed", self.vertical_speed)?;
         pos("window_s", self.window_s)?;
