@@ -108,12 +108,12 @@ pub fn clips_of(name: &str, track: &Track) -> Vec<Clip> {
 
 /// Every k-th frame of a track recorded at k × 30 fps (AIST++ 60 fps, CMU
 /// BVH 120 fps), so that cases run at 30 fps like the videos people film.
-fn to_30fps(t: &Track) -> mp_geom::Result<Track> {
+pub(crate) fn to_30fps(t: &Track) -> mp_geom::Result<Track> {
     t.subsample(((t.fps() / 30.0).round() as usize).max(1))
 }
 
 /// Files of `dir` with extension `ext`, sorted.
-fn files(dir: &Path, ext: &str) -> Vec<PathBuf> {
+pub(crate) fn files(dir: &Path, ext: &str) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
         .unwrap_or_default();
@@ -122,7 +122,8 @@ fn files(dir: &Path, ext: &str) -> Vec<PathBuf> {
     v
 }
 
-fn stem(p: &Path) -> String {
+/// A path's file name without its extension.
+pub(crate) fn stem(p: &Path) -> String {
     p.file_stem()
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or_default()

@@ -10,6 +10,8 @@ use mp_geom::skeleton_map::SkeletonMap;
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 
+use crate::synth_sources::{files, stem, to_30fps};
+
 /// Which part of a source a track belongs to.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Part {
@@ -100,6 +102,12 @@ fn clip(
     })
 }
 
+/// The `.npz` files of a folder, sorted; an error names a missing folder.
+fn npz_files(dir: &Path) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    anyhow::ensure!(dir.is_dir(), "reading {}: no such folder", dir.display());
+    Ok(files(dir, "npz"))
+}
+
 /// The part of the next clip of group `key`: the clips of each group go to
 /// validation and held-out in turn.
 fn alternate<K: Ord>(seen: &mut std::collections::BTreeMap<K, usize>, key: K) -> Part {
@@ -142,19 +150,9 @@ fn penn(data: &Path, want: Part) -> anyhow::Result<Vec<Clip>> {
 /// held-out.
 fn aist(data: &Path, want: Part) -> anyhow::Result<Vec<Clip>> {
     let dir = data.join("aistpp_keypoints2d");
-    let mut files: Vec<_> = std::fs::read_dir(&dir)
-        .with_context(|| format!("reading {}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "npz"))
-        .collect();
-    files.sort();
     let mut out = Vec::new();
-    for f in files {
-        let stem = f
-            .file_stem()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .to_string();
+    for f in npz_files(&dir)? {
+        let stem = stem(&f);
         let ch: usize = stem
             .rsplit("ch")
             .next()
@@ -169,13 +167,12 @@ fn aist(data: &Path, want: Part) -> anyhow::Result<Vec<Clip>> {
             continue;
         }
         let a = AistPlusPlus::open(&f)?;
-        let step = (a.fps / 30.0).round().max(1.0) as usize;
         for (v, track) in a.views.iter().enumerate() {
             out.extend(clip(
                 "aist",
                 format!("ch{ch:02}/c{:02}", v + 1),
                 part,
-                track.subsample(step)?,
+                to_30fps(track)?,
                 1920.0,
             ));
         }
@@ -194,20 +191,10 @@ fn quva(data: &Path, want: Part) -> anyhow::Result<Vec<Clip>> {
         "090_hoolahoop",
     ];
     let dir = data.join("reference_keypoints");
-    let mut files: Vec<_> = std::fs::read_dir(&dir)
-        .with_context(|| format!("reading {}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "npz"))
-        .collect();
-    files.sort();
     let map = SkeletonMap::to_coco17(&Skeleton::blazepose33())?;
     let mut out = Vec::new();
-    for f in files {
-        let stem = f
-            .file_stem()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .to_string();
+    for f in npz_files(&dir)? {
+        let stem = stem(&f);
         let part = if VALIDATION.contains(&stem.as_str()) {
             Part::Validation
         } else {

@@ -351,6 +351,7 @@ fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Res
             .map(|s| CountedInterval::new(s.start_frame, s.end_frame, s.period_frames, s.score))
             .collect();
         let periodicity = strength.max(weighted_score(&segs).clamp(0.0, 1.0));
+        let (cycle_mismatch, end_mismatch) = intervals_mismatch(signal, &intervals);
         let features = CountFeatures {
             periodicity,
             cycles: intervals.iter().map(|i| i.cycles).sum(),
@@ -359,8 +360,8 @@ fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Res
                 .map(|i| i.end_frame - i.start_frame)
                 .sum::<usize>() as f64
                 / n as f64,
-            cycle_mismatch: intervals_mismatch(signal, &intervals).0,
-            end_mismatch: intervals_mismatch(signal, &intervals).1,
+            cycle_mismatch,
+            end_mismatch,
             frames_signal: kind == CountSignal::Frames,
             intervals: true,
         };
