@@ -353,13 +353,20 @@ def time_warp(motion, rng, strength=0.15):
     """Random monotone time warp of clips [B,60,60] (numpy)."""
     out = np.empty_like(motion)
     for i in range(motion.shape[0]):
-        g = np.cumsum(np.exp(rng.normal(0, strength, T - 1)))
-        g = np.concatenate([[0.0], g / g[-1]]) * (T - 1)
-        i0 = np.minimum(np.floor(g).astype(int), T - 1)
-        i1 = np.minimum(i0 + 1, T - 1)
-        w = (g - i0)[:, None]
+        i0, i1, w = warp_grid(rng, strength)
         out[i] = (1 - w) * motion[i, i0] + w * motion[i, i1]
     return out
+
+
+def warp_grid(rng, strength):
+    """One random monotone time warp of the T canonical frames: for each
+    warped frame, the two source frames it interpolates and the weight of
+    the second ([T, 1])."""
+    g = np.cumsum(np.exp(rng.normal(0, strength, T - 1)))
+    g = np.concatenate([[0.0], g / g[-1]]) * (T - 1)
+    i0 = np.minimum(np.floor(g).astype(int), T - 1)
+    i1 = np.minimum(i0 + 1, T - 1)
+    return i0, i1, (g - i0)[:, None]
 
 
 class Data:
@@ -715,11 +722,7 @@ def warp_pair_np(motion, mask, rng, strength=0.15):
     non-zero weight) is, as in mp_refine::dataset::canonical_mask."""
     out, mout = np.empty_like(motion), np.empty_like(mask)
     for i in range(motion.shape[0]):
-        g = np.cumsum(np.exp(rng.normal(0, strength, T - 1)))
-        g = np.concatenate([[0.0], g / g[-1]]) * (T - 1)
-        i0 = np.minimum(np.floor(g).astype(int), T - 1)
-        i1 = np.minimum(i0 + 1, T - 1)
-        w = (g - i0)[:, None]
+        i0, i1, w = warp_grid(rng, strength)
         out[i] = (1 - w) * motion[i, i0] + w * motion[i, i1]
         mout[i] = np.maximum(mask[i, i0] * (w < 1 - 1e-9), mask[i, i1] * (w > 1e-9))
     return out, mout
