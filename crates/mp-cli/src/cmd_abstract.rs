@@ -2,14 +2,13 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::{Args, ValueEnum};
 use mp_abstract::dsl::{print_with, PrintOptions};
 use mp_abstract::edit::set_iterations;
 use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};
 use mp_abstract::{read_program, write_program, AbstractParams};
 use mp_forecast::{ForecastMethod, PredictOptions};
-use mp_geom::io::{read_track, write_track};
+use mp_geom::io::write_track;
 use mp_pipeline::{analyse_track, Params};
 
 /// Options shared by the commands that analyse a track.
@@ -18,6 +17,8 @@ pub struct AnalysisOpts {
     /// Largest side of the video frame in pixels (scale = frame / 512); default: from the track's extent.
     #[arg(long)]
     pub frame_size: Option<f64>,
+    #[command(flatten)]
+    pub rate: crate::track_arg::RateOpt,
     /// Loop score threshold at the 512-px reference scale.
     #[arg(long, default_value_t = Params::default().analysis.loops.threshold)]
     pub threshold: f64,
@@ -157,7 +158,7 @@ pub struct PredictArgs {
 
 /// `mp abstract`: the abstract program of a track, written and summarised.
 pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
-    let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
+    let track = crate::track_arg::read_track(&a.track, &a.opts.rate)?;
     let an = analyse_track(&track, a.opts.frame_size, &a.opts.pipeline_params())?;
     write_program(&an.program, &a.output)?;
     if !a.quiet {
@@ -179,7 +180,7 @@ pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
 pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
     let mut params = a.opts.pipeline_params();
     a.people.apply(&mut params)?;
-    let input = mp_pipeline::Input::open(&a.track, a.opts.frame_size)?;
+    let input = crate::track_arg::open_input(&a.track, a.opts.frame_size, &a.opts.rate)?;
     let out = mp_pipeline::analyse_input(
         input,
         &params,
@@ -287,7 +288,7 @@ pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
             "a track input needs --observe N and --horizon H (frames observed from the start, frames predicted)"
         );
     };
-    let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
+    let track = crate::track_arg::read_track(&a.track, &a.opts.rate)?;
     let mut opts = PredictOptions {
         method: a.method.into(),
         train: a.forecast.train.clone(),
@@ -324,6 +325,7 @@ mod tests {
     fn predict_without_flags_uses_the_library_defaults() {
         let opts = AnalysisOpts {
             frame_size: None,
+            rate: Default::default(),
             threshold: Params::default().analysis.loops.threshold,
             max_body: Params::default().analysis.loops.max_body,
         };

@@ -42,6 +42,8 @@ pub struct BatchArgs {
     #[arg(long)]
     pub frame_size: Option<f64>,
     #[command(flatten)]
+    pub rate: crate::track_arg::RateOpt,
+    #[command(flatten)]
     pub people: crate::cmd_run::PeopleOpts,
     /// Do not write the overlay videos.
     #[arg(long)]
@@ -58,6 +60,7 @@ impl BatchArgs {
             jobs: self.jobs,
             threads: self.threads,
             frame_px: self.frame_size,
+            fps: self.rate.fps,
             ..BatchParams::default()
         };
         p.params.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
@@ -72,6 +75,7 @@ impl BatchArgs {
 
 /// `mp batch`.
 pub fn batch_cmd(a: &BatchArgs) -> Result<()> {
+    crate::track_arg::check_out_dir(&a.out)?;
     let params = a.params()?;
     let items = mp_pipeline::batch_items(&a.input)?;
     let cancel = ctrl_c_token();

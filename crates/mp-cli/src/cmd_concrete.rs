@@ -14,8 +14,10 @@ use mp_pipeline::Params;
 /// Arguments of `mp fit`.
 #[derive(Args, Debug)]
 pub struct FitArgs {
-    /// Input track (any format `mp_geom::io::read_track` reads).
+    /// Input keypoint track (npz, npy, json, csv, bvh, mpt, or an OpenPose folder).
     pub track: PathBuf,
+    #[command(flatten)]
+    pub rate: crate::track_arg::RateOpt,
     /// Output program: `.json` for JSON, anything else for the DSL text.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -88,6 +90,8 @@ pub struct ExecuteArgs {
 pub struct StatsArgs {
     /// The track the program encodes.
     pub track: PathBuf,
+    #[command(flatten)]
+    pub rate: crate::track_arg::RateOpt,
     /// The program (`.json` or DSL text).
     pub program: PathBuf,
     /// Print JSON instead of a table.
@@ -98,8 +102,7 @@ pub struct StatsArgs {
 /// `mp fit`: the same concrete program as `mp run` and `mp abstract` give
 /// for the same track and options.
 pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
-    let track = mp_geom::io::read_track(&a.track)
-        .with_context(|| format!("reading {}", a.track.display()))?;
+    let track = crate::track_arg::read_track(&a.track, &a.rate)?;
     let mut params = Params::default();
     if let Some(l) = a.lambda {
         params.analysis.synth.lambda = Lambda::fixed(l);
@@ -163,8 +166,7 @@ pub fn execute(a: &ExecuteArgs) -> anyhow::Result<()> {
 
 /// `mp stats`.
 pub fn stats(a: &StatsArgs) -> anyhow::Result<()> {
-    let track = mp_geom::io::read_track(&a.track)
-        .with_context(|| format!("reading {}", a.track.display()))?;
+    let track = crate::track_arg::read_track(&a.track, &a.rate)?;
     let p = Program::read(&a.program)?;
     let s = program_stats(&p, &track)?;
     if a.json {

@@ -71,6 +71,7 @@ pub fn performer_cmd(a: &PerformerArgs) -> anyhow::Result<()> {
 }
 
 pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
+    crate::track_arg::check_out_dir(&a.out)?;
     let perf_params = PerformerParams {
         seed: a.seed,
         ..PerformerParams::default()
@@ -98,6 +99,7 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
         frame_size: Some((w, h)),
         // Scale from the performer's own extent (as for any track file), not the canvas size.
         frame_px: None,
+        fps_assumed: false,
     };
     let summary = cmd_run::run_or_exit(input, &a.out, &Params::default(), a.quiet)?;
     let o = &summary.outcome;

@@ -3,10 +3,8 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
 use mp_forecast::{search_statue, ArSpace, StatueOptions, StatueParams};
-use mp_geom::io::read_track;
 
 /// Options of `mp predict` used by the `nn` and `ar` methods.
 #[derive(Args, Debug, Clone, Default)]
@@ -28,6 +26,8 @@ pub struct StatueArgs {
     /// Input track (Penn Action-13, COCO-17 or BlazePose-33 in 2D; MSR-20 or BlazePose-33 world
     /// landmarks in 3D; or any track with the joints of --models).
     pub track: PathBuf,
+    #[command(flatten)]
+    pub rate: crate::track_arg::RateOpt,
     /// Use AR on poses (Θ) instead of AR on latents (Φ).
     #[arg(long)]
     pub pose_space: bool,
@@ -49,7 +49,7 @@ pub struct StatueArgs {
 
 /// `mp statue`: the frame after which the learned forecaster's error drops most.
 pub fn statue_cmd(a: &StatueArgs) -> anyhow::Result<()> {
-    let track = read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
+    let track = crate::track_arg::read_track(&a.track, &a.rate)?;
     let opts = StatueOptions {
         space: if a.pose_space {
             ArSpace::Pose

@@ -101,6 +101,7 @@ fn progress_and_options(
 
 /// `mp extract`: keypoints of a video or image written as a track.
 pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
+    crate::track_arg::refuse_track_for_extract(&a.video)?;
     let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
     if a.world && model == ModelChoice::MoveNet {
         bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
@@ -244,7 +245,7 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
 pub struct OverlayArgs {
     /// The video the track was extracted from.
     pub video: PathBuf,
-    /// Keypoint track in pixels (any format `mp_geom::io::read_track` reads).
+    /// Keypoint track in pixels (npz, npy, json, csv, mpt, or an OpenPose folder), drawn frame by frame.
     pub track: PathBuf,
     /// Output: .png (contact sheet of evenly spaced frames) or .mp4 (every frame).
     #[arg(short, long)]

@@ -24,6 +24,8 @@ pub struct RunArgs {
     /// Largest side of the video frame in pixels, for track input (scale = frame / 512); default: from the motion's extent.
     #[arg(long)]
     pub frame_size: Option<f64>,
+    #[command(flatten)]
+    pub rate: crate::track_arg::RateOpt,
     /// Do not write the overlay video.
     #[arg(long)]
     pub no_video: bool,
@@ -90,7 +92,8 @@ pub fn run_cmd(a: &RunArgs) -> Result<()> {
     a.pose.apply(&mut params)?;
     a.people.apply(&mut params)?;
     params.output.overlay_video = !a.no_video;
-    let input = Input::open(&a.input, a.frame_size)?;
+    crate::track_arg::check_out_dir(&a.out)?;
+    let input = crate::track_arg::open_input(&a.input, a.frame_size, &a.rate)?;
     let summary = run_or_exit(input, &a.out, &params, a.quiet)?;
     if !a.quiet {
         print_summary(&summary, &a.out);

@@ -14,6 +14,7 @@ mod cmd_refine;
 mod cmd_run;
 mod cmd_video;
 mod progress;
+mod track_arg;
 
 use clap::{Parser, Subcommand};
 

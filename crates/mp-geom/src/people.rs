@@ -308,6 +308,22 @@ impl People {
     pub fn fps(&self) -> f64 {
         self.fps
     }
+
+    /// The same people at another frame rate (every track with it).
+    pub fn with_fps(self, fps: f64) -> Result<Self> {
+        let n = self.n_frames;
+        let list = self
+            .people
+            .into_iter()
+            .map(|p| {
+                Ok(Person {
+                    track: p.track.with_fps(fps)?,
+                    ..p
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        People::new(n, fps, list)
+    }
     /// The people, sorted by id.
     pub fn people(&self) -> &[Person] {
         &self.people

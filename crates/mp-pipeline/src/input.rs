@@ -40,6 +40,9 @@ pub enum Input {
         frame_size: Option<(usize, usize)>,
         /// Largest frame side in pixels, used as the scale; `None`: the motion's extent.
         frame_px: Option<f64>,
+        /// The file states no frame rate and none was given:
+        /// [`mp_geom::io::DEFAULT_FPS`] was assumed.
+        fps_assumed: bool,
     },
 }
 
@@ -48,6 +51,19 @@ impl Input {
     /// ([`VIDEO_EXTENSIONS`]); `frame_px` is the frame size to use as the scale
     /// of a track (ignored for videos, whose frame size is known).
     pub fn open(path: impl AsRef<Path>, frame_px: Option<f64>) -> Result<Self> {
+        Self::open_with(path, frame_px, None)
+    }
+
+    /// [`Input::open`] with the frame rate of a track file: `Some` over
+    /// what the file states; `None`, the file's own, or
+    /// [`mp_geom::io::DEFAULT_FPS`] when it states none (then
+    /// [`Input::fps_assumed`] is true and the description says so).
+    /// Ignored for videos, whose rate is in the container.
+    pub fn open_with(
+        path: impl AsRef<Path>,
+        frame_px: Option<f64>,
+        fps: Option<f64>,
+    ) -> Result<Self> {
         let path = path.as_ref();
         if !path.exists() {
             return Err(PipelineError::MissingInput(path.to_path_buf()));
@@ -57,16 +73,45 @@ impl Input {
                 path: path.to_path_buf(),
             });
         }
-        let track = mp_geom::io::read_track(path).map_err(|source| PipelineError::Track {
-            path: path.to_path_buf(),
-            extensions: VIDEO_EXTENSIONS.join(", "),
-            source,
-        })?;
+        let opts = mp_geom::io::ReadOptions {
+            fps,
+            ..Default::default()
+        };
+        let (track, rate) =
+            mp_geom::io::read_track_rated(path, &opts).map_err(|source| PipelineError::Track {
+                path: path.to_path_buf(),
+                extensions: VIDEO_EXTENSIONS.join(", "),
+                source,
+            })?;
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        Ok(Self::from_track(track, &name, frame_px))
+        let mut input = Self::from_track(track, &name, frame_px);
+        if rate == mp_geom::io::RateSource::Assumed {
+            if let Input::Track {
+                description,
+                fps_assumed,
+                ..
+            } = &mut input
+            {
+                description.push_str(" (assumed: the file states no frame rate)");
+                *fps_assumed = true;
+            }
+        }
+        Ok(input)
+    }
+
+    /// Whether the frame rate of a track input was assumed
+    /// ([`Input::open_with`]).
+    pub fn fps_assumed(&self) -> bool {
+        matches!(
+            self,
+            Input::Track {
+                fps_assumed: true,
+                ..
+            }
+        )
     }
 
     /// A track in memory; `name` titles the report.
@@ -77,6 +122,7 @@ impl Input {
             track,
             frame_size: None,
             frame_px,
+            fps_assumed: false,
         }
     }
 

@@ -192,6 +192,7 @@ pub(crate) fn keypoints_timed(
             description,
             frame_size,
             frame_px,
+            ..
         } => {
             if let Some(n) = params.pose.max_frames {
                 if n < track.n_frames() {

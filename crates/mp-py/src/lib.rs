@@ -57,12 +57,33 @@ fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
 }
 
 /// Reads a keypoint track: the project's `.npz`/`.json`/`.mpt`, CSV, `.npy`,
-/// BVH, OpenPose folders.
+/// BVH, OpenPose folders. `fps`: the frame rate, over what the file states;
+/// by default the file's (a CSV `time` column, the project's formats, BVH),
+/// and 30 with a `UserWarning` for a file that states none.
 #[pyfunction]
-fn read_track(py: Python<'_>, path: PathBuf) -> PyResult<PyTrack> {
-    let t = py
-        .detach(|| mp_geom::io::read_track(&path))
+#[pyo3(signature = (path, fps = None))]
+fn read_track(py: Python<'_>, path: PathBuf, fps: Option<f64>) -> PyResult<PyTrack> {
+    let opts = mp_geom::io::ReadOptions {
+        fps,
+        ..Default::default()
+    };
+    let (t, rate) = py
+        .detach(|| mp_geom::io::read_track_rated(&path, &opts))
         .map_err(errors::geom)?;
+    if rate == mp_geom::io::RateSource::Assumed {
+        let msg = std::ffi::CString::new(format!(
+            "{} states no frame rate: {} fps assumed (pass fps=)",
+            path.display(),
+            mp_geom::io::DEFAULT_FPS
+        ))
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &msg,
+            1,
+        )?;
+    }
     Ok(PyTrack::new(t))
 }
 

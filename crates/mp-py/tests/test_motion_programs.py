@@ -260,3 +260,15 @@ def test_grammar_symbols_and_learn_equal_the_cli(performer, mp_bin, tmp_path):
     assert g["sentences"] == gc["sentences"]
     with pytest.raises(mp.GrammarError):
         mp.grammar_learn({"not": "symbols"})
+
+
+def test_frame_rate_travels_with_the_file(performer, tmp_path):
+    t = mp.read_track(performer)
+    fast = mp.Track.from_numpy(t.positions, 60.0, confidence=t.confidence, skeleton="coco17")
+    fast.save(tmp_path / "t60.csv")
+    assert mp.read_track(tmp_path / "t60.csv").fps == 60.0  # the CSV's time column
+    np.save(tmp_path / "t.npy", t.positions)
+    with pytest.warns(UserWarning, match="30 fps assumed"):
+        assert mp.read_track(tmp_path / "t.npy").fps == 30.0
+    assert mp.read_track(tmp_path / "t.npy", fps=60).fps == 60.0
+    assert mp.read_track(tmp_path / "t60.csv", fps=25).fps == 25.0

@@ -22,8 +22,7 @@ pub use concepts::{concepts_cmd, ConceptsArgs};
 /// Arguments of `mp refine`.
 #[derive(Args, Debug)]
 pub struct RefineArgs {
-    /// Input track: 20 MSR Action3D joints in 3D, metres (any format `mp_geom::io::read_track`
-    /// reads); BlazePose-33 world landmarks (`mp extract VIDEO --world`), refined through the 20
+    /// Input track: 20 MSR Action3D joints in 3D, metres (npz, npy, json, csv, mpt); BlazePose-33 world landmarks (`mp extract VIDEO --world`), refined through the 20
     /// MSR joints and carried back; or a CMU BVH file (mapped onto the 20 joints).
     pub track: PathBuf,
     /// Output track (format by extension).

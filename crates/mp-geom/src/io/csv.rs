@@ -23,6 +23,11 @@
 //! 0,101.5,48.0,0.98,104.0,45.5,0.95
 //! ```
 //!
+//! A `time` column (seconds; also `t`) states the frame rate: the frames
+//! over the time from the first to the last (times must increase with the
+//! frame). Without one the rate is [`ReadOptions::fps`], else
+//! [`super::DEFAULT_FPS`]. The writer adds `time` after `frame`.
+//!
 //! The skeleton is the one in [`ReadOptions::skeleton`], else chosen from the
 //! joint names ([`super::skeleton_from_names`]).
 
@@ -70,15 +75,61 @@ fn parse_cell(cell: &str, path: &Path, line: usize, col: &str) -> Result<f64> {
 
 /// Reads a CSV track (long or wide, detected from the header).
 pub fn read_csv(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
+    read_csv_rated(path, opts).map(|(t, _)| t)
+}
+
+/// [`read_csv`], and whether the file states its frame rate (a `time`
+/// column).
+pub(crate) fn read_csv_rated(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<(Track, bool)> {
     let path = path.as_ref();
     opts.validate()?;
     let text = std::fs::read_to_string(path).map_err(|e| GeomError::io(path, e))?;
-    track_from_csv_str(&text, path, opts)
+    csv_rated(&text, path, opts)
 }
 
 /// Parses CSV text (long or wide, detected from the header) as
 /// [`read_csv`] does; `path` names the source in errors.
 pub fn track_from_csv_str(text: &str, path: &Path, opts: &ReadOptions) -> Result<Track> {
+    csv_rated(text, path, opts).map(|(t, _)| t)
+}
+
+fn is_time(name: &str) -> bool {
+    matches!(name, "time" | "t")
+}
+
+/// The frame rate stated by `(frame, seconds)` pairs: the frames over the
+/// time from the first frame to the last. The times of one frame must
+/// agree and increase with the frame.
+fn rate_from_times(path: &Path, times: &[(usize, f64)]) -> Result<Option<f64>> {
+    let mut by_frame: Vec<(usize, f64)> = times.to_vec();
+    by_frame.sort_by_key(|&(f, _)| f);
+    by_frame.dedup_by(|b, a| a.0 == b.0 && a.1 == b.1);
+    for w in by_frame.windows(2) {
+        let ((f0, t0), (f1, t1)) = (w[0], w[1]);
+        if !(t0.is_finite() && t1.is_finite()) || f1 == f0 || t1 <= t0 {
+            return Err(GeomError::format(
+                path,
+                format!(
+                    "the `time` column must increase with the frame and be the same within a \
+                     frame: frame {f0} at {t0} s, frame {f1} at {t1} s"
+                ),
+            ));
+        }
+    }
+    let (Some(&(fa, ta)), Some(&(fb, tb))) = (by_frame.first(), by_frame.last()) else {
+        return Ok(None);
+    };
+    if fb == fa {
+        return Ok(None);
+    }
+    let fps = (fb - fa) as f64 / (tb - ta);
+    // Times written with a few decimals: a rate within 0.01 % of a whole
+    // number is that number.
+    let r = fps.round();
+    Ok(Some(if (fps - r).abs() <= 1e-4 * r { r } else { fps }))
+}
+
+fn csv_rated(text: &str, path: &Path, opts: &ReadOptions) -> Result<(Track, bool)> {
     opts.validate()?;
     let mut lines = text
         .lines()
@@ -101,12 +152,32 @@ pub fn track_from_csv_str(text: &str, path: &Path, opts: &ReadOptions) -> Result
             ));
         }
     }
-    if cols.iter().any(|c| c == "joint") {
-        read_long(path, &cols, &rows, opts)
+    let track = if cols.iter().any(|c| c == "joint") {
+        read_long(path, &cols, &rows, opts)?
     } else {
         // Keep the header's original case for joint names.
         let raw: Vec<String> = header.split(',').map(|c| c.trim().to_string()).collect();
-        read_wide(path, &raw, &rows, opts)
+        read_wide(path, &raw, &rows, opts)?
+    };
+    // The rate a `time` column states: per row, its frame (the `frame`
+    // column, else the row's place) and its time.
+    let Some(tc) = cols.iter().position(|c| is_time(c)) else {
+        return Ok((track, false));
+    };
+    let fc = cols.iter().position(|c| c == "frame");
+    let mut times = Vec::with_capacity(rows.len());
+    for (i, (n, r)) in rows.iter().enumerate() {
+        let f = match fc {
+            Some(fc) => r[fc].trim().parse::<usize>().map_err(|_| {
+                GeomError::format(path, format!("line {n}: frame `{}` is not an index", r[fc]))
+            })?,
+            None => i,
+        };
+        times.push((f, parse_cell(r[tc], path, *n, &cols[tc])?));
+    }
+    match rate_from_times(path, &times)? {
+        Some(fps) => Ok((track.with_fps(fps)?, true)),
+        None => Ok((track, false)),
     }
 }
 
@@ -220,7 +291,7 @@ fn read_long(
         None if numeric => super::infer_skeleton(opts, j, path)?,
         None => skeleton_from_names(&names),
     };
-    Track::new(pos, Some(conf), opts.fps, opts.units_for(d), skeleton)
+    Track::new(pos, Some(conf), opts.rate(), opts.units_for(d), skeleton)
         .map_err(|e| GeomError::format(path, e.to_string()))
 }
 
@@ -237,7 +308,7 @@ fn read_wide(
     let mut has_z = false;
     for c in cols {
         let lc = c.to_ascii_lowercase();
-        if lc == "frame" || lc == "time" || lc == "t" {
+        if lc == "frame" || is_time(&lc) {
             roles.push(None);
             continue;
         }
@@ -315,7 +386,7 @@ fn read_wide(
         }
         None => skeleton_from_names(&names),
     };
-    Track::new(pos, Some(conf), opts.fps, opts.units_for(d), skeleton)
+    Track::new(pos, Some(conf), opts.rate(), opts.units_for(d), skeleton)
         .map_err(|e| GeomError::format(path, e.to_string()))
 }
 
@@ -336,17 +407,21 @@ pub fn track_to_csv_string(track: &Track, layout: CsvLayout) -> Result<String> {
     let pos = track.positions();
     let conf = track.confidence();
     let axes = ["x", "y", "z"];
+    // Seconds to the nanosecond: the rate read back is within 1e-6 of the
+    // track's over any two frames up to 1 kHz.
+    let fps = track.fps();
+    let time = |f: usize| format!("{:.9}", f as f64 / fps);
     let mut s = String::new();
     match layout {
         CsvLayout::Long => {
-            s.push_str("frame,joint,x,y");
+            s.push_str("frame,time,joint,x,y");
             if d == 3 {
                 s.push_str(",z");
             }
             s.push_str(",confidence\n");
             for f in 0..t {
                 for ji in 0..j {
-                    let _ = write!(s, "{f},{}", sk.joints[ji]);
+                    let _ = write!(s, "{f},{},{}", time(f), sk.joints[ji]);
                     for k in 0..d {
                         let _ = write!(s, ",{}", pos[[f, ji, k]]);
                     }
@@ -361,7 +436,7 @@ pub fn track_to_csv_string(track: &Track, layout: CsvLayout) -> Result<String> {
                     format!("wide CSV holds at most 3 dimensions, track has {d}"),
                 ));
             }
-            s.push_str("frame");
+            s.push_str("frame,time");
             for name in &sk.joints {
                 for a in axes.iter().take(d) {
                     let _ = write!(s, ",{name}_{a}");
@@ -370,7 +445,7 @@ pub fn track_to_csv_string(track: &Track, layout: CsvLayout) -> Result<String> {
             }
             s.push('\n');
             for f in 0..t {
-                let _ = write!(s, "{f}");
+                let _ = write!(s, "{f},{}", time(f));
                 for ji in 0..j {
                     for k in 0..d {
                         let _ = write!(s, ",{}", pos[[f, ji, k]]);
@@ -384,8 +459,9 @@ pub fn track_to_csv_string(track: &Track, layout: CsvLayout) -> Result<String> {
     Ok(s)
 }
 
-/// Writes a track as CSV (atomic). Frame rate, units and bones are not
-/// stored: read back with the same [`ReadOptions`].
+/// Writes a track as CSV (atomic), with a `time` column that states the
+/// frame rate. Units and bones are not stored: read back with the same
+/// [`ReadOptions`].
 pub fn write_csv(path: impl AsRef<Path>, track: &Track, layout: CsvLayout) -> Result<()> {
     let s = track_to_csv_string(track, layout)?;
     write_atomic(path, s.as_bytes())

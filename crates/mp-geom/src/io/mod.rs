@@ -49,9 +49,11 @@ use crate::track::{Track, Units};
 /// sets, BVH) ignore the options they already know.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReadOptions {
-    /// Frame rate for formats without one (CSV, `.npy`, OpenPose, AlphaPose).
-    /// Default 30 fps.
-    pub fps: f64,
+    /// Frame rate. `None`: the rate the file states (the project's npz, JSON
+    /// and `.mpt`, people files, BVH's frame time, a CSV `time` column, the
+    /// data sets), else [`DEFAULT_FPS`] ([`RateSource::Assumed`]). `Some`:
+    /// this rate, whatever the file states ([`RateSource::Given`]).
+    pub fps: Option<f64>,
     /// Units; `None` = pixels for D = 2, metres for D = 3.
     pub units: Option<Units>,
     /// Skeleton; `None` = inferred from the joint names or count
@@ -61,10 +63,25 @@ pub struct ReadOptions {
     pub length_scale: f64,
 }
 
+/// The frame rate of a file that states none and was given none: 30 fps.
+pub const DEFAULT_FPS: f64 = 30.0;
+
+/// Where the frame rate of a track read from a file came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RateSource {
+    /// The file states it.
+    File,
+    /// [`ReadOptions::fps`].
+    Given,
+    /// Neither: [`DEFAULT_FPS`] (`.npy`, CSV without a `time` column,
+    /// OpenPose and AlphaPose JSON).
+    Assumed,
+}
+
 impl Default for ReadOptions {
     fn default() -> Self {
         ReadOptions {
-            fps: 30.0,
+            fps: None,
             units: None,
             skeleton: None,
             length_scale: 1.0,
@@ -75,11 +92,13 @@ impl Default for ReadOptions {
 impl ReadOptions {
     /// Checks the options once.
     pub fn validate(&self) -> Result<()> {
-        if !(self.fps.is_finite() && self.fps > 0.0) {
-            return Err(GeomError::param(
-                "fps",
-                format!("must be finite and > 0, got {}", self.fps),
-            ));
+        if let Some(fps) = self.fps {
+            if !(fps.is_finite() && fps > 0.0) {
+                return Err(GeomError::param(
+                    "fps",
+                    format!("must be finite and > 0, got {fps}"),
+                ));
+            }
         }
         if !(self.length_scale.is_finite() && self.length_scale > 0.0) {
             return Err(GeomError::param(
@@ -88,6 +107,12 @@ impl ReadOptions {
             ));
         }
         Ok(())
+    }
+
+    /// The rate of a file that states none: [`ReadOptions::fps`], else
+    /// [`DEFAULT_FPS`].
+    pub(crate) fn rate(&self) -> f64 {
+        self.fps.unwrap_or(DEFAULT_FPS)
     }
 
     pub(crate) fn units_for(&self, dims: usize) -> Units {
@@ -173,10 +198,44 @@ pub fn read_track(path: impl AsRef<Path>) -> Result<Track> {
 ///
 /// A people file with nobody in it is an error ("no person in this file").
 pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
+    read_track_rated(path, opts).map(|(t, _)| t)
+}
+
+/// [`read_track_with`], telling where the track's frame rate came from (so
+/// that a caller can say when [`DEFAULT_FPS`] was assumed).
+pub fn read_track_rated(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<(Track, RateSource)> {
     let path = path.as_ref();
-    match read_any(path, opts, false)? {
-        Content::Track(t) => Ok(*t),
-        Content::People(p) => people::main_track_of(&p, path),
+    let (content, source) = read_rated(path, opts, false)?;
+    let track = match content {
+        Content::Track(t) => *t,
+        Content::People(p) => people::main_track_of(&p, path)?,
+    };
+    Ok((track, source))
+}
+
+/// [`read_any`] with [`ReadOptions::fps`] applied over what the file states.
+fn read_rated(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Content, RateSource)> {
+    let (content, stated) = read_any(path, opts, people_npz)?;
+    match (opts.fps, content) {
+        (Some(fps), Content::Track(t)) => {
+            let t = if t.fps() == fps { *t } else { t.with_fps(fps)? };
+            Ok((Content::Track(Box::new(t)), RateSource::Given))
+        }
+        (Some(fps), Content::People(p)) => Ok((
+            Content::People(
+                p.with_fps(fps)
+                    .map_err(|e| GeomError::format(path, e.to_string()))?,
+            ),
+            RateSource::Given,
+        )),
+        (None, c) => Ok((
+            c,
+            if stated {
+                RateSource::File
+            } else {
+                RateSource::Assumed
+            },
+        )),
     }
 }
 
@@ -188,13 +247,13 @@ enum Content {
 
 /// Reads a file as [`read_track_with`] describes, keeping people JSON and
 /// `.mpt` files as people; a people npz too when `people_npz` is set (else
-/// its single-track arrays are read).
-fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<Content> {
+/// its single-track arrays are read). Also tells whether the file states
+/// its frame rate (else [`ReadOptions::rate`] was used).
+fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Content, bool)> {
     opts.validate()?;
     if path.is_dir() {
-        return Ok(Content::Track(Box::new(openpose::read_openpose_dir(
-            path, opts,
-        )?)));
+        let t = openpose::read_openpose_dir(path, opts)?;
+        return Ok((Content::Track(Box::new(t)), false));
     }
     if !path.exists() {
         return Err(GeomError::io(
@@ -202,90 +261,98 @@ fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<Content
             std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or folder"),
         ));
     }
-    let track = match extension(path).as_str() {
+    let people = |p: People| Ok((Content::People(p), true));
+    let (track, stated) = match extension(path).as_str() {
         "npz" => {
             let z = npz::Npz::open(path)?;
             if people::is_people_npz(&z) {
                 if people_npz {
-                    return people::people_from_npz(&z).map(Content::People);
+                    return people(people::people_from_npz(&z)?);
                 }
                 // The single-track arrays hold the main person; a file of
                 // nobody has none.
                 if !z.contains("positions") {
                     return Err(people::no_person(path));
                 }
-                native::track_from_npz(&z)
+                (native::track_from_npz(&z)?, true)
             } else if z.contains("positions") {
-                native::track_from_npz(&z)
+                (native::track_from_npz(&z)?, z.contains("fps"))
             } else if z.contains("landmarks_px") {
-                Ok(datasets::MediaPipeReference::from_npz(&z, false)?.image)
+                (
+                    datasets::MediaPipeReference::from_npz(&z, false)?.image,
+                    true,
+                )
             } else if z.contains("X") && z.contains("labels") {
-                Ok(datasets::CmuFeatures::from_npz(&z)?.track)
+                (datasets::CmuFeatures::from_npz(&z)?.track, true)
             } else if z.contains("keypoints2d") {
-                Err(GeomError::format(
+                return Err(GeomError::format(
                     path,
                     "AIST++ file with several camera views: use io::datasets::AistPlusPlus",
-                ))
+                ));
             } else if z.contains("offsets") {
-                Err(GeomError::format(
+                return Err(GeomError::format(
                     path,
                     "multi-clip data set: use io::datasets::PennAction or MsrAction3D",
-                ))
+                ));
             } else {
-                Err(GeomError::format(
+                return Err(GeomError::format(
                     path,
                     format!(
                         "npz holds no known track layout (arrays: {})",
                         z.names().join(", ")
                     ),
-                ))
+                ));
             }
         }
-        "npy" => native::read_track_npy(path, opts),
+        "npy" => (native::read_track_npy(path, opts)?, false),
         "json" => {
             let text = std::fs::read_to_string(path).map_err(|e| GeomError::io(path, e))?;
             let value: serde_json::Value = serde_json::from_str(&text)
                 .map_err(|e| GeomError::format(path, format!("invalid JSON: {e}")))?;
             if value.get("format").and_then(|f| f.as_str()) == Some(native::JSON_FORMAT) {
-                native::track_from_json_value(value, path)
+                (native::track_from_json_value(value, path)?, true)
             } else if people::is_people_json(&value) {
-                return people::people_from_json_value(value, path).map(Content::People);
+                return people(people::people_from_json_value(value, path)?);
             } else if value.is_array() {
-                openpose::alphapose_from_value(&value, path, opts)
+                (openpose::alphapose_from_value(&value, path, opts)?, false)
             } else if value.get("people").is_some() {
-                openpose::openpose_from_frames(&[(path.to_path_buf(), value)], opts)
+                let frames = [(path.to_path_buf(), value)];
+                (openpose::openpose_from_frames(&frames, opts)?, false)
             } else {
-                Err(GeomError::format(
+                return Err(GeomError::format(
                     path,
                     "JSON is neither an mp track, mp people, an AlphaPose result list nor an \
                      OpenPose frame",
-                ))
+                ));
             }
         }
-        "csv" => csv::read_csv(path, opts),
+        "csv" => csv::read_csv_rated(path, opts)?,
         "mpt" => {
             let bytes = std::fs::read(path).map_err(|e| GeomError::io(path, e))?;
             if people::is_people_bincode(&bytes) {
-                return people::people_from_bincode_at(&bytes, path).map(Content::People);
+                return people(people::people_from_bincode_at(&bytes, path)?);
             }
-            native::track_from_bincode_at(&bytes, path)
+            (native::track_from_bincode_at(&bytes, path)?, true)
         }
         "bvh" => {
             let b = bvh::Bvh::read(path)?;
-            b.to_track(&bvh::BvhTrackParams {
+            let t = b.to_track(&bvh::BvhTrackParams {
                 length_scale: opts.length_scale,
                 units: opts.units.unwrap_or(Units::Metres),
                 include_end_sites: false,
-            })
+            })?;
+            (t, true)
         }
-        other => Err(GeomError::format(
-            path,
-            format!(
+        other => {
+            return Err(GeomError::format(
+                path,
+                format!(
                 "unknown track file extension `{other}` (npz, npy, json, csv, bvh, mpt or a folder)"
             ),
-        )),
-    }?;
-    Ok(Content::Track(Box::new(track)))
+            ))
+        }
+    };
+    Ok((Content::Track(Box::new(track)), stated))
 }
 
 /// Reads people with default [`ReadOptions`]. See [`read_people_with`].
@@ -300,7 +367,7 @@ pub fn read_people(path: impl AsRef<Path>) -> Result<People> {
 /// covering the whole track ([`People::from_track`]).
 pub fn read_people_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<People> {
     let path = path.as_ref();
-    match read_any(path, opts, true)? {
+    match read_rated(path, opts, true)?.0 {
         Content::People(p) => Ok(p),
         Content::Track(t) => {
             People::from_track(*t).map_err(|e| GeomError::format(path, e.to_string()))

@@ -119,7 +119,7 @@ pub fn track_from_npz(z: &Npz) -> Result<Track> {
     let fps = if z.contains("fps") {
         z.scalar_f64("fps")?
     } else {
-        ReadOptions::default().fps
+        super::DEFAULT_FPS
     };
     let units = if z.contains("units") {
         Units::parse(&z.scalar_string("units")?)?
@@ -493,7 +493,7 @@ pub fn track_from_npy_bytes(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Re
     let (t, j, d) = pos.dim();
     check_has_values(t, j, d, path)?;
     let skeleton = infer_skeleton(opts, j, path)?;
-    Track::new(pos, None, opts.fps, opts.units_for(d), skeleton)
+    Track::new(pos, None, opts.rate(), opts.units_for(d), skeleton)
         .map_err(|e| GeomError::format(path, e.to_string()))
 }
 

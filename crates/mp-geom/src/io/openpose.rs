@@ -228,7 +228,7 @@ pub fn openpose_from_frames(
         _ if j == 18 => coco18_skeleton(),
         _ => body25_skeleton(),
     };
-    Track::new(pos, Some(conf), opts.fps, opts.units_for(2), skeleton)
+    Track::new(pos, Some(conf), opts.rate(), opts.units_for(2), skeleton)
 }
 
 /// Reads an OpenPose output folder (`*_keypoints.json`, sorted by file name;
@@ -346,7 +346,7 @@ pub fn alphapose_from_value(
     Track::new(
         pos,
         Some(conf),
-        opts.fps,
+        opts.rate(),
         opts.units_for(2),
         Skeleton::coco17(),
     )

@@ -160,6 +160,10 @@ pub struct BatchParams {
     /// Largest side of the video frame in pixels for track inputs (the
     /// scale), as in [`Input::open`]. Default `None`: the motion's extent.
     pub frame_px: Option<f64>,
+    /// Frame rate of track inputs, over what a file states, as in
+    /// [`Input::open_with`]. Default `None`: each file's own (30 fps where
+    /// it states none).
+    pub fps: Option<f64>,
     /// The parameters of every item's [`run`](crate::run). Default [`Params::default()`].
     pub params: Params,
 }
@@ -170,6 +174,7 @@ impl Default for BatchParams {
             jobs: 1,
             threads: None,
             frame_px: None,
+            fps: None,
             params: Params::default(),
         }
     }
@@ -187,12 +192,14 @@ impl BatchParams {
         if self.threads == Some(0) {
             return Err(BatchError::param("threads", "must be at least 1"));
         }
-        if let Some(px) = self.frame_px {
-            if !(px.is_finite() && px > 0.0) {
-                return Err(BatchError::param(
-                    "frame_px",
-                    format!("must be finite and > 0, got {px}"),
-                ));
+        for (name, v) in [("frame_px", self.frame_px), ("fps", self.fps)] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(BatchError::param(
+                        name,
+                        format!("must be finite and > 0, got {v}"),
+                    ));
+                }
             }
         }
         self.params.validate()?;
@@ -329,7 +336,7 @@ fn run_item(
     input: &Path,
     output: &Path,
     params: &Params,
-    frame_px: Option<f64>,
+    (frame_px, fps): (Option<f64>, Option<f64>),
     observer: &dyn BatchObserver,
     cancel: &CancelToken,
     slot: &mut crate::ModelSlot,
@@ -340,7 +347,7 @@ fn run_item(
         inner: observer,
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let opened = Input::open(input, frame_px)?;
+        let opened = Input::open_with(input, frame_px, fps)?;
         crate::run_with(opened, output, params, &item_observer, cancel, slot)
     }));
     if result.is_err() {
@@ -457,7 +464,7 @@ pub fn batch(
                         &items[i],
                         &outputs[i],
                         &run_params,
-                        params.frame_px,
+                        (params.frame_px, params.fps),
                         observer,
                         cancel,
                         &mut slot,

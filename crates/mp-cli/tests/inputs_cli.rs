@@ -1,0 +1,120 @@
+//! What a command is given: frame rates that travel with the data (`--fps`,
+//! a CSV `time` column, a warning when 30 fps is assumed) and, for the usual
+//! mistakes, errors that name the right command.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
+
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mp"))
+        .args(args)
+        .output()
+        .expect("cannot start mp")
+}
+
+fn ok(args: &[&str]) -> (String, String) {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "mp {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn refused(args: &[&str]) -> String {
+    let out = run(args);
+    assert_eq!(out.status.code(), Some(1), "mp {args:?} should fail");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// `period_frames` and `fps` of the first counted interval of `mp loops --json`.
+fn period_s(args: &[&str]) -> f64 {
+    let (out, _) = ok(args);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let fps = v["fps"].as_f64().unwrap();
+    let iv = &v["intervals"][0];
+    let frames = iv["boundaries"][1].as_f64().unwrap() - iv["boundaries"][0].as_f64().unwrap();
+    frames / fps
+}
+
+#[test]
+fn a_track_keeps_its_rate_through_csv_and_npy_takes_fps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |name: &str| tmp.path().join(name).to_string_lossy().into_owned();
+    ok(&["performer", "-o", &p("perf.npz")]);
+    ok(&["fit", &p("perf.npz"), "-o", &p("prog.txt"), "--quiet"]);
+    for ext in ["npz", "csv"] {
+        ok(&[
+            "execute",
+            &p("prog.txt"),
+            "--fps",
+            "60",
+            "-o",
+            &p(&format!("e60.{ext}")),
+        ]);
+    }
+    let npz = period_s(&["loops", &p("e60.npz"), "--json"]);
+    let csv = period_s(&["loops", &p("e60.csv"), "--json"]);
+    assert!((npz - csv).abs() < 1e-9, "npz {npz} s, csv {csv} s");
+    let text = std::fs::read_to_string(p("e60.csv")).unwrap();
+    assert!(text.starts_with("frame,time,"), "{}", &text[..30]);
+
+    // A CSV without its time column states no rate: 30 fps, with a warning,
+    // unless --fps says otherwise.
+    let stripped: String = text
+        .lines()
+        .map(|l| {
+            let mut f: Vec<&str> = l.split(',').collect();
+            f.remove(1);
+            f.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(p("no_time.csv"), stripped).unwrap();
+    let (_, err) = ok(&["loops", &p("no_time.csv")]);
+    assert!(
+        err.contains("30 fps assumed") && err.contains("--fps"),
+        "{err}"
+    );
+    let assumed = period_s(&["loops", &p("no_time.csv"), "--json"]);
+    assert!((assumed - 2.0 * npz).abs() < 1e-9, "{assumed} vs 2 × {npz}");
+    let given = period_s(&["loops", &p("no_time.csv"), "--json", "--fps", "60"]);
+    assert!((given - npz).abs() < 1e-9, "{given} vs {npz}");
+    let (_, err) = ok(&["loops", &p("no_time.csv"), "--fps", "60"]);
+    assert!(!err.contains("assumed"), "{err}");
+}
+
+#[test]
+fn mistakes_get_the_right_advice() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |name: &str| tmp.path().join(name).to_string_lossy().into_owned();
+    std::fs::write(p("photo.jpg"), b"not really").unwrap();
+    std::fs::write(p("clip.mp4"), b"not really").unwrap();
+    std::fs::write(p("README.md"), b"# notes").unwrap();
+    std::fs::create_dir(p("videos")).unwrap();
+    std::fs::write(p("videos/a.mp4"), b"").unwrap();
+    ok(&["performer", "-o", &p("perf.npz")]);
+
+    let e = refused(&["run", &p("photo.jpg"), "--out", &p("o")]);
+    assert!(e.contains("still image") && e.contains("mp extract"), "{e}");
+    let e = refused(&["run", &p("videos"), "--out", &p("o")]);
+    assert!(e.contains("mp batch"), "{e}");
+    let e = refused(&["fit", &p("clip.mp4"), "-o", &p("p.txt")]);
+    assert!(
+        e.contains("is a video") && e.contains("mp extract") && e.contains("mp run"),
+        "{e}"
+    );
+    let e = refused(&["fit", &p("photo.jpg"), "-o", &p("p.txt")]);
+    assert!(e.contains("is an image") && e.contains("mp extract"), "{e}");
+    let e = refused(&["extract", &p("perf.npz"), "-o", &p("x.npz")]);
+    assert!(
+        e.contains("already a keypoint track") && e.contains("mp run"),
+        "{e}"
+    );
+    let e = refused(&["run", &p("perf.npz"), "--out", &p("README.md")]);
+    assert!(e.contains("README.md is a file"), "{e}");
+    assert_eq!(std::fs::read_to_string(p("README.md")).unwrap(), "# notes");
+}
