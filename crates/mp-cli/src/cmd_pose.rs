@@ -31,9 +31,9 @@ pub struct ExtractArgs {
     /// One-Euro smoothing of the keypoints (MediaPipe's `smooth_landmarks`).
     #[arg(long)]
     pub smooth: bool,
-    /// Write COCO-17 joints instead of the model's own skeleton.
+    /// Keep all of the pose model's joints (BlazePose: 33) instead of the COCO-17 body joints `mp run` analyses (world coordinates, `--world`, always keep all 33).
     #[arg(long)]
-    pub coco17: bool,
+    pub all_joints: bool,
     /// ONNX Runtime threads.
     #[arg(long, default_value_t = SessionParams::default().intra_threads)]
     pub threads: usize,
@@ -137,7 +137,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     } else {
         ex.track.clone()
     };
-    if a.coco17 && track.skeleton().name != "coco17" {
+    if !a.all_joints && !a.world && track.skeleton().name != "coco17" {
         track = track.to_coco17().context("mapping to COCO-17")?;
     }
     mp_geom::io::write_track(&a.output, &track)
@@ -189,7 +189,7 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
     .map_err(pose_err)
     .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
     pb.finish_and_clear();
-    let people = if a.coco17 {
+    let people = if !a.all_joints {
         ex.people.clone().map_tracks(|t| t.to_coco17())?
     } else {
         ex.people.clone()

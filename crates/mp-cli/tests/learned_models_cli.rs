@@ -59,7 +59,7 @@ fn extracted(video: &Path) -> Result<&'static (tempfile::TempDir, [PathBuf; 3]),
         .get_or_init(|| {
             let dir = tempfile::tempdir().unwrap();
             let names = ["blazepose.npz", "world.npz", "coco.npz"];
-            let extra: [&[&str]; 3] = [&[], &["--world"], &["--coco17"]];
+            let extra: [&[&str]; 3] = [&["--all-joints"], &["--world"], &[]];
             for (name, extra) in names.iter().zip(extra) {
                 let out = mp()
                     .arg("extract")

@@ -69,6 +69,8 @@ struct WindowRef {
 pub struct NearestNeighbour {
     params: NnParams,
     body: BodyJoints,
+    /// The training tracks' skeleton.
+    skeleton: mp_geom::Skeleton,
     n_joints: usize,
     dims: usize,
     /// Per training track: positions with missing joints interpolated, and which joints were ever valid.
@@ -161,6 +163,7 @@ impl NearestNeighbour {
         Ok(NearestNeighbour {
             params,
             body,
+            skeleton: first.skeleton().clone(),
             n_joints,
             dims,
             tracks,
@@ -168,6 +171,12 @@ impl NearestNeighbour {
             coords,
             masks,
         })
+    }
+
+    /// The skeleton of the training tracks (what a track must have, or map
+    /// onto: [`crate::mapped`]).
+    pub fn skeleton(&self) -> &mp_geom::Skeleton {
+        &self.skeleton
     }
 
     /// Number of indexed training windows.

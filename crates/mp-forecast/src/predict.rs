@@ -344,10 +344,13 @@ pub fn predict(
         }
         ForecastMethod::Nn => {
             let (nn, train) = nearest_neighbour(opts.train.as_deref(), &opts.nn_params)?;
-            (
-                nn.predict(&past, horizon)?,
-                PredictPath::NearestNeighbour { train },
-            )
+            // A track of another product skeleton is mapped onto the
+            // training set's joints and the prediction carried back.
+            let pred = match map_to_model(track.skeleton(), track.dims(), &nn.skeleton().joints)? {
+                Some(map) => MappedForecaster::new(nn, map).predict(&past, horizon)?,
+                None => nn.predict(&past, horizon)?,
+            };
+            (pred, PredictPath::NearestNeighbour { train })
         }
         ForecastMethod::Ar | ForecastMethod::ArPose => {
             let space = if opts.method == ForecastMethod::Ar {
@@ -562,6 +565,24 @@ mod tests {
         assert!(e.contains("walk") && e.contains("ar-pose"), "{e}");
         assert_eq!(PredictOptions::default().method, ForecastMethod::Loop);
         assert!(PredictOptions::default().validate().is_ok());
+    }
+
+    #[test]
+    fn nn_takes_the_product_skeletons_through_the_mappings() {
+        let train = mp_geom::data_or_return!(PennAction::TRAIN_FILE);
+        let track = performer();
+        assert_eq!(track.skeleton().name, "coco17");
+        let opts = PredictOptions {
+            train: Some(train),
+            ..PredictOptions::with_method(ForecastMethod::Nn)
+        };
+        let p = predict(&track, 60, 15, &opts).unwrap();
+        assert_eq!(p.track.skeleton().name, "coco17");
+        assert_eq!((p.track.n_frames(), p.track.n_joints()), (15, 17));
+        // Within a body's reach of the truth, which a prediction of the
+        // wrong joints or scale would not be.
+        let kd = p.actual_kd.unwrap();
+        assert!(kd.is_finite() && kd < 0.5 * track.scale(), "{kd}");
     }
 
     #[test]

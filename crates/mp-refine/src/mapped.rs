@@ -52,7 +52,7 @@ pub fn msr20_map(track: &Track) -> Result<Option<SkeletonMap>> {
     Err(RefineError::JointCount {
         what: format!(
             "refinement of a `{name}` track (20 MSR Action3D joints, or BlazePose-33 world \
-             landmarks from `mp extract VIDEO --world` without --coco17)"
+             landmarks from `mp extract VIDEO --world`)"
         ),
         expected: MSR_JOINTS,
         got: track.n_joints(),
