@@ -36,11 +36,12 @@ impl AnalysisOpts {
         p
     }
 
-    /// The abstract analysis parameters with these options (scale included).
-    fn params(&self) -> AbstractParams {
+    /// The abstract analysis parameters with these options, at the scale of
+    /// a frame of `frame_px` (default: `--frame-size`).
+    fn params_at(&self, frame_px: Option<f64>) -> AbstractParams {
         let p = self.pipeline_params();
         AbstractParams {
-            synth: p.synth_for(self.frame_size),
+            synth: p.synth_for(frame_px.or(self.frame_size)),
             loops: p.analysis.loops,
         }
     }
@@ -159,7 +160,8 @@ pub struct PredictArgs {
 /// `mp abstract`: the abstract program of a track, written and summarised.
 pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
     let track = crate::track_arg::read_track(&a.track, &a.opts.rate)?;
-    let an = analyse_track(&track, a.opts.frame_size, &a.opts.pipeline_params())?;
+    let frame_px = crate::track_arg::frame_px(&a.track, a.opts.frame_size)?;
+    let an = analyse_track(&track, frame_px, &a.opts.pipeline_params())?;
     write_program(&an.program, &a.output)?;
     if !a.quiet {
         print!("{}", print_with(&an.program, &PrintOptions::summary()));
@@ -295,7 +297,9 @@ pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
         models: a.forecast.models.clone(),
         ..PredictOptions::default()
     };
-    opts.loop_params.analysis = a.opts.params();
+    opts.loop_params.analysis = a
+        .opts
+        .params_at(crate::track_arg::frame_px(&a.track, a.opts.frame_size)?);
     let p = mp_forecast::predict(&track, observe, horizon, &opts)?;
     if let Some(text) = p.explanation() {
         eprintln!("{text}");
@@ -330,7 +334,7 @@ mod tests {
             max_body: Params::default().analysis.loops.max_body,
         };
         assert_eq!(
-            opts.params(),
+            opts.params_at(None),
             PredictOptions::default().loop_params.analysis
         );
         assert_eq!(ForecastMethod::from(Method::ArPose), ForecastMethod::ArPose);

@@ -121,7 +121,8 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     if a.strict_joints {
         params.analysis.synth.unobserved_joints = UnobservedJoints::Error;
     }
-    let syn = mp_pipeline::concrete_program(&track, a.frame_size, &params)
+    let frame_px = crate::track_arg::frame_px(&a.track, a.frame_size)?;
+    let syn = mp_pipeline::concrete_program(&track, frame_px, &params)
         .with_context(|| format!("fitting {}", a.track.display()))?;
     let p = &syn.program;
     if !a.quiet {

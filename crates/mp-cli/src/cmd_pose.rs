@@ -140,7 +140,10 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     if !a.all_joints && !a.world && track.skeleton().name != "coco17" {
         track = track.to_coco17().context("mapping to COCO-17")?;
     }
-    mp_geom::io::write_track(&a.output, &track)
+    // Pixels keep the frame they are in (the scale of their programs);
+    // world coordinates are metres.
+    let frame = (!a.world).then_some((ex.width, ex.height));
+    mp_geom::io::write_track_framed(&a.output, &track, frame)
         .with_context(|| format!("writing {}", a.output.display()))?;
     if !a.quiet {
         println!(
@@ -204,7 +207,7 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
             .with_context(|| format!("nobody was found in {}", a.video.display()))?;
         mp_geom::io::write_track(&a.output, &track)
     } else {
-        mp_geom::io::write_people(&a.output, &people)
+        mp_geom::io::write_people_framed(&a.output, &people, Some((ex.width, ex.height)))
     }
     .with_context(|| format!("writing {}", a.output.display()))?;
     if let Some(w) = ex.warning() {

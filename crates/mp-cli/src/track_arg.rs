@@ -84,6 +84,18 @@ pub fn read_track(path: &Path, rate: &RateOpt) -> Result<Track> {
     Ok(track)
 }
 
+/// The frame size (largest side, pixels) a track is scaled by: `given`
+/// (`--frame-size`), else the one its npz states (written by `mp run` and
+/// `mp extract`), else `None` (the motion's extent).
+pub fn frame_px(path: &Path, given: Option<f64>) -> Result<Option<f64>> {
+    if given.is_some() {
+        return Ok(given);
+    }
+    let size = mp_geom::io::read_frame_size(path)
+        .with_context(|| format!("reading {}", path.display()))?;
+    Ok(size.map(|(w, h)| w.max(h) as f64))
+}
+
 /// Opens the input of `mp run` / `mp loops` (a video or a keypoint track),
 /// with advice for a still image and for a folder that holds no OpenPose
 /// frames (a folder of videos is `mp batch`'s).

@@ -245,6 +245,32 @@ fn run_on_golf_clip_writes_consistent_outputs() {
 }
 
 #[test]
+fn fit_on_the_runs_track_reproduces_its_program() {
+    let Some(dir) = golf_run() else {
+        return;
+    };
+    // The track keeps the video frame it is in, so its program is fitted
+    // at the same scale as `mp run`'s.
+    assert_eq!(
+        mp_geom::io::read_frame_size(dir.join("track.npz")).unwrap(),
+        Some((354, 492))
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("p.txt");
+    run_ok(
+        mp().arg("fit")
+            .arg(dir.join("track.npz"))
+            .arg("-o")
+            .arg(&p)
+            .arg("--quiet"),
+    );
+    assert_eq!(
+        std::fs::read_to_string(&p).unwrap(),
+        std::fs::read_to_string(dir.join("program.txt")).unwrap()
+    );
+}
+
+#[test]
 fn run_on_track_file() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("out");

@@ -49,7 +49,8 @@ pub enum Input {
 impl Input {
     /// A video or a track file, told apart by the extension
     /// ([`VIDEO_EXTENSIONS`]); `frame_px` is the frame size to use as the scale
-    /// of a track (ignored for videos, whose frame size is known).
+    /// of a track (ignored for videos, whose frame size is known; default for
+    /// a track: the frame size its npz states, else the motion's extent).
     pub fn open(path: impl AsRef<Path>, frame_px: Option<f64>) -> Result<Self> {
         Self::open_with(path, frame_px, None)
     }
@@ -87,7 +88,19 @@ impl Input {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
+        // A track that states the video frame it is in (an npz of `mp run`
+        // or `mp extract`) is scaled by it, as the video was.
+        let frame_size =
+            mp_geom::io::read_frame_size(path).map_err(|source| PipelineError::Track {
+                path: path.to_path_buf(),
+                extensions: VIDEO_EXTENSIONS.join(", "),
+                source,
+            })?;
+        let frame_px = frame_px.or(frame_size.map(|(w, h)| w.max(h) as f64));
         let mut input = Self::from_track(track, &name, frame_px);
+        if let Input::Track { frame_size: f, .. } = &mut input {
+            *f = frame_size;
+        }
         if rate == mp_geom::io::RateSource::Assumed {
             if let Input::Track {
                 description,

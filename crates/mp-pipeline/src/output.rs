@@ -96,12 +96,13 @@ pub fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<String>>
         _ => false,
     };
     match &outcome.keypoints.people {
-        Some(people) if top_is_main => {
-            put("track.npz", &mp_geom::io::people_to_npz_bytes(people)?)?
-        }
+        Some(people) if top_is_main => put(
+            "track.npz",
+            &mp_geom::io::people_to_npz_bytes_framed(people, outcome.keypoints.frame_size)?,
+        )?,
         _ => put(
             "track.npz",
-            &mp_geom::io::native::track_to_npz_bytes(track)?,
+            &mp_geom::io::native::track_to_npz_bytes_framed(track, outcome.keypoints.frame_size)?,
         )?,
     }
     let mut programs = |dir: &str, an: &Analysis| -> Result<()> {

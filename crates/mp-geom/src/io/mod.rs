@@ -33,8 +33,8 @@ pub mod openpose;
 pub mod people;
 
 pub use atomic::{abandon_partial_writes, write_atomic, PartialFile};
-pub use native::{track_from_bincode, track_to_bincode};
-pub use people::people_to_npz_bytes;
+pub use native::{read_frame_size, track_from_bincode, track_to_bincode};
+pub use people::{people_to_npz_bytes, people_to_npz_bytes_framed};
 
 use std::path::Path;
 
@@ -379,9 +379,22 @@ pub fn read_people_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Pe
 /// (compressed), `.json` or `.mpt` (binary); see [`people`]. Atomic
 /// (temporary file + rename).
 pub fn write_people(path: impl AsRef<Path>, people: &People) -> Result<()> {
+    write_people_framed(path, people, None)
+}
+
+/// [`write_people`] keeping the video frame size in an `.npz` (as
+/// [`write_track_framed`]).
+pub fn write_people_framed(
+    path: impl AsRef<Path>,
+    people: &People,
+    frame_size: Option<(usize, usize)>,
+) -> Result<()> {
     let path = path.as_ref();
     match extension(path).as_str() {
-        "npz" => people::write_people_npz(path, people),
+        "npz" => write_atomic(
+            path,
+            &people::people_to_npz_bytes_framed(people, frame_size)?,
+        ),
         "json" => people::write_people_json(path, people),
         "mpt" => people::write_people_bincode(path, people),
         other => Err(GeomError::format(
@@ -395,9 +408,20 @@ pub fn write_people(path: impl AsRef<Path>, people: &People) -> Result<()> {
 /// (compressed), `.json`, `.csv` (wide) or `.mpt` (binary). Atomic
 /// (temporary file + rename).
 pub fn write_track(path: impl AsRef<Path>, track: &Track) -> Result<()> {
+    write_track_framed(path, track, None)
+}
+
+/// [`write_track`] keeping the width and height of the video frame the
+/// track's pixels are in, in an `.npz` ([`read_frame_size`] reads it back:
+/// the scale its programs are fitted at); other formats leave it out.
+pub fn write_track_framed(
+    path: impl AsRef<Path>,
+    track: &Track,
+    frame_size: Option<(usize, usize)>,
+) -> Result<()> {
     let path = path.as_ref();
     match extension(path).as_str() {
-        "npz" => native::write_track_npz(path, track),
+        "npz" => write_atomic(path, &native::track_to_npz_bytes_framed(track, frame_size)?),
         "json" => native::write_track_json(path, track),
         "csv" => csv::write_csv(path, track, csv::CsvLayout::Wide),
         "mpt" => native::write_track_bincode(path, track),

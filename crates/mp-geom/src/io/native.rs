@@ -14,6 +14,7 @@
 //! | `coco17` | `<i8 (17,)` or `(0,)` | COCO-17 mapping, −1 = none |
 //! | `root` | `<i8 ()` | root joint, −1 = none |
 //! | `mp_track_version` | `<i8 ()` | format version (1) |
+//! | `frame_size` | `<i8 (2,)` | optional: width and height of the video frame the pixels are in |
 //!
 //! **JSON**: `{"format": "mp-track", "version": 1, "fps", "units", "skeleton":
 //! {name, joints, bones, coco17, root}, "positions": [[[x, y(, z)] per joint]
@@ -53,9 +54,55 @@ pub const BINARY_VERSION: u32 = 1;
 
 /// Encodes a track as compressed npz bytes.
 pub fn track_to_npz_bytes(track: &Track) -> Result<Vec<u8>> {
+    track_to_npz_bytes_framed(track, None)
+}
+
+/// [`track_to_npz_bytes`] with the width and height of the video frame the
+/// track's pixels are in (`frame_size`), which [`read_frame_size`] gives
+/// back: the scale a program of the track is fitted at.
+pub fn track_to_npz_bytes_framed(
+    track: &Track,
+    frame_size: Option<(usize, usize)>,
+) -> Result<Vec<u8>> {
     let mut out = NpzOut::new(true);
     add_track_arrays(&mut out, track)?;
+    add_frame_size(&mut out, frame_size)?;
     out.finish()
+}
+
+/// Adds the optional `frame_size` array.
+pub(crate) fn add_frame_size(out: &mut NpzOut, frame_size: Option<(usize, usize)>) -> Result<()> {
+    if let Some((w, h)) = frame_size {
+        out.add("frame_size", &Array1::from(vec![w as i64, h as i64]))?;
+    }
+    Ok(())
+}
+
+/// The video frame size (width, height) an npz track or people file
+/// states (`frame_size`); `None` for other files and npz files without it.
+pub fn read_frame_size(path: impl AsRef<Path>) -> Result<Option<(usize, usize)>> {
+    let path = path.as_ref();
+    let is_npz = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npz"));
+    if !is_npz || !path.is_file() {
+        return Ok(None);
+    }
+    let z = Npz::open(path)?;
+    if !z.contains("frame_size") {
+        return Ok(None);
+    }
+    let a = z.array("frame_size")?.to_f64()?;
+    let v: Vec<f64> = a.iter().copied().collect();
+    match v.as_slice() {
+        [w, h] if *w >= 1.0 && *h >= 1.0 && w.is_finite() && h.is_finite() => {
+            Ok(Some((*w as usize, *h as usize)))
+        }
+        _ => Err(GeomError::format(
+            path,
+            format!("frame_size must be two positive sizes (width, height), got {v:?}"),
+        )),
+    }
 }
 
 /// Adds the arrays of the npz track format to an archive being built.

@@ -111,6 +111,15 @@ fn build(n_frames: usize, fps: f64, people: Vec<Person>, path: &Path) -> Result<
 /// Encodes people as compressed npz bytes (see the module docs for the
 /// arrays and for a video with nobody in it).
 pub fn people_to_npz_bytes(people: &People) -> Result<Vec<u8>> {
+    people_to_npz_bytes_framed(people, None)
+}
+
+/// [`people_to_npz_bytes`] with the video frame size (`frame_size`, as
+/// [`native::track_to_npz_bytes_framed`]).
+pub fn people_to_npz_bytes_framed(
+    people: &People,
+    frame_size: Option<(usize, usize)>,
+) -> Result<Vec<u8>> {
     let t = people.n_frames();
     let list = people.people();
     let (j, d) = list
@@ -142,6 +151,7 @@ pub fn people_to_npz_bytes(people: &People) -> Result<Vec<u8>> {
     out.add("people_positions", &pos)?;
     out.add("people_confidence", &conf)?;
     out.add(NPZ_VERSION_KEY, &arr0(FORMAT_VERSION))?;
+    native::add_frame_size(&mut out, frame_size)?;
     out.finish()
 }
 

@@ -1,12 +1,15 @@
-//! Frame rates travel with the data: the rate a file states (a CSV `time`
-//! column, the project's formats), the rate a caller gives, and the rate
-//! assumed when neither says (reported as such).
+//! Frame rates and frame sizes travel with the data: the rate a file states
+//! (a CSV `time` column, the project's formats), the rate a caller gives,
+//! the rate assumed when neither says (reported as such), and the video
+//! frame an npz's pixels are in.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::native::write_track_npy;
 use mp_geom::io::{
-    read_people_with, read_track_rated, write_track, RateSource, ReadOptions, DEFAULT_FPS,
+    read_frame_size, read_people_with, read_track_rated, write_people_framed, write_track,
+    write_track_framed, RateSource, ReadOptions, DEFAULT_FPS,
 };
+use mp_geom::People;
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
 
@@ -95,4 +98,33 @@ fn the_projects_formats_keep_their_rate_and_people_take_a_given_one() {
         assert_eq!(p.fps(), 24.0, "{ext}");
         assert!(p.people().iter().all(|q| q.track.fps() == 24.0), "{ext}");
     }
+}
+
+#[test]
+fn npz_files_keep_the_video_frame_they_are_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let t = track(30.0);
+    let (a, b, c) = (
+        dir.path().join("a.npz"),
+        dir.path().join("b.npz"),
+        dir.path().join("c.npz"),
+    );
+    write_track_framed(&a, &t, Some((640, 360))).unwrap();
+    write_people_framed(
+        &b,
+        &People::from_track(t.clone()).unwrap(),
+        Some((1920, 1080)),
+    )
+    .unwrap();
+    write_track(&c, &t).unwrap();
+    assert_eq!(read_frame_size(&a).unwrap(), Some((640, 360)));
+    assert_eq!(read_frame_size(&b).unwrap(), Some((1920, 1080)));
+    assert_eq!(read_frame_size(&c).unwrap(), None);
+    // The track itself reads as before.
+    let (back, _) = read_track_rated(&a, &ReadOptions::default()).unwrap();
+    assert_eq!(back, t);
+    // Other formats state no frame.
+    let j = dir.path().join("a.json");
+    write_track_framed(&j, &t, Some((640, 360))).unwrap();
+    assert_eq!(read_frame_size(&j).unwrap(), None);
 }
