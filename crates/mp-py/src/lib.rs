@@ -95,9 +95,11 @@ fn read_track(py: Python<'_>, path: PathBuf, fps: Option<f64>) -> PyResult<PyTra
 /// most `max_people` at once) unless `single_person` (MediaPipe's
 /// single-person pipeline); the `Track` returned is the main person's over
 /// the whole video, or with `people=True` every tracked person, as `People`
-/// (the keypoint stage of `mp run`).
+/// (the keypoint stage of `mp run`). `world=True`: BlazePose's world
+/// landmarks instead (metres, hip-centred, 3D, all 33; as `mp extract
+/// --world`), the input of `refine`.
 #[pyfunction]
-#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false))]
+#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false, world=false))]
 #[allow(clippy::too_many_arguments)]
 fn extract<'py>(
     py: Python<'py>,
@@ -110,8 +112,30 @@ fn extract<'py>(
     people: bool,
     max_people: Option<usize>,
     single_person: bool,
+    world: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut params = params_with(Some(model), threads, max_frames, all_joints, None, None)?;
+    if world {
+        if people {
+            return Err(errors::ParamError::new_err(
+                "world=True follows one person (MediaPipe's world landmarks); people=True needs \
+                 image coordinates",
+            ));
+        }
+        let session = mp_pose::SessionParams {
+            intra_threads: params.pose.threads,
+            ..Default::default()
+        };
+        let opts = mp_pose::extract::ExtractOptions {
+            max_frames,
+            ..Default::default()
+        };
+        let model = params.pose.model;
+        let t = py
+            .detach(|| mp_pose::extract::world_landmarks(&video, model, session, &opts))
+            .map_err(|e| errors::pipeline(mp_pipeline::PipelineError::Pose(e)))?;
+        return Ok(Bound::new(py, PyTrack::new(t))?.into_any());
+    }
     if let Some(r) = recover_s {
         params.pose.recover_s = r;
     }

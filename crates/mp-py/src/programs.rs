@@ -58,6 +58,13 @@ impl PyProgram {
         self.inner.write(&path).map_err(errors::concrete)
     }
 
+    /// Pickles through the JSON form (exact numbers).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let py = slf.py();
+        let parse = py.get_type::<PyProgram>().getattr("parse")?;
+        Ok((parse, (slf.get().to_json()?,)))
+    }
+
     /// Positions of the executed program, `T' × J × D`, at `fps` frames per
     /// second (default: the program's own rate).
     #[pyo3(signature = (fps=None))]
@@ -289,6 +296,50 @@ impl PyCounts {
 
 #[pymethods]
 impl PyCounts {
+    /// The counts with their people, as JSON (what they pickle through).
+    fn _state(&self) -> PyResult<String> {
+        let v = serde_json::json!({
+            "counts": self.inner,
+            "people": self.people,
+            "person": self.person,
+        });
+        serde_json::to_string(&v).map_err(|e| errors::MpError::new_err(e.to_string()))
+    }
+
+    /// Counts from the output of `Counts.to_json` (or of their pickled state).
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        let bad = |e: serde_json::Error| {
+            errors::ParamError::new_err(format!("not the JSON of Counts: {e}"))
+        };
+        let mut v: serde_json::Value = serde_json::from_str(text).map_err(bad)?;
+        if v.get("counts").is_none() {
+            v = serde_json::json!({ "counts": v });
+        }
+        let mut take = |k: &str| v.get_mut(k).map(serde_json::Value::take);
+        let counts: Counts =
+            serde_json::from_value(take("counts").unwrap_or_default()).map_err(bad)?;
+        let people = match take("people") {
+            Some(p) => serde_json::from_value(p).map_err(bad)?,
+            None => Vec::new(),
+        };
+        let person = match take("person") {
+            Some(p) => serde_json::from_value(p).map_err(bad)?,
+            None => None,
+        };
+        Ok(PyCounts {
+            inner: counts,
+            people,
+            person,
+        })
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let py = slf.py();
+        let from_json = py.get_type::<PyCounts>().getattr("from_json")?;
+        Ok((from_json, (slf.get()._state()?,)))
+    }
+
     /// Every tracked person of a video (empty for a track and the
     /// single-person pipeline): dicts with `id`, `main`, `first_frame`,
     /// `last_frame`, `frames_found`, `box` (mean box `[x0, y0, x1, y1]`,

@@ -125,16 +125,19 @@ impl PyTrack {
         ))
     }
 
-    /// Joint positions, a `T × J × D` float64 array (a copy).
+    /// Joint positions, a `T × J × D` float64 array: a read-only copy (a
+    /// track does not change; `Track.from_numpy(positions.copy(), …)` makes
+    /// a new one from edited positions).
     #[getter]
-    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray3<f64>> {
-        self.inner.positions().to_pyarray(py)
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        read_only(self.inner.positions().to_pyarray(py))
     }
 
-    /// Per-joint confidence, a `T × J` float64 array in [0, 1] (a copy).
+    /// Per-joint confidence, a `T × J` float64 array in [0, 1] (a read-only
+    /// copy, as `positions`).
     #[getter]
-    fn confidence<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        self.inner.confidence().to_pyarray(py)
+    fn confidence<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        read_only(self.inner.confidence().to_pyarray(py))
     }
 
     /// Frames per second.
@@ -235,4 +238,11 @@ impl PyTrack {
             t.fps()
         )
     }
+}
+
+/// The array with numpy's write flag cleared, so that an edit raises
+/// instead of changing a copy nobody reads.
+fn read_only<T>(a: Bound<'_, T>) -> PyResult<Bound<'_, T>> {
+    a.as_any().call_method1("setflags", (false,))?;
+    Ok(a)
 }

@@ -236,6 +236,10 @@ def test_refine_a_3d_track(data, mp_bin, tmp_path):
     video = data("golfdb/golf_swing.mp4")
     run_cli(mp_bin, "extract", video, "--world", "--max-frames", 60, "-o", tmp_path / "w.npz", "-q")
     w = mp.read_track(tmp_path / "w.npz")
+    # Python's world landmarks are the command's.
+    wp = mp.extract(video, max_frames=60, world=True)
+    assert wp.dims == 3 and wp.n_joints == 33 and wp.units == "m"
+    np.testing.assert_allclose(wp.positions, w.positions, atol=1e-6)
     r = mp.refine(w)
     assert r.joint_names == w.joint_names and r.n_frames == w.n_frames
     assert np.isfinite(r.positions).all()
@@ -272,3 +276,29 @@ def test_frame_rate_travels_with_the_file(performer, tmp_path):
         assert mp.read_track(tmp_path / "t.npy").fps == 30.0
     assert mp.read_track(tmp_path / "t.npy", fps=60).fps == 60.0
     assert mp.read_track(tmp_path / "t60.csv", fps=25).fps == 25.0
+
+
+def test_results_pickle_and_arrays_are_read_only(performer):
+    t = mp.read_track(performer)
+    with pytest.raises(ValueError, match="read-only"):
+        t.positions[:, :, 0] += 100
+    with pytest.raises(ValueError, match="read-only"):
+        t.confidence[0, 0] = 0.5
+    edited = t.positions.copy()
+    edited[:, :, 0] += 100
+    moved = mp.Track.from_numpy(edited, t.fps, confidence=t.confidence, skeleton="coco17")
+    np.testing.assert_allclose(moved.positions[:, :, 0], t.positions[:, :, 0] + 100)
+    prog = mp.fit(t)
+    back = pickle.loads(pickle.dumps(prog))
+    assert back == prog and back.text == prog.text
+    counts = mp.count(t)
+    c2 = pickle.loads(pickle.dumps(counts))
+    assert (c2.total, c2.signal, c2.method, c2.confidence, c2.intervals) == (
+        counts.total, counts.signal, counts.method, counts.confidence, counts.intervals)
+    # Through a process pool, as a data-science workflow would.
+    import multiprocessing as mpc
+    import operator
+    with mpc.get_context("spawn").Pool(1) as pool:
+        got = pool.map(operator.attrgetter("total"), [counts])
+        texts = pool.map(operator.attrgetter("text"), [prog])
+    assert got == [counts.total] and texts == [prog.text]

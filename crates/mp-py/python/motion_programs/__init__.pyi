@@ -222,6 +222,7 @@ def extract(
     people: Literal[False] = False,
     max_people: Optional[int] = None,
     single_person: bool = False,
+    world: bool = False,
 ) -> Track: ...
 @overload
 def extract(
@@ -235,6 +236,7 @@ def extract(
     people: Literal[True],
     max_people: Optional[int] = None,
     single_person: bool = False,
+    world: Literal[False] = False,
 ) -> People: ...
 def fit(
     track: Track,
