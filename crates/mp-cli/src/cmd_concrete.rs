@@ -61,10 +61,13 @@ pub struct FitArgs {
     /// Fail on joints that are never observed instead of fitting them to their stored positions.
     #[arg(long)]
     pub strict_joints: bool,
-    /// Decimals of the program printed on the terminal (the written file is lossless).
+    /// Also print the program on the terminal (the written file holds it whole).
+    #[arg(long)]
+    pub print: bool,
+    /// Decimals of the program printed with --print (the written file is lossless).
     #[arg(long, default_value_t = dsl::PRETTY_DECIMALS)]
     pub precision: usize,
-    /// Do not print the program.
+    /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
 }
@@ -125,10 +128,13 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     let syn = mp_pipeline::concrete_program(&track, frame_px, &params)
         .with_context(|| format!("fitting {}", a.track.display()))?;
     let p = &syn.program;
-    if !a.quiet {
+    if a.print {
         print!("{}", dsl::print_pretty(p, a.precision));
     }
     p.write(&a.output)?;
+    if a.quiet {
+        return Ok(());
+    }
     eprintln!(
         "{} frames, {} joints → {} segments, {} parameters ({} numbers written; raw {}); unit scale {:.4}; wrote {}",
         p.n_frames(),

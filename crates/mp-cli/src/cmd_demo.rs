@@ -5,7 +5,6 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use mp_abstract::dsl::{print_with, PrintOptions};
 use mp_geom::io::write_track;
 use mp_geom::performer::{perform, PerformerParams};
 
@@ -104,9 +103,10 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
     let summary = cmd_run::run_or_exit(input, &a.out, &Params::default(), a.quiet)?;
     let o = &summary.outcome;
     if let Some(an) = &o.analysis {
-        print!("{}", print_with(&an.program, &PrintOptions::summary()));
-        println!();
-        println!("Loops of the abstract program (ground truth of the performer in brackets):");
+        println!(
+            "Loops of the abstract program ({}; ground truth of the performer in brackets):",
+            a.out.join("abstract.txt").display()
+        );
         for i in &an.intervals {
             println!(
                 "  frames {:>4}..{:<4} {} × body of {} primitives  [{}]",
