@@ -222,6 +222,34 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
         c.method.as_str(),
         c.confidence
     );
+    // The loops of the abstract program (what --threshold and --max-body
+    // set, and `mp extend --loop N` numbers) are another thing than the
+    // repetitions counted above.
+    if let Some(an) = &out.analysis {
+        println!();
+        println!(
+            "loops of the abstract program (`mp extend --loop N`; --threshold {}, --max-body {}):",
+            a.opts.threshold, a.opts.max_body
+        );
+        if an.intervals.is_empty() {
+            println!("  none");
+        } else {
+            println!(
+                "{:>4} {:>8} {:>8} {:>10} {:>12}",
+                "#", "start", "end", "iterations", "body (prims)"
+            );
+            for (i, l) in an.intervals.iter().enumerate() {
+                println!(
+                    "{:>4} {:>8} {:>8} {:>10} {:>12}",
+                    i + 1,
+                    l.start_frame,
+                    l.end_frame,
+                    l.iterations,
+                    l.body_size
+                );
+            }
+        }
+    }
     crate::cmd_run::print_people(&out);
     Ok(())
 }

@@ -52,6 +52,27 @@ fn loops_are_numbered_from_one() {
     let first = table.lines().nth(1).unwrap();
     assert_eq!(first.split_whitespace().next(), Some("1"), "{table}");
 
+    // Its program-loop section follows the options it names: one loop body
+    // at most one primitive long finds other loops than the default.
+    let loops_part = |t: &str| {
+        t.split("loops of the abstract program")
+            .nth(1)
+            .unwrap()
+            .to_string()
+    };
+    let default = loops_part(&table);
+    assert_eq!(
+        default
+            .lines()
+            .filter(|l| l.trim_start().starts_with(char::is_numeric))
+            .count(),
+        before.len(),
+        "{table}"
+    );
+    let short = loops_part(&ok(&["loops", &p("perf.npz"), "--max-body", "1"]));
+    assert_ne!(default, short);
+    assert!(short.contains("--max-body 1"), "{short}");
+
     // `mp extend --loop 2` edits the second loop and nothing else.
     ok(&[
         "extend",

@@ -434,6 +434,11 @@ pub(crate) fn run_with(
         timings.push(Stage::Report, html_time + t_write.elapsed(), n);
     }
     check(cancel)?;
+    // What an earlier run into the same folder wrote and this one did not
+    // (another input's people, plots or overlay) does not stay beside it.
+    files.push(mp_report::outdir::RUN_FILES.into());
+    out.replace_previous_run(&files)
+        .map_err(PipelineError::from_report)?;
     drop(out);
     outcome.stages.extend(std::mem::take(&mut timings.stages));
     outcome.total = start.elapsed();

@@ -41,6 +41,10 @@ pub fn emergency_cleanup() -> MutexGuard<'static, Vec<PathBuf>> {
     reg
 }
 
+/// The list of the files the last run wrote into an output folder
+/// ([`OutputDir::replace_previous_run`]).
+pub const RUN_FILES: &str = "mp-run-files.txt";
+
 /// Name of the staging folder of this process inside an output folder.
 pub fn staging_name() -> String {
     format!(".mp-partial-{}", std::process::id())
@@ -140,6 +144,42 @@ impl OutputDir {
         self.rename_into_place(staged, rel)
     }
 
+    /// Records `files` (relative paths) as what this run wrote, in the
+    /// list [`RUN_FILES`], and removes the files the previous run into the
+    /// same folder listed there and this one did not write (a person seen
+    /// then but not now, plots of other joints, an overlay of an earlier
+    /// video), with the folders they leave empty; files the folder holds
+    /// besides are never touched. Returns the removed files.
+    pub fn replace_previous_run(&self, files: &[String]) -> Result<Vec<String>> {
+        let list_path = self.dir.join(RUN_FILES);
+        let previous: Vec<String> = std::fs::read_to_string(&list_path)
+            .map(|t| t.lines().map(str::to_string).collect())
+            .unwrap_or_default();
+        let mut text = files.join("\n");
+        text.push('\n');
+        self.write(RUN_FILES, text.as_bytes())?;
+        let keep: std::collections::HashSet<&str> = files.iter().map(String::as_str).collect();
+        let mut removed = Vec::new();
+        for rel in previous {
+            if rel.is_empty() || keep.contains(rel.as_str()) || Self::check_rel(&rel).is_err() {
+                continue;
+            }
+            let p = self.dir.join(&rel);
+            if p.is_file() && std::fs::remove_file(&p).is_ok() {
+                // Folders the file leaves empty go too (never the output folder).
+                let mut dir = p.parent();
+                while let Some(d) = dir.filter(|d| *d != self.dir && d.starts_with(&self.dir)) {
+                    if std::fs::remove_dir(d).is_err() {
+                        break;
+                    }
+                    dir = d.parent();
+                }
+                removed.push(rel);
+            }
+        }
+        Ok(removed)
+    }
+
     fn rename_into_place(&self, tmp: &Path, rel: &str) -> Result<PathBuf> {
         let dst = self.dir.join(rel);
         if let Some(parent) = dst.parent() {
@@ -184,6 +224,35 @@ mod tests {
             .collect();
         names.sort();
         assert_eq!(names, vec!["plots", "video.mp4"]);
+    }
+
+    #[test]
+    fn a_new_run_removes_what_the_last_one_wrote_and_it_did_not() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("run");
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("notes.md"), b"mine").unwrap();
+        let first = ["a.txt", "people/3/program.txt", "overlay.mp4"].map(String::from);
+        {
+            let o = OutputDir::create(&out).unwrap();
+            for f in &first {
+                o.write(f, b"1").unwrap();
+            }
+            assert!(o.replace_previous_run(&first).unwrap().is_empty());
+        }
+        let second = ["a.txt".to_string()];
+        let o = OutputDir::create(&out).unwrap();
+        o.write("a.txt", b"2").unwrap();
+        let mut removed = o.replace_previous_run(&second).unwrap();
+        removed.sort();
+        assert_eq!(removed, vec!["overlay.mp4", "people/3/program.txt"]);
+        assert!(!out.join("people").exists(), "the emptied folders go");
+        assert_eq!(std::fs::read(out.join("a.txt")).unwrap(), b"2");
+        assert_eq!(std::fs::read(out.join("notes.md")).unwrap(), b"mine");
+        assert_eq!(
+            std::fs::read_to_string(out.join(RUN_FILES)).unwrap(),
+            "a.txt\n"
+        );
     }
 
     #[test]
