@@ -165,7 +165,7 @@ pub fn execute(a: &ExecuteArgs) -> anyhow::Result<()> {
     eprintln!(
         "{} frames at {} fps → {}",
         track.n_frames(),
-        track.fps(),
+        mp_geom::fps_label(track.fps()),
         a.output.display()
     );
     Ok(())

@@ -84,7 +84,7 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
             a.seed,
             track.n_frames(),
             track.n_joints(),
-            track.fps(),
+            mp_geom::fps_label(track.fps()),
             w,
             h,
             perf.segments

@@ -61,6 +61,19 @@ pub struct Track {
     skeleton: Skeleton,
 }
 
+/// A frame rate as people write it: a whole number when the rate is within
+/// 0.01 % of one (a BVH frame time of 0.008333 s is 120 fps, not
+/// 120.0048), else at most three decimals (29.97).
+pub fn fps_label(fps: f64) -> String {
+    let r = fps.round();
+    if r > 0.0 && (fps - r).abs() <= 1e-4 * r {
+        format!("{r:.0}")
+    } else {
+        let s = format!("{fps:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
 impl Track {
     /// Builds a track, checking shapes and turning non-finite positions into
     /// missing joints (confidence 0); a finite coordinate beyond
@@ -425,6 +438,15 @@ pub fn bracket(valid: &[usize], f: usize) -> Option<(usize, usize, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn frame_rates_read_as_people_write_them() {
+        assert_eq!(fps_label(30.0), "30");
+        assert_eq!(fps_label(1.0 / 0.008333), "120");
+        assert_eq!(fps_label(29.97), "29.97");
+        assert_eq!(fps_label(30000.0 / 1001.0), "29.97");
+        assert_eq!(fps_label(12.5), "12.5");
+    }
 
     fn tiny() -> Track {
         let mut p = Array3::zeros((4, 2, 2));

@@ -161,6 +161,6 @@ pub fn describe_track(track: &Track, name: &str) -> String {
         track.skeleton().name,
         track.dims(),
         track.units().as_str(),
-        track.fps()
+        mp_geom::fps_label(track.fps())
     )
 }

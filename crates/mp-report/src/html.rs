@@ -111,7 +111,7 @@ pub fn standard_cards(
             format!(
                 "{:.2} s at {} fps",
                 t as f64 / program.fps,
-                crate::svg::tick_label(program.fps)
+                mp_geom::fps_label(program.fps)
             ),
         ),
         Card::new(

@@ -166,7 +166,7 @@ pub fn joint_trajectory_svg(
         &format!(
             "{} frames at {} fps · {} primitives: {}",
             t_total,
-            tick_label(fps),
+            mp_geom::fps_label(fps),
             curves.len(),
             counts.join(", ")
         ),
@@ -357,7 +357,7 @@ pub fn joint_trajectory_svg(
                 py1 + 38.0,
                 &format!(
                     "frame ({} fps; {} s in all)",
-                    tick_label(fps),
+                    mp_geom::fps_label(fps),
                     tick_label(t_total as f64 / fps)
                 ),
                 12.0,

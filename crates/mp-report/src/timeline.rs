@@ -321,7 +321,7 @@ pub fn timeline_svg(
     svg.text(
         (x0 + x1) / 2.0,
         rows_bottom + 36.0,
-        &format!("time ({t_total} frames at {} fps)", tick_label(fps)),
+        &format!("time ({t_total} frames at {} fps)", mp_geom::fps_label(fps)),
         12.0,
         style::INK,
         Anchor::Middle,
