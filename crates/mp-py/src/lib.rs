@@ -63,28 +63,7 @@ fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
 #[pyfunction]
 #[pyo3(signature = (path, fps = None))]
 fn read_track(py: Python<'_>, path: PathBuf, fps: Option<f64>) -> PyResult<PyTrack> {
-    let opts = mp_geom::io::ReadOptions {
-        fps,
-        ..Default::default()
-    };
-    let (t, rate) = py
-        .detach(|| mp_geom::io::read_track_rated(&path, &opts))
-        .map_err(errors::geom)?;
-    if rate == mp_geom::io::RateSource::Assumed {
-        let msg = std::ffi::CString::new(format!(
-            "{} states no frame rate: {} fps assumed (pass fps=)",
-            path.display(),
-            mp_geom::io::DEFAULT_FPS
-        ))
-        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
-        PyErr::warn(
-            py,
-            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-            &msg,
-            1,
-        )?;
-    }
-    Ok(PyTrack::new(t))
+    Ok(PyTrack::new(track::read_track_file(py, &path, fps)?))
 }
 
 /// Keypoints of a video (as `mp extract`, COCO-17 joints unless
@@ -197,7 +176,7 @@ fn extract<'py>(
 #[allow(clippy::too_many_arguments)]
 fn fit(
     py: Python<'_>,
-    track: &PyTrack,
+    track: &Bound<'_, PyAny>,
     frame_size: Option<f64>,
     lambda_: Option<f64>,
     max_segment_frames: Option<usize>,
@@ -240,7 +219,15 @@ fn fit(
             .parse::<mp_concrete::RefitNorm>()
             .map_err(errors::ParamError::new_err)?;
     }
-    let t = &track.inner;
+    let t = &track::track_arg(track, "fit")?;
+    // A track file that states its video frame (`mp run`'s and `mp
+    // extract`'s npz) is fitted at that scale, as `mp fit` does.
+    let frame_size = match (frame_size, track.extract::<PathBuf>()) {
+        (None, Ok(path)) => mp_geom::io::read_frame_size(&path)
+            .map_err(errors::geom)?
+            .map(|(w, h)| w.max(h) as f64),
+        (given, _) => given,
+    };
     let syn = py
         .detach(|| mp_pipeline::concrete_program(t, frame_size, &params))
         .map_err(errors::pipeline)?;
@@ -291,9 +278,15 @@ fn count(
             .map_err(errors::pipeline)?;
         return Ok(PyCounts::of_counts(c));
     }
-    let path: PathBuf = source.extract().map_err(|_| {
-        errors::ParamError::new_err("count() takes a Track or the path of a video or track file")
-    })?;
+    let Ok(path) = source.extract::<PathBuf>() else {
+        // An array (or anything else a track is made from).
+        let t = track::track_arg(source, "count")?;
+        let th = thumbnails.map(|x| &x.inner);
+        let c = py
+            .detach(|| mp_pipeline::count(&t, th, &params))
+            .map_err(errors::pipeline)?;
+        return Ok(PyCounts::of_counts(c));
+    };
     let out = py
         .detach(|| {
             let input = Input::open(&path, None)?;
@@ -312,7 +305,7 @@ fn count(
 #[pyo3(signature = (track, horizon, method="loop", observe=None, models=None, train=None))]
 fn predict(
     py: Python<'_>,
-    track: &PyTrack,
+    track: &Bound<'_, PyAny>,
     horizon: usize,
     method: &str,
     observe: Option<usize>,
@@ -327,7 +320,7 @@ fn predict(
         train,
         ..mp_forecast::PredictOptions::with_method(m)
     };
-    let t = &track.inner;
+    let t = &track::track_arg(track, "predict")?;
     let observe = observe.unwrap_or(t.n_frames());
     let p = py
         .detach(|| mp_forecast::predict(t, observe, horizon, &opts))
@@ -337,14 +330,13 @@ fn predict(
 }
 
 /// Learned refinement of a 3D track (as `mp refine`): MSR Action3D's 20
-/// joints, or BlazePose world landmarks (`extract(..., world=True)` is not
-/// offered here: use `mp extract --world`), mapped onto the networks'
-/// joints and back. `action` (1–20) skips action recognition.
+/// joints, or BlazePose world landmarks (`extract(video, world=True)`),
+/// mapped onto the networks' joints and back. `action` (1–20) skips action recognition.
 #[pyfunction]
 #[pyo3(signature = (track, action=None, models=None, concepts=None))]
 fn refine(
     py: Python<'_>,
-    track: &PyTrack,
+    track: &Bound<'_, PyAny>,
     action: Option<u32>,
     models: Option<PathBuf>,
     concepts: Option<PathBuf>,
@@ -355,7 +347,7 @@ fn refine(
         action,
         ..mp_refine::RefineOptions::default()
     };
-    let t = &track.inner;
+    let t = &track::track_arg(track, "refine")?;
     let r = py
         .detach(|| mp_refine::refine_default(t, &opts))
         .map_err(errors::refine)?;

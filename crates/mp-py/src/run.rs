@@ -321,7 +321,7 @@ impl PyAnalyser {
 #[pyo3(signature = (track, k=None, seed=None))]
 pub fn grammar_symbols<'py>(
     py: Python<'py>,
-    track: &PyTrack,
+    track: &Bound<'py, PyAny>,
     k: Option<usize>,
     seed: Option<u64>,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -333,7 +333,7 @@ pub fn grammar_symbols<'py>(
         p.seed = s;
     }
     let motion = Motion {
-        track: track.inner.clone(),
+        track: crate::track::track_arg(track, "grammar_symbols")?,
         bvh: None,
         paths: Vec::new(),
         frame_step: 1,

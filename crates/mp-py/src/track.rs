@@ -246,3 +246,77 @@ fn read_only<T>(a: Bound<'_, T>) -> PyResult<Bound<'_, T>> {
     a.as_any().call_method1("setflags", (false,))?;
     Ok(a)
 }
+
+/// Issues a Python `UserWarning`.
+pub(crate) fn warn(py: Python<'_>, msg: &str) -> PyResult<()> {
+    let msg = std::ffi::CString::new(msg)
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    PyErr::warn(
+        py,
+        &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+        &msg,
+        1,
+    )
+}
+
+/// Reads a track file at `fps` (over what it states), warning when 30 fps
+/// is assumed.
+pub(crate) fn read_track_file(
+    py: Python<'_>,
+    path: &std::path::Path,
+    fps: Option<f64>,
+) -> PyResult<Track> {
+    let opts = mp_geom::io::ReadOptions {
+        fps,
+        ..Default::default()
+    };
+    let (t, rate) = py
+        .detach(|| mp_geom::io::read_track_rated(path, &opts))
+        .map_err(errors::geom)?;
+    if rate == mp_geom::io::RateSource::Assumed {
+        warn(
+            py,
+            &format!(
+                "{} states no frame rate: {} fps assumed (pass fps=)",
+                path.display(),
+                mp_geom::io::DEFAULT_FPS
+            ),
+        )?;
+    }
+    Ok(t)
+}
+
+/// What the functions that take a track accept: a `Track`, the path of a
+/// track file, or a T × J × D array (30 fps assumed, with a warning). A
+/// video's path gets advice (`extract` first).
+pub(crate) fn track_arg(obj: &Bound<'_, PyAny>, func: &str) -> PyResult<Track> {
+    let py = obj.py();
+    if let Ok(t) = obj.cast::<PyTrack>() {
+        return Ok(t.get().inner.clone());
+    }
+    if let Ok(path) = obj.extract::<std::path::PathBuf>() {
+        if mp_pipeline::is_video(&path) {
+            return Err(errors::ParamError::new_err(format!(
+                "{func}() takes a track; {} is a video: extract(video) reads its keypoints",
+                path.display()
+            )));
+        }
+        return read_track_file(py, &path, None);
+    }
+    if let Ok(a) = obj.extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>() {
+        warn(
+            py,
+            &format!(
+                "{func}(): an array states no frame rate: {} fps assumed (Track.from_numpy(a, fps) \
+                 gives one)",
+                mp_geom::io::DEFAULT_FPS
+            ),
+        )?;
+        let t = PyTrack::from_numpy(a, mp_geom::io::DEFAULT_FPS, None, None, None, "px")?;
+        return Ok(t.inner);
+    }
+    Err(errors::ParamError::new_err(format!(
+        "{func}() takes a Track, the path of a track file or a T × J × D array, got {}",
+        obj.get_type().name()?
+    )))
+}

@@ -302,3 +302,20 @@ def test_results_pickle_and_arrays_are_read_only(performer):
         got = pool.map(operator.attrgetter("total"), [counts])
         texts = pool.map(operator.attrgetter("text"), [prog])
     assert got == [counts.total] and texts == [prog.text]
+
+
+def test_functions_take_a_track_a_path_or_an_array(performer, tmp_path):
+    t = mp.read_track(performer)
+    by_track = mp.fit(t)
+    assert mp.fit(performer) == by_track
+    assert mp.fit(str(performer)) == by_track
+    with pytest.warns(UserWarning, match="30 fps assumed"):
+        from_array = mp.fit(t.positions)
+    assert from_array.n_frames == by_track.n_frames
+    with pytest.warns(UserWarning, match="30 fps assumed"):
+        assert mp.count(t.positions).total == mp.count(t).total
+    assert mp.predict(performer, 5, method="constant")[0].n_frames == 5
+    with pytest.raises(mp.ParamError, match="extract"):
+        mp.fit(tmp_path / "clip.mp4")
+    with pytest.raises(mp.ParamError, match="takes a Track"):
+        mp.fit({"not": "a track"})

@@ -9,6 +9,8 @@ import numpy.typing as npt
 __version__: str
 
 PathArg = Union[str, PathLike]
+# A Track, the path of a track file, or a T × J × D array (30 fps assumed, with a warning).
+TrackLike = Union["Track", PathArg, npt.ArrayLike]
 PersonArg = Union[str, int]
 Box = tuple[float, float, float, float]
 
@@ -239,7 +241,7 @@ def extract(
     world: Literal[False] = False,
 ) -> People: ...
 def fit(
-    track: Track,
+    track: TrackLike,
     frame_size: Optional[float] = None,
     lambda_: Optional[float] = None,
     max_segment_frames: Optional[int] = None,
@@ -253,14 +255,14 @@ def fit(
 def abstract(track: Track, frame_size: Optional[float] = None) -> AbstractProgram: ...
 def abstract_program(track: Track, frame_size: Optional[float] = None) -> AbstractProgram: ...
 def count(
-    source: Union[PathArg, Track],
+    source: Union[PathArg, TrackLike],
     thumbnails: Optional[Track] = None,
     person: Optional[PersonArg] = None,
     max_people: Optional[int] = None,
     single_person: bool = False,
 ) -> Counts: ...
 def run(
-    source: Union[PathArg, Track],
+    source: Union[PathArg, TrackLike],
     out_dir: PathArg,
     model: Optional[str] = None,
     threads: Optional[int] = None,
@@ -273,10 +275,10 @@ def run(
     max_people: Optional[int] = None,
     single_person: bool = False,
 ) -> Summary: ...
-def grammar_symbols(track: Track, k: Optional[int] = None, seed: Optional[int] = None) -> dict[str, Any]: ...
+def grammar_symbols(track: TrackLike, k: Optional[int] = None, seed: Optional[int] = None) -> dict[str, Any]: ...
 def grammar_learn(symbols: dict[str, Any], seed: Optional[int] = None) -> dict[str, Any]: ...
 def predict(
-    track: Track,
+    track: TrackLike,
     horizon: int,
     method: str = "loop",
     observe: Optional[int] = None,
@@ -284,7 +286,7 @@ def predict(
     train: Optional[PathArg] = None,
 ) -> tuple[Track, Optional[str]]: ...
 def refine(
-    track: Track,
+    track: TrackLike,
     action: Optional[int] = None,
     models: Optional[PathArg] = None,
     concepts: Optional[PathArg] = None,
