@@ -64,9 +64,9 @@ pub struct FitArgs {
     /// Also print the program on the terminal (the written file holds it whole).
     #[arg(long)]
     pub print: bool,
-    /// Decimals of the program printed with --print (the written file is lossless).
-    #[arg(long, default_value_t = dsl::PRETTY_DECIMALS)]
-    pub precision: usize,
+    /// Decimals of the program printed with --print (the written file is lossless); default: by the track's units (px 2, m 4, unitless 3).
+    #[arg(long)]
+    pub precision: Option<usize>,
     /// No summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -129,7 +129,8 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
         .with_context(|| format!("fitting {}", a.track.display()))?;
     let p = &syn.program;
     if a.print {
-        print!("{}", dsl::print_pretty(p, a.precision));
+        let decimals = a.precision.unwrap_or(dsl::pretty_decimals(p.units));
+        print!("{}", dsl::print_pretty(p, decimals));
     }
     p.write(&a.output)?;
     if a.quiet {

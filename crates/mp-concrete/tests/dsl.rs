@@ -193,7 +193,7 @@ fn pretty_matches_the_paper_notation() {
 joint \"right_wrist\" {\n    \
 circular_motion(center=(220.56, 175.67), radius=108.23, angle=3.17*t + 79.99, duration=7)\n    \
 stationary(x=129.25, y=121.59, duration=4)\n    \
-circular_motion(center=(249.49, 169.97), radius=107.97, angle=-6.60*t + -156.79, duration=4)\n    \
+circular_motion(center=(249.49, 169.97), radius=107.97, angle=-6.60*t - 156.79, duration=4)\n    \
 linear_motion(x=-0.48*t + 261.61, y=5.13*t + 122.32, duration=13)\n}\n";
     assert_eq!(text, expected);
     // The paper's numbers are exact decimals here, so pretty text parses back to the same program.
@@ -207,7 +207,7 @@ fn spline_and_3d_forms() {
     };
     assert_eq!(
         dsl::statement(&s, 5, dsl::NumberFormat::Exact),
-        "spline_motion(x=1*t^3 + -2*t^2 + 3.5*t + 4, y=0*t^3 + 0*t^2 + 1*t + -1, duration=5)"
+        "spline_motion(x=1*t^3 - 2*t^2 + 3.5*t + 4, y=0*t^3 + 0*t^2 + 1*t - 1, duration=5)"
     );
     let c = Primitive::Circle {
         center: vec![0.1, 0.2, 0.3],

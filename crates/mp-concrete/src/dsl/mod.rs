@@ -20,6 +20,6 @@ mod print;
 
 pub use parse::{parse, parse_statement};
 pub use print::{
-    axis_name, fmt_number, header, joint_block, print, print_pretty, print_with, statement,
-    NumberFormat, PRETTY_DECIMALS,
+    axis_name, fmt_number, header, joint_block, pretty_decimals, print, print_pretty, print_with,
+    statement, NumberFormat, PRETTY_DECIMALS,
 };

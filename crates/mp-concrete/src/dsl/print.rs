@@ -20,7 +20,16 @@ pub enum NumberFormat {
 /// Formats one number.
 pub fn fmt_number(x: f64, nf: NumberFormat) -> String {
     match nf {
-        NumberFormat::Fixed(p) => format!("{x:.p$}"),
+        NumberFormat::Fixed(p) => {
+            let s = format!("{x:.p$}");
+            // A value that rounds to zero prints without a sign (`0.00`,
+            // not `-0.00`).
+            if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
+                s[1..].to_string()
+            } else {
+                s
+            }
+        }
         NumberFormat::Exact => {
             let a = x.abs();
             if a == 0.0 || (1e-5..1e16).contains(&a) {
@@ -43,17 +52,23 @@ pub fn axis_name(k: usize, d: usize) -> String {
     }
 }
 
-/// Polynomial `c[0]·t^(n-1) + … + c[n-1]` printed highest power first, with
-/// the paper's `+ -value` style for negative coefficients.
+/// Polynomial `c[0]·t^(n-1) + … + c[n-1]` printed highest power first; a
+/// negative coefficient after the first is subtracted (`3*t - 4`, which
+/// reads back exactly: `- 0` is −0).
 fn poly(coeffs: &[f64], nf: NumberFormat) -> String {
     let n = coeffs.len();
     let mut s = String::new();
     for (i, c) in coeffs.iter().enumerate() {
         let pow = n - 1 - i;
-        if i > 0 {
+        if i == 0 {
+            s.push_str(&fmt_number(*c, nf));
+        } else if c.is_sign_negative() {
+            s.push_str(" - ");
+            s.push_str(&fmt_number(-*c, nf));
+        } else {
             s.push_str(" + ");
+            s.push_str(&fmt_number(*c, nf));
         }
-        s.push_str(&fmt_number(*c, nf));
         match pow {
             0 => {}
             1 => s.push_str("*t"),
@@ -190,6 +205,17 @@ pub fn print(p: &Program) -> String {
 
 /// Decimals of [`print_pretty`] when none are chosen: 2, as the paper's figures.
 pub const PRETTY_DECIMALS: usize = 2;
+
+/// Decimals that show a program's numbers to about the same precision in
+/// every unit: 2 for pixels (the paper's), 4 for metres (0.1 mm), 3 for
+/// unitless features.
+pub fn pretty_decimals(units: mp_geom::Units) -> usize {
+    match units {
+        mp_geom::Units::Pixels => PRETTY_DECIMALS,
+        mp_geom::Units::Metres => 4,
+        mp_geom::Units::Unitless => 3,
+    }
+}
 
 /// Human-friendly text with `decimals` digits after the point (the paper uses 2).
 /// Not lossless.
