@@ -176,22 +176,43 @@ pub fn standard_cards(
     ));
     let reps: usize = intervals.iter().map(|i| i.count).sum();
     cards.push(Card::new(
-        "loops",
-        intervals.len().to_string(),
-        if intervals.is_empty() {
-            "no repetition detected".to_string()
-        } else {
-            format!(
-                "{reps} repetitions: {}",
-                intervals
-                    .iter()
-                    .map(|i| format!("×{}", i.count))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        },
+        "repetitions",
+        reps.to_string(),
+        repetitions_line(intervals),
     ));
     cards
+}
+
+/// Intervals shown on the repetitions card before "and N more": the line
+/// stays one line for any length of recording.
+const CARD_INTERVALS: usize = 6;
+
+/// "in 3 intervals: ×4, ×3, ×3", at most [`CARD_INTERVALS`] of them (the
+/// ones with most repetitions, in time order) and "and N more".
+fn repetitions_line(intervals: &[RepetitiveInterval]) -> String {
+    if intervals.is_empty() {
+        return "no repetition detected".to_string();
+    }
+    let mut shown: Vec<usize> = (0..intervals.len()).collect();
+    shown.sort_by_key(|&i| std::cmp::Reverse(intervals[i].count));
+    shown.truncate(CARD_INTERVALS);
+    shown.sort_unstable();
+    let list: Vec<String> = shown
+        .iter()
+        .map(|&i| format!("×{}", intervals[i].count))
+        .collect();
+    let more = intervals.len() - shown.len();
+    let n = intervals.len();
+    format!(
+        "in {n} interval{}: {}{}",
+        if n == 1 { "" } else { "s" },
+        list.join(", "),
+        if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        }
+    )
 }
 
 fn listing_html(program: &Program, default_joint: usize, offset: usize) -> String {
@@ -641,6 +662,26 @@ pub fn report_html(input: &ReportInput<'_>) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_repetitions_card_stays_one_line() {
+        let iv = |count: usize| RepetitiveInterval {
+            start_frame: 0,
+            end_frame: 10,
+            body_size: 0,
+            iterations: count,
+            boundaries: Vec::new(),
+            count,
+            score: 1.0,
+        };
+        assert_eq!(repetitions_line(&[]), "no repetition detected");
+        assert_eq!(repetitions_line(&[iv(4)]), "in 1 interval: ×4");
+        let many: Vec<_> = (0..300).map(|i| iv(1 + i % 9)).collect();
+        let line = repetitions_line(&many);
+        assert!(line.starts_with("in 300 intervals: ×9, ×9"), "{line}");
+        assert!(line.ends_with(" and 294 more"), "{line}");
+        assert_eq!(line.matches('×').count(), CARD_INTERVALS);
+    }
 
     #[test]
     fn page_is_self_contained_and_lists_every_statement() {
