@@ -16,11 +16,13 @@ use serde_json::{json, Map, Value};
 /// Arguments of `cargo xtask eval count`.
 #[derive(Args, Debug)]
 pub struct EvalCountArgs {
-    /// A folder of videos (or one video). Required unless `--synthetic`.
-    #[arg(long, required_unless_present = "synthetic")]
+    /// A folder of videos (or one video). Required unless `--synthetic`; with
+    /// `--synthetic-video`, the labelled videos the cases are cut from
+    /// (default: the shared data folder's QUVA videos).
+    #[arg(long, required_unless_present_any = ["synthetic", "synthetic_video"])]
     pub videos: Option<PathBuf>,
     /// A folder of labels: `<video stem>.npy`, one entry per repetition. Required unless `--synthetic`.
-    #[arg(long, required_unless_present = "synthetic")]
+    #[arg(long, required_unless_present_any = ["synthetic", "synthetic_video"])]
     pub labels: Option<PathBuf>,
     /// Output JSON.
     #[arg(long)]
@@ -29,8 +31,16 @@ pub struct EvalCountArgs {
     /// the shared data folder instead of videos (`eval_count_synth`).
     #[arg(long, conflicts_with_all = ["videos", "labels"])]
     pub synthetic: bool,
+    /// Count made videos of known count (QUVA cycles repeated between
+    /// stretches of the golf swing, plain, small over moving footage, and
+    /// partly covered; `synth_video`), clips cached under mp-out/video_cases.
+    #[arg(long, conflicts_with = "synthetic")]
+    pub synthetic_video: bool,
+    /// The non-repetitive footage of `--synthetic-video`.
+    #[arg(long, default_value = "../shared/data/golfdb/golf_swing.mp4")]
+    pub golf: PathBuf,
     /// Seed of the synthetic cases.
-    #[arg(long, default_value_t = 0, requires = "synthetic")]
+    #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Number of synthetic cases.
     #[arg(long, default_value_t = 600, requires = "synthetic")]
@@ -109,6 +119,18 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
             &a.fit_confidence,
         );
     }
+    if a.synthetic_video {
+        let quva = Path::new("../shared/data/quva_repetition");
+        return crate::eval_count_video::run(
+            &a.out,
+            a.seed,
+            &a.videos.clone().unwrap_or_else(|| quva.join("videos")),
+            &a.labels.clone().unwrap_or_else(|| quva.join("annotations")),
+            &a.golf,
+            &params_with(&a.count_params)?,
+            &a.count_params,
+        );
+    }
     let (Some(videos), Some(labels)) = (a.videos.as_deref(), a.labels.as_deref()) else {
         bail!("--videos DIR and --labels DIR are required (or give --synthetic)");
     };
@@ -125,6 +147,7 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
     let mut by_video = Map::new();
     let (mut errs, mut obos) = (Vec::new(), Vec::new());
     let (mut frames_total, mut count_s, mut total_s) = (0usize, 0.0f64, 0.0f64);
+    let mut motion_s = 0.0f64;
     // Keypoints, thumbnails and labels of each video, for leave-one-video-out.
     let mut kept: Vec<(String, mp_geom::Track, Option<mp_geom::Track>, usize)> = Vec::new();
     for (video, label) in &items {
@@ -157,6 +180,7 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
                 .sum::<f64>()
         };
         count_s += stage_s(Stage::Count);
+        motion_s += stage_s(Stage::Motion);
         total_s += out.total.as_secs_f64();
         kept.push((
             name.clone(),
@@ -184,9 +208,10 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
         "count_mae": errs.iter().sum::<f64>() / k,
         "obo_acc": obos.iter().filter(|&&b| b).count() as f64 / k,
         "count_ms_per_frame": 1000.0 * count_s / frames_total.max(1) as f64,
+        "motion_ms_per_frame": 1000.0 * motion_s / frames_total.max(1) as f64,
         "total_ms_per_frame": 1000.0 * total_s / frames_total.max(1) as f64,
         "frames": frames_total,
-        "count_param_overrides": a.count_params, "definition": "mp_pipeline::analyse_input with Params::default() on each video (what `mp run` writes as loops.json total_repetitions). MAE = mean over videos of |count − true| / true; OBO = fraction with |count − true| ≤ 1. count_ms_per_frame: the counting stage alone (after keypoints); total_ms_per_frame: decoding, pose, programs and counting.",
+        "count_param_overrides": a.count_params, "definition": "mp_pipeline::analyse_input with Params::default() on each video (what `mp run` writes as loops.json total_repetitions). MAE = mean over videos of |count − true| / true; OBO = fraction with |count − true| ≤ 1. count_ms_per_frame: the counting stage alone (after keypoints); motion_ms_per_frame: locating the region that moves on its own and choosing the frame signal; total_ms_per_frame: decoding, pose, programs and counting.",
         "leave_one_video_out": leave_one_out(&kept)?,
         "videos_dir": videos.display().to_string(),
         "labels_dir": labels.display().to_string(),

@@ -11,7 +11,9 @@
 //! the whole video. Each analysed person's frame signal is read from grey
 //! thumbnails of their own box (a second decoding pass), not of the whole
 //! frame, so that the people beside them stay out of it; the whole frame is
-//! read only when nobody is found.
+//! read only when nobody is found. Where a region of the picture moves on
+//! its own and repeats more clearly than those thumbnails, its cells are the
+//! frame signal instead ([`crate::frame_signal`]).
 
 use std::path::Path;
 use std::time::Instant;
@@ -28,6 +30,7 @@ use mp_pose::{ModelChoice, PoseEstimator};
 use mp_report::{FrameStore, FrameStoreParams};
 
 use crate::error::{PipelineError, Result};
+use crate::frame_signal::{choose_frame_signal, FrameChoice};
 use crate::input::Input;
 use crate::params::{Params, PersonChoice};
 use crate::progress::{check, Observer, Stage, StageTime, Timings};
@@ -114,9 +117,13 @@ impl ModelSlot {
 pub struct Keypoints {
     /// The keypoints (COCO-17 unless all joints were asked for).
     pub track: Track,
-    /// Grey thumbnails as a unitless feature track: of the tracked person's own box
-    /// when people are tracked and someone was found, else of the whole frames.
+    /// The frame signal, grey thumbnails as a unitless feature track: of the
+    /// tracked person's own box when people are tracked and someone was
+    /// found, else of the whole frames — or, when more periodic, of the
+    /// region of the picture that moves on its own ([`crate::frame_signal`]).
     pub thumbnails: Option<Track>,
+    /// How the frame signal was chosen (for video).
+    pub frame_choice: Option<FrameChoice>,
     /// Fraction of frames with a person (1 for a track).
     pub found_fraction: f64,
     /// Title of the report.
@@ -203,6 +210,7 @@ pub(crate) fn keypoints_timed(
                 found_fraction: mp_abstract::count::found_fraction(&track),
                 track,
                 thumbnails: None,
+                frame_choice: None,
                 title,
                 description,
                 frame_size,
@@ -315,7 +323,7 @@ fn from_video(
     let (track, found, people, person, others, thumbnails) = match posed.people {
         None => {
             let track = coco(posed.track)?;
-            (track, posed.found, None, None, Vec::new(), whole_frame)
+            (track, posed.found, None, None, Vec::new(), None)
         }
         Some(people) => {
             let people = people.map_tracks(coco)?;
@@ -344,12 +352,23 @@ fn from_video(
                         Ok((*id, th))
                     })
                     .collect::<Result<Vec<_>>>()?;
-                (top_thumbs.or(whole_frame), others)
+                (top_thumbs, others)
             } else {
-                (whole_frame, rest.iter().map(|id| (*id, None)).collect())
+                (None, rest.iter().map(|id| (*id, None)).collect())
             };
             (track, found, Some(people), top, others, thumbnails)
         }
+    };
+    // The frame signal: the own box's (or the whole frame's) thumbnails, or
+    // those of the region that moves on its own, the more periodic.
+    let (thumbnails, frame_choice) = match whole_frame {
+        Some(whole) => {
+            let t1 = Instant::now();
+            let (signal, choice) = choose_frame_signal(whole, thumbnails, params)?;
+            timings.push(Stage::Motion, t1.elapsed(), n);
+            (Some(signal), Some(choice))
+        }
+        None => (thumbnails, None),
     };
     let overlay = keep.overlay.then(|| OverlayFrames {
         info: info.clone(),
@@ -383,6 +402,7 @@ fn from_video(
         title: name,
         track,
         thumbnails,
+        frame_choice,
         found_fraction: found,
         frame_size: Some((info.width, info.height)),
         frame_px: Some(info.width.max(info.height) as f64),

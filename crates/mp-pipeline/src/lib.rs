@@ -33,6 +33,7 @@
 pub mod analysis;
 pub mod batch;
 pub mod error;
+pub mod frame_signal;
 pub mod input;
 pub mod keypoints;
 pub mod output;

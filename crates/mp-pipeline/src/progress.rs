@@ -26,6 +26,8 @@ pub enum Stage {
     People,
     /// Grey thumbnails of each analysed person's own box (a second decoding pass).
     Boxes,
+    /// Where the picture moves on its own, and the frame signal counting reads.
+    Motion,
     /// Plots, timeline and contact sheet.
     Pictures,
     /// Overlay video.
@@ -46,6 +48,7 @@ impl Stage {
             Stage::Count => "count",
             Stage::People => "people",
             Stage::Boxes => "boxes",
+            Stage::Motion => "motion",
             Stage::Pictures => "pictures",
             Stage::Overlay => "overlay",
             Stage::Report => "report",
@@ -63,6 +66,7 @@ impl Stage {
             Stage::Count => "repetition intervals and counts",
             Stage::People => "programs and counts of the other people, in parallel",
             Stage::Boxes => "second FFmpeg pass: grey thumbnails of each person's own box",
+            Stage::Motion => "motion energy of the thumbnails (camera motion discounted) and the periodicity of the regions where it gathers",
             Stage::Pictures => "plots (SVG + PNG), timeline, contact sheet",
             Stage::Overlay => "own thread, alongside pictures + report; draw + H.264",
             Stage::Report => "HTML page with the frames embedded",

@@ -35,6 +35,7 @@ pub mod error;
 pub mod extract;
 pub mod filter;
 pub mod imageops;
+pub mod motion;
 pub mod movenet;
 pub mod people;
 pub mod pose;

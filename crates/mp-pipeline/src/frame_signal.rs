@@ -1,0 +1,169 @@
+//! Step 1b: the frame signal that counting reads.
+//!
+//! The thumbnails of the whole frame (or of the tracked person's own box)
+//! miss a repetition that fills little of a cluttered, moving picture, and
+//! the pose model often misses the person there too. So the motion energy of
+//! the whole-frame thumbnails, with the camera's global motion discounted
+//! (`mp_pose::motion`), locates where the picture moves on its own: for
+//! each region side in [`REGION_SIDES`], the square region where that energy
+//! gathers most. Of these regions' thumbnails and the usual ones, the most
+//! periodic signal — the autocorrelation of its motion at its period
+//! (`mp_abstract::estimate_period` with the frame settings), the periodicity
+//! by which counting also chooses between keypoints and frames — is the
+//! frame signal. The regions' cells are copied from the whole-frame
+//! thumbnails: no extra decoding, and at most a quarter of their memory.
+
+use mp_abstract::repetition::estimate_period;
+use mp_geom::Track;
+use mp_pose::motion::{moving_regions, region_track, CellRegion, MotionEnergy};
+
+use crate::error::Result;
+use crate::params::Params;
+
+/// Sides of the candidate regions, as fractions of the thumbnail side: a
+/// quarter, a third and half of the picture's side (a sixteenth to a
+/// quarter of its area).
+pub const REGION_SIDES: [f64; 3] = [0.25, 1.0 / 3.0, 0.5];
+
+/// Which frame signal was chosen, and how periodic each candidate was.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameChoice {
+    /// The chosen region of the whole-frame thumbnails; `None`: the usual
+    /// thumbnails (the person's own box, or the whole frame).
+    pub region: Option<CellRegion>,
+    /// Periodicity of the usual thumbnails.
+    pub base_periodicity: f64,
+    /// Each moving region, its energy over the picture's mean, and its periodicity.
+    pub regions: Vec<(CellRegion, f64, f64)>,
+}
+
+/// Periodicity of a frame signal (0 when it has no period).
+fn periodicity(track: &Track, params: &Params) -> Result<f64> {
+    let n = track.n_frames();
+    if n < 4 {
+        return Ok(0.0);
+    }
+    Ok(estimate_period(track, 0, n, &params.count.frame_period)?
+        .map(|e| e.strength.max(0.0))
+        .unwrap_or(0.0))
+}
+
+/// The frame signal: the usual thumbnails (`own`, the person's own box, or
+/// else `whole`, the whole-frame thumbnails, square) or the thumbnails of
+/// the region of `whole` that moves on its own, whichever is the more
+/// periodic (the usual ones on ties) — see the module docs.
+pub fn choose_frame_signal(
+    whole: Track,
+    own: Option<Track>,
+    params: &Params,
+) -> Result<(Track, FrameChoice)> {
+    let size = whole.n_joints();
+    let base_periodicity = periodicity(own.as_ref().unwrap_or(&whole), params)?;
+    let mut choice = FrameChoice {
+        region: None,
+        base_periodicity,
+        regions: Vec::new(),
+    };
+    if whole.n_frames() < 4 || whole.dims() != size {
+        return Ok((own.unwrap_or(whole), choice));
+    }
+    let energy = MotionEnergy::of_track(&whole)?.energy();
+    let sides: Vec<usize> = REGION_SIDES
+        .iter()
+        .map(|f| ((f * size as f64).round() as usize).clamp(1, size))
+        .collect();
+    // One region's cells at a time (at most a quarter of the picture's: 2 KB
+    // a frame for 32-cell thumbnails); the chosen one is copied again.
+    let mut best: Option<(CellRegion, f64)> = None;
+    for (reg, ratio) in moving_regions(&energy, size, &sides) {
+        let p = periodicity(&region_track(&whole, reg)?, params)?;
+        choice.regions.push((reg, ratio, p));
+        if p > best.map_or(base_periodicity, |b| b.1) {
+            best = Some((reg, p));
+        }
+    }
+    Ok(match best {
+        Some((reg, _)) => {
+            choice.region = Some(reg);
+            (region_track(&whole, reg)?, choice)
+        }
+        None => (own.unwrap_or(whole), choice),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mp_pose::thumbs::thumbnail_track;
+
+    /// 32 × 32 thumbnails of a picture whose every cell flickers at random
+    /// (clutter, ±10 grey levels), with, when `rep`, a 6 × 6 patch at rows
+    /// 3..9, columns 20..26 that brightens and darkens every 20 frames (more
+    /// motion per frame than the flicker, much less over the picture).
+    fn scene(n: usize, rep: bool) -> Track {
+        let mut state = 12345u64;
+        let mut rnd = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as f64 / (1u64 << 31) as f64
+        };
+        let thumbs: Vec<Vec<f32>> = (0..n)
+            .map(|t| {
+                (0..1024)
+                    .map(|k| {
+                        let (r, c) = (k / 32, k % 32);
+                        let patch = rep && (3..9).contains(&r) && (20..26).contains(&c);
+                        let v = if patch {
+                            100.0 + 60.0 * (std::f64::consts::TAU * t as f64 / 20.0).sin()
+                        } else {
+                            100.0 + 20.0 * rnd()
+                        };
+                        v as f32
+                    })
+                    .collect()
+            })
+            .collect();
+        thumbnail_track(thumbs, 32, 30.0).unwrap()
+    }
+
+    #[test]
+    fn a_small_repetition_in_clutter_is_chosen() {
+        let whole = scene(200, true);
+        let params = Params::default();
+        let (tr, choice) = choose_frame_signal(whole, None, &params).unwrap();
+        let reg = choice.region.expect("a region");
+        assert!(
+            reg.r0 <= 3 && reg.r1 >= 9 && reg.c0 <= 20 && reg.c1 >= 26,
+            "{reg:?}"
+        );
+        assert_eq!(tr.n_joints(), reg.r1 - reg.r0);
+        let chosen = choice
+            .regions
+            .iter()
+            .find(|r| r.0 == reg)
+            .map(|r| r.2)
+            .unwrap();
+        assert!(chosen > choice.base_periodicity, "{choice:?}");
+        assert!(chosen > 0.5, "{choice:?}");
+        let est = estimate_period(&tr, 0, 200, &params.count.frame_period)
+            .unwrap()
+            .unwrap();
+        assert!((est.period_frames as i64 - 20).abs() <= 1, "{est:?}");
+    }
+
+    #[test]
+    fn clutter_alone_keeps_the_usual_signal_or_a_weak_one() {
+        let whole = scene(200, false);
+        let (_, choice) = choose_frame_signal(whole.clone(), None, &Params::default()).unwrap();
+        // Random flicker has no period anywhere.
+        for (_, _, p) in &choice.regions {
+            assert!(*p < 0.3, "{choice:?}");
+        }
+        // Too short to say anything: the usual signal, untouched.
+        let short = whole.slice_frames(0, 3).unwrap();
+        let (tr, c) = choose_frame_signal(short, None, &Params::default()).unwrap();
+        assert_eq!(c.region, None);
+        assert_eq!(tr.n_frames(), 3);
+    }
+}
