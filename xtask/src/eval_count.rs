@@ -60,6 +60,25 @@ pub struct EvalCountArgs {
         requires = "synthetic"
     )]
     pub fit_confidence: Vec<u64>,
+    /// Long recordings of several activities: with `--videos`/`--labels`,
+    /// every labelled video and `--golf` scaled to 640×360 at 30 fps and
+    /// played in order `--repeats` times (`eval_count_long`); with
+    /// `--synthetic`, synthetic long recordings of several repetitive
+    /// stretches and real long recordings (`eval_count_long_synth`).
+    #[arg(long)]
+    pub long: bool,
+    /// A non-repetitive clip played after the labelled videos (`--long`).
+    #[arg(long, requires = "long")]
+    pub golf: Option<PathBuf>,
+    /// Folder of the scaled clips and their keypoints (`--long`).
+    #[arg(long, default_value = "mp-out/long_cache", requires = "long")]
+    pub cache: PathBuf,
+    /// How many times the clips are played (`--long`): 25 make about an hour.
+    #[arg(long, default_value_t = 25, requires = "long")]
+    pub repeats: usize,
+    /// Synthetic long recordings per keypoint source (`--long --synthetic`).
+    #[arg(long, default_value_t = 20, requires = "long")]
+    pub long_cases: usize,
 }
 
 /// The product's parameters with `overrides` (`KEY=VALUE`, VALUE as JSON)
@@ -86,7 +105,7 @@ pub fn params_with(overrides: &[String]) -> anyhow::Result<Params> {
 }
 
 /// Videos of a folder (or the one given) that have a label file.
-fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(PathBuf, PathBuf)>> {
+pub(crate) fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(PathBuf, PathBuf)>> {
     let files: Vec<PathBuf> = if videos.is_dir() {
         let mut v: Vec<PathBuf> = std::fs::read_dir(videos)
             .with_context(|| format!("listing {}", videos.display()))?
@@ -109,6 +128,30 @@ fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(PathBuf, PathBu
 }
 
 pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
+    if a.long && a.synthetic {
+        return crate::eval_count_long_synth::run(
+            &a.out,
+            a.seed,
+            a.long_cases,
+            &params_with(&a.count_params)?,
+            &a.count_params,
+        );
+    }
+    if a.long {
+        let (Some(videos), Some(labels)) = (a.videos.as_deref(), a.labels.as_deref()) else {
+            bail!("--long needs --videos DIR and --labels DIR (or --synthetic)");
+        };
+        return crate::eval_count_long::run(&crate::eval_count_long::LongArgs {
+            videos,
+            labels,
+            golf: a.golf.as_deref(),
+            cache: &a.cache,
+            repeats: a.repeats,
+            out: &a.out,
+            params: params_with(&a.count_params)?,
+            overrides: &a.count_params,
+        });
+    }
     if a.synthetic {
         return crate::eval_count_synth::run(
             &a.out,

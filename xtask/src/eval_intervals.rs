@@ -15,7 +15,7 @@ use serde_json::{json, Map, Value};
 use crate::eval_loops::ratio;
 
 /// Maximal runs of equal labels: `(label, start, end)`.
-fn blocks(labels: &[i64]) -> Vec<(i64, usize, usize)> {
+pub(crate) fn blocks(labels: &[i64]) -> Vec<(i64, usize, usize)> {
     let mut out = Vec::new();
     let mut s = 0;
     for i in 1..=labels.len() {
@@ -28,8 +28,11 @@ fn blocks(labels: &[i64]) -> Vec<(i64, usize, usize)> {
 }
 
 /// Greedy one-to-one matching of detections and labels by decreasing IoM (> 0.5):
-/// the number of matched pairs.
-fn one_to_one(det: &[(usize, usize)], gt: &[(usize, usize)]) -> usize {
+/// the matched pairs `(detection, label)`.
+pub(crate) fn one_to_one_pairs(
+    det: &[(usize, usize)],
+    gt: &[(usize, usize)],
+) -> Vec<(usize, usize)> {
     let mut pairs: Vec<(f64, usize, usize)> = det
         .iter()
         .enumerate()
@@ -38,15 +41,20 @@ fn one_to_one(det: &[(usize, usize)], gt: &[(usize, usize)]) -> usize {
         .collect();
     pairs.sort_by(|x, y| y.0.total_cmp(&x.0));
     let (mut ud, mut ug) = (vec![false; det.len()], vec![false; gt.len()]);
-    let mut n = 0;
+    let mut out = Vec::new();
     for (_, a, b) in pairs {
         if !ud[a] && !ug[b] {
             ud[a] = true;
             ug[b] = true;
-            n += 1;
+            out.push((a, b));
         }
     }
-    n
+    out
+}
+
+/// The number of one-to-one matched pairs ([`one_to_one_pairs`]).
+fn one_to_one(det: &[(usize, usize)], gt: &[(usize, usize)]) -> usize {
+    one_to_one_pairs(det, gt).len()
 }
 
 /// Matching counts of detections against labels, summed over recordings.

@@ -3,6 +3,8 @@
 mod bench;
 mod eval_concrete;
 mod eval_count;
+mod eval_count_long;
+mod eval_count_long_synth;
 mod eval_count_synth;
 mod eval_count_video;
 mod eval_forecast;

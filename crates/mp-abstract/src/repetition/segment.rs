@@ -68,6 +68,11 @@ pub struct SegmentParams {
     /// threshold; above 1 never merges. Default 0.7 (chosen by leave-one-recording-out
     /// on the CMU exercise recordings: every fold chose it).
     pub merge_ratio: f64,
+    /// Interval lengths tried by the search: every grid step up to where a
+    /// step is this fraction of the length, then lengths growing by this
+    /// fraction (0: every grid step). Bounds the search's cost per frame on
+    /// long recordings. Default 0.05.
+    pub length_resolution: f64,
 }
 
 impl Default for SegmentParams {
@@ -88,6 +93,7 @@ impl Default for SegmentParams {
             peak_ratio: 0.8,
             rest_fraction: 0.2,
             merge_ratio: 0.7,
+            length_resolution: 0.05,
         }
     }
 }
@@ -158,6 +164,7 @@ impl SegmentParams {
         }
         AbstractError::check_non_negative("interval_penalty_s", self.interval_penalty_s)?;
         AbstractError::check_non_negative("merge_ratio", self.merge_ratio)?;
+        AbstractError::check_non_negative("length_resolution", self.length_resolution)?;
         Ok(())
     }
 }
@@ -360,9 +367,13 @@ pub fn segment_repetitions(
         if top < lmin {
             return None;
         }
+        // Concordance at every lag from half the shortest period up, each
+        // computed once (a lag is also half of a longer one).
+        let low = (lmin / 2).max(1);
+        let at: Vec<Option<f64>> = (low..=top).map(|l| conc.at(s, e, l)).collect();
         let scores: Vec<f64> = (lmin..=top)
-            .map(|l| match conc.at(s, e, l) {
-                Some(cl) => cl - conc.at(s, e, (l / 2).max(1)).unwrap_or(1.0).max(0.0),
+            .map(|l| match at[l - low] {
+                Some(cl) => cl - at[(l / 2).max(1) - low].unwrap_or(1.0).max(0.0),
                 None => f64::NEG_INFINITY,
             })
             .collect();
@@ -385,6 +396,7 @@ pub fn segment_repetitions(
         Some((scores[k], lmin + k))
     };
     let nn = nodes.len();
+    let lengths = candidate_lengths(nn, params.length_resolution);
     let mut value = vec![f64::NEG_INFINITY; nn];
     // For each node: the previous node and, for a repetitive interval, its score and period.
     type Step = Option<(usize, Option<(f64, usize)>)>;
@@ -397,8 +409,9 @@ pub fn segment_repetitions(
         // Candidate starts, computed in parallel for long rows.
         let cands: Vec<(usize, f64, usize)> = {
             use rayon::prelude::*;
-            (0..j)
-                .into_par_iter()
+            lengths
+                .par_iter()
+                .filter_map(|&k| j.checked_sub(k))
                 .filter(|&i| {
                     let len = e - nodes[i];
                     len >= min_len && len <= max_len
@@ -496,6 +509,21 @@ pub fn segment_repetitions(
     Ok(segs)
 }
 
+/// The interval lengths, in grid steps, that the search tries (below
+/// `max_steps`): every length up to the one where a step is `resolution` of
+/// the length, then lengths growing by that fraction (0: every length). A
+/// longer bout is still found whole: as consecutive pieces that the merge
+/// step joins.
+fn candidate_lengths(max_steps: usize, resolution: f64) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut k = 1usize;
+    while k < max_steps {
+        out.push(k);
+        k = (k + 1).max((k as f64 * (1.0 + resolution)).round() as usize);
+    }
+    out
+}
+
 /// The score an interval of `len` frames with a period of `period` frames
 /// must exceed: [`SegmentParams::short_threshold`] below two periods,
 /// [`SegmentParams::threshold`] otherwise.
@@ -550,4 +578,21 @@ fn active_runs(
         }
     }
     runs.into_iter().map(|(a, b)| (s + a, s + b)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::candidate_lengths;
+
+    #[test]
+    fn lengths_are_dense_then_grow_by_the_resolution() {
+        let mut want: Vec<usize> = (1..=30).collect();
+        want.extend([32, 34, 36, 38]);
+        assert_eq!(candidate_lengths(40, 0.05), want);
+        assert_eq!(candidate_lengths(6, 0.0), vec![1, 2, 3, 4, 5]);
+        assert!(candidate_lengths(1, 0.05).is_empty());
+        // About 90 lengths up to 600 grid steps (two minutes at 0.2 s).
+        let n = candidate_lengths(600, 0.05).len();
+        assert!((85..=95).contains(&n), "{n}");
+    }
 }
