@@ -36,9 +36,6 @@ pub struct EvalCountArgs {
     /// partly covered; `synth_video`), clips cached under mp-out/video_cases.
     #[arg(long, conflicts_with = "synthetic")]
     pub synthetic_video: bool,
-    /// The non-repetitive footage of `--synthetic-video`.
-    #[arg(long, default_value = "../shared/data/golfdb/golf_swing.mp4")]
-    pub golf: PathBuf,
     /// Seed of the synthetic cases.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -67,8 +64,10 @@ pub struct EvalCountArgs {
     /// stretches and real long recordings (`eval_count_long_synth`).
     #[arg(long)]
     pub long: bool,
-    /// A non-repetitive clip played after the labelled videos (`--long`).
-    #[arg(long, requires = "long")]
+    /// Non-repetitive footage (a golf swing): around the repetitions of
+    /// `--synthetic-video` (default: the shared data folder's golf swing),
+    /// and played after the labelled videos with `--long`.
+    #[arg(long)]
     pub golf: Option<PathBuf>,
     /// Folder of the scaled clips and their keypoints (`--long`).
     #[arg(long, default_value = "mp-out/long_cache", requires = "long")]
@@ -169,7 +168,9 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
             a.seed,
             &a.videos.clone().unwrap_or_else(|| quva.join("videos")),
             &a.labels.clone().unwrap_or_else(|| quva.join("annotations")),
-            &a.golf,
+            &a.golf
+                .clone()
+                .unwrap_or_else(|| Path::new("../shared/data/golfdb/golf_swing.mp4").to_path_buf()),
             &params_with(&a.count_params)?,
             &a.count_params,
         );
