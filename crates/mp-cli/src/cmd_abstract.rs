@@ -197,15 +197,14 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
     }
     let fps = out.keypoints.track.fps();
     println!(
-        "{:>4} {:>8} {:>8} {:>9} {:>9} {:>9} {:>6} {:>10}",
-        "#", "start", "end", "start_s", "end_s", "period_s", "count", "confidence"
+        "{:>4} {:>13} {:>9} {:>9} {:>9} {:>6} {:>11}",
+        "#", "frames", "start_s", "end_s", "period_s", "count", "periodicity"
     );
     for (i, r) in c.intervals.iter().enumerate() {
         println!(
-            "{:>4} {:>8} {:>8} {:>9.2} {:>9.2} {:>9.2} {:>6} {:>10.2}",
+            "{:>4} {:>13} {:>9.2} {:>9.2} {:>9.2} {:>6} {:>11.2}",
             i + 1,
-            r.start_frame,
-            r.end_frame,
+            mp_geom::frames_label(r.start_frame, r.end_frame),
             r.start_frame as f64 / fps,
             r.end_frame as f64 / fps,
             r.period_frames as f64 / fps,
@@ -235,15 +234,14 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
             println!("  none");
         } else {
             println!(
-                "{:>4} {:>8} {:>8} {:>10} {:>12}",
-                "#", "start", "end", "iterations", "body (prims)"
+                "{:>4} {:>13} {:>10} {:>12}",
+                "#", "frames", "iterations", "body (prims)"
             );
             for (i, l) in an.intervals.iter().enumerate() {
                 println!(
-                    "{:>4} {:>8} {:>8} {:>10} {:>12}",
+                    "{:>4} {:>13} {:>10} {:>12}",
                     i + 1,
-                    l.start_frame,
-                    l.end_frame,
+                    mp_geom::frames_label(l.start_frame, l.end_frame),
                     l.iterations,
                     l.body_size
                 );

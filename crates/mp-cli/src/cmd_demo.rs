@@ -59,10 +59,9 @@ pub fn performer_cmd(a: &PerformerArgs) -> anyhow::Result<()> {
     );
     for s in &perf.segments {
         eprintln!(
-            "  {:<12} frames {:>4}..{:<4} {} repetitions",
+            "  {:<12} frames {:<11} {} repetitions",
             s.kind.name(),
-            s.frames.start,
-            s.frames.end,
+            mp_geom::frames_label(s.frames.start, s.frames.end),
             s.reps.len()
         );
     }
@@ -109,9 +108,8 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
         );
         for i in &an.intervals {
             println!(
-                "  frames {:>4}..{:<4} {} × body of {} primitives  [{}]",
-                i.start_frame,
-                i.end_frame,
+                "  frames {:<11} {} × body of {} primitives  [{}]",
+                mp_geom::frames_label(i.start_frame, i.end_frame),
                 i.count,
                 i.body_size,
                 truth(&perf, i.start_frame, i.end_frame)
@@ -129,9 +127,8 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
     );
     for i in &c.intervals {
         println!(
-            "  frames {:>4}..{:<4} {} repetitions  [{}]",
-            i.start_frame,
-            i.end_frame,
+            "  frames {:<11} {} repetitions  [{}]",
+            mp_geom::frames_label(i.start_frame, i.end_frame),
             i.count,
             truth(&perf, i.start_frame, i.end_frame)
         );

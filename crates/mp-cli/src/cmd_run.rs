@@ -149,10 +149,9 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
     );
     for (i, iv) in c.intervals.iter().enumerate() {
         println!(
-            "  loop {}: frames {:>4}..{:<4} ({:.2}–{:.2} s)  {} repetitions, period {:.2} s",
+            "  loop {}: frames {:<11} ({:.2}–{:.2} s)  {} repetitions, period {:.2} s",
             i + 1,
-            iv.start_frame,
-            iv.end_frame,
+            mp_geom::frames_label(iv.start_frame, iv.end_frame),
             iv.start_frame as f64 / fps,
             iv.end_frame as f64 / fps,
             iv.count,

@@ -70,15 +70,17 @@ pub fn edit_cmd(a: &EditArgs) -> Result<()> {
     }
     let fps = r.fps;
     println!(
-        "loop {}: frames {}..{} ({} repetitions); iteration {}..{} closest to the mean",
-        r.loop_number, r.interval.0, r.interval.1, r.count_before, r.iteration.0, r.iteration.1
+        "loop {}: frames {} ({} repetitions); the iteration at frames {} is closest to the mean",
+        r.loop_number,
+        mp_geom::frames_label(r.interval.0, r.interval.1),
+        r.count_before,
+        mp_geom::frames_label(r.iteration.0, r.iteration.1)
     );
     println!(
-        "{} {} iteration(s) of frames {}..{} (seam cost {:.2}); {} → {} frames ({:.2} → {:.2} s) written to {}",
+        "{} {} iteration(s) of frames {} (seam cost {:.2}); {} → {} frames ({:.2} → {:.2} s) written to {}",
         if r.change >= 0 { "added" } else { "removed" },
         r.change.unsigned_abs(),
-        r.segment.0,
-        r.segment.1,
+        mp_geom::frames_label(r.segment.0, r.segment.1),
         r.seam_cost,
         r.frames_in,
         r.frames_out,
@@ -203,14 +205,13 @@ pub fn predict_video_cmd(
         );
     }
     println!(
-        "{} observed + {} predicted frames ({:.2} s, {} from the {}; cycle {}..{}) written to {}",
+        "{} observed + {} predicted frames ({:.2} s, {} from the {}; cycle at frames {}) written to {}",
         r.observed,
         r.predicted,
         r.predicted as f64 / r.fps,
         r.used.as_str(),
         r.source,
-        r.cycle.0,
-        r.cycle.1,
+        mp_geom::frames_label(r.cycle.0, r.cycle.1),
         output.display()
     );
     Ok(())

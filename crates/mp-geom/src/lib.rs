@@ -36,4 +36,4 @@ pub use error::{GeomError, Result};
 pub use people::{People, Person, PersonId};
 pub use primitive::{Primitive, PrimitiveKind};
 pub use skeleton::Skeleton;
-pub use track::{fps_label, Track, Units};
+pub use track::{fps_label, frames_label, Track, Units};

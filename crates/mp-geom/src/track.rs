@@ -74,6 +74,17 @@ pub fn fps_label(fps: f64) -> String {
     }
 }
 
+/// Frames `start..end` (the end excluded, as in files and JSON) as people
+/// read a range: the first and the last frame, `"56–131"` (one frame: `"56"`).
+pub fn frames_label(start: usize, end: usize) -> String {
+    let last = end.saturating_sub(1).max(start);
+    if last == start {
+        start.to_string()
+    } else {
+        format!("{start}–{last}")
+    }
+}
+
 impl Track {
     /// Builds a track, checking shapes and turning non-finite positions into
     /// missing joints (confidence 0); a finite coordinate beyond
@@ -438,6 +449,13 @@ pub fn bracket(valid: &[usize], f: usize) -> Option<(usize, usize, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn frame_ranges_read_first_to_last() {
+        assert_eq!(frames_label(0, 124), "0–123");
+        assert_eq!(frames_label(56, 57), "56");
+        assert_eq!(frames_label(5, 5), "5");
+    }
 
     #[test]
     fn frame_rates_read_as_people_write_them() {

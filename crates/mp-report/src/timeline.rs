@@ -234,10 +234,9 @@ pub fn timeline_svg(
             );
         }
         svg.raw(&format!(
-            "<title>loop {}: frames {}..{}, {} iterations of {} primitives</title>\n",
+            "<title>loop {}: frames {}, {} iterations of {} primitives</title>\n",
             li + 1,
-            iv.start_frame,
-            iv.end_frame,
+            mp_geom::frames_label(iv.start_frame, iv.end_frame),
             iv.iterations,
             iv.body_size
         ));
