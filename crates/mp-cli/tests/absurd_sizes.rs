@@ -2,34 +2,15 @@
 //! naming the parameter, never an allocation abort (a signal).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mp"))
-        .args(args)
-        .output()
-        .expect("cannot start mp")
-}
+mod common;
 
 fn ok(args: &[&str]) {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "mp {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::ok(args);
 }
 
 /// Exit code 1 (an error, not a signal) and stderr naming `param`.
 fn refused(args: &[&str], param: &str) {
-    let out = run(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "mp {args:?} should fail with exit code 1 (status {:?}):\n{stderr}",
-        out.status
-    );
+    let stderr = common::refused(args);
     assert!(
         stderr.contains(param),
         "mp {args:?}: the message should name `{param}`:\n{stderr}"
@@ -72,7 +53,7 @@ fn absurd_sizes_are_errors() {
         ],
         "lambda.seconds",
     );
-    let both = run(&[
+    let both = common::run(&[
         "fit",
         &p("perf.npz"),
         "-o",

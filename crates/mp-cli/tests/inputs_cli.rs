@@ -3,33 +3,9 @@
 //! mistakes, errors that name the right command.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use std::process::{Command, Output};
+mod common;
 
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mp"))
-        .args(args)
-        .output()
-        .expect("cannot start mp")
-}
-
-fn ok(args: &[&str]) -> (String, String) {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "mp {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    (
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn refused(args: &[&str]) -> String {
-    let out = run(args);
-    assert_eq!(out.status.code(), Some(1), "mp {args:?} should fail");
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+use common::{ok, refused};
 
 /// `period_frames` and `fps` of the first counted interval of `mp loops --json`.
 fn period_s(args: &[&str]) -> f64 {

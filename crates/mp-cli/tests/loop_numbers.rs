@@ -2,29 +2,12 @@
 //! and `mp extend --loop N` takes the same numbers.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use std::process::{Command, Output};
+mod common;
 
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mp"))
-        .args(args)
-        .output()
-        .expect("cannot start mp")
-}
+use common::refused;
 
 fn ok(args: &[&str]) -> String {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "mp {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn refused(args: &[&str]) -> String {
-    let out = run(args);
-    assert_eq!(out.status.code(), Some(1), "mp {args:?} should fail");
-    String::from_utf8_lossy(&out.stderr).into_owned()
+    common::ok(args).0
 }
 
 /// Iteration counts of the loops of an abstract program in JSON, in order.

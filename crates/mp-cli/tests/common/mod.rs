@@ -1,0 +1,40 @@
+//! Running the `mp` binary from the command-line tests.
+#![allow(dead_code)] // each test file uses the helpers it needs
+
+use std::process::{Command, Output};
+
+/// `mp ARGS`, its output captured.
+pub fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mp"))
+        .args(args)
+        .output()
+        .expect("cannot start mp")
+}
+
+/// `mp ARGS`, which must succeed: its stdout and stderr.
+pub fn ok(args: &[&str]) -> (String, String) {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "mp {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// `mp ARGS`, which must fail with exit code 1 (an error, not a signal):
+/// its stderr.
+pub fn refused(args: &[&str]) -> String {
+    let out = run(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "mp {args:?} should fail with exit code 1 (status {:?}):\n{stderr}",
+        out.status
+    );
+    stderr
+}
