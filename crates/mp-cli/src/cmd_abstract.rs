@@ -37,11 +37,11 @@ impl AnalysisOpts {
     }
 
     /// The abstract analysis parameters with these options, at the scale of
-    /// a frame of `frame_px` (default: `--frame-size`).
+    /// a frame of `frame_px` ([`crate::track_arg::frame_px`]).
     fn params_at(&self, frame_px: Option<f64>) -> AbstractParams {
         let p = self.pipeline_params();
         AbstractParams {
-            synth: p.synth_for(frame_px.or(self.frame_size)),
+            synth: p.synth_for(frame_px),
             loops: p.analysis.loops,
         }
     }
@@ -159,8 +159,9 @@ pub struct PredictArgs {
 
 /// `mp abstract`: the abstract program of a track, written and summarised.
 pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
-    let track = crate::track_arg::read_track(&a.track, &a.opts.rate)?;
-    let frame_px = crate::track_arg::frame_px(&a.track, a.opts.frame_size)?;
+    let read = crate::track_arg::read_track_file(&a.track, &a.opts.rate)?;
+    let frame_px = crate::track_arg::frame_px(&read, a.opts.frame_size);
+    let track = read.track;
     let an = analyse_track(&track, frame_px, &a.opts.pipeline_params())?;
     write_program(&an.program, &a.output)?;
     if !a.quiet {
@@ -316,16 +317,16 @@ pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
             "a track input needs --observe N and --horizon H (frames observed from the start, frames predicted)"
         );
     };
-    let track = crate::track_arg::read_track(&a.track, &a.opts.rate)?;
+    let read = crate::track_arg::read_track_file(&a.track, &a.opts.rate)?;
+    let frame_px = crate::track_arg::frame_px(&read, a.opts.frame_size);
+    let track = read.track;
     let mut opts = PredictOptions {
         method: a.method.into(),
         train: a.forecast.train.clone(),
         models: a.forecast.models.clone(),
         ..PredictOptions::default()
     };
-    opts.loop_params.analysis = a
-        .opts
-        .params_at(crate::track_arg::frame_px(&a.track, a.opts.frame_size)?);
+    opts.loop_params.analysis = a.opts.params_at(frame_px);
     let p = mp_forecast::predict(&track, observe, horizon, &opts)?;
     if let Some(text) = p.explanation() {
         eprintln!("{text}");

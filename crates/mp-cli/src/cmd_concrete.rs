@@ -105,7 +105,9 @@ pub struct StatsArgs {
 /// `mp fit`: the same concrete program as `mp run` and `mp abstract` give
 /// for the same track and options.
 pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
-    let track = crate::track_arg::read_track(&a.track, &a.rate)?;
+    let read = crate::track_arg::read_track_file(&a.track, &a.rate)?;
+    let frame_px = crate::track_arg::frame_px(&read, a.frame_size);
+    let track = read.track;
     let mut params = Params::default();
     if let Some(l) = a.lambda {
         params.analysis.synth.lambda = Lambda::fixed(l);
@@ -124,7 +126,6 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     if a.strict_joints {
         params.analysis.synth.unobserved_joints = UnobservedJoints::Error;
     }
-    let frame_px = crate::track_arg::frame_px(&a.track, a.frame_size)?;
     let syn = mp_pipeline::concrete_program(&track, frame_px, &params)
         .with_context(|| format!("fitting {}", a.track.display()))?;
     let p = &syn.program;

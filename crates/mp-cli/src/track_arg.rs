@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use mp_geom::io::{read_track_rated, RateSource, ReadOptions, DEFAULT_FPS};
+use mp_geom::io::{read_track_rated, RateSource, ReadOptions, TrackRead, DEFAULT_FPS};
 use mp_geom::Track;
 use mp_pipeline::{is_video, Input};
 
@@ -69,31 +69,32 @@ fn refuse_pictures(path: &Path) -> Result<()> {
 }
 
 /// Reads the keypoint track a command is given, at the rate of `rate`
-/// (warning when 30 fps is assumed); a video or an image gets advice instead.
-pub fn read_track(path: &Path, rate: &RateOpt) -> Result<Track> {
+/// (warning when 30 fps is assumed), with the frame size its file states; a
+/// video or an image gets advice instead.
+pub fn read_track_file(path: &Path, rate: &RateOpt) -> Result<TrackRead> {
     refuse_pictures(path)?;
     let opts = ReadOptions {
         fps: rate.fps,
         ..Default::default()
     };
-    let (track, source) =
+    let read =
         read_track_rated(path, &opts).with_context(|| format!("reading {}", path.display()))?;
-    if source == RateSource::Assumed {
+    if read.rate == RateSource::Assumed {
         warn_assumed(path);
     }
-    Ok(track)
+    Ok(read)
+}
+
+/// [`read_track_file`]'s track alone.
+pub fn read_track(path: &Path, rate: &RateOpt) -> Result<Track> {
+    read_track_file(path, rate).map(|r| r.track)
 }
 
 /// The frame size (largest side, pixels) a track is scaled by: `given`
-/// (`--frame-size`), else the one its npz states (written by `mp run` and
+/// (`--frame-size`), else the one its file states (the npz of `mp run` and
 /// `mp extract`), else `None` (the motion's extent).
-pub fn frame_px(path: &Path, given: Option<f64>) -> Result<Option<f64>> {
-    if given.is_some() {
-        return Ok(given);
-    }
-    let size = mp_geom::io::read_frame_size(path)
-        .with_context(|| format!("reading {}", path.display()))?;
-    Ok(size.map(|(w, h)| w.max(h) as f64))
+pub fn frame_px(read: &TrackRead, given: Option<f64>) -> Option<f64> {
+    given.or(read.frame_size.map(|(w, h)| w.max(h) as f64))
 }
 
 /// Opens the input of `mp run` / `mp loops` (a video or a keypoint track),

@@ -251,10 +251,8 @@ fn fit_on_the_runs_track_reproduces_its_program() {
     };
     // The track keeps the video frame it is in, so its program is fitted
     // at the same scale as `mp run`'s.
-    assert_eq!(
-        mp_geom::io::read_frame_size(dir.join("track.npz")).unwrap(),
-        Some((354, 492))
-    );
+    let read = mp_geom::io::read_track_rated(dir.join("track.npz"), &Default::default()).unwrap();
+    assert_eq!(read.frame_size, Some((354, 492)));
     let tmp = tempfile::tempdir().unwrap();
     let p = tmp.path().join("p.txt");
     run_ok(

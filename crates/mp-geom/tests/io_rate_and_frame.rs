@@ -6,8 +6,8 @@
 
 use mp_geom::io::native::write_track_npy;
 use mp_geom::io::{
-    read_frame_size, read_people_with, read_track_rated, write_people_framed, write_track,
-    write_track_framed, RateSource, ReadOptions, DEFAULT_FPS,
+    read_people_with, read_track_rated, write_people_framed, write_track, write_track_framed,
+    RateSource, ReadOptions, DEFAULT_FPS,
 };
 use mp_geom::People;
 use mp_geom::{Skeleton, Track, Units};
@@ -34,10 +34,12 @@ fn csv_states_its_rate_in_a_time_column() {
     write_track(&f, &track(60.0)).unwrap();
     let text = std::fs::read_to_string(&f).unwrap();
     assert!(text.starts_with("frame,time,"), "{}", &text[..40]);
-    let (t, src) = read_track_rated(&f, &ReadOptions::default()).unwrap();
+    let r = read_track_rated(&f, &ReadOptions::default()).unwrap();
+    let (t, src) = (r.track, r.rate);
     assert_eq!((t.fps(), src), (60.0, RateSource::File));
     // A rate given by the caller wins over the file's.
-    let (t, src) = read_track_rated(&f, &given(25.0)).unwrap();
+    let r = read_track_rated(&f, &given(25.0)).unwrap();
+    let (t, src) = (r.track, r.rate);
     assert_eq!((t.fps(), src), (25.0, RateSource::Given));
 }
 
@@ -54,7 +56,8 @@ fn long_csv_time_column_and_hand_written_times() {
         }
     }
     std::fs::write(&f, s).unwrap();
-    let (t, src) = read_track_rated(&f, &ReadOptions::default()).unwrap();
+    let r = read_track_rated(&f, &ReadOptions::default()).unwrap();
+    let (t, src) = (r.track, r.rate);
     assert_eq!(src, RateSource::File);
     assert!((t.fps() - 29.97).abs() < 0.01, "{}", t.fps());
 }
@@ -75,14 +78,17 @@ fn formats_without_a_rate_report_the_assumed_one() {
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("a.npy");
     write_track_npy(&f, &track(50.0)).unwrap();
-    let (t, src) = read_track_rated(&f, &ReadOptions::default()).unwrap();
+    let r = read_track_rated(&f, &ReadOptions::default()).unwrap();
+    let (t, src) = (r.track, r.rate);
     assert_eq!((t.fps(), src), (DEFAULT_FPS, RateSource::Assumed));
-    let (t, src) = read_track_rated(&f, &given(50.0)).unwrap();
+    let r = read_track_rated(&f, &given(50.0)).unwrap();
+    let (t, src) = (r.track, r.rate);
     assert_eq!((t.fps(), src), (50.0, RateSource::Given));
     // A CSV without a time column states none either.
     let c = dir.path().join("no_time.csv");
     std::fs::write(&c, "frame,a_x,a_y\n0,1,2\n1,2,3\n").unwrap();
-    let (t, src) = read_track_rated(&c, &ReadOptions::default()).unwrap();
+    let r = read_track_rated(&c, &ReadOptions::default()).unwrap();
+    let (t, src) = (r.track, r.rate);
     assert_eq!((t.fps(), src), (DEFAULT_FPS, RateSource::Assumed));
 }
 
@@ -92,7 +98,8 @@ fn the_projects_formats_keep_their_rate_and_people_take_a_given_one() {
     for ext in ["npz", "json", "mpt"] {
         let f = dir.path().join(format!("t.{ext}"));
         write_track(&f, &track(120.0)).unwrap();
-        let (t, src) = read_track_rated(&f, &ReadOptions::default()).unwrap();
+        let r = read_track_rated(&f, &ReadOptions::default()).unwrap();
+        let (t, src) = (r.track, r.rate);
         assert_eq!((t.fps(), src), (120.0, RateSource::File), "{ext}");
         let p = read_people_with(&f, &given(24.0)).unwrap();
         assert_eq!(p.fps(), 24.0, "{ext}");
@@ -117,14 +124,19 @@ fn npz_files_keep_the_video_frame_they_are_in() {
     )
     .unwrap();
     write_track(&c, &t).unwrap();
-    assert_eq!(read_frame_size(&a).unwrap(), Some((640, 360)));
-    assert_eq!(read_frame_size(&b).unwrap(), Some((1920, 1080)));
-    assert_eq!(read_frame_size(&c).unwrap(), None);
+    let frame = |f: &std::path::Path| {
+        read_track_rated(f, &ReadOptions::default())
+            .unwrap()
+            .frame_size
+    };
+    assert_eq!(frame(&a), Some((640, 360)));
+    assert_eq!(frame(&b), Some((1920, 1080)));
+    assert_eq!(frame(&c), None);
     // The track itself reads as before.
-    let (back, _) = read_track_rated(&a, &ReadOptions::default()).unwrap();
+    let back = read_track_rated(&a, &ReadOptions::default()).unwrap().track;
     assert_eq!(back, t);
     // Other formats state no frame.
     let j = dir.path().join("a.json");
     write_track_framed(&j, &t, Some((640, 360))).unwrap();
-    assert_eq!(read_frame_size(&j).unwrap(), None);
+    assert_eq!(frame(&j), None);
 }

@@ -78,7 +78,7 @@ impl Input {
             fps,
             ..Default::default()
         };
-        let (track, rate) =
+        let read =
             mp_geom::io::read_track_rated(path, &opts).map_err(|source| PipelineError::Track {
                 path: path.to_path_buf(),
                 extensions: VIDEO_EXTENSIONS.join(", "),
@@ -88,28 +88,22 @@ impl Input {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
+        let assumed = read.rate == mp_geom::io::RateSource::Assumed;
         // A track that states the video frame it is in (an npz of `mp run`
         // or `mp extract`) is scaled by it, as the video was.
-        let frame_size =
-            mp_geom::io::read_frame_size(path).map_err(|source| PipelineError::Track {
-                path: path.to_path_buf(),
-                extensions: VIDEO_EXTENSIONS.join(", "),
-                source,
-            })?;
-        let frame_px = frame_px.or(frame_size.map(|(w, h)| w.max(h) as f64));
-        let mut input = Self::from_track(track, &name, frame_px);
-        if let Input::Track { frame_size: f, .. } = &mut input {
-            *f = frame_size;
-        }
-        if rate == mp_geom::io::RateSource::Assumed {
-            if let Input::Track {
-                description,
-                fps_assumed,
-                ..
-            } = &mut input
-            {
+        let frame_px = frame_px.or(read.frame_size.map(|(w, h)| w.max(h) as f64));
+        let mut input = Self::from_track(read.track, &name, frame_px);
+        if let Input::Track {
+            description,
+            frame_size,
+            fps_assumed,
+            ..
+        } = &mut input
+        {
+            *frame_size = read.frame_size;
+            *fps_assumed = assumed;
+            if assumed {
                 description.push_str(" (assumed: the file states no frame rate)");
-                *fps_assumed = true;
             }
         }
         Ok(input)

@@ -63,7 +63,7 @@ fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
 #[pyfunction]
 #[pyo3(signature = (path, fps = None))]
 fn read_track(py: Python<'_>, path: PathBuf, fps: Option<f64>) -> PyResult<PyTrack> {
-    Ok(PyTrack::new(track::read_track_file(py, &path, fps)?))
+    Ok(PyTrack::new(track::read_track_file(py, &path, fps)?.track))
 }
 
 /// Keypoints of a video (as `mp extract`, COCO-17 joints unless
@@ -219,15 +219,11 @@ fn fit(
             .parse::<mp_concrete::RefitNorm>()
             .map_err(errors::ParamError::new_err)?;
     }
-    let t = &track::track_arg(track, "fit")?;
+    let (t, frame) = track::track_arg_framed(track, "fit")?;
+    let t = &t;
     // A track file that states its video frame (`mp run`'s and `mp
     // extract`'s npz) is fitted at that scale, as `mp fit` does.
-    let frame_size = match (frame_size, track.extract::<PathBuf>()) {
-        (None, Ok(path)) => mp_geom::io::read_frame_size(&path)
-            .map_err(errors::geom)?
-            .map(|(w, h)| w.max(h) as f64),
-        (given, _) => given,
-    };
+    let frame_size = frame_size.or(frame.map(|(w, h)| w.max(h) as f64));
     let syn = py
         .detach(|| mp_pipeline::concrete_program(t, frame_size, &params))
         .map_err(errors::pipeline)?;

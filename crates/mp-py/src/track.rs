@@ -260,20 +260,20 @@ pub(crate) fn warn(py: Python<'_>, msg: &str) -> PyResult<()> {
 }
 
 /// Reads a track file at `fps` (over what it states), warning when 30 fps
-/// is assumed.
+/// is assumed; with the frame size the file states.
 pub(crate) fn read_track_file(
     py: Python<'_>,
     path: &std::path::Path,
     fps: Option<f64>,
-) -> PyResult<Track> {
+) -> PyResult<mp_geom::io::TrackRead> {
     let opts = mp_geom::io::ReadOptions {
         fps,
         ..Default::default()
     };
-    let (t, rate) = py
+    let read = py
         .detach(|| mp_geom::io::read_track_rated(path, &opts))
         .map_err(errors::geom)?;
-    if rate == mp_geom::io::RateSource::Assumed {
+    if read.rate == mp_geom::io::RateSource::Assumed {
         warn(
             py,
             &format!(
@@ -283,16 +283,24 @@ pub(crate) fn read_track_file(
             ),
         )?;
     }
-    Ok(t)
+    Ok(read)
 }
 
 /// What the functions that take a track accept: a `Track`, the path of a
 /// track file, or a T × J × D array (30 fps assumed, with a warning). A
 /// video's path gets advice (`extract` first).
 pub(crate) fn track_arg(obj: &Bound<'_, PyAny>, func: &str) -> PyResult<Track> {
+    track_arg_framed(obj, func).map(|(t, _)| t)
+}
+
+/// [`track_arg`] with the video frame (width, height) a track file states.
+pub(crate) fn track_arg_framed(
+    obj: &Bound<'_, PyAny>,
+    func: &str,
+) -> PyResult<(Track, Option<(usize, usize)>)> {
     let py = obj.py();
     if let Ok(t) = obj.cast::<PyTrack>() {
-        return Ok(t.get().inner.clone());
+        return Ok((t.get().inner.clone(), None));
     }
     if let Ok(path) = obj.extract::<std::path::PathBuf>() {
         if mp_pipeline::is_video(&path) {
@@ -301,7 +309,8 @@ pub(crate) fn track_arg(obj: &Bound<'_, PyAny>, func: &str) -> PyResult<Track> {
                 path.display()
             )));
         }
-        return read_track_file(py, &path, None);
+        let read = read_track_file(py, &path, None)?;
+        return Ok((read.track, read.frame_size));
     }
     if let Ok(a) = obj.extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>() {
         warn(
@@ -313,7 +322,7 @@ pub(crate) fn track_arg(obj: &Bound<'_, PyAny>, func: &str) -> PyResult<Track> {
             ),
         )?;
         let t = PyTrack::from_numpy(a, mp_geom::io::DEFAULT_FPS, None, None, None, "px")?;
-        return Ok(t.inner);
+        return Ok((t.inner, None));
     }
     Err(errors::ParamError::new_err(format!(
         "{func}() takes a Track, the path of a track file or a T × J × D array, got {}",

@@ -33,7 +33,7 @@ pub mod openpose;
 pub mod people;
 
 pub use atomic::{abandon_partial_writes, write_atomic, PartialFile};
-pub use native::{read_frame_size, track_from_bincode, track_to_bincode};
+pub use native::{track_from_bincode, track_to_bincode};
 pub use people::{people_to_npz_bytes, people_to_npz_bytes_framed};
 
 use std::path::Path;
@@ -198,24 +198,56 @@ pub fn read_track(path: impl AsRef<Path>) -> Result<Track> {
 ///
 /// A people file with nobody in it is an error ("no person in this file").
 pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
-    read_track_rated(path, opts).map(|(t, _)| t)
+    read_track_rated(path, opts).map(|r| r.track)
 }
 
-/// [`read_track_with`], telling where the track's frame rate came from (so
-/// that a caller can say when [`DEFAULT_FPS`] was assumed).
-pub fn read_track_rated(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<(Track, RateSource)> {
+/// A track read from a file, with what the file says around it.
+#[derive(Debug, Clone)]
+pub struct TrackRead {
+    /// The track.
+    pub track: Track,
+    /// Where its frame rate came from (so that a caller can say when
+    /// [`DEFAULT_FPS`] was assumed).
+    pub rate: RateSource,
+    /// The video frame (width, height) its pixels are in, when the file
+    /// states it (the npz of [`write_track_framed`] / [`write_people_framed`]).
+    pub frame_size: Option<(usize, usize)>,
+}
+
+/// [`read_track_with`], with where the rate came from and the frame size the
+/// file states, in one read.
+pub fn read_track_rated(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<TrackRead> {
     let path = path.as_ref();
-    let (content, source) = read_rated(path, opts, false)?;
+    let (content, rate, stated) = read_rated(path, opts, false)?;
     let track = match content {
         Content::Track(t) => *t,
         Content::People(p) => people::main_track_of(&p, path)?,
     };
-    Ok((track, source))
+    Ok(TrackRead {
+        track,
+        rate,
+        frame_size: stated.frame_size,
+    })
 }
 
 /// [`read_any`] with [`ReadOptions::fps`] applied over what the file states.
-fn read_rated(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Content, RateSource)> {
+fn read_rated(
+    path: &Path,
+    opts: &ReadOptions,
+    people_npz: bool,
+) -> Result<(Content, RateSource, Stated)> {
     let (content, stated) = read_any(path, opts, people_npz)?;
+    let (content, rate) = rated(path, opts, content, stated.rate)?;
+    Ok((content, rate, stated))
+}
+
+/// `content` at [`ReadOptions::fps`] when given, and where its rate came from.
+fn rated(
+    path: &Path,
+    opts: &ReadOptions,
+    content: Content,
+    stated: bool,
+) -> Result<(Content, RateSource)> {
     match (opts.fps, content) {
         (Some(fps), Content::Track(t)) => {
             let t = if t.fps() == fps { *t } else { t.with_fps(fps)? };
@@ -247,13 +279,13 @@ enum Content {
 
 /// Reads a file as [`read_track_with`] describes, keeping people JSON and
 /// `.mpt` files as people; a people npz too when `people_npz` is set (else
-/// its single-track arrays are read). Also tells whether the file states
-/// its frame rate (else [`ReadOptions::rate`] was used).
-fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Content, bool)> {
+/// its single-track arrays are read). Also tells what the file states
+/// besides ([`Stated`]).
+fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Content, Stated)> {
     opts.validate()?;
     if path.is_dir() {
         let t = openpose::read_openpose_dir(path, opts)?;
-        return Ok((Content::Track(Box::new(t)), false));
+        return Ok((Content::Track(Box::new(t)), Stated::default()));
     }
     if !path.exists() {
         return Err(GeomError::io(
@@ -261,13 +293,23 @@ fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Conten
             std::io::Error::new(std::io::ErrorKind::NotFound, "no such file or folder"),
         ));
     }
-    let people = |p: People| Ok((Content::People(p), true));
+    let people = |p: People, frame_size| {
+        Ok((
+            Content::People(p),
+            Stated {
+                rate: true,
+                frame_size,
+            },
+        ))
+    };
+    let mut frame_size = None;
     let (track, stated) = match extension(path).as_str() {
         "npz" => {
             let z = npz::Npz::open(path)?;
+            frame_size = native::frame_size_of(&z)?;
             if people::is_people_npz(&z) {
                 if people_npz {
-                    return people(people::people_from_npz(&z)?);
+                    return people(people::people_from_npz(&z)?, frame_size);
                 }
                 // The single-track arrays hold the main person; a file of
                 // nobody has none.
@@ -312,7 +354,7 @@ fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Conten
             if value.get("format").and_then(|f| f.as_str()) == Some(native::JSON_FORMAT) {
                 (native::track_from_json_value(value, path)?, true)
             } else if people::is_people_json(&value) {
-                return people(people::people_from_json_value(value, path)?);
+                return people(people::people_from_json_value(value, path)?, None);
             } else if value.is_array() {
                 (openpose::alphapose_from_value(&value, path, opts)?, false)
             } else if value.get("people").is_some() {
@@ -330,7 +372,7 @@ fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Conten
         "mpt" => {
             let bytes = std::fs::read(path).map_err(|e| GeomError::io(path, e))?;
             if people::is_people_bincode(&bytes) {
-                return people(people::people_from_bincode_at(&bytes, path)?);
+                return people(people::people_from_bincode_at(&bytes, path)?, None);
             }
             (native::track_from_bincode_at(&bytes, path)?, true)
         }
@@ -352,7 +394,22 @@ fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Conten
             ))
         }
     };
-    Ok((Content::Track(Box::new(track)), stated))
+    Ok((
+        Content::Track(Box::new(track)),
+        Stated {
+            rate: stated,
+            frame_size,
+        },
+    ))
+}
+
+/// What a file states besides its track or people.
+#[derive(Debug, Default)]
+struct Stated {
+    /// Its frame rate (else [`ReadOptions::rate`] was used).
+    rate: bool,
+    /// The video frame its pixels are in.
+    frame_size: Option<(usize, usize)>,
 }
 
 /// Reads people with default [`ReadOptions`]. See [`read_people_with`].
@@ -412,7 +469,7 @@ pub fn write_track(path: impl AsRef<Path>, track: &Track) -> Result<()> {
 }
 
 /// [`write_track`] keeping the width and height of the video frame the
-/// track's pixels are in, in an `.npz` ([`read_frame_size`] reads it back:
+/// track's pixels are in, in an `.npz` ([`read_track_rated`] reads it back:
 /// the scale its programs are fitted at); other formats leave it out.
 pub fn write_track_framed(
     path: impl AsRef<Path>,

@@ -58,8 +58,8 @@ pub fn track_to_npz_bytes(track: &Track) -> Result<Vec<u8>> {
 }
 
 /// [`track_to_npz_bytes`] with the width and height of the video frame the
-/// track's pixels are in (`frame_size`), which [`read_frame_size`] gives
-/// back: the scale a program of the track is fitted at.
+/// track's pixels are in (`frame_size`), which [`super::read_track_rated`]
+/// gives back: the scale a program of the track is fitted at.
 pub fn track_to_npz_bytes_framed(
     track: &Track,
     frame_size: Option<(usize, usize)>,
@@ -78,17 +78,10 @@ pub(crate) fn add_frame_size(out: &mut NpzOut, frame_size: Option<(usize, usize)
     Ok(())
 }
 
-/// The video frame size (width, height) an npz track or people file
-/// states (`frame_size`); `None` for other files and npz files without it.
-pub fn read_frame_size(path: impl AsRef<Path>) -> Result<Option<(usize, usize)>> {
-    let path = path.as_ref();
-    let is_npz = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("npz"));
-    if !is_npz || !path.is_file() {
-        return Ok(None);
-    }
-    let z = Npz::open(path)?;
+/// The video frame size (width, height) an opened npz track or people file
+/// states (`frame_size`), if any.
+pub(crate) fn frame_size_of(z: &Npz) -> Result<Option<(usize, usize)>> {
+    let path = z.path();
     if !z.contains("frame_size") {
         return Ok(None);
     }
