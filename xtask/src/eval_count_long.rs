@@ -29,7 +29,6 @@ use mp_geom::{Skeleton, Units};
 use mp_pipeline::{CancelToken, Input, Keep, Params, Silent};
 use mp_pose::thumbs::{grey_thumbnail_region, thumbnail_track};
 use mp_pose::video::VideoReader;
-use ndarray::{concatenate, Axis};
 use serde_json::{json, Value};
 
 use crate::eval_intervals::one_to_one_pairs;
@@ -158,16 +157,7 @@ fn thumbnails(video: &Path, region: Option<[f64; 4]>, size: usize) -> anyhow::Re
 
 /// Tracks joined in time (same skeleton, units and rate).
 pub fn join(parts: &[&Track]) -> anyhow::Result<Track> {
-    let first = parts.first().context("nothing to join")?;
-    let pos: Vec<_> = parts.iter().map(|t| t.positions()).collect();
-    let conf: Vec<_> = parts.iter().map(|t| t.confidence()).collect();
-    Ok(Track::new(
-        concatenate(Axis(0), &pos)?,
-        Some(concatenate(Axis(0), &conf)?),
-        first.fps(),
-        first.units(),
-        first.skeleton().clone(),
-    )?)
+    Ok(Track::concat(parts)?)
 }
 
 /// Arguments of the long-recording evaluation.

@@ -67,27 +67,6 @@ pub struct VideoCase {
     pub pad_s: (f64, f64),
 }
 
-/// Width, height and frame rate of a video (ffprobe).
-pub fn probe(path: &Path) -> anyhow::Result<(usize, usize, f64)> {
-    let out = Command::new("ffprobe")
-        .args(["-v", "error", "-select_streams", "v:0"])
-        .args(["-show_entries", "stream=width,height,r_frame_rate"])
-        .args(["-of", "csv=p=0"])
-        .arg(path)
-        .output()
-        .with_context(|| format!("running ffprobe on {}", path.display()))?;
-    let s = String::from_utf8_lossy(&out.stdout);
-    let f: Vec<&str> = s.trim().split(',').collect();
-    if f.len() < 3 {
-        bail!("ffprobe gave `{}` for {}", s.trim(), path.display());
-    }
-    let fps = match f[2].split_once('/') {
-        Some((a, b)) => a.parse::<f64>()? / b.parse::<f64>()?,
-        None => f[2].parse()?,
-    };
-    Ok((f[0].parse()?, f[1].parse()?, fps))
-}
-
 /// The labelled videos of `videos` (labels `<stem>.npy` in `labels`) with
 /// at least three labelled cycles.
 pub fn sources(videos: &Path, labels: &Path) -> anyhow::Result<Vec<Source>> {
@@ -115,7 +94,8 @@ pub fn sources(videos: &Path, labels: &Path) -> anyhow::Result<Vec<Source>> {
         if ends.len() < 3 {
             continue;
         }
-        let (width, height, fps) = probe(&path)?;
+        let info = mp_pose::video::probe(&path)?;
+        let (width, height, fps) = (info.width, info.height, info.fps);
         out.push(Source {
             path,
             name,

@@ -238,6 +238,44 @@ impl Track {
         )
     }
 
+    /// Tracks joined in time. They need the same joints, dimensions, units
+    /// and frame rate; the skeleton of the first is kept.
+    pub fn concat(parts: &[&Track]) -> Result<Self> {
+        let first = parts
+            .first()
+            .ok_or_else(|| GeomError::Shape("no track to join".into()))?;
+        for (i, t) in parts.iter().enumerate().skip(1) {
+            if t.n_joints() != first.n_joints()
+                || t.dims() != first.dims()
+                || t.units() != first.units()
+                || (t.fps() - first.fps()).abs() > 1e-9 * first.fps()
+            {
+                return Err(GeomError::Shape(format!(
+                    "track {i} ({} joints × {} dims, {} fps, {}) cannot follow track 0 \
+                     ({} joints × {} dims, {} fps, {})",
+                    t.n_joints(),
+                    t.dims(),
+                    t.fps(),
+                    t.units().as_str(),
+                    first.n_joints(),
+                    first.dims(),
+                    first.fps(),
+                    first.units().as_str()
+                )));
+            }
+        }
+        let pos: Vec<_> = parts.iter().map(|t| t.positions()).collect();
+        let conf: Vec<_> = parts.iter().map(|t| t.confidence()).collect();
+        let shape = |e: ndarray::ShapeError| GeomError::Shape(e.to_string());
+        Track::new(
+            ndarray::concatenate(ndarray::Axis(0), &pos).map_err(shape)?,
+            Some(ndarray::concatenate(ndarray::Axis(0), &conf).map_err(shape)?),
+            first.fps(),
+            first.units(),
+            first.skeleton().clone(),
+        )
+    }
+
     /// Frames `start..end` (end exclusive) as a new track.
     pub fn slice_frames(&self, start: usize, end: usize) -> Result<Self> {
         if start >= end || end > self.n_frames() {

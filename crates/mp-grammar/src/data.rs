@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 
 use mp_geom::io::bvh::{Bvh, BvhTrackParams};
 use mp_geom::Track;
-use ndarray::{concatenate, Axis};
 
 use crate::error::{GrammarError, Result};
 
@@ -115,40 +114,8 @@ pub fn read_motions(paths: &[PathBuf], frame_step: usize) -> Result<Motion> {
 /// Joins tracks in time. They need the same joints, dimensions, units and
 /// frame rate; the skeleton of the first is kept.
 pub fn concat_tracks(tracks: &[Track]) -> Result<Track> {
-    let first = tracks
-        .first()
-        .ok_or_else(|| GrammarError::Empty("no track to join".into()))?;
-    for (i, t) in tracks.iter().enumerate().skip(1) {
-        if t.n_joints() != first.n_joints()
-            || t.dims() != first.dims()
-            || t.units() != first.units()
-            || (t.fps() - first.fps()).abs() > 1e-9 * first.fps()
-        {
-            return Err(GrammarError::Invalid(format!(
-                "track {i} ({} joints × {} dims, {} fps, {}) cannot follow track 0 \
-                 ({} joints × {} dims, {} fps, {})",
-                t.n_joints(),
-                t.dims(),
-                t.fps(),
-                t.units().as_str(),
-                first.n_joints(),
-                first.dims(),
-                first.fps(),
-                first.units().as_str()
-            )));
-        }
-    }
-    let pos: Vec<_> = tracks.iter().map(|t| t.positions()).collect();
-    let conf: Vec<_> = tracks.iter().map(|t| t.confidence()).collect();
-    let pos = concatenate(Axis(0), &pos).map_err(|e| GrammarError::Invalid(e.to_string()))?;
-    let conf = concatenate(Axis(0), &conf).map_err(|e| GrammarError::Invalid(e.to_string()))?;
-    Ok(Track::new(
-        pos,
-        Some(conf),
-        first.fps(),
-        first.units(),
-        first.skeleton().clone(),
-    )?)
+    let parts: Vec<&Track> = tracks.iter().collect();
+    Ok(Track::concat(&parts)?)
 }
 
 /// Frame range of each take in a joined track.

@@ -13,6 +13,7 @@
 //! length of the video.
 
 use mp_geom::{Skeleton, Track, Units};
+use nalgebra::{Matrix3, Vector3};
 use ndarray::Array3;
 
 use crate::error::{PoseError, Result};
@@ -65,33 +66,6 @@ fn gradients(g: &[f64], size: usize) -> (Vec<f64>, Vec<f64>) {
     (gx, gy)
 }
 
-/// Solves the 3 × 3 system `a · x = b` (Gaussian elimination with partial
-/// pivoting); `None` when it is singular.
-fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
-    for k in 0..3 {
-        let p = (k..3).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if a[p][k].abs() < 1e-12 {
-            return None;
-        }
-        a.swap(k, p);
-        b.swap(k, p);
-        let (pivot, pb) = (a[k], b[k]);
-        for i in k + 1..3 {
-            let f = a[i][k] / pivot[k];
-            for (x, p) in a[i].iter_mut().zip(pivot).skip(k) {
-                *x -= f * p;
-            }
-            b[i] -= f * pb;
-        }
-    }
-    let mut x = [0.0; 3];
-    for k in (0..3).rev() {
-        let s: f64 = (k + 1..3).map(|j| a[k][j] * x[j]).sum();
-        x[k] = (b[k] - s) / a[k][k];
-    }
-    Some(x)
-}
-
 /// The global motion from `prev` to `cur` and the residual difference of
 /// each cell (what the global motion does not explain), both `size × size`
 /// row-major grids. The frame difference `cur − prev` is modelled as
@@ -100,22 +74,21 @@ fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
 pub fn global_motion(prev: &[f64], cur: &[f64], size: usize) -> (GlobalMotion, Vec<f64>) {
     let mean: Vec<f64> = prev.iter().zip(cur).map(|(a, b)| 0.5 * (a + b)).collect();
     let (gx, gy) = gradients(&mean, size);
-    let mut ata = [[0.0; 3]; 3];
-    let mut atb = [0.0; 3];
+    let mut ata = Matrix3::<f64>::zeros();
+    let mut atb = Vector3::<f64>::zeros();
     for k in 0..size * size {
-        let row = [-gx[k], -gy[k], 1.0];
-        let d = cur[k] - prev[k];
-        for i in 0..3 {
-            for j in 0..3 {
-                ata[i][j] += row[i] * row[j];
-            }
-            atb[i] += row[i] * d;
-        }
+        let row = Vector3::new(-gx[k], -gy[k], 1.0);
+        ata += row * row.transpose();
+        atb += row * (cur[k] - prev[k]);
     }
-    let [dx, dy, offset] = solve3(ata, atb).unwrap_or_else(|| {
-        // A flat picture: only the brightness offset can be fitted.
-        [0.0, 0.0, atb[2] / (size * size) as f64]
-    });
+    // Least squares through the pseudo-inverse: on a flat picture (no
+    // gradient) only the brightness offset is fitted, the shift stays 0.
+    let eps = 1e-12 * ata.trace().max(1.0);
+    let x = ata
+        .svd(true, true)
+        .solve(&atb, eps)
+        .unwrap_or_else(|_| Vector3::new(0.0, 0.0, atb[2] / (size * size) as f64));
+    let (dx, dy, offset) = (x[0], x[1], x[2]);
     let residual = (0..size * size)
         .map(|k| cur[k] - prev[k] + gx[k] * dx + gy[k] * dy - offset)
         .collect();

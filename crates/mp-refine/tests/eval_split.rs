@@ -5,14 +5,15 @@
 //! message, where the shared data are absent.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
+mod common;
+
 use std::path::Path;
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::io::npz::NpzOut;
 use mp_refine::eval_refine::{evaluate, RefineEvalParams, RefineEvalReport};
 use mp_refine::eval_split::{split_for, split_params, subjects_of, TrainingSubjects};
-use mp_refine::nets::{find_model_dir, RefineNets};
-use mp_refine::Concepts;
+use mp_refine::nets::find_model_dir;
 use ndarray::{concatenate, Array1, Axis};
 
 /// Writes an MSR Action3D npz (the shared file's keys) holding `n` clips of
@@ -83,10 +84,7 @@ fn files_without_subject_9_are_scored_on_the_subjects_the_networks_never_saw() {
     let path = mp_geom::data_or_return!(MsrAction3D::FILE);
     let shared = MsrAction3D::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let dir = find_model_dir().expect("models/refine/manifest.json is part of the repository");
-    let nets = RefineNets::load_default()
-        .unwrap_or_else(|e| panic!("loading {}: {e} (run `cargo xtask setup`)", dir.display()));
-    let concepts =
-        Concepts::from_json(&std::fs::read_to_string(dir.join("concepts.json")).unwrap()).unwrap();
+    let (nets, concepts) = common::shipped();
     let trained = TrainingSubjects::read(&dir).unwrap();
     assert_eq!(trained.seen(), vec![1, 3, 5, 7]);
     let tmp = tempfile::tempdir().unwrap();

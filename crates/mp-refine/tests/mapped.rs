@@ -4,12 +4,12 @@
 //! Skipped, with a message, where the shared data are absent.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
+mod common;
+
 use mp_geom::io::datasets::MediaPipeReference;
 use mp_geom::metrics::nanmean;
 use mp_refine::mapped::refine_any;
-use mp_refine::nets::{find_model_dir, RefineNets};
 use mp_refine::pipeline::{NetRefineParams, NetRefiner};
-use mp_refine::Concepts;
 
 #[test]
 fn blazepose_world_landmarks_are_refined_on_their_own_skeleton() {
@@ -19,11 +19,7 @@ fn blazepose_world_landmarks_are_refined_on_their_own_skeleton() {
         .world
         .slice_frames(0, 90)
         .unwrap();
-    let dir = find_model_dir().expect("models/refine is part of the repository");
-    let nets = RefineNets::load_default()
-        .unwrap_or_else(|e| panic!("loading {}: {e} (run `cargo xtask setup`)", dir.display()));
-    let concepts =
-        Concepts::from_json(&std::fs::read_to_string(dir.join("concepts.json")).unwrap()).unwrap();
+    let (nets, concepts) = common::shipped();
     let params = NetRefineParams::default();
     let refiner = NetRefiner::new(&nets, &concepts, &params).unwrap();
     let r = refine_any(&refiner, &world, None).unwrap();
