@@ -34,8 +34,9 @@ def plot(video: str, out: str) -> mp.Counts:
     if s.program is not None:
         ax.plot(t, s.program.execute()[:, j, 1], color="tab:pink", lw=1.5, label="program")
     for iv in counts.intervals:
-        b = iv["boundaries"]
-        for k, (a, e) in enumerate(zip(b[:-1], b[1:])):
+        # Each repetition's first and last frame (both included).
+        for k, (a, last) in enumerate(iv["repetitions"]):
+            e = last + 1
             ax.axvspan(a / track.fps, e / track.fps, color="tab:blue", alpha=0.08 + 0.08 * (k % 2))
             ax.text((a + e) / 2 / track.fps, 0.97, str(k + 1), transform=ax.get_xaxis_transform(),
                     ha="center", va="top", fontsize=8, color="tab:blue")

@@ -142,6 +142,7 @@ def people_rows(batch: dict):
         if status != "ok" or not people:
             continue
         for p in json.loads(people):
+            reps = p["repetitions"] or {}
             rows.append({
                 "path": str(path),
                 "person": p["id"],
@@ -151,11 +152,11 @@ def people_rows(batch: dict):
                 "frames_found": p["frames_found"],
                 "box": p["box"],
                 "analysed": p["analysed"],
-                "total_repetitions": p["total_repetitions"],
-                "counts": json.dumps(p["counts"]),
-                "signal": p["signal"],
-                "method": p["method"],
-                "confidence": p["confidence"],
+                "total_repetitions": reps.get("total"),
+                "counts": json.dumps([i["count"] for i in reps["intervals"]] if reps else None),
+                "signal": reps.get("signal"),
+                "method": reps.get("method"),
+                "confidence": reps.get("confidence"),
                 "program": p["program"],
                 "abstract_program": p["abstract_program"],
             })

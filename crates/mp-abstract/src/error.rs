@@ -45,6 +45,10 @@ pub enum AbstractError {
         column: usize,
         message: String,
     },
+    /// Counts whose parts disagree (a total that is not the sum of the
+    /// intervals' counts, a range that ends before it starts).
+    #[error("inconsistent counts: {0}")]
+    Inconsistent(String),
     /// A reference to something that does not exist (a loop index, an iteration).
     #[error("not found: {0}")]
     NotFound(String),

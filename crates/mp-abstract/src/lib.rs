@@ -26,6 +26,9 @@ pub mod repetition;
 pub mod selfmatch;
 pub mod synth;
 
+pub use count::json::{
+    CountedIntervalJson, ProgramLoopJson, RepetitionsJson, LOOPS_SCHEMA, LOOPS_VERSION,
+};
 pub use count::{
     count_repetitions, count_signals, ConfidenceModel, CountFeatures, CountMethod, CountParams,
     CountSignal, CountedInterval, Counts,

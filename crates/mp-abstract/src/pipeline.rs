@@ -72,7 +72,7 @@ impl AbstractParams {
 }
 
 /// Everything the analysis of one track produces.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Analysis {
     /// The concrete program.
     pub concrete: Program,

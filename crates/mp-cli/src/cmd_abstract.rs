@@ -168,11 +168,12 @@ pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
         print!("{}", print_with(&an.program, &PrintOptions::summary()));
     }
     eprintln!(
-        "{} frames → {} primitives → {} statements, {} loops; written to {}",
+        "{} frames → {} primitives → {} statements, {} program loop{}; written to {}",
         track.n_frames(),
         an.prims.len(),
         an.program.stmts.len(),
         an.loops.len(),
+        if an.loops.len() == 1 { "" } else { "s" },
         a.output.display()
     );
     Ok(())
@@ -192,11 +193,12 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
     )?;
     let c = &out.counts;
     if a.json {
-        let v = mp_pipeline::output::loops_json(&out);
+        let v = mp_pipeline::output::loops_file(&out);
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
     let fps = out.keypoints.track.fps();
+    println!("repetitions (counted; on a video, `mp edit --interval N` repeats interval N):");
     println!(
         "{:>4} {:>13} {:>9} {:>9} {:>9} {:>6} {:>11}",
         "#", "frames", "start_s", "end_s", "period_s", "count", "periodicity"
@@ -210,7 +212,7 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
             r.end_frame as f64 / fps,
             r.period_frames as f64 / fps,
             r.count,
-            r.confidence
+            r.periodicity
         );
     }
     println!(
@@ -222,13 +224,13 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
         c.method.as_str(),
         c.confidence
     );
-    // The loops of the abstract program (what --threshold and --max-body
-    // set, and `mp extend --loop N` numbers) are another thing than the
-    // repetitions counted above.
+    // The program loops (the abstract program's `for` statements, what
+    // --threshold and --max-body set, and `mp extend --loop N` numbers) are
+    // another thing than the repetitions counted above.
     if let Some(an) = &out.analysis {
         println!();
         println!(
-            "loops of the abstract program (`mp extend --loop N`; --threshold {}, --max-body {}):",
+            "program loops (the abstract program's `for` statements; `mp extend --loop N`; --threshold {}, --max-body {}):",
             a.opts.threshold, a.opts.max_body
         );
         if an.intervals.is_empty() {

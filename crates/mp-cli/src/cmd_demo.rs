@@ -101,37 +101,57 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
     };
     let summary = cmd_run::run_or_exit(input, &a.out, &Params::default(), a.quiet)?;
     let o = &summary.outcome;
-    if let Some(an) = &o.analysis {
-        println!(
-            "Loops of the abstract program ({}; ground truth of the performer in brackets):",
-            a.out.join("abstract.txt").display()
-        );
-        for i in &an.intervals {
-            println!(
-                "  frames {:<11} {} × body of {} primitives  [{}]",
-                mp_geom::frames_label(i.start_frame, i.end_frame),
-                i.count,
-                i.body_size,
-                truth(&perf, i.start_frame, i.end_frame)
-            );
-        }
-    }
     let c = &o.counts;
+    let repeated: Vec<_> = perf.segments.iter().filter(|s| s.reps.len() >= 2).collect();
+    let single: Vec<String> = perf
+        .segments
+        .iter()
+        .filter(|s| s.reps.len() == 1)
+        .map(|s| s.kind.name().to_string())
+        .collect();
     println!(
-        "Repetitions counted: {} (from the {}, {}, confidence {:.2}); the performer did {}",
+        "Repetitions counted: {} (from the {}, {}, confidence {:.2}); the performer repeated {}: {}{}",
         c.total,
         c.signal.as_str(),
         c.method.as_str(),
         c.confidence,
-        perf.segments.iter().map(|s| s.reps.len()).sum::<usize>()
+        repeated.iter().map(|s| s.reps.len()).sum::<usize>(),
+        repeated
+            .iter()
+            .map(|s| format!("{} × {}", s.reps.len(), s.kind.name()))
+            .collect::<Vec<_>>()
+            .join(", "),
+        if single.is_empty() {
+            String::new()
+        } else {
+            format!(" (and one {}: a single movement)", single.join(", one "))
+        }
     );
-    for i in &c.intervals {
+    for (k, i) in c.intervals.iter().enumerate() {
         println!(
-            "  frames {:<11} {} repetitions  [{}]",
+            "  interval {}: frames {:<11} {} repetition{}  [{}]",
+            k + 1,
             mp_geom::frames_label(i.start_frame, i.end_frame),
             i.count,
+            if i.count == 1 { "" } else { "s" },
             truth(&perf, i.start_frame, i.end_frame)
         );
+    }
+    if let Some(an) = &o.analysis {
+        println!(
+            "Program loops, the `for` statements of the abstract program ({}; ground truth of the performer in brackets):",
+            a.out.join("abstract.txt").display()
+        );
+        for (k, i) in an.intervals.iter().enumerate() {
+            println!(
+                "  loop {}: frames {:<11} {} iterations of a body of {} primitives  [{}]",
+                k + 1,
+                mp_geom::frames_label(i.start_frame, i.end_frame),
+                i.iterations,
+                i.body_size,
+                truth(&perf, i.start_frame, i.end_frame)
+            );
+        }
     }
     println!();
     if !a.quiet {

@@ -119,6 +119,9 @@ pub fn run_or_exit(input: Input, out: &Path, params: &Params, quiet: bool) -> Re
     Ok(res?)
 }
 
+/// Counted intervals `mp run` prints before "and N more".
+const PRINTED_INTERVALS: usize = 10;
+
 /// Prints the counts, the programs, the stage timings and the files.
 pub fn print_summary(s: &RunSummary, out: &Path) {
     let o = &s.outcome;
@@ -126,7 +129,7 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
     let fps = o.keypoints.track.fps();
     match &o.analysis {
         Some(an) => println!(
-            "{} frames × {} joints → {} segments ({} primitives), {} loop{} in the abstract program",
+            "{} frames × {} joints → {} segments ({} primitives); the abstract program has {} program loop{}",
             an.concrete.n_frames(),
             an.concrete.n_joints(),
             an.concrete.n_segments(),
@@ -147,15 +150,22 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
         c.method.as_str(),
         c.confidence
     );
-    for (i, iv) in c.intervals.iter().enumerate() {
+    for (i, iv) in c.intervals.iter().enumerate().take(PRINTED_INTERVALS) {
         println!(
-            "  loop {}: frames {:<11} ({:.2}–{:.2} s)  {} repetitions, period {:.2} s",
+            "  interval {}: frames {:<11} ({:.2}–{:.2} s)  {} repetition{}, period {:.2} s",
             i + 1,
             mp_geom::frames_label(iv.start_frame, iv.end_frame),
             iv.start_frame as f64 / fps,
             iv.end_frame as f64 / fps,
             iv.count,
+            if iv.count == 1 { "" } else { "s" },
             iv.period_frames as f64 / fps
+        );
+    }
+    if c.intervals.len() > PRINTED_INTERVALS {
+        println!(
+            "  and {} more intervals (every one in loops.json and `mp loops`)",
+            c.intervals.len() - PRINTED_INTERVALS
         );
     }
     print_people(o);

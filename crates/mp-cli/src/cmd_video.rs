@@ -11,22 +11,28 @@ use mp_video::{EditChange, EditParams, InterpMethod, InterpParams, PredictMethod
 
 /// Arguments of `mp edit`.
 #[derive(Args, Debug)]
-#[command(group(clap::ArgGroup::new("change").required(true).args(["iterations", "add", "remove"])))]
+#[command(group(clap::ArgGroup::new("change").required(true).args(["count", "add", "remove"])))]
 pub struct EditArgs {
     /// Input video.
     pub video: PathBuf,
-    /// Which loop, numbered from 1 as `mp run` and the report print them
-    /// (`counted[I - 1]` of `mp run`'s loops.json).
-    #[arg(long = "loop", default_value_t = 1, value_name = "I")]
-    pub loop_number: usize,
-    /// Set the loop's count to N repetitions.
-    #[arg(long)]
-    pub iterations: Option<usize>,
-    /// Add K iterations.
-    #[arg(long)]
+    /// Which interval of repetitions, numbered from 1 as `mp run`, `mp loops`
+    /// and the report print them (`repetitions.intervals[I - 1]` of
+    /// `mp run`'s loops.json).
+    #[arg(
+        long = "interval",
+        alias = "loop",
+        default_value_t = 1,
+        value_name = "I"
+    )]
+    pub interval: usize,
+    /// Set the interval's count to N repetitions.
+    #[arg(long, alias = "iterations", value_name = "N")]
+    pub count: Option<usize>,
+    /// Add K repetitions.
+    #[arg(long, value_name = "K")]
     pub add: Option<usize>,
-    /// Remove K iterations.
-    #[arg(long)]
+    /// Remove K repetitions.
+    #[arg(long, value_name = "K")]
     pub remove: Option<usize>,
     /// Output video (mp4).
     #[arg(short, long)]
@@ -42,13 +48,14 @@ pub struct EditArgs {
     pub json: bool,
 }
 
-/// `mp edit`: a loop of a video repeated more or fewer times.
+/// `mp edit`: the repetitions of a video's counted interval made more or
+/// fewer.
 pub fn edit_cmd(a: &EditArgs) -> Result<()> {
-    let change = match (a.iterations, a.add, a.remove) {
-        (Some(n), _, _) => EditChange::Iterations(n),
+    let change = match (a.count, a.add, a.remove) {
+        (Some(n), _, _) => EditChange::Count(n),
         (_, Some(k), _) => EditChange::Add(k),
         (_, _, Some(k)) => EditChange::Remove(k),
-        _ => bail!("one of --iterations, --add, --remove is needed"),
+        _ => bail!("one of --count, --add, --remove is needed"),
     };
     let params = EditParams {
         seam_search: a.seam_search,
@@ -57,7 +64,7 @@ pub fn edit_cmd(a: &EditArgs) -> Result<()> {
     };
     let r = mp_video::edit_video(
         &a.video,
-        a.loop_number,
+        a.interval,
         change,
         &params,
         &Params::default(),
@@ -70,16 +77,17 @@ pub fn edit_cmd(a: &EditArgs) -> Result<()> {
     }
     let fps = r.fps;
     println!(
-        "loop {}: frames {} ({} repetitions); the iteration at frames {} is closest to the mean",
-        r.loop_number,
+        "interval {}: frames {} ({} repetitions); the repetition at frames {} is closest to the mean",
+        r.interval_number,
         mp_geom::frames_label(r.interval.0, r.interval.1),
         r.count_before,
-        mp_geom::frames_label(r.iteration.0, r.iteration.1)
+        mp_geom::frames_label(r.repetition.0, r.repetition.1)
     );
     println!(
-        "{} {} iteration(s) of frames {} (seam cost {:.2}); {} → {} frames ({:.2} → {:.2} s) written to {}",
+        "{} {} repetition{} of frames {} (seam cost {:.2}); {} → {} frames ({:.2} → {:.2} s) written to {}",
         if r.change >= 0 { "added" } else { "removed" },
         r.change.unsigned_abs(),
+        if r.change.unsigned_abs() == 1 { "" } else { "s" },
         mp_geom::frames_label(r.segment.0, r.segment.1),
         r.seam_cost,
         r.frames_in,
@@ -200,7 +208,7 @@ pub fn predict_video_cmd(
     .with_context(|| format!("predicting {}", video.display()))?;
     if r.used != r.method {
         eprintln!(
-            "no loop or period found: the {} continuation is used",
+            "no repetition or period found: the {} continuation is used",
             r.used.as_str()
         );
     }

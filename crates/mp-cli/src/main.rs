@@ -42,13 +42,13 @@ enum Command {
     Abstract(cmd_abstract::AbstractArgs),
     /// Repetitive intervals of a track, with iterations and counts.
     Loops(cmd_abstract::LoopsArgs),
-    /// Change a loop's iteration count and execute (or write) the edited program.
+    /// Change a program loop's iteration count and execute (or write) the edited program.
     Extend(cmd_abstract::ExtendArgs),
     /// Stochastic execution of an abstract program with a seed.
     Sample(cmd_abstract::SampleArgs),
     /// Predict future frames of a track, or continue a video by unrolling its last loop (--seconds).
     Predict(cmd_abstract::PredictArgs),
-    /// Repeat a counted loop of a video more or fewer times, on its own frames.
+    /// More or fewer repetitions in a counted interval of a video, on its own frames.
     Edit(cmd_video::EditArgs),
     /// Raise a video's frame rate 2, 4 or 8 times with frames guided by the motion program.
     Interpolate(cmd_video::InterpolateArgs),

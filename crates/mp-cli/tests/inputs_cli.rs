@@ -12,8 +12,9 @@ fn period_s(args: &[&str]) -> f64 {
     let (out, _) = ok(args);
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let fps = v["fps"].as_f64().unwrap();
-    let iv = &v["intervals"][0];
-    let frames = iv["boundaries"][1].as_f64().unwrap() - iv["boundaries"][0].as_f64().unwrap();
+    let iv = &v["repetitions"]["intervals"][0];
+    let first = &iv["repetitions"][0];
+    let frames = first[1].as_f64().unwrap() + 1.0 - first[0].as_f64().unwrap();
     frames / fps
 }
 

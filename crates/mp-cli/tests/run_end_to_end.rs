@@ -146,17 +146,24 @@ fn check_outputs(
     let loops: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("loops.json")).unwrap()).unwrap();
     assert_eq!(loops["frames"], frames);
-    let intervals = loops["intervals"].as_array().unwrap();
-    let counts = loops["counts"].as_array().unwrap();
-    assert_eq!(intervals.len(), counts.len());
+    let reps = &loops["repetitions"];
+    let intervals = reps["intervals"].as_array().unwrap();
+    let mut total = 0;
     for iv in intervals {
-        let end = iv["end_frame"].as_u64().unwrap() as usize;
-        assert!(end <= frames);
-        assert_eq!(
-            iv["boundaries"].as_array().unwrap().len(),
-            iv["iterations"].as_u64().unwrap() as usize + 1
+        let (first, last) = (
+            iv["first_frame"].as_u64().unwrap() as usize,
+            iv["last_frame"].as_u64().unwrap() as usize,
         );
+        assert!(first <= last && last < frames);
+        let count = iv["count"].as_u64().unwrap() as usize;
+        total += count;
+        // Every repetition's [first, last], inside the interval, in order.
+        let r = iv["repetitions"].as_array().unwrap();
+        assert_eq!(r.len(), count);
+        assert_eq!(r[0][0].as_u64().unwrap() as usize, first);
+        assert_eq!(r[count - 1][1].as_u64().unwrap() as usize, last);
     }
+    assert_eq!(reps["total"].as_u64().unwrap() as usize, total);
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
     let d = report_data(&html);
     assert_eq!(d["frames"], frames);

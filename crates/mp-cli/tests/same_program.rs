@@ -49,10 +49,10 @@ fn fit_abstract_loops_and_run_agree() {
     let written: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(tmp.path().join("run/loops.json")).unwrap())
             .unwrap();
-    assert_eq!(printed["total_repetitions"], written["total_repetitions"]);
-    assert_eq!(printed["intervals"], written["intervals"]);
+    assert_eq!(printed["repetitions"], written["repetitions"]);
+    assert_eq!(printed["program_loops"], written["program_loops"]);
     // The performer does 4 jumping jacks, 3 squats and 3 arm circles in a row.
-    assert_eq!(written["total_repetitions"], 10, "{written}");
+    assert_eq!(written["repetitions"]["total"], 10, "{written}");
 
     // A fixed λ is a different program: the option is honoured.
     mp(&[

@@ -122,23 +122,24 @@ fn errors_name_what_is_wrong() {
     };
     let out = dir.path().join("x.mp4");
 
-    // No loop 99: the message gives the loops there are and the numbering.
+    // No interval 99: the message gives the intervals there are and the
+    // numbering.
     let err = run_err(
         mp().arg("edit")
             .arg(&input)
-            .args(["--loop", "99", "--add", "1", "-o"])
+            .args(["--interval", "99", "--add", "1", "-o"])
             .arg(&out),
     );
-    assert!(err.contains("no loop 99"), "{err}");
+    assert!(err.contains("no interval 99"), "{err}");
     assert!(err.contains("numbered from 1"), "{err}");
-    // Loop 0 does not exist either: loops are numbered from 1.
+    // Interval 0 does not exist either: intervals are numbered from 1.
     let err = run_err(
         mp().arg("edit")
             .arg(&input)
-            .args(["--loop", "0", "--add", "1", "-o"])
+            .args(["--interval", "0", "--add", "1", "-o"])
             .arg(&out),
     );
-    assert!(err.contains("no loop 0"), "{err}");
+    assert!(err.contains("no interval 0"), "{err}");
 
     // Factors below 2, and factors that are not 2, 4 or 8.
     for f in ["0", "1", "3", "16"] {
@@ -223,7 +224,7 @@ fn a_video_without_a_person_is_a_clear_error() {
             .arg(&out),
     );
     assert!(
-        err.contains("no person found") || err.contains("no counted loop"),
+        err.contains("no person found") || err.contains("has no repetitions"),
         "{err}"
     );
     assert!(!out.exists());

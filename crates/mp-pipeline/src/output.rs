@@ -2,14 +2,15 @@
 //! video and report — every file written through the folder's staging area,
 //! so a cancelled run leaves only complete files.
 
-use mp_abstract::Analysis;
+use mp_abstract::{Analysis, ProgramLoopJson, RepetitionsJson};
+use mp_geom::PersonId;
 use mp_geom::{CancelToken, Track};
 use mp_pose::video::{VideoReader, VideoWriter};
 use mp_report::draw::{draw_skeleton, SkeletonStyle, View};
 use mp_report::outdir::check_cancel;
 use mp_report::raster::{pixmap_to_rgb, rgb_to_pixmap};
 use mp_report::OutputDir;
-use serde_json::json;
+use serde::Serialize;
 
 use crate::error::{PipelineError, Result};
 use crate::keypoints::OverlayFrames;
@@ -19,62 +20,88 @@ use crate::Outcome;
 /// preset, and smaller files on this kind of footage).
 pub const OVERLAY_PRESET: &str = "veryfast";
 
-/// The content of `loops.json`: the counts a user gets (`total_repetitions`,
-/// one entry of `intervals` and `counts` per counted interval, the signal and
-/// method that decided, a confidence) and the loops of the abstract program,
-/// for the top-level person (`person`: the main person, or the one asked
-/// for); then `people`, one entry per tracked person (empty for a track file
-/// and the single-person pipeline): `id`, `main`, `first_frame`,
-/// `last_frame`, `frames_found`, `box` (mean box `[x0, y0, x1, y1]`, px),
-/// `analysed`, and for those analysed `total_repetitions`, `counts`,
-/// `intervals`, `signal`, `method`, `confidence` (frames of the video).
-pub fn loops_json(outcome: &Outcome) -> serde_json::Value {
+/// The content of `loops.json` (layout [`mp_abstract::LOOPS_VERSION`],
+/// documented in `docs/LOOPS_JSON.md`). Every frame range is inclusive
+/// (`first_frame`–`last_frame`), in frames of the video.
+#[derive(Debug, Clone, Serialize)]
+pub struct LoopsFile {
+    /// `mp-loops`.
+    pub schema: &'static str,
+    /// [`mp_abstract::LOOPS_VERSION`].
+    pub version: u32,
+    /// Frame rate.
+    pub fps: f64,
+    /// Frames of the recording.
+    pub frames: usize,
+    /// Whose counts the top level holds: the main person, or the one asked
+    /// for; null for a track file and the single-person pipeline.
+    pub person: Option<PersonId>,
+    /// What was counted.
+    pub repetitions: RepetitionsJson,
+    /// The `for` statements of the abstract program.
+    pub program_loops: Vec<ProgramLoopJson>,
+    /// One entry per tracked person (empty for a track file and the
+    /// single-person pipeline).
+    pub people: Vec<PersonEntry>,
+}
+
+/// One tracked person's entry of `loops.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct PersonEntry {
+    /// The person's id.
+    pub id: PersonId,
+    /// Whether the top-level results are this person's.
+    pub main: bool,
+    /// First video frame where the person was tracked.
+    pub first_frame: usize,
+    /// Last video frame where the person was tracked.
+    pub last_frame: usize,
+    /// Frames with a pose.
+    pub frames_found: usize,
+    /// Mean box `[x0, y0, x1, y1]`, px.
+    #[serde(rename = "box")]
+    pub mean_box: Option<[f64; 4]>,
+    /// Whether the person was analysed (seen long enough, and chosen).
+    pub analysed: bool,
+    /// The person's repetitions; null when not analysed.
+    pub repetitions: Option<RepetitionsJson>,
+}
+
+/// `loops.json` of an outcome.
+pub fn loops_file(outcome: &Outcome) -> LoopsFile {
     let track = &outcome.keypoints.track;
-    let counts = &outcome.counts;
-    let people: Vec<serde_json::Value> = outcome
-        .people
-        .iter()
-        .map(|p| {
-            let mut v = json!({
-                "id": p.id,
-                "main": p.main,
-                "first_frame": p.first_frame,
-                "last_frame": p.last_frame,
-                "frames_found": p.frames_found,
-                "box": p.mean_box,
-                "analysed": p.counts.is_some(),
-            });
-            if let (Some(c), Some(obj)) = (&p.counts, v.as_object_mut()) {
-                obj.insert("total_repetitions".into(), json!(c.total));
-                obj.insert(
-                    "counts".into(),
-                    json!(c.intervals.iter().map(|i| i.count).collect::<Vec<_>>()),
-                );
-                obj.insert("intervals".into(), json!(c.repetitive_intervals()));
-                obj.insert("signal".into(), json!(c.signal.as_str()));
-                obj.insert("method".into(), json!(c.method.as_str()));
-                obj.insert("confidence".into(), json!(c.confidence));
-                obj.insert("periodicity".into(), json!(c.periodicity));
-            }
-            v
-        })
-        .collect();
-    json!({
-        "fps": track.fps(),
-        "frames": track.n_frames(),
-        "person": outcome.keypoints.person,
-        "total_repetitions": counts.total,
-        "counts": counts.intervals.iter().map(|i| i.count).collect::<Vec<_>>(),
-        "intervals": counts.repetitive_intervals(),
-        "method": counts.method.as_str(),
-        "signal": counts.signal.as_str(),
-        "confidence": counts.confidence,
-        "periodicity": counts.periodicity,
-        "confidence_features": counts.features,
-        "counted": counts.intervals,
-        "program_loops": outcome.analysis.as_ref().map(|a| a.intervals.clone()).unwrap_or_default(),
-        "people": people,
-    })
+    LoopsFile {
+        schema: mp_abstract::LOOPS_SCHEMA,
+        version: mp_abstract::LOOPS_VERSION,
+        fps: track.fps(),
+        frames: track.n_frames(),
+        person: outcome.keypoints.person,
+        repetitions: RepetitionsJson::new(&outcome.counts),
+        program_loops: outcome
+            .analysis
+            .as_ref()
+            .map(|a| a.intervals.iter().map(ProgramLoopJson::new).collect())
+            .unwrap_or_default(),
+        people: outcome
+            .people
+            .iter()
+            .map(|p| PersonEntry {
+                id: p.id,
+                main: p.main,
+                first_frame: p.first_frame,
+                last_frame: p.last_frame,
+                frames_found: p.frames_found,
+                mean_box: p.mean_box,
+                analysed: p.counts.is_some(),
+                repetitions: p.counts.as_ref().map(RepetitionsJson::new),
+            })
+            .collect(),
+    }
+}
+
+/// [`loops_file`] as a JSON value.
+pub fn loops_json(outcome: &Outcome) -> serde_json::Value {
+    serde_json::to_value(loops_file(outcome)).unwrap_or(serde_json::Value::Null)
 }
 
 /// Writes `track.npz` (with every tracked person along a person axis when
@@ -133,7 +160,7 @@ pub fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<String>>
     }
     put(
         "loops.json",
-        serde_json::to_string_pretty(&loops_json(outcome))?.as_bytes(),
+        serde_json::to_string_pretty(&loops_file(outcome))?.as_bytes(),
     )?;
     Ok(files)
 }

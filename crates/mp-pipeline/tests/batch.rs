@@ -56,7 +56,7 @@ fn track_folder(dir: &Path) -> PathBuf {
 
 fn total_of(loops_json: &Path) -> usize {
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(loops_json).unwrap()).unwrap();
-    v["total_repetitions"].as_u64().unwrap() as usize
+    v["repetitions"]["total"].as_u64().unwrap() as usize
 }
 
 fn by_name<'a>(items: &'a [ItemReport], name: &str) -> &'a ItemReport {

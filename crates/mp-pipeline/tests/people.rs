@@ -101,7 +101,7 @@ fn each_person_gets_their_own_programs_and_count() {
         .find(|e| e["id"].as_u64() == Some(other.id as u64))
         .unwrap();
     assert_eq!(
-        entry["total_repetitions"].as_u64().unwrap() as usize,
+        entry["repetitions"]["total"].as_u64().unwrap() as usize,
         other.counts.as_ref().unwrap().total
     );
     assert_eq!(entry["box"].as_array().unwrap().len(), 4);

@@ -21,6 +21,9 @@ pub struct PyPerson {
     inner: Person,
 }
 
+/// What a person pickles through: id, first frame, track bytes.
+type PersonState<'py> = (PersonId, usize, Bound<'py, PyBytes>);
+
 #[pymethods]
 impl PyPerson {
     /// The person's id (1, 2, … in order of appearance).
@@ -70,10 +73,30 @@ impl PyPerson {
         self.inner == other.inner
     }
 
+    /// A person from its pickled state (id, first frame, track bytes).
+    #[staticmethod]
+    fn _from_state(id: PersonId, first_frame: usize, track: &[u8]) -> PyResult<Self> {
+        Ok(PyPerson {
+            inner: Person {
+                id,
+                first_frame,
+                track: mp_geom::io::track_from_bincode(track).map_err(errors::geom)?,
+            },
+        })
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, PersonState<'py>)> {
+        let py = slf.py();
+        let p = &slf.get().inner;
+        let track = mp_geom::io::track_to_bincode(&p.track).map_err(errors::geom)?;
+        let from_state = py.get_type::<PyPerson>().getattr("_from_state")?;
+        Ok((from_state, (p.id, p.first_frame, PyBytes::new(py, &track))))
+    }
+
     fn __repr__(&self) -> String {
         let p = &self.inner;
         format!(
-            "Person(id={}, frames {}..={}, found on {} frames)",
+            "Person(id={}, frames {}–{}, found on {} frames)",
             p.id,
             p.first_frame,
             p.last_frame(),

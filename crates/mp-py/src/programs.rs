@@ -1,13 +1,15 @@
 //! Programs and counts: `Program` (concrete), `AbstractProgram`, `Counts`,
 //! `Summary` of a run.
 
-use mp_abstract::{Analysis, Counts};
+use mp_abstract::{
+    Analysis, Counts, ProgramLoopJson, RepetitionsJson, LOOPS_SCHEMA, LOOPS_VERSION,
+};
 use mp_concrete::{ExecParams, Program};
 use mp_geom::PersonId;
 use mp_pipeline::Outcome;
 use numpy::{PyArray3, ToPyArray};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyBytes, PyDict, PyList};
 
 use crate::errors;
 use crate::track::PyTrack;
@@ -170,8 +172,46 @@ pub struct PyAbstract {
     pub(crate) inner: Analysis,
 }
 
+/// An analysis as JSON text (its primitives are internally tagged, which
+/// only a self-describing format reads back; JSON keeps every number exact).
+pub(crate) fn analysis_to_json(a: &Analysis) -> PyResult<String> {
+    serde_json::to_string(a).map_err(|e| errors::MpError::new_err(e.to_string()))
+}
+
+/// An analysis from [`analysis_to_json`]'s text.
+pub(crate) fn analysis_from_json(text: &str) -> PyResult<Analysis> {
+    serde_json::from_str(text).map_err(|e| {
+        errors::ParamError::new_err(format!("not the bytes of an abstract program: {e}"))
+    })
+}
+
 #[pymethods]
 impl PyAbstract {
+    /// The abstract program with the analysis it came from, as bytes (what
+    /// it pickles through).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        Ok(PyBytes::new(py, analysis_to_json(&self.inner)?.as_bytes()))
+    }
+
+    /// An abstract program from `AbstractProgram.to_bytes`'s output.
+    #[staticmethod]
+    fn from_bytes(data: &[u8]) -> PyResult<Self> {
+        let text = std::str::from_utf8(data).map_err(|e| {
+            errors::ParamError::new_err(format!("not the bytes of an abstract program: {e}"))
+        })?;
+        Ok(PyAbstract {
+            inner: analysis_from_json(text)?,
+        })
+    }
+
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let py = slf.py();
+        let from_bytes = py.get_type::<PyAbstract>().getattr("from_bytes")?;
+        Ok((from_bytes, (slf.get().to_bytes(py)?,)))
+    }
+
     /// The abstract program in its text form.
     #[getter]
     fn text(&self) -> String {
@@ -192,21 +232,19 @@ impl PyAbstract {
         }
     }
 
-    /// The loops as frame intervals: dicts with `start_frame`, `end_frame`,
-    /// `iterations`, `body_size`, `boundaries`.
+    /// The program loops (its `for` statements) as frame ranges: dicts
+    /// with `first_frame`, `last_frame` (inclusive), `iterations`,
+    /// `body_primitives`, `score` and `iteration_frames` (`[first, last]`
+    /// of each iteration) — the entries of `loops.json`'s `program_loops`.
     #[getter]
-    fn loops<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let list = PyList::empty(py);
-        for iv in &self.inner.intervals {
-            let d = PyDict::new(py);
-            d.set_item("start_frame", iv.start_frame)?;
-            d.set_item("end_frame", iv.end_frame)?;
-            d.set_item("iterations", iv.iterations)?;
-            d.set_item("body_size", iv.body_size)?;
-            d.set_item("boundaries", iv.boundaries.clone())?;
-            list.append(d)?;
-        }
-        Ok(list)
+    fn program_loops<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let loops: Vec<ProgramLoopJson> = self
+            .inner
+            .intervals
+            .iter()
+            .map(ProgramLoopJson::new)
+            .collect();
+        to_python(py, &json_value(&loops)?)
     }
 
     fn __repr__(&self) -> String {
@@ -218,12 +256,16 @@ impl PyAbstract {
     }
 }
 
-/// Repetition counts: `total`, `intervals` (dicts with `start_frame`,
-/// `end_frame`, `period_frames`, `count`, `cycles`, `boundaries`,
-/// `confidence`), the `signal` (`keypoints` or `frames`) and `method`
-/// (`period`, `intervals`, `none`) that decided, and a `confidence`; for a
-/// video with several people tracked, `person` (whose counts these are) and
-/// `people` (every tracked person's entry of `loops.json`).
+/// Repetition counts: `total`, `intervals` (dicts as in `loops.json`'s
+/// `repetitions.intervals`: `first_frame`, `last_frame` (inclusive),
+/// `count`, `period_frames`, `period_s`, `cycles`, `periodicity`,
+/// `repetitions` (`[first, last]` of each)), the `signal` (`keypoints` or
+/// `frames`) and `method` (`period`, `intervals`, `none`) that decided, and
+/// a `confidence`; for a video with several people tracked, `person` (whose
+/// counts these are) and `people` (every tracked person's entry of
+/// `loops.json`). `to_json()` gives the `loops.json` document (without
+/// program loops), `Counts.from_json` reads it back, or reads a
+/// `loops.json` that `mp run` wrote.
 #[pyclass(name = "Counts", module = "motion_programs", frozen)]
 pub struct PyCounts {
     pub(crate) inner: Counts,
@@ -233,36 +275,19 @@ pub struct PyCounts {
     person: Option<PersonId>,
 }
 
-/// The keys of a person's entry that only analysed people have; the others
-/// get them as None, so every entry has the same keys.
-const ANALYSED_KEYS: [&str; 7] = [
-    "total_repetitions",
-    "counts",
-    "intervals",
-    "signal",
-    "method",
-    "confidence",
-    "periodicity",
-];
-
 /// Every tracked person's entry, as `loops.json`'s `people` list (the same
-/// function writes it), each with every key.
+/// function writes it; `repetitions` is None for people not analysed).
 pub(crate) fn people_entries(outcome: &Outcome) -> Vec<serde_json::Value> {
     let mut v = mp_pipeline::output::loops_json(outcome);
-    let list = match v.get_mut("people").map(serde_json::Value::take) {
+    match v.get_mut("people").map(serde_json::Value::take) {
         Some(serde_json::Value::Array(list)) => list,
         _ => Vec::new(),
-    };
-    list.into_iter()
-        .map(|mut e| {
-            if let Some(obj) = e.as_object_mut() {
-                for k in ANALYSED_KEYS {
-                    obj.entry(k).or_insert(serde_json::Value::Null);
-                }
-            }
-            e
-        })
-        .collect()
+    }
+}
+
+/// A value as JSON, errors as `MpError`.
+fn json_value<T: serde::Serialize>(x: &T) -> PyResult<serde_json::Value> {
+    serde_json::to_value(x).map_err(|e| errors::MpError::new_err(e.to_string()))
 }
 
 /// JSON values as Python objects (dicts, lists, numbers, None).
@@ -286,49 +311,79 @@ impl PyCounts {
 
     /// The top-level counts of an analysis, with every tracked person's entry.
     pub(crate) fn of_outcome(outcome: &Outcome) -> Self {
+        Self::new(
+            outcome.counts.clone(),
+            people_entries(outcome),
+            outcome.keypoints.person,
+        )
+    }
+
+    /// Counts with `loops.json`'s people entries and whose counts they are.
+    pub(crate) fn new(
+        inner: Counts,
+        people: Vec<serde_json::Value>,
+        person: Option<PersonId>,
+    ) -> Self {
         PyCounts {
-            inner: outcome.counts.clone(),
-            people: people_entries(outcome),
-            person: outcome.keypoints.person,
+            inner,
+            people,
+            person,
         }
     }
 }
 
 #[pymethods]
 impl PyCounts {
-    /// The counts with their people, as JSON (what they pickle through).
-    fn _state(&self) -> PyResult<String> {
+    /// The counts as the `loops.json` document (`schema`, `version`, `fps`,
+    /// `frames`, `person`, `repetitions`, `people`; no program loops).
+    fn to_json(&self) -> PyResult<String> {
         let v = serde_json::json!({
-            "counts": self.inner,
-            "people": self.people,
+            "schema": LOOPS_SCHEMA,
+            "version": LOOPS_VERSION,
+            "fps": self.inner.fps,
+            "frames": self.inner.frames,
             "person": self.person,
+            "repetitions": RepetitionsJson::new(&self.inner),
+            "people": self.people,
         });
-        serde_json::to_string(&v).map_err(|e| errors::MpError::new_err(e.to_string()))
+        serde_json::to_string_pretty(&v).map_err(|e| errors::MpError::new_err(e.to_string()))
     }
 
-    /// Counts from the output of `Counts.to_json` (or of their pickled state).
+    /// Counts from the output of `Counts.to_json`, or from a `loops.json`
+    /// that `mp run` or `mp loops --json` wrote.
     #[staticmethod]
     fn from_json(text: &str) -> PyResult<Self> {
-        let bad = |e: serde_json::Error| {
-            errors::ParamError::new_err(format!("not the JSON of Counts: {e}"))
+        let bad = |e: String| {
+            errors::ParamError::new_err(format!("not the JSON of repetition counts: {e}"))
         };
-        let mut v: serde_json::Value = serde_json::from_str(text).map_err(bad)?;
-        if v.get("counts").is_none() {
-            v = serde_json::json!({ "counts": v });
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+        match v.get("version").and_then(serde_json::Value::as_u64) {
+            Some(x) if x == u64::from(LOOPS_VERSION) => {}
+            Some(x) => {
+                return Err(bad(format!(
+                    "version {x}, this version of mp reads version {LOOPS_VERSION}"
+                )))
+            }
+            None => return Err(bad("no `version` key".into())),
         }
-        let mut take = |k: &str| v.get_mut(k).map(serde_json::Value::take);
-        let counts: Counts =
-            serde_json::from_value(take("counts").unwrap_or_default()).map_err(bad)?;
-        let people = match take("people") {
-            Some(p) => serde_json::from_value(p).map_err(bad)?,
-            None => Vec::new(),
+        let field = |k: &str| v.get(k).cloned().unwrap_or(serde_json::Value::Null);
+        let fps: f64 =
+            serde_json::from_value(field("fps")).map_err(|e| bad(format!("fps: {e}")))?;
+        let frames: usize =
+            serde_json::from_value(field("frames")).map_err(|e| bad(format!("frames: {e}")))?;
+        let reps: RepetitionsJson = serde_json::from_value(field("repetitions"))
+            .map_err(|e| bad(format!("repetitions: {e}")))?;
+        let inner = reps
+            .to_counts(frames, fps)
+            .map_err(|e| bad(e.to_string()))?;
+        let people = match v.get("people") {
+            Some(serde_json::Value::Array(p)) => p.clone(),
+            _ => Vec::new(),
         };
-        let person = match take("person") {
-            Some(p) => serde_json::from_value(p).map_err(bad)?,
-            None => None,
-        };
+        let person =
+            serde_json::from_value(field("person")).map_err(|e| bad(format!("person: {e}")))?;
         Ok(PyCounts {
-            inner: counts,
+            inner,
             people,
             person,
         })
@@ -337,15 +392,16 @@ impl PyCounts {
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
         let py = slf.py();
         let from_json = py.get_type::<PyCounts>().getattr("from_json")?;
-        Ok((from_json, (slf.get()._state()?,)))
+        Ok((from_json, (slf.get().to_json()?,)))
     }
 
     /// Every tracked person of a video (empty for a track and the
     /// single-person pipeline): dicts with `id`, `main`, `first_frame`,
     /// `last_frame`, `frames_found`, `box` (mean box `[x0, y0, x1, y1]`,
-    /// px), `analysed`, and `total_repetitions`, `counts`, `intervals`,
-    /// `signal`, `method`, `confidence` (None for people not analysed: seen
-    /// too briefly); frames are the video's. The entries of `loops.json`.
+    /// px), `analysed`, and `repetitions` (as `Counts.to_json()`'s
+    /// `repetitions`: `total`, `intervals`, `signal`, `method`,
+    /// `confidence`, …; None for people not analysed: seen too briefly);
+    /// frames are the video's. The entries of `loops.json`.
     #[getter]
     fn people<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(py, &serde_json::Value::Array(self.people.clone()))
@@ -404,28 +460,16 @@ impl PyCounts {
         self.inner.fps
     }
 
-    /// The counted intervals.
+    /// The counted intervals: dicts with `first_frame`, `last_frame`
+    /// (inclusive), `count`, `period_frames`, `period_s`, `cycles`,
+    /// `periodicity` and `repetitions` (`[first, last]` of each), as in
+    /// `loops.json`.
     #[getter]
-    fn intervals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let list = PyList::empty(py);
-        for iv in &self.inner.intervals {
-            let d = PyDict::new(py);
-            d.set_item("start_frame", iv.start_frame)?;
-            d.set_item("end_frame", iv.end_frame)?;
-            d.set_item("period_frames", iv.period_frames)?;
-            d.set_item("cycles", iv.cycles)?;
-            d.set_item("count", iv.count)?;
-            d.set_item("boundaries", iv.boundaries.clone())?;
-            d.set_item("confidence", iv.confidence)?;
-            list.append(d)?;
-        }
-        Ok(list)
-    }
-
-    /// The counts as JSON (the `counted` part of `loops.json`).
-    fn to_json(&self) -> PyResult<String> {
-        serde_json::to_string_pretty(&self.inner)
-            .map_err(|e| errors::MpError::new_err(e.to_string()))
+    fn intervals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(
+            py,
+            &json_value(&RepetitionsJson::new(&self.inner).intervals)?,
+        )
     }
 
     fn __repr__(&self) -> String {

@@ -4,16 +4,19 @@
 use std::path::PathBuf;
 use std::sync::Mutex;
 
+use mp_abstract::{Analysis, Counts};
+use mp_geom::{People, PersonId, Track};
 use mp_grammar::data::Motion;
 use mp_grammar::model::find_symbols;
 use mp_grammar::{PoseDistanceParams, SymbolParams};
-use mp_pipeline::{Analyser, CancelToken, Input, RunSummary, Silent};
+use mp_pipeline::{Analyser, CancelToken, Input, Outcome, RunSummary, Silent};
 use pyo3::prelude::*;
-use pyo3::types::PyList;
+use pyo3::types::PyBytes;
+use serde::{Deserialize, Serialize};
 
 use crate::errors;
 use crate::people::PyPeople;
-use crate::programs::{PyAbstract, PyCounts, PyProgram};
+use crate::programs::{analysis_from_json, analysis_to_json, PyAbstract, PyCounts, PyProgram};
 use crate::track::PyTrack;
 
 /// What `run` produced: `counts`, `track`, `program` and `abstract_program`
@@ -22,70 +25,218 @@ use crate::track::PyTrack;
 /// frames), `seconds` (wall time); for a video with several people tracked,
 /// `person` (whose results these are), `people` (every tracked person's
 /// entry of `loops.json`), `tracked` (their keypoints, `People`) and
-/// `program_of(id)` / `abstract_program_of(id)`.
+/// `program_of(id)` / `abstract_program_of(id)`. Pickles (`to_bytes` /
+/// `Summary.from_bytes`).
 #[pyclass(name = "Summary", module = "motion_programs", frozen)]
 pub struct PySummary {
-    inner: RunSummary,
+    track: Track,
+    tracked: Option<People>,
+    person: Option<PersonId>,
+    analysis: Option<Analysis>,
+    counts: Counts,
+    /// `loops.json`'s `people` entries.
+    people: Vec<serde_json::Value>,
+    /// Every analysed person's programs.
+    analyses: Vec<(PersonId, Analysis)>,
+    found_fraction: f64,
+    /// (stage name, seconds, frames).
+    stages: Vec<(String, f64, usize)>,
+    seconds: f64,
+    report: Option<PathBuf>,
+    files: Vec<String>,
     out_dir: Option<PathBuf>,
 }
 
+/// What a summary pickles through: the track and people as their own
+/// binary forms, the analyses and people entries as JSON text, the rest as
+/// they are.
+#[derive(Serialize, Deserialize)]
+struct SummaryState {
+    track: Vec<u8>,
+    tracked: Option<Vec<u8>>,
+    person: Option<PersonId>,
+    /// JSON (see `programs::analysis_to_json`).
+    analysis: Option<String>,
+    counts: Counts,
+    people: String,
+    analyses: Vec<(PersonId, String)>,
+    found_fraction: f64,
+    stages: Vec<(String, f64, usize)>,
+    seconds: f64,
+    report: Option<PathBuf>,
+    files: Vec<String>,
+    out_dir: Option<PathBuf>,
+}
+
+/// Magic and version of a pickled summary.
+const SUMMARY_MAGIC: &[u8] = b"mp-summary";
+const SUMMARY_VERSION: u32 = 1;
+
 impl PySummary {
-    fn person_analysis(&self, id: mp_geom::PersonId) -> Option<&mp_pipeline::Analysis> {
-        self.inner
-            .outcome
+    /// The summary of an analysis written to `out_dir` (or nothing written).
+    fn of_outcome(
+        outcome: Outcome,
+        report: Option<PathBuf>,
+        files: Vec<String>,
+        out_dir: Option<PathBuf>,
+    ) -> Self {
+        let people = crate::programs::people_entries(&outcome);
+        let stages = outcome
+            .stages
+            .iter()
+            .map(|s| (s.stage.name().to_string(), s.time.as_secs_f64(), s.frames))
+            .collect();
+        let analyses = outcome
             .people
             .iter()
-            .find(|p| p.id == id)
-            .and_then(|p| p.analysis.as_ref())
+            .filter_map(|p| p.analysis.clone().map(|a| (p.id, a)))
+            .collect();
+        let seconds = outcome.total.as_secs_f64();
+        let kp = outcome.keypoints;
+        PySummary {
+            track: kp.track,
+            tracked: kp.people,
+            person: kp.person,
+            analysis: outcome.analysis,
+            counts: outcome.counts,
+            people,
+            analyses,
+            found_fraction: kp.found_fraction,
+            stages,
+            seconds,
+            report,
+            files,
+            out_dir,
+        }
+    }
+
+    fn of_run(s: RunSummary, out_dir: PathBuf) -> Self {
+        Self::of_outcome(s.outcome, s.report, s.files, Some(out_dir))
+    }
+
+    fn person_analysis(&self, id: PersonId) -> Option<&Analysis> {
+        self.analyses.iter().find(|(p, _)| *p == id).map(|(_, a)| a)
     }
 }
 
 #[pymethods]
 impl PySummary {
+    /// The summary as bytes (what it pickles through).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let state = SummaryState {
+            track: mp_geom::io::track_to_bincode(&self.track).map_err(errors::geom)?,
+            tracked: self
+                .tracked
+                .as_ref()
+                .map(mp_geom::io::people::people_to_bincode)
+                .transpose()
+                .map_err(errors::geom)?,
+            person: self.person,
+            analysis: self.analysis.as_ref().map(analysis_to_json).transpose()?,
+            counts: self.counts.clone(),
+            people: serde_json::to_string(&self.people)
+                .map_err(|e| errors::MpError::new_err(e.to_string()))?,
+            analyses: self
+                .analyses
+                .iter()
+                .map(|(id, a)| Ok((*id, analysis_to_json(a)?)))
+                .collect::<PyResult<_>>()?,
+            found_fraction: self.found_fraction,
+            stages: self.stages.clone(),
+            seconds: self.seconds,
+            report: self.report.clone(),
+            files: self.files.clone(),
+            out_dir: self.out_dir.clone(),
+        };
+        let b = mp_geom::io::binary::encode(SUMMARY_MAGIC, SUMMARY_VERSION, &state)
+            .map_err(errors::geom)?;
+        Ok(PyBytes::new(py, &b))
+    }
+
+    /// A summary from `Summary.to_bytes`'s output.
+    #[staticmethod]
+    fn from_bytes(data: &[u8]) -> PyResult<Self> {
+        let s: SummaryState = mp_geom::io::binary::decode(
+            SUMMARY_MAGIC,
+            SUMMARY_VERSION,
+            data,
+            std::path::Path::new("summary bytes"),
+        )
+        .map_err(errors::geom)?;
+        let people = serde_json::from_str(&s.people)
+            .map_err(|e| errors::ParamError::new_err(format!("summary bytes: people: {e}")))?;
+        Ok(PySummary {
+            track: mp_geom::io::track_from_bincode(&s.track).map_err(errors::geom)?,
+            tracked: s
+                .tracked
+                .as_deref()
+                .map(mp_geom::io::people::people_from_bincode)
+                .transpose()
+                .map_err(errors::geom)?,
+            person: s.person,
+            analysis: s.analysis.as_deref().map(analysis_from_json).transpose()?,
+            counts: s.counts,
+            people,
+            analyses: s
+                .analyses
+                .iter()
+                .map(|(id, a)| Ok((*id, analysis_from_json(a)?)))
+                .collect::<PyResult<_>>()?,
+            found_fraction: s.found_fraction,
+            stages: s.stages,
+            seconds: s.seconds,
+            report: s.report,
+            files: s.files,
+            out_dir: s.out_dir,
+        })
+    }
+
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let py = slf.py();
+        let from_bytes = py.get_type::<PySummary>().getattr("from_bytes")?;
+        Ok((from_bytes, (slf.get().to_bytes(py)?,)))
+    }
+
     /// Repetition counts (what `loops.json` holds).
     #[getter]
     fn counts(&self) -> PyCounts {
-        PyCounts::of_outcome(&self.inner.outcome)
+        PyCounts::new(self.counts.clone(), self.people.clone(), self.person)
     }
 
     /// Every tracked person (empty for a track and the single-person
     /// pipeline): the dicts of `Counts.people`, `loops.json`'s `people` list.
     #[getter]
     fn people<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let list = crate::programs::people_entries(&self.inner.outcome);
-        crate::programs::to_python(py, &serde_json::Value::Array(list))
+        crate::programs::to_python(py, &serde_json::Value::Array(self.people.clone()))
     }
 
     /// The id of the person the top-level results follow, or None (a track,
     /// the single-person pipeline, nobody found).
     #[getter]
-    fn person(&self) -> Option<mp_geom::PersonId> {
-        self.inner.outcome.keypoints.person
+    fn person(&self) -> Option<PersonId> {
+        self.person
     }
 
     /// Every tracked person's keypoints (`People`), or None (a track, the
     /// single-person pipeline).
     #[getter]
     fn tracked(&self) -> Option<PyPeople> {
-        self.inner
-            .outcome
-            .keypoints
-            .people
-            .clone()
-            .map(PyPeople::new)
+        self.tracked.clone().map(PyPeople::new)
     }
 
     /// The concrete program of person `id` (over their own frames, from
     /// their `first_frame`; the main person's over the whole video), or
     /// None when they were not analysed.
-    fn program_of(&self, id: mp_geom::PersonId) -> Option<PyProgram> {
+    fn program_of(&self, id: PersonId) -> Option<PyProgram> {
         self.person_analysis(id).map(|a| PyProgram {
             inner: a.concrete.clone(),
         })
     }
 
     /// The abstract program of person `id` (see `program_of`), or None.
-    fn abstract_program_of(&self, id: mp_geom::PersonId) -> Option<PyAbstract> {
+    fn abstract_program_of(&self, id: PersonId) -> Option<PyAbstract> {
         self.person_analysis(id)
             .map(|a| PyAbstract { inner: a.clone() })
     }
@@ -93,13 +244,13 @@ impl PySummary {
     /// The keypoints.
     #[getter]
     fn track(&self) -> PyTrack {
-        PyTrack::new(self.inner.outcome.keypoints.track.clone())
+        PyTrack::new(self.track.clone())
     }
 
     /// The concrete program, or None.
     #[getter]
     fn program(&self) -> Option<PyProgram> {
-        self.inner.outcome.analysis.as_ref().map(|a| PyProgram {
+        self.analysis.as_ref().map(|a| PyProgram {
             inner: a.concrete.clone(),
         })
     }
@@ -107,9 +258,7 @@ impl PySummary {
     /// The abstract program, or None.
     #[getter]
     fn abstract_program(&self) -> Option<PyAbstract> {
-        self.inner
-            .outcome
-            .analysis
+        self.analysis
             .as_ref()
             .map(|a| PyAbstract { inner: a.clone() })
     }
@@ -117,7 +266,7 @@ impl PySummary {
     /// The report page, or None.
     #[getter]
     fn report(&self) -> Option<PathBuf> {
-        self.inner.report.clone()
+        self.report.clone()
     }
 
     /// The output folder (None for an analysis that wrote nothing).
@@ -129,47 +278,43 @@ impl PySummary {
     /// Frames analysed.
     #[getter]
     fn frames(&self) -> usize {
-        self.inner.outcome.keypoints.track.n_frames()
+        self.track.n_frames()
     }
 
     /// Files written, relative to the output folder.
     #[getter]
     fn files(&self) -> Vec<String> {
-        self.inner.files.clone()
+        self.files.clone()
     }
 
     /// Fraction of frames with a person.
     #[getter]
     fn person_found(&self) -> f64 {
-        self.inner.outcome.keypoints.found_fraction
+        self.found_fraction
     }
 
     /// Time per stage: a list of (name, seconds, frames).
     #[getter]
-    fn stages<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let l = PyList::empty(py);
-        for s in &self.inner.outcome.stages {
-            l.append((s.stage.name(), s.time.as_secs_f64(), s.frames))?;
-        }
-        Ok(l)
+    fn stages(&self) -> Vec<(String, f64, usize)> {
+        self.stages.clone()
     }
 
     /// Wall time of the run, seconds.
     #[getter]
     fn seconds(&self) -> f64 {
-        self.inner.outcome.total.as_secs_f64()
+        self.seconds
     }
 
     fn __repr__(&self) -> String {
         format!(
             "Summary({} repetitions, {} files in {}, {:.2} s)",
-            self.inner.outcome.counts.total,
-            self.inner.files.len(),
+            self.counts.total,
+            self.files.len(),
             self.out_dir
                 .as_ref()
                 .map(|d| d.display().to_string())
                 .unwrap_or_else(|| "no folder".into()),
-            self.inner.outcome.total.as_secs_f64()
+            self.seconds
         )
     }
 }
@@ -208,10 +353,7 @@ pub fn run(
     let s = py
         .detach(|| mp_pipeline::run(input, &dir, &params, &Silent, &CancelToken::new()))
         .map_err(errors::pipeline)?;
-    Ok(PySummary {
-        inner: s,
-        out_dir: Some(out_dir),
-    })
+    Ok(PySummary::of_run(s, out_dir))
 }
 
 /// The input a Python call names: a `Track`, or the path of a video or track file.
@@ -279,14 +421,7 @@ impl PyAnalyser {
                 a.analyse(input, &Silent, &CancelToken::new())
             })
             .map_err(errors::pipeline)?;
-        Ok(PySummary {
-            inner: RunSummary {
-                outcome,
-                report: None,
-                files: Vec::new(),
-            },
-            out_dir: None,
-        })
+        Ok(PySummary::of_outcome(outcome, None, Vec::new(), None))
     }
 
     /// As `run()`, with this analyser's parameters and loaded model.
@@ -306,10 +441,7 @@ impl PyAnalyser {
                 a.run(input, &dir, &Silent, &CancelToken::new())
             })
             .map_err(errors::pipeline)?;
-        Ok(PySummary {
-            inner: s,
-            out_dir: Some(out_dir),
-        })
+        Ok(PySummary::of_run(s, out_dir))
     }
 }
 

@@ -65,9 +65,14 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
     assert a.concrete == prog
     c = mp.count(t)
     cli = json.loads(run_cli(mp_bin, "loops", performer, "--json"))
-    assert c.total == cli["total_repetitions"] == 10
-    assert [i["count"] for i in c.intervals] == cli["counts"] == [4, 3, 3]
-    assert c.method == cli["method"] and c.signal == "keypoints"
+    reps = cli["repetitions"]
+    assert c.total == reps["total"] == 10
+    assert [i["count"] for i in c.intervals] == [i["count"] for i in reps["intervals"]] == [4, 3, 3]
+    assert c.intervals == reps["intervals"]
+    assert c.method == reps["method"] and c.signal == "keypoints"
+    # The program loops are the abstract program's `for` statements, another thing.
+    assert a.program_loops == cli["program_loops"]
+    assert all(len(l["iteration_frames"]) == l["iterations"] for l in a.program_loops)
     # Free parameters: a C0 program's start poses are the previous segment's ends.
     _, j, d = t.positions.shape
     assert prog.n_numbers - prog.n_params == d * j * (prog.n_segments - 1)
@@ -125,8 +130,8 @@ def test_counts_from_video_equal_the_cli(data, mp_bin):
     c = mp.count(str(video))
     assert abs(c.total - truth) <= 1, c
     cli = json.loads(run_cli(mp_bin, "loops", video, "--json"))
-    assert c.total == cli["total_repetitions"]
-    assert c.signal == cli["signal"]
+    assert c.total == cli["repetitions"]["total"]
+    assert c.signal == cli["repetitions"]["signal"]
 
 
 def test_run_writes_what_mp_run_writes(performer, mp_bin, tmp_path):
@@ -137,7 +142,17 @@ def test_run_writes_what_mp_run_writes(performer, mp_bin, tmp_path):
     assert (tmp_path / "py" / "program.txt").read_text() == (tmp_path / "cli" / "program.txt").read_text()
     a = json.loads((tmp_path / "py" / "loops.json").read_text())
     b = json.loads((tmp_path / "cli" / "loops.json").read_text())
-    assert a["total_repetitions"] == b["total_repetitions"] == s.counts.total
+    assert a["repetitions"] == b["repetitions"]
+    assert a["repetitions"]["total"] == s.counts.total
+    # A loops.json reads back as the counts it holds.
+    back = mp.Counts.from_json((tmp_path / "py" / "loops.json").read_text())
+    assert (back.total, back.intervals, back.confidence) == (s.counts.total, s.counts.intervals, s.counts.confidence)
+    # A summary pickles with everything it holds.
+    s2 = pickle.loads(pickle.dumps(s))
+    assert (s2.counts.total, s2.files, s2.report, s2.out_dir) == (s.counts.total, s.files, s.report, s.out_dir)
+    assert s2.program == s.program and s2.stages == s.stages
+    assert s2.abstract_program.text == s.abstract_program.text
+    np.testing.assert_array_equal(s2.track.positions, s.track.positions)
     assert s.report is not None and s.program is not None
     assert [n for n, _, _ in s.stages][:2] == ["concrete", "abstract"]
 
@@ -295,6 +310,13 @@ def test_results_pickle_and_arrays_are_read_only(performer):
     c2 = pickle.loads(pickle.dumps(counts))
     assert (c2.total, c2.signal, c2.method, c2.confidence, c2.intervals) == (
         counts.total, counts.signal, counts.method, counts.confidence, counts.intervals)
+    ab = mp.abstract(t)
+    ab2 = pickle.loads(pickle.dumps(ab))
+    assert ab2.text == ab.text and ab2.program_loops == ab.program_loops and ab2.concrete == prog
+    with pytest.raises(mp.MpError, match="summary"):
+        mp.Summary.from_bytes(b"not a summary")
+    with pytest.raises(mp.ParamError, match="version"):
+        mp.Counts.from_json('{"version": 1, "total_repetitions": 3}')
     # Through a process pool, as a data-science workflow would.
     import multiprocessing as mpc
     import operator

@@ -141,6 +141,9 @@ def test_people_pickle_and_files(two_people, tmp_path):
         assert a == b and a.box == b.box
         np.testing.assert_array_equal(a.track.positions, b.track.positions)
     assert mp.People.from_bytes(people.to_bytes()) == people
+    # One person pickles on its own too.
+    one = people[people.main]
+    assert pickle.loads(pickle.dumps(one)) == one
     with pytest.raises(mp.TrackError):
         mp.People.from_bytes(b"garbage")
     # The file forms: npz with a person axis, JSON, the binary form.
@@ -171,8 +174,8 @@ def test_count_gives_every_person(data, two_counts, two_people):
     assert [p["main"] for p in people].count(True) == 1
     main = next(p for p in people if p["main"])
     assert c.person == main["id"] == two_people.main
-    assert c.total == main["total_repetitions"]
-    assert [i["count"] for i in c.intervals] == main["counts"]
+    assert c.total == main["repetitions"]["total"]
+    assert c.intervals == main["repetitions"]["intervals"]
     by_panel = {}
     for p, q in zip(people, two_people):
         # The tracker of extract(people=True) and of count() is the same.
@@ -180,10 +183,11 @@ def test_count_gives_every_person(data, two_counts, two_people):
         assert p["box"] == list(q.box)
         # Both were seen for the whole clip: both analysed, each from their own frames.
         assert p["analysed"], p
-        assert p["signal"] in ("keypoints", "frames") and p["method"] in ("period", "intervals", "none")
-        assert 0 <= p["confidence"] <= 1
-        assert sum(p["counts"]) == p["total_repetitions"]
-        by_panel[LEFT if centre_x(q) < PANEL_W else RIGHT] = p["total_repetitions"]
+        r = p["repetitions"]
+        assert r["signal"] in ("keypoints", "frames") and r["method"] in ("period", "intervals", "none")
+        assert 0 <= r["confidence"] <= 1
+        assert sum(i["count"] for i in r["intervals"]) == r["total"]
+        by_panel[LEFT if centre_x(q) < PANEL_W else RIGHT] = r["total"]
     # Each performer's repetitions are counted from their own motion.
     for rel, n in by_panel.items():
         assert abs(n - truth(data, rel)) <= 1, (rel, n, truth(data, rel), people)
@@ -192,12 +196,10 @@ def test_count_gives_every_person(data, two_counts, two_people):
 def test_people_equal_the_cli(mp_bin, two_panel, two_counts):
     c = two_counts
     cli = json.loads(run_cli(mp_bin, "loops", two_panel, "--json"))
-    assert cli["person"] == c.person and cli["total_repetitions"] == c.total
+    assert cli["person"] == c.person and cli["repetitions"]["total"] == c.total
     assert len(cli["people"]) == len(c.people) == 2
-    for a, b in zip(c.people, cli["people"]):
-        # The same entries; keys of analysed people only are None for the others here.
-        assert {k: v for k, v in a.items() if k in b} == b
-        assert all(a[k] is None for k in a if k not in b)
+    # The same entries.
+    assert c.people == cli["people"]
 
 
 def test_person_choice_on_a_video(two_panel, two_people):
@@ -208,8 +210,8 @@ def test_person_choice_on_a_video(two_panel, two_people):
     entries = {p["id"]: p for p in s.people}
     assert sorted(entries) == [1, 2] and entries[1]["main"] and not entries[2]["main"]
     assert entries[1]["analysed"] and not entries[2]["analysed"]
-    assert entries[2]["total_repetitions"] is None and entries[2]["counts"] is None
-    assert s.counts.total == entries[1]["total_repetitions"]
+    assert entries[2]["repetitions"] is None
+    assert s.counts.total == entries[1]["repetitions"]["total"]
     assert s.tracked == two_people
     np.testing.assert_array_equal(s.track.positions, two_people.track(1).positions)
     assert s.program_of(1) is not None and s.program_of(1) == s.program
@@ -238,3 +240,21 @@ def test_person_options_are_checked(performer, tmp_path):
         mp.extract(str(tmp_path / "x.mp4"), people=True, single_person=True)
     with pytest.raises(mp.ParamError, match="people=True"):
         mp.extract(str(tmp_path / "x.mp4"), people=True, model="movenet")
+
+
+def test_the_guide_example_runs(data, two_panel, tmp_path):
+    """docs/PYTHON.md's example, on real videos: a QUVA clip for `squats.mp4` and the two-panel
+    video for `gym.mp4`; every line runs, and what its comments say holds."""
+    import pathlib
+    import re
+    guide = (pathlib.Path(__file__).resolve().parents[3] / "docs/PYTHON.md").read_text()
+    code = re.search(r"## Example\n\n```python\n(.*?)```", guide, re.S).group(1)
+    code = (code.replace('"squats.mp4"', repr(str(data("quva_repetition/videos/023_fitness.mp4"))))
+                .replace('"gym.mp4"', repr(str(two_panel)))
+                .replace('"out/"', repr(str(tmp_path / "out"))))
+    scope = {}
+    exec(compile(code, "docs/PYTHON.md", "exec"), scope)
+    assert scope["track"].positions.shape[1:] == (17, 2)
+    assert scope["counts"].total == scope["summary"].counts.total == 7
+    assert scope["people"].ids == [1, 2]
+    assert (tmp_path / "out" / "report.html").is_file()

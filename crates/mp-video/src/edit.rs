@@ -1,13 +1,13 @@
-//! `mp edit`: a counted loop of a video repeated more or fewer times, on the
-//! video's own frames.
+//! `mp edit`: the repetitions of one counted interval of a video made more or
+//! fewer, on the video's own frames.
 //!
-//! Loop `i` is `counts.intervals[i]` of the pipeline's analysis (the
-//! `counted` list of `loops.json`), its iterations the windows between its
-//! `boundaries`. The full iteration whose keypoints and thumbnails are
-//! closest to the mean iteration (resampled to the period) is the one
-//! repeated (or, with its neighbours, removed). Each seam is placed where
+//! Interval `i` (from 1) is `counts.intervals[i - 1]` of the pipeline's
+//! analysis (`repetitions.intervals[i - 1]` of `loops.json`), its repetitions
+//! the windows between its `boundaries`. The full repetition whose keypoints
+//! and thumbnails are closest to the mean repetition (resampled to the
+//! period) is the one repeated (or, with its neighbours, removed). Each seam is placed where
 //! pose and pixels match best within [`EditParams::seam_search`] frames of
-//! the iteration's boundaries, and cross-faded over
+//! the repetition's boundaries, and cross-faded over
 //! [`EditParams::crossfade`] frames. Audio is dropped.
 
 use std::path::{Path, PathBuf};
@@ -20,21 +20,21 @@ use crate::error::{Result, VideoError};
 use crate::motion::{analyse_video, VideoMotion};
 use crate::plan::{render_to_file, Plan, PlanFrame, RenderParams};
 
-/// What to do with the loop's iterations.
+/// What to do with the interval's repetitions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EditChange {
     /// Set the count to this many repetitions.
-    Iterations(usize),
-    /// Add this many iterations.
+    Count(usize),
+    /// Add this many repetitions.
     Add(usize),
-    /// Remove this many iterations.
+    /// Remove this many repetitions.
     Remove(usize),
 }
 
 /// Parameters of an edit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EditParams {
-    /// Seams are searched within this many frames of an iteration's
+    /// Seams are searched within this many frames of a repetition's
     /// boundaries. Default 4.
     pub seam_search: usize,
     /// Frames cross-faded after each seam. Default 3.
@@ -78,21 +78,26 @@ impl EditParams {
     }
 }
 
-/// What an edit did.
+/// What an edit did. Frame ranges are `[start, end)` here; its JSON
+/// (`mp edit --json`) gives them as inclusive `[first, last]` pairs, as
+/// `loops.json` does.
 #[derive(Debug, Clone, Serialize)]
 pub struct EditReport {
-    /// The loop's number, from 1 as `mp run` and the report print it
-    /// (`loops.json`'s `counted[loop - 1]`).
-    pub loop_number: usize,
-    /// The loop's frames `[start, end)`.
+    /// The interval's number, from 1 as `mp run` and the report print it
+    /// (`loops.json`'s `repetitions.intervals[interval_number - 1]`).
+    pub interval_number: usize,
+    /// The interval's frames `[start, end)`.
+    #[serde(serialize_with = "inclusive")]
     pub interval: (usize, usize),
     /// Its repetitions before the edit.
     pub count_before: usize,
-    /// Iterations added (> 0) or removed (< 0).
+    /// Repetitions added (> 0) or removed (< 0).
     pub change: i64,
-    /// The iteration closest to the loop's mean `[start, end)`.
-    pub iteration: (usize, usize),
+    /// The repetition closest to the interval's mean `[start, end)`.
+    #[serde(serialize_with = "inclusive")]
+    pub repetition: (usize, usize),
     /// The frames repeated (or removed) once, seams included `[start, end)`.
+    #[serde(serialize_with = "inclusive")]
     pub segment: (usize, usize),
     /// Pose-and-pixel distance across the seam (1 ≈ two consecutive frames).
     pub seam_cost: f64,
@@ -109,8 +114,16 @@ pub struct EditReport {
     pub plan: Plan,
 }
 
-/// The full iterations of an interval (windows at least ¾ of the period long).
-fn iterations(iv: &CountedInterval) -> Vec<(usize, usize)> {
+/// `[start, end)` as the inclusive `[first, last]` of the JSON.
+fn inclusive<S: serde::Serializer>(
+    r: &(usize, usize),
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    [r.0, r.1.saturating_sub(1).max(r.0)].serialize(s)
+}
+
+/// The full repetitions of an interval (windows at least ¾ of the period long).
+fn repetitions(iv: &CountedInterval) -> Vec<(usize, usize)> {
     iv.boundaries
         .windows(2)
         .map(|w| (w[0], w[1]))
@@ -118,7 +131,7 @@ fn iterations(iv: &CountedInterval) -> Vec<(usize, usize)> {
         .collect()
 }
 
-/// Index (into `iters`) of the iteration closest to the mean iteration.
+/// Index (into `iters`) of the repetition closest to the mean repetition.
 fn closest_to_mean(m: &VideoMotion, iters: &[(usize, usize)], period: usize) -> usize {
     let samples = period.clamp(2, 120);
     let feats: Vec<Vec<Vec<f64>>> = iters
@@ -219,33 +232,34 @@ fn best_seam(
     best
 }
 
-/// The plan of an edit of `m`'s loop number `loop_number` (from 1, as
-/// `mp run` and the report number loops: `counts.intervals[loop_number - 1]`).
+/// The plan of an edit of `m`'s counted interval number `interval_number`
+/// (from 1, as `mp run` and the report number them:
+/// `counts.intervals[interval_number - 1]`).
 pub fn plan_edit(
     m: &VideoMotion,
-    loop_number: usize,
+    interval_number: usize,
     change: EditChange,
     params: &EditParams,
 ) -> Result<EditReport> {
     params.validate()?;
     m.require_person()?;
     let n = m.n_frames();
-    let iv = loop_number
+    let iv = interval_number
         .checked_sub(1)
         .and_then(|i| m.counts.intervals.get(i))
-        .ok_or(VideoError::NoLoop {
-            number: loop_number,
+        .ok_or(VideoError::NoInterval {
+            number: interval_number,
             available: m.counts.intervals.len(),
         })?;
     let k: i64 = match change {
-        EditChange::Iterations(x) => x as i64 - iv.count as i64,
+        EditChange::Count(x) => x as i64 - iv.count as i64,
         EditChange::Add(x) => x as i64,
         EditChange::Remove(x) => -(x as i64),
     };
-    let iters = iterations(iv);
+    let iters = repetitions(iv);
     if iters.is_empty() {
         return Err(VideoError::Edit(format!(
-            "loop {loop_number} has no full iteration"
+            "interval {interval_number} has no full repetition"
         )));
     }
     let chosen = closest_to_mean(m, &iters, iv.period_frames);
@@ -261,7 +275,7 @@ pub fn plan_edit(
         let max_frames = (params.max_output_s * m.fps()) as usize;
         if n + (k as usize).saturating_mul(len) > max_frames {
             return Err(VideoError::Edit(format!(
-                "{k} more iterations of {len} frames would make the video longer than {} s",
+                "{k} more repetitions of {len} frames would make the video longer than {} s",
                 params.max_output_s
             )));
         }
@@ -288,13 +302,13 @@ pub fn plan_edit(
         let kk = (-k) as usize;
         if kk >= iv.count {
             return Err(VideoError::Edit(format!(
-                "cannot remove {kk} of the {} repetitions of loop {loop_number}: at least one must stay",
+                "cannot remove {kk} of the {} repetitions of interval {interval_number}: at least one must stay",
                 iv.count
             )));
         }
         if kk > iters.len() {
             return Err(VideoError::Edit(format!(
-                "loop {loop_number} has {} full iterations, cannot remove {kk}",
+                "interval {interval_number} has {} full repetitions, cannot remove {kk}",
                 iters.len()
             )));
         }
@@ -318,11 +332,11 @@ pub fn plan_edit(
         cost = cst;
     }
     Ok(EditReport {
-        loop_number,
+        interval_number,
         interval: (iv.start_frame, iv.end_frame),
         count_before: iv.count,
         change: k,
-        iteration: (b0, b1),
+        repetition: (b0, b1),
         segment,
         seam_cost: cost,
         frames_in: n,
@@ -333,12 +347,12 @@ pub fn plan_edit(
     })
 }
 
-/// Analyses `input` as `mp run` does (with `analysis`), edits loop number
-/// `loop_number` (from 1, as `mp run` prints it) and writes the result to
-/// `output` (atomically).
+/// Analyses `input` as `mp run` does (with `analysis`), edits counted
+/// interval number `interval_number` (from 1, as `mp run` prints it) and
+/// writes the result to `output` (atomically).
 pub fn edit_video(
     input: &Path,
-    loop_number: usize,
+    interval_number: usize,
     change: EditChange,
     params: &EditParams,
     analysis: &Params,
@@ -346,7 +360,7 @@ pub fn edit_video(
 ) -> Result<EditReport> {
     params.validate()?;
     let m = analyse_video(input, analysis, None)?;
-    let mut report = plan_edit(&m, loop_number, change, params)?;
+    let mut report = plan_edit(&m, interval_number, change, params)?;
     let written = render_to_file(input, &report.plan, output, m.fps(), &params.render)?;
     report.frames_out = written;
     report.output = Some(output.to_path_buf());

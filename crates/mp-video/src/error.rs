@@ -17,12 +17,12 @@ pub enum VideoError {
     /// Concrete programs.
     #[error("program: {0}")]
     Program(String),
-    /// The loop asked for does not exist.
-    #[error("{}", no_loop_message(*.number, *.available))]
-    NoLoop {
-        /// The loop number asked for (from 1, as `mp run` prints loops).
+    /// The counted interval asked for does not exist.
+    #[error("{}", no_interval_message(*.number, *.available))]
+    NoInterval {
+        /// The interval number asked for (from 1, as `mp run` prints them).
         number: usize,
-        /// Loops found.
+        /// Counted intervals found.
         available: usize,
     },
     /// The interpolation factor is not supported.
@@ -89,14 +89,14 @@ impl VideoError {
     }
 }
 
-fn no_loop_message(number: usize, available: usize) -> String {
+fn no_interval_message(number: usize, available: usize) -> String {
     let have = match available {
-        0 => "the video has no counted loop (`mp run` finds no repetition)".to_string(),
-        1 => "the video has 1 counted loop: --loop 1".to_string(),
-        n => format!("the video has {n} counted loops: --loop 1 to {n}"),
+        0 => "the video has no repetitions (`mp run` counts none)".to_string(),
+        1 => "the video has 1 interval of repetitions: --interval 1".to_string(),
+        n => format!("the video has {n} intervals of repetitions: --interval 1 to {n}"),
     };
     format!(
-        "no loop {number}: {have}; loops are numbered from 1 as `mp run` and the report print them"
+        "no interval {number}: {have}; intervals are numbered from 1 as `mp run`, `mp loops` and the report print them"
     )
 }
 

@@ -3,11 +3,11 @@
 //! The programs and loops that `mp run` finds in a video, applied to the
 //! video's own frames:
 //!
-//! * [`edit`]: a counted loop repeated more or fewer times (`mp edit`): the
-//!   iteration closest to the loop's mean is repeated or removed, seams are
+//! * [`edit`]: more or fewer repetitions in a counted interval (`mp edit`):
+//!   the repetition closest to the interval's mean is repeated or removed, seams are
 //!   placed where pose and pixels match best within a few frames and
 //!   cross-faded.
-//! * [`predict`]: the video continued by unrolling its last loop on pixels
+//! * [`predict`]: the video continued by unrolling its last repetition on pixels
 //!   (`mp predict VIDEO --seconds S`), with the constant (frozen last frame)
 //!   and nearest-neighbour frame baselines.
 //! * [`interpolate`]: in-between frames from the program fitted on the

@@ -1,14 +1,14 @@
 //! `mp predict VIDEO --seconds S`: the video continued by unrolling its last
-//! loop on pixels.
+//! repetition on pixels.
 //!
-//! The last counted loop's final iteration is the cycle: its start is placed
+//! The last repetition of the last counted interval is the cycle: its start is placed
 //! where the frames before it match the video's last frames best (pose and
 //! pixels, within [`PredictParams::seam_search`] frames of one period
 //! earlier), so the cycle is phase-aligned with the end of the video; it is
 //! then played again and again, the last [`PredictParams::crossfade`] frames
 //! of each repeat faded into the frames one cycle earlier so that every seam
-//! joins frames that followed each other in the video. Without a counted
-//! loop in the observed frames, the dominant period of the keypoints (else of
+//! joins frames that followed each other in the video. Without counted
+//! repetitions in the observed frames, the dominant period of the keypoints (else of
 //! the frame thumbnails) is the cycle's length; without any, the
 //! nearest-neighbour continuation is used.
 //!
@@ -33,7 +33,7 @@ pub const MAX_SECONDS: f64 = 3600.0;
 /// How the future frames are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 pub enum PredictMethod {
-    /// Unroll the last counted loop (ours).
+    /// Unroll the last counted repetition (ours).
     #[default]
     Loop,
     /// Hold the last frame.
@@ -83,10 +83,11 @@ impl Default for PredictParams {
 pub struct PredictReport {
     /// The method asked for.
     pub method: PredictMethod,
-    /// The method used (`Nearest` when no loop was counted).
+    /// The method used (`Nearest` when nothing repeats).
     pub used: PredictMethod,
-    /// Where the cycle's length came from: `counted loop` (the last loop
-    /// of `loops.json`), `autocorrelation period` (no loop counted in the
+    /// Where the cycle's length came from: `counted repetitions` (the last
+    /// interval of `loops.json`'s repetitions), `autocorrelation period`
+    /// (no repetition counted in the
     /// observed frames: the dominant period of the keypoints, else of the
     /// frame thumbnails), `nearest frame` or `last frame`.
     pub source: &'static str,
@@ -132,12 +133,12 @@ fn nearest_cycle(m: &VideoMotion, min_lag: usize) -> Option<(usize, usize)> {
     best.map(|(j, _)| (j + 1, n))
 }
 
-/// The period of the last loop: the last counted loop's, else the dominant
+/// The period of the last repetition: the last counted interval's, else the dominant
 /// period of the keypoints (`mp_abstract::estimate_period`), else of the
 /// frame thumbnails.
 fn loop_period(m: &VideoMotion) -> Result<Option<(usize, &'static str)>> {
     if let Some(iv) = m.counts.intervals.last() {
-        return Ok(Some((iv.period_frames, "counted loop")));
+        return Ok(Some((iv.period_frames, "counted repetitions")));
     }
     let n = m.n_frames();
     let from = |t: &mp_geom::Track, p: &PeriodParams| -> Result<Option<usize>> {
@@ -175,7 +176,7 @@ pub fn plan_prediction(
     let mut used = method;
     let mut fade = 0;
     let mut source = match method {
-        PredictMethod::Loop => "counted loop",
+        PredictMethod::Loop => "counted repetitions",
         PredictMethod::Constant => "last frame",
         PredictMethod::Nearest => "nearest frame",
     };

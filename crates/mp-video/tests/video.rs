@@ -46,7 +46,7 @@ fn edit_adds_and_removes_one_repetition() {
         // Frame count: the repeated iteration's length, up to the seam adjustment.
         let n = frames(&out) as i64;
         let seg = (r.segment.1 - r.segment.0) as i64;
-        let iter = (r.iteration.1 - r.iteration.0) as i64;
+        let iter = (r.repetition.1 - r.repetition.0) as i64;
         assert_eq!(n, before.n_frames() as i64 + k * seg, "{r:?}");
         let slack = 2 * EditParams::default().seam_search as i64;
         assert!(
@@ -199,7 +199,7 @@ fn errors_are_typed() {
         &out,
     )
     .unwrap_err();
-    assert!(matches!(e, VideoError::NoLoop { number: 7, .. }), "{e}");
+    assert!(matches!(e, VideoError::NoInterval { number: 7, .. }), "{e}");
     // Removing every repetition.
     let e = edit_video(
         &input,
@@ -261,7 +261,7 @@ fn a_video_without_a_person_is_an_error() {
     )
     .unwrap_err();
     assert!(
-        matches!(e, VideoError::NoPerson(_) | VideoError::NoLoop { .. }),
+        matches!(e, VideoError::NoPerson(_) | VideoError::NoInterval { .. }),
         "{e}"
     );
     let e = predict_video(

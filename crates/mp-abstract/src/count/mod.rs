@@ -26,6 +26,7 @@
 use serde::{Deserialize, Serialize};
 
 mod confidence;
+pub mod json;
 mod span;
 
 pub use confidence::{ConfidenceModel, CountFeatures};
@@ -188,12 +189,14 @@ pub struct CountedInterval {
     pub count: usize,
     /// Frame where each repetition starts, plus `end_frame`.
     pub boundaries: Vec<usize>,
-    /// How periodic the interval is (autocorrelation or concordance at the period).
-    pub confidence: f64,
+    /// How periodic the interval is (autocorrelation or concordance at the
+    /// period, 0..1).
+    #[serde(alias = "confidence")]
+    pub periodicity: f64,
 }
 
 impl CountedInterval {
-    fn new(start: usize, end: usize, period: usize, confidence: f64) -> Self {
+    fn new(start: usize, end: usize, period: usize, periodicity: f64) -> Self {
         let period = period.max(1);
         let cycles = (end - start) as f64 / period as f64;
         let count = cycles.round().max(0.0) as usize;
@@ -209,7 +212,7 @@ impl CountedInterval {
             cycles,
             count,
             boundaries,
-            confidence,
+            periodicity,
         }
     }
 
@@ -223,7 +226,7 @@ impl CountedInterval {
             iterations: self.count,
             boundaries: self.boundaries.clone(),
             count: self.count,
-            score: self.confidence,
+            score: self.periodicity,
         }
     }
 }
