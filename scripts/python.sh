@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the Python package `motion_programs` (crates/mp-py, PyO3 + maturin) and installs it into the
-# project's virtual environment `.venv`, with numpy, pytest, matplotlib and Ray (Ray Data, pyarrow).
+# project's virtual environment `.venv`, with numpy, pytest, matplotlib, Ray (Ray Data, pyarrow), pandas,
+# pose-format and c3d (the tests read and write Parquet, `.pose` and C3D files with them).
 #   bash scripts/python.sh            # optimised wheel (cargo's release profile)
 #   bash scripts/python.sh dev        # the dev profile (what the test suite builds; shares its artifacts)
 # Idempotent: packages already installed are kept; the wheel is rebuilt incrementally.
@@ -13,10 +14,10 @@ if [ ! -x .venv/bin/python ]; then
   "$PY" -m venv .venv
 fi
 VPY=.venv/bin/python
-if ! "$VPY" -c "import maturin, numpy, pytest, ray, pyarrow, pandas, matplotlib" 2>/dev/null; then
-  echo "python: installing maturin, numpy, pytest, matplotlib, Ray into .venv"
+if ! "$VPY" -c "import maturin, numpy, pytest, ray, pyarrow, pandas, matplotlib, pose_format, c3d" 2>/dev/null; then
+  echo "python: installing maturin, numpy, pytest, matplotlib, Ray, pandas, pose-format, c3d into .venv"
   "$VPY" -m pip install -q --no-cache-dir --upgrade pip
-  "$VPY" -m pip install -q --no-cache-dir "maturin>=1.9,<2" "numpy>=1.21" pytest matplotlib "ray[data]>=2.40" pyarrow pandas
+  "$VPY" -m pip install -q --no-cache-dir "maturin>=1.9,<2" "numpy>=1.21" pytest matplotlib "ray[data]>=2.40" pyarrow pandas pose-format c3d
 fi
 WHEELS="target/wheels/$PROFILE"
 rm -rf "$WHEELS"

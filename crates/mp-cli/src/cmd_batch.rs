@@ -18,7 +18,7 @@ use crate::progress::ctrl_c_token;
 /// Arguments of `mp batch`.
 #[derive(Args, Debug)]
 pub struct BatchArgs {
-    /// A folder of videos and track files (npz, json, csv, npy, bvh, mpt; hidden files and subfolders are not read), or a text file listing inputs, one per line (`#` comments; relative paths relative to the list).
+    /// A folder of videos and track files (npz, json, csv, npy, bvh, mpt, c3d, parquet, pose; hidden files and subfolders are not read), or a text file listing inputs, one per line (`#` comments; relative paths relative to the list).
     pub input: PathBuf,
     /// Output folder: one folder per input (named after the file) and `manifest.jsonl`.
     #[arg(long, short)]

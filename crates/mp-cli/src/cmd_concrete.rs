@@ -14,7 +14,7 @@ use mp_pipeline::Params;
 /// Arguments of `mp fit`.
 #[derive(Args, Debug)]
 pub struct FitArgs {
-    /// Input keypoint track (npz, npy, json, csv, bvh, mpt, or an OpenPose folder).
+    /// Input keypoint track (npz, npy, json, csv, bvh, mpt, c3d, parquet, pose, or an OpenPose folder).
     pub track: PathBuf,
     #[command(flatten)]
     pub rate: crate::track_arg::RateOpt,

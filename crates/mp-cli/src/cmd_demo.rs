@@ -15,7 +15,7 @@ use crate::cmd_run;
 /// Arguments of `mp performer`.
 #[derive(Args, Debug)]
 pub struct PerformerArgs {
-    /// Output track (`.npz`, `.json` or `.csv`).
+    /// Output track (format by extension, as `mp_geom::io::write_track` writes; `.bvh` and `.c3d` with --3d).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Write the 3D track (metres) instead of the 2D one (pixels).

@@ -19,7 +19,7 @@ use mp_pose::SessionParams;
 pub struct ExtractArgs {
     /// Input video (anything FFmpeg decodes) or still image (.png, .jpg).
     pub video: PathBuf,
-    /// Output track (.npz, .json, .mpt or .csv); with several people, npz, JSON and .mpt hold everyone (the npz's single-track arrays hold the main person), CSV the main person.
+    /// Output track (.npz, .json, .mpt, .csv, .parquet or .pose; .c3d and .bvh with --world); with several people, npz, JSON, .mpt, .parquet and .pose hold everyone (the npz's single-track arrays hold the main person), CSV the main person.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Pose model: full, lite (BlazePose-33) or movenet (COCO-17).
@@ -105,6 +105,13 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
     if a.world && model == ModelChoice::MoveNet {
         bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
+    }
+    if !a.world && mp_geom::io::needs_3d(&a.output) {
+        bail!(
+            "{} holds 3D motion and keypoints are 2D pixels: add --world for BlazePose's 3D \
+             world coordinates (metres), or write .npz, .csv, .parquet or .pose",
+            a.output.display()
+        );
     }
     let people = !a.single_person
         && !a.world
@@ -197,11 +204,7 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
     } else {
         ex.people.clone()
     };
-    let csv = a
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-    if csv {
+    if !mp_geom::io::holds_people(&a.output) {
         let track = people
             .main_track()
             .with_context(|| format!("nobody was found in {}", a.video.display()))?;

@@ -12,7 +12,7 @@ use crate::progress::{ctrl_c_token, Bars};
 /// Arguments of `mp run`.
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// A video (mp4, mov, avi, webm, mkv, …) or a keypoint track (npz, json, csv, npy, bvh, OpenPose folder).
+    /// A video (mp4, mov, avi, webm, mkv, …) or a keypoint track (npz, json, csv, npy, bvh, mpt, c3d, parquet, pose, OpenPose folder).
     pub input: PathBuf,
     /// Output folder (created if needed).
     #[arg(long, short)]

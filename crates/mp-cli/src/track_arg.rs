@@ -22,7 +22,7 @@ pub struct RateOpt {
 const IMAGE_EXTENSIONS: [&str; 7] = ["png", "jpg", "jpeg", "bmp", "webp", "tif", "tiff"];
 
 /// Extensions of keypoint tracks.
-pub const TRACK_EXTENSIONS: [&str; 6] = ["npz", "npy", "json", "csv", "bvh", "mpt"];
+pub const TRACK_EXTENSIONS: [&str; 9] = mp_geom::io::TRACK_EXTENSIONS;
 
 fn extension(path: &Path) -> String {
     path.extension()
@@ -164,6 +164,9 @@ mod tests {
         assert!(is_image(Path::new("a/photo.JPG")));
         assert!(!is_image(Path::new("clip.mp4")));
         assert!(is_track_file(Path::new("motion.bvh")));
+        for f in ["take.c3d", "keypoints.parquet", "signs.pose"] {
+            assert!(is_track_file(Path::new(f)), "{f}");
+        }
         assert!(!is_track_file(Path::new("clip.mov")));
     }
 

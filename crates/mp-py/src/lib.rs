@@ -57,8 +57,9 @@ fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
 }
 
 /// Reads a keypoint track: the project's `.npz`/`.json`/`.mpt`, CSV, `.npy`,
-/// BVH, OpenPose folders. `fps`: the frame rate, over what the file states;
-/// by default the file's (a CSV `time` column, the project's formats, BVH),
+/// BVH, C3D, Parquet, pose-format `.pose`, OpenPose folders. `fps`: the frame
+/// rate, over what the file states; by default the file's (a CSV or Parquet
+/// `time` column, the project's formats, BVH, C3D, `.pose`),
 /// and 30 with a `UserWarning` for a file that states none.
 #[pyfunction]
 #[pyo3(signature = (path, fps = None))]

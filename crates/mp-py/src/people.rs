@@ -199,7 +199,8 @@ impl PyPeople {
     }
 
     /// Writes the people; the format follows the extension (`.npz` with a
-    /// person axis, `.json`, `.mpt`), through a temporary file and a rename.
+    /// person axis, `.json`, `.mpt`, `.parquet` with a `person` column,
+    /// `.pose`), through a temporary file and a rename.
     fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
         let p = &self.inner;
         py.detach(|| mp_geom::io::write_people(&path, p))
@@ -273,8 +274,9 @@ impl PyPeople {
 }
 
 /// Reads the people of a video: a people file (`.npz` with a person axis,
-/// `.json`, `.mpt`), or any track file as one person (id 1) over the whole
-/// track.
+/// `.json`, `.mpt`, a Parquet table with a `person` column, a `.pose` file
+/// with several people), or any track file as one person (id 1) over the
+/// whole track.
 #[pyfunction]
 pub fn read_people(py: Python<'_>, path: std::path::PathBuf) -> PyResult<PyPeople> {
     let p = py

@@ -193,7 +193,8 @@ impl PyTrack {
     }
 
     /// Writes the track; the format follows the extension (`.npz`, `.json`,
-    /// `.csv`, `.npy`, `.mpt`), through a temporary file and a rename.
+    /// `.csv`, `.mpt`, `.parquet`, `.pose`; `.bvh` and `.c3d` for 3D tracks
+    /// in metres), through a temporary file and a rename.
     fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
         let t = &self.inner;
         py.detach(|| mp_geom::io::write_track(&path, t))

@@ -94,15 +94,12 @@ pub struct ConceptsArgs {
     pub seed: u64,
 }
 
-/// Whether `p` names a track or BVH file (by extension).
+/// Whether `p` names a track file (by extension).
 fn is_track_file(p: &Path) -> bool {
-    matches!(
-        p.extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .as_deref(),
-        Some("bvh" | "npz" | "npy" | "json" | "csv")
-    )
+    p.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .is_some_and(|e| mp_geom::io::TRACK_EXTENSIONS.contains(&e.as_str()))
 }
 
 /// `mp concepts`.

@@ -100,7 +100,7 @@ fn is_time(name: &str) -> bool {
 /// The frame rate stated by `(frame, seconds)` pairs: the frames over the
 /// time from the first frame to the last. The times of one frame must
 /// agree and increase with the frame.
-fn rate_from_times(path: &Path, times: &[(usize, f64)]) -> Result<Option<f64>> {
+pub(crate) fn rate_from_times(path: &Path, times: &[(usize, f64)]) -> Result<Option<f64>> {
     let mut by_frame: Vec<(usize, f64)> = times.to_vec();
     by_frame.sort_by_key(|&(f, _)| f);
     by_frame.dedup_by(|b, a| a.0 == b.0 && a.1 == b.1);

@@ -15,9 +15,25 @@
 //!   AlphaPose result files (COCO-17).
 //! * [`bvh`]: BVH motion capture (hierarchy + channels, forward kinematics,
 //!   slicing, concatenation, writing).
+//! * [`bvh_export`]: BVH of a 3D joint-position track (a hierarchy from the
+//!   skeleton's bones, per-frame joint rotations).
+//! * [`c3d`]: C3D motion capture (the 3D points, through the `c3dio` crate).
+//! * [`parquet`]: Parquet tables, one row per frame × joint (× person),
+//!   through the `parquet` crate.
+//! * [`pose`]: the `.pose` files of the `pose-format` Python package.
 //! * [`read_track`] / [`write_track`]: one entry point that picks the format
 //!   from the extension and the content; [`read_people`] / [`write_people`]
 //!   the same for people (any single-track file reads as one person).
+//!
+//! | extension | read | written |
+//! |---|---|---|
+//! | `.npz`, `.json`, `.mpt` | the project's tracks and people; data sets (npz) | exactly |
+//! | `.npy` | a `(T, J, D)` array | — |
+//! | `.csv` | long or wide tables | wide, with `time` |
+//! | `.bvh` | forward kinematics | 3D tracks in metres ([`bvh_export`]) |
+//! | `.c3d` | 3D points, in metres | 3D tracks in metres (2D refused) |
+//! | `.parquet` | long tables (any writer); people with a `person` column | exactly, rate/units/skeleton in the metadata |
+//! | `.pose` | the body component; several people | one component, 32-bit floats |
 //!
 //! Every write goes to a temporary file in the destination folder that is
 //! renamed into place, so a crash never leaves a half-written file.
@@ -25,12 +41,16 @@
 mod atomic;
 pub mod binary;
 pub mod bvh;
+pub mod bvh_export;
+pub mod c3d;
 pub mod csv;
 pub mod datasets;
 pub mod native;
 pub mod npz;
 pub mod openpose;
+pub mod parquet;
 pub mod people;
+pub mod pose;
 
 pub use atomic::{abandon_partial_writes, write_atomic, PartialFile};
 pub use native::{track_from_bincode, track_to_bincode};
@@ -148,14 +168,7 @@ pub(crate) fn infer_skeleton(opts: &ReadOptions, n: usize, path: &Path) -> Resul
 /// exactly, else a custom skeleton with those names (generic when the names
 /// are `j0`, `j1`, …).
 pub fn skeleton_from_names(names: &[String]) -> Skeleton {
-    for s in [
-        Skeleton::coco17(),
-        Skeleton::blazepose33(),
-        Skeleton::penn13(),
-        Skeleton::msr20(),
-        openpose::body25_skeleton(),
-        openpose::coco18_skeleton(),
-    ] {
+    for s in builtin_skeletons() {
         if s.joints == names {
             return s;
         }
@@ -165,6 +178,18 @@ pub fn skeleton_from_names(names: &[String]) -> Skeleton {
         return generic;
     }
     Skeleton::custom("custom", names.to_vec(), Vec::new(), None)
+}
+
+/// The skeletons readers recognise by their joint names.
+pub(crate) fn builtin_skeletons() -> [Skeleton; 6] {
+    [
+        Skeleton::coco17(),
+        Skeleton::blazepose33(),
+        Skeleton::penn13(),
+        Skeleton::msr20(),
+        openpose::body25_skeleton(),
+        openpose::coco18_skeleton(),
+    ]
 }
 
 fn extension(path: &Path) -> String {
@@ -192,9 +217,15 @@ pub fn read_track(path: impl AsRef<Path>) -> Result<Track> {
 ///   over the whole video), an AlphaPose result list, or a single OpenPose
 ///   frame;
 /// * `.csv`: long or wide CSV;
-/// * `.bvh`: BVH, forward kinematics to joint positions;
+/// * `.bvh`: BVH, forward kinematics to joint positions (a BVH that
+///   [`bvh_export`] wrote from a built-in skeleton reads back as it);
 /// * `.mpt`: the project's binary form ([`track_from_bincode`]), or a people
-///   file (the main person's track over the whole video).
+///   file (the main person's track over the whole video);
+/// * `.c3d`: the 3D points of a C3D file ([`c3d`]);
+/// * `.parquet`: a long table ([`parquet`]); with a `person` column, the
+///   main person's track over the whole video;
+/// * `.pose`: the body component of a pose-format file ([`pose`]); with
+///   several people, the main person's track.
 ///
 /// A people file with nobody in it is an error ("no person in this file").
 pub fn read_track_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
@@ -210,7 +241,8 @@ pub struct TrackRead {
     /// [`DEFAULT_FPS`] was assumed).
     pub rate: RateSource,
     /// The video frame (width, height) its pixels are in, when the file
-    /// states it (the npz of [`write_track_framed`] / [`write_people_framed`]).
+    /// states it (the npz, Parquet and `.pose` files of [`write_track_framed`] /
+    /// [`write_people_framed`], a `.pose` header's width and height).
     pub frame_size: Option<(usize, usize)>,
 }
 
@@ -272,7 +304,7 @@ fn rated(
 }
 
 /// What a file holds: one track, or people.
-enum Content {
+pub(crate) enum Content {
     Track(Box<Track>),
     People(People),
 }
@@ -383,14 +415,32 @@ fn read_any(path: &Path, opts: &ReadOptions, people_npz: bool) -> Result<(Conten
                 units: opts.units.unwrap_or(Units::Metres),
                 include_end_sites: false,
             })?;
-            (t, true)
+            (bvh_export::with_builtin_order(t)?, true)
+        }
+        "c3d" => c3d::read_c3d_rated(path, opts)?,
+        "parquet" => {
+            let r = parquet::read_parquet_any(path, opts)?;
+            let stated = Stated {
+                rate: r.rate_stated,
+                frame_size: r.frame_size,
+            };
+            return Ok((r.content, stated));
+        }
+        "pose" => {
+            let (content, frame_size) = pose::read_pose_any(path, opts)?;
+            let stated = Stated {
+                rate: true,
+                frame_size,
+            };
+            return Ok((content, stated));
         }
         other => {
             return Err(GeomError::format(
                 path,
                 format!(
-                "unknown track file extension `{other}` (npz, npy, json, csv, bvh, mpt or a folder)"
-            ),
+                    "unknown track file extension `{other}` ({} or a folder)",
+                    TRACK_EXTENSIONS.join(", ")
+                ),
             ))
         }
     };
@@ -419,7 +469,8 @@ pub fn read_people(path: impl AsRef<Path>) -> Result<People> {
 
 /// Reads the people of a video: a people file ([`people`]: `.npz` with
 /// `mp_people_version`, `.json` with `"format": "mp-people"`, `.mpt` with
-/// magic `mp-people`) as it is; any other file [`read_track_with`] reads
+/// magic `mp-people`; a Parquet table with a `person` column, a `.pose`
+/// file with several people) as it is; any other file [`read_track_with`] reads
 /// (a single-track npz, JSON, CSV, BVH, …) as one person with id 1
 /// covering the whole track ([`People::from_track`]).
 pub fn read_people_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<People> {
@@ -432,59 +483,103 @@ pub fn read_people_with(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Pe
     }
 }
 
-/// Writes people in the project's format chosen by extension: `.npz`
-/// (compressed), `.json` or `.mpt` (binary); see [`people`]. Atomic
+/// Writes people in the format chosen by extension: `.npz` (compressed),
+/// `.json` or `.mpt` (binary), see [`people`]; `.parquet` (a `person`
+/// column) or `.pose` (one person slot each; ids not kept). Atomic
 /// (temporary file + rename).
 pub fn write_people(path: impl AsRef<Path>, people: &People) -> Result<()> {
     write_people_framed(path, people, None)
 }
 
-/// [`write_people`] keeping the video frame size in an `.npz` (as
-/// [`write_track_framed`]).
+/// [`write_people`] keeping the video frame size in an `.npz`, `.parquet`
+/// or `.pose` (as [`write_track_framed`]).
 pub fn write_people_framed(
     path: impl AsRef<Path>,
     people: &People,
     frame_size: Option<(usize, usize)>,
 ) -> Result<()> {
     let path = path.as_ref();
-    match extension(path).as_str() {
+    let written = match extension(path).as_str() {
         "npz" => write_atomic(
             path,
             &people::people_to_npz_bytes_framed(people, frame_size)?,
         ),
         "json" => people::write_people_json(path, people),
         "mpt" => people::write_people_bincode(path, people),
+        "parquet" => parquet::write_people_parquet(path, people, frame_size),
+        "pose" => pose::write_people_pose(path, people, frame_size),
         other => Err(GeomError::format(
             path,
-            format!("cannot write people as `{other}` (use .npz, .json or .mpt)"),
+            format!("cannot write people as `{other}` (use .npz, .json, .mpt, .parquet or .pose)"),
         )),
-    }
+    };
+    written.map_err(|e| naming(path, e))
 }
 
-/// Writes a track in the project's format chosen by extension: `.npz`
-/// (compressed), `.json`, `.csv` (wide) or `.mpt` (binary). Atomic
-/// (temporary file + rename).
+/// Writes a track in the format chosen by extension: `.npz` (compressed),
+/// `.json`, `.csv` (wide), `.mpt` (binary), `.bvh` and `.c3d` (3D tracks in
+/// metres; see [`bvh_export`] and [`c3d`]), `.parquet` or `.pose`. A track
+/// a format cannot hold is an error naming the file. Atomic (temporary
+/// file + rename).
 pub fn write_track(path: impl AsRef<Path>, track: &Track) -> Result<()> {
     write_track_framed(path, track, None)
 }
 
 /// [`write_track`] keeping the width and height of the video frame the
-/// track's pixels are in, in an `.npz` ([`read_track_rated`] reads it back:
-/// the scale its programs are fitted at); other formats leave it out.
+/// track's pixels are in, in an `.npz`, a `.parquet` (metadata) or a `.pose`
+/// (its header) ([`read_track_rated`] reads it back: the scale its programs
+/// are fitted at); other formats leave it out.
 pub fn write_track_framed(
     path: impl AsRef<Path>,
     track: &Track,
     frame_size: Option<(usize, usize)>,
 ) -> Result<()> {
     let path = path.as_ref();
-    match extension(path).as_str() {
-        "npz" => write_atomic(path, &native::track_to_npz_bytes_framed(track, frame_size)?),
+    let written = match extension(path).as_str() {
+        "npz" => native::track_to_npz_bytes_framed(track, frame_size)
+            .and_then(|b| write_atomic(path, &b)),
         "json" => native::write_track_json(path, track),
         "csv" => csv::write_csv(path, track, csv::CsvLayout::Wide),
         "mpt" => native::write_track_bincode(path, track),
+        "bvh" => bvh_export::track_to_bvh(track).and_then(|b| b.write_bvh(path)),
+        "c3d" => c3d::write_c3d(path, track),
+        "parquet" => parquet::write_parquet(path, track, frame_size),
+        "pose" => pose::write_pose(path, track, frame_size),
         other => Err(GeomError::format(
             path,
-            format!("cannot write tracks as `{other}` (use .npz, .json, .csv or .mpt)"),
+            format!(
+                "cannot write tracks as `{other}` (use .npz, .json, .csv, .mpt, .bvh, .c3d, \
+                 .parquet or .pose)"
+            ),
         )),
+    };
+    written.map_err(|e| naming(path, e))
+}
+
+/// A writer's refusal of what it was given, as an error naming the file.
+fn naming(path: &Path, e: GeomError) -> GeomError {
+    match e {
+        GeomError::InvalidParam { reason, .. } => GeomError::format(path, reason),
+        other => other,
     }
 }
+
+/// Whether [`write_people`] keeps several people in a file with this
+/// extension (`.npz`, `.json`, `.mpt`, `.parquet`, `.pose`); the other
+/// track formats hold one track.
+pub fn holds_people(path: impl AsRef<Path>) -> bool {
+    matches!(
+        extension(path.as_ref()).as_str(),
+        "npz" | "json" | "mpt" | "parquet" | "pose"
+    )
+}
+
+/// Whether a track written with this extension must be 3D (`.bvh`, `.c3d`).
+pub fn needs_3d(path: impl AsRef<Path>) -> bool {
+    matches!(extension(path.as_ref()).as_str(), "bvh" | "c3d")
+}
+
+/// The extensions [`read_track`] reads (besides OpenPose folders).
+pub const TRACK_EXTENSIONS: [&str; 9] = [
+    "npz", "npy", "json", "csv", "bvh", "mpt", "c3d", "parquet", "pose",
+];
