@@ -174,16 +174,18 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
     if let Some(r) = &s.report {
         println!("Report: {}", r.display());
     }
-    println!(
-        "All files in {}/: {}",
-        out.display(),
-        s.files
-            .iter()
-            .filter(|f| !f.starts_with("plots/"))
-            .cloned()
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
+    // Plots and the report's frames and data are named by their folder.
+    let mut names: Vec<String> = Vec::new();
+    for f in &s.files {
+        let name = match f.split_once('/') {
+            Some((dir @ ("plots" | "report"), _)) => format!("{dir}/"),
+            _ => f.clone(),
+        };
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    println!("All files in {}/: {}", out.display(), names.join(", "));
 }
 
 /// One line per tracked person (when people were tracked), and the warning

@@ -3,6 +3,8 @@
 //! bad input, Ctrl-C, and the report opened in headless Chromium.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
@@ -81,6 +83,28 @@ fn report_data(html: &str) -> serde_json::Value {
             .find("</script>")
             .expect("unterminated data block");
     serde_json::from_str(&html[start..end]).expect("report data block is not JSON")
+}
+
+/// The content of one of the report's data files (`report/…`).
+fn report_file(dir: &Path, rel: &str) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    mp_report::page::data::registered(&text)
+        .unwrap_or_else(|| panic!("{rel} does not register its content"))
+        .2
+}
+
+/// Every file under `dir`, relative to `base`.
+fn files_under(base: &Path, dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(files_under(base, &p));
+        } else {
+            out.push(p.strip_prefix(base).unwrap().display().to_string());
+        }
+    }
+    out
 }
 
 fn png_luma_variance(bytes: &[u8]) -> (u32, u32, f64) {
@@ -164,24 +188,54 @@ fn check_outputs(
         assert_eq!(r[count - 1][1].as_u64().unwrap() as usize, last);
     }
     assert_eq!(reps["total"].as_u64().unwrap() as usize, total);
+    // The page is small; its frames and data lie in report/, every file of
+    // which is in the run's list.
     let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(html.len() < 300_000, "report.html is {} B", html.len());
     let d = report_data(&html);
-    assert_eq!(d["frames"], frames);
+    assert_eq!(d["people"][0]["frames"], frames);
     assert_eq!(d["joints"].as_array().unwrap().len(), joints);
-    assert_eq!(d["bounds"].as_array().unwrap().last().unwrap(), frames);
-    assert_eq!(d["intervals"].as_array().unwrap().len(), intervals.len());
     assert_eq!(
-        html.matches("<li class=\"st k-").count(),
-        program.n_segments() * program.n_joints(),
-        "the listing shows every statement of every joint"
+        d["pictures"].as_array().unwrap().len(),
+        if video { frames } else { 0 },
+        "one picture per analysed frame of a short video"
     );
+    let person = report_file(dir, "report/p0/person.js");
+    assert_eq!(person["bounds"].as_array().unwrap().last().unwrap(), frames);
+    assert_eq!(
+        person["repetitions"].as_array().unwrap().len(),
+        intervals.len()
+    );
+    let statements: usize = (0..joints)
+        .map(|j| {
+            report_file(dir, &format!("report/p0/joint-{j:02}.js"))["listing"]
+                .as_array()
+                .unwrap()
+                .len()
+        })
+        .sum();
+    assert_eq!(
+        statements,
+        program.n_segments() * program.n_joints(),
+        "the listings hold every statement of every joint"
+    );
+    let listed = std::fs::read_to_string(dir.join("mp-run-files.txt")).unwrap();
+    let listed: Vec<&str> = listed.lines().collect();
+    let folder = files_under(dir, &dir.join("report"));
+    assert!(!folder.is_empty());
+    for f in &folder {
+        assert!(
+            listed.contains(&f.as_str()),
+            "{f} is not in mp-run-files.txt"
+        );
+    }
     assert!(
         !html.contains("https://"),
         "the report must not load anything from the network"
     );
     assert!(
-        !html.contains("<script src"),
-        "the report must be self-contained"
+        !html.contains("data:image"),
+        "the frames lie beside the page, not in it"
     );
 
     // The program reproduces the keypoints.
@@ -246,9 +300,11 @@ fn run_on_golf_clip_writes_consistent_outputs() {
         String::from_utf8_lossy(&out.stdout).trim(),
         format!("354,492,{GOLF_FRAMES}")
     );
-    // Frames are embedded in the report, one per analysed frame.
-    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
-    assert_eq!(html.matches("data:image/jpeg;base64,").count(), GOLF_FRAMES);
+    // The frames lie beside the report, one per analysed frame.
+    for f in 0..GOLF_FRAMES {
+        let jpg = std::fs::read(dir.join(format!("report/frames/{f:06}.jpg"))).unwrap();
+        assert_eq!(mp_report::frames::jpeg_size(&jpg), Some((354, 492)));
+    }
 }
 
 #[test]
@@ -426,37 +482,7 @@ fn interrupted_run_leaves_no_partial_files() {
 
 /// Runs headless Chromium on a page with the given extra arguments.
 fn chromium(page: &Path, profile: &Path, extra: &[&str]) -> Output {
-    chromium_at(page, "", profile, extra)
-}
-
-/// [`chromium`] on the page with a URL fragment (`#person=2`, or empty).
-fn chromium_at(page: &Path, fragment: &str, profile: &Path, extra: &[&str]) -> Output {
-    let exe = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
-        .into_iter()
-        .find(|p| Path::new(p).exists())
-        .expect("Chromium not found at /usr/bin/chromium (scripts/setup.sh installs the Debian package)");
-    let url = format!(
-        "file://{}{fragment}",
-        page.canonicalize().unwrap().display()
-    );
-    Command::new(exe)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--no-first-run",
-            "--hide-scrollbars",
-            "--window-size=1280,900",
-            "--virtual-time-budget=2000",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
-        .args(extra)
-        .arg(url)
-        .output()
-        .expect("cannot start Chromium")
+    common::browser::chromium_at(page, "", profile, extra)
 }
 
 #[test]
@@ -486,142 +512,33 @@ fn report_renders_in_headless_chromium() {
         "screenshot looks blank (luma variance {var:.1})"
     );
 
-    // DOM after the script ran, with the console on stderr.
-    let out = chromium(
+    // The page opened at its first frame, and at a late one: the picture of
+    // that frame and its keypoints (from the data file) are loaded and drawn.
+    let dom = common::browser::check_opens_at(&page, "", &tmp.path().join("p2"), Some(0), Some(0));
+    let late = GOLF_FRAMES - 5;
+    common::browser::check_opens_at(
         &page,
-        &tmp.path().join("p2"),
-        &["--dump-dom", "--enable-logging=stderr", "--v=0"],
+        &format!("#frame={late}"),
+        &tmp.path().join("p3"),
+        Some(late),
+        Some(late),
     );
-    let dom = String::from_utf8_lossy(&out.stdout);
-    let log = String::from_utf8_lossy(&out.stderr);
-    assert!(!log.contains("Uncaught"), "script errors:\n{log}");
-    let status = dom
-        .split("<div id=\"mp-status\"")
-        .nth(1)
-        .and_then(|s| s.split("</div>").next())
-        .unwrap_or_else(|| {
-            panic!(
-                "status element missing from the DOM:\n{}",
-                &dom[..dom.len().min(2000)]
-            )
-        });
-    assert!(status.contains("data-errors=\"0\""), "{status}");
-    assert!(status.contains("data-ready=\"1\""), "{status}");
-    assert!(status.trim_end().ends_with(">ok"), "{status}");
     // The listing is there and the running statement is highlighted.
     assert!(dom.contains("class=\"listing\""));
     assert!(
         dom.matches(" active\"").count() >= 1,
         "no highlighted statement"
     );
-    // The stage canvas was drawn with the frame and the skeleton (not uniform).
-    let canvas = dom
-        .split("<canvas id=\"stage\"")
-        .nth(1)
-        .and_then(|s| s.split('>').next())
-        .unwrap();
-    let var: f64 = canvas
-        .split("data-variance=\"")
-        .nth(1)
-        .and_then(|s| s.split('"').next())
+    // The skeletons were drawn over the frame.
+    let stage = common::browser::start_tag(&dom, "<canvas id=\"stage\"");
+    let ink: usize = common::browser::attr(stage, "data-ink")
         .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("canvas not measured: {canvas}"));
-    assert!(var > 100.0, "stage canvas looks blank (variance {var})");
-    // The timeline SVG is inline and got its cursor.
+        .unwrap_or_else(|| panic!("canvas not measured: {stage}"));
+    assert!(ink > 500, "no skeleton on the stage ({ink} pixels painted)");
+    // The timeline SVG was loaded and got its cursor.
     assert!(dom.contains("class=\"mp-timeline\""));
     assert!(dom.contains("fill=\"#facc15\""), "timeline cursor missing");
-}
-
-/// Two exercising people side by side (020_fitness and 027_fitness, 3 s):
-/// the report's people strip has a row each, and a link that names the
-/// other person opens the page on their analysis.
-#[test]
-fn report_picks_the_person_a_link_names() {
-    let test = mp_geom::paths::current_test_name();
-    let Some(a) =
-        mp_geom::paths::data_file_or_skip("quva_repetition/videos/020_fitness.mp4", &test)
-    else {
-        return;
-    };
-    let Some(b) =
-        mp_geom::paths::data_file_or_skip("quva_repetition/videos/027_fitness.mp4", &test)
-    else {
-        return;
-    };
-    let tmp = tempfile::tempdir().unwrap();
-    let video = tmp.path().join("two.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-i"])
-        .arg(&a)
-        .arg("-i")
-        .arg(&b)
-        .args([
-            "-filter_complex",
-            "[0:v]fps=30,scale=-2:360,setsar=1[a];[1:v]fps=30,scale=-2:360,setsar=1[b];[a][b]hstack=inputs=2[v]",
-            "-map",
-            "[v]",
-            "-t",
-            "3",
-            "-c:v",
-            "libx264",
-            "-preset",
-            "veryfast",
-            "-pix_fmt",
-            "yuv420p",
-        ])
-        .arg(&video)
-        .status()
-        .expect("ffmpeg runs");
-    assert!(status.success());
-    let dir = tmp.path().join("out");
-    run_ok(
-        mp().arg("run")
-            .arg(&video)
-            .arg("--out")
-            .arg(&dir)
-            .args(["--no-video", "--quiet"]),
-    );
-    let loops: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("loops.json")).unwrap()).unwrap();
-    let people = loops["people"].as_array().unwrap();
-    assert_eq!(people.len(), 2, "{people:?}");
-    let other = people
-        .iter()
-        .find(|p| p["main"] == false)
-        .expect("a person besides the main one")["id"]
-        .as_u64()
-        .unwrap();
-    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
-    assert_eq!(html.matches("<g class=\"row\"").count(), 2);
-    assert_eq!(report_data(&html)["people"].as_array().unwrap().len(), 2);
-
-    let out = chromium_at(
-        &dir.join("report.html"),
-        &format!("#person={other}&frame=45"),
-        &tmp.path().join("p"),
-        &["--dump-dom"],
-    );
-    let dom = String::from_utf8_lossy(&out.stdout);
-    let status = dom
-        .split("<div id=\"mp-status\"")
-        .nth(1)
-        .and_then(|s| s.split("</div>").next())
-        .unwrap_or("");
-    assert!(status.contains("data-errors=\"0\""), "{status}");
-    assert!(status.contains("data-ready=\"1\""), "{status}");
-    assert!(
-        status.contains(&format!("data-person=\"{other}\"")),
-        "the page shows person {other}: {status}"
-    );
-    // The other person's listing is the one shown; the main person's is hidden.
-    let shown: Vec<&str> = dom
-        .split("<div class=\"pp\" data-person=\"")
-        .skip(1)
-        .map(|s| s.split('>').next().unwrap_or(""))
-        .collect();
-    assert!(
-        shown.iter().any(|s| s.starts_with("0\" hidden")),
-        "{shown:?}"
-    );
-    assert!(shown.contains(&"1\""), "{shown:?}");
+    // The counted repetitions and the program loops have their panels.
+    assert!(dom.contains("id=\"repetitions-body\""));
+    assert!(dom.contains("id=\"abstract-body\""));
 }

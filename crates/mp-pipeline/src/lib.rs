@@ -11,7 +11,8 @@
 //! 4. [`count`]: repetition intervals and counts from the keypoints and, for
 //!    video, the frame thumbnails (where no person is found, the frames count).
 //! 5. [`run`]: all of the above into an output folder, with pictures, an
-//!    overlay video and `report.html`.
+//!    overlay video and the report (`report.html` and its folder `report/`;
+//!    where nobody is found, a page with the frames and the counts).
 //! 6. [`Analyser`]: many inputs with one set of parameters, the pose model
 //!    kept loaded between videos.
 //! 7. [`batch()`]: [`run`] over a folder or a list of inputs, several at
@@ -116,7 +117,8 @@ impl Outcome {
 pub struct RunSummary {
     /// The analysis (its frame copies and frame thumbnails are released).
     pub outcome: Outcome,
-    /// The report page, when one was written.
+    /// The report page, when one was written (whenever the report was asked
+    /// for, also where nobody was found).
     pub report: Option<PathBuf>,
     /// Files written, relative to the output folder.
     pub files: Vec<String>,
@@ -316,9 +318,11 @@ fn people_outcomes(
 
 /// The whole pipeline into `out_dir`: `track.npz`, `program.txt/.json`,
 /// `abstract.txt/.json`, `loops.json`, and (see [`OutputParams`]) `plots/`,
-/// `timeline.svg/.png`, `contact_sheet.png`, `overlay.mp4` for video, and
-/// `report.html`, written last. The overlay video is encoded on its own
-/// thread alongside the pictures and the report page.
+/// `timeline.svg/.png`, `contact_sheet.png`, `overlay.mp4` for video, the
+/// report's folder `report/` and `report.html`, written last. Where nobody
+/// was found there are no programs and no pictures, and the page shows the
+/// frames, the repetitions counted from them and a notice. The overlay video
+/// is encoded on its own thread alongside the pictures and the report.
 pub fn run(
     input: Input,
     out_dir: &Path,
@@ -366,73 +370,90 @@ pub(crate) fn run_with(
     let track = &outcome.keypoints.track;
     let mut files = output::write_analysis(&out, &outcome)?;
     let mut report = None;
-    if let (Some(an), true) = (outcome.analysis.as_ref(), params.output.report) {
-        let executed = an
-            .concrete
-            .execute()
-            .map_err(|e| PipelineError::stage("executing the program", e))?;
-        let intervals = outcome.counts.repetitive_intervals();
-        let kp = &outcome.keypoints;
-        let analysed = Analysed {
-            track,
-            program: &an.concrete,
-            executed: &executed,
-            abstract_program: &an.program,
-            intervals: &intervals,
-            frames: frames.as_ref(),
-            frame_size: kp.frame_size,
-            title: &kp.title,
-        };
-        let n = track.n_frames();
-        let overlay_src = overlay_src.filter(|_| params.output.overlay_video);
-        let with_overlay = overlay_src.is_some();
-        let (pictures, overlay) = std::thread::scope(|s| {
-            let overlay = overlay_src.map(|src| {
-                observer.started(Stage::Overlay, Some(n));
-                let (out, executed) = (&out, &executed);
-                let others = output::other_people(kp);
-                s.spawn(move || {
-                    let t0 = Instant::now();
-                    output::write_overlay(out, src, track, executed, &others, &|d| {
-                        observer.progress(Stage::Overlay, d)
+    let n = track.n_frames();
+    let kp = &outcome.keypoints;
+    match (outcome.analysis.as_ref(), params.output.report) {
+        (_, false) => {}
+        (Some(an), true) => {
+            let executed = an
+                .concrete
+                .execute()
+                .map_err(|e| PipelineError::stage("executing the program", e))?;
+            let intervals = outcome.counts.repetitive_intervals();
+            let analysed = Analysed {
+                track,
+                program: &an.concrete,
+                executed: &executed,
+                abstract_program: &an.program,
+                intervals: &intervals,
+                program_loops: &an.intervals,
+                frames: frames.as_ref(),
+                frame_size: kp.frame_size,
+                title: &kp.title,
+            };
+            let overlay_src = overlay_src.filter(|_| params.output.overlay_video);
+            let with_overlay = overlay_src.is_some();
+            let (pictures, overlay) = std::thread::scope(|s| {
+                let overlay = overlay_src.map(|src| {
+                    observer.started(Stage::Overlay, Some(n));
+                    let (out, executed) = (&out, &executed);
+                    let others = output::other_people(kp);
+                    s.spawn(move || {
+                        let t0 = Instant::now();
+                        output::write_overlay(out, src, track, executed, &others, &|d| {
+                            observer.progress(Stage::Overlay, d)
+                        })
+                        .map(|()| t0.elapsed())
                     })
-                    .map(|()| t0.elapsed())
-                })
+                });
+                let pictures = pictures_and_page(
+                    &out,
+                    Some(&analysed),
+                    &outcome,
+                    frames.as_ref(),
+                    with_overlay,
+                    observer,
+                );
+                let overlay = overlay.map(|h| {
+                    h.join()
+                        .map_err(|_| {
+                            PipelineError::stage("overlay video", "the overlay thread panicked")
+                        })
+                        .and_then(|r| r)
+                });
+                (pictures, overlay)
             });
-            let pictures = pictures_and_page(
+            let (pic_files, pic_time, page, page_time) = pictures?;
+            files.extend(pic_files);
+            timings.push(Stage::Pictures, pic_time, n);
+            if let Some(ov) = overlay {
+                let t = ov?;
+                files.push("overlay.mp4".into());
+                timings.push(Stage::Overlay, t, n);
+            }
+            report = Some(write_page(
                 &out,
-                &analysed,
-                kp,
-                &outcome.people,
-                &outcome.counts,
-                with_overlay,
-                observer,
-            );
-            let overlay = overlay.map(|h| {
-                h.join()
-                    .map_err(|_| {
-                        PipelineError::stage("overlay video", "the overlay thread panicked")
-                    })
-                    .and_then(|r| r)
-            });
-            (pictures, overlay)
-        });
-        let (pic_files, pic_time, html, html_time) = pictures?;
-        files.extend(pic_files);
-        timings.push(Stage::Pictures, pic_time, n);
-        if let Some(ov) = overlay {
-            let t = ov?;
-            files.push("overlay.mp4".into());
-            timings.push(Stage::Overlay, t, n);
+                page,
+                page_time,
+                &mut files,
+                &mut timings,
+                n,
+            )?);
         }
-        // The report is written last: when it exists, everything it links to does too.
-        let t_write = Instant::now();
-        report = Some(
-            out.write("report.html", html.as_bytes())
-                .map_err(PipelineError::from_report)?,
-        );
-        files.push("report.html".into());
-        timings.push(Stage::Report, html_time + t_write.elapsed(), n);
+        // Nobody was found: the page shows the frames and the repetitions
+        // counted from them, and says so.
+        (None, true) => {
+            let (_, _, page, page_time) =
+                pictures_and_page(&out, None, &outcome, frames.as_ref(), false, observer)?;
+            report = Some(write_page(
+                &out,
+                page,
+                page_time,
+                &mut files,
+                &mut timings,
+                n,
+            )?);
+        }
     }
     check(cancel)?;
     // What an earlier run into the same folder wrote and this one did not
@@ -450,40 +471,68 @@ pub(crate) fn run_with(
     })
 }
 
-/// Pictures, then the report page (not yet written): files, times, page.
+/// Writes the report page, last: when it exists, everything it links to
+/// and loads does too.
+fn write_page(
+    out: &OutputDir,
+    page: mp_report::ReportPage,
+    page_time: Duration,
+    files: &mut Vec<String>,
+    timings: &mut Timings<'_>,
+    n: usize,
+) -> Result<PathBuf> {
+    let t_write = Instant::now();
+    files.extend(page.files.iter().cloned());
+    let path = page.write(out).map_err(PipelineError::from_report)?;
+    files.push(mp_report::page::PAGE.into());
+    timings.push(Stage::Report, page_time + t_write.elapsed(), n);
+    Ok(path)
+}
+
+/// The pictures (when there is a program), then the report's folder and page
+/// (the page not yet written): picture files, their time, the page, its time.
 fn pictures_and_page(
     out: &OutputDir,
-    a: &Analysed<'_>,
-    kp: &Keypoints,
-    people: &[PersonOutcome],
-    counts: &Counts,
+    a: Option<&Analysed<'_>>,
+    outcome: &Outcome,
+    frames: Option<&mp_report::FrameStore>,
     with_overlay: bool,
     observer: &dyn Observer,
-) -> Result<(Vec<String>, Duration, String, Duration)> {
+) -> Result<(Vec<String>, Duration, mp_report::ReportPage, Duration)> {
+    let kp = &outcome.keypoints;
     let t_pic = Instant::now();
-    observer.started(Stage::Pictures, Some(a.program.n_joints() + 2));
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let pic_files = mp_report::write_pictures(out, a, &|| {
-        let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        observer.progress(Stage::Pictures, d);
-    })
-    .map_err(PipelineError::from_report)?;
+    let pic_files = match a {
+        Some(a) => {
+            observer.started(Stage::Pictures, Some(a.program.n_joints() + 2));
+            let done = std::sync::atomic::AtomicUsize::new(0);
+            mp_report::write_pictures(out, a, &|| {
+                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                observer.progress(Stage::Pictures, d);
+            })
+            .map_err(PipelineError::from_report)?
+        }
+        None => Vec::new(),
+    };
     let pic_time = t_pic.elapsed();
     let t_rep = Instant::now();
     observer.started(Stage::Report, None);
-    let mut linked: Vec<String> = [
-        "program.txt",
-        "program.json",
-        "abstract.txt",
-        "abstract.json",
-        "loops.json",
-        "track.npz",
-        "timeline.svg",
-        "contact_sheet.png",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let mut linked: Vec<String> = if a.is_some() {
+        [
+            "program.txt",
+            "program.json",
+            "abstract.txt",
+            "abstract.json",
+            "loops.json",
+            "track.npz",
+            "timeline.svg",
+            "contact_sheet.png",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    } else {
+        vec!["loops.json".into(), "track.npz".into()]
+    };
     if with_overlay {
         linked.push("overlay.mp4".into());
     }
@@ -493,6 +542,11 @@ fn pictures_and_page(
             .filter(|f| f.starts_with("plots/") && f.ends_with(".svg"))
             .cloned(),
     );
+    let people = &outcome.people;
+    for p in people.iter().filter(|p| !p.main && p.analysis.is_some()) {
+        linked.push(format!("people/{}/program.txt", p.id));
+        linked.push(format!("people/{}/abstract.txt", p.id));
+    }
     let mut cards = Vec::new();
     if let Some(model) = &kp.model {
         cards.push(Card::new(
@@ -501,24 +555,55 @@ fn pictures_and_page(
             format!("of frames with a person · {model}"),
         ));
     }
-    cards.push(Card::new(
-        "count",
-        counts.total.to_string(),
-        format!(
-            "repetitions · from {} ({}, confidence {:.2})",
-            counts.signal.as_str(),
-            counts.method.as_str(),
-            counts.confidence
+    cards.extend(report_people::people_card(people));
+    let n = kp.track.n_frames();
+    let notice = a.is_none().then(|| match &kp.model {
+        Some(model) => format!(
+            "No person was found in this video: the pose model ({model}) examined its {n} frames and found nobody, so there is no program; the repetitions are counted from the frames alone."
         ),
-    ));
-    cards.extend(report_people::person_cards(people, kp.track.fps()));
-    for p in people.iter().filter(|p| !p.main && p.analysis.is_some()) {
-        linked.push(format!("people/{}/program.txt", p.id));
-        linked.push(format!("people/{}/abstract.txt", p.id));
+        None => format!(
+            "No person was found in this recording: none of its {n} frames holds a keypoint, so there is no program."
+        ),
+    });
+    let views = report_people::people_views(kp, people, n)?;
+    let executed;
+    let main = mp_report::PersonPage {
+        id: kp.person.filter(|_| !people.is_empty()),
+        label: views
+            .as_ref()
+            .map_or_else(|| "the person".to_string(), |v| v.main_label()),
+        colour: None,
+        offset: 0,
+        track: &kp.track,
+        program: match (a, outcome.analysis.as_ref()) {
+            (Some(a), Some(an)) => {
+                executed = a.executed;
+                Some(mp_report::ProgramView {
+                    concrete: &an.concrete,
+                    executed,
+                    abstract_program: &an.program,
+                    loops: &an.intervals,
+                })
+            }
+            _ => None,
+        },
+        repetitions: outcome.counts.intervals.clone(),
+    };
+    let mut everyone = vec![main];
+    if let Some(v) = &views {
+        everyone.extend(v.pages()?);
     }
-    let views = report_people::people_views(kp, people, a.track.n_frames())?;
-    let view = views.as_ref().map(|v| v.view()).transpose()?;
-    let html = mp_report::report_page(a, &kp.description, &cards, &linked, view.as_ref())
-        .map_err(PipelineError::from_report)?;
-    Ok((pic_files, pic_time, html, t_rep.elapsed()))
+    let input = mp_report::ReportInput {
+        title: &kp.title,
+        subtitle: &kp.description,
+        people: everyone,
+        counts: &outcome.counts,
+        frames,
+        notice,
+        cards,
+        files: &linked,
+        strip: views.as_ref().map(|v| v.rows.clone()),
+    };
+    let page = mp_report::write_report(out, &input).map_err(PipelineError::from_report)?;
+    Ok((pic_files, pic_time, page, t_rep.elapsed()))
 }

@@ -105,7 +105,8 @@ impl Default for PersonParams {
 /// What a run writes besides the programs and counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct OutputParams {
-    /// Plots, timeline, contact sheet and `report.html`. Default true.
+    /// Plots, timeline, contact sheet and the report (`report.html` and its
+    /// folder `report/`). Default true.
     pub report: bool,
     /// `overlay.mp4` for video input. Default true.
     pub overlay_video: bool,

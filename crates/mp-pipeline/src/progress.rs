@@ -69,7 +69,7 @@ impl Stage {
             Stage::Motion => "motion energy of the thumbnails (camera motion discounted) and the periodicity of the regions where it gathers",
             Stage::Pictures => "plots (SVG + PNG), timeline, contact sheet",
             Stage::Overlay => "own thread, alongside pictures + report; draw + H.264",
-            Stage::Report => "HTML page with the frames embedded",
+            Stage::Report => "the page, its frames as JPEG files and its data in chunks (report/)",
         }
     }
 }

@@ -1,93 +1,65 @@
-//! The report's several people: a card per person, the person picker's
-//! analyses and the people strip's rows.
+//! The report's several people: the people card, everyone the person
+//! picker can show and the people strip's rows.
 
-use mp_abstract::RepetitiveInterval;
+use mp_abstract::CountedInterval;
 use mp_geom::Track;
-use mp_report::Card;
+use mp_report::{Card, PersonPage, ProgramView};
 
 use crate::{output, Keypoints, PersonOutcome, PipelineError, Result};
 
-/// One report card per analysed person: their count, frames and the colour
-/// of their skeleton in the overlay (the top-level person keeps the
-/// left/right colours of the plots).
-pub(crate) fn person_cards(people: &[PersonOutcome], fps: f64) -> Vec<Card> {
+/// The people card (with two people or more): how many were tracked and how
+/// many analysed, in one line whatever their number.
+pub(crate) fn people_card(people: &[PersonOutcome]) -> Option<Card> {
     if people.len() < 2 {
-        return Vec::new();
+        return None;
     }
-    // Everyone appears in the people strip; the cards are for the people
-    // seen long enough to be analysed.
-    people
-        .iter()
-        .filter(|p| p.counts.is_some())
-        .map(|p| {
-            let value = p
-                .counts
-                .as_ref()
-                .map_or("–".to_string(), |c| c.total.to_string());
-            let colour = if p.main {
-                "left/right colours".to_string()
-            } else {
-                let [r, g, b] = output::person_colour(p.id);
-                format!("colour #{r:02x}{g:02x}{b:02x}")
-            };
-            Card::new(
-                format!("person {}{}", p.id, if p.main { " (main)" } else { "" }),
-                value,
-                format!(
-                    "{} · {:.1}–{:.1} s · overlay {colour}",
-                    "repetitions",
-                    p.first_frame as f64 / fps,
-                    p.last_frame as f64 / fps,
-                ),
-            )
-        })
-        .collect()
+    let analysed = people.iter().filter(|p| p.counts.is_some()).count();
+    Some(Card::new(
+        "people",
+        people.len().to_string(),
+        format!("tracked · {analysed} analysed · pick one in the People panel"),
+    ))
 }
 
 /// What the report's person picker needs beyond the outcome: each other
-/// person's executed program and loops in their own frames, and the rows of
-/// the people strip.
+/// analysed person's executed program and counted repetitions in their own
+/// frames, and the rows of the people strip.
 pub(crate) struct PeopleViews<'a> {
     main: &'a PersonOutcome,
-    others: Vec<(&'a PersonOutcome, &'a Track, Track, Vec<RepetitiveInterval>)>,
-    rows: Vec<mp_report::PersonRow>,
+    others: Vec<(&'a PersonOutcome, &'a Track, Track, Vec<CountedInterval>)>,
+    pub(crate) rows: Vec<mp_report::PersonRow>,
 }
 
 impl PeopleViews<'_> {
-    pub(crate) fn view(&self) -> Result<mp_report::PeopleView<'_>> {
-        let others = self
-            .others
+    /// The main person's label in the picker.
+    pub(crate) fn main_label(&self) -> String {
+        person_label(self.main)
+    }
+
+    /// The people besides the main one, in the picker's order (from 1).
+    pub(crate) fn pages(&self) -> Result<Vec<PersonPage<'_>>> {
+        self.others
             .iter()
-            .map(|(p, track, executed, intervals)| {
+            .map(|(p, track, executed, repetitions)| {
                 let an = p.analysis.as_ref().ok_or_else(|| {
                     PipelineError::stage("the report", format!("person {} has no analysis", p.id))
                 })?;
-                let a = mp_report::Analysed {
+                Ok(PersonPage {
+                    id: Some(p.id),
+                    label: person_label(p),
+                    colour: Some(output::person_colour(p.id)),
+                    offset: p.offset,
                     track,
-                    program: &an.concrete,
-                    executed,
-                    abstract_program: &an.program,
-                    intervals,
-                    frames: None,
-                    frame_size: None,
-                    title: "",
-                };
-                mp_report::person_view(
-                    p.id,
-                    person_label(p),
-                    output::person_colour(p.id),
-                    p.offset,
-                    &a,
-                )
-                .map_err(PipelineError::from_report)
+                    program: Some(ProgramView {
+                        concrete: &an.concrete,
+                        executed,
+                        abstract_program: &an.program,
+                        loops: &an.intervals,
+                    }),
+                    repetitions: repetitions.clone(),
+                })
             })
-            .collect::<Result<Vec<_>>>()?;
-        Ok(mp_report::PeopleView {
-            main_id: self.main.id,
-            main_label: person_label(self.main),
-            others,
-            rows: self.rows.clone(),
-        })
+            .collect()
     }
 }
 
@@ -129,10 +101,12 @@ pub(crate) fn people_views<'a>(
         if executed.n_frames() != person.track.n_frames() {
             continue;
         }
-        let intervals: Vec<RepetitiveInterval> = c
-            .repetitive_intervals()
-            .into_iter()
-            .map(|mut iv| {
+        // The counts are in video frames; the page wants the person's own.
+        let repetitions: Vec<CountedInterval> = c
+            .intervals
+            .iter()
+            .map(|iv| {
+                let mut iv = iv.clone();
                 iv.start_frame = iv.start_frame.saturating_sub(p.offset);
                 iv.end_frame = iv.end_frame.saturating_sub(p.offset);
                 for b in &mut iv.boundaries {
@@ -141,7 +115,7 @@ pub(crate) fn people_views<'a>(
                 iv
             })
             .collect();
-        others.push((p, &person.track, executed, intervals));
+        others.push((p, &person.track, executed, repetitions));
     }
     let rows = people
         .iter()
@@ -158,7 +132,7 @@ pub(crate) fn people_views<'a>(
             let repetitions = p
                 .counts
                 .iter()
-                .flat_map(|c| c.repetitive_intervals())
+                .flat_map(|c| c.intervals.iter())
                 .flat_map(|iv| {
                     iv.boundaries
                         .windows(2)
@@ -186,3 +160,45 @@ pub(crate) fn people_views<'a>(
 /// The main person's colour in the people strip (the overlay draws them in
 /// the left/right orange and blue; orange is their left).
 const MAIN_COLOUR: [u8; 3] = [255, 159, 28];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_people_card_of_one_line_for_any_crowd() {
+        let person = |id: u32, analysed: bool| PersonOutcome {
+            id,
+            main: id == 1,
+            first_frame: 0,
+            last_frame: 10,
+            frames_found: 11,
+            mean_box: None,
+            offset: 0,
+            analysis: None,
+            counts: analysed.then(|| {
+                mp_abstract::count_repetitions(
+                    &mp_geom::Track::new(
+                        ndarray::Array3::zeros((8, 1, 2)),
+                        None,
+                        30.0,
+                        mp_geom::Units::Pixels,
+                        mp_geom::Skeleton::generic(1),
+                    )
+                    .unwrap(),
+                    mp_abstract::CountSignal::Keypoints,
+                    &Default::default(),
+                )
+                .unwrap()
+            }),
+        };
+        assert!(people_card(&[person(1, true)]).is_none());
+        let crowd: Vec<PersonOutcome> = (1..=300).map(|id| person(id, id % 3 == 0)).collect();
+        let card = people_card(&crowd).unwrap();
+        assert_eq!(card.value, "300");
+        assert_eq!(
+            card.sub,
+            "tracked · 100 analysed · pick one in the People panel"
+        );
+    }
+}

@@ -321,7 +321,8 @@ impl PySummary {
 
 /// The whole pipeline into `out_dir` (as `mp run`): keypoints (for a video),
 /// programs, counts, pictures, `overlay.mp4` (video only, unless
-/// `overlay_video=False`) and `report.html` (unless `report=False`).
+/// `overlay_video=False`) and the report, `report.html` with its folder
+/// `report/` (unless `report=False`).
 /// `source` is a video or track file path, or a `Track`. For a video, every
 /// person in view is tracked (at most `max_people`; `single_person`:
 /// MediaPipe's single-person pipeline) and `person` (`"all"`, the default,

@@ -2,14 +2,17 @@
 //!
 //! * [`plots`]: per-joint trajectory plots (each coordinate against time,
 //!   keypoints as dots, the executed program coloured by primitive kind).
-//! * [`timeline`]: primitives of every joint by kind and the detected loops
-//!   with iteration boundaries and counts, over one time axis.
+//! * [`timeline`]: primitives of every joint by kind, the counted
+//!   repetitions and the abstract program's loops, over one time axis.
 //! * [`draw`]: skeletons on frames or on a blank canvas, contact sheets.
 //! * [`frames`]: reduced JPEG copies of video frames for the report.
-//! * [`html`]: the self-contained report page.
-//! * [`people`]: several people on the page (the picker and the people strip).
-//! * [`pictures`]: every picture of an analysis and its report page, written
-//!   into an output folder.
+//! * [`page`]: the report, `report.html` and the folder `report/` beside it
+//!   whose frames and data the page loads as it plays ([`page::cards`]: the
+//!   summary cards; [`page::panels`]: the panels' contents; [`page::data`]:
+//!   the folder's files and their size budgets).
+//! * [`people`]: several people on the page (the people strip).
+//! * [`pictures`]: every picture of an analysis, written into an output
+//!   folder.
 //! * [`raster`]: SVG → PNG (resvg, pure Rust), PNG/JPEG encoding.
 //! * [`outdir`]: an output folder whose files appear complete or not at all,
 //!   cancelled through a `CancelToken`.
@@ -17,12 +20,11 @@
 //! Pictures are written as SVG (exact, small, readable in any browser) and
 //! rasterised to PNG from the same SVG, so both always agree.
 
-pub mod b64;
 pub mod draw;
 pub mod error;
 pub mod frames;
-pub mod html;
 pub mod outdir;
+pub mod page;
 pub mod people;
 pub mod pictures;
 pub mod plots;
@@ -33,9 +35,11 @@ pub mod timeline;
 
 pub use error::{ReportError, Result};
 pub use frames::{FrameStore, FrameStoreParams};
-pub use html::{report_html, standard_cards, Card, ReportInput};
 pub use outdir::OutputDir;
-pub use people::{PeopleView, PersonRow, PersonView};
-pub use pictures::{person_view, report_page, write_pictures, Analysed};
+pub use page::{
+    standard_cards, write_report, Card, PersonPage, ProgramView, ReportInput, ReportPage,
+};
+pub use people::PersonRow;
+pub use pictures::{write_pictures, Analysed};
 pub use plots::{joint_trajectory_svg, PlotParams};
 pub use timeline::{timeline_svg, TimeAxis, TimelineParams};

@@ -1,39 +1,12 @@
-//! Several people on the report page: the others whom the page's picker
-//! switches to, and the people strip — one row per person over the video's
-//! time axis, in the person's overlay colour, with their repetitions.
+//! Several people on the report page: the people strip — one row per person
+//! over the video's time axis, in the person's overlay colour, with their
+//! repetitions.
 
 use std::fmt::Write as _;
 
-use mp_abstract::RepetitiveInterval;
-use mp_concrete::Program;
 use mp_geom::Track;
 
 use crate::svg::esc;
-
-/// A person besides the main one whose analysis the page can show.
-#[derive(Debug, Clone)]
-pub struct PersonView<'a> {
-    /// The person's id.
-    pub id: u32,
-    /// The picker's label (`person 3 · 7 repetitions`).
-    pub label: String,
-    /// Overlay colour.
-    pub colour: [u8; 3],
-    /// Video frame of the analysis' first frame.
-    pub offset: usize,
-    /// The person's keypoints (frames from `offset`).
-    pub track: &'a Track,
-    /// Their concrete program.
-    pub program: &'a Program,
-    /// The program executed at the track's frames.
-    pub executed: &'a Track,
-    /// Their abstract program, printed.
-    pub abstract_text: String,
-    /// Their loops (frames of `track`).
-    pub intervals: Vec<RepetitiveInterval>,
-    /// Their timeline picture.
-    pub timeline_svg: String,
-}
 
 /// One row of the people strip.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,20 +24,6 @@ pub struct PersonRow {
     /// Index of the person in the page's picker (0: the main person), when
     /// the page can show their analysis.
     pub pick: Option<usize>,
-}
-
-/// Everyone on the page: the main person (the page's own analysis), the
-/// others it can switch to, and the strip's rows.
-#[derive(Debug, Clone)]
-pub struct PeopleView<'a> {
-    /// The main person's id.
-    pub main_id: u32,
-    /// The main person's label in the picker.
-    pub main_label: String,
-    /// The others with an analysis.
-    pub others: Vec<PersonView<'a>>,
-    /// Everyone tracked, in id order.
-    pub rows: Vec<PersonRow>,
 }
 
 /// Runs of frames where `track` has any joint with confidence > 0, as
@@ -85,10 +44,28 @@ pub fn found_runs(track: &Track, offset: usize) -> Vec<[usize; 2]> {
     runs
 }
 
+/// Pixel spans `[a, b)` of frame ranges on the strip, those less than a
+/// pixel apart joined into one when either is narrower than `keep_px`
+/// (wider ones keep their own outline): a row has at most a span per
+/// `keep_px` pixels of the time axis, whatever the recording's length.
+fn spans(ranges: impl IntoIterator<Item = (f64, f64)>, keep_px: f64) -> Vec<(f64, f64)> {
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for (a, b) in ranges {
+        match out.last_mut() {
+            Some(last) if a - last.1 < 1.0 && (last.1 - last.0 < keep_px || b - a < keep_px) => {
+                last.1 = last.1.max(b)
+            }
+            _ => out.push((a, b)),
+        }
+    }
+    out
+}
+
 /// The people strip: a row per person (label, the frames they were seen as
 /// bars in their colour, each counted repetition as a darker tick-bounded
-/// block), over `n_frames` frames at `fps`. Rows with an analysis carry
-/// `data-person` (the picker's index) for the page's script.
+/// block; spans less than a pixel apart drawn as one), over `n_frames`
+/// frames at `fps`. Rows with an analysis carry `data-person` (the picker's
+/// index) for the page's script.
 pub fn people_strip_svg(rows: &[PersonRow], n_frames: usize, fps: f64) -> String {
     let (left, right, row_h, top) = (215.0, 16.0, 22.0, 8.0);
     let width = 1100.0;
@@ -127,8 +104,10 @@ pub fn people_strip_svg(rows: &[PersonRow], n_frames: usize, fps: f64) -> String
             y + row_h * 0.68,
             esc(&r.label)
         );
-        for run in &r.found {
-            let (a, b) = (x(run[0]), x(run[1] + 1));
+        for (a, b) in spans(
+            r.found.iter().map(|run| (x(run[0]), x(run[1] + 1))),
+            f64::INFINITY,
+        ) {
             let _ = write!(
                 s,
                 r#"<rect x="{a:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{colour}" fill-opacity="0.45"/>"#,
@@ -137,8 +116,7 @@ pub fn people_strip_svg(rows: &[PersonRow], n_frames: usize, fps: f64) -> String
                 row_h - 10.0
             );
         }
-        for rep in &r.repetitions {
-            let (a, b) = (x(rep[0]), x(rep[1]));
+        for (a, b) in spans(r.repetitions.iter().map(|rep| (x(rep[0]), x(rep[1]))), 2.0) {
             let _ = write!(
                 s,
                 r##"<rect x="{a:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{colour}" stroke="#0f172a" stroke-width="0.8"/>"##,
@@ -204,6 +182,17 @@ mod tests {
         assert_eq!(svg.matches(r#"fill-opacity="0.45""#).count(), 3);
         assert_eq!(svg.matches(r##"stroke="#0f172a""##).count(), 2);
         assert!(svg.contains(">10 s</text>"));
+        // An hour of one-second repetitions stays one block per pixel at most.
+        let hour = vec![PersonRow {
+            id: 1,
+            label: "person 1".into(),
+            colour: [255, 159, 28],
+            found: (0..3600).map(|s| [s * 30, s * 30 + 20]).collect(),
+            repetitions: (0..3600).map(|s| [s * 30, s * 30 + 30]).collect(),
+            pick: Some(0),
+        }];
+        let svg = people_strip_svg(&hour, 108_000, 30.0);
+        assert!(svg.len() < 200_000, "{} bytes", svg.len());
     }
 
     #[test]

@@ -1,8 +1,7 @@
-//! The pictures of an analysis written into an output folder — one
-//! trajectory plot per joint (SVG + PNG), the timeline (SVG + PNG), a
-//! contact sheet of twelve frames — and the report page that shows them.
+//! The pictures of an analysis written into an output folder: one
+//! trajectory plot per joint (SVG + PNG), the timeline (SVG + PNG) and a
+//! contact sheet of twelve frames.
 
-use mp_abstract::dsl::{print_with, PrintOptions};
 use mp_abstract::{AbstractProgram, RepetitiveInterval};
 use mp_concrete::Program;
 use mp_geom::Track;
@@ -13,9 +12,7 @@ use crate::draw::{
 };
 use crate::error::{ReportError, Result};
 use crate::frames::FrameStore;
-use crate::html::{report_html, standard_cards, Card, ReportInput};
 use crate::outdir::{check_cancel, OutputDir};
-use crate::people::{PeopleView, PersonView};
 use crate::plots::{joint_trajectory_svg, PlotParams};
 use crate::raster::{pixmap_to_png, rgb_to_pixmap, svg_to_png};
 use crate::timeline::{timeline_svg, TimelineParams};
@@ -33,8 +30,10 @@ pub struct Analysed<'a> {
     pub executed: &'a Track,
     /// The abstract program.
     pub abstract_program: &'a AbstractProgram,
-    /// Counted repetitive intervals.
+    /// Counted repetitions, as intervals.
     pub intervals: &'a [RepetitiveInterval],
+    /// The abstract program's loops (its `for` statements) as frame intervals.
+    pub program_loops: &'a [RepetitiveInterval],
     /// Reduced video frames, when the input was a video.
     pub frames: Option<&'a FrameStore>,
     /// Video frame size (width, height), when known.
@@ -107,7 +106,12 @@ pub fn write_pictures(
         files.push(format!("{stem}.svg"));
         files.push(format!("{stem}.png"));
     }
-    let (tl_svg, _) = timeline_svg(a.program, a.intervals, &TimelineParams::default())?;
+    let (tl_svg, _) = timeline_svg(
+        a.program,
+        a.intervals,
+        a.program_loops,
+        &TimelineParams::default(),
+    )?;
     out.write("timeline.svg", tl_svg.as_bytes())?;
     out.write("timeline.png", &svg_to_png("timeline", &tl_svg, 1.0)?)?;
     files.push("timeline.svg".into());
@@ -183,71 +187,4 @@ fn contact_sheet_of(
         4,
         &format!("{} — keypoints and program (pink)", a.title),
     )
-}
-
-/// The timeline as the report page shows it (no title: the page has one).
-fn page_timeline(a: &Analysed<'_>) -> Result<String> {
-    let (svg, _) = timeline_svg(
-        a.program,
-        a.intervals,
-        &TimelineParams {
-            title: false,
-            ..TimelineParams::default()
-        },
-    )?;
-    Ok(svg)
-}
-
-/// A person besides the main one for the report's picker: `a` is their
-/// analysis (frames from video frame `offset`; its `frames`, `frame_size`
-/// and `title` are not used).
-pub fn person_view<'a>(
-    id: u32,
-    label: String,
-    colour: [u8; 3],
-    offset: usize,
-    a: &Analysed<'a>,
-) -> Result<PersonView<'a>> {
-    let timeline = page_timeline(a)?;
-    Ok(PersonView {
-        id,
-        label,
-        colour,
-        offset,
-        track: a.track,
-        program: a.program,
-        executed: a.executed,
-        abstract_text: print_with(a.abstract_program, &PrintOptions::summary()),
-        intervals: a.intervals.to_vec(),
-        timeline_svg: timeline,
-    })
-}
-
-/// The report page (not yet written): the standard cards plus `extra_cards`,
-/// the abstract program's summary, the timeline, and links to `linked`.
-pub fn report_page(
-    a: &Analysed<'_>,
-    subtitle: &str,
-    extra_cards: &[Card],
-    linked: &[String],
-    people: Option<&PeopleView<'_>>,
-) -> Result<String> {
-    let mut cards = standard_cards(a.track, a.program, a.executed, a.intervals);
-    cards.extend(extra_cards.iter().cloned());
-    let abstract_text = print_with(a.abstract_program, &PrintOptions::summary());
-    let tl_page = page_timeline(a)?;
-    report_html(&ReportInput {
-        title: a.title,
-        subtitle,
-        track: a.track,
-        program: a.program,
-        executed: a.executed,
-        abstract_text: &abstract_text,
-        intervals: a.intervals,
-        frames: a.frames,
-        timeline_svg: &tl_page,
-        cards: &cards,
-        files: linked,
-        people,
-    })
 }

@@ -14,10 +14,12 @@ pub fn kind_color(kind: PrimitiveKind) -> &'static str {
 
 /// Colour of the detected keypoints (dots in plots).
 pub const KEYPOINT_DOT: &str = "#475569";
-/// Colour of loops in the timeline.
+/// Colour of counted repetitions in the timeline and the plots.
 pub const LOOP_FILL: &str = "#14b8a6";
-/// Darker loop colour (iteration boundaries, labels).
+/// Darker repetition colour (repetition boundaries, labels).
 pub const LOOP_DARK: &str = "#0f766e";
+/// Colour of the abstract program's loops (its `for` statements) in the timeline.
+pub const PROGRAM_LOOP: &str = "#6366f1";
 /// Text colour.
 pub const INK: &str = "#0f172a";
 /// Secondary text colour.

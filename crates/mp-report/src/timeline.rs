@@ -1,6 +1,8 @@
 //! The timeline: one row per joint with its primitives coloured by kind, a
-//! row with the mix of kinds per segment, and the detected loops with their
-//! iteration boundaries and repetition counts, over a common time axis.
+//! row with the mix of kinds per segment, the counted repetitions with their
+//! boundaries and counts, and the abstract program's loops, over a common
+//! time axis. Its size is bounded whatever the recording's length: long
+//! programs are drawn per column of the time axis.
 
 use mp_abstract::RepetitiveInterval;
 use mp_concrete::Program;
@@ -46,11 +48,63 @@ pub struct TimeAxis {
     pub frames: usize,
 }
 
-/// The timeline as an SVG document and its time axis. The root element
+/// Columns per pixel of the time axis: programs with at most as many
+/// segments as columns have every segment drawn on its own; longer ones are
+/// drawn per column (the kind covering most of its frames), so the
+/// picture's size is bounded whatever the length.
+const COLUMNS_PER_PX: f64 = 0.5;
+
+/// The smallest width, in pixels, of a segment or a repetition whose
+/// boundary lines are drawn (narrower ones would only paint the rows over).
+const MIN_LINE_GAP_PX: f64 = 3.0;
+
+/// Kind index (in [`PrimitiveKind::ALL`]) of every segment and joint.
+fn kind_indices(program: &Program) -> Vec<Vec<usize>> {
+    program
+        .segments
+        .iter()
+        .map(|seg| {
+            seg.primitives
+                .iter()
+                .map(|p| {
+                    PrimitiveKind::ALL
+                        .iter()
+                        .position(|k| *k == p.kind())
+                        .unwrap_or(0)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Frames of each kind per column and joint, for `columns` equal columns
+/// over the program's frames: `[column][joint][kind]`.
+fn column_kinds(program: &Program, columns: usize) -> Vec<Vec<[usize; 4]>> {
+    let t_total = program.n_frames().max(1);
+    let j = program.n_joints();
+    let kinds = kind_indices(program);
+    let mut out = vec![vec![[0usize; 4]; j]; columns];
+    let mut f = 0usize;
+    for (si, seg) in program.segments.iter().enumerate() {
+        for t in f..f + seg.duration_frames {
+            let c = (t * columns / t_total).min(columns - 1);
+            for (ji, k) in kinds[si].iter().enumerate().take(j) {
+                out[c][ji][(*k).min(3)] += 1;
+            }
+        }
+        f += seg.duration_frames;
+    }
+    out
+}
+
+/// The timeline as an SVG document and its time axis. `repetitions` are the
+/// counted repetitions, `program_loops` the abstract program's loops (its
+/// `for` statements), both in frames of the program. The root element
 /// carries `data-x0`, `data-x1`, `data-top`, `data-bottom` and `data-frames`.
 pub fn timeline_svg(
     program: &Program,
-    intervals: &[RepetitiveInterval],
+    repetitions: &[RepetitiveInterval],
+    program_loops: &[RepetitiveInterval],
     params: &TimelineParams,
 ) -> Result<(String, TimeAxis)> {
     if !(params.width_px.is_finite() && params.width_px >= 300.0) {
@@ -74,18 +128,24 @@ pub fn timeline_svg(
     let label_w = 118.0;
     let (x0, x1) = (label_w + 12.0, params.width_px - 18.0);
     let fx = |f: f64| x0 + f / t_total as f64 * (x1 - x0);
-    let title_h = if params.title { 50.0 } else { 34.0 };
+    let px_per_frame = (x1 - x0) / t_total as f64;
+    // The legend's line, then the summary's (the title, when drawn, beside the legend).
+    let title_h = 50.0;
     let mix_top = title_h;
     let mix_h = 30.0;
     let loops_top = mix_top + mix_h + 10.0;
     let loop_h = 40.0;
-    let rows_top = loops_top + loop_h + 14.0;
+    let plo_top = loops_top + loop_h + 6.0;
+    let plo_h = 18.0;
+    let rows_top = plo_top + plo_h + 10.0;
     let rows_bottom = rows_top + j as f64 * rh;
     let h = rows_bottom + 46.0;
     let bounds = program.boundaries();
+    let columns = ((x1 - x0) * COLUMNS_PER_PX).floor().max(1.0) as usize;
+    let per_segment = program.n_segments() <= columns;
 
     let mut svg = Svg::new(params.width_px, h, style::PAPER);
-    let reps: usize = intervals.iter().map(|i| i.count).sum();
+    let reps: usize = repetitions.iter().map(|i| i.count).sum();
     if params.title {
         svg.text(
             18.0,
@@ -97,16 +157,18 @@ pub fn timeline_svg(
             r#"font-weight="bold""#,
         );
     }
+    let plural =
+        |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
     svg.text(
         18.0,
-        if params.title { 42.0 } else { 24.0 },
+        42.0,
         &format!(
-            "{} segments × {} joints · {} loop{} · {} repetitions",
+            "{} segments × {} joints · {} in {} · {}",
             program.n_segments(),
             j,
-            intervals.len(),
-            if intervals.len() == 1 { "" } else { "s" },
-            reps
+            plural(reps, "repetition", "repetitions"),
+            plural(repetitions.len(), "interval", "intervals"),
+            plural(program_loops.len(), "program loop", "program loops"),
         ),
         11.5,
         style::MUTED,
@@ -122,11 +184,17 @@ pub fn timeline_svg(
         svg.rect(lx - 12.0, 15.0, 12.0, 11.0, kind_color(*k), r#"rx="2""#);
         lx -= 26.0;
     }
-    svg.text(lx, 24.0, "loop", 11.5, style::INK, Anchor::End, "");
-    lx -= 36.0;
-    svg.rect(lx - 12.0, 15.0, 12.0, 11.0, style::LOOP_FILL, r#"rx="2""#);
+    for (label, colour) in [
+        ("program loop", style::PROGRAM_LOOP),
+        ("repetition", style::LOOP_FILL),
+    ] {
+        svg.text(lx, 24.0, label, 11.5, style::INK, Anchor::End, "");
+        lx -= 7.0 * label.len() as f64 + 8.0;
+        svg.rect(lx - 12.0, 15.0, 12.0, 11.0, colour, r#"rx="2""#);
+        lx -= 26.0;
+    }
 
-    // Mix of kinds per segment.
+    // Mix of kinds per segment (per column for long programs).
     svg.text(
         label_w,
         mix_top + mix_h / 2.0 + 4.0,
@@ -136,56 +204,98 @@ pub fn timeline_svg(
         Anchor::End,
         "",
     );
-    for (si, seg) in program.segments.iter().enumerate() {
-        let (a, b) = (fx(bounds[si] as f64), fx(bounds[si + 1] as f64));
-        let n = seg.primitives.len().max(1) as f64;
+    let stack = |svg: &mut Svg, a: f64, b: f64, per_kind: [usize; 4]| {
+        let n = per_kind.iter().sum::<usize>().max(1) as f64;
         let mut y = mix_top;
-        for k in PrimitiveKind::ALL {
-            let c = seg.primitives.iter().filter(|p| p.kind() == k).count() as f64;
+        for (ki, k) in PrimitiveKind::ALL.iter().enumerate() {
+            let c = per_kind.get(ki).copied().unwrap_or(0) as f64;
             if c > 0.0 {
                 let hh = mix_h * c / n;
-                svg.rect(a, y, (b - a).max(0.5), hh, kind_color(k), "");
+                svg.rect(a, y, (b - a).max(0.5), hh, kind_color(*k), "");
                 y += hh;
             }
         }
-        svg.line(b, mix_top, b, mix_top + mix_h, style::PAPER, 0.8, "");
+    };
+    let cols = (!per_segment).then(|| column_kinds(program, columns));
+    match &cols {
+        None => {
+            let kinds = kind_indices(program);
+            for si in 0..program.n_segments() {
+                let (a, b) = (fx(bounds[si] as f64), fx(bounds[si + 1] as f64));
+                let mut per_kind = [0usize; 4];
+                for &k in &kinds[si] {
+                    per_kind[k.min(3)] += 1;
+                }
+                stack(&mut svg, a, b, per_kind);
+                if b - a >= MIN_LINE_GAP_PX {
+                    svg.line(b, mix_top, b, mix_top + mix_h, style::PAPER, 0.8, "");
+                }
+            }
+        }
+        Some(cols) => {
+            // Columns with the same mix (in whole joints) are drawn as one.
+            let w = (x1 - x0) / columns as f64;
+            let mix = |c: usize| -> [usize; 4] {
+                let mut m = [0usize; 4];
+                for joint in &cols[c] {
+                    for (ki, n) in joint.iter().enumerate() {
+                        m[ki] += n;
+                    }
+                }
+                let total = m.iter().sum::<usize>().max(1);
+                m.map(|n| (n * j.max(1) + total / 2) / total)
+            };
+            let mut c = 0;
+            while c < columns {
+                let m = mix(c);
+                let mut e = c + 1;
+                while e < columns && mix(e) == m {
+                    e += 1;
+                }
+                stack(&mut svg, x0 + c as f64 * w, x0 + e as f64 * w, m);
+                c = e;
+            }
+        }
     }
 
-    // Loops.
+    // Counted repetitions.
     svg.text(
         label_w,
         loops_top + loop_h / 2.0 + 4.0,
-        "loops",
+        "repetitions",
         11.0,
         style::INK,
         Anchor::End,
         "",
     );
     svg.rect(x0, loops_top, x1 - x0, loop_h, "#f1f5f9", r#"rx="3""#);
-    for (li, iv) in intervals.iter().enumerate() {
+    for (li, iv) in repetitions.iter().enumerate() {
         let (a, b) = (fx(iv.start_frame as f64), fx(iv.end_frame as f64));
         svg.rect(
             a,
             loops_top + 3.0,
-            b - a,
+            (b - a).max(0.5),
             loop_h - 6.0,
             style::LOOP_FILL,
             r#"fill-opacity="0.85" rx="3""#,
         );
-        let inner = iv.boundaries.len().saturating_sub(2);
-        for &bf in iv.boundaries.iter().skip(1).take(inner) {
-            let x = fx(bf as f64);
-            svg.line(
-                x,
-                loops_top + 3.0,
-                x,
-                loops_top + loop_h - 3.0,
-                style::PAPER,
-                1.5,
-                "",
-            );
+        for w in iv.boundaries.windows(2).skip(1) {
+            let x = fx(w[0] as f64);
+            if (w[0] - iv.boundaries[0]) as f64 * px_per_frame >= MIN_LINE_GAP_PX
+                && (w[1] - w[0]) as f64 * px_per_frame >= MIN_LINE_GAP_PX
+            {
+                svg.line(
+                    x,
+                    loops_top + 3.0,
+                    x,
+                    loops_top + loop_h - 3.0,
+                    style::PAPER,
+                    1.5,
+                    "",
+                );
+            }
         }
-        // Iteration numbers, where they fit.
+        // Repetition numbers, where they fit.
         for (k, w) in iv.boundaries.windows(2).enumerate() {
             let (ia, ib) = (fx(w[0] as f64), fx(w[1] as f64));
             if ib - ia >= 14.0 {
@@ -200,7 +310,8 @@ pub fn timeline_svg(
                 );
             }
         }
-        // The count in a dark label in the middle of the loop.
+        // The count in a dark label in the middle of the interval, or
+        // above it where it is narrow (not at all where it is a sliver).
         let label = format!("×{}", iv.count);
         let cx = (a + b) / 2.0;
         let lw = 12.0 + 8.5 * label.chars().count() as f64;
@@ -222,7 +333,7 @@ pub fn timeline_svg(
                 Anchor::Middle,
                 r#"font-weight="bold""#,
             );
-        } else {
+        } else if b - a >= 10.0 {
             svg.text(
                 cx,
                 loops_top - 2.0,
@@ -234,23 +345,64 @@ pub fn timeline_svg(
             );
         }
         svg.raw(&format!(
-            "<title>loop {}: frames {}, {} iterations of {} primitives</title>\n",
+            "<title>interval {}: frames {}, {} repetitions</title>\n",
             li + 1,
             mp_geom::frames_label(iv.start_frame, iv.end_frame),
-            iv.iterations,
-            iv.body_size
+            iv.count
         ));
     }
-    if intervals.is_empty() {
+    if repetitions.is_empty() {
         svg.text(
             (x0 + x1) / 2.0,
             loops_top + loop_h / 2.0 + 4.0,
-            "no repetition detected",
+            "no repetition counted",
             11.0,
             style::MUTED,
             Anchor::Middle,
             "",
         );
+    }
+
+    // Program loops: the abstract program's `for` statements.
+    svg.text(
+        label_w,
+        plo_top + plo_h / 2.0 + 4.0,
+        "program loops",
+        11.0,
+        style::INK,
+        Anchor::End,
+        "",
+    );
+    svg.rect(x0, plo_top, x1 - x0, plo_h, "#f1f5f9", r#"rx="3""#);
+    for (li, lp) in program_loops.iter().enumerate() {
+        let (a, b) = (fx(lp.start_frame as f64), fx(lp.end_frame as f64));
+        svg.rect(
+            a,
+            plo_top + 2.0,
+            (b - a).max(0.5),
+            plo_h - 4.0,
+            style::PROGRAM_LOOP,
+            r#"fill-opacity="0.85" rx="2""#,
+        );
+        let label = format!("×{}", lp.iterations);
+        if b - a >= 10.0 + 7.0 * label.chars().count() as f64 {
+            svg.text(
+                (a + b) / 2.0,
+                plo_top + plo_h - 5.0,
+                &label,
+                10.5,
+                "#ffffff",
+                Anchor::Middle,
+                r#"font-weight="bold""#,
+            );
+        }
+        svg.raw(&format!(
+            "<title>program loop {}: frames {}, {} iterations of {} primitives</title>\n",
+            li + 1,
+            mp_geom::frames_label(lp.start_frame, lp.end_frame),
+            lp.iterations,
+            lp.body_size
+        ));
     }
 
     // One row per joint.
@@ -266,29 +418,74 @@ pub fn timeline_svg(
             Anchor::End,
             "",
         );
-        for (si, seg) in program.segments.iter().enumerate() {
-            let Some(p) = seg.primitives.get(ji) else {
-                continue;
-            };
-            let (a, b) = (fx(bounds[si] as f64), fx(bounds[si + 1] as f64));
-            svg.rect(
-                a,
-                y + 0.5,
-                (b - a).max(0.5),
-                rh - 1.0,
-                kind_color(p.kind()),
-                "",
-            );
+        match &cols {
+            None => {
+                // Consecutive segments of one kind as one rectangle (the
+                // segment boundaries are drawn over the rows).
+                let kind = |si: usize| program.segments[si].primitives.get(ji).map(|p| p.kind());
+                let mut si = 0;
+                while si < program.n_segments() {
+                    let k = kind(si);
+                    let mut e = si + 1;
+                    while e < program.n_segments() && kind(e) == k {
+                        e += 1;
+                    }
+                    if let Some(k) = k {
+                        let (a, b) = (fx(bounds[si] as f64), fx(bounds[e] as f64));
+                        svg.rect(a, y + 0.5, (b - a).max(0.5), rh - 1.0, kind_color(k), "");
+                    }
+                    si = e;
+                }
+            }
+            Some(cols) => {
+                // The kind covering most of each column; runs of one kind as one.
+                let w = (x1 - x0) / columns as f64;
+                let major = |c: usize| -> usize {
+                    let k = &cols[c][ji];
+                    (0..4)
+                        .max_by_key(|&i| (k[i], std::cmp::Reverse(i)))
+                        .unwrap_or(0)
+                };
+                let mut c = 0;
+                while c < columns {
+                    let k = major(c);
+                    let mut e = c + 1;
+                    while e < columns && major(e) == k {
+                        e += 1;
+                    }
+                    svg.rect(
+                        x0 + c as f64 * w,
+                        y + 0.5,
+                        (e - c) as f64 * w,
+                        rh - 1.0,
+                        kind_color(PrimitiveKind::ALL[k.min(PrimitiveKind::ALL.len() - 1)]),
+                        "",
+                    );
+                    c = e;
+                }
+            }
         }
     }
-    // Segment boundaries over the rows.
-    for &b in bounds.iter().skip(1).take(bounds.len().saturating_sub(2)) {
-        let x = fx(b as f64);
-        svg.line(x, rows_top, x, rows_bottom, style::PAPER, 0.8, "");
+    // Segment boundaries over the rows, between segments wide enough to show.
+    for si in 1..program.n_segments() {
+        let wide = |s: usize| (bounds[s + 1] - bounds[s]) as f64 * px_per_frame >= MIN_LINE_GAP_PX;
+        if wide(si - 1) && wide(si) {
+            let x = fx(bounds[si] as f64);
+            svg.line(x, rows_top, x, rows_bottom, style::PAPER, 0.8, "");
+        }
     }
-    // Loop iteration boundaries over the rows.
-    for iv in intervals {
-        for &bf in &iv.boundaries {
+    // Repetition boundaries over the rows, where the repetitions are wide enough.
+    for iv in repetitions {
+        for (k, &bf) in iv.boundaries.iter().enumerate() {
+            let before = k.checked_sub(1).map(|p| bf - iv.boundaries[p]);
+            let after = iv.boundaries.get(k + 1).map(|n| n - bf);
+            let wide = before
+                .into_iter()
+                .chain(after)
+                .all(|n| n as f64 * px_per_frame >= MIN_LINE_GAP_PX);
+            if !wide {
+                continue;
+            }
             let x = fx(bf as f64);
             svg.line(
                 x,
@@ -360,14 +557,20 @@ mod tests {
             count: 2,
             score: 1.0,
         };
-        let (svg, axis) = timeline_svg(&program, &[iv], &TimelineParams::default()).unwrap();
+        let lp = RepetitiveInterval {
+            body_size: 1,
+            ..iv.clone()
+        };
+        let (svg, axis) = timeline_svg(&program, &[iv], &[lp], &TimelineParams::default()).unwrap();
         assert!(svg.contains("×2"));
+        assert!(svg.contains("program loop 1: frames 0–15, 2 iterations of 1 primitives"));
+        assert!(svg.contains("interval 1: frames 0–15, 2 repetitions"));
         assert!(svg.contains("left_wrist"));
         assert!(svg.contains("data-frames=\"16\""));
         assert_eq!(axis.frames, 16);
         assert!(axis.x1_px > axis.x0_px);
         crate::raster::svg_to_png("timeline", &svg, 1.0).unwrap();
-        let (svg, _) = timeline_svg(&program, &[], &TimelineParams::default()).unwrap();
-        assert!(svg.contains("no repetition detected"));
+        let (svg, _) = timeline_svg(&program, &[], &[], &TimelineParams::default()).unwrap();
+        assert!(svg.contains("no repetition counted"));
     }
 }

@@ -3,6 +3,8 @@
 
 use std::process::{Command, Output};
 
+pub mod browser;
+
 /// `mp ARGS`, its output captured.
 pub fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_mp"))
