@@ -41,6 +41,76 @@ fn loops_json(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("loops.json")).unwrap()).unwrap()
 }
 
+/// The value of the summary card captioned `label`.
+fn card(html: &str, label: &str) -> String {
+    let key = format!(r#"<div class="l">{label}</div><div class="v">"#);
+    let start = html.find(&key).unwrap_or_else(|| panic!("no {label} card")) + key.len();
+    html[start..start + html[start..].find('<').unwrap()].to_string()
+}
+
+/// The terminal, `loops.json` and the report show the same repetitions and
+/// the same program loops (numbers, frames and iterations).
+fn counts_agree(stdout: &str, dir: &Path, html: &str) {
+    let loops = loops_json(dir);
+    let reps = loops["repetitions"]["total"].as_u64().unwrap();
+    let ploops = loops["program_loops"].as_array().unwrap();
+    // Terminal.
+    assert!(
+        stdout.contains(&format!("\n{reps} repetition"))
+            || stdout.starts_with(&format!("{reps} repetition")),
+        "{stdout}"
+    );
+    let n = ploops.len();
+    assert!(
+        stdout.contains(&format!(
+            "the abstract program has {n} program loop{}",
+            if n == 1 { "" } else { "s" }
+        )),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains(&format!(
+            "(main): frames 0–263 (0.0–8.8 s, found in 264) · {reps} repetition"
+        )),
+        "{stdout}"
+    );
+    // The report's cards.
+    assert_eq!(card(html, "repetitions"), reps.to_string());
+    assert_eq!(card(html, "program loops"), n.to_string());
+    // The person's panels: every program loop with its frames and iterations,
+    // and as many counted intervals as loops.json has.
+    let person = std::fs::read_to_string(dir.join("report/p0/person.js")).unwrap();
+    let row = regex::Regex::new(r"<tr><td>(\d+)</td><td>([^<]*)</td><td>[^<]*</td><td>×(\d+)</td>")
+        .unwrap();
+    let shown: Vec<(String, String)> = row
+        .captures_iter(&person)
+        .map(|c| (c[2].to_string(), c[3].to_string()))
+        .collect();
+    let written: Vec<(String, String)> = ploops
+        .iter()
+        .map(|l| {
+            (
+                format!("{}–{}", l["first_frame"], l["last_frame"]),
+                l["iterations"].to_string(),
+            )
+        })
+        .collect();
+    assert_eq!(shown, written, "program loops: report vs loops.json");
+    let count = regex::Regex::new(r#"<td class=\\?"count\\?">×(\d+)</td>"#).unwrap();
+    let shown: Vec<u64> = count
+        .captures_iter(&person)
+        .map(|c| c[1].parse().unwrap())
+        .collect();
+    let written: Vec<u64> = loops["repetitions"]["intervals"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i["count"].as_u64().unwrap())
+        .collect();
+    assert_eq!(shown, written, "counted intervals: report vs loops.json");
+    assert_eq!(written.iter().sum::<u64>(), reps);
+}
+
 /// The whole golf swing (264 frames: two data files of 256 frames): the page
 /// opens at frames in either, with their pictures and keypoints.
 #[test]
@@ -48,15 +118,16 @@ fn a_whole_clip_loads_the_frames_and_data_it_scrubs_to() {
     let video = mp_geom::data_or_return!("golfdb/golf_swing.mp4");
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("golf");
-    run_ok(
+    let out = run_ok(
         mp().arg("run")
             .arg(&video)
             .arg("--out")
             .arg(&dir)
-            .args(["--no-video", "--quiet"]),
+            .arg("--no-video"),
     );
     let page = dir.join("report.html");
     let html = std::fs::read_to_string(&page).unwrap();
+    counts_agree(&String::from_utf8_lossy(&out.stdout), &dir, &html);
     let d = report_data(&html);
     assert_eq!(d["people"][0]["frames"], 264);
     assert_eq!(d["people"][0]["chunks"], 2);
