@@ -117,10 +117,10 @@ fn strip_comment(line: &str) -> String {
     l.trim().to_string()
 }
 
-/// A shown line as a pattern: literal text (whitespace runs as `\s+`),
+/// A shown line as a pattern: literal text (runs of spaces as one or more),
 /// numbers captured, `…` as any text.
 fn pattern(shown: &str) -> (Regex, Vec<String>) {
-    let num = Regex::new(r"-?\d+(?:\.\d+)?").unwrap();
+    let num = Regex::new(r"-?[0-9]+(?:\.[0-9]+)?").unwrap();
     let mut re = String::from("^");
     let mut numbers = Vec::new();
     let literal = |text: &str, re: &mut String| {
@@ -130,19 +130,19 @@ fn pattern(shown: &str) -> (Regex, Vec<String>) {
             }
             let mut words = part.split_whitespace().peekable();
             if part.starts_with(char::is_whitespace) && !part.trim().is_empty() {
-                re.push_str(r"\s+");
+                re.push_str(r"[ \t]+");
             }
             while let Some(w) = words.next() {
                 re.push_str(&regex::escape(w));
                 if words.peek().is_some() {
-                    re.push_str(r"\s+");
+                    re.push_str(r"[ \t]+");
                 }
             }
             if part.ends_with(char::is_whitespace) && !part.trim().is_empty() {
-                re.push_str(r"\s+");
+                re.push_str(r"[ \t]+");
             }
             if part.trim().is_empty() && !part.is_empty() {
-                re.push_str(r"\s*");
+                re.push_str(r"[ \t]*");
             }
         }
     };
@@ -157,12 +157,12 @@ fn pattern(shown: &str) -> (Regex, Vec<String>) {
             continue;
         }
         literal(&shown[last..m.start()], &mut re);
-        re.push_str(r"(-?\d+(?:\.\d+)?)");
+        re.push_str(r"(-?[0-9]+(?:\.[0-9]+)?)");
         numbers.push(m.as_str().to_string());
         last = m.end();
     }
     literal(&shown[last..], &mut re);
-    re.push_str(r"\s*$");
+    re.push_str(r"[ \t]*$");
     (Regex::new(&re).unwrap(), numbers)
 }
 

@@ -80,8 +80,9 @@ fn counts_agree(stdout: &str, dir: &Path, html: &str) {
     // The person's panels: every program loop with its frames and iterations,
     // and as many counted intervals as loops.json has.
     let person = std::fs::read_to_string(dir.join("report/p0/person.js")).unwrap();
-    let row = regex::Regex::new(r"<tr><td>(\d+)</td><td>([^<]*)</td><td>[^<]*</td><td>×(\d+)</td>")
-        .unwrap();
+    let row =
+        regex::Regex::new(r"<tr><td>([0-9]+)</td><td>([^<]*)</td><td>[^<]*</td><td>×([0-9]+)</td>")
+            .unwrap();
     let shown: Vec<(String, String)> = row
         .captures_iter(&person)
         .map(|c| (c[2].to_string(), c[3].to_string()))
@@ -96,7 +97,7 @@ fn counts_agree(stdout: &str, dir: &Path, html: &str) {
         })
         .collect();
     assert_eq!(shown, written, "program loops: report vs loops.json");
-    let count = regex::Regex::new(r#"<td class=\\?"count\\?">×(\d+)</td>"#).unwrap();
+    let count = regex::Regex::new(r#"<td class=\\?"count\\?">×([0-9]+)</td>"#).unwrap();
     let shown: Vec<u64> = count
         .captures_iter(&person)
         .map(|c| c[1].parse().unwrap())

@@ -1,0 +1,87 @@
+//! Files as people expect, through the `mp` binary: every output is created
+//! with the permissions of an ordinary new file (0666 less the umask), and a
+//! folder `mp run` used before holds afterwards what the new run wrote, the
+//! user's own files, and nothing the earlier run left.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
+
+mod common;
+
+use std::os::unix::fs::PermissionsExt;
+use std::path::Path;
+
+use common::ok;
+
+fn mode(p: &Path) -> u32 {
+    std::fs::metadata(p).unwrap().permissions().mode() & 0o777
+}
+
+#[test]
+fn outputs_have_ordinary_permissions_and_a_reused_folder_is_cleaned() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |name: &str| tmp.path().join(name);
+    let s = |name: &str| p(name).to_string_lossy().into_owned();
+    // What a new file gets here (0666 less this process's umask).
+    std::fs::write(p("reference"), b"").unwrap();
+    let ordinary = mode(&p("reference"));
+
+    ok(&["performer", "-o", &s("perf.npz")]);
+    ok(&["fit", &s("perf.npz"), "-o", &s("prog.txt")]);
+    ok(&["abstract", &s("perf.npz"), "-o", &s("abs.json"), "--quiet"]);
+    ok(&["execute", &s("prog.txt"), "-o", &s("exec.csv")]);
+    ok(&["run", &s("perf.npz"), "--out", &s("run"), "--quiet"]);
+    for f in [
+        "perf.npz",
+        "prog.txt",
+        "abs.json",
+        "exec.csv",
+        "run/loops.json",
+        "run/report.html",
+    ] {
+        assert_eq!(mode(&p(f)), ordinary, "{f}: {:o}", mode(&p(f)));
+    }
+
+    // A reused folder: the user's file stays, the earlier run's files that
+    // the new run does not write go.
+    std::fs::write(p("run/notes.md"), b"mine").unwrap();
+    let plots = |dir: &str| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(p(dir).join("plots"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let first = plots("run");
+    assert!(first.iter().any(|f| f.ends_with("_nose.svg")), "{first:?}");
+    let Some(bvh) = mp_geom::paths::data_file_or_skip(
+        "cmu_salsa_bvh/60_01_scaled.bvh",
+        "outputs_have_ordinary_permissions_and_a_reused_folder_is_cleaned",
+    ) else {
+        return;
+    };
+    ok(&[
+        "run",
+        bvh.to_str().unwrap(),
+        "--out",
+        &s("run"),
+        "--quiet",
+        "--max-frames",
+        "240",
+    ]);
+    let second = plots("run");
+    assert!(
+        !second
+            .iter()
+            .any(|f| f.ends_with("_nose.svg") || f.ends_with("_nose.png")),
+        "the performer's plots stayed beside the new ones: {second:?}"
+    );
+    assert!(!second.is_empty());
+    assert_eq!(std::fs::read(p("run/notes.md")).unwrap(), b"mine");
+    let listed = std::fs::read_to_string(p("run/mp-run-files.txt")).unwrap();
+    for f in &second {
+        assert!(
+            listed.contains(&format!("plots/{f}")),
+            "{f} not in the run's list"
+        );
+    }
+}
