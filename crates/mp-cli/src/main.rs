@@ -9,6 +9,7 @@ mod cmd_concrete;
 mod cmd_demo;
 mod cmd_forecast;
 mod cmd_grammar;
+mod cmd_live;
 mod cmd_pose;
 mod cmd_refine;
 mod cmd_run;
@@ -42,6 +43,8 @@ enum Command {
     Abstract(cmd_abstract::AbstractArgs),
     /// Repetitive intervals of a track, with iterations and counts.
     Loops(cmd_abstract::LoopsArgs),
+    /// Live analysis of a file or a stream on standard input (`-`): people, repetitions as they happen.
+    Live(cmd_live::LiveArgs),
     /// Change a program loop's iteration count and execute (or write) the edited program.
     Extend(cmd_abstract::ExtendArgs),
     /// Stochastic execution of an abstract program with a seed.
@@ -81,6 +84,7 @@ fn main() {
         Command::Stats(a) => cmd_concrete::stats(&a),
         Command::Abstract(a) => cmd_abstract::abstract_cmd(&a),
         Command::Loops(a) => cmd_abstract::loops_cmd(&a),
+        Command::Live(a) => cmd_live::live_cmd(&a),
         Command::Extend(a) => cmd_abstract::extend_cmd(&a),
         Command::Sample(a) => cmd_abstract::sample_cmd(&a),
         Command::Predict(a) => cmd_abstract::predict_cmd(&a),

@@ -240,6 +240,11 @@ pub fn probe(path: impl AsRef<Path>) -> Result<VideoInfo> {
         .stdin(Stdio::null())
         .output()
         .map_err(|e| spawn_error("ffprobe", path, e))?;
+    probe_output(path, &out)
+}
+
+/// What `ffprobe` said: the video's properties, or its message.
+fn probe_output(path: &Path, out: &std::process::Output) -> Result<VideoInfo> {
     if !out.status.success() {
         let msg = String::from_utf8_lossy(&out.stderr).trim().to_string();
         return Err(PoseError::Video {
@@ -252,6 +257,48 @@ pub fn probe(path: impl AsRef<Path>) -> Result<VideoInfo> {
         });
     }
     parse_probe_json(path, &String::from_utf8_lossy(&out.stdout))
+}
+
+/// Reads a stream's properties with `ffprobe` from its first bytes (a
+/// container that can be read from a pipe, such as MPEG-TS); `name` stands
+/// for the stream in messages and in [`VideoInfo::path`].
+pub fn probe_bytes(name: &Path, bytes: &[u8]) -> Result<VideoInfo> {
+    use std::io::Write;
+    let mut child = Command::new("ffprobe")
+        .args([
+            "-v",
+            "error",
+            "-print_format",
+            "json",
+            "-show_streams",
+            "-i",
+            "pipe:0",
+        ])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| spawn_error("ffprobe", name, e))?;
+    if let Some(mut stdin) = child.stdin.take() {
+        let data = bytes.to_vec();
+        // ffprobe may stop reading early: a closed pipe is not an error here.
+        std::thread::spawn(move || {
+            let _ = stdin.write_all(&data);
+        });
+    }
+    let out = child
+        .wait_with_output()
+        .map_err(|e| spawn_error("ffprobe", name, e))?;
+    probe_output(name, &out)
+}
+
+/// How [`VideoReader::open_with`] reads its input.
+#[derive(Default)]
+pub struct ReadOptions {
+    /// Read at the video's own frame rate (FFmpeg's `-re`), as a camera would deliver it.
+    pub realtime: bool,
+    /// The bytes of the video, fed to FFmpeg's standard input, instead of the file.
+    pub feed: Option<Box<dyn Read + Send>>,
 }
 
 /// Streams the frames of a video from an `ffmpeg` pipe, one at a time.
@@ -286,23 +333,61 @@ impl VideoReader {
         Self::spawn(info, Some(filter))
     }
 
+    /// Starts decoding with [`ReadOptions`]: at the video's own speed, or
+    /// from a byte stream (a container such as MPEG-TS) fed to FFmpeg's
+    /// standard input on a thread of its own; `info` (the frame size and
+    /// rate) then comes from the caller, e.g. [`probe_bytes`] on the
+    /// stream's first bytes.
+    pub fn open_with(info: VideoInfo, options: ReadOptions) -> Result<Self> {
+        Self::spawn_with(info, None, options)
+    }
+
     fn spawn(info: VideoInfo, filter: Option<&str>) -> Result<Self> {
+        Self::spawn_with(info, filter, ReadOptions::default())
+    }
+
+    fn spawn_with(info: VideoInfo, filter: Option<&str>, options: ReadOptions) -> Result<Self> {
         let path = info.path.clone();
         let mut cmd = Command::new("ffmpeg");
-        cmd.args(["-v", "error", "-nostdin", "-i"])
-            .arg(&path)
-            .args(["-map", "0:v:0"]);
+        cmd.args(["-v", "error", "-nostdin"]);
+        if options.realtime {
+            cmd.arg("-re");
+        }
+        match options.feed {
+            // A stream: decode from its first packets instead of reading
+            // seconds of it ahead to learn what it holds.
+            Some(_) => cmd.args([
+                "-probesize",
+                "32768",
+                "-analyzeduration",
+                "0",
+                "-i",
+                "pipe:0",
+            ]),
+            None => cmd.arg("-i").arg(&path),
+        };
+        cmd.args(["-map", "0:v:0"]);
         match filter {
             Some(f) => cmd.arg("-vf").arg(f),
             None => cmd.args(["-fps_mode", "passthrough"]),
         };
         let mut child = cmd
             .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
-            .stdin(Stdio::null())
+            .stdin(if options.feed.is_some() {
+                Stdio::piped()
+            } else {
+                Stdio::null()
+            })
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
             .map_err(|e| spawn_error("ffmpeg", &path, e))?;
+        if let (Some(mut feed), Some(mut stdin)) = (options.feed, child.stdin.take()) {
+            // Ends with the feed, or when FFmpeg closes its input (it ended or was stopped).
+            std::thread::spawn(move || {
+                let _ = std::io::copy(&mut feed, &mut stdin);
+            });
+        }
         let stdout = child.stdout.take();
         let stderr = child.stderr.take().map(|mut s| {
             std::thread::spawn(move || {

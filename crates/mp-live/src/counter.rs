@@ -1,0 +1,368 @@
+//! The online repetition counter of one person.
+//!
+//! The person's recent poses sit in a sliding window of at most
+//! `window_s` seconds of stream frames (older ones are forgotten, so memory
+//! is bounded whatever the stream's length). Every `count_every_s` seconds
+//! of stream time the window is counted with the offline counting
+//! ([`mp_pipeline::count`], the keypoints of `mp run`), and its repetitions
+//! (their boundaries, in stream frames) become a running total:
+//!
+//! - a counting whose confidence (`Counts::confidence`) is below
+//!   `min_confidence` is set aside: early on, with a cycle or two in the
+//!   window, the counting often takes a harmonic for the period;
+//! - a repetition is **confirmed** once its end lies `confirm_periods` of
+//!   its period before the window's last frame (the counting of a window
+//!   often stretches or cuts the repetition still under way);
+//! - the part of it after the end of the last repetition taken (the stream
+//!   frame up to which the stream is counted, which only grows) is added,
+//!   in periods, to the cycles seen so far (as the offline counting divides
+//!   an interval's length by its period); the running total is those cycles
+//!   rounded, so a repetition is reported when they pass the next half. Two countings of overlapping windows place their
+//!   boundaries differently (each from its own window's start): taking
+//!   whole repetitions again would count the overlap twice;
+//! - at the end of the stream (or when the person leaves) the window is
+//!   counted once more and every new repetition in it is reported, confirmed
+//!   or not, so that on a stream shorter than the window the total is the
+//!   offline count of the same frames whenever the earlier countings agreed
+//!   with the last one.
+
+use std::collections::VecDeque;
+
+use mp_geom::{Skeleton, Track, Units};
+use ndarray::{Array2, Array3};
+
+use crate::{LiveParams, Result};
+
+/// One repetition reported.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Repetition {
+    /// The person's running total, this repetition included.
+    pub count: usize,
+    /// First stream frame.
+    pub start_frame: usize,
+    /// One past the last stream frame.
+    pub end_frame: usize,
+}
+
+/// One stream frame of the window.
+struct Row {
+    frame: usize,
+    points: Vec<[f64; 2]>,
+    conf: Vec<f64>,
+}
+
+/// See the module docs.
+pub struct OnlineCounter {
+    fps: f64,
+    skeleton: Skeleton,
+    coco: bool,
+    max_frames: usize,
+    every: usize,
+    max_gap: usize,
+    confirm_periods: f64,
+    min_confidence: f64,
+    rows: VecDeque<Row>,
+    last_counted: Option<usize>,
+    reported_until: usize,
+    cycles: f64,
+    total: usize,
+    longest: usize,
+}
+
+impl OnlineCounter {
+    /// A counter of poses in `skeleton` at `fps` frames per second; they are
+    /// counted in COCO-17 unless `params.analysis.pose.all_joints` (as `mp run`).
+    pub fn new(fps: f64, skeleton: Skeleton, params: &LiveParams) -> Self {
+        let frames = |s: f64| (s * fps).round().max(1.0) as usize;
+        let coco = !params.analysis.pose.all_joints
+            && skeleton.name != "coco17"
+            && skeleton.maps_to_coco17();
+        OnlineCounter {
+            fps,
+            skeleton,
+            coco,
+            max_frames: frames(params.window_s).max(4),
+            every: frames(params.count_every_s),
+            max_gap: (params.max_gap_s * fps).round() as usize,
+            confirm_periods: params.confirm_periods,
+            min_confidence: params.min_confidence,
+            rows: VecDeque::new(),
+            last_counted: None,
+            reported_until: 0,
+            cycles: 0.0,
+            total: 0,
+            longest: 0,
+        }
+    }
+
+    /// Repetitions reported so far.
+    pub fn total(&self) -> usize {
+        self.total
+    }
+
+    /// Stream frames in the window now.
+    pub fn window_len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The most stream frames the window ever held.
+    pub fn longest_window(&self) -> usize {
+        self.longest
+    }
+
+    /// The most stream frames the window may hold.
+    pub fn max_window(&self) -> usize {
+        self.max_frames
+    }
+
+    /// Adds the pose of stream frame `frame` (after the previous one).
+    /// A short gap since the previous pose (dropped frames) is filled by
+    /// linear interpolation; a longer one stays empty (no pose).
+    pub fn push(&mut self, frame: usize, points: Vec<[f64; 2]>, conf: Vec<f64>) {
+        if let Some(last) = self.rows.back() {
+            if frame <= last.frame {
+                return;
+            }
+            let gap = frame - last.frame - 1;
+            if gap > 0 && gap <= self.max_gap && last.points.len() == points.len() {
+                let (f0, p0, c0) = (last.frame, last.points.clone(), last.conf.clone());
+                for g in 1..=gap {
+                    let a = g as f64 / (gap + 1) as f64;
+                    let pts = p0
+                        .iter()
+                        .zip(&points)
+                        .map(|(p, q)| [p[0] + a * (q[0] - p[0]), p[1] + a * (q[1] - p[1])])
+                        .collect();
+                    let cf = c0.iter().zip(&conf).map(|(p, q)| p.min(*q)).collect();
+                    self.push_row(Row {
+                        frame: f0 + g,
+                        points: pts,
+                        conf: cf,
+                    });
+                }
+            }
+        }
+        self.push_row(Row {
+            frame,
+            points,
+            conf,
+        });
+    }
+
+    fn push_row(&mut self, row: Row) {
+        let last = row.frame;
+        self.rows.push_back(row);
+        while self
+            .rows
+            .front()
+            .is_some_and(|f| last - f.frame >= self.max_frames)
+        {
+            self.rows.pop_front();
+        }
+        self.longest = self.longest.max(self.rows.len());
+    }
+
+    /// Takes back the poses after stream frame `frame` (the tracker took them back).
+    pub fn retract_after(&mut self, frame: usize) {
+        while self.rows.back().is_some_and(|r| r.frame > frame) {
+            self.rows.pop_back();
+        }
+    }
+
+    /// Whether the window is due to be counted again.
+    pub fn due(&self) -> bool {
+        match (self.rows.back(), self.last_counted) {
+            (None, _) => false,
+            (Some(_), None) => true,
+            (Some(b), Some(c)) => b.frame >= c + self.every,
+        }
+    }
+
+    /// Counts the window when due and returns the repetitions newly confirmed.
+    pub fn update(&mut self, params: &LiveParams) -> Result<Vec<Repetition>> {
+        if !self.due() {
+            return Ok(Vec::new());
+        }
+        self.count_window(params, false)
+    }
+
+    /// Counts the window once more and reports every new repetition in it
+    /// (the end of the stream, or the person left).
+    pub fn finish(&mut self, params: &LiveParams) -> Result<Vec<Repetition>> {
+        self.count_window(params, true)
+    }
+
+    fn count_window(&mut self, params: &LiveParams, last: bool) -> Result<Vec<Repetition>> {
+        let (Some(first), Some(back)) = (self.rows.front(), self.rows.back()) else {
+            return Ok(Vec::new());
+        };
+        let (first, back) = (first.frame, back.frame);
+        self.last_counted = Some(back);
+        let n = back - first + 1;
+        if n < 4 {
+            return Ok(Vec::new());
+        }
+        let j = self.skeleton.len();
+        let mut pos = Array3::<f64>::zeros((n, j, 2));
+        let mut conf = Array2::<f64>::zeros((n, j));
+        for r in &self.rows {
+            let t = r.frame - first;
+            for q in 0..j.min(r.points.len()).min(r.conf.len()) {
+                let (p, c) = (r.points[q], r.conf[q]);
+                if p.iter().all(|v| v.is_finite()) && c.is_finite() {
+                    pos[[t, q, 0]] = p[0];
+                    pos[[t, q, 1]] = p[1];
+                    conf[[t, q]] = c.clamp(0.0, 1.0);
+                }
+            }
+        }
+        let mut track = Track::new(
+            pos,
+            Some(conf),
+            self.fps,
+            Units::Pixels,
+            self.skeleton.clone(),
+        )?;
+        if self.coco {
+            track = track.to_coco17()?;
+        }
+        let counts = mp_pipeline::count(&track, None, &params.analysis)?;
+        let mut out = Vec::new();
+        // An unsure counting (the window holds too few cycles, or the
+        // period found is a harmonic) waits for a surer one.
+        if !last && counts.confidence < self.min_confidence {
+            return Ok(out);
+        }
+        for iv in &counts.intervals {
+            let margin = (self.confirm_periods * iv.period_frames as f64).ceil() as usize;
+            for w in iv.boundaries.windows(2) {
+                let (s, e) = (first + w[0], first + w[1]);
+                if e <= s || e <= self.reported_until {
+                    continue;
+                }
+                // `e` is one past the repetition's last frame.
+                if !last && e + margin > back + 1 {
+                    break;
+                }
+                let new = (e - s.max(self.reported_until)) as f64 / iv.period_frames.max(1) as f64;
+                self.reported_until = e;
+                self.cycles += new;
+                if self.cycles < self.total as f64 + 0.5 {
+                    continue;
+                }
+                self.total += 1;
+                out.push(Repetition {
+                    count: self.total,
+                    start_frame: s,
+                    end_frame: e,
+                });
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A COCO-17 pose whose wrists and elbows swing with period `period` frames.
+    fn pose(f: usize, period: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
+        let a = (2.0 * std::f64::consts::PI * f as f64 / period).sin();
+        let pts = (0..17)
+            .map(|q| {
+                let x = 100.0 + 10.0 * (q % 4) as f64;
+                let y = 100.0 + 20.0 * (q / 4) as f64;
+                let swing = if (7..=10).contains(&q) { 60.0 } else { 3.0 };
+                [x + 0.3 * swing * a, y - swing * a]
+            })
+            .collect();
+        (pts, vec![0.9; 17])
+    }
+
+    fn offline_total(frames: usize, period: f64, fps: f64) -> usize {
+        let mut pos = Array3::<f64>::zeros((frames, 17, 2));
+        for f in 0..frames {
+            for (q, p) in pose(f, period).0.into_iter().enumerate() {
+                pos[[f, q, 0]] = p[0];
+                pos[[f, q, 1]] = p[1];
+            }
+        }
+        let conf = Array2::from_elem((frames, 17), 0.9);
+        let track = Track::new(pos, Some(conf), fps, Units::Pixels, Skeleton::coco17()).unwrap();
+        mp_pipeline::count(&track, None, &mp_pipeline::Params::default())
+            .unwrap()
+            .total
+    }
+
+    #[test]
+    fn reports_each_repetition_once_and_matches_offline() {
+        let (fps, period, frames) = (30.0, 30.0, 300);
+        let params = LiveParams::default();
+        let mut c = OnlineCounter::new(fps, Skeleton::coco17(), &params);
+        let mut reps = Vec::new();
+        for f in 0..frames {
+            let (p, v) = pose(f, period);
+            c.push(f, p, v);
+            reps.extend(c.update(&params).unwrap());
+        }
+        let before_end = reps.len();
+        reps.extend(c.finish(&params).unwrap());
+        let offline = offline_total(frames, period, fps);
+        assert!(
+            before_end >= offline - 2,
+            "{before_end} of {offline} before the end"
+        );
+        assert_eq!(reps.len(), offline, "{reps:?}");
+        for (k, r) in reps.iter().enumerate() {
+            assert_eq!(r.count, k + 1);
+            assert!(r.end_frame > r.start_frame);
+            if k > 0 {
+                assert!(r.end_frame > reps[k - 1].end_frame, "{reps:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn window_stays_bounded_over_twenty_minutes() {
+        // A short window and sparse countings keep the test quick; the bound
+        // is the same whatever the stream's length.
+        let fps = 15.0;
+        let params = LiveParams {
+            window_s: 8.0,
+            count_every_s: 4.0,
+            ..LiveParams::default()
+        };
+        let mut c = OnlineCounter::new(fps, Skeleton::coco17(), &params);
+        let frames = (20.0 * 60.0 * fps) as usize;
+        let mut last = 0;
+        for f in 0..frames {
+            let (p, v) = pose(f, 24.0);
+            c.push(f, p, v);
+            for r in c.update(&params).unwrap() {
+                assert_eq!(r.count, last + 1);
+                last = r.count;
+            }
+            assert!(c.window_len() <= c.max_window());
+        }
+        assert_eq!(c.max_window(), 120);
+        assert_eq!(c.longest_window(), 120);
+        // 1.6 s cycles over 20 minutes: 750.
+        let total = c.total() + c.finish(&params).unwrap().len();
+        assert!((748..=751).contains(&total), "{total}");
+    }
+
+    #[test]
+    fn short_gaps_are_filled_and_taken_back() {
+        let params = LiveParams::default();
+        let mut c = OnlineCounter::new(30.0, Skeleton::coco17(), &params);
+        let (p, v) = pose(0, 30.0);
+        c.push(0, p.clone(), v.clone());
+        c.push(4, p.clone(), v.clone());
+        assert_eq!(c.window_len(), 5);
+        c.push(100, p, v);
+        assert_eq!(c.window_len(), 6);
+        c.retract_after(4);
+        assert_eq!(c.window_len(), 5);
+    }
+}

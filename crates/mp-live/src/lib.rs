@@ -1,0 +1,224 @@
+//! Live analysis: frames are read from a file or a stream (standard input)
+//! as they arrive, every person in view is tracked with the pose model and
+//! tracker of `mp run`, and each person's repetitions are counted online, in
+//! memory bounded whatever the stream's length.
+//!
+//! - [`source`]: the frames, decoded by FFmpeg on a thread of their own; when
+//!   the pose model falls behind a live source, only the newest frame waits
+//!   and the others are dropped (and counted).
+//! - [`counter`]: the online repetition counter of one person: a sliding
+//!   window of their recent keypoints, counted again every half second with
+//!   the offline counting, turned into a running total that only grows.
+//! - [`run()`]: the loop over the frames, reporting [`Event`]s.
+
+pub mod counter;
+pub mod run;
+pub mod source;
+
+use serde::Serialize;
+
+pub use counter::{OnlineCounter, Repetition};
+pub use run::run;
+pub use source::{LiveSource, Slot};
+
+/// Why a live run stopped early.
+#[derive(Debug, thiserror::Error)]
+pub enum LiveError {
+    /// The source cannot be opened or decoded.
+    #[error("{0}")]
+    Source(String),
+    /// No frame came for longer than the stall timeout.
+    #[error("the stream stalled: no frame for {0:.1} s")]
+    Stalled(f64),
+    /// The pose model or the tracker failed.
+    #[error(transparent)]
+    Pose(#[from] mp_pose::PoseError),
+    /// Counting failed.
+    #[error(transparent)]
+    Pipeline(#[from] mp_pipeline::PipelineError),
+    /// A keypoint track could not be built.
+    #[error(transparent)]
+    Geom(#[from] mp_geom::GeomError),
+    /// A parameter is out of range.
+    #[error("invalid parameter {name}: {reason}")]
+    Param {
+        /// The parameter.
+        name: &'static str,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// The result of this crate's fallible functions.
+pub type Result<T> = std::result::Result<T, LiveError>;
+
+/// Parameters of a live run. The pose model, the tracker and the counting
+/// are `mp run`'s ([`mp_pipeline::Params`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiveParams {
+    /// Pose model, tracker and counting. Default `mp run`'s.
+    pub analysis: mp_pipeline::Params,
+    /// Seconds of each person's recent keypoints that are counted. Default 20.
+    pub window_s: f64,
+    /// Seconds of stream time between two countings of a window. Default 0.5.
+    pub count_every_s: f64,
+    /// A repetition is reported once its end lies this many of its periods
+    /// before the window's last frame. Default 0.5.
+    pub confirm_periods: f64,
+    /// Countings of a window less confident than this (`Counts::confidence`)
+    /// report nothing until the end of the stream. Default 0.5.
+    pub min_confidence: f64,
+    /// Gaps in a person's poses up to this many seconds (dropped frames) are
+    /// filled by linear interpolation. Default 0.25.
+    pub max_gap_s: f64,
+    /// Seconds of stream time between two status reports. Default 2.
+    pub status_every_s: f64,
+    /// Seconds without a frame after which the stream counts as stalled. Default 10.
+    pub stall_timeout_s: f64,
+    /// Stop after this many seconds of stream time. Default none.
+    pub duration_s: Option<f64>,
+    /// Read a file at its own speed, as a camera would deliver it. Default false.
+    pub realtime: bool,
+    /// Drop frames when the pose model falls behind: `None` (default) drops
+    /// them for live sources (standard input, `realtime`) and analyses every
+    /// frame of a file read as fast as possible.
+    pub drop_late: Option<bool>,
+}
+
+impl Default for LiveParams {
+    fn default() -> Self {
+        LiveParams {
+            analysis: mp_pipeline::Params::default(),
+            window_s: 20.0,
+            count_every_s: 0.5,
+            confirm_periods: 0.5,
+            min_confidence: 0.5,
+            max_gap_s: 0.25,
+            status_every_s: 2.0,
+            stall_timeout_s: 10.0,
+            duration_s: None,
+            realtime: false,
+            drop_late: None,
+        }
+    }
+}
+
+impl LiveParams {
+    /// Checks every value.
+    pub fn validate(&self) -> Result<()> {
+        let positive = |name: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(LiveError::Param {
+                    name,
+                    reason: format!("must be a positive number of seconds, got {v}"),
+                })
+            }
+        };
+        positive("window_s", self.window_s)?;
+        positive("count_every_s", self.count_every_s)?;
+        positive("status_every_s", self.status_every_s)?;
+        positive("stall_timeout_s", self.stall_timeout_s)?;
+        if let Some(d) = self.duration_s {
+            positive("duration_s", d)?;
+        }
+        if !(self.confirm_periods.is_finite() && self.confirm_periods >= 0.0) {
+            return Err(LiveError::Param {
+                name: "confirm_periods",
+                reason: format!("must be ≥ 0, got {}", self.confirm_periods),
+            });
+        }
+        if !(0.0..=1.0).contains(&self.min_confidence) {
+            return Err(LiveError::Param {
+                name: "min_confidence",
+                reason: format!("must be in 0..1, got {}", self.min_confidence),
+            });
+        }
+        if !(self.max_gap_s.is_finite() && self.max_gap_s >= 0.0) {
+            return Err(LiveError::Param {
+                name: "max_gap_s",
+                reason: format!("must be ≥ 0, got {}", self.max_gap_s),
+            });
+        }
+        self.analysis.validate()?;
+        Ok(())
+    }
+}
+
+/// What a live run reports, in order. As JSON (`serde_json`), each is an
+/// object whose `type` names the variant (`rep`, `enter`, `leave`,
+/// `status`, `summary`, `error`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Event {
+    /// A person's repetition, once confirmed.
+    Rep {
+        /// The person.
+        person: u32,
+        /// The person's running total, this repetition included.
+        count: usize,
+        /// Stream time of the repetition's first frame, seconds.
+        start: f64,
+        /// Stream time of its end, seconds.
+        end: f64,
+        /// Stream time of the frame on which it was reported, seconds.
+        t: f64,
+    },
+    /// A person's track was confirmed.
+    Enter {
+        /// The person.
+        person: u32,
+        /// Stream time, seconds.
+        t: f64,
+    },
+    /// A person is gone for good.
+    Leave {
+        /// The person.
+        person: u32,
+        /// Stream time, seconds.
+        t: f64,
+    },
+    /// How the run keeps up.
+    Status {
+        /// Stream time of the last frame analysed, seconds.
+        t: f64,
+        /// Frames analysed per second since the previous status.
+        fps: f64,
+        /// Frames analysed so far.
+        frames: usize,
+        /// Frames dropped so far (the pose model was behind).
+        dropped: usize,
+        /// Seconds the last frame analysed is behind the source.
+        delay: f64,
+    },
+    /// Why the run stopped early.
+    Error {
+        /// The message.
+        message: String,
+    },
+    /// The end of the run (always the last event).
+    Summary(Summary),
+}
+
+/// The totals at the end of a run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Summary {
+    /// Frames analysed.
+    pub frames: usize,
+    /// Frames dropped.
+    pub dropped: usize,
+    /// Stream time of the last frame analysed, seconds.
+    pub t: f64,
+    /// Every person confirmed, by id.
+    pub people: Vec<PersonTotal>,
+}
+
+/// One person's total.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PersonTotal {
+    /// The person.
+    pub id: u32,
+    /// Repetitions reported.
+    pub total_repetitions: usize,
+}

@@ -1,0 +1,265 @@
+//! The live loop: frames from the [`crate::source`], every person tracked
+//! with BlazePose and the people tracker (`mp run`'s), each confirmed
+//! person's repetitions counted online ([`crate::counter`]).
+
+use std::collections::{BTreeMap, HashMap};
+use std::time::{Duration, Instant};
+
+use mp_geom::CancelToken;
+use mp_pose::people::TrackEvent;
+use mp_pose::{BlazePoseParams, MultiPose, MultiPoseParams, SessionParams, VideoInfo};
+
+use crate::counter::{OnlineCounter, Repetition};
+use crate::source::{self, LiveSource, Taken};
+use crate::{Event, LiveError, LiveParams, PersonTotal, Result, Summary};
+
+/// One track of the tracker: its person id once confirmed, its counter.
+struct Tracked {
+    id: Option<u32>,
+    counter: OnlineCounter,
+}
+
+/// The state of a run, kept apart from the loop so that the summary can be
+/// written whatever stopped it.
+struct State {
+    fps: f64,
+    frames: usize,
+    dropped: usize,
+    t: f64,
+    tracks: HashMap<u64, Tracked>,
+    totals: BTreeMap<u32, usize>,
+}
+
+impl State {
+    fn summary(&self) -> Summary {
+        Summary {
+            frames: self.frames,
+            dropped: self.dropped,
+            t: self.t,
+            people: self
+                .totals
+                .iter()
+                .map(|(id, n)| PersonTotal {
+                    id: *id,
+                    total_repetitions: *n,
+                })
+                .collect(),
+        }
+    }
+
+    fn report(&mut self, id: u32, reps: Vec<Repetition>, on_event: &mut dyn FnMut(&Event)) {
+        for r in reps {
+            self.totals.insert(id, r.count);
+            on_event(&Event::Rep {
+                person: id,
+                count: r.count,
+                start: r.start_frame as f64 / self.fps,
+                end: r.end_frame as f64 / self.fps,
+                t: self.t,
+            });
+        }
+    }
+}
+
+/// Runs the live analysis of `source` until it ends, `cancel` is set or
+/// `params.duration_s` of stream time have passed, reporting every
+/// [`Event`] to `on_event` as it happens; the last event is always the
+/// [`Event::Summary`] (after an [`Event::Error`] when the run stopped on
+/// an error). Returns the summary, or the error that stopped the run.
+pub fn run(
+    source: &LiveSource,
+    params: &LiveParams,
+    cancel: &CancelToken,
+    on_event: &mut dyn FnMut(&Event),
+) -> Result<Summary> {
+    let mut state = State {
+        fps: 30.0,
+        frames: 0,
+        dropped: 0,
+        t: 0.0,
+        tracks: HashMap::new(),
+        totals: BTreeMap::new(),
+    };
+    let result = run_inner(source, params, cancel, &mut state, on_event);
+    let summary = state.summary();
+    if let Err(e) = &result {
+        on_event(&Event::Error {
+            message: e.to_string(),
+        });
+    }
+    on_event(&Event::Summary(summary.clone()));
+    result.map(|()| summary)
+}
+
+fn run_inner(
+    source: &LiveSource,
+    params: &LiveParams,
+    cancel: &CancelToken,
+    state: &mut State,
+    on_event: &mut dyn FnMut(&Event),
+) -> Result<()> {
+    params.validate()?;
+    let pose = &params.analysis.pose;
+    let model = pose
+        .model
+        .landmark_model()
+        .ok_or_else(|| LiveError::Param {
+            name: "analysis.pose.model",
+            reason: "live analysis needs BlazePose (full, lite or heavy)".into(),
+        })?;
+    let mut multi = MultiPose::new(MultiPoseParams {
+        pose: BlazePoseParams {
+            model,
+            session: SessionParams {
+                intra_threads: pose.threads.max(1),
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+        people: pose.tracker.clone(),
+    })?;
+    let stall = Duration::from_secs_f64(params.stall_timeout_s);
+    let reader = source::open(source, params.realtime, stall)?;
+    let drop_late = params
+        .drop_late
+        .unwrap_or_else(|| source.is_live(params.realtime));
+    let (slot, info) = source::decode_into_slot(reader, drop_late)?;
+    let result = analyse(
+        &slot, &info, &mut multi, params, cancel, stall, drop_late, state, on_event,
+    );
+    slot.stop();
+    state.dropped = slot.dropped();
+    result
+}
+
+#[allow(clippy::too_many_arguments)]
+fn analyse(
+    slot: &source::Slot,
+    info: &VideoInfo,
+    multi: &mut MultiPose,
+    params: &LiveParams,
+    cancel: &CancelToken,
+    stall: Duration,
+    live: bool,
+    state: &mut State,
+    on_event: &mut dyn FnMut(&Event),
+) -> Result<()> {
+    state.fps = info.fps;
+    let skeleton = multi.skeleton();
+    let mut started: Option<(Instant, f64)> = None;
+    let mut last_status = (0.0, 0usize, Instant::now());
+    let poll = Duration::from_millis(200);
+    let mut waited = Duration::ZERO;
+    loop {
+        if cancel.is_cancelled() {
+            break;
+        }
+        let frame = match slot.take(poll) {
+            Taken::Frame(f) => f,
+            Taken::Ended(Ok(())) => break,
+            Taken::Ended(Err(e)) => return Err(LiveError::Source(e)),
+            Taken::Stalled => {
+                waited += poll;
+                if waited >= stall {
+                    return Err(LiveError::Stalled(stall.as_secs_f64()));
+                }
+                continue;
+            }
+        };
+        waited = Duration::ZERO;
+        if params.duration_s.is_some_and(|d| frame.timestamp_s > d) {
+            break;
+        }
+        let start = *started.get_or_insert((Instant::now(), frame.timestamp_s));
+        state.t = frame.timestamp_s;
+        state.frames += 1;
+        let r = multi.process(&frame)?;
+        for tp in r.poses {
+            let tr = state.tracks.entry(tp.key).or_insert_with(|| Tracked {
+                id: None,
+                counter: OnlineCounter::new(info.fps, skeleton.clone(), params),
+            });
+            tr.counter
+                .push(frame.index, tp.pose.keypoints_px, tp.pose.visibility);
+        }
+        for e in r.events {
+            match e {
+                TrackEvent::Confirmed { key, id, .. } => {
+                    let tr = state.tracks.entry(key).or_insert_with(|| Tracked {
+                        id: None,
+                        counter: OnlineCounter::new(info.fps, skeleton.clone(), params),
+                    });
+                    tr.id = Some(id);
+                    state.totals.entry(id).or_insert(0);
+                    on_event(&Event::Enter {
+                        person: id,
+                        t: state.t,
+                    });
+                }
+                TrackEvent::Dropped { key, keep_until } => {
+                    if let Some(tr) = state.tracks.get_mut(&key) {
+                        tr.counter.retract_after(keep_until);
+                    }
+                }
+                TrackEvent::Ended { key } => {
+                    if let Some(mut tr) = state.tracks.remove(&key) {
+                        if let Some(id) = tr.id {
+                            let reps = tr.counter.finish(params)?;
+                            state.report(id, reps, on_event);
+                            on_event(&Event::Leave {
+                                person: id,
+                                t: state.t,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        let mut due = Vec::new();
+        for tr in state.tracks.values_mut() {
+            if let Some(id) = tr.id {
+                let reps = tr.counter.update(params)?;
+                if !reps.is_empty() {
+                    due.push((id, reps));
+                }
+            }
+        }
+        due.sort_by_key(|d| d.0);
+        for (id, reps) in due {
+            state.report(id, reps, on_event);
+        }
+        if state.t - last_status.0 >= params.status_every_s {
+            let now = Instant::now();
+            let secs = now.duration_since(last_status.2).as_secs_f64();
+            let fps = (state.frames - last_status.1) as f64 / secs.max(1e-9);
+            // Live: how far the frame is behind the source's clock (started
+            // with the first frame); a file read as fast as possible: behind
+            // the newest frame decoded.
+            let delay = if live {
+                now.duration_since(start.0).as_secs_f64() - (state.t - start.1)
+            } else {
+                slot.newest_s() - state.t
+            };
+            on_event(&Event::Status {
+                t: state.t,
+                fps,
+                frames: state.frames,
+                dropped: slot.dropped(),
+                delay: delay.max(0.0),
+            });
+            last_status = (state.t, state.frames, now);
+        }
+    }
+    // The end: every person still in view is counted once more.
+    let mut rest: Vec<(u32, Vec<Repetition>)> = Vec::new();
+    for tr in state.tracks.values_mut() {
+        if let Some(id) = tr.id {
+            rest.push((id, tr.counter.finish(params)?));
+        }
+    }
+    rest.sort_by_key(|r| r.0);
+    for (id, reps) in rest {
+        state.report(id, reps, on_event);
+    }
+    Ok(())
+}

@@ -1,0 +1,60 @@
+#!/usr/bin/env python3
+"""Streams QUVA videos at their own speed into `mp live - --json` and compares
+its final count with `mp loops`, and each labelled cycle end with the wall-clock
+time of the `rep` line that brings the count to it.
+
+    python3 scripts/live_measure.py [--mp target/release/mp] NAME...
+
+NAME is a video of quva_repetition/videos without `.mp4` (e.g. 023_fitness);
+the data folder is MP_DATA_DIR, else ../shared/data. Prints one Markdown table
+row per video (docs/RESULTS.md, "Live analysis").
+"""
+import argparse, ast, json, os, struct, subprocess, sys, time
+
+
+def npy_ints(path):
+    d = open(path, "rb").read()
+    n = struct.unpack("<H", d[8:10])[0]
+    h = ast.literal_eval(d[10:10 + n].decode())
+    k = h["shape"][0]
+    return list(struct.unpack("<%dq" % k, d[10 + n:10 + n + 8 * k]))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--mp", default="target/debug/mp")
+    ap.add_argument("names", nargs="+")
+    a = ap.parse_args()
+    data = os.environ.get("MP_DATA_DIR", "../shared/data") + "/quva_repetition"
+    print("| video | labelled | `mp loops` | `mp live` | analysed | dropped | median delay (s) | largest delay (s) |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name in a.names:
+        v = f"{data}/videos/{name}.mp4"
+        labels = npy_ints(f"{data}/annotations/{name}.npy")
+        rate = subprocess.check_output(["ffprobe", "-v", "error", "-select_streams", "v:0",
+                                        "-show_entries", "stream=avg_frame_rate", "-of", "csv=p=0", v])
+        num, den = rate.decode().strip().split("/")
+        fps = float(num) / float(den)
+        loops = json.loads(subprocess.check_output([a.mp, "loops", v, "--json"]))["repetitions"]["total"]
+        t0 = time.time()
+        ff = subprocess.Popen(["ffmpeg", "-v", "error", "-nostdin", "-re", "-i", v, "-an", "-c:v", "libx264",
+                               "-tune", "zerolatency", "-f", "mpegts", "pipe:1"], stdout=subprocess.PIPE)
+        mp = subprocess.Popen([a.mp, "live", "-", "--json"], stdin=ff.stdout, stdout=subprocess.PIPE)
+        ff.stdout.close()
+        events = [(time.time() - t0, json.loads(line)) for line in mp.stdout]
+        mp.wait()
+        ff.wait()
+        summary = events[-1][1]
+        totals = {p["id"]: p["total_repetitions"] for p in summary["people"]}
+        main_id = max(totals, key=totals.get) if totals else None
+        reps = [w for w, e in events if e["type"] == "rep" and e["person"] == main_id]
+        delays = sorted(w - end / fps for w, end in zip(reps, labels))
+        med = delays[len(delays) // 2] if delays else float("nan")
+        top = delays[-1] if delays else float("nan")
+        print(f"| {name} | {len(labels)} | {loops} | {totals.get(main_id, 0)} | {summary['frames']} "
+              f"| {summary['dropped']} | {med:.2f} | {top:.2f} |")
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
