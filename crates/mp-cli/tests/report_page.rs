@@ -6,25 +6,11 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 use common::browser::{attr, check_opens_at, chromium_at, start_tag, status};
 
-fn mp() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_mp"))
-}
-
-fn run_ok(cmd: &mut Command) -> Output {
-    let out = cmd.output().expect("cannot start the mp binary");
-    assert!(
-        out.status.success(),
-        "mp failed ({}):\nstdout:\n{}\nstderr:\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
+use common::{mp_command as mp, run_ok};
 
 /// The JSON data block of a report page.
 fn report_data(html: &str) -> serde_json::Value {

@@ -16,21 +16,7 @@ use mp_geom::Track;
 
 const GOLF_FRAMES: usize = 60;
 
-fn mp() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_mp"))
-}
-
-fn run_ok(cmd: &mut Command) -> Output {
-    let out = cmd.output().expect("cannot start the mp binary");
-    assert!(
-        out.status.success(),
-        "mp failed ({}):\nstdout:\n{}\nstderr:\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
+use common::{mp_command as mp, run_ok};
 
 /// One run of `mp run` on the first 60 frames of the golf swing, shared by the tests below;
 /// `None` (the skip recorded for the running test) where the shared video is absent.

@@ -40,3 +40,21 @@ pub fn refused(args: &[&str]) -> String {
     );
     stderr
 }
+
+/// The `mp` binary as a command to build on.
+pub fn mp_command() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mp"))
+}
+
+/// Runs a command of the `mp` binary, which must succeed; its output.
+pub fn run_ok(cmd: &mut Command) -> Output {
+    let out = cmd.output().expect("cannot start the mp binary");
+    assert!(
+        out.status.success(),
+        "mp failed ({}):\nstdout:\n{}\nstderr:\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
