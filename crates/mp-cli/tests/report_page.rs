@@ -10,18 +10,7 @@ use std::process::Command;
 
 use common::browser::{attr, check_opens_at, chromium_at, start_tag, status};
 
-use common::{mp_command as mp, run_ok};
-
-/// The JSON data block of a report page.
-fn report_data(html: &str) -> serde_json::Value {
-    let key = "id=\"mp-data\">";
-    let start = html.find(key).expect("report has no data block") + key.len();
-    let end = start
-        + html[start..]
-            .find("</script>")
-            .expect("unterminated data block");
-    serde_json::from_str(&html[start..end]).expect("report data block is not JSON")
-}
+use common::{mp_command as mp, report_data, run_ok};
 
 fn loops_json(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("loops.json")).unwrap()).unwrap()

@@ -16,7 +16,7 @@ use mp_geom::Track;
 
 const GOLF_FRAMES: usize = 60;
 
-use common::{mp_command as mp, run_ok};
+use common::{mp_command as mp, report_data, run_ok};
 
 /// One run of `mp run` on the first 60 frames of the golf swing, shared by the tests below;
 /// `None` (the skip recorded for the running test) where the shared video is absent.
@@ -58,17 +58,6 @@ fn leftovers(dir: &Path) -> Vec<String> {
         }
     }
     bad
-}
-
-/// The JSON data block of a report page.
-fn report_data(html: &str) -> serde_json::Value {
-    let key = "id=\"mp-data\">";
-    let start = html.find(key).expect("report has no data block") + key.len();
-    let end = start
-        + html[start..]
-            .find("</script>")
-            .expect("unterminated data block");
-    serde_json::from_str(&html[start..end]).expect("report data block is not JSON")
 }
 
 /// The content of one of the report's data files (`report/…`).

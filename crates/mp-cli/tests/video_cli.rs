@@ -14,20 +14,12 @@ fn mp() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mp"))
 }
 
+mod common;
+
+use common::run_ok;
+
 fn run(cmd: &mut Command) -> Output {
     cmd.output().expect("cannot start the mp binary")
-}
-
-fn run_ok(cmd: &mut Command) -> Output {
-    let out = run(cmd);
-    assert!(
-        out.status.success(),
-        "mp failed ({}):\nstdout:\n{}\nstderr:\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
 }
 
 /// Runs `cmd`, expects exit status 1 and returns stderr.

@@ -58,3 +58,14 @@ pub fn run_ok(cmd: &mut Command) -> Output {
     );
     out
 }
+
+/// The JSON data block of a report page.
+pub fn report_data(html: &str) -> serde_json::Value {
+    let key = "id=\"mp-data\">";
+    let start = html.find(key).expect("report has no data block") + key.len();
+    let end = start
+        + html[start..]
+            .find("</script>")
+            .expect("unterminated data block");
+    serde_json::from_str(&html[start..end]).expect("report data block is not JSON")
+}
