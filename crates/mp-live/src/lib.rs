@@ -15,6 +15,9 @@ pub mod counter;
 pub mod run;
 pub mod source;
 
+use std::collections::BTreeMap;
+
+use mp_pose::Frame;
 use serde::Serialize;
 
 pub use counter::{OnlineCounter, Repetition};
@@ -199,6 +202,44 @@ pub enum Event {
     },
     /// The end of the run (always the last event).
     Summary(Summary),
+}
+
+/// Where a live run reports what it finds: every [`Event`], and every
+/// analysed frame with the poses on it (for drawing or keeping them; the
+/// default ignores frames). A closure `|e: &Event| …` is a sink of events.
+pub trait Sink {
+    /// An event, as it happens.
+    fn event(&mut self, event: &Event);
+    /// A frame once analysed, after the events it caused.
+    fn frame(&mut self, _frame: &LiveFrame<'_>) {}
+}
+
+impl<F: FnMut(&Event)> Sink for F {
+    fn event(&mut self, event: &Event) {
+        self(event)
+    }
+}
+
+/// An analysed frame and what was found on it.
+#[derive(Debug, Clone, Copy)]
+pub struct LiveFrame<'a> {
+    /// The frame (RGB).
+    pub frame: &'a Frame,
+    /// The confirmed people on it.
+    pub people: &'a [PersonPose],
+    /// Every confirmed person's running total of repetitions, by id.
+    pub totals: &'a BTreeMap<u32, usize>,
+}
+
+/// One confirmed person's pose on a frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PersonPose {
+    /// The person.
+    pub id: u32,
+    /// Keypoints in image pixels `(x, y)`, in the pose model's skeleton order.
+    pub keypoints_px: Vec<[f64; 2]>,
+    /// Per-keypoint visibility in `[0, 1]`.
+    pub visibility: Vec<f64>,
 }
 
 /// The totals at the end of a run.

@@ -11,7 +11,9 @@ use mp_pose::{BlazePoseParams, MultiPose, MultiPoseParams, SessionParams, VideoI
 
 use crate::counter::{OnlineCounter, Repetition};
 use crate::source::{self, LiveSource, Taken};
-use crate::{Event, LiveError, LiveParams, PersonTotal, Result, Summary};
+use crate::{
+    Event, LiveError, LiveFrame, LiveParams, PersonPose, PersonTotal, Result, Sink, Summary,
+};
 
 /// One track of the tracker: its person id once confirmed, its counter.
 struct Tracked {
@@ -47,10 +49,10 @@ impl State {
         }
     }
 
-    fn report(&mut self, id: u32, reps: Vec<Repetition>, on_event: &mut dyn FnMut(&Event)) {
+    fn report(&mut self, id: u32, reps: Vec<Repetition>, sink: &mut dyn Sink) {
         for r in reps {
             self.totals.insert(id, r.count);
-            on_event(&Event::Rep {
+            sink.event(&Event::Rep {
                 person: id,
                 count: r.count,
                 start: r.start_frame as f64 / self.fps,
@@ -63,14 +65,16 @@ impl State {
 
 /// Runs the live analysis of `source` until it ends, `cancel` is set or
 /// `params.duration_s` of stream time have passed, reporting every
-/// [`Event`] to `on_event` as it happens; the last event is always the
-/// [`Event::Summary`] (after an [`Event::Error`] when the run stopped on
-/// an error). Returns the summary, or the error that stopped the run.
+/// [`Event`] to `sink` as it happens (a closure `|e: &Event| …` is a
+/// [`Sink`]), and every analysed frame with the poses found on it; the last
+/// event is always the [`Event::Summary`] (after an [`Event::Error`] when
+/// the run stopped on an error). Returns the summary, or the error that
+/// stopped the run.
 pub fn run(
     source: &LiveSource,
     params: &LiveParams,
     cancel: &CancelToken,
-    on_event: &mut dyn FnMut(&Event),
+    sink: &mut dyn Sink,
 ) -> Result<Summary> {
     let mut state = State {
         fps: 30.0,
@@ -80,14 +84,14 @@ pub fn run(
         tracks: HashMap::new(),
         totals: BTreeMap::new(),
     };
-    let result = run_inner(source, params, cancel, &mut state, on_event);
+    let result = run_inner(source, params, cancel, &mut state, sink);
     let summary = state.summary();
     if let Err(e) = &result {
-        on_event(&Event::Error {
+        sink.event(&Event::Error {
             message: e.to_string(),
         });
     }
-    on_event(&Event::Summary(summary.clone()));
+    sink.event(&Event::Summary(summary.clone()));
     result.map(|()| summary)
 }
 
@@ -96,7 +100,7 @@ fn run_inner(
     params: &LiveParams,
     cancel: &CancelToken,
     state: &mut State,
-    on_event: &mut dyn FnMut(&Event),
+    sink: &mut dyn Sink,
 ) -> Result<()> {
     params.validate()?;
     let pose = &params.analysis.pose;
@@ -125,7 +129,7 @@ fn run_inner(
         .unwrap_or_else(|| source.is_live(params.realtime));
     let (slot, info) = source::decode_into_slot(reader, drop_late)?;
     let result = analyse(
-        &slot, &info, &mut multi, params, cancel, stall, drop_late, state, on_event,
+        &slot, &info, &mut multi, params, cancel, stall, drop_late, state, sink,
     );
     slot.stop();
     state.dropped = slot.dropped();
@@ -142,7 +146,7 @@ fn analyse(
     stall: Duration,
     live: bool,
     state: &mut State,
-    on_event: &mut dyn FnMut(&Event),
+    sink: &mut dyn Sink,
 ) -> Result<()> {
     state.fps = info.fps;
     let skeleton = multi.skeleton();
@@ -174,6 +178,17 @@ fn analyse(
         state.t = frame.timestamp_s;
         state.frames += 1;
         let r = multi.process(&frame)?;
+        let people: Vec<PersonPose> = r
+            .poses
+            .iter()
+            .filter_map(|tp| {
+                Some(PersonPose {
+                    id: tp.id?,
+                    keypoints_px: tp.pose.keypoints_px.clone(),
+                    visibility: tp.pose.visibility.clone(),
+                })
+            })
+            .collect();
         for tp in r.poses {
             let tr = state.tracks.entry(tp.key).or_insert_with(|| Tracked {
                 id: None,
@@ -191,7 +206,7 @@ fn analyse(
                     });
                     tr.id = Some(id);
                     state.totals.entry(id).or_insert(0);
-                    on_event(&Event::Enter {
+                    sink.event(&Event::Enter {
                         person: id,
                         t: state.t,
                     });
@@ -205,8 +220,8 @@ fn analyse(
                     if let Some(mut tr) = state.tracks.remove(&key) {
                         if let Some(id) = tr.id {
                             let reps = tr.counter.finish(params)?;
-                            state.report(id, reps, on_event);
-                            on_event(&Event::Leave {
+                            state.report(id, reps, sink);
+                            sink.event(&Event::Leave {
                                 person: id,
                                 t: state.t,
                             });
@@ -226,8 +241,13 @@ fn analyse(
         }
         due.sort_by_key(|d| d.0);
         for (id, reps) in due {
-            state.report(id, reps, on_event);
+            state.report(id, reps, sink);
         }
+        sink.frame(&LiveFrame {
+            frame: &frame,
+            people: &people,
+            totals: &state.totals,
+        });
         if state.t - last_status.0 >= params.status_every_s {
             let now = Instant::now();
             let secs = now.duration_since(last_status.2).as_secs_f64();
@@ -240,7 +260,7 @@ fn analyse(
             } else {
                 slot.newest_s() - state.t
             };
-            on_event(&Event::Status {
+            sink.event(&Event::Status {
                 t: state.t,
                 fps,
                 frames: state.frames,
@@ -259,7 +279,7 @@ fn analyse(
     }
     rest.sort_by_key(|r| r.0);
     for (id, reps) in rest {
-        state.report(id, reps, on_event);
+        state.report(id, reps, sink);
     }
     Ok(())
 }
