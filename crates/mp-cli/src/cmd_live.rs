@@ -1,12 +1,16 @@
 //! `mp live`: live analysis of a file or of a stream on standard input.
 
+use std::io::Write;
+
 use clap::Args;
 use mp_live::{Event, LiveParams, LiveSource};
 
 /// Arguments of `mp live`.
 #[derive(Args, Debug)]
 pub struct LiveArgs {
-    /// A video file, or `-` for a video stream (e.g. MPEG-TS) on standard input.
+    /// A video file, `-` for a video stream (e.g. MPEG-TS) on standard input,
+    /// a camera (`/dev/video0`) or a network stream (`rtsp://…`, `udp://…`,
+    /// `srt://…`, `http://…`, `tcp://…`).
     pub source: String,
     /// Print one JSON object per line instead of text.
     #[arg(long)]
@@ -37,13 +41,19 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
     let source = LiveSource::parse(&a.source);
     let cancel = crate::progress::ctrl_c_token();
     let json = a.json;
+    // A reader that went away (`mp live … | head`) stops the run.
+    let stop = cancel.clone();
     let mut print = |e: &Event| {
-        if json {
-            if let Ok(line) = serde_json::to_string(e) {
-                println!("{line}");
+        let line = if json {
+            serde_json::to_string(e).ok()
+        } else {
+            text_line(e)
+        };
+        if let Some(line) = line {
+            let mut out = std::io::stdout().lock();
+            if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
+                stop.cancel();
             }
-        } else if let Some(line) = text_line(e) {
-            println!("{line}");
         }
     };
     mp_live::run(&source, &params, &cancel, &mut print)
@@ -70,6 +80,9 @@ fn text_line(e: &Event) -> Option<String> {
             delay,
             ..
         } => format!("{t:8.2} s  {fps:.1} fps, {dropped} frames dropped, {delay:.2} s behind"),
+        Event::Reconnect { attempt, reason, t } => {
+            format!("{t:8.2} s  the source is tried again (attempt {attempt}): {reason}")
+        }
         Event::Error { .. } => return None,
         Event::Summary(s) => {
             let people: Vec<String> = s

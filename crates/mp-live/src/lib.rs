@@ -22,7 +22,7 @@ use serde::Serialize;
 
 pub use counter::{OnlineCounter, Repetition};
 pub use run::run;
-pub use source::{LiveSource, Slot};
+pub use source::{LiveSource, Reconnect, Slot};
 
 /// Why a live run stopped early.
 #[derive(Debug, thiserror::Error)]
@@ -151,7 +151,7 @@ impl LiveParams {
 
 /// What a live run reports, in order. As JSON (`serde_json`), each is an
 /// object whose `type` names the variant (`rep`, `enter`, `leave`,
-/// `status`, `summary`, `error`).
+/// `status`, `reconnect`, `summary`, `error`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase")]
 pub enum Event {
@@ -194,6 +194,15 @@ pub enum Event {
         dropped: usize,
         /// Seconds the last frame analysed is behind the source.
         delay: f64,
+    },
+    /// A network source could not be reached or broke off, and is tried again.
+    Reconnect {
+        /// 1 for the first new try in a row.
+        attempt: u32,
+        /// Why.
+        reason: String,
+        /// Stream time, seconds.
+        t: f64,
     },
     /// Why the run stopped early.
     Error {

@@ -123,11 +123,16 @@ fn run_inner(
         people: pose.tracker.clone(),
     })?;
     let stall = Duration::from_secs_f64(params.stall_timeout_s);
-    let reader = source::open(source, params.realtime, stall)?;
     let drop_late = params
         .drop_late
         .unwrap_or_else(|| source.is_live(params.realtime));
-    let (slot, info) = source::decode_into_slot(reader, drop_late)?;
+    let (slot, info) = source::start(source, params.realtime, stall, drop_late, &mut |r| {
+        sink.event(&Event::Reconnect {
+            attempt: r.attempt,
+            reason: r.reason,
+            t: 0.0,
+        })
+    })?;
     let result = analyse(
         &slot, &info, &mut multi, params, cancel, stall, drop_late, state, sink,
     );
@@ -158,10 +163,21 @@ fn analyse(
         if cancel.is_cancelled() {
             break;
         }
+        for r in slot.take_reconnects() {
+            sink.event(&Event::Reconnect {
+                attempt: r.attempt,
+                reason: r.reason,
+                t: state.t,
+            });
+        }
         let frame = match slot.take(poll) {
             Taken::Frame(f) => f,
             Taken::Ended(Ok(())) => break,
             Taken::Ended(Err(e)) => return Err(LiveError::Source(e)),
+            Taken::Stalled if slot.is_reconnecting() => {
+                waited = Duration::ZERO;
+                continue;
+            }
             Taken::Stalled => {
                 waited += poll;
                 if waited >= stall {
