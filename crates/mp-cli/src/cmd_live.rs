@@ -1,7 +1,11 @@
 //! `mp live`: live analysis of a file or of a stream on standard input.
 
+use std::io::IsTerminal;
+
 use clap::Args;
 use mp_live::{Event, LiveParams, LiveSource};
+
+use crate::live_view::LiveView;
 
 /// Arguments of `mp live`.
 #[derive(Args, Debug)]
@@ -37,10 +41,21 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
     let source = LiveSource::parse(&a.source);
     let cancel = crate::progress::ctrl_c_token();
     let json = a.json;
+    // Text on a terminal: a view redrawn in place, then the summary line.
+    let mut view = (!json && std::io::stdout().is_terminal()).then(LiveView::default);
     let mut print = |e: &Event| {
         if json {
             if let Ok(line) = serde_json::to_string(e) {
                 println!("{line}");
+            }
+        } else if let Some(v) = view.as_mut() {
+            v.update(e);
+            if matches!(e, Event::Summary(_)) {
+                if let Some(line) = text_line(e) {
+                    println!("{line}");
+                }
+            } else {
+                let _ = v.draw(&mut std::io::stdout().lock());
             }
         } else if let Some(line) = text_line(e) {
             println!("{line}");

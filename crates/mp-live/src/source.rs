@@ -52,6 +52,9 @@ impl LiveSource {
     }
 }
 
+/// How long [`Slot::stop`] waits for the decoding thread to end.
+pub const STOP_WAIT: Duration = Duration::from_secs(2);
+
 /// Bytes read from standard input at a time.
 const CHUNK: usize = 64 << 10;
 /// The most bytes of standard input read before giving up finding a video in them.
@@ -193,6 +196,8 @@ struct SlotState {
     newest_s: f64,
     ended: Option<std::result::Result<(), String>>,
     stop: bool,
+    /// The decoding thread has ended and its FFmpeg process with it.
+    decoder_done: bool,
 }
 
 /// The frame waiting for the pose model (see the module docs), shared
@@ -235,10 +240,26 @@ impl Slot {
         self.lock().newest_s
     }
 
-    /// Asks the decoding thread to stop.
+    /// Asks the decoding thread to stop, and waits until it has ended (its
+    /// FFmpeg process stopped) or [`STOP_WAIT`] has passed: it may be waiting
+    /// for bytes of a stalled stream, and then ends with the stream.
     pub fn stop(&self) {
-        self.lock().stop = true;
+        let mut s = self.lock();
+        s.stop = true;
         self.inner.1.notify_all();
+        let deadline = Instant::now() + STOP_WAIT;
+        while !s.decoder_done {
+            let now = Instant::now();
+            if now >= deadline {
+                break;
+            }
+            s = self
+                .inner
+                .1
+                .wait_timeout(s, deadline - now)
+                .map(|(g, _)| g)
+                .unwrap_or_else(|p| p.into_inner().0);
+        }
     }
 
     /// Puts a decoded frame; false when the decoding should stop.
@@ -298,21 +319,30 @@ pub fn decode_into_slot(reader: VideoReader, drop_late: bool) -> Result<(Slot, V
     std::thread::Builder::new()
         .name("live-decode".into())
         .spawn(move || {
-            for frame in reader {
-                match frame {
-                    Ok(f) => {
-                        if !s.put(f) {
-                            return;
-                        }
-                    }
-                    Err(e) => {
-                        s.end(Err(e.to_string()));
-                        return;
-                    }
-                }
-            }
-            s.end(Ok(()));
+            decode(reader, &s);
+            // The reader (and its FFmpeg process) is gone by now.
+            s.lock().decoder_done = true;
+            s.inner.1.notify_all();
         })
         .map_err(|e| LiveError::Source(format!("cannot start the decoding thread: {e}")))?;
     Ok((slot, info))
+}
+
+/// Decodes `reader`'s frames into the slot until it ends or the slot stops;
+/// the reader, and its FFmpeg process, end on return.
+fn decode(reader: VideoReader, s: &Slot) {
+    for frame in reader {
+        match frame {
+            Ok(f) => {
+                if !s.put(f) {
+                    return;
+                }
+            }
+            Err(e) => {
+                s.end(Err(e.to_string()));
+                return;
+            }
+        }
+    }
+    s.end(Ok(()));
 }
