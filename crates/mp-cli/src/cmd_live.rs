@@ -1,9 +1,11 @@
 //! `mp live`: live analysis of a file or of a stream on standard input.
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 
 use clap::Args;
 use mp_live::{Event, LiveParams, LiveSource};
+
+use crate::live_view::LiveView;
 
 /// Arguments of `mp live`.
 #[derive(Args, Debug)]
@@ -43,17 +45,26 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
     let json = a.json;
     // A reader that went away (`mp live … | head`) stops the run.
     let stop = cancel.clone();
+    // Text on a terminal: a view redrawn in place, then the summary line.
+    let mut view = (!json && std::io::stdout().is_terminal()).then(LiveView::default);
     let mut print = |e: &Event| {
-        let line = if json {
-            serde_json::to_string(e).ok()
-        } else {
-            text_line(e)
-        };
-        if let Some(line) = line {
-            let mut out = std::io::stdout().lock();
-            if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
-                stop.cancel();
+        let mut out = std::io::stdout().lock();
+        let written = if let Some(v) = view.as_mut() {
+            v.update(e);
+            match e {
+                Event::Summary(_) => text_line(e).map_or(Ok(()), |l| writeln!(out, "{l}")),
+                _ => v.draw(&mut out),
             }
+        } else {
+            let line = if json {
+                serde_json::to_string(e).ok()
+            } else {
+                text_line(e)
+            };
+            line.map_or(Ok(()), |l| writeln!(out, "{l}"))
+        };
+        if written.and_then(|()| out.flush()).is_err() {
+            stop.cancel();
         }
     };
     mp_live::run(&source, &params, &cancel, &mut print)

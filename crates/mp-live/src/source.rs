@@ -95,6 +95,9 @@ impl LiveSource {
     }
 }
 
+/// How long [`Slot::stop`] waits for the decoding thread to end.
+pub const STOP_WAIT: Duration = Duration::from_secs(2);
+
 /// Bytes read from standard input at a time.
 const CHUNK: usize = 64 << 10;
 /// The longest wait for more bytes before the first bytes of a stream are probed.
@@ -463,6 +466,8 @@ struct SlotState {
     stop: bool,
     reconnects: Vec<Reconnect>,
     reconnecting: bool,
+    /// The decoding thread has ended and its FFmpeg processes with it.
+    decoder_done: bool,
 }
 
 /// A new try at a network source that could not be reached or broke off.
@@ -538,10 +543,26 @@ impl Slot {
         self.lock().stop
     }
 
-    /// Asks the decoding thread to stop.
+    /// Asks the decoding thread to stop, and waits until it has ended (its
+    /// FFmpeg process stopped) or [`STOP_WAIT`] has passed: it may be waiting
+    /// for bytes of a stalled stream, and then ends with the stream.
     pub fn stop(&self) {
-        self.lock().stop = true;
+        let mut s = self.lock();
+        s.stop = true;
         self.inner.1.notify_all();
+        let deadline = Instant::now() + STOP_WAIT;
+        while !s.decoder_done {
+            let now = Instant::now();
+            if now >= deadline {
+                break;
+            }
+            s = self
+                .inner
+                .1
+                .wait_timeout(s, deadline - now)
+                .map(|(g, _)| g)
+                .unwrap_or_else(|p| p.into_inner().0);
+        }
     }
 
     /// Puts a decoded frame; false when the decoding should stop.
@@ -617,7 +638,12 @@ pub fn start(
     let source = source.clone();
     std::thread::Builder::new()
         .name("live-decode".into())
-        .spawn(move || decode(first, &source, realtime, stall, &s))
+        .spawn(move || {
+            decode(first, &source, realtime, stall, &s);
+            // The readers (and their FFmpeg processes) are gone by now.
+            s.lock().decoder_done = true;
+            s.inner.1.notify_all();
+        })
         .map_err(|e| LiveError::Source(format!("cannot start the decoding thread: {e}")))?;
     Ok((slot, info))
 }

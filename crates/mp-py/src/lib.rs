@@ -8,6 +8,7 @@
 //! `maturin build` (see `crates/mp-py/pyproject.toml`).
 
 mod errors;
+mod live;
 mod people;
 mod programs;
 mod run;
@@ -363,6 +364,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyCounts>()?;
     m.add_class::<run::PySummary>()?;
     m.add_class::<run::PyAnalyser>()?;
+    m.add_class::<live::PyLive>()?;
     m.add_function(wrap_pyfunction!(read_track, m)?)?;
     m.add_function(wrap_pyfunction!(people::read_people, m)?)?;
     m.add_function(wrap_pyfunction!(extract, m)?)?;
@@ -372,6 +374,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(predict, m)?)?;
     m.add_function(wrap_pyfunction!(refine, m)?)?;
     m.add_function(wrap_pyfunction!(run::run, m)?)?;
+    m.add_function(wrap_pyfunction!(live::live, m)?)?;
     m.add_function(wrap_pyfunction!(run::grammar_symbols, m)?)?;
     m.add_function(wrap_pyfunction!(run::grammar_learn, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -299,3 +299,30 @@ def refine(
     models: Optional[PathArg] = None,
     concepts: Optional[PathArg] = None,
 ) -> Track: ...
+
+class Live:
+    """The events of a live run (returned by live()): an iterator of dicts, one per line of
+    `mp live --json`. close() (or leaving a `with` block, or dropping the iterator, as a `break`
+    out of a `for` loop does) cancels the run and waits for it and its decoder to end."""
+    def __iter__(self) -> Iterator[dict[str, Any]]: ...
+    def __next__(self) -> dict[str, Any]: ...
+    def close(self) -> None: ...
+    def __enter__(self) -> "Live": ...
+    def __exit__(self, *args: Any) -> None: ...
+
+def live(
+    source: PathArg,
+    realtime: bool = False,
+    duration: Optional[float] = None,
+    window: Optional[float] = None,
+    stall_timeout: Optional[float] = None,
+) -> Live:
+    """Live analysis of a video file, or of a stream on standard input ("-"), as `mp live SOURCE
+    --json`: yields its events as dicts with the keys and values of the JSON lines (`type`: "enter",
+    "rep", "leave", "status", "error", "summary"; the summary always last). Options as `mp live`'s:
+    `realtime` reads a file at its own speed; `duration` stops after that many seconds of stream
+    time; `window` (default 20) the seconds of each person's recent motion counted; `stall_timeout`
+    (default 10) the seconds the stream may go without a frame (None: the defaults of `mp live`).
+    When the run stops on an error, the "error" and "summary" events come first, then the error is
+    raised: PoseError (the source, decoding, the pose model) or ParamError (an option)."""
+    ...
