@@ -5,6 +5,7 @@ use std::io::{IsTerminal, Write};
 use clap::Args;
 use mp_live::{Event, LiveParams, LiveSource};
 
+use crate::live_page::LivePage;
 use crate::live_view::LiveView;
 
 /// Arguments of `mp live`.
@@ -29,6 +30,13 @@ pub struct LiveArgs {
     /// Seconds of each person's recent motion that are counted.
     #[arg(long, default_value_t = LiveParams::default().window_s)]
     pub window: f64,
+    /// Serve a live page (the annotated video, the people and their counts)
+    /// at ADDR while the stream plays: a port (on 127.0.0.1; 0 for a free
+    /// one) or HOST:PORT; without a value 127.0.0.1:8000. After the stream
+    /// ends the page stays until Ctrl-C.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1,
+          default_missing_value = crate::live_page::DEFAULT_ADDR)]
+    pub serve: Option<String>,
 }
 
 /// `mp live SOURCE`.
@@ -67,8 +75,30 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
             stop.cancel();
         }
     };
-    mp_live::run(&source, &params, &cancel, &mut print)
-        .map_err(|e| anyhow::anyhow!("live analysis of {}: {e}", source.name()))?;
+    let page = match &a.serve {
+        Some(addr) => {
+            let page = LivePage::start(crate::live_page::parse_addr(addr)?)?;
+            eprintln!("serving the live page at {}", page.url());
+            Some(page)
+        }
+        None => None,
+    };
+    let result = match &page {
+        Some(page) => mp_live::run(&source, &params, &cancel, &mut page.sink(&mut print)),
+        None => mp_live::run(&source, &params, &cancel, &mut print),
+    };
+    result.map_err(|e| anyhow::anyhow!("live analysis of {}: {e}", source.name()))?;
+    if let Some(page) = page {
+        if !cancel.is_cancelled() {
+            eprintln!(
+                "the stream ended; the page stays at {} until Ctrl-C",
+                page.url()
+            );
+            while !cancel.is_cancelled() {
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+        }
+    }
     Ok(())
 }
 

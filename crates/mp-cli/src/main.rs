@@ -14,6 +14,7 @@ mod cmd_pose;
 mod cmd_refine;
 mod cmd_run;
 mod cmd_video;
+mod live_page;
 mod live_view;
 mod progress;
 mod track_arg;

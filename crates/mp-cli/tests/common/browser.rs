@@ -99,3 +99,32 @@ pub fn check_opens_at(
     );
     dom
 }
+
+/// Runs headless Chromium on a live `url` (a page served by `mp live
+/// --serve`) for `wait_ms` of real time (the page never finishes loading
+/// while its streams are open), with the given extra arguments
+/// (`--dump-dom`, `--screenshot=…`).
+pub fn chromium_live(url: &str, profile: &Path, wait_ms: u32, extra: &[&str]) -> Output {
+    let exe = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .into_iter()
+        .find(|p| Path::new(p).exists())
+        .expect("Chromium not found at /usr/bin/chromium (scripts/setup.sh installs the Debian package)");
+    Command::new(exe)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--no-first-run",
+            "--hide-scrollbars",
+            "--window-size=1280,900",
+        ])
+        .arg(format!("--timeout={wait_ms}"))
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(url)
+        .output()
+        .expect("cannot start Chromium")
+}
