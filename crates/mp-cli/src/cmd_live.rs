@@ -23,6 +23,10 @@ pub struct LiveArgs {
     /// Seconds of each person's recent motion that are counted.
     #[arg(long, default_value_t = LiveParams::default().window_s)]
     pub window: f64,
+    /// Also report each person's concrete program, segment by segment, as
+    /// its segments are committed (`segment` lines).
+    #[arg(long)]
+    pub segments: bool,
 }
 
 /// `mp live SOURCE`.
@@ -32,6 +36,7 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
         duration_s: a.duration,
         stall_timeout_s: a.stall_timeout,
         window_s: a.window,
+        program: a.segments,
         ..LiveParams::default()
     };
     let source = LiveSource::parse(&a.source);
@@ -61,6 +66,17 @@ fn text_line(e: &Event) -> Option<String> {
             end,
             t,
         } => format!("{t:8.2} s  person {person}  repetition {count}  ({start:.2}–{end:.2} s)"),
+        Event::Segment {
+            person,
+            index,
+            start,
+            end,
+            t,
+            summary,
+            ..
+        } => format!(
+            "{t:8.2} s  person {person}  segment {index}  ({start:.2}–{end:.2} s)  {summary}"
+        ),
         Event::Enter { person, t } => format!("{t:8.2} s  person {person} enters"),
         Event::Leave { person, t } => format!("{t:8.2} s  person {person} leaves"),
         Event::Status {
