@@ -37,6 +37,11 @@ pub struct LiveArgs {
     #[arg(long, value_name = "ADDR", num_args = 0..=1,
           default_missing_value = crate::live_page::DEFAULT_ADDR)]
     pub serve: Option<String>,
+    /// Also report each person's concrete program, segment by segment, as
+    /// its segments are committed (`segment` lines; the page of `--serve`
+    /// shows them in any case).
+    #[arg(long)]
+    pub segments: bool,
 }
 
 /// `mp live SOURCE`.
@@ -46,6 +51,8 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
         duration_s: a.duration,
         stall_timeout_s: a.stall_timeout,
         window_s: a.window,
+        // The page shows the program as it grows.
+        program: a.segments || a.serve.is_some(),
         ..LiveParams::default()
     };
     let source = LiveSource::parse(&a.source);
@@ -55,7 +62,11 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
     let stop = cancel.clone();
     // Text on a terminal: a view redrawn in place, then the summary line.
     let mut view = (!json && std::io::stdout().is_terminal()).then(LiveView::default);
+    let segments = a.segments;
     let mut print = |e: &Event| {
+        if !segments && matches!(e, Event::Segment { .. }) {
+            return;
+        }
         let mut out = std::io::stdout().lock();
         let written = if let Some(v) = view.as_mut() {
             v.update(e);
@@ -112,6 +123,17 @@ fn text_line(e: &Event) -> Option<String> {
             end,
             t,
         } => format!("{t:8.2} s  person {person}  repetition {count}  ({start:.2}–{end:.2} s)"),
+        Event::Segment {
+            person,
+            index,
+            start,
+            end,
+            t,
+            summary,
+            ..
+        } => format!(
+            "{t:8.2} s  person {person}  segment {index}  ({start:.2}–{end:.2} s)  {summary}"
+        ),
         Event::Enter { person, t } => format!("{t:8.2} s  person {person} enters"),
         Event::Leave { person, t } => format!("{t:8.2} s  person {person} leaves"),
         Event::Status {

@@ -191,3 +191,64 @@ fn stalled_stream_fails_cleanly() {
     assert!(err.contains("stalled"), "{err}");
     assert_eq!(lines(&out).last().unwrap()["type"], "summary");
 }
+
+/// `mp live FILE --json --segments`: each person's `segment` lines come in
+/// order (`index` 0, 1, …), each starts where the previous one ends, and
+/// together they span the person's frames (from no earlier than their first
+/// analysed frame to no later than the last frame of the file).
+#[test]
+fn segments_tile_each_persons_frames() {
+    let video = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
+    let out = mp()
+        .arg("live")
+        .arg(&video)
+        .args(["--json", "--segments"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{}\n{err}", out.status);
+    let events = lines(&out);
+    let summary = events.last().unwrap();
+    assert_eq!(summary["type"], "summary");
+    let (frames, last_t) = (
+        summary["frames"].as_f64().unwrap(),
+        summary["t"].as_f64().unwrap(),
+    );
+    let dt = last_t / (frames - 1.0);
+    let mut by_person: std::collections::BTreeMap<i64, Vec<&serde_json::Value>> =
+        Default::default();
+    for e in events.iter().filter(|e| e["type"] == "segment") {
+        for key in ["person", "index", "start", "end", "t", "summary", "program"] {
+            assert!(!e[key].is_null(), "no {key}: {e}");
+        }
+        by_person
+            .entry(e["person"].as_i64().unwrap())
+            .or_default()
+            .push(e);
+    }
+    assert!(!by_person.is_empty(), "no segment line");
+    for (person, segs) in &by_person {
+        for (k, s) in segs.iter().enumerate() {
+            assert_eq!(s["index"].as_u64().unwrap(), k as u64, "person {person}");
+            let (start, end) = (s["start"].as_f64().unwrap(), s["end"].as_f64().unwrap());
+            assert!(end > start, "{s}");
+            if k > 0 {
+                let prev = segs[k - 1]["end"].as_f64().unwrap();
+                assert!(
+                    (start - prev).abs() < 1e-6,
+                    "person {person}: {s} after {prev}"
+                );
+            }
+        }
+        let first = segs[0]["start"].as_f64().unwrap();
+        let end = segs[segs.len() - 1]["end"].as_f64().unwrap();
+        assert!(first >= 0.0);
+        assert!(end <= last_t + dt + 1e-6, "{end} past {last_t}");
+    }
+    // The one performer is seen for most of the video.
+    let longest = by_person
+        .values()
+        .map(|s| s[s.len() - 1]["end"].as_f64().unwrap() - s[0]["start"].as_f64().unwrap())
+        .fold(0.0, f64::max);
+    assert!(longest > 0.8 * last_t, "{longest} of {last_t} s");
+}

@@ -267,6 +267,15 @@ fn the_page_shows_the_stream_and_the_final_totals() {
     assert!(!summary.is_empty(), "nobody found: {stdout}");
     assert!(summary.values().any(|n| *n > 0), "no repetition: {stdout}");
     assert_eq!(page, summary, "the page's totals and the summary line");
+    // The program as it grew: segments on the page, none on standard output
+    // (that needs --segments).
+    let program = &dom[dom.find("<ol id=\"program\"").expect("no program panel")..];
+    let program = &program[..program.find("</ol>").unwrap()];
+    assert!(
+        program.matches("<li data-person=").count() > 0,
+        "no segment on the page: {program}"
+    );
+    assert!(!stdout.contains("\"type\":\"segment\""), "{stdout}");
     for (person, n) in &summary {
         assert_eq!(
             reps.get(person).copied().unwrap_or(0),

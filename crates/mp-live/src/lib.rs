@@ -9,9 +9,13 @@
 //! - [`counter`]: the online repetition counter of one person: a sliding
 //!   window of their recent keypoints, counted again every half second with
 //!   the offline counting, turned into a running total that only grows.
+//! - [`program`]: the online concrete program of one person: a buffer of
+//!   their frames not yet committed, segmented again every second with the
+//!   offline synthesis, whose leading segments are committed once stable.
 //! - [`run()`]: the loop over the frames, reporting [`Event`]s.
 
 pub mod counter;
+pub mod program;
 pub mod run;
 pub mod source;
 
@@ -21,6 +25,7 @@ use mp_pose::Frame;
 use serde::Serialize;
 
 pub use counter::{OnlineCounter, Repetition};
+pub use program::{OnlineProgram, ProgramSegment};
 pub use run::run;
 pub use source::{LiveSource, Reconnect, Slot};
 
@@ -86,6 +91,18 @@ pub struct LiveParams {
     /// them for live sources (standard input, `realtime`) and analyses every
     /// frame of a file read as fast as possible.
     pub drop_late: Option<bool>,
+    /// Each confirmed person's concrete program, reported segment by segment
+    /// ([`Event::Segment`]). Default false (segmentation costs CPU).
+    pub program: bool,
+    /// Seconds of stream time between two segmentations of a person's
+    /// uncommitted frames. Default 1.
+    pub program_every_s: f64,
+    /// A stable segment is committed once its end lies this many seconds
+    /// before the last frame. Default 2.
+    pub program_lag_s: f64,
+    /// Uncommitted frames are committed, stable or not, once they span this
+    /// many seconds (more than `program_lag_s`). Default 10.
+    pub program_max_lag_s: f64,
 }
 
 impl Default for LiveParams {
@@ -102,6 +119,10 @@ impl Default for LiveParams {
             duration_s: None,
             realtime: false,
             drop_late: None,
+            program: false,
+            program_every_s: 1.0,
+            program_lag_s: 2.0,
+            program_max_lag_s: 10.0,
         }
     }
 }
@@ -123,6 +144,18 @@ impl LiveParams {
         positive("count_every_s", self.count_every_s)?;
         positive("status_every_s", self.status_every_s)?;
         positive("stall_timeout_s", self.stall_timeout_s)?;
+        positive("program_every_s", self.program_every_s)?;
+        positive("program_lag_s", self.program_lag_s)?;
+        positive("program_max_lag_s", self.program_max_lag_s)?;
+        if self.program_max_lag_s <= self.program_lag_s {
+            return Err(LiveError::Param {
+                name: "program_max_lag_s",
+                reason: format!(
+                    "must be more than program_lag_s ({}), got {}",
+                    self.program_lag_s, self.program_max_lag_s
+                ),
+            });
+        }
         if let Some(d) = self.duration_s {
             positive("duration_s", d)?;
         }
@@ -150,8 +183,8 @@ impl LiveParams {
 }
 
 /// What a live run reports, in order. As JSON (`serde_json`), each is an
-/// object whose `type` names the variant (`rep`, `enter`, `leave`,
-/// `status`, `reconnect`, `summary`, `error`).
+/// object whose `type` names the variant (`rep`, `segment`, `enter`,
+/// `leave`, `status`, `reconnect`, `summary`, `error`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase")]
 pub enum Event {
@@ -167,6 +200,29 @@ pub enum Event {
         end: f64,
         /// Stream time of the frame on which it was reported, seconds.
         t: f64,
+    },
+    /// A segment of a person's concrete program, once committed
+    /// ([`crate::program`]); with `LiveParams::program` only.
+    Segment {
+        /// The person.
+        person: u32,
+        /// The person's segment number, from 0 (it rises by one each time).
+        index: usize,
+        /// Stream time of the segment's first frame, seconds.
+        start: f64,
+        /// Stream time one frame past its last frame, seconds (the next
+        /// segment's `start`; as a repetition's `end`).
+        end: f64,
+        /// Stream time of the frame on which it was reported, seconds.
+        t: f64,
+        /// How many joints follow each kind of primitive, e.g. `"9 stationary, 5 lines, 3 splines"`.
+        summary: String,
+        /// Committed because the person's uncommitted frames reached
+        /// `program_max_lag_s`, before the segment was stable.
+        forced: bool,
+        /// The segment's primitives in the DSL of `mp fit`, one line per
+        /// joint: `name: statement`.
+        program: String,
     },
     /// A person's track was confirmed.
     Enter {

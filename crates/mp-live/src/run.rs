@@ -1,6 +1,7 @@
 //! The live loop: frames from the [`crate::source`], every person tracked
 //! with BlazePose and the people tracker (`mp run`'s), each confirmed
-//! person's repetitions counted online ([`crate::counter`]).
+//! person's repetitions counted online ([`crate::counter`]) and, with
+//! `LiveParams::program`, their concrete program ([`crate::program`]).
 
 use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
@@ -10,15 +11,47 @@ use mp_pose::people::TrackEvent;
 use mp_pose::{BlazePoseParams, MultiPose, MultiPoseParams, SessionParams, VideoInfo};
 
 use crate::counter::{OnlineCounter, Repetition};
+use crate::program::{OnlineProgram, ProgramSegment};
 use crate::source::{self, LiveSource, Taken};
 use crate::{
     Event, LiveError, LiveFrame, LiveParams, PersonPose, PersonTotal, Result, Sink, Summary,
 };
 
-/// One track of the tracker: its person id once confirmed, its counter.
+/// One track of the tracker: its person id once confirmed, its counter,
+/// its program (and its segments committed before it was confirmed).
 struct Tracked {
     id: Option<u32>,
     counter: OnlineCounter,
+    program: Option<OnlineProgram>,
+    segments: Vec<ProgramSegment>,
+}
+
+impl Tracked {
+    fn new(info: &VideoInfo, skeleton: &mp_geom::Skeleton, params: &LiveParams) -> Self {
+        let frame_px = Some(info.width.max(info.height) as f64);
+        Tracked {
+            id: None,
+            counter: OnlineCounter::new(info.fps, skeleton.clone(), params),
+            program: params
+                .program
+                .then(|| OnlineProgram::new(info.fps, skeleton.clone(), frame_px, params)),
+            segments: Vec::new(),
+        }
+    }
+
+    /// The program's segments committed since the last call: every one
+    /// left when `last` (the end of the stream, or the person left).
+    fn segments(&mut self, params: &LiveParams, last: bool) -> Result<Vec<ProgramSegment>> {
+        if let Some(p) = &mut self.program {
+            let more = if last {
+                p.finish(params)?
+            } else {
+                p.update(params)?
+            };
+            self.segments.extend(more);
+        }
+        Ok(std::mem::take(&mut self.segments))
+    }
 }
 
 /// The state of a run, kept apart from the loop so that the summary can be
@@ -46,6 +79,28 @@ impl State {
                     total_repetitions: *n,
                 })
                 .collect(),
+        }
+    }
+
+    fn report_segments(
+        &self,
+        id: u32,
+        tr: &Tracked,
+        segs: Vec<ProgramSegment>,
+        sink: &mut dyn Sink,
+    ) {
+        let joints = tr.program.as_ref().map_or(&[][..], |p| p.joints());
+        for s in segs {
+            sink.event(&Event::Segment {
+                person: id,
+                index: s.index,
+                start: s.start_frame as f64 / self.fps,
+                end: s.end_frame as f64 / self.fps,
+                t: self.t,
+                summary: s.summary(),
+                forced: s.forced,
+                program: s.dsl(joints),
+            });
         }
     }
 
@@ -206,20 +261,24 @@ fn analyse(
             })
             .collect();
         for tp in r.poses {
-            let tr = state.tracks.entry(tp.key).or_insert_with(|| Tracked {
-                id: None,
-                counter: OnlineCounter::new(info.fps, skeleton.clone(), params),
-            });
+            let tr = state
+                .tracks
+                .entry(tp.key)
+                .or_insert_with(|| Tracked::new(info, &skeleton, params));
+            if let Some(p) = &mut tr.program {
+                let (pts, vis) = (tp.pose.keypoints_px.clone(), tp.pose.visibility.clone());
+                tr.segments.extend(p.push(frame.index, pts, vis, params)?);
+            }
             tr.counter
                 .push(frame.index, tp.pose.keypoints_px, tp.pose.visibility);
         }
         for e in r.events {
             match e {
                 TrackEvent::Confirmed { key, id, .. } => {
-                    let tr = state.tracks.entry(key).or_insert_with(|| Tracked {
-                        id: None,
-                        counter: OnlineCounter::new(info.fps, skeleton.clone(), params),
-                    });
+                    let tr = state
+                        .tracks
+                        .entry(key)
+                        .or_insert_with(|| Tracked::new(info, &skeleton, params));
                     tr.id = Some(id);
                     state.totals.entry(id).or_insert(0);
                     sink.event(&Event::Enter {
@@ -230,6 +289,9 @@ fn analyse(
                 TrackEvent::Dropped { key, keep_until } => {
                     if let Some(tr) = state.tracks.get_mut(&key) {
                         tr.counter.retract_after(keep_until);
+                        if let Some(p) = &mut tr.program {
+                            p.retract_after(keep_until);
+                        }
                     }
                 }
                 TrackEvent::Ended { key } => {
@@ -237,6 +299,8 @@ fn analyse(
                         if let Some(id) = tr.id {
                             let reps = tr.counter.finish(params)?;
                             state.report(id, reps, sink);
+                            let segs = tr.segments(params, true)?;
+                            state.report_segments(id, &tr, segs, sink);
                             sink.event(&Event::Leave {
                                 person: id,
                                 t: state.t,
@@ -247,17 +311,21 @@ fn analyse(
             }
         }
         let mut due = Vec::new();
-        for tr in state.tracks.values_mut() {
+        for (key, tr) in state.tracks.iter_mut() {
             if let Some(id) = tr.id {
                 let reps = tr.counter.update(params)?;
-                if !reps.is_empty() {
-                    due.push((id, reps));
+                let segs = tr.segments(params, false)?;
+                if !reps.is_empty() || !segs.is_empty() {
+                    due.push((id, *key, reps, segs));
                 }
             }
         }
         due.sort_by_key(|d| d.0);
-        for (id, reps) in due {
+        for (id, key, reps, segs) in due {
             state.report(id, reps, sink);
+            if let Some(tr) = state.tracks.get(&key) {
+                state.report_segments(id, tr, segs, sink);
+            }
         }
         sink.frame(&LiveFrame {
             frame: &frame,
@@ -287,15 +355,23 @@ fn analyse(
         }
     }
     // The end: every person still in view is counted once more.
-    let mut rest: Vec<(u32, Vec<Repetition>)> = Vec::new();
-    for tr in state.tracks.values_mut() {
+    let mut rest = Vec::new();
+    for (key, tr) in state.tracks.iter_mut() {
         if let Some(id) = tr.id {
-            rest.push((id, tr.counter.finish(params)?));
+            rest.push((
+                id,
+                *key,
+                tr.counter.finish(params)?,
+                tr.segments(params, true)?,
+            ));
         }
     }
     rest.sort_by_key(|r| r.0);
-    for (id, reps) in rest {
+    for (id, key, reps, segs) in rest {
         state.report(id, reps, sink);
+        if let Some(tr) = state.tracks.get(&key) {
+            state.report_segments(id, tr, segs, sink);
+        }
     }
     Ok(())
 }
