@@ -3,13 +3,19 @@
 its final count with `mp loops`, and each labelled cycle end with the wall-clock
 time of the `rep` line that brings the count to it.
 
-    python3 scripts/live_measure.py [--mp target/release/mp] NAME...
+    python3 scripts/live_measure.py [--mp target/release/mp] [--encode] NAME...
+
+The video is encoded once into MPEG-TS (libx264, zerolatency) and sent at its
+own speed without encoding again (`ffmpeg -re -i V.ts -c copy -f mpegts
+pipe:1`), as a camera's stream arrives encoded; with `--encode` the sender
+encodes while it sends (`ffmpeg -re -i V.mp4 -c:v libx264 -tune zerolatency
+-f mpegts pipe:1`), which takes CPU from the analysis on the same machine.
 
 NAME is a video of quva_repetition/videos without `.mp4` (e.g. 023_fitness);
 the data folder is MP_DATA_DIR, else ../shared/data. Prints one Markdown table
 row per video (docs/RESULTS.md, "Live analysis").
 """
-import argparse, ast, json, os, struct, subprocess, sys, time
+import argparse, ast, json, os, struct, subprocess, sys, tempfile, time
 
 
 def npy_ints(path):
@@ -23,6 +29,7 @@ def npy_ints(path):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--mp", default="target/debug/mp")
+    ap.add_argument("--encode", action="store_true")
     ap.add_argument("names", nargs="+")
     a = ap.parse_args()
     data = os.environ.get("MP_DATA_DIR", "../shared/data") + "/quva_repetition"
@@ -36,9 +43,15 @@ def main():
         num, den = rate.decode().strip().split("/")
         fps = float(num) / float(den)
         loops = json.loads(subprocess.check_output([a.mp, "loops", v, "--json"]))["repetitions"]["total"]
+        encode = ["-an", "-c:v", "libx264", "-tune", "zerolatency", "-f", "mpegts"]
+        if a.encode:
+            sender = ["-re", "-i", v] + encode + ["pipe:1"]
+        else:
+            ts = os.path.join(tempfile.mkdtemp(), "v.ts")
+            subprocess.run(["ffmpeg", "-v", "error", "-nostdin", "-i", v] + encode + [ts], check=True)
+            sender = ["-re", "-i", ts, "-c", "copy", "-f", "mpegts", "pipe:1"]
         t0 = time.time()
-        ff = subprocess.Popen(["ffmpeg", "-v", "error", "-nostdin", "-re", "-i", v, "-an", "-c:v", "libx264",
-                               "-tune", "zerolatency", "-f", "mpegts", "pipe:1"], stdout=subprocess.PIPE)
+        ff = subprocess.Popen(["ffmpeg", "-v", "error", "-nostdin"] + sender, stdout=subprocess.PIPE)
         mp = subprocess.Popen([a.mp, "live", "-", "--json"], stdin=ff.stdout, stdout=subprocess.PIPE)
         ff.stdout.close()
         events = [(time.time() - t0, json.loads(line)) for line in mp.stdout]
