@@ -26,11 +26,9 @@
 //!   offline count of the same frames whenever the earlier countings agreed
 //!   with the last one.
 
-use std::collections::VecDeque;
+use mp_geom::Skeleton;
 
-use mp_geom::{Skeleton, Track, Units};
-use ndarray::{Array2, Array3};
-
+use crate::poses::Poses;
 use crate::{LiveParams, Result};
 
 /// One repetition reported.
@@ -44,24 +42,13 @@ pub struct Repetition {
     pub end_frame: usize,
 }
 
-/// One stream frame of the window.
-struct Row {
-    frame: usize,
-    points: Vec<[f64; 2]>,
-    conf: Vec<f64>,
-}
-
 /// See the module docs.
 pub struct OnlineCounter {
-    fps: f64,
-    skeleton: Skeleton,
-    coco: bool,
     max_frames: usize,
     every: usize,
-    max_gap: usize,
     confirm_periods: f64,
     min_confidence: f64,
-    rows: VecDeque<Row>,
+    rows: Poses,
     last_counted: Option<usize>,
     reported_until: usize,
     cycles: f64,
@@ -74,19 +61,12 @@ impl OnlineCounter {
     /// counted in COCO-17 unless `params.analysis.pose.all_joints` (as `mp run`).
     pub fn new(fps: f64, skeleton: Skeleton, params: &LiveParams) -> Self {
         let frames = |s: f64| (s * fps).round().max(1.0) as usize;
-        let coco = !params.analysis.pose.all_joints
-            && skeleton.name != "coco17"
-            && skeleton.maps_to_coco17();
         OnlineCounter {
-            fps,
-            skeleton,
-            coco,
             max_frames: frames(params.window_s).max(4),
             every: frames(params.count_every_s),
-            max_gap: (params.max_gap_s * fps).round() as usize,
             confirm_periods: params.confirm_periods,
             min_confidence: params.min_confidence,
-            rows: VecDeque::new(),
+            rows: Poses::new(fps, skeleton, params),
             last_counted: None,
             reported_until: 0,
             cycles: 0.0,
@@ -119,62 +99,25 @@ impl OnlineCounter {
     /// A short gap since the previous pose (dropped frames) is filled by
     /// linear interpolation; a longer one stays empty (no pose).
     pub fn push(&mut self, frame: usize, points: Vec<[f64; 2]>, conf: Vec<f64>) {
-        if let Some(last) = self.rows.back() {
-            if frame <= last.frame {
-                return;
-            }
-            let gap = frame - last.frame - 1;
-            if gap > 0 && gap <= self.max_gap && last.points.len() == points.len() {
-                let (f0, p0, c0) = (last.frame, last.points.clone(), last.conf.clone());
-                for g in 1..=gap {
-                    let a = g as f64 / (gap + 1) as f64;
-                    let pts = p0
-                        .iter()
-                        .zip(&points)
-                        .map(|(p, q)| [p[0] + a * (q[0] - p[0]), p[1] + a * (q[1] - p[1])])
-                        .collect();
-                    let cf = c0.iter().zip(&conf).map(|(p, q)| p.min(*q)).collect();
-                    self.push_row(Row {
-                        frame: f0 + g,
-                        points: pts,
-                        conf: cf,
-                    });
-                }
-            }
-        }
-        self.push_row(Row {
-            frame,
-            points,
-            conf,
-        });
-    }
-
-    fn push_row(&mut self, row: Row) {
-        let last = row.frame;
-        self.rows.push_back(row);
-        while self
-            .rows
-            .front()
-            .is_some_and(|f| last - f.frame >= self.max_frames)
-        {
-            self.rows.pop_front();
+        self.rows.push(frame, points, conf);
+        if let Some(last) = self.rows.last_frame() {
+            self.rows
+                .forget_before((last + 1).saturating_sub(self.max_frames));
         }
         self.longest = self.longest.max(self.rows.len());
     }
 
     /// Takes back the poses after stream frame `frame` (the tracker took them back).
     pub fn retract_after(&mut self, frame: usize) {
-        while self.rows.back().is_some_and(|r| r.frame > frame) {
-            self.rows.pop_back();
-        }
+        self.rows.retract_after(frame);
     }
 
     /// Whether the window is due to be counted again.
     pub fn due(&self) -> bool {
-        match (self.rows.back(), self.last_counted) {
+        match (self.rows.last_frame(), self.last_counted) {
             (None, _) => false,
             (Some(_), None) => true,
-            (Some(b), Some(c)) => b.frame >= c + self.every,
+            (Some(b), Some(c)) => b >= c + self.every,
         }
     }
 
@@ -193,39 +136,16 @@ impl OnlineCounter {
     }
 
     fn count_window(&mut self, params: &LiveParams, last: bool) -> Result<Vec<Repetition>> {
-        let (Some(first), Some(back)) = (self.rows.front(), self.rows.back()) else {
+        let Some((first, back)) = self.rows.span() else {
             return Ok(Vec::new());
         };
-        let (first, back) = (first.frame, back.frame);
         self.last_counted = Some(back);
-        let n = back - first + 1;
-        if n < 4 {
+        if back - first + 1 < 4 {
             return Ok(Vec::new());
         }
-        let j = self.skeleton.len();
-        let mut pos = Array3::<f64>::zeros((n, j, 2));
-        let mut conf = Array2::<f64>::zeros((n, j));
-        for r in &self.rows {
-            let t = r.frame - first;
-            for q in 0..j.min(r.points.len()).min(r.conf.len()) {
-                let (p, c) = (r.points[q], r.conf[q]);
-                if p.iter().all(|v| v.is_finite()) && c.is_finite() {
-                    pos[[t, q, 0]] = p[0];
-                    pos[[t, q, 1]] = p[1];
-                    conf[[t, q]] = c.clamp(0.0, 1.0);
-                }
-            }
-        }
-        let mut track = Track::new(
-            pos,
-            Some(conf),
-            self.fps,
-            Units::Pixels,
-            self.skeleton.clone(),
-        )?;
-        if self.coco {
-            track = track.to_coco17()?;
-        }
+        let Some(track) = self.rows.track()? else {
+            return Ok(Vec::new());
+        };
         let counts = mp_pipeline::count(&track, None, &params.analysis)?;
         let mut out = Vec::new();
         // An unsure counting (the window holds too few cycles, or the
@@ -265,6 +185,8 @@ impl OnlineCounter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mp_geom::{Track, Units};
+    use ndarray::{Array2, Array3};
 
     /// A COCO-17 pose whose wrists and elbows swing with period `period` frames.
     fn pose(f: usize, period: f64) -> (Vec<[f64; 2]>, Vec<f64>) {

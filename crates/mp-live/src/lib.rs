@@ -15,6 +15,7 @@
 //! - [`run()`]: the loop over the frames, reporting [`Event`]s.
 
 pub mod counter;
+mod poses;
 pub mod program;
 pub mod run;
 pub mod source;

@@ -24,12 +24,10 @@
 //! `max_gap_s`) without overlap; each keeps the primitives the segmentation
 //! of its buffer gave it.
 
-use std::collections::VecDeque;
-
 use mp_concrete::{dsl, Program, Segment};
-use mp_geom::{Primitive, Skeleton, Track, Units};
-use ndarray::{Array2, Array3};
+use mp_geom::{Primitive, Skeleton, Track};
 
+use crate::poses::Poses;
 use crate::{LiveError, LiveParams, Result};
 
 /// One committed segment of a person's program.
@@ -97,24 +95,13 @@ impl ProgramSegment {
     }
 }
 
-/// One stream frame of the buffer.
-struct Row {
-    frame: usize,
-    points: Vec<[f64; 2]>,
-    conf: Vec<f64>,
-}
-
 /// See the module docs.
 pub struct OnlineProgram {
-    fps: f64,
-    skeleton: Skeleton,
-    coco: bool,
     frame_px: Option<f64>,
     every: usize,
     lag: usize,
     max_frames: usize,
-    max_gap: usize,
-    rows: VecDeque<Row>,
+    rows: Poses,
     /// Boundaries (stream frames) of the last segmentation.
     previous: Vec<usize>,
     last_segmented: Option<usize>,
@@ -130,25 +117,15 @@ impl OnlineProgram {
     /// COCO-17 unless `params.analysis.pose.all_joints` (as `mp run`).
     pub fn new(fps: f64, skeleton: Skeleton, frame_px: Option<f64>, params: &LiveParams) -> Self {
         let frames = |s: f64| (s * fps).round().max(1.0) as usize;
-        let coco = !params.analysis.pose.all_joints
-            && skeleton.name != "coco17"
-            && skeleton.maps_to_coco17();
-        let joints = if coco {
-            Skeleton::coco17().joints
-        } else {
-            skeleton.joints.clone()
-        };
+        let rows = Poses::new(fps, skeleton, params);
+        let joints = rows.joints();
         let lag = (params.program_lag_s * fps).round() as usize;
         OnlineProgram {
-            fps,
-            skeleton,
-            coco,
             frame_px,
             every: frames(params.program_every_s),
             lag,
             max_frames: frames(params.program_max_lag_s).max(lag + 2),
-            max_gap: (params.max_gap_s * fps).round() as usize,
-            rows: VecDeque::new(),
+            rows,
             previous: Vec::new(),
             last_segmented: None,
             next_index: 0,
@@ -175,7 +152,7 @@ impl OnlineProgram {
     /// The most stream frames the buffer may hold: `program_max_lag_s` of
     /// frames, plus a filled gap of up to `max_gap_s` pushed at once.
     pub fn max_buffer(&self) -> usize {
-        self.max_frames + self.max_gap
+        self.max_frames + self.rows.max_gap()
     }
 
     /// Segments committed so far.
@@ -195,36 +172,10 @@ impl OnlineProgram {
         params: &LiveParams,
     ) -> Result<Vec<ProgramSegment>> {
         let mut out = Vec::new();
-        if let Some(last) = self.rows.back() {
-            if frame <= last.frame {
-                return Ok(out);
-            }
-            let gap = frame - last.frame - 1;
-            if gap > 0 && gap <= self.max_gap && last.points.len() == points.len() {
-                let (f0, p0, c0) = (last.frame, last.points.clone(), last.conf.clone());
-                for g in 1..=gap {
-                    let a = g as f64 / (gap + 1) as f64;
-                    let pts = p0
-                        .iter()
-                        .zip(&points)
-                        .map(|(p, q)| [p[0] + a * (q[0] - p[0]), p[1] + a * (q[1] - p[1])])
-                        .collect();
-                    let cf = c0.iter().zip(&conf).map(|(p, q)| p.min(*q)).collect();
-                    self.rows.push_back(Row {
-                        frame: f0 + g,
-                        points: pts,
-                        conf: cf,
-                    });
-                }
-            } else if gap > 0 {
-                out = self.finish(params)?;
-            }
+        if self.rows.breaks_at(frame) {
+            out = self.finish(params)?;
         }
-        self.rows.push_back(Row {
-            frame,
-            points,
-            conf,
-        });
+        self.rows.push(frame, points, conf);
         self.longest = self.longest.max(self.rows.len());
         Ok(out)
     }
@@ -232,18 +183,16 @@ impl OnlineProgram {
     /// Takes back the poses after stream frame `frame` (the tracker took
     /// them back); frames committed already stay.
     pub fn retract_after(&mut self, frame: usize) {
-        while self.rows.back().is_some_and(|r| r.frame > frame) {
-            self.rows.pop_back();
-        }
+        self.rows.retract_after(frame);
     }
 
     /// Whether the buffer is due to be segmented again.
     pub fn due(&self) -> bool {
-        match (self.rows.back(), self.last_segmented) {
+        match (self.rows.last_frame(), self.last_segmented) {
             (None, _) => false,
             _ if self.rows.len() >= self.max_frames => true,
             (Some(_), None) => self.rows.len() >= self.every,
-            (Some(b), Some(c)) => b.frame >= c + self.every,
+            (Some(b), Some(c)) => b >= c + self.every,
         }
     }
 
@@ -265,44 +214,11 @@ impl OnlineProgram {
         Ok(out)
     }
 
-    /// The buffer as a track (stream frames `first..`), in the program's joints.
-    fn buffer_track(&self) -> Result<Option<Track>> {
-        let (Some(first), Some(back)) = (self.rows.front(), self.rows.back()) else {
-            return Ok(None);
-        };
-        let n = back.frame - first.frame + 1;
-        let j = self.skeleton.len();
-        let mut pos = Array3::<f64>::zeros((n, j, 2));
-        let mut conf = Array2::<f64>::zeros((n, j));
-        for r in &self.rows {
-            let t = r.frame - first.frame;
-            for q in 0..j.min(r.points.len()).min(r.conf.len()) {
-                let (p, c) = (r.points[q], r.conf[q]);
-                if p.iter().all(|v| v.is_finite()) && c.is_finite() {
-                    pos[[t, q, 0]] = p[0];
-                    pos[[t, q, 1]] = p[1];
-                    conf[[t, q]] = c.clamp(0.0, 1.0);
-                }
-            }
-        }
-        let mut track = Track::new(
-            pos,
-            Some(conf),
-            self.fps,
-            Units::Pixels,
-            self.skeleton.clone(),
-        )?;
-        if self.coco {
-            track = track.to_coco17()?;
-        }
-        Ok(Some(track))
-    }
-
     fn segment_buffer(&mut self, params: &LiveParams, last: bool) -> Result<Vec<ProgramSegment>> {
-        let Some(track) = self.buffer_track()? else {
+        let Some(track) = self.rows.track()? else {
             return Ok(Vec::new());
         };
-        let first = self.rows.front().map_or(0, |r| r.frame);
+        let first = self.rows.span().map_or(0, |s| s.0);
         let end = first + track.n_frames();
         self.last_segmented = Some(end - 1);
         let min_conf = params.analysis.analysis.synth.min_confidence;
@@ -353,9 +269,7 @@ impl OnlineProgram {
         let n_stable = take - forced.min(take);
         let mut out = Vec::with_capacity(take);
         for (k, (s, e, segment)) in segments.into_iter().take(take).enumerate() {
-            while self.rows.front().is_some_and(|r| r.frame < e) {
-                self.rows.pop_front();
-            }
+            self.rows.forget_before(e);
             out.push(ProgramSegment {
                 index: self.next_index,
                 start_frame: s,
