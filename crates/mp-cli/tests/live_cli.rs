@@ -8,16 +8,9 @@ use std::io::Write;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-fn mp() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_mp"))
-}
+mod common;
 
-fn lines(out: &Output) -> Vec<serde_json::Value> {
-    String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON ({e}): {l}")))
-        .collect()
-}
+use common::{json_lines as lines, mp_command as mp};
 
 /// Expects exit status 1, no panic, and a summary line last; returns stderr.
 fn failed(out: &Output) -> String {

@@ -7,32 +7,39 @@ use std::process::{Command, Output};
 /// Runs headless Chromium on `page` with a URL fragment (`#frame=55`, or
 /// empty) and the given extra arguments (`--dump-dom`, `--screenshot=…`).
 pub fn chromium_at(page: &Path, fragment: &str, profile: &Path, extra: &[&str]) -> Output {
-    let exe = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
-        .into_iter()
-        .find(|p| Path::new(p).exists())
-        .expect("Chromium not found at /usr/bin/chromium (scripts/setup.sh installs the Debian package)");
     let url = format!(
         "file://{}{fragment}",
         page.canonicalize().unwrap().display()
     );
-    Command::new(exe)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--no-first-run",
-            "--hide-scrollbars",
-            "--window-size=1280,900",
-            "--virtual-time-budget=3000",
-        ])
-        .arg(format!("--user-data-dir={}", profile.display()))
+    headless(profile)
+        .arg("--virtual-time-budget=3000")
         .args(extra)
         .arg(url)
         .output()
         .expect("cannot start Chromium")
+}
+
+/// Headless Chromium with a fresh profile and a fixed window, as every test
+/// runs it.
+fn headless(profile: &Path) -> Command {
+    let exe = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .into_iter()
+        .find(|p| Path::new(p).exists())
+        .expect("Chromium not found at /usr/bin/chromium (scripts/setup.sh installs the Debian package)");
+    let mut cmd = Command::new(exe);
+    cmd.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        "--hide-scrollbars",
+        "--window-size=1280,900",
+    ])
+    .arg(format!("--user-data-dir={}", profile.display()));
+    cmd
 }
 
 /// The start tag of the element whose start tag begins with `start` (e.g.
@@ -105,24 +112,8 @@ pub fn check_opens_at(
 /// while its streams are open), with the given extra arguments
 /// (`--dump-dom`, `--screenshot=…`).
 pub fn chromium_live(url: &str, profile: &Path, wait_ms: u32, extra: &[&str]) -> Output {
-    let exe = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
-        .into_iter()
-        .find(|p| Path::new(p).exists())
-        .expect("Chromium not found at /usr/bin/chromium (scripts/setup.sh installs the Debian package)");
-    Command::new(exe)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--no-first-run",
-            "--hide-scrollbars",
-            "--window-size=1280,900",
-        ])
+    headless(profile)
         .arg(format!("--timeout={wait_ms}"))
-        .arg(format!("--user-data-dir={}", profile.display()))
         .args(extra)
         .arg(url)
         .output()

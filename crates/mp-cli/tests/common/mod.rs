@@ -41,6 +41,14 @@ pub fn refused(args: &[&str]) -> String {
     stderr
 }
 
+/// The JSON lines of a command's standard output (`mp live --json`).
+pub fn json_lines(out: &Output) -> Vec<serde_json::Value> {
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON ({e}): {l}")))
+        .collect()
+}
+
 /// The `mp` binary as a command to build on.
 pub fn mp_command() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mp"))
