@@ -23,26 +23,8 @@ fn failed(out: &Output) -> String {
 /// `ffmpeg -readrate SPEED -i VIDEO … -f mpegts pipe:1 | mp live - --json`
 /// (speed 1: the video's own, `-re`).
 fn stream_live(video: &Path, speed: f64) -> Output {
-    let mut ff = Command::new("ffmpeg")
-        .args([
-            "-v",
-            "error",
-            "-nostdin",
-            "-readrate",
-            &speed.to_string(),
-            "-i",
-        ])
-        .arg(video)
-        .args([
-            "-an",
-            "-c:v",
-            "libx264",
-            "-tune",
-            "zerolatency",
-            "-f",
-            "mpegts",
-            "pipe:1",
-        ])
+    let mut ff = common::mpegts_sender(video, speed)
+        .arg("pipe:1")
         .stdout(Stdio::piped())
         .spawn()
         .expect("ffmpeg");

@@ -25,18 +25,7 @@ fn free_port() -> u16 {
 /// FFmpeg serving `video` as MPEG-TS, at half its own speed, to the first
 /// client of `tcp://127.0.0.1:PORT`.
 fn serve(video: &Path, port: u16) -> Child {
-    Command::new("ffmpeg")
-        .args(["-v", "error", "-nostdin", "-readrate", "0.5", "-i"])
-        .arg(video)
-        .args([
-            "-an",
-            "-c:v",
-            "libx264",
-            "-tune",
-            "zerolatency",
-            "-f",
-            "mpegts",
-        ])
+    common::mpegts_sender(video, 0.5)
         .arg(format!("tcp://127.0.0.1:{port}?listen=1"))
         .stdout(Stdio::null())
         .stderr(Stdio::null())

@@ -49,6 +49,31 @@ pub fn json_lines(out: &Output) -> Vec<serde_json::Value> {
         .collect()
 }
 
+/// FFmpeg sending `video` as MPEG-TS (H.264, zerolatency) at `speed` times
+/// its own rate; the caller adds where to (`pipe:1`, `tcp://…?listen=1`).
+pub fn mpegts_sender(video: &std::path::Path, speed: f64) -> Command {
+    let mut cmd = Command::new("ffmpeg");
+    cmd.args([
+        "-v",
+        "error",
+        "-nostdin",
+        "-readrate",
+        &speed.to_string(),
+        "-i",
+    ])
+    .arg(video)
+    .args([
+        "-an",
+        "-c:v",
+        "libx264",
+        "-tune",
+        "zerolatency",
+        "-f",
+        "mpegts",
+    ]);
+    cmd
+}
+
 /// The `mp` binary as a command to build on.
 pub fn mp_command() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mp"))
