@@ -215,6 +215,7 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
             smoothing: args.smooth.then(SmoothingParams::default),
             // MediaPipe's Python API stamps frames 1/30 s apart.
             fixed_frame_interval_s: Some(1.0 / 30.0),
+            ..ExtractOptions::default()
         };
         let ex = extract(source, estimator.as_mut(), &opts, |_, _| {})
             .map_err(|e| anyhow::anyhow!("{e}"))?;

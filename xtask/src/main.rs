@@ -14,6 +14,7 @@ mod eval_intervals;
 mod eval_loops;
 mod eval_people;
 mod eval_pose;
+mod eval_pose_rate;
 mod eval_refine;
 mod eval_refine_cv;
 mod eval_video;
@@ -69,6 +70,8 @@ enum Eval {
     Concrete(eval_concrete::EvalConcreteArgs),
     /// Keypoints (BlazePose / MoveNet) against MediaPipe's reference, PCK on the COCO sample, speed.
     Pose(eval_pose::EvalPoseArgs),
+    /// The pose model on every 2nd or 3rd frame (`--pose-fps`) against every frame: counts, keypoints, programs, time.
+    PoseRate(eval_pose_rate::EvalPoseRateArgs),
     /// Forecasting (Constant, NN, Loop, AR on Φ / Θ): PCK or (PA-)MPJPE per horizon, with and without DTW.
     Forecast(eval_forecast::EvalForecastArgs),
     /// Learned motion refinement: injected flaws (MPJPE), generated motion (FID, accuracy, diversity, multimodality), ablation.
@@ -91,6 +94,7 @@ fn main() {
             Eval::People(a) => eval_people::run(&a),
             Eval::Grammar(a) => eval_grammar::run(&a),
             Eval::Pose(a) => eval_pose::run(&a),
+            Eval::PoseRate(a) => eval_pose_rate::run(&a),
             Eval::Forecast(a) => eval_forecast::run(&a),
             Eval::Refine(a) => eval_refine::run(&a),
             Eval::Interpolation(a) => eval_video::run_interpolation(&a),

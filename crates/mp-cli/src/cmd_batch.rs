@@ -38,6 +38,9 @@ pub struct BatchArgs {
     /// Keep all of the pose model's joints (BlazePose: 33) instead of the COCO-17 body joints.
     #[arg(long)]
     pub all_joints: bool,
+    /// How often the pose model runs: all (every frame), auto (12 poses a second: every second frame at 24–30 fps), or N poses a second; the frames between are filled from the motion.
+    #[arg(long, value_name = "N|auto|all", default_value_t = Params::default().pose.rate.label())]
+    pub pose_fps: String,
     /// Largest side of the video frame in pixels, for track inputs (scale = frame / 512); default: from each motion's extent.
     #[arg(long)]
     pub frame_size: Option<f64>,
@@ -66,6 +69,7 @@ impl BatchArgs {
         p.params.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
         p.params.pose.max_frames = self.max_frames;
         p.params.pose.all_joints = self.all_joints;
+        p.params.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
         p.params.output.overlay_video = !self.no_video;
         self.people.apply(&mut p.params)?;
         p.validate()?;

@@ -53,6 +53,9 @@ pub struct ExtractArgs {
     /// Most people tracked at once.
     #[arg(long, default_value_t = mp_pose::PeopleParams::default().max_people)]
     pub max_people: usize,
+    /// How often the pose model runs: all (every frame), auto (12 poses a second: every second frame at 24–30 fps), or N poses a second; the frames between are filled from the motion
+    #[arg(long, value_name = "N|auto|all", default_value_t = mp_pipeline::Params::default().pose.rate.label())]
+    pub pose_fps: String,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
@@ -78,12 +81,24 @@ fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {
     pb
 }
 
+/// ` (pose model on N of M frames)` when it skipped some, else nothing.
+fn posed_note(posed: &[bool]) -> String {
+    let n = posed.iter().filter(|&&p| p).count();
+    if n == posed.len() {
+        String::new()
+    } else {
+        format!(" (pose model on {n} of {} frames)", posed.len())
+    }
+}
+
 /// The progress bar and extraction options of `mp extract`.
 fn progress_and_options(
     a: &ExtractArgs,
     frame_count: Option<usize>,
+    fps: f64,
     name: &str,
-) -> (ProgressBar, ExtractOptions) {
+) -> Result<(ProgressBar, ExtractOptions)> {
+    let rate = mp_pipeline::PoseRate::parse(&a.pose_fps)?;
     let total = match (frame_count, a.max_frames) {
         (Some(n), Some(m)) => Some(n.min(m)),
         (n, None) => n,
@@ -94,15 +109,17 @@ fn progress_and_options(
     let opts = ExtractOptions {
         smoothing: a.smooth.then(SmoothingParams::default),
         max_frames: a.max_frames,
+        pose_every: rate.stride(fps),
         ..ExtractOptions::default()
     };
-    (pb, opts)
+    Ok((pb, opts))
 }
 
 /// `mp extract`: keypoints of a video or image written as a track.
 pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     crate::track_arg::refuse_track_for_extract(&a.video)?;
     let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
+    mp_pipeline::PoseRate::parse(&a.pose_fps)?;
     if a.world && model == ModelChoice::MoveNet {
         bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
     }
@@ -130,20 +147,21 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         a.recover,
     )
     .map_err(pose_err)?;
-    let (pb, opts) = progress_and_options(a, source.frame_count, est.name());
+    let (pb, opts) = progress_and_options(a, source.frame_count, source.fps, est.name())?;
     let ex = extract(source, est.as_mut(), &opts, |done, _| {
         pb.set_position(done as u64)
     })
     .map_err(pose_err)
     .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
     pb.finish_and_clear();
-    let mut track: Track = if a.world {
+    let track: Track = if a.world {
         ex.world
             .clone()
             .context("the model gave no world coordinates")?
     } else {
         ex.track.clone()
     };
+    let mut track = mp_pipeline::pose_rate::fill_track(&track, &ex.posed)?;
     if !a.all_joints && !a.world && track.skeleton().name != "coco17" {
         track = track.to_coco17().context("mapping to COCO-17")?;
     }
@@ -154,10 +172,11 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         .with_context(|| format!("writing {}", a.output.display()))?;
     if !a.quiet {
         println!(
-            "{}: {} frames at {:.3} fps, pose in {:.1}% ({} joints, {}), {:.1} frames/s → {}",
+            "{}: {} frames at {:.3} fps{}, pose in {:.1}% ({} joints, {}), {:.1} frames/s → {}",
             a.video.display(),
             track.n_frames(),
             track.fps(),
+            posed_note(&ex.posed),
             100.0 * ex.found_fraction(),
             track.n_joints(),
             track.units().as_str(),
@@ -192,17 +211,18 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
         },
     })
     .map_err(pose_err)?;
-    let (pb, opts) = progress_and_options(a, source.frame_count, est.name());
+    let (pb, opts) = progress_and_options(a, source.frame_count, source.fps, est.name())?;
     let ex = mp_pose::extract_people(source, &mut est, &opts, |done, _| {
         pb.set_position(done as u64)
     })
     .map_err(pose_err)
     .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
     pb.finish_and_clear();
+    let people = mp_pipeline::pose_rate::fill_people(ex.people.clone(), &ex.posed)?;
     let people = if !a.all_joints {
-        ex.people.clone().map_tracks(|t| t.to_coco17())?
+        people.map_tracks(|t| t.to_coco17())?
     } else {
-        ex.people.clone()
+        people
     };
     if !mp_geom::io::holds_people(&a.output) {
         let track = people
@@ -218,10 +238,11 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
     }
     if !a.quiet {
         println!(
-            "{}: {} frames at {:.3} fps, {} {} tracked (someone in {:.1}% of frames), {:.1} frames/s → {}",
+            "{}: {} frames at {:.3} fps{}, {} {} tracked (someone in {:.1}% of frames), {:.1} frames/s → {}",
             a.video.display(),
             people.n_frames(),
             people.fps(),
+            posed_note(&ex.posed),
             people.len(),
             if people.len() == 1 { "person" } else { "people" },
             100.0 * ex.found_fraction(),

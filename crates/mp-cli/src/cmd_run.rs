@@ -49,6 +49,9 @@ pub struct PoseOpts {
     /// ONNX Runtime threads.
     #[arg(long, default_value_t = Params::default().pose.threads)]
     pub threads: usize,
+    /// How often the pose model runs: all (every frame), auto (12 poses a second: every second frame at 24–30 fps), or N poses a second; the frames between are filled from the motion.
+    #[arg(long, value_name = "N|auto|all", default_value_t = Params::default().pose.rate.label())]
+    pub pose_fps: String,
 }
 
 impl PoseOpts {
@@ -58,6 +61,7 @@ impl PoseOpts {
         p.pose.max_frames = self.max_frames;
         p.pose.all_joints = self.all_joints;
         p.pose.threads = self.threads;
+        p.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
         Ok(())
     }
 }

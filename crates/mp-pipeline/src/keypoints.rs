@@ -428,10 +428,12 @@ struct Posed {
 }
 
 /// The extraction options of the pose pass: all frames or the first
-/// `max_frames`, no smoothing.
-fn extract_options(params: &Params) -> ExtractOptions {
+/// `max_frames`, the model on the frames of `params.pose.rate` at the
+/// video's `fps`, no smoothing.
+fn extract_options(params: &Params, fps: f64) -> ExtractOptions {
     ExtractOptions {
         max_frames: params.pose.max_frames,
+        pose_every: params.pose.rate.stride(fps),
         ..Default::default()
     }
 }
@@ -442,14 +444,15 @@ fn pose_single(
     params: &Params,
     progress: impl Fn(usize),
 ) -> Result<Posed> {
+    let fps = source.fps;
     let est = slot.get(params)?;
-    let ex = extract(source, est, &extract_options(params), |done, _| {
+    let ex = extract(source, est, &extract_options(params, fps), |done, _| {
         progress(done)
     })?;
     Ok(Posed {
         n_frames: ex.track.n_frames(),
         found: ex.found_fraction(),
-        track: ex.track,
+        track: crate::pose_rate::fill_track(&ex.track, &ex.posed)?,
         people: None,
         model: est.name().to_string(),
         warning: None,
@@ -464,7 +467,7 @@ fn pose_people(
 ) -> Result<Posed> {
     let fps = source.fps;
     let est = slot.get_multi(params)?;
-    let ex = extract_people(source, est, &extract_options(params), |done, _| {
+    let ex = extract_people(source, est, &extract_options(params, fps), |done, _| {
         progress(done)
     })?;
     let n = ex.people.n_frames();
@@ -482,7 +485,7 @@ fn pose_people(
         n_frames: n,
         model: est.name().to_string(),
         warning: ex.warning(),
-        people: Some(ex.people),
+        people: Some(crate::pose_rate::fill_people(ex.people, &ex.posed)?),
     })
 }
 

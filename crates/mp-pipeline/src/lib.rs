@@ -39,6 +39,7 @@ pub mod input;
 pub mod keypoints;
 pub mod output;
 pub mod params;
+pub mod pose_rate;
 pub mod progress;
 mod report_people;
 
@@ -56,6 +57,7 @@ pub use keypoints::{keypoints, Keep, Keypoints, ModelSlot};
 pub use mp_abstract::{Analysis, CountMethod, CountSignal, CountedInterval, Counts};
 pub use mp_geom::CancelToken;
 pub use params::{OutputParams, Params, PersonChoice, PersonParams, PoseParams};
+pub use pose_rate::PoseRate;
 pub use progress::{Observer, Silent, Stage, StageTime};
 
 use mp_report::pictures::Analysed;

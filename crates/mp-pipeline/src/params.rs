@@ -33,6 +33,9 @@ pub struct PoseParams {
     pub people: bool,
     /// The person tracker (`max_people`, detection rates, confirmation).
     pub tracker: mp_pose::PeopleParams,
+    /// How often the pose model runs; the frames between are filled from
+    /// the motion ([`crate::pose_rate`]). Default every frame.
+    pub rate: crate::pose_rate::PoseRate,
 }
 
 impl Default for PoseParams {
@@ -46,6 +49,7 @@ impl Default for PoseParams {
             recover_s: mp_pose::BlazePoseParams::default().recover_s,
             people: true,
             tracker: mp_pose::PeopleParams::default(),
+            rate: crate::pose_rate::PoseRate::default(),
         }
     }
 }
@@ -181,6 +185,7 @@ impl Params {
             ));
         }
         self.pose.tracker.validate()?;
+        self.pose.rate.validate()?;
         if !(self.person.min_seen_s.is_finite() && self.person.min_seen_s >= 0.0) {
             return Err(PipelineError::param(
                 "person.min_seen_s",

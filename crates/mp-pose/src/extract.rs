@@ -213,6 +213,17 @@ pub struct ExtractOptions {
     /// Time between frames used by the smoothing filters instead of the
     /// frames' timestamps (MediaPipe's Python API uses 1/30 s).
     pub fixed_frame_interval_s: Option<f64>,
+    /// The pose model runs on every `pose_every`-th frame (0, 2k, …) and on
+    /// the last one, when the number of frames is known; the frames between
+    /// get no pose here (the caller fills them: `mp_pipeline::pose_rate`).
+    /// 0 or 1 (default): every frame.
+    pub pose_every: usize,
+}
+
+/// Whether frame `index` is one the pose model runs on ([`ExtractOptions::pose_every`]):
+/// every `every`-th frame from the first, and the last of `total` frames.
+pub fn is_posed_frame(index: usize, every: usize, total: Option<usize>) -> bool {
+    every <= 1 || index.is_multiple_of(every) || total.is_some_and(|n| index + 1 == n)
 }
 
 /// BlazePose's world landmarks of a video or image (metres, hip-centred, 3D,
@@ -250,9 +261,11 @@ pub struct Extraction {
     pub presence: Array2<f64>,
     /// Whether each frame has a pose.
     pub found: Vec<bool>,
+    /// Whether the pose model ran on each frame ([`ExtractOptions::pose_every`]).
+    pub posed: Vec<bool>,
     /// Whether the detector ran on each frame (BlazePose).
     pub detector_ran: Vec<bool>,
-    /// Milliseconds spent in the estimator per frame (no decoding).
+    /// Milliseconds spent in the estimator per posed frame (no decoding).
     pub estimate_ms: Vec<f64>,
     /// Milliseconds for the whole run, decoding included.
     pub total_ms: f64,
@@ -267,13 +280,25 @@ impl Extraction {
     pub fn estimator_fps(&self) -> f64 {
         median_fps(&self.estimate_ms)
     }
-    /// Fraction of frames with a pose.
+    /// Fraction of the posed frames with a pose.
     pub fn found_fraction(&self) -> f64 {
-        if self.found.is_empty() {
-            0.0
-        } else {
-            self.found.iter().filter(|&&f| f).count() as f64 / self.found.len() as f64
+        posed_fraction(&self.found, &self.posed)
+    }
+}
+
+/// Fraction of the posed frames (`posed`) where `found` holds; 0 without any.
+pub(crate) fn posed_fraction(found: &[bool], posed: &[bool]) -> f64 {
+    let (mut n, mut k) = (0usize, 0usize);
+    for (i, f) in found.iter().enumerate() {
+        if posed.get(i).copied().unwrap_or(true) {
+            n += 1;
+            k += usize::from(*f);
         }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        k as f64 / n as f64
     }
 }
 
@@ -293,8 +318,9 @@ pub fn median_fps(ms: &[f64]) -> f64 {
     }
 }
 
-/// Runs `estimator` over every frame of `source`. `progress(done, total)` is
-/// called after each frame.
+/// Runs `estimator` over the frames of `source` (every frame, or those
+/// [`ExtractOptions::pose_every`] names). `progress(done, total)` is called
+/// after each frame.
 pub fn extract(
     mut source: FrameSource,
     estimator: &mut dyn PoseEstimator,
@@ -323,6 +349,7 @@ pub fn extract(
     };
     let start = Instant::now();
     let mut poses: Vec<Option<Pose>> = Vec::new();
+    let mut posed = Vec::new();
     let mut estimate_ms = Vec::new();
     let mut done = 0usize;
     while options.max_frames.is_none_or(|m| done < m) {
@@ -330,6 +357,14 @@ pub fn extract(
             break;
         };
         let frame: Frame = frame?;
+        if !is_posed_frame(done, options.pose_every, total) {
+            poses.push(None);
+            posed.push(false);
+            done += 1;
+            progress(done, total);
+            continue;
+        }
+        posed.push(true);
         let t0 = Instant::now();
         let mut pose = estimator.estimate(&frame)?;
         estimate_ms.push(t0.elapsed().as_secs_f64() * 1000.0);
@@ -422,6 +457,7 @@ pub fn extract(
         depth_px: has_depth.then_some(depth),
         presence,
         found,
+        posed,
         detector_ran,
         estimate_ms,
         total_ms,

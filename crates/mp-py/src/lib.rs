@@ -52,6 +52,29 @@ pub(crate) fn params_with(
     Ok(p)
 }
 
+/// Sets `params.pose.rate` from a Python `pose_fps`: a number of poses a
+/// second, `"auto"` or `"all"` (None: the library's default).
+pub(crate) fn pose_rate_arg(
+    params: &mut Params,
+    pose_fps: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    let Some(v) = pose_fps else {
+        return Ok(());
+    };
+    let rate = if let Ok(text) = v.extract::<String>() {
+        mp_pipeline::PoseRate::parse(&text)
+    } else if let Ok(n) = v.extract::<f64>() {
+        let r = mp_pipeline::PoseRate::Fps(n);
+        r.validate().map(|_| r)
+    } else {
+        return Err(errors::ParamError::new_err(
+            "pose_fps: expected a number of poses a second, \"auto\" or \"all\"",
+        ));
+    };
+    params.pose.rate = rate.map_err(errors::pipeline)?;
+    Ok(())
+}
+
 fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
     mp_pipeline::params::ModelChoice::parse(name)
         .map_err(|e| errors::ParamError::new_err(e.to_string()))
@@ -78,9 +101,12 @@ fn read_track(py: Python<'_>, path: PathBuf, fps: Option<f64>) -> PyResult<PyTra
 /// the whole video, or with `people=True` every tracked person, as `People`
 /// (the keypoint stage of `mp run`). `world=True`: BlazePose's world
 /// landmarks instead (metres, hip-centred, 3D, all 33; as `mp extract
-/// --world`), the input of `refine`.
+/// --world`), the input of `refine`. `pose_fps`: how often the pose model
+/// runs, a number of poses a second, `"auto"` (12 a second) or `"all"`
+/// (default); the frames between are filled from the motion (as `mp
+/// extract --pose-fps`).
 #[pyfunction]
-#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false, world=false))]
+#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false, world=false, pose_fps=None))]
 #[allow(clippy::too_many_arguments)]
 fn extract<'py>(
     py: Python<'py>,
@@ -94,9 +120,16 @@ fn extract<'py>(
     max_people: Option<usize>,
     single_person: bool,
     world: bool,
+    pose_fps: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut params = params_with(Some(model), threads, max_frames, all_joints, None, None)?;
+    pose_rate_arg(&mut params, pose_fps)?;
     if world {
+        if params.pose.rate != mp_pipeline::PoseRate::Every {
+            return Err(errors::ParamError::new_err(
+                "world=True poses every frame: pose_fps applies to image keypoints",
+            ));
+        }
         if people {
             return Err(errors::ParamError::new_err(
                 "world=True follows one person (MediaPipe's world landmarks); people=True needs \

@@ -327,8 +327,10 @@ impl PySummary {
 /// person in view is tracked (at most `max_people`; `single_person`:
 /// MediaPipe's single-person pipeline) and `person` (`"all"`, the default,
 /// `"main"` or an id) chooses whom to analyse, as `mp run --person`.
+/// `pose_fps`: how often the pose model runs (a number of poses a second,
+/// `"auto"` or `"all"`, the default), as `mp run --pose-fps`.
 #[pyfunction]
-#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=true, report=true, person=None, max_people=None, single_person=false))]
+#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=true, report=true, person=None, max_people=None, single_person=false, pose_fps=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     py: Python<'_>,
@@ -344,8 +346,10 @@ pub fn run(
     person: Option<&Bound<'_, PyAny>>,
     max_people: Option<usize>,
     single_person: bool,
+    pose_fps: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PySummary> {
     let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
+    crate::pose_rate_arg(&mut params, pose_fps)?;
     params.output.overlay_video = overlay_video;
     params.output.report = report;
     crate::people::apply(&mut params, person, max_people, single_person)?;
@@ -375,7 +379,8 @@ fn input_of(source: &Bound<'_, PyAny>, frame_size: Option<f64>) -> PyResult<Inpu
 /// Analyses many inputs with one set of parameters and the pose model kept
 /// loaded between videos — one per worker of a batch job (a Ray actor, a
 /// process of a pool). Its methods release the GIL; one analyser runs one
-/// input at a time (calls from several threads wait for each other).
+/// input at a time (calls from several threads wait for each other). Its
+/// options are `run`'s.
 #[pyclass(name = "Analyser", module = "motion_programs", frozen)]
 pub struct PyAnalyser {
     inner: Mutex<Analyser>,
@@ -384,7 +389,7 @@ pub struct PyAnalyser {
 #[pymethods]
 impl PyAnalyser {
     #[new]
-    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=true, report=true, person=None, max_people=None, single_person=false))]
+    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=true, report=true, person=None, max_people=None, single_person=false, pose_fps=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         model: Option<&str>,
@@ -396,8 +401,10 @@ impl PyAnalyser {
         person: Option<&Bound<'_, PyAny>>,
         max_people: Option<usize>,
         single_person: bool,
+        pose_fps: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
+        crate::pose_rate_arg(&mut params, pose_fps)?;
         params.output.overlay_video = overlay_video;
         params.output.report = report;
         crate::people::apply(&mut params, person, max_people, single_person)?;

@@ -169,6 +169,23 @@ def test_extract_a_video(data):
         mp.extract(str(video), max_frames=2, recover_s=-1.0)
 
 
+def test_pose_on_half_the_frames(data):
+    video = str(data("golfdb/golf_swing.mp4"))
+    full = mp.extract(video, max_frames=21)
+    half = mp.extract(video, max_frames=21, pose_fps=15)
+    assert half.n_frames == 21
+    # The skipped (odd) frames are filled close to the every-frame keypoints.
+    both = (full.confidence[1::2] > 0) & (half.confidence[1::2] > 0)
+    d = np.linalg.norm(half.positions[1::2] - full.positions[1::2], axis=-1)[both]
+    assert d.size > 100 and np.median(d) < 4.0
+    assert mp.extract(video, max_frames=3, pose_fps="all").n_frames == 3
+    for bad in [0, -1.5, "fast"]:
+        with pytest.raises(mp.ParamError, match="pose_fps"):
+            mp.extract(video, max_frames=2, pose_fps=bad)
+    with pytest.raises(mp.ParamError, match="pose_fps"):
+        mp.extract(video, max_frames=2, pose_fps=15, world=True)
+
+
 def test_bad_input_raises_clear_exceptions(tmp_path):
     with pytest.raises(mp.TrackError, match="nope.npz"):
         mp.read_track(tmp_path / "nope.npz")

@@ -15,7 +15,7 @@ use ndarray::{Array2, Array3};
 
 use super::{MultiPose, TrackEvent};
 use crate::error::{PoseError, Result};
-use crate::extract::{ExtractOptions, PoseSmoother};
+use crate::extract::{is_posed_frame, ExtractOptions, PoseSmoother};
 use crate::video::FrameSource;
 
 /// What [`extract_people`] found.
@@ -23,11 +23,13 @@ use crate::video::FrameSource;
 pub struct PeopleExtraction {
     /// Every person's keypoints (pixels, BlazePose-33), numbered by first appearance.
     pub people: People,
-    /// People with a pose on each frame.
+    /// People with a pose on each frame (0 on the frames the model skipped).
     pub people_per_frame: Vec<usize>,
+    /// Whether the pose model ran on each frame ([`ExtractOptions::pose_every`]).
+    pub posed: Vec<bool>,
     /// Detector runs over the whole video.
     pub detector_runs: usize,
-    /// Milliseconds spent in the estimator per frame (no decoding).
+    /// Milliseconds spent in the estimator per posed frame (no decoding).
     pub estimate_ms: Vec<f64>,
     /// Milliseconds for the whole run, decoding included.
     pub total_ms: f64,
@@ -44,13 +46,10 @@ pub struct PeopleExtraction {
 }
 
 impl PeopleExtraction {
-    /// Fraction of frames with at least one person.
+    /// Fraction of the posed frames with at least one person.
     pub fn found_fraction(&self) -> f64 {
-        if self.people_per_frame.is_empty() {
-            return 0.0;
-        }
-        self.people_per_frame.iter().filter(|&&n| n > 0).count() as f64
-            / self.people_per_frame.len() as f64
+        let found: Vec<bool> = self.people_per_frame.iter().map(|&n| n > 0).collect();
+        crate::extract::posed_fraction(&found, &self.posed)
     }
 
     /// Frames per second of the estimator alone (median per-frame time).
@@ -82,8 +81,10 @@ struct Collected {
     smoother: Option<PoseSmoother>,
 }
 
-/// Runs the multi-person estimator over every frame of `source`.
-/// `progress(done, total)` is called after each frame.
+/// Runs the multi-person estimator over the frames of `source` (every
+/// frame, or those [`ExtractOptions::pose_every`] names; a person's poses
+/// are then on those frames only). `progress(done, total)` is called after
+/// each frame.
 pub fn extract_people(
     mut source: FrameSource,
     estimator: &mut MultiPose,
@@ -104,6 +105,7 @@ pub fn extract_people(
     let start = Instant::now();
     let mut tracks: HashMap<u64, Collected> = HashMap::new();
     let mut per_frame = Vec::new();
+    let mut posed = Vec::new();
     let mut estimate_ms = Vec::new();
     let mut detector_runs = 0usize;
     while options.max_frames.is_none_or(|m| per_frame.len() < m) {
@@ -111,6 +113,13 @@ pub fn extract_people(
             break;
         };
         let frame = frame?;
+        if !is_posed_frame(per_frame.len(), options.pose_every, total) {
+            per_frame.push(0);
+            posed.push(false);
+            progress(per_frame.len(), total);
+            continue;
+        }
+        posed.push(true);
         let t0 = Instant::now();
         let r = estimator.process(&frame)?;
         estimate_ms.push(t0.elapsed().as_secs_f64() * 1000.0);
@@ -129,7 +138,8 @@ pub fn extract_people(
             }
             let c = tracks.entry(tp.key).or_default();
             if let Some(sp) = options.smoothing {
-                let restart = c.frames.last().is_none_or(|l| l.0 + 1 != f);
+                let step = options.pose_every.max(1);
+                let restart = c.frames.last().is_none_or(|l| f > l.0 + step);
                 if restart || c.smoother.is_none() {
                     c.smoother = Some(PoseSmoother::new(sp)?);
                 }
@@ -208,6 +218,7 @@ pub fn extract_people(
     Ok(PeopleExtraction {
         people,
         people_per_frame: per_frame,
+        posed,
         detector_runs,
         estimate_ms,
         total_ms,
