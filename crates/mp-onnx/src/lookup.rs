@@ -99,6 +99,15 @@ impl ModelDirs {
         self.dirs.iter().map(|d| d.join(file)).find(|p| p.is_file())
     }
 
+    /// Path of the first of `files` in the first folder that has any of them:
+    /// a folder's preferred file wins over its fallback, and an earlier
+    /// folder over a later one.
+    pub fn find_first_of(&self, files: &[&str]) -> Option<PathBuf> {
+        self.dirs
+            .iter()
+            .find_map(|d| files.iter().map(|f| d.join(f)).find(|p| p.is_file()))
+    }
+
     /// The first folder that has `file` (e.g. the folder of a `manifest.json`).
     pub fn find_dir_with(&self, file: impl AsRef<Path>) -> Option<PathBuf> {
         let file = file.as_ref();
@@ -124,6 +133,28 @@ impl ModelDirs {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_folder_prefers_its_first_file_and_earlier_folders_win() {
+        let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+        std::fs::write(a.path().join("plain.onnx"), b"x").unwrap();
+        std::fs::write(b.path().join("cut.onnx"), b"x").unwrap();
+        std::fs::write(b.path().join("plain.onnx"), b"x").unwrap();
+        let dirs = ModelDirs::new()
+            .with_dir(a.path().to_path_buf())
+            .with_dir(b.path().to_path_buf());
+        let files = ["cut.onnx", "plain.onnx"];
+        assert_eq!(
+            dirs.find_first_of(&files),
+            Some(a.path().join("plain.onnx"))
+        );
+        let only_b = ModelDirs::new().with_dir(b.path().to_path_buf());
+        assert_eq!(
+            only_b.find_first_of(&files),
+            Some(b.path().join("cut.onnx"))
+        );
+        assert_eq!(only_b.find_first_of(&["none.onnx"]), None);
+    }
 
     #[test]
     fn first_folder_with_the_file_wins() {

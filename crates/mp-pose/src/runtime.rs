@@ -48,6 +48,31 @@ impl ModelFile {
         ModelFile::MoveNetLightning,
     ];
 
+    /// File name of the landmark model without its segmentation-mask head
+    /// (`pose_landmark_full_nomask.onnx`), made by `cargo xtask models`: the
+    /// same graph cut to the outputs this crate reads, the same values in
+    /// about half the time (ONNX Runtime runs every node of a graph, the
+    /// 256×256 mask's decoder included, whichever outputs are asked for).
+    /// `None` for the detector and MoveNet.
+    pub fn without_mask(self) -> Option<&'static str> {
+        match self {
+            ModelFile::LandmarkFull => Some("pose_landmark_full_nomask.onnx"),
+            ModelFile::LandmarkLite => Some("pose_landmark_lite_nomask.onnx"),
+            ModelFile::LandmarkHeavy => Some("pose_landmark_heavy_nomask.onnx"),
+            ModelFile::PoseDetection | ModelFile::MoveNetLightning => None,
+        }
+    }
+
+    /// The files the estimators open, in order of preference in each folder:
+    /// the model without its mask head ([`ModelFile::without_mask`]), then
+    /// the model as converted.
+    pub fn run_files(self) -> Vec<&'static str> {
+        self.without_mask()
+            .into_iter()
+            .chain(std::iter::once(self.file_name()))
+            .collect()
+    }
+
     /// File name of the model.
     pub fn file_name(self) -> &'static str {
         match self {
@@ -81,6 +106,18 @@ pub fn model_dirs() -> Vec<PathBuf> {
 /// Path of a model file, from the first folder of [`model_dirs`] that has it.
 pub fn model_path(model: ModelFile) -> Result<PathBuf> {
     find_model_file(model.file_name())
+}
+
+/// Path of the file the estimators open for `model`: the first folder of
+/// [`model_dirs`] with either of [`ModelFile::run_files`], the file without
+/// the mask head preferred within a folder.
+pub fn run_model_path(model: ModelFile) -> Result<PathBuf> {
+    let dirs = model_search();
+    dirs.find_first_of(&model.run_files())
+        .ok_or_else(|| PoseError::ModelMissing {
+            file: model.file_name().to_string(),
+            searched: dirs.describe(usize::MAX),
+        })
 }
 
 /// Path of a model file by name (see [`model_path`]).

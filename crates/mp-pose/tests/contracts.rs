@@ -220,6 +220,52 @@ fn landmark_lite_contract_and_fixed_output() {
     );
 }
 
+/// The estimators open the landmark model without its mask head (made by
+/// `cargo xtask models`); it must give the values of the model as converted.
+fn check_without_mask(kind: LandmarkModelKind, file: ModelFile) {
+    let cut = runtime::run_model_path(file).unwrap();
+    let want = file.without_mask().unwrap();
+    assert!(
+        cut.ends_with(want),
+        "the estimators open {}, not {want} (run `cargo xtask models`)",
+        cut.display()
+    );
+    let s = runtime::open_session(&cut, &SessionParams::default()).unwrap();
+    let outs = runtime::outputs_of(&s);
+    assert!(outs.iter().all(|o| o.name != "Identity_2"), "{outs:?}");
+    assert_eq!(outs.len(), 4, "{outs:?}");
+    drop(s);
+    let orig = runtime::model_path(file).unwrap();
+    let open = |p: &std::path::Path| {
+        LandmarkModel::open(p, kind, RefineParams::default(), &SessionParams::default()).unwrap()
+    };
+    let (mut a, mut b) = (open(&orig), open(&cut));
+    for seed in [0u8, 91] {
+        let input: Vec<f32> = pattern(256)
+            .iter()
+            .map(|&v| v.wrapping_add(seed) as f32 / 255.0)
+            .collect();
+        let (x, y) = (a.run_tensor(&input).unwrap(), b.run_tensor(&input).unwrap());
+        assert!((x.pose_presence - y.pose_presence).abs() < 1e-5);
+        for (p, q) in x.landmarks.iter().zip(&y.landmarks) {
+            // Pixels of the 256-pixel crop.
+            assert!(
+                ((p.x - q.x) * 256.0).abs() < 1e-3 && ((p.y - q.y) * 256.0).abs() < 1e-3,
+                "{kind:?}: {p:?} vs {q:?}"
+            );
+        }
+        for (p, q) in x.world.iter().zip(&y.world) {
+            assert!((0..3).all(|k| (p[k] - q[k]).abs() < 1e-5), "{p:?} vs {q:?}");
+        }
+    }
+}
+
+#[test]
+fn landmark_models_without_mask_give_the_same_values() {
+    check_without_mask(LandmarkModelKind::Full, ModelFile::LandmarkFull);
+    check_without_mask(LandmarkModelKind::Lite, ModelFile::LandmarkLite);
+}
+
 #[test]
 fn movenet_contract_and_fixed_output() {
     if common::movenet_model().is_none() {

@@ -200,8 +200,9 @@ pub fn refine_with_heatmap(landmarks: &mut [CropLandmark], heatmap: &[f32], para
 /// The landmark model: an ONNX session plus pre- and post-processing.
 pub struct LandmarkModel {
     session: Session,
-    /// Asks only for the outputs this crate reads, so ONNX Runtime can skip
-    /// the segmentation mask (same values, less work).
+    /// Asks only for the outputs this crate reads (ONNX Runtime still runs
+    /// a mask head that is in the graph: the estimators therefore open the
+    /// model without it, [`crate::runtime::ModelFile::without_mask`]).
     run_options: RunOptions<HasSelectedOutputs>,
     name: String,
     kind: LandmarkModelKind,

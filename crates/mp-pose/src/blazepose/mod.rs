@@ -127,20 +127,20 @@ impl BlazePoseParams {
         Ok(())
     }
 
+    /// The file the estimators open for `file` ([`runtime::run_model_path`],
+    /// or in `model_dir` the first of [`ModelFile::run_files`]).
     pub(crate) fn model_path(&self, file: ModelFile) -> Result<PathBuf> {
         match &self.model_dir {
-            Some(d) => {
-                let p = d.join(file.file_name());
-                if p.is_file() {
-                    Ok(p)
-                } else {
-                    Err(PoseError::ModelMissing {
-                        file: file.file_name().into(),
-                        searched: d.display().to_string(),
-                    })
-                }
-            }
-            None => runtime::model_path(file),
+            Some(d) => file
+                .run_files()
+                .into_iter()
+                .map(|f| d.join(f))
+                .find(|p| p.is_file())
+                .ok_or_else(|| PoseError::ModelMissing {
+                    file: file.file_name().into(),
+                    searched: d.display().to_string(),
+                }),
+            None => runtime::run_model_path(file),
         }
     }
 }
