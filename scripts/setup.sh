@@ -8,11 +8,15 @@
 #
 #   bash scripts/setup.sh        # builds the set-up tool in cargo's release profile, as `mp` is built
 #   bash scripts/setup.sh dev    # in the dev profile, whose compiled crates `cargo test` reuses
+#   bash scripts/setup.sh gpu    # also ONNX Runtime's GPU build with CUDA (several GB); then
+#                                # `source .cache/onnxruntime-gpu.env` runs the pose models on the GPU
 set -euo pipefail
 PROFILE="${1:-release}"
+GPU=()
 case "$PROFILE" in
   release|dev) ;;
-  *) echo "setup: unknown profile '$PROFILE' (release or dev)" >&2; exit 2 ;;
+  gpu) PROFILE=release; GPU=(--gpu) ;;
+  *) echo "setup: unknown profile '$PROFILE' (release, dev or gpu)" >&2; exit 2 ;;
 esac
 cd "$(dirname "$0")/.."
 
@@ -58,5 +62,5 @@ fetch_footage
 if [ "$PROFILE" = dev ]; then
   cargo run --quiet --package xtask -- setup
 else
-  cargo xtask setup
+  cargo xtask setup "${GPU[@]}"
 fi

@@ -19,6 +19,11 @@ pub struct SetupArgs {
     /// Only install ONNX Runtime, not the models.
     #[arg(long)]
     pub no_models: bool,
+    /// Also install ONNX Runtime's GPU build with its CUDA libraries (PyPI's
+    /// `onnxruntime-gpu[cuda,cudnn]`, several GB) into `.cache/venv-gpu`, and
+    /// write `.cache/onnxruntime-gpu.env`, which points `mp` at it.
+    #[arg(long)]
+    pub gpu: bool,
 }
 
 /// The workspace root (the folder holding `xtask/`).
@@ -34,6 +39,74 @@ pub fn run(args: &SetupArgs) -> Result<()> {
     if !args.no_models {
         crate::models::run(&crate::models::ModelsArgs::default())?;
     }
+    if args.gpu {
+        install_gpu_runtime(&root)?;
+    }
+    Ok(())
+}
+
+/// The GPU build of ONNX Runtime with the CUDA and cuDNN libraries it loads.
+const GPU_PACKAGE: &str = "onnxruntime-gpu[cuda,cudnn]";
+
+/// Installs ONNX Runtime's GPU build and its CUDA libraries into
+/// `.cache/venv-gpu` and writes `.cache/onnxruntime-gpu.env`: `source` it
+/// and `mp` loads that library (`ORT_DYLIB_PATH`) and finds the CUDA
+/// libraries (`LD_LIBRARY_PATH`); `--device auto` (the default) then runs
+/// the pose models on the GPU, and falls back to the CPU where there is no
+/// GPU.
+fn install_gpu_runtime(root: &Path) -> Result<()> {
+    let python = crate::pyenv::venv(root, ".cache/venv-gpu", "setup")?;
+    let spec = format!("{GPU_PACKAGE}=={ORT_VERSION}");
+    crate::pyenv::ensure_packages(
+        &python,
+        "onnxruntime, nvidia.cudnn",
+        &[&spec],
+        "setup",
+        " (the GPU build with CUDA and cuDNN: several GB)",
+    )?;
+    let out = Command::new(&python)
+        .args([
+            "-c",
+            "import onnxruntime, os, glob, nvidia\n\
+             capi = os.path.join(os.path.dirname(onnxruntime.__file__), 'capi')\n\
+             print(os.path.join(capi, 'libonnxruntime.so.' + onnxruntime.__version__))\n\
+             libs = sorted(glob.glob(os.path.join(list(nvidia.__path__)[0], '*', 'lib')))\n\
+             print(':'.join([capi] + libs))",
+        ])
+        .output()
+        .context("asking the GPU environment where its libraries are")?;
+    if !out.status.success() {
+        bail!(
+            "the GPU environment does not import: {}",
+            String::from_utf8_lossy(&out.stderr).trim()
+        );
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let mut lines = text.lines();
+    let (Some(lib), Some(dirs)) = (lines.next(), lines.next()) else {
+        bail!("the GPU environment did not name its libraries: {text}");
+    };
+    if !Path::new(lib).is_file() {
+        bail!("the GPU build's library {lib} is missing");
+    }
+    let env = root.join(".cache/onnxruntime-gpu.env");
+    crate::write_file(
+        &env,
+        format!(
+            "# ONNX Runtime's GPU build for `mp` (written by `cargo xtask setup --gpu`)\n\
+             export ORT_DYLIB_PATH={lib}\n\
+             export LD_LIBRARY_PATH={dirs}${{LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}}\n"
+        ),
+    )?;
+    println!(
+        "setup: ONNX Runtime's GPU build is in {}; `source {}` before running `mp` to use it",
+        python
+            .parent()
+            .and_then(Path::parent)
+            .unwrap_or(root)
+            .display(),
+        env.display()
+    );
     Ok(())
 }
 

@@ -41,6 +41,9 @@ pub struct BatchArgs {
     /// How often the pose model runs: all (every frame), auto (12 poses a second: every second frame at 24–30 fps), or N poses a second; the frames between are filled from the motion.
     #[arg(long, value_name = "N|auto|all", default_value_t = Params::default().pose.rate.label())]
     pub pose_fps: String,
+    /// Where the pose models run: auto (the GPU where ONNX Runtime's CUDA build and a GPU are there, else the CPU), cpu, cuda or cuda:N.
+    #[arg(long, default_value_t = Params::default().pose.device.label())]
+    pub device: String,
     /// Largest side of the video frame in pixels, for track inputs (scale = frame / 512); default: from each motion's extent.
     #[arg(long)]
     pub frame_size: Option<f64>,
@@ -70,6 +73,7 @@ impl BatchArgs {
         p.params.pose.max_frames = self.max_frames;
         p.params.pose.all_joints = self.all_joints;
         p.params.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
+        p.params.pose.device = mp_pose::runtime::Device::parse(&self.device)?;
         p.params.output.overlay_video = !self.no_video;
         self.people.apply(&mut p.params)?;
         p.validate()?;

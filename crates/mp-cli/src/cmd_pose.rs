@@ -56,6 +56,9 @@ pub struct ExtractArgs {
     /// How often the pose model runs: all (every frame), auto (12 poses a second: every second frame at 24–30 fps), or N poses a second; the frames between are filled from the motion
     #[arg(long, value_name = "N|auto|all", default_value_t = mp_pipeline::Params::default().pose.rate.label())]
     pub pose_fps: String,
+    /// Where the pose model runs: auto (the GPU where ONNX Runtime's CUDA build and a GPU are there, else the CPU), cpu, cuda or cuda:N.
+    #[arg(long, default_value_t = mp_pipeline::Params::default().pose.device.label())]
+    pub device: String,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
@@ -120,6 +123,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     crate::track_arg::refuse_track_for_extract(&a.video)?;
     let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
     mp_pipeline::PoseRate::parse(&a.pose_fps)?;
+    let device = mp_pose::runtime::Device::parse(&a.device).map_err(|e| anyhow::anyhow!("{e}"))?;
     if a.world && model == ModelChoice::MoveNet {
         bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
     }
@@ -135,13 +139,14 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         && model.landmark_model().is_some()
         && mp_pipeline::is_video(&a.video);
     if people {
-        return extract_people_cmd(a, model);
+        return extract_people_cmd(a, model, device);
     }
     let source = open_source(&a.video).map_err(pose_err)?;
     let mut est = open_estimator_with(
         model,
         SessionParams {
             intra_threads: a.threads,
+            device,
             ..Default::default()
         },
         a.recover,
@@ -190,7 +195,11 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
 /// `mp extract` on a video with several-people tracking: every person with
 /// their id (npz with a person axis, JSON or `.mpt`; a CSV holds the main
 /// person only).
-fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
+fn extract_people_cmd(
+    a: &ExtractArgs,
+    model: ModelChoice,
+    device: mp_pose::runtime::Device,
+) -> Result<()> {
     let source = open_source(&a.video).map_err(pose_err)?;
     let Some(lm) = model.landmark_model() else {
         bail!("several people need BlazePose (full or lite)");
@@ -200,6 +209,7 @@ fn extract_people_cmd(a: &ExtractArgs, model: ModelChoice) -> Result<()> {
             model: lm,
             session: SessionParams {
                 intra_threads: a.threads,
+                device,
                 ..Default::default()
             },
             recover_s: a.recover,

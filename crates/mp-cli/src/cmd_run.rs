@@ -52,6 +52,9 @@ pub struct PoseOpts {
     /// How often the pose model runs: all (every frame), auto (12 poses a second: every second frame at 24–30 fps), or N poses a second; the frames between are filled from the motion.
     #[arg(long, value_name = "N|auto|all", default_value_t = Params::default().pose.rate.label())]
     pub pose_fps: String,
+    /// Where the pose model runs: auto (the GPU where ONNX Runtime's CUDA build and a GPU are there, else the CPU), cpu, cuda or cuda:N.
+    #[arg(long, default_value_t = Params::default().pose.device.label())]
+    pub device: String,
 }
 
 impl PoseOpts {
@@ -62,6 +65,7 @@ impl PoseOpts {
         p.pose.all_joints = self.all_joints;
         p.pose.threads = self.threads;
         p.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
+        p.pose.device = mp_pose::runtime::Device::parse(&self.device)?;
         Ok(())
     }
 }

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use mp_geom::CancelToken;
 use mp_pose::people::TrackEvent;
-use mp_pose::{BlazePoseParams, MultiPose, MultiPoseParams, SessionParams, VideoInfo};
+use mp_pose::{BlazePoseParams, MultiPose, MultiPoseParams, VideoInfo};
 
 use crate::counter::{OnlineCounter, Repetition};
 use crate::program::{OnlineProgram, ProgramSegment};
@@ -169,10 +169,7 @@ fn run_inner(
     let mut multi = MultiPose::new(MultiPoseParams {
         pose: BlazePoseParams {
             model,
-            session: SessionParams {
-                intra_threads: pose.threads.max(1),
-                ..Default::default()
-            },
+            session: pose.session(),
             ..Default::default()
         },
         people: pose.tracker.clone(),

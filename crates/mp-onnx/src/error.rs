@@ -27,6 +27,14 @@ pub enum OnnxError {
         /// What ONNX Runtime reported.
         reason: String,
     },
+    /// A device was asked for that ONNX Runtime cannot use.
+    #[error("cannot run on {device}: {reason}")]
+    Device {
+        /// The device (`cuda:0`).
+        device: String,
+        /// Why not.
+        reason: String,
+    },
     /// A model file was not found.
     #[error("model file `{file}` not found (looked in: {searched})")]
     ModelMissing {

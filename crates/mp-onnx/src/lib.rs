@@ -39,4 +39,7 @@ pub use library::{
 };
 pub use lookup::ModelDirs;
 pub use network::{Input, Network, Output};
-pub use session::{check_tensor, inputs_of, open_session, outputs_of, SessionParams, TensorInfo};
+pub use session::{
+    check_tensor, cuda_available, inputs_of, open_session, outputs_of, Device, SessionParams,
+    TensorInfo,
+};

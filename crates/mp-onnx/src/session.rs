@@ -7,6 +7,63 @@ use ort::session::Session;
 use crate::error::{format_shape, OnnxError, Result};
 use crate::library::environment;
 
+/// Where a model runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Device {
+    /// The GPU (CUDA device 0) where the ONNX Runtime library loaded has
+    /// its CUDA execution provider and a GPU takes the session; the CPU
+    /// otherwise. Default.
+    #[default]
+    Auto,
+    /// The CPU.
+    Cpu,
+    /// CUDA device `n`; an error where ONNX Runtime cannot use it.
+    Cuda(u32),
+}
+
+impl Device {
+    /// Parses `auto`, `cpu`, `cuda` (device 0) or `cuda:N`.
+    pub fn parse(text: &str) -> Result<Self> {
+        let t = text.trim().to_ascii_lowercase();
+        match t.as_str() {
+            "auto" => Ok(Device::Auto),
+            "cpu" => Ok(Device::Cpu),
+            "cuda" | "gpu" => Ok(Device::Cuda(0)),
+            other => other
+                .strip_prefix("cuda:")
+                .and_then(|n| n.parse::<u32>().ok())
+                .map(Device::Cuda)
+                .ok_or_else(|| {
+                    OnnxError::param(
+                        "device",
+                        format!("`{text}` is not a device (auto, cpu, cuda or cuda:N)"),
+                    )
+                }),
+        }
+    }
+
+    /// `auto`, `cpu` or `cuda:N`.
+    pub fn label(&self) -> String {
+        match self {
+            Device::Auto => "auto".into(),
+            Device::Cpu => "cpu".into(),
+            Device::Cuda(n) => format!("cuda:{n}"),
+        }
+    }
+}
+
+/// Whether the ONNX Runtime library loaded has its CUDA execution provider
+/// (the GPU build; a GPU is still needed for a session to use it). Loads
+/// the library first when needed.
+pub fn cuda_available() -> Result<bool> {
+    use ort::ep::ExecutionProvider;
+    environment()?;
+    ort::ep::CUDA::is_available().map_err(|e| OnnxError::Device {
+        device: "cuda".into(),
+        reason: e.to_string(),
+    })
+}
+
 /// Settings of an inference session.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SessionParams {
@@ -15,6 +72,8 @@ pub struct SessionParams {
     /// Whether idle intra-op threads may busy-spin. Default `false`: with spinning,
     /// two sessions on 2 cores run several times slower.
     pub allow_spinning: bool,
+    /// Where the model runs. Default [`Device::Auto`].
+    pub device: Device,
 }
 
 impl Default for SessionParams {
@@ -22,6 +81,7 @@ impl Default for SessionParams {
         SessionParams {
             intra_threads: 2,
             allow_spinning: false,
+            device: Device::default(),
         }
     }
 }
@@ -40,12 +100,41 @@ impl SessionParams {
 }
 
 /// Opens an ONNX model with the given settings (loading ONNX Runtime first
-/// when needed). One inter-op thread; spinning as [`SessionParams::allow_spinning`].
+/// when needed). One inter-op thread; spinning as [`SessionParams::allow_spinning`];
+/// on the device of [`SessionParams::device`]: with [`Device::Auto`], on
+/// the GPU where CUDA takes the session and on the CPU otherwise.
 ///
-/// Errors: invalid settings, a missing or unloadable library, or a model
-/// that ONNX Runtime refuses ([`OnnxError::Model`], naming the file).
+/// Errors: invalid settings, a missing or unloadable library, a model
+/// that ONNX Runtime refuses ([`OnnxError::Model`], naming the file), or a
+/// CUDA device asked for that ONNX Runtime cannot use ([`OnnxError::Device`]).
 pub fn open_session(path: &Path, params: &SessionParams) -> Result<Session> {
     params.validate()?;
+    match params.device {
+        Device::Cpu => open_on(path, params, None),
+        Device::Cuda(n) => {
+            if !cuda_available()? {
+                return Err(OnnxError::Device {
+                    device: format!("cuda:{n}"),
+                    reason: "the ONNX Runtime library loaded is the CPU build, without CUDA \
+                             (`bash scripts/setup.sh gpu` installs the GPU build)"
+                        .into(),
+                });
+            }
+            open_on(path, params, Some(n))
+        }
+        Device::Auto => {
+            if cuda_available().unwrap_or(false) {
+                if let Ok(s) = open_on(path, params, Some(0)) {
+                    return Ok(s);
+                }
+            }
+            open_on(path, params, None)
+        }
+    }
+}
+
+/// [`open_session`] on the CPU (`cuda: None`) or on CUDA device `n`.
+fn open_on(path: &Path, params: &SessionParams, cuda: Option<u32>) -> Result<Session> {
     let name = path.display().to_string();
     let env = environment()?;
     let spin = if params.allow_spinning { "1" } else { "0" };
@@ -58,12 +147,34 @@ pub fn open_session(path: &Path, params: &SessionParams) -> Result<Session> {
     let builder = builder
         .with_config_entry("session.intra_op.allow_spinning", spin)
         .map_err(err)?;
-    let mut builder = builder
+    let builder = builder
         .with_config_entry("session.inter_op.allow_spinning", spin)
         .map_err(err)?;
-    builder
-        .commit_from_file(path)
-        .map_err(|e| OnnxError::model(&name, e))
+    let mut builder = match cuda {
+        None => builder,
+        Some(n) => {
+            let device_id = i32::try_from(n).map_err(|_| {
+                OnnxError::param("device", format!("CUDA device {n} is out of range"))
+            })?;
+            let ep = ort::ep::CUDA::default()
+                .with_device_id(device_id)
+                .build()
+                .error_on_failure();
+            builder
+                .with_execution_providers([ep])
+                .map_err(|e| OnnxError::Device {
+                    device: format!("cuda:{n}"),
+                    reason: e.to_string(),
+                })?
+        }
+    };
+    builder.commit_from_file(path).map_err(|e| match cuda {
+        Some(n) => OnnxError::Device {
+            device: format!("cuda:{n}"),
+            reason: e.to_string(),
+        },
+        None => OnnxError::model(&name, e),
+    })
 }
 
 /// Name, element type and shape (−1 = dynamic) of a session input or output.
@@ -175,6 +286,19 @@ mod tests {
             name: name.into(),
             dtype: dtype.into(),
             shape: shape.to_vec(),
+        }
+    }
+
+    #[test]
+    fn devices_parse_and_bad_ones_are_named() {
+        assert_eq!(Device::parse("auto").unwrap(), Device::Auto);
+        assert_eq!(Device::parse("CPU").unwrap(), Device::Cpu);
+        assert_eq!(Device::parse("cuda").unwrap(), Device::Cuda(0));
+        assert_eq!(Device::parse("cuda:1").unwrap(), Device::Cuda(1));
+        assert_eq!(Device::Cuda(1).label(), "cuda:1");
+        for bad in ["tpu", "cuda:", "cuda:-1", "cuda:x", ""] {
+            let e = Device::parse(bad).unwrap_err().to_string();
+            assert!(e.contains("device"), "{bad}: {e}");
         }
     }
 

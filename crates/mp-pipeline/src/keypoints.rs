@@ -57,7 +57,12 @@ pub struct OverlayFrames {
 /// state is reset for each video).
 #[derive(Default)]
 pub struct ModelSlot {
-    loaded: Option<(ModelChoice, usize, u64, Box<dyn PoseEstimator + Send>)>,
+    loaded: Option<(
+        ModelChoice,
+        SessionParams,
+        u64,
+        Box<dyn PoseEstimator + Send>,
+    )>,
     multi: Option<MultiPose>,
 }
 
@@ -74,10 +79,7 @@ impl ModelSlot {
         let want = MultiPoseParams {
             pose: BlazePoseParams {
                 model: lm,
-                session: SessionParams {
-                    intra_threads: params.pose.threads.max(1),
-                    ..Default::default()
-                },
+                session: params.pose.session(),
                 ..Default::default()
             },
             people: params.pose.tracker.clone(),
@@ -92,19 +94,12 @@ impl ModelSlot {
 
     /// The model for `params`, opened when not loaded yet (or loaded with other settings).
     fn get(&mut self, params: &Params) -> Result<&mut (dyn PoseEstimator + Send)> {
-        let (model, threads) = (params.pose.model, params.pose.threads.max(1));
+        let (model, session) = (params.pose.model, params.pose.session());
         let recover = params.pose.recover_s.to_bits();
-        let fits = matches!(&self.loaded, Some((m, t, r, _)) if *m == model && *t == threads && *r == recover);
+        let fits = matches!(&self.loaded, Some((m, s, r, _)) if *m == model && *s == session && *r == recover);
         if !fits {
-            let est = open_estimator_with(
-                model,
-                SessionParams {
-                    intra_threads: threads,
-                    ..Default::default()
-                },
-                params.pose.recover_s,
-            )?;
-            self.loaded = Some((model, threads, recover, est));
+            let est = open_estimator_with(model, session.clone(), params.pose.recover_s)?;
+            self.loaded = Some((model, session, recover, est));
         }
         match self.loaded.as_mut() {
             Some((_, _, _, est)) => Ok(est.as_mut()),

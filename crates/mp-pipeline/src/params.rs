@@ -36,6 +36,21 @@ pub struct PoseParams {
     /// How often the pose model runs; the frames between are filled from
     /// the motion ([`crate::pose_rate`]). Default every frame.
     pub rate: crate::pose_rate::PoseRate,
+    /// Where the pose model runs (`mp_pose::runtime::Device`): the GPU
+    /// where ONNX Runtime's CUDA build and a GPU are there, else the CPU
+    /// (default, `auto`); `cpu`; or a CUDA device, an error where there is none.
+    pub device: mp_pose::runtime::Device,
+}
+
+impl PoseParams {
+    /// The ONNX Runtime session settings of the pose models.
+    pub fn session(&self) -> mp_pose::SessionParams {
+        mp_pose::SessionParams {
+            intra_threads: self.threads.max(1),
+            device: self.device,
+            ..Default::default()
+        }
+    }
 }
 
 impl Default for PoseParams {
@@ -50,6 +65,7 @@ impl Default for PoseParams {
             people: true,
             tracker: mp_pose::PeopleParams::default(),
             rate: crate::pose_rate::PoseRate::default(),
+            device: mp_pose::runtime::Device::default(),
         }
     }
 }

@@ -12,9 +12,9 @@
 use std::path::PathBuf;
 
 pub use mp_onnx::{
-    check_tensor, environment, find_library, inputs_of, library_candidates, open_session,
-    outputs_of, ModelDirs, OnnxError, SessionParams, TensorInfo, LIBRARY_DIR_IN_WORKSPACE,
-    LIBRARY_FILE,
+    check_tensor, cuda_available, environment, find_library, inputs_of, library_candidates,
+    open_session, outputs_of, Device, ModelDirs, OnnxError, SessionParams, TensorInfo,
+    LIBRARY_DIR_IN_WORKSPACE, LIBRARY_FILE,
 };
 
 use crate::error::{PoseError, Result};

@@ -75,6 +75,16 @@ pub(crate) fn pose_rate_arg(
     Ok(())
 }
 
+/// Sets `params.pose.device` from a Python `device` (`"auto"`, `"cpu"`,
+/// `"cuda"`, `"cuda:N"`; None: the library's default).
+pub(crate) fn device_arg(params: &mut Params, device: Option<&str>) -> PyResult<()> {
+    if let Some(d) = device {
+        params.pose.device = mp_pose::runtime::Device::parse(d)
+            .map_err(|e| errors::ParamError::new_err(e.to_string()))?;
+    }
+    Ok(())
+}
+
 fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
     mp_pipeline::params::ModelChoice::parse(name)
         .map_err(|e| errors::ParamError::new_err(e.to_string()))
@@ -104,9 +114,11 @@ fn read_track(py: Python<'_>, path: PathBuf, fps: Option<f64>) -> PyResult<PyTra
 /// --world`), the input of `refine`. `pose_fps`: how often the pose model
 /// runs, a number of poses a second, `"auto"` (12 a second) or `"all"`
 /// (default); the frames between are filled from the motion (as `mp
-/// extract --pose-fps`).
+/// extract --pose-fps`). `device`: where the pose model runs, `"auto"`
+/// (default: the GPU where ONNX Runtime's CUDA build and a GPU are there),
+/// `"cpu"`, `"cuda"` or `"cuda:N"`.
 #[pyfunction]
-#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false, world=false, pose_fps=None))]
+#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false, world=false, pose_fps=None, device=None))]
 #[allow(clippy::too_many_arguments)]
 fn extract<'py>(
     py: Python<'py>,
@@ -121,9 +133,11 @@ fn extract<'py>(
     single_person: bool,
     world: bool,
     pose_fps: Option<&Bound<'py, PyAny>>,
+    device: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut params = params_with(Some(model), threads, max_frames, all_joints, None, None)?;
     pose_rate_arg(&mut params, pose_fps)?;
+    device_arg(&mut params, device)?;
     if world {
         if params.pose.rate != mp_pipeline::PoseRate::Every {
             return Err(errors::ParamError::new_err(
@@ -136,10 +150,7 @@ fn extract<'py>(
                  image coordinates",
             ));
         }
-        let session = mp_pose::SessionParams {
-            intra_threads: params.pose.threads,
-            ..Default::default()
-        };
+        let session = params.pose.session();
         let opts = mp_pose::extract::ExtractOptions {
             max_frames,
             ..Default::default()

@@ -328,9 +328,11 @@ impl PySummary {
 /// MediaPipe's single-person pipeline) and `person` (`"all"`, the default,
 /// `"main"` or an id) chooses whom to analyse, as `mp run --person`.
 /// `pose_fps`: how often the pose model runs (a number of poses a second,
-/// `"auto"` or `"all"`, the default), as `mp run --pose-fps`.
+/// `"auto"` or `"all"`, the default), as `mp run --pose-fps`; `device`
+/// where the pose model runs (`"auto"`, `"cpu"`, `"cuda"`, `"cuda:N"`), as
+/// `mp run --device`.
 #[pyfunction]
-#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=true, report=true, person=None, max_people=None, single_person=false, pose_fps=None))]
+#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=true, report=true, person=None, max_people=None, single_person=false, pose_fps=None, device=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     py: Python<'_>,
@@ -347,9 +349,11 @@ pub fn run(
     max_people: Option<usize>,
     single_person: bool,
     pose_fps: Option<&Bound<'_, PyAny>>,
+    device: Option<&str>,
 ) -> PyResult<PySummary> {
     let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
     crate::pose_rate_arg(&mut params, pose_fps)?;
+    crate::device_arg(&mut params, device)?;
     params.output.overlay_video = overlay_video;
     params.output.report = report;
     crate::people::apply(&mut params, person, max_people, single_person)?;
@@ -389,7 +393,7 @@ pub struct PyAnalyser {
 #[pymethods]
 impl PyAnalyser {
     #[new]
-    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=true, report=true, person=None, max_people=None, single_person=false, pose_fps=None))]
+    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=true, report=true, person=None, max_people=None, single_person=false, pose_fps=None, device=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         model: Option<&str>,
@@ -402,9 +406,11 @@ impl PyAnalyser {
         max_people: Option<usize>,
         single_person: bool,
         pose_fps: Option<&Bound<'_, PyAny>>,
+        device: Option<&str>,
     ) -> PyResult<Self> {
         let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
         crate::pose_rate_arg(&mut params, pose_fps)?;
+        crate::device_arg(&mut params, device)?;
         params.output.overlay_video = overlay_video;
         params.output.report = report;
         crate::people::apply(&mut params, person, max_people, single_person)?;

@@ -186,6 +186,17 @@ def test_pose_on_half_the_frames(data):
         mp.extract(video, max_frames=2, pose_fps=15, world=True)
 
 
+def test_device_is_checked(data):
+    video = str(data("golfdb/golf_swing.mp4"))
+    cpu = mp.extract(video, max_frames=3, device="cpu")
+    auto = mp.extract(video, max_frames=3, device="auto")
+    assert np.abs(cpu.positions - auto.positions).max() < 1.0
+    with pytest.raises(mp.ParamError, match="device"):
+        mp.extract(video, max_frames=2, device="tpu")
+    with pytest.raises(mp.ParamError, match="device"):
+        mp.Analyser(device="cuda:x")
+
+
 def test_bad_input_raises_clear_exceptions(tmp_path):
     with pytest.raises(mp.TrackError, match="nope.npz"):
         mp.read_track(tmp_path / "nope.npz")
