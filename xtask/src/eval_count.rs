@@ -103,6 +103,37 @@ pub fn params_with(overrides: &[String]) -> anyhow::Result<Params> {
     Ok(params)
 }
 
+/// One video through `mp_pipeline::analyse_input` (what `mp run` does).
+pub(crate) fn analyse_video(video: &Path, params: &Params) -> anyhow::Result<mp_pipeline::Outcome> {
+    analyse_input(
+        Input::open(video, None)?,
+        params,
+        &Silent,
+        &CancelToken::new(),
+    )
+    .with_context(|| format!("analysing {}", video.display()))
+}
+
+/// A labelled video's name (its file stem) and its labelled count (the
+/// label file's length).
+pub(crate) fn name_and_count(video: &Path, label: &Path) -> anyhow::Result<(String, usize)> {
+    let truth = mp_geom::io::npz::read_npy(label)?.to_i64()?.len();
+    let name = video
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    Ok((name, truth))
+}
+
+/// Seconds an analysis spent in `stage`.
+pub(crate) fn stage_seconds(out: &mp_pipeline::Outcome, stage: Stage) -> f64 {
+    out.stages
+        .iter()
+        .filter(|t| t.stage == stage)
+        .map(|t| t.time.as_secs_f64())
+        .sum()
+}
+
 /// Videos of a folder (or the one given) that have a label file.
 pub(crate) fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(PathBuf, PathBuf)>> {
     let files: Vec<PathBuf> = if videos.is_dir() {
@@ -195,19 +226,9 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
     // Keypoints, thumbnails and labels of each video, for leave-one-video-out.
     let mut kept: Vec<(String, mp_geom::Track, Option<mp_geom::Track>, usize)> = Vec::new();
     for (video, label) in &items {
-        let truth = mp_geom::io::npz::read_npy(label)?.to_i64()?.len();
-        let name = video
-            .file_stem()
-            .map(|s| s.to_string_lossy().to_string())
-            .unwrap_or_default();
+        let (name, truth) = crate::eval_count::name_and_count(video, label)?;
         eprint!("{name} … ");
-        let out = analyse_input(
-            Input::open(video, None)?,
-            &params,
-            &Silent,
-            &CancelToken::new(),
-        )
-        .with_context(|| format!("analysing {}", video.display()))?;
+        let out = analyse_video(video, &params)?;
         let c = &out.counts;
         let err = (c.total as f64 - truth as f64).abs() / truth.max(1) as f64;
         let obo = (c.total as i64 - truth as i64).abs() <= 1;
@@ -216,13 +237,7 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
         obos.push(obo);
         let n = out.keypoints.track.n_frames();
         frames_total += n;
-        let stage_s = |st: Stage| {
-            out.stages
-                .iter()
-                .filter(|t| t.stage == st)
-                .map(|t| t.time.as_secs_f64())
-                .sum::<f64>()
-        };
+        let stage_s = |st: Stage| stage_seconds(&out, st);
         count_s += stage_s(Stage::Count);
         motion_s += stage_s(Stage::Motion);
         total_s += out.total.as_secs_f64();

@@ -12,10 +12,10 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use clap::Args;
 use mp_geom::Track;
-use mp_pipeline::{analyse_input, CancelToken, Input, Params, PoseRate, Silent, Stage};
+use mp_pipeline::{Params, PoseRate, Stage};
 use serde_json::{json, Map, Value};
 
 /// Arguments of `cargo xtask eval pose-rate`.
@@ -79,19 +79,8 @@ fn run_one(video: &std::path::Path, stride: usize, fps: f64) -> anyhow::Result<R
     if params.pose.rate.stride(fps) != stride {
         bail!("stride {stride} at {fps} fps is not reachable");
     }
-    let out = analyse_input(
-        Input::open(video, None)?,
-        &params,
-        &Silent,
-        &CancelToken::new(),
-    )
-    .with_context(|| format!("analysing {}", video.display()))?;
-    let pose_s = out
-        .stages
-        .iter()
-        .filter(|t| t.stage == Stage::Pose)
-        .map(|t| t.time.as_secs_f64())
-        .sum();
+    let out = crate::eval_count::analyse_video(video, &params)?;
+    let pose_s = crate::eval_count::stage_seconds(&out, Stage::Pose);
     Ok(RateRun {
         count: out.counts.total,
         program: out.analysis.map(|a| a.concrete),
@@ -123,11 +112,7 @@ pub fn run(a: &EvalPoseRateArgs) -> anyhow::Result<()> {
     let mut total_s = vec![0.0f64; k];
     let mut frames = 0usize;
     for (video, label) in &items {
-        let truth = mp_geom::io::npz::read_npy(label)?.to_i64()?.len();
-        let name = video
-            .file_stem()
-            .map(|s| s.to_string_lossy().to_string())
-            .unwrap_or_default();
+        let (name, truth) = crate::eval_count::name_and_count(video, label)?;
         let fps = mp_pose::video::VideoReader::open(video)?.info().fps;
         let runs = a
             .strides
