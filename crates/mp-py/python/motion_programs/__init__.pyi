@@ -215,6 +215,8 @@ class Analyser:
         person: Optional[PersonArg] = None,
         max_people: Optional[int] = None,
         single_person: bool = False,
+        pose_fps: Union[float, str, None] = None,
+        device: Optional[str] = None,
     ) -> None: ...
     def analyse(self, source: Union[PathArg, Track], frame_size: Optional[float] = None) -> Summary: ...
     def run(self, source: Union[PathArg, Track], out_dir: PathArg, frame_size: Optional[float] = None) -> Summary: ...
@@ -233,6 +235,8 @@ def extract(
     max_people: Optional[int] = None,
     single_person: bool = False,
     world: bool = False,
+    pose_fps: Union[float, str, None] = None,
+    device: Optional[str] = None,
 ) -> Track: ...
 @overload
 def extract(
@@ -247,6 +251,8 @@ def extract(
     max_people: Optional[int] = None,
     single_person: bool = False,
     world: Literal[False] = False,
+    pose_fps: Union[float, str, None] = None,
+    device: Optional[str] = None,
 ) -> People: ...
 def fit(
     track: TrackLike,
@@ -282,6 +288,8 @@ def run(
     person: Optional[PersonArg] = None,
     max_people: Optional[int] = None,
     single_person: bool = False,
+    pose_fps: Union[float, str, None] = None,
+    device: Optional[str] = None,
 ) -> Summary: ...
 def grammar_symbols(track: TrackLike, k: Optional[int] = None, seed: Optional[int] = None) -> dict[str, Any]: ...
 def grammar_learn(symbols: dict[str, Any], seed: Optional[int] = None) -> dict[str, Any]: ...
