@@ -31,10 +31,11 @@ pub struct LiveArgs {
     #[arg(long, default_value_t = LiveParams::default().window_s)]
     pub window: f64,
     /// Serve a live page (the annotated video, the people and their counts)
-    /// at ADDR while the stream plays: a port (on 127.0.0.1; 0 for a free
-    /// one) or HOST:PORT; without a value 127.0.0.1:8000. After the stream
-    /// ends the page stays until Ctrl-C.
-    #[arg(long, value_name = "ADDR", num_args = 0..=1,
+    /// while the stream plays, at 127.0.0.1:8000 or at `--serve=ADDR`: a
+    /// port (on 127.0.0.1; 0 for a free one) or HOST:PORT (the `=` keeps a
+    /// source after `--serve` a source). After the stream ends the page
+    /// stays until Ctrl-C.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, require_equals = true,
           default_missing_value = crate::live_page::DEFAULT_ADDR)]
     pub serve: Option<String>,
     /// Also report each person's concrete program, segment by segment, as
@@ -162,4 +163,32 @@ fn text_line(e: &Event) -> Option<String> {
             )
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        live: super::LiveArgs,
+    }
+
+    #[test]
+    fn a_source_may_follow_serve_and_an_address_takes_an_equals_sign() {
+        let c = Cli::try_parse_from(["mp", "--serve", "squats.mp4"]).unwrap();
+        assert_eq!(c.live.source, "squats.mp4");
+        assert_eq!(
+            c.live.serve.as_deref(),
+            Some(crate::live_page::DEFAULT_ADDR)
+        );
+        let c = Cli::try_parse_from(["mp", "squats.mp4", "--serve=0"]).unwrap();
+        assert_eq!(c.live.serve.as_deref(), Some("0"));
+        let c = Cli::try_parse_from(["mp", "-"]).unwrap();
+        assert_eq!(c.live.serve, None);
+        // Without `=` an address is a second source: refused.
+        assert!(Cli::try_parse_from(["mp", "squats.mp4", "--serve", "8080"]).is_err());
+    }
 }

@@ -28,7 +28,7 @@ fn serve(video: &Path) -> Served {
     let mut child = common::mp_command()
         .arg("live")
         .arg(video)
-        .args(["--realtime", "--json", "--serve", "127.0.0.1:0"])
+        .args(["--realtime", "--json", "--serve=127.0.0.1:0"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
