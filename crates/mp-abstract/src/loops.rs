@@ -1,5 +1,5 @@
 //! Loop detection over a sequence of deterministic abstract primitives
-//! (paper §3.2, with the reference behaviour of SPEC.md).
+//! (paper §3.2; docs/ALGORITHMS.md).
 //!
 //! For each loop-body size `k = 1..=max_body`, a window of `W_k` primitives
 //! slides over the sequence; the primitives of a window are grouped by their
@@ -38,7 +38,7 @@ pub const MAX_BODY: usize = 1000;
 /// `windows` and as `short_window_iterations`: one million.
 pub const MAX_WINDOW: usize = 1_000_000;
 
-/// Parameters of loop detection. Defaults follow SPEC.md.
+/// Parameters of loop detection. Defaults: the product's (docs/ALGORITHMS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LoopParams {
     /// Largest loop-body size tried (default 10).

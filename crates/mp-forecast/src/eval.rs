@@ -1,4 +1,4 @@
-//! The forecasting evaluation protocol (SPEC "Forecasting", paper 002 §4.2).
+//! The forecasting evaluation protocol (paper 002 §4.2; docs/ALGORITHMS.md, "Forecasting").
 //!
 //! For every clip and every start frame `s` (every frame in 2D, every 25th in
 //! 3D: [`EvalParams::start_stride_frames`]) with at least one frame after the
@@ -92,7 +92,7 @@ impl Default for EvalParams {
 }
 
 impl EvalParams {
-    /// SPEC defaults for a data set of this track kind: 2D → start at every
+    /// The protocol's defaults for a data set of this track kind: 2D → start at every
     /// frame; 3D → every 25th frame, root from the skeleton (centroid alignment
     /// when the root joint is valid in fewer than half of `track`'s frames),
     /// millimetres for metres.

@@ -1,7 +1,7 @@
 //! # mp-forecast — forecasting human motion from keypoints
 //!
-//! Condition on the latest 15 observed frames, predict the next 1–30 (SPEC
-//! "Forecasting", paper 002 "Predicting 3D Human Dynamics from Video").
+//! Condition on the latest 15 observed frames, predict the next 1–30 (paper
+//! 002, "Predicting 3D Human Dynamics from Video"; docs/ALGORITHMS.md).
 //!
 //! * [`Forecaster`]: the seam every method implements
 //!   (`predict(past, horizon) -> Track`).

@@ -23,7 +23,7 @@ use crate::normalize::{push_features, BodyJoints, Normalizer};
 /// Parameters of [`NearestNeighbour`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct NnParams {
-    /// Frames in a query / training window. Default 15 (SPEC: condition on 15 frames).
+    /// Frames in a query / training window. Default 15 (paper 002: condition on 15 frames).
     pub context_frames: usize,
     /// A training window is kept only when this many frames follow it. Default 30
     /// (the longest evaluated horizon). Longer queries repeat the last frame.

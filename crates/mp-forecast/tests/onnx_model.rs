@@ -275,7 +275,7 @@ fn learned_model_beats_constant_on_real_penn_action_clips() {
 
 #[test]
 fn learned_3d_model_beats_constant_on_real_msr_action3d_clips() {
-    // the 30 validation clips, a start every 25th frame (SPEC's 3D protocol): PA-MPJPE with
+    // the 30 validation clips, a start every 25th frame (the 3D protocol of paper 002): PA-MPJPE with
     // DTW averaged over the horizons 5–30 (mm, lower is better)
     let ds = mp_forecast::data::ForecastDataset::open(mp_geom::data_or_return!(
         "msr_action3d/msr_action3d_odd_subjects.npz"

@@ -1,4 +1,4 @@
-//! The selection rules of `fit_best` (SPEC.md, Level 2).
+//! The selection rules of `fit_best` (docs/ALGORITHMS.md, concrete programs).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::fit::{fit_best, fit_circle, fit_line, fit_stationary, ErrorNorm, FitParams};

@@ -4,7 +4,7 @@
 //! # Scale
 //!
 //! Thresholds and λ are given at the reference scale of a 512-pixel frame
-//! (SPEC.md). `unit_scale` (track units per reference pixel) converts them:
+//! (docs/ALGORITHMS.md). `unit_scale` (track units per reference pixel) converts them:
 //!
 //! * [`Scale::FrameSize`]: `unit_scale = max(H, W) / 512` (pixels, frame size known);
 //! * [`Scale::Auto`] (default): `unit_scale = track.scale() / REFERENCE_EXTENT_PX`,
@@ -208,7 +208,7 @@ pub enum Scale {
     },
 }
 
-/// Parameters of synthesis. Defaults follow SPEC.md.
+/// Parameters of synthesis. Defaults: the product's (docs/ALGORITHMS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SynthParams {
     /// Segment penalty. Default: fixed 1600.

@@ -6,7 +6,7 @@
 //! returns the fitted [`Primitive`] with its error (see [`ErrorNorm`]).
 //!
 //! Thresholds in [`FitParams`] are given at the reference scale of a 512-pixel
-//! frame (SPEC.md); `FitParams::unit_scale` converts them to the data's units
+//! frame (docs/ALGORITHMS.md); `FitParams::unit_scale` converts them to the data's units
 //! (track units per reference pixel), so the same defaults serve pixels of any
 //! frame size and metres.
 //!
@@ -77,7 +77,7 @@ pub enum ErrorNorm {
     Squared,
 }
 
-/// Parameters of primitive fitting and selection. Defaults follow SPEC.md.
+/// Parameters of primitive fitting and selection. Defaults: the product's (docs/ALGORITHMS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FitParams {
     /// Which primitive kinds may be chosen by [`fit_best`].
@@ -523,7 +523,7 @@ fn bbox_diag(points: ArrayView2<'_, f64>, weights: Option<&[f64]>) -> f64 {
 }
 
 /// Fits every kind in `params.kinds` and returns the best by the selection
-/// rules of SPEC.md (lowest error with penalties; stationary wins under its thresholds).
+/// rules of docs/ALGORITHMS.md (lowest error with penalties; stationary wins under its thresholds).
 ///
 /// The exact rules are listed in the [module documentation](self).
 pub fn fit_best(
