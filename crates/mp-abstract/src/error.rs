@@ -2,6 +2,7 @@
 
 /// Everything that can go wrong in `mp-abstract`.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum AbstractError {
     /// An error from the geometry layer.
     #[error(transparent)]

@@ -34,6 +34,7 @@ impl std::error::Error for ParseError {}
 
 /// Everything that can go wrong in `mp-concrete`.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ConcreteError {
     /// An error from `mp-geom` (track checks, fitting).
     #[error(transparent)]

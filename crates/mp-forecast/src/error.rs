@@ -6,6 +6,7 @@ use std::path::PathBuf;
 ///
 /// Each variant names the file, model, frame, joint or parameter involved.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ForecastError {
     /// The observed track is shorter than a method needs.
     #[error("{what} needs at least {needed} observed frames, got {got}")]

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 /// Each variant names what was wrong (the file, the frame, the joint, the
 /// parameter) so that a message can be shown to a user as it is.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum GeomError {
     /// An I/O error on a named file.
     #[error("{path}: {source}")]

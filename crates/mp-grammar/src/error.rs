@@ -5,6 +5,7 @@
 /// Each variant names what is wrong (the parameter, the sentence, the symbol,
 /// the frame) so that the message can be shown to a user as it is.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum GrammarError {
     /// A parameter outside its valid range.
     #[error("invalid parameter `{name}`: {reason}")]

@@ -32,6 +32,7 @@ pub use source::{LiveSource, Reconnect, Slot};
 
 /// Why a live run stopped early.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LiveError {
     /// The source cannot be opened or decoded.
     #[error("{0}")]

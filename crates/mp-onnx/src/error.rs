@@ -7,6 +7,7 @@ use std::path::PathBuf;
 /// Each variant names the library, model file, tensor or parameter involved,
 /// so that the message can be shown to a user as it is.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum OnnxError {
     /// The ONNX Runtime shared library was not found.
     #[error(

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 /// Everything that can stop an analysis; each variant names the input,
 /// stage or file involved, and wraps the library error with its message.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PipelineError {
     /// The run was cancelled through its `CancelToken`.
     #[error("cancelled")]

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 /// Each variant names the file, frame, model or parameter involved, so that
 /// the message can be shown to a user as it is.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum PoseError {
     /// ONNX Runtime could not be found or loaded, or a session could not be
     /// opened or checked (see [`mp_onnx::OnnxError`]).

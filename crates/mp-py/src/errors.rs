@@ -134,5 +134,7 @@ pub fn pipeline(e: mp_pipeline::PipelineError) -> PyErr {
         P::Stage { ref stage, .. } if stage.contains("concrete") => ProgramError::new_err(msg),
         P::Stage { ref stage, .. } if stage.contains("loops") => AbstractError::new_err(msg),
         P::Stage { .. } => MpError::new_err(msg),
+        // An error kind added later: the base class.
+        _ => MpError::new_err(msg),
     }
 }

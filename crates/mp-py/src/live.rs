@@ -107,6 +107,8 @@ fn to_py(py: Python<'_>, name: &str, e: LiveError) -> PyErr {
         LiveError::Source(_) | LiveError::Stalled(_) | LiveError::Pose(_) => {
             errors::PoseError::new_err(msg)
         }
+        // An error kind added later: the base class.
+        _ => errors::MpError::new_err(msg),
     }
 }
 

@@ -8,6 +8,7 @@ use mp_geom::GeomError;
 /// Each variant names the parameter, frame, joint or action that is wrong so
 /// that the message can be shown to a user as it is.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RefineError {
     /// An error from `mp-geom` (track checks, spline fitting, data files).
     #[error(transparent)]

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 /// Everything that can go wrong while drawing pictures or writing a report.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ReportError {
     /// A file or folder could not be read or written.
     #[error("{path}: {source}")]

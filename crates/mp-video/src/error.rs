@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 /// Everything that can stop a video edit, prediction or interpolation.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum VideoError {
     /// Decoding, encoding or the pose model.
     #[error(transparent)]

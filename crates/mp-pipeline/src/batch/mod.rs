@@ -78,6 +78,7 @@ pub const MAX_JOBS: usize = 1024;
 /// Everything that stops a whole batch (an item's own failure does not: it
 /// is recorded in its [`ItemReport`]).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BatchError {
     /// A parameter is out of range.
     #[error("parameter `{name}`: {reason}")]
