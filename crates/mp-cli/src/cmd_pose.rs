@@ -99,9 +99,9 @@ fn progress_and_options(
     a: &ExtractArgs,
     frame_count: Option<usize>,
     fps: f64,
+    rate: mp_pipeline::PoseRate,
     name: &str,
-) -> Result<(ProgressBar, ExtractOptions)> {
-    let rate = mp_pipeline::PoseRate::parse(&a.pose_fps)?;
+) -> (ProgressBar, ExtractOptions) {
     let total = match (frame_count, a.max_frames) {
         (Some(n), Some(m)) => Some(n.min(m)),
         (n, None) => n,
@@ -115,14 +115,14 @@ fn progress_and_options(
         pose_every: rate.stride(fps),
         ..ExtractOptions::default()
     };
-    Ok((pb, opts))
+    (pb, opts)
 }
 
 /// `mp extract`: keypoints of a video or image written as a track.
 pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     crate::track_arg::refuse_track_for_extract(&a.video)?;
     let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
-    mp_pipeline::PoseRate::parse(&a.pose_fps)?;
+    let rate = mp_pipeline::PoseRate::parse(&a.pose_fps)?;
     let device = mp_pose::runtime::Device::parse(&a.device).map_err(|e| anyhow::anyhow!("{e}"))?;
     if a.world && model == ModelChoice::MoveNet {
         bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
@@ -139,7 +139,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         && model.landmark_model().is_some()
         && mp_pipeline::is_video(&a.video);
     if people {
-        return extract_people_cmd(a, model, device);
+        return extract_people_cmd(a, model, rate, device);
     }
     let source = open_source(&a.video).map_err(pose_err)?;
     let mut est = open_estimator_with(
@@ -152,7 +152,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         a.recover,
     )
     .map_err(pose_err)?;
-    let (pb, opts) = progress_and_options(a, source.frame_count, source.fps, est.name())?;
+    let (pb, opts) = progress_and_options(a, source.frame_count, source.fps, rate, est.name());
     let ex = extract(source, est.as_mut(), &opts, |done, _| {
         pb.set_position(done as u64)
     })
@@ -198,6 +198,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
 fn extract_people_cmd(
     a: &ExtractArgs,
     model: ModelChoice,
+    rate: mp_pipeline::PoseRate,
     device: mp_pose::runtime::Device,
 ) -> Result<()> {
     let source = open_source(&a.video).map_err(pose_err)?;
@@ -221,7 +222,7 @@ fn extract_people_cmd(
         },
     })
     .map_err(pose_err)?;
-    let (pb, opts) = progress_and_options(a, source.frame_count, source.fps, est.name())?;
+    let (pb, opts) = progress_and_options(a, source.frame_count, source.fps, rate, est.name());
     let ex = mp_pose::extract_people(source, &mut est, &opts, |done, _| {
         pb.set_position(done as u64)
     })
