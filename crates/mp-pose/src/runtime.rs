@@ -140,17 +140,32 @@ pub(crate) fn image_tensor<'a, T>(
 where
     T: ort::value::PrimitiveTensorElementType + std::fmt::Debug + Clone + 'static,
 {
-    if input.len() != n * n * 3 {
+    image_batch_tensor(input, 1, n, model, what)
+}
+
+/// Wraps `count` prepared `n × n × 3` (NHWC) images laid end to end as one
+/// `[count, n, n, 3]` input of `model`, refusing a buffer of the wrong length.
+pub(crate) fn image_batch_tensor<'a, T>(
+    input: &'a [T],
+    count: usize,
+    n: usize,
+    model: &str,
+    what: &str,
+) -> Result<ort::value::TensorRef<'a, T>>
+where
+    T: ort::value::PrimitiveTensorElementType + std::fmt::Debug + Clone + 'static,
+{
+    let want = count * n * n * 3;
+    if count == 0 || input.len() != want {
         return Err(PoseError::param(
             "input",
             format!(
-                "{what} input needs {} values, got {}",
-                n * n * 3,
+                "{what} input needs {want} values ({count} of {n} × {n} × 3), got {}",
                 input.len()
             ),
         ));
     }
-    ort::value::TensorRef::from_array_view(([1usize, n, n, 3], input))
+    ort::value::TensorRef::from_array_view(([count, n, n, 3], input))
         .map_err(|e| PoseError::model(model, e))
 }
 

@@ -10,6 +10,7 @@ mod common;
 use mp_pose::blazepose::detector::{self, PoseDetector};
 use mp_pose::blazepose::landmarks::{LandmarkModel, LandmarkModelKind, RefineParams};
 use mp_pose::blazepose::DetectorParams;
+use mp_pose::imageops::{RgbView, Roi};
 use mp_pose::movenet::{MoveNet, MoveNetParams};
 use mp_pose::runtime::{self, ModelFile, SessionParams, TensorInfo};
 use serde_json::Value;
@@ -264,6 +265,79 @@ fn check_without_mask(kind: LandmarkModelKind, file: ModelFile) {
 fn landmark_models_without_mask_give_the_same_values() {
     check_without_mask(LandmarkModelKind::Full, ModelFile::LandmarkFull);
     check_without_mask(LandmarkModelKind::Lite, ModelFile::LandmarkLite);
+}
+
+/// Several crops in one run of the landmark model (the cut model's batch is
+/// open) give each crop's values from a run of its own, and a model whose
+/// batch is closed runs them one by one.
+#[test]
+fn several_crops_in_one_run_give_each_crops_values() {
+    let (w, h) = (512usize, 384usize);
+    let data: Vec<u8> = (0..w * h * 3)
+        .map(|i| {
+            let (p, c) = (i / 3, i % 3);
+            let (x, y) = (p % w, p / w);
+            ((7 * x + 3 * y + 60 * c + (x * y) / 97) % 256) as u8
+        })
+        .collect();
+    let image = RgbView {
+        width: w,
+        height: h,
+        data: &data,
+    };
+    let rois = [
+        Roi::letterbox(w, h),
+        Roi {
+            center_x_px: 150.0,
+            center_y_px: 200.0,
+            width_px: 180.0,
+            height_px: 180.0,
+            rotation_rad: 0.4,
+        },
+        Roi {
+            center_x_px: 400.0,
+            center_y_px: 120.0,
+            width_px: 260.0,
+            height_px: 260.0,
+            rotation_rad: -1.2,
+        },
+    ];
+    let cut = runtime::run_model_path(ModelFile::LandmarkFull).unwrap();
+    let orig = runtime::model_path(ModelFile::LandmarkFull).unwrap();
+    let open = |p: &std::path::Path| {
+        LandmarkModel::open(
+            p,
+            LandmarkModelKind::Full,
+            RefineParams::default(),
+            &SessionParams::default(),
+        )
+        .unwrap()
+    };
+    let mut batched = open(&cut);
+    assert!(
+        batched.batch_open(),
+        "{} takes one crop a run (run `cargo xtask models`)",
+        cut.display()
+    );
+    let mut single = open(&orig);
+    assert!(!single.batch_open());
+    let together = batched.run_many(image, &rois).unwrap();
+    let apart = single.run_many(image, &rois).unwrap();
+    assert_eq!(together.len(), 3);
+    assert_eq!(apart.len(), 3);
+    for (i, (x, y)) in together.iter().zip(&apart).enumerate() {
+        assert!((x.pose_presence - y.pose_presence).abs() < 1e-4, "crop {i}");
+        for (p, q) in x.landmarks.iter().zip(&y.landmarks) {
+            // Pixels of the 256-pixel crop.
+            assert!(
+                ((p.x - q.x) * 256.0).abs() < 1e-2 && ((p.y - q.y) * 256.0).abs() < 1e-2,
+                "crop {i}: {p:?} vs {q:?}"
+            );
+        }
+    }
+    // The crops differ, so a mix-up of the batch's order would show.
+    assert!((together[0].landmarks[0].x - together[2].landmarks[0].x).abs() > 1e-4);
+    assert!(batched.run_many(image, &[]).unwrap().is_empty());
 }
 
 #[test]

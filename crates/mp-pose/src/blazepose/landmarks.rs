@@ -207,6 +207,9 @@ pub struct LandmarkModel {
     name: String,
     kind: LandmarkModelKind,
     refine: RefineParams,
+    /// The graph takes several crops in one run (its batch dimension is
+    /// open, as in the models `cargo xtask models` cuts).
+    batch_open: bool,
     crop: Vec<u8>,
     input: Vec<f32>,
 }
@@ -224,7 +227,8 @@ impl LandmarkModel {
         let name = path.display().to_string();
         let ins = runtime::inputs_of(&session);
         let outs = runtime::outputs_of(&session);
-        runtime::check_tensor(&name, &ins, INPUT_NAME, "f32", &[1, 256, 256, 3])?;
+        let input = runtime::check_tensor(&name, &ins, INPUT_NAME, "f32", &[1, 256, 256, 3])?;
+        let batch_open = input.shape.first().is_some_and(|&b| b < 0);
         runtime::check_tensor(&name, &outs, LANDMARKS_NAME, "f32", &[1, 195])?;
         runtime::check_tensor(&name, &outs, PRESENCE_NAME, "f32", &[1, 1])?;
         runtime::check_tensor(&name, &outs, HEATMAP_NAME, "f32", &[1, 64, 64, 39])?;
@@ -244,6 +248,7 @@ impl LandmarkModel {
             name,
             kind,
             refine,
+            batch_open,
             crop: Vec::new(),
             input: Vec::new(),
         })
@@ -254,32 +259,52 @@ impl LandmarkModel {
         self.kind
     }
 
+    /// Whether one run takes several crops ([`LandmarkModel::run_many`]
+    /// makes one call for all of them).
+    pub fn batch_open(&self) -> bool {
+        self.batch_open
+    }
+
     /// Runs the model on a prepared `[1, 256, 256, 3]` input in [0, 1].
     pub fn run_tensor(&mut self, input: &[f32]) -> Result<LandmarkOutput> {
+        let mut out = self.run_batch(input, 1)?;
+        out.pop().ok_or_else(|| PoseError::Contract {
+            model: self.name.clone(),
+            reason: "a run on one crop gave no result".into(),
+        })
+    }
+
+    /// Runs the model once on `count` prepared crops laid end to end
+    /// (`[count, 256, 256, 3]`); the results in the same order.
+    fn run_batch(&mut self, input: &[f32], count: usize) -> Result<Vec<LandmarkOutput>> {
         let n = LANDMARK_INPUT;
-        let tensor = runtime::image_tensor(input, n, &self.name, "landmark")?;
+        let tensor = runtime::image_batch_tensor(input, count, n, &self.name, "landmark")?;
         let outputs = self
             .session
             .run_with_options(ort::inputs![INPUT_NAME => tensor], &self.run_options)
             .map_err(|e| PoseError::model(&self.name, e))?;
-        let raw = runtime::output_f32(&outputs, &self.name, LANDMARKS_NAME, 195)?;
-        let presence = runtime::output_f32(&outputs, &self.name, PRESENCE_NAME, 1)?;
-        let world = runtime::output_f32(&outputs, &self.name, WORLD_NAME, 117)?;
-        let heatmap = runtime::output_f32(
-            &outputs,
-            &self.name,
-            HEATMAP_NAME,
-            HEATMAP_SIZE * HEATMAP_SIZE * NUM_LANDMARKS_ALL,
-        )?;
-        let mut landmarks = decode_landmarks(raw);
-        if self.refine.enabled {
-            refine_with_heatmap(&mut landmarks, heatmap, &self.refine);
+        let heat_len = HEATMAP_SIZE * HEATMAP_SIZE * NUM_LANDMARKS_ALL;
+        let raw = runtime::output_f32(&outputs, &self.name, LANDMARKS_NAME, 195 * count)?;
+        let presence = runtime::output_f32(&outputs, &self.name, PRESENCE_NAME, count)?;
+        let world = runtime::output_f32(&outputs, &self.name, WORLD_NAME, 117 * count)?;
+        let heatmap = runtime::output_f32(&outputs, &self.name, HEATMAP_NAME, heat_len * count)?;
+        let mut results = Vec::with_capacity(count);
+        for i in 0..count {
+            let mut landmarks = decode_landmarks(&raw[i * 195..(i + 1) * 195]);
+            if self.refine.enabled {
+                let heat = &heatmap[i * heat_len..(i + 1) * heat_len];
+                refine_with_heatmap(&mut landmarks, heat, &self.refine);
+            }
+            results.push(LandmarkOutput {
+                pose_presence: presence[i],
+                landmarks,
+                world: world[i * 117..(i + 1) * 117]
+                    .chunks_exact(3)
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect(),
+            });
         }
-        Ok(LandmarkOutput {
-            pose_presence: presence[0],
-            landmarks,
-            world: world.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
-        })
+        Ok(results)
     }
 
     /// Crops `roi` from the image (border replicate) and runs the model.
@@ -289,6 +314,28 @@ impl LandmarkModel {
         let mut input = std::mem::take(&mut self.input);
         to_f32(&self.crop, 1.0 / 255.0, 0.0, &mut input);
         let result = self.run_tensor(&input);
+        self.input = input;
+        result
+    }
+
+    /// [`LandmarkModel::run`] on several regions of one image: one run of
+    /// the model for all of them where its batch is open
+    /// ([`LandmarkModel::batch_open`]), else one run each. The same values
+    /// either way; the results in the order of `rois`.
+    pub fn run_many(&mut self, image: RgbView<'_>, rois: &[Roi]) -> Result<Vec<LandmarkOutput>> {
+        if !self.batch_open || rois.len() < 2 {
+            return rois.iter().map(|roi| self.run(image, roi)).collect();
+        }
+        let n = LANDMARK_INPUT;
+        let mut input = std::mem::take(&mut self.input);
+        input.clear();
+        input.reserve(rois.len() * n * n * 3);
+        for roi in rois {
+            crop_u8(image, roi, n, n, Border::Replicate, &mut self.crop);
+            // As `to_f32(crop, 1/255, 0)` writes a single crop.
+            input.extend(self.crop.iter().map(|&v| v as f32 * (1.0 / 255.0) + 0.0));
+        }
+        let result = self.run_batch(&input, rois.len());
         self.input = input;
         result
     }

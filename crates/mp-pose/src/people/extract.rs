@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;
 
-use mp_geom::{People, Person, Track, Units};
+use mp_geom::{People, Person, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 
 use super::{MultiPose, TrackEvent};
@@ -78,7 +78,131 @@ impl PeopleExtraction {
 struct Collected {
     id: Option<u32>,
     frames: Vec<(usize, Vec<[f64; 2]>, Vec<f64>)>,
-    smoother: Option<PoseSmoother>,
+}
+
+/// Every track's poses, gathered frame by frame as the tracker reports them
+/// ([`TrackEvent`]s included), and turned into [`People`] at the end: the
+/// tracks that got an id, without the poses the tracker took back.
+/// [`extract_people`] gathers a video with it; a live run replays what it
+/// saw into one.
+pub struct PeopleCollector {
+    joints: usize,
+    tracks: HashMap<u64, Collected>,
+}
+
+impl PeopleCollector {
+    /// A collector of poses with `joints` keypoints each.
+    pub fn new(joints: usize) -> Self {
+        PeopleCollector {
+            joints,
+            tracks: HashMap::new(),
+        }
+    }
+
+    /// The pose of track `key` on `frame`. Errors: a pose whose keypoint
+    /// count is not the collector's (`who` names the estimator).
+    pub fn pose(
+        &mut self,
+        key: u64,
+        frame: usize,
+        keypoints_px: Vec<[f64; 2]>,
+        visibility: Vec<f64>,
+        who: &str,
+    ) -> Result<()> {
+        let j = self.joints;
+        if keypoints_px.len() != j || visibility.len() != j {
+            return Err(PoseError::BadFrame {
+                frame,
+                reason: format!(
+                    "{who} returned {} keypoints, its skeleton has {j}",
+                    keypoints_px.len()
+                ),
+            });
+        }
+        self.tracks
+            .entry(key)
+            .or_default()
+            .frames
+            .push((frame, keypoints_px, visibility));
+        Ok(())
+    }
+
+    /// The last frame with a pose of track `key`.
+    pub fn last_frame(&self, key: u64) -> Option<usize> {
+        self.tracks.get(&key)?.frames.last().map(|l| l.0)
+    }
+
+    /// A change of the tracks, as the tracker reported it.
+    pub fn event(&mut self, event: &TrackEvent) {
+        match *event {
+            TrackEvent::Confirmed { key, id, .. } => {
+                self.tracks.entry(key).or_default().id = Some(id);
+            }
+            TrackEvent::Dropped { key, keep_until } => {
+                if let Some(c) = self.tracks.get_mut(&key) {
+                    c.frames.retain(|x| x.0 <= keep_until);
+                }
+            }
+            TrackEvent::Ended { key } => {
+                if self.tracks.get(&key).is_some_and(|c| c.id.is_none()) {
+                    self.tracks.remove(&key);
+                }
+            }
+        }
+    }
+
+    /// The people of a video of `n_frames` at `fps`: the tracks with an id
+    /// and a pose in `skeleton` (pixels), numbered 1, 2, … by first
+    /// appearance, or with the tracker's ids when `keep_ids`. Also adds one
+    /// to `per_frame[f]` for each person with a pose on frame `f`.
+    pub fn finish(
+        self,
+        n_frames: usize,
+        fps: f64,
+        skeleton: &Skeleton,
+        keep_ids: bool,
+        per_frame: &mut [usize],
+    ) -> Result<People> {
+        let j = self.joints;
+        let mut kept: Vec<Collected> = self
+            .tracks
+            .into_values()
+            .filter(|c| c.id.is_some() && !c.frames.is_empty())
+            .collect();
+        kept.sort_by_key(|c| (c.frames[0].0, c.id));
+        let mut people = Vec::with_capacity(kept.len());
+        for (k, c) in kept.into_iter().enumerate() {
+            let first = c.frames[0].0;
+            let last = c.frames.last().map_or(first, |l| l.0);
+            let len = last - first + 1;
+            let mut pos = Array3::<f64>::zeros((len, j, 2));
+            let mut conf = Array2::<f64>::zeros((len, j));
+            for (f, kps, vis) in &c.frames {
+                let ti = f - first;
+                if let Some(slot) = per_frame.get_mut(*f) {
+                    *slot += 1;
+                }
+                for q in 0..j {
+                    if kps[q].iter().all(|v| v.is_finite()) && vis[q].is_finite() {
+                        pos[[ti, q, 0]] = kps[q][0];
+                        pos[[ti, q, 1]] = kps[q][1];
+                        conf[[ti, q]] = vis[q].clamp(0.0, 1.0);
+                    }
+                }
+            }
+            let track = Track::new(pos, Some(conf), fps, Units::Pixels, skeleton.clone())?;
+            let id = match (keep_ids, c.id) {
+                (true, Some(id)) => id,
+                _ => k as u32 + 1,
+            };
+            people.push(Person {
+                id,
+                first_frame: first,
+                track,
+            });
+        }
+        Ok(People::new(n_frames, fps, people)?)
+    }
 }
 
 /// Runs the multi-person estimator over the frames of `source` (every
@@ -103,7 +227,8 @@ pub fn extract_people(
         (None, b) => b,
     };
     let start = Instant::now();
-    let mut tracks: HashMap<u64, Collected> = HashMap::new();
+    let mut collector = PeopleCollector::new(j);
+    let mut smoothers: HashMap<u64, PoseSmoother> = HashMap::new();
     let mut per_frame = Vec::new();
     let mut posed = Vec::new();
     let mut estimate_ms = Vec::new();
@@ -126,46 +251,24 @@ pub fn extract_people(
         detector_runs += r.detector_runs;
         let f = frame.index;
         for mut tp in r.poses {
-            if tp.pose.keypoints_px.len() != j || tp.pose.visibility.len() != j {
-                return Err(PoseError::BadFrame {
-                    frame: f,
-                    reason: format!(
-                        "{} returned {} keypoints, its skeleton has {j}",
-                        estimator.name(),
-                        tp.pose.keypoints_px.len()
-                    ),
-                });
-            }
-            let c = tracks.entry(tp.key).or_default();
             if let Some(sp) = options.smoothing {
                 let step = options.pose_every.max(1);
-                let restart = c.frames.last().is_none_or(|l| f > l.0 + step);
-                if restart || c.smoother.is_none() {
-                    c.smoother = Some(PoseSmoother::new(sp)?);
+                let restart = collector.last_frame(tp.key).is_none_or(|l| f > l + step);
+                if restart || !smoothers.contains_key(&tp.key) {
+                    smoothers.insert(tp.key, PoseSmoother::new(sp)?);
                 }
-                if let Some(sm) = c.smoother.as_mut() {
+                if let Some(sm) = smoothers.get_mut(&tp.key) {
                     sm.apply(frame.timestamp_s, &mut tp.pose);
                 }
             }
-            c.frames.push((f, tp.pose.keypoints_px, tp.pose.visibility));
+            let (kps, vis) = (tp.pose.keypoints_px, tp.pose.visibility);
+            collector.pose(tp.key, f, kps, vis, estimator.name())?;
         }
         for e in r.events {
-            match e {
-                TrackEvent::Confirmed { key, id, .. } => {
-                    tracks.entry(key).or_default().id = Some(id);
-                }
-                TrackEvent::Dropped { key, keep_until } => {
-                    if let Some(c) = tracks.get_mut(&key) {
-                        c.frames.retain(|x| x.0 <= keep_until);
-                        c.smoother = None;
-                    }
-                }
-                TrackEvent::Ended { key } => {
-                    if tracks.get(&key).is_some_and(|c| c.id.is_none()) {
-                        tracks.remove(&key);
-                    }
-                }
+            if let TrackEvent::Dropped { key, .. } | TrackEvent::Ended { key } = e {
+                smoothers.remove(&key);
             }
+            collector.event(&e);
         }
         per_frame.push(0);
         progress(per_frame.len(), total);
@@ -179,39 +282,7 @@ pub fn extract_people(
         });
     }
     // People with an id and a pose, by first appearance.
-    let mut kept: Vec<Collected> = tracks
-        .into_values()
-        .filter(|c| c.id.is_some() && !c.frames.is_empty())
-        .collect();
-    kept.sort_by_key(|c| (c.frames[0].0, c.id));
-    let mut people = Vec::with_capacity(kept.len());
-    for (k, c) in kept.into_iter().enumerate() {
-        let first = c.frames[0].0;
-        let last = c.frames.last().map_or(first, |l| l.0);
-        let len = last - first + 1;
-        let mut pos = Array3::<f64>::zeros((len, j, 2));
-        let mut conf = Array2::<f64>::zeros((len, j));
-        for (f, kps, vis) in &c.frames {
-            let ti = f - first;
-            if let Some(slot) = per_frame.get_mut(*f) {
-                *slot += 1;
-            }
-            for q in 0..j {
-                if kps[q].iter().all(|v| v.is_finite()) && vis[q].is_finite() {
-                    pos[[ti, q, 0]] = kps[q][0];
-                    pos[[ti, q, 1]] = kps[q][1];
-                    conf[[ti, q]] = vis[q].clamp(0.0, 1.0);
-                }
-            }
-        }
-        let track = Track::new(pos, Some(conf), source.fps, Units::Pixels, skeleton.clone())?;
-        people.push(Person {
-            id: k as u32 + 1,
-            first_frame: first,
-            track,
-        });
-    }
-    let people = People::new(n, source.fps, people)?;
+    let people = collector.finish(n, source.fps, &skeleton, false, &mut per_frame)?;
     let (refused, most_seen) = estimator
         .tracker()
         .map_or(((0, None), 0), |t| (t.refused(), t.most_seen()));

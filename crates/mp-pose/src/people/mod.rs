@@ -24,15 +24,17 @@ pub mod tracker;
 
 use mp_geom::Skeleton;
 
-use crate::blazepose::{self, detector, BlazePoseParams, LandmarkModel, PoseDetector};
-use crate::error::Result;
+use crate::blazepose::{
+    self, detector, BlazePoseParams, LandmarkModel, LandmarkOutput, PoseDetector,
+};
+use crate::error::{PoseError, Result};
 use crate::filter::PointsFilter;
 use crate::imageops::{RgbView, Roi};
 use crate::pose::Pose;
 use crate::runtime::ModelFile;
 use crate::video::Frame;
 
-pub use extract::{extract_people, PeopleExtraction};
+pub use extract::{extract_people, PeopleCollector, PeopleExtraction};
 pub use tracker::{
     Candidate, FrameResult, PeopleParams, PersonId, Seen, Sensors, TrackEvent, TrackedPose, Tracker,
 };
@@ -174,6 +176,26 @@ struct BlazeSensors<'a> {
     name: &'a str,
 }
 
+impl BlazeSensors<'_> {
+    /// The pose in `roi` from the landmark model's output, if a person is there.
+    fn seen(
+        &self,
+        roi: &Roi,
+        out: &LandmarkOutput,
+        filter: &mut PointsFilter,
+    ) -> Result<Option<Seen<Pose>>> {
+        if out.pose_presence.is_nan() || out.pose_presence < self.min_presence {
+            return Ok(None);
+        }
+        let (pose, next) =
+            blazepose::pose_in_roi(self.name, *roi, out, filter, self.time_ns, self.roi_scale)?;
+        Ok(Some(Seen {
+            pose,
+            next_roi: next.is_valid().then_some(next),
+        }))
+    }
+}
+
 impl Sensors for BlazeSensors<'_> {
     type Pose = Pose;
 
@@ -182,15 +204,32 @@ impl Sensors for BlazeSensors<'_> {
             return Ok(None);
         }
         let out = self.landmarks.run(self.image, roi)?;
-        if out.pose_presence.is_nan() || out.pose_presence < self.min_presence {
-            return Ok(None);
+        self.seen(roi, &out, filter)
+    }
+
+    fn landmarks_many(
+        &mut self,
+        jobs: &mut [(Roi, &mut PointsFilter)],
+    ) -> Result<Vec<Option<Seen<Pose>>>> {
+        let valid: Vec<Roi> = jobs
+            .iter()
+            .filter(|(roi, _)| roi.is_valid())
+            .map(|(roi, _)| *roi)
+            .collect();
+        let mut outs = self.landmarks.run_many(self.image, &valid)?.into_iter();
+        let mut seen = Vec::with_capacity(jobs.len());
+        for (roi, filter) in jobs.iter_mut() {
+            if !roi.is_valid() {
+                seen.push(None);
+                continue;
+            }
+            let out = outs.next().ok_or_else(|| PoseError::Contract {
+                model: self.name.to_string(),
+                reason: format!("fewer results than the {} crops", valid.len()),
+            })?;
+            seen.push(self.seen(roi, &out, filter)?);
         }
-        let (pose, next) =
-            blazepose::pose_in_roi(self.name, *roi, &out, filter, self.time_ns, self.roi_scale)?;
-        Ok(Some(Seen {
-            pose,
-            next_roi: next.is_valid().then_some(next),
-        }))
+        Ok(seen)
     }
 
     fn detect(&mut self, region: &Roi) -> Result<Vec<Candidate>> {

@@ -221,6 +221,18 @@ pub trait Sensors {
         roi: &Roi,
         filter: &mut PointsFilter,
     ) -> Result<Option<Seen<Self::Pose>>>;
+    /// [`Sensors::landmarks`] in several regions of the frame, each with its
+    /// track's filter; the results in the same order. The default looks in
+    /// one region after the other; a model that takes several crops in one
+    /// run overrides it.
+    fn landmarks_many(
+        &mut self,
+        jobs: &mut [(Roi, &mut PointsFilter)],
+    ) -> Result<Vec<Option<Seen<Self::Pose>>>> {
+        jobs.iter_mut()
+            .map(|(roi, filter)| self.landmarks(roi, filter))
+            .collect()
+    }
     /// The detector in a square `region`.
     fn detect(&mut self, region: &Roi) -> Result<Vec<Candidate>>;
 }
@@ -484,14 +496,27 @@ impl Tracker {
         let mut events = Vec::new();
         let mut found: Vec<(usize, Seen<S::Pose>, Roi)> = Vec::new();
 
-        // 1. The carried crops.
+        // 1. The carried crops, all in one look.
+        let mut carried = Vec::new();
+        let mut jobs = Vec::new();
         for (i, tr) in self.tracks.iter_mut().enumerate() {
-            let Some(roi) = tr.carried.take() else {
-                continue;
-            };
-            match sensors.landmarks(&roi, &mut tr.filter)? {
+            if let Some(roi) = tr.carried.take() {
+                carried.push(i);
+                jobs.push((roi, &mut tr.filter));
+            }
+        }
+        let seen = sensors.landmarks_many(&mut jobs)?;
+        if seen.len() != jobs.len() {
+            return Err(PoseError::Contract {
+                model: "landmarks".into(),
+                reason: format!("{} results for {} regions", seen.len(), jobs.len()),
+            });
+        }
+        let rois: Vec<Roi> = jobs.into_iter().map(|(roi, _)| roi).collect();
+        for ((i, roi), seen) in carried.into_iter().zip(rois).zip(seen) {
+            match seen {
                 Some(seen) => found.push((i, seen, roi)),
-                None => tr.filter.reset(),
+                None => self.tracks[i].filter.reset(),
             }
         }
 
