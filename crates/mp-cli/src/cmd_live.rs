@@ -43,6 +43,13 @@ pub struct LiveArgs {
     /// shows them in any case).
     #[arg(long)]
     pub segments: bool,
+    /// When the stream ends (or on Ctrl-C, or after `--duration`), write
+    /// the files `mp run` writes into this folder, from the poses of the
+    /// whole stream (kept meanwhile in a spool file there): the track, the
+    /// programs, `loops.json`, each person's folder, the plots and the
+    /// report page (without the video's frames).
+    #[arg(long, short = 'o', value_name = "DIR")]
+    pub out: Option<std::path::PathBuf>,
 }
 
 /// `mp live SOURCE`.
@@ -54,6 +61,7 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
         window_s: a.window,
         // The page shows the program as it grows.
         program: a.segments || a.serve.is_some(),
+        out: a.out.clone(),
         ..LiveParams::default()
     };
     let source = LiveSource::parse(&a.source);
@@ -155,11 +163,15 @@ fn text_line(e: &Event) -> Option<String> {
                 .map(|p| format!("person {}: {} repetitions", p.id, p.total_repetitions))
                 .collect();
             format!(
-                "{} frames analysed, {} dropped{}{}",
+                "{} frames analysed, {} dropped{}{}{}",
                 s.frames,
                 s.dropped,
                 if people.is_empty() { "" } else { "; " },
-                people.join("; ")
+                people.join("; "),
+                s.out
+                    .as_ref()
+                    .map(|d| format!("; wrote {d}"))
+                    .unwrap_or_default()
             )
         }
     })

@@ -164,6 +164,7 @@ mod tests {
                 id: 1,
                 total_repetitions: 2,
             }],
+            ..Default::default()
         }));
         assert_eq!(v.lines()[2], "person 3: 1 repetition (left)");
     }

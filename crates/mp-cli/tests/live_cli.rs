@@ -227,3 +227,91 @@ fn segments_tile_each_persons_frames() {
         .fold(0.0, f64::max);
     assert!(longest > 0.8 * last_t, "{longest} of {last_t} s");
 }
+
+/// `mp live --out DIR` writes `mp run`'s files when the stream ends (here
+/// after `--duration`): the same keypoints as `mp run` on the same frames,
+/// the programs and counts made from them, and no spool left behind.
+#[test]
+fn out_writes_what_mp_run_writes() {
+    let video = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
+    let dir = tempfile::tempdir().unwrap();
+    let (live_dir, run_dir) = (dir.path().join("live"), dir.path().join("run"));
+    let out = mp()
+        .arg("live")
+        .arg(&video)
+        .args(["--json", "--duration", "4", "--out"])
+        .arg(&live_dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{}\n{err}", out.status);
+    let events = lines(&out);
+    let summary = events.last().unwrap();
+    assert_eq!(summary["type"], "summary");
+    assert_eq!(
+        summary["out"].as_str(),
+        Some(live_dir.display().to_string().as_str()),
+        "{summary}"
+    );
+    let frames = summary["frames"].as_u64().unwrap();
+    assert_eq!(summary["dropped"].as_u64(), Some(0), "a file is read whole");
+    for f in [
+        "track.npz",
+        "program.txt",
+        "abstract.json",
+        "loops.json",
+        "report.html",
+        "mp-run-files.txt",
+    ] {
+        assert!(
+            live_dir.join(f).is_file(),
+            "no {f} in {}",
+            live_dir.display()
+        );
+    }
+    let left: Vec<_> = std::fs::read_dir(&live_dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains("spool"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    // `mp run` on the same frames.
+    let run = mp()
+        .arg("run")
+        .arg(&video)
+        .args([
+            "--no-video",
+            "--quiet",
+            "--max-frames",
+            &frames.to_string(),
+            "-o",
+        ])
+        .arg(&run_dir)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let read = |d: &Path| mp_geom::io::read_track(d.join("track.npz")).unwrap();
+    let (a, b) = (read(&live_dir), read(&run_dir));
+    assert_eq!(a.n_frames(), b.n_frames());
+    assert_eq!(a.skeleton().joints, b.skeleton().joints);
+    let mut worst = 0.0f64;
+    for (p, q) in a.positions().iter().zip(b.positions().iter()) {
+        worst = worst.max((p - q).abs());
+    }
+    assert!(worst < 0.01, "keypoints differ by {worst} px");
+    let total = |d: &Path| -> i64 {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("loops.json")).unwrap()).unwrap();
+        v["repetitions"]["total"].as_i64().unwrap()
+    };
+    assert!(
+        (total(&live_dir) - total(&run_dir)).abs() <= 1,
+        "live {} vs run {}",
+        total(&live_dir),
+        total(&run_dir)
+    );
+}

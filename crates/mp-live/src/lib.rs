@@ -13,10 +13,13 @@
 //!   their frames not yet committed, segmented again every second with the
 //!   offline synthesis, whose leading segments are committed once stable.
 //! - [`run()`]: the loop over the frames, reporting [`Event`]s.
+//! - `record`: with [`LiveParams::out`], every pose kept in a spool file
+//!   and, when the stream ends, `mp run`'s files written from them.
 
 pub mod counter;
 mod poses;
 pub mod program;
+mod record;
 pub mod run;
 pub mod source;
 
@@ -49,6 +52,9 @@ pub enum LiveError {
     /// A keypoint track could not be built.
     #[error(transparent)]
     Geom(#[from] mp_geom::GeomError),
+    /// The output folder cannot be written.
+    #[error("{0}")]
+    Output(String),
     /// A parameter is out of range.
     #[error("invalid parameter {name}: {reason}")]
     Param {
@@ -105,6 +111,14 @@ pub struct LiveParams {
     /// Uncommitted frames are committed, stable or not, once they span this
     /// many seconds (more than `program_lag_s`). Default 10.
     pub program_max_lag_s: f64,
+    /// A folder into which, when the stream ends (its end, `duration_s`, a
+    /// cancel or an error), the files `mp run` writes are written from the
+    /// poses of the whole stream, with the people numbered as the events
+    /// numbered them: `track.npz`, programs, `loops.json`, per-person
+    /// folders, plots and the report page (without frames: the stream is
+    /// not kept). Meanwhile the poses wait in a spool file in the folder, so
+    /// memory stays flat. Default none.
+    pub out: Option<std::path::PathBuf>,
 }
 
 impl Default for LiveParams {
@@ -125,6 +139,7 @@ impl Default for LiveParams {
             program_every_s: 1.0,
             program_lag_s: 2.0,
             program_max_lag_s: 10.0,
+            out: None,
         }
     }
 }
@@ -320,6 +335,10 @@ pub struct Summary {
     pub t: f64,
     /// Every person confirmed, by id.
     pub people: Vec<PersonTotal>,
+    /// The folder `LiveParams::out` into which `mp run`'s files were
+    /// written, once they were.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub out: Option<String>,
 }
 
 /// One person's total.

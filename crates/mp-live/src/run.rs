@@ -12,6 +12,7 @@ use mp_pose::{BlazePoseParams, MultiPose, MultiPoseParams, VideoInfo};
 
 use crate::counter::{OnlineCounter, Repetition};
 use crate::program::{OnlineProgram, ProgramSegment};
+use crate::record::Recorder;
 use crate::source::{self, LiveSource, Taken};
 use crate::{
     Event, LiveError, LiveFrame, LiveParams, PersonPose, PersonTotal, Result, Sink, Summary,
@@ -63,11 +64,18 @@ struct State {
     t: f64,
     tracks: HashMap<u64, Tracked>,
     totals: BTreeMap<u32, usize>,
+    /// The spool of every pose, with `LiveParams::out`.
+    recorder: Option<Recorder>,
+    /// The stream's frame size, the pose model's skeleton and name, once known.
+    stream: Option<((usize, usize), mp_geom::Skeleton, String)>,
+    /// The output folder, once written.
+    out: Option<String>,
 }
 
 impl State {
     fn summary(&self) -> Summary {
         Summary {
+            out: self.out.clone(),
             frames: self.frames,
             dropped: self.dropped,
             t: self.t,
@@ -138,14 +146,35 @@ pub fn run(
         t: 0.0,
         tracks: HashMap::new(),
         totals: BTreeMap::new(),
+        recorder: None,
+        stream: None,
+        out: None,
     };
     let result = run_inner(source, params, cancel, &mut state, sink);
-    let summary = state.summary();
     if let Err(e) = &result {
         sink.event(&Event::Error {
             message: e.to_string(),
         });
     }
+    // The output folder, whatever stopped the run (after an error, from the
+    // frames analysed before it).
+    let written = match state.recorder.take() {
+        Some(rec) => write_out(rec, source, params, &state),
+        None => Ok(None),
+    };
+    let result = match written {
+        Ok(out) => {
+            state.out = out;
+            result
+        }
+        Err(e) => {
+            sink.event(&Event::Error {
+                message: e.to_string(),
+            });
+            result.and(Err(e))
+        }
+    };
+    let summary = state.summary();
     sink.event(&Event::Summary(summary.clone()));
     result.map(|()| summary)
 }
@@ -158,6 +187,9 @@ fn run_inner(
     sink: &mut dyn Sink,
 ) -> Result<()> {
     params.validate()?;
+    if let Some(dir) = &params.out {
+        state.recorder = Some(Recorder::create(dir)?);
+    }
     let pose = &params.analysis.pose;
     let model = pose
         .model
@@ -207,6 +239,11 @@ fn analyse(
 ) -> Result<()> {
     state.fps = info.fps;
     let skeleton = multi.skeleton();
+    state.stream = Some((
+        (info.width, info.height),
+        skeleton.clone(),
+        multi.name().to_string(),
+    ));
     let mut started: Option<(Instant, f64)> = None;
     let mut last_status = (0.0, 0usize, Instant::now());
     let poll = Duration::from_millis(200);
@@ -246,6 +283,9 @@ fn analyse(
         state.t = frame.timestamp_s;
         state.frames += 1;
         let r = multi.process(&frame)?;
+        if let Some(rec) = &mut state.recorder {
+            rec.frame(frame.index, &r.poses, &r.events)?;
+        }
         let people: Vec<PersonPose> = r
             .poses
             .iter()
@@ -371,4 +411,50 @@ fn analyse(
         }
     }
     Ok(())
+}
+
+/// `mp run`'s files in `params.out`, from the poses `rec` kept; the folder
+/// written, or `None` when no frame came.
+fn write_out(
+    rec: Recorder,
+    source: &LiveSource,
+    params: &LiveParams,
+    state: &State,
+) -> Result<Option<String>> {
+    let (Some(dir), Some((frame_size, skeleton, model))) = (&params.out, &state.stream) else {
+        return Ok(None);
+    };
+    if rec.frames() == 0 {
+        rec.discard();
+        return Ok(None);
+    }
+    let n = rec.frames();
+    let (people, posed) = rec.people(state.fps, skeleton)?;
+    let title = source.name();
+    let description = format!(
+        "live {title} · {}×{} at {} fps · {n} frames ({} analysed, {} dropped) · {model}",
+        frame_size.0,
+        frame_size.1,
+        mp_geom::fps_label(state.fps),
+        state.frames,
+        state.dropped,
+    );
+    let input = mp_pipeline::Input::People {
+        people,
+        skeleton: skeleton.clone(),
+        posed,
+        title,
+        description,
+        frame_size: *frame_size,
+        model: model.clone(),
+    };
+    // A cancel of the stream ends the stream, not the writing of its results.
+    mp_pipeline::run(
+        input,
+        dir,
+        &params.analysis,
+        &mp_pipeline::Silent,
+        &mp_geom::CancelToken::new(),
+    )?;
+    Ok(Some(dir.display().to_string()))
 }

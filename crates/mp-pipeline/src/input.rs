@@ -44,6 +44,27 @@ pub enum Input {
         /// [`mp_geom::io::DEFAULT_FPS`] was assumed.
         fps_assumed: bool,
     },
+    /// Every person of a video, already found by the pose model and the
+    /// tracker (a live run's): analysed as `mp run` analyses the people of
+    /// a video, without its pictures.
+    People {
+        /// The people, in `skeleton`, pixels.
+        people: mp_geom::People,
+        /// The pose model's skeleton (of a video where nobody was found too).
+        skeleton: mp_geom::Skeleton,
+        /// Per frame, whether the pose model saw it; the frames it did not
+        /// see (dropped, or skipped by the pose rate) are filled from the
+        /// motion as [`crate::pose_rate::fill_people`] does.
+        posed: Vec<bool>,
+        /// Title of the report.
+        title: String,
+        /// Where the motion came from (subtitle of the report).
+        description: String,
+        /// Frame size (width, height) in pixels.
+        frame_size: (usize, usize),
+        /// The pose model's name.
+        model: String,
+    },
 }
 
 impl Input {
@@ -140,7 +161,7 @@ impl Input {
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default(),
-            Input::Track { title, .. } => title.clone(),
+            Input::Track { title, .. } | Input::People { title, .. } => title.clone(),
         }
     }
 }

@@ -219,6 +219,81 @@ pub(crate) fn keypoints_timed(
                 overlay: None,
             })
         }
+        Input::People {
+            people,
+            skeleton,
+            posed,
+            title,
+            description,
+            frame_size,
+            model,
+        } => from_people(
+            people,
+            skeleton,
+            &posed,
+            params,
+            title,
+            description,
+            frame_size,
+            model,
+        ),
+    }
+}
+
+/// The keypoints of people found elsewhere (a live run): the choice of
+/// people and the tracks of `mp run`, without thumbnails or frames.
+#[allow(clippy::too_many_arguments)]
+fn from_people(
+    people: People,
+    skeleton: mp_geom::Skeleton,
+    posed: &[bool],
+    params: &Params,
+    title: String,
+    description: String,
+    frame_size: (usize, usize),
+    model: String,
+) -> Result<Keypoints> {
+    let (n, fps) = (people.n_frames(), people.fps());
+    let coco = |t: Track| coco17_unless_all(t, params);
+    let empty = coco(Track::new(
+        ndarray::Array3::zeros((n, skeleton.len(), 2)),
+        Some(ndarray::Array2::zeros((n, skeleton.len()))),
+        fps,
+        mp_geom::Units::Pixels,
+        skeleton,
+    )?)?;
+    let people = crate::pose_rate::fill_people(people, posed)?.map_tracks(coco)?;
+    let (top, rest) = chosen_people(&people, params)?;
+    let track = match top {
+        Some(id) => people.full_track(id)?,
+        None => empty,
+    };
+    Ok(Keypoints {
+        found_fraction: mp_abstract::count::found_fraction(&track),
+        track,
+        thumbnails: None,
+        frame_choice: None,
+        title,
+        description,
+        frame_size: Some(frame_size),
+        frame_px: Some(frame_size.0.max(frame_size.1) as f64),
+        model: Some(model),
+        people: Some(people),
+        person: top,
+        others: rest.into_iter().map(|id| (id, None)).collect(),
+        warning: None,
+        frames: None,
+        overlay: None,
+    })
+}
+
+/// `track` in COCO-17 where its skeleton maps to it, unless every joint
+/// was asked for.
+fn coco17_unless_all(t: Track, params: &Params) -> mp_geom::Result<Track> {
+    if !params.pose.all_joints && t.skeleton().name != "coco17" && t.skeleton().maps_to_coco17() {
+        t.to_coco17()
+    } else {
+        Ok(t)
     }
 }
 
@@ -296,14 +371,7 @@ fn from_video(
         None => None,
     };
     timings.push(Stage::Pose, wall, n);
-    let coco = |t: Track| -> mp_geom::Result<Track> {
-        if !params.pose.all_joints && t.skeleton().name != "coco17" && t.skeleton().maps_to_coco17()
-        {
-            t.to_coco17()
-        } else {
-            Ok(t)
-        }
-    };
+    let coco = |t: Track| coco17_unless_all(t, params);
     let mut thumbs = decoded.thumbnails;
     thumbs.truncate(n);
     let whole_frame = if thumbs.len() == n && n > 0 {

@@ -174,11 +174,13 @@ impl Drop for PyLive {
 /// of `mp live`): `realtime` reads a file at its own speed, `duration` stops
 /// after that many seconds of stream time, `window` is the seconds of each
 /// person's recent motion counted, `stall_timeout` how long the stream may
-/// go without a frame. When the run stops on an error, the `error` and
+/// go without a frame, `out` a folder into which the files `mp run` writes
+/// are written when the stream ends (as `mp live --out`; the summary's
+/// `out` then names it). When the run stops on an error, the `error` and
 /// `summary` events come, then the error is raised (`PoseError` for the
 /// source, decoding or the pose model; `ParamError` for an option).
 #[pyfunction]
-#[pyo3(signature = (source, realtime=false, duration=None, window=None, stall_timeout=None))]
+#[pyo3(signature = (source, realtime=false, duration=None, window=None, stall_timeout=None, out=None))]
 pub fn live(
     py: Python<'_>,
     source: PathBuf,
@@ -186,6 +188,7 @@ pub fn live(
     duration: Option<f64>,
     window: Option<f64>,
     stall_timeout: Option<f64>,
+    out: Option<PathBuf>,
 ) -> PyResult<PyLive> {
     let d = LiveParams::default();
     let params = LiveParams {
@@ -193,6 +196,7 @@ pub fn live(
         duration_s: duration,
         window_s: window.unwrap_or(d.window_s),
         stall_timeout_s: stall_timeout.unwrap_or(d.stall_timeout_s),
+        out,
         ..d
     };
     let source = match source.to_str() {

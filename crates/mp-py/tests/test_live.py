@@ -171,3 +171,19 @@ def test_ctrl_c_stops_the_run(data):
     out, err = child.communicate(timeout=60)
     assert child.returncode == 0, err
     assert out.splitlines()[-1] == "interrupted 0", out + err
+
+
+def test_out_writes_the_files_of_a_run(data, tmp_path):
+    video = data(SHORT)
+    out = tmp_path / "live"
+    events = list(mp.live(video, duration=2.0, out=out))
+    summary = events[-1]
+    assert summary["type"] == "summary"
+    assert summary["out"] == str(out)
+    for name in ["track.npz", "program.txt", "loops.json", "report.html"]:
+        assert (out / name).is_file(), name
+    assert not [p for p in out.iterdir() if "spool" in p.name]
+    track = mp.read_track(out / "track.npz")
+    assert track.n_frames == summary["frames"]
+    with open(out / "loops.json") as f:
+        assert json.load(f)["repetitions"]["total"] >= 0

@@ -324,13 +324,15 @@ def live(
     duration: Optional[float] = None,
     window: Optional[float] = None,
     stall_timeout: Optional[float] = None,
+    out: Optional[PathArg] = None,
 ) -> Live:
     """Live analysis of a video file, or of a stream on standard input ("-"), as `mp live SOURCE
     --json`: yields its events as dicts with the keys and values of the JSON lines (`type`: "enter",
     "rep", "leave", "status", "error", "summary"; the summary always last). Options as `mp live`'s:
     `realtime` reads a file at its own speed; `duration` stops after that many seconds of stream
     time; `window` (default 20) the seconds of each person's recent motion counted; `stall_timeout`
-    (default 10) the seconds the stream may go without a frame (None: the defaults of `mp live`).
-    When the run stops on an error, the "error" and "summary" events come first, then the error is
+    (default 10) the seconds the stream may go without a frame (None: the defaults of `mp live`);
+    `out` a folder into which the files `mp run` writes are written when the stream ends (the
+    summary's "out" then names it). When the run stops on an error, the "error" and "summary" events come first, then the error is
     raised: PoseError (the source, decoding, the pose model) or ParamError (an option)."""
     ...
