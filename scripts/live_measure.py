@@ -30,6 +30,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--mp", default="target/debug/mp")
     ap.add_argument("--encode", action="store_true")
+    ap.add_argument("--pose-fps", default=None, help="passed to mp live (default: mp live's)")
     ap.add_argument("names", nargs="+")
     a = ap.parse_args()
     data = os.environ.get("MP_DATA_DIR", "../shared/data") + "/quva_repetition"
@@ -52,7 +53,8 @@ def main():
             sender = ["-re", "-i", ts, "-c", "copy", "-f", "mpegts", "pipe:1"]
         t0 = time.time()
         ff = subprocess.Popen(["ffmpeg", "-v", "error", "-nostdin"] + sender, stdout=subprocess.PIPE)
-        mp = subprocess.Popen([a.mp, "live", "-", "--json"], stdin=ff.stdout, stdout=subprocess.PIPE)
+        live = [a.mp, "live", "-", "--json"] + (["--pose-fps", a.pose_fps] if a.pose_fps else [])
+        mp = subprocess.Popen(live, stdin=ff.stdout, stdout=subprocess.PIPE)
         ff.stdout.close()
         events = [(time.time() - t0, json.loads(line)) for line in mp.stdout]
         mp.wait()

@@ -50,11 +50,17 @@ pub struct LiveArgs {
     /// report page (without the video's frames).
     #[arg(long, short = 'o', value_name = "DIR")]
     pub out: Option<std::path::PathBuf>,
+    /// How often the pose model runs: `all` (every frame), `auto` (at least
+    /// 12 times a second: every 2nd frame of a 30-fps stream) or a number
+    /// of poses a second; the people's poses on the frames between are
+    /// filled from the motion. Fewer poses keep up with a faster stream.
+    #[arg(long, value_name = "N|auto|all", default_value_t = LiveParams::default().analysis.pose.rate.label())]
+    pub pose_fps: String,
 }
 
 /// `mp live SOURCE`.
 pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
-    let params = LiveParams {
+    let mut params = LiveParams {
         realtime: a.realtime,
         duration_s: a.duration,
         stall_timeout_s: a.stall_timeout,
@@ -64,6 +70,7 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
         out: a.out.clone(),
         ..LiveParams::default()
     };
+    params.analysis.pose.rate = mp_pipeline::PoseRate::parse(&a.pose_fps)?;
     let source = LiveSource::parse(&a.source);
     let cancel = crate::progress::ctrl_c_token();
     let json = a.json;

@@ -119,6 +119,7 @@ mod tests {
                 t: 2.0,
                 fps: 28.04,
                 frames: 60,
+                posed: 60,
                 dropped: 2,
                 delay: 0.126,
             },

@@ -315,3 +315,49 @@ fn out_writes_what_mp_run_writes() {
         total(&run_dir)
     );
 }
+
+/// `--pose-fps auto` runs the pose model on every second frame of a 29-fps
+/// video; the frames between are filled in the files of `--out`.
+#[test]
+fn a_pose_rate_skips_frames_and_out_fills_them() {
+    let video = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
+    let dir = tempfile::tempdir().unwrap();
+    let out = mp()
+        .arg("live")
+        .arg(&video)
+        .args(["--json", "--pose-fps", "auto", "--duration", "3", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{}\n{err}", out.status);
+    let events = lines(&out);
+    let summary = events.last().unwrap();
+    let (frames, posed) = (
+        summary["frames"].as_u64().unwrap(),
+        summary["posed"].as_u64().unwrap(),
+    );
+    assert_eq!(posed, frames.div_ceil(2), "{summary}");
+    assert!(
+        events.iter().any(|e| e["type"] == "rep"),
+        "no repetition at half the poses"
+    );
+    let track = mp_geom::io::read_track(dir.path().join("track.npz")).unwrap();
+    assert_eq!(track.n_frames() as u64, frames);
+    // The person is seen throughout: every frame has keypoints, the skipped
+    // ones filled between their neighbours.
+    let conf = track.confidence();
+    let seen = (0..track.n_frames())
+        .filter(|&t| conf.row(t).iter().any(|&c| c > 0.0))
+        .count();
+    assert!(seen as f64 > 0.9 * frames as f64, "{seen} of {frames}");
+    // A bad rate is refused before anything runs.
+    let bad = mp()
+        .arg("live")
+        .arg(&video)
+        .args(["--pose-fps", "fast"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("pose_fps"));
+}

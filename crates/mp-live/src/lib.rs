@@ -263,6 +263,9 @@ pub enum Event {
         fps: f64,
         /// Frames analysed so far.
         frames: usize,
+        /// Of them, frames the pose model ran on (all of them unless the
+        /// pose rate, `analysis.pose.rate`, skips some).
+        posed: usize,
         /// Frames dropped so far (the pose model was behind).
         dropped: usize,
         /// Seconds the last frame analysed is behind the source.
@@ -329,6 +332,9 @@ pub struct PersonPose {
 pub struct Summary {
     /// Frames analysed.
     pub frames: usize,
+    /// Of them, frames the pose model ran on (all of them unless the pose
+    /// rate, `analysis.pose.rate`, skips some).
+    pub posed: usize,
     /// Frames dropped.
     pub dropped: usize,
     /// Stream time of the last frame analysed, seconds.

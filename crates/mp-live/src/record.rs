@@ -122,6 +122,12 @@ impl Recorder {
         Ok(())
     }
 
+    /// Stream frame `frame` came, but the pose model did not see it (the
+    /// pose rate skipped it): it is filled at the end.
+    pub(crate) fn skipped(&mut self, frame: usize) {
+        self.frames = self.frames.max(frame as u64 + 1);
+    }
+
     /// Frames of the stream so far (the last one seen, plus one).
     pub(crate) fn frames(&self) -> usize {
         self.frames as usize

@@ -60,6 +60,7 @@ impl Tracked {
 struct State {
     fps: f64,
     frames: usize,
+    posed: usize,
     dropped: usize,
     t: f64,
     tracks: HashMap<u64, Tracked>,
@@ -77,6 +78,7 @@ impl State {
         Summary {
             out: self.out.clone(),
             frames: self.frames,
+            posed: self.posed,
             dropped: self.dropped,
             t: self.t,
             people: self
@@ -142,6 +144,7 @@ pub fn run(
     let mut state = State {
         fps: 30.0,
         frames: 0,
+        posed: 0,
         dropped: 0,
         t: 0.0,
         tracks: HashMap::new(),
@@ -248,6 +251,11 @@ fn analyse(
     let mut last_status = (0.0, 0usize, Instant::now());
     let poll = Duration::from_millis(200);
     let mut waited = Duration::ZERO;
+    // The pose rate: the model runs on a frame at least `stride` frames
+    // after the last one it ran on (dropped frames count towards it).
+    let stride = params.analysis.pose.rate.stride(info.fps);
+    let mut next_pose = 0usize;
+    let mut shown: Vec<PersonPose> = Vec::new();
     loop {
         if cancel.is_cancelled() {
             break;
@@ -282,6 +290,21 @@ fn analyse(
         let start = *started.get_or_insert((Instant::now(), frame.timestamp_s));
         state.t = frame.timestamp_s;
         state.frames += 1;
+        if frame.index < next_pose {
+            // Skipped by the pose rate: the people's poses on it are filled
+            // from the frames around it; the page shows the last ones.
+            if let Some(rec) = &mut state.recorder {
+                rec.skipped(frame.index);
+            }
+            sink.frame(&LiveFrame {
+                frame: &frame,
+                people: &shown,
+                totals: &state.totals,
+            });
+            continue;
+        }
+        next_pose = frame.index + stride;
+        state.posed += 1;
         let r = multi.process(&frame)?;
         if let Some(rec) = &mut state.recorder {
             rec.frame(frame.index, &r.poses, &r.events)?;
@@ -369,6 +392,7 @@ fn analyse(
             people: &people,
             totals: &state.totals,
         });
+        shown = people;
         if state.t - last_status.0 >= params.status_every_s {
             let now = Instant::now();
             let secs = now.duration_since(last_status.2).as_secs_f64();
@@ -385,6 +409,7 @@ fn analyse(
                 t: state.t,
                 fps,
                 frames: state.frames,
+                posed: state.posed,
                 dropped: slot.dropped(),
                 delay: delay.max(0.0),
             });

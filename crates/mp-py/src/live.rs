@@ -176,11 +176,13 @@ impl Drop for PyLive {
 /// person's recent motion counted, `stall_timeout` how long the stream may
 /// go without a frame, `out` a folder into which the files `mp run` writes
 /// are written when the stream ends (as `mp live --out`; the summary's
-/// `out` then names it). When the run stops on an error, the `error` and
+/// `out` then names it), `pose_fps` how often the pose model runs (as
+/// `extract`'s; the summary's `posed` counts its frames). When the run stops on an error, the `error` and
 /// `summary` events come, then the error is raised (`PoseError` for the
 /// source, decoding or the pose model; `ParamError` for an option).
 #[pyfunction]
-#[pyo3(signature = (source, realtime=false, duration=None, window=None, stall_timeout=None, out=None))]
+#[pyo3(signature = (source, realtime=false, duration=None, window=None, stall_timeout=None, out=None, pose_fps=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn live(
     py: Python<'_>,
     source: PathBuf,
@@ -189,9 +191,10 @@ pub fn live(
     window: Option<f64>,
     stall_timeout: Option<f64>,
     out: Option<PathBuf>,
+    pose_fps: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyLive> {
     let d = LiveParams::default();
-    let params = LiveParams {
+    let mut params = LiveParams {
         realtime,
         duration_s: duration,
         window_s: window.unwrap_or(d.window_s),
@@ -199,6 +202,7 @@ pub fn live(
         out,
         ..d
     };
+    crate::pose_rate_arg(&mut params.analysis, pose_fps)?;
     let source = match source.to_str() {
         Some("-") => LiveSource::Stdin,
         _ => LiveSource::File(source),

@@ -176,14 +176,18 @@ def test_ctrl_c_stops_the_run(data):
 def test_out_writes_the_files_of_a_run(data, tmp_path):
     video = data(SHORT)
     out = tmp_path / "live"
-    events = list(mp.live(video, duration=2.0, out=out))
+    events = list(mp.live(video, duration=2.0, out=out, pose_fps="auto"))
     summary = events[-1]
     assert summary["type"] == "summary"
     assert summary["out"] == str(out)
+    # Every second frame of a 29-fps video goes through the pose model.
+    assert summary["posed"] == (summary["frames"] + 1) // 2
     for name in ["track.npz", "program.txt", "loops.json", "report.html"]:
         assert (out / name).is_file(), name
     assert not [p for p in out.iterdir() if "spool" in p.name]
     track = mp.read_track(out / "track.npz")
     assert track.n_frames == summary["frames"]
+    with pytest.raises(mp.ParamError, match="pose_fps"):
+        mp.live(video, pose_fps=-1)
     with open(out / "loops.json") as f:
         assert json.load(f)["repetitions"]["total"] >= 0

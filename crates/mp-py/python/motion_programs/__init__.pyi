@@ -325,6 +325,7 @@ def live(
     window: Optional[float] = None,
     stall_timeout: Optional[float] = None,
     out: Optional[PathArg] = None,
+    pose_fps: Union[float, str, None] = None,
 ) -> Live:
     """Live analysis of a video file, or of a stream on standard input ("-"), as `mp live SOURCE
     --json`: yields its events as dicts with the keys and values of the JSON lines (`type`: "enter",
@@ -333,6 +334,7 @@ def live(
     time; `window` (default 20) the seconds of each person's recent motion counted; `stall_timeout`
     (default 10) the seconds the stream may go without a frame (None: the defaults of `mp live`);
     `out` a folder into which the files `mp run` writes are written when the stream ends (the
-    summary's "out" then names it). When the run stops on an error, the "error" and "summary" events come first, then the error is
+    summary's "out" then names it); `pose_fps` how often the pose model runs (as extract's; the
+    summary's "posed" counts its frames). When the run stops on an error, the "error" and "summary" events come first, then the error is
     raised: PoseError (the source, decoding, the pose model) or ParamError (an option)."""
     ...
