@@ -36,14 +36,6 @@ pub struct BenchArgs {
     pub out: PathBuf,
 }
 
-fn workspace_root() -> PathBuf {
-    // xtask lives in <root>/xtask.
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("."))
-}
-
 /// CPU seconds used by this process so far (user + system, Linux `/proc`), if known.
 fn cpu_seconds() -> Option<f64> {
     let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
@@ -273,7 +265,8 @@ fn criterion(a: &BenchArgs, md: &mut String) -> anyhow::Result<bool> {
     let mut all_ok = true;
     for p in &a.packages {
         let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-        cmd.current_dir(workspace_root()).args(["bench", "-p", p]);
+        cmd.current_dir(crate::setup::workspace_root())
+            .args(["bench", "-p", p]);
         eprintln!("running {cmd:?}");
         let out = cmd.output().context("running cargo bench")?;
         let stdout = String::from_utf8_lossy(&out.stdout);
@@ -309,7 +302,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
     let out = if a.out.is_absolute() {
         a.out.clone()
     } else {
-        workspace_root().join(&a.out)
+        crate::setup::workspace_root().join(&a.out)
     };
     crate::write_file(&out, &md).with_context(|| format!("writing {}", out.display()))?;
     println!("{md}");

@@ -35,6 +35,7 @@
 //! symbols and scored in bits per symbol under the grammar, the FSM and a
 //! unigram model.
 
+use crate::stats::mean;
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -211,14 +212,6 @@ fn purity_nmi(a: &[usize], b: &[i64]) -> (f64, f64) {
         0.0
     };
     (purity, nmi)
-}
-
-fn mean(v: &[f64]) -> f64 {
-    if v.is_empty() {
-        0.0
-    } else {
-        v.iter().sum::<f64>() / v.len() as f64
-    }
 }
 
 fn p90(v: &[f64]) -> f64 {

@@ -22,6 +22,7 @@ mod fit_confidence;
 mod models;
 mod pyenv;
 mod setup;
+mod stats;
 mod synth_reps;
 mod synth_select;
 mod synth_sources;

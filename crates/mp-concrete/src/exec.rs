@@ -15,12 +15,11 @@ use serde::{Deserialize, Serialize};
 use crate::error::{ConcreteError, Result};
 use crate::program::Program;
 
-/// The most output cells (frames × joints) one execution may produce:
-/// 10 million, i.e. at most 240 MB of positions at 3 dimensions × 8 bytes
-/// (e.g. 1 hour at 30 fps of 92 joints, or 588 000 frames of 17 joints).
-/// Larger requests (an absurd `fps_out`, a program of absurd durations) are a
+/// The most output cells (frames × joints) one execution may produce
+/// (`mp_geom::track::MAX_FRAME_JOINTS`): larger requests (an absurd
+/// `fps_out`, a program of absurd durations) are a
 /// [`ConcreteError::TooLarge`] instead of an allocation failure.
-pub const MAX_FRAME_JOINTS: usize = 10_000_000;
+pub use mp_geom::track::MAX_FRAME_JOINTS;
 
 /// The most output frames for `joints` joints: `MAX_FRAME_JOINTS / joints` (at least 1).
 pub fn max_output_frames(joints: usize) -> usize {

@@ -18,6 +18,7 @@
 //! joint is *valid* when its confidence is > 0; a missing joint is written as 0
 //! with mask 0 in the model features.
 
+use mp_geom::stats::median;
 use mp_geom::{Skeleton, Track};
 use ndarray::{ArrayView2, ArrayView3};
 
@@ -82,20 +83,6 @@ fn mean_valid(
         *v /= n as f64;
     }
     Some(m)
-}
-
-/// Median as numpy computes it (mean of the two middle values for an even count).
-pub(crate) fn median(values: &mut [f64]) -> Option<f64> {
-    if values.is_empty() {
-        return None;
-    }
-    values.sort_by(|a, b| a.total_cmp(b));
-    let n = values.len();
-    Some(if n % 2 == 1 {
-        values[n / 2]
-    } else {
-        0.5 * (values[n / 2 - 1] + values[n / 2])
-    })
 }
 
 impl Normalizer {

@@ -29,6 +29,7 @@ pub mod performer;
 pub mod primitive;
 pub mod skeleton;
 pub mod skeleton_map;
+pub mod stats;
 pub mod track;
 
 pub use cancel::CancelToken;

@@ -46,6 +46,14 @@ impl Units {
 /// a larger finite coordinate is an error, not a missing joint.
 pub const MAX_COORDINATE: f64 = 1e100;
 
+/// The most cells (frames × joints) one generated motion may hold: 10
+/// million, i.e. at most 240 MB of positions at 3 dimensions × 8 bytes
+/// (1 hour at 30 fps of 92 joints, or 588 000 frames of 17 joints). The
+/// execution of programs and the synthesis of grammars refuse larger
+/// requests (an absurd frame rate or duration) with an error instead of an
+/// allocation failure.
+pub const MAX_FRAME_JOINTS: usize = 10_000_000;
+
 /// A motion track: positions `T × J × D` (D = 2 pixels or 3 metres),
 /// per-joint confidence in `[0, 1]` (0 = missing), a frame rate and a skeleton.
 ///

@@ -34,8 +34,7 @@ pub mod session;
 
 pub use error::{format_shape, OnnxError, Result};
 pub use library::{
-    environment, find_library, library_candidates, workspace_root, LIBRARY_DIR_IN_WORKSPACE,
-    LIBRARY_FILE,
+    environment, find_library, library_candidates, LIBRARY_DIR_IN_WORKSPACE, LIBRARY_FILE,
 };
 pub use lookup::ModelDirs;
 pub use network::{Input, Network, Output};

@@ -8,6 +8,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+use mp_geom::paths::workspace_root;
+
 use crate::error::{OnnxError, Result};
 
 /// File name of the ONNX Runtime library on this platform.
@@ -24,14 +26,6 @@ pub const LIBRARY_DIR_IN_WORKSPACE: &str = ".cache/onnxruntime/lib";
 
 /// Name given to the ONNX Runtime environment (shown in its logs).
 const ENVIRONMENT_NAME: &str = "mp";
-
-/// The workspace root recorded at build time (`MP_WORKSPACE_ROOT`, set by the
-/// workspace's `.cargo/config.toml`), when built inside the workspace.
-pub fn workspace_root() -> Option<PathBuf> {
-    option_env!("MP_WORKSPACE_ROOT")
-        .filter(|s| !s.is_empty())
-        .map(PathBuf::from)
-}
 
 /// Paths as one comma-separated string for messages.
 pub(crate) fn join_paths(paths: &[PathBuf]) -> String {

@@ -15,7 +15,9 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{OnnxError, Result};
-use crate::library::{join_paths, workspace_root};
+use mp_geom::paths::workspace_root;
+
+use crate::library::join_paths;
 
 /// An ordered list of folders searched for model files (no duplicates).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

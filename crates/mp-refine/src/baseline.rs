@@ -27,6 +27,7 @@
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::metrics::nanmean;
+use mp_geom::stats::median;
 use mp_geom::Track;
 use ndarray::s;
 use serde::{Deserialize, Serialize};
@@ -142,19 +143,6 @@ pub fn held_frames(pos: ndarray::ArrayView3<'_, f64>, tol: f64) -> Vec<usize> {
         .collect()
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Per-frame flags from frozen runs and acceleration outliers (before dilation).
 pub fn detect_motion_flaws(track: &Track, params: &RefineParams) -> Result<Vec<bool>> {
     let (a, b) = detect_parts(track, params)?;
@@ -203,9 +191,9 @@ fn detect_parts(track: &Track, params: &RefineParams) -> Result<(Vec<bool>, Vec<
                 s / nj.max(1) as f64
             })
             .collect();
-        let med = median(&mut acc.clone());
+        let med = median(&mut acc.clone()).unwrap_or(0.0);
         let mut dev: Vec<f64> = acc.iter().map(|a| (a - med).abs()).collect();
-        let mad = 1.4826 * median(&mut dev);
+        let mad = 1.4826 * median(&mut dev).unwrap_or(0.0);
         for (i, a) in acc.iter().enumerate() {
             let z = if mad > 0.0 {
                 (a - med) / mad

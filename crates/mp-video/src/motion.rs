@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use mp_abstract::Counts;
+use mp_geom::stats::median;
 use mp_geom::{CancelToken, Track};
 use mp_pipeline::{Input, Keep, Params, Silent};
 use mp_pose::VideoInfo;
@@ -186,12 +187,4 @@ impl VideoMotion {
         }
         f
     }
-}
-
-fn median(v: &mut [f64]) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    Some(v[v.len() / 2])
 }

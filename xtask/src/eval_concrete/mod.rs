@@ -29,6 +29,7 @@
 mod continuity;
 mod sweep;
 
+use crate::stats::mean;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -234,15 +235,6 @@ fn run_clip(
         interp,
         seconds,
     })
-}
-
-fn mean(v: impl Iterator<Item = f64>) -> f64 {
-    let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
-    if n == 0 {
-        f64::NAN
-    } else {
-        s / n as f64
-    }
 }
 
 fn summary(rs: &[&ClipResult], steps: &[usize]) -> Value {

@@ -22,6 +22,7 @@
 
 mod sources;
 
+use crate::stats::mean;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -167,18 +168,6 @@ fn run_track(
         person_px: c.person_px,
         sums,
     }))
-}
-
-fn mean(v: impl IntoIterator<Item = f64>) -> f64 {
-    let (s, n) = v
-        .into_iter()
-        .filter(|x| x.is_finite())
-        .fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
-    if n == 0 {
-        f64::NAN
-    } else {
-        s / n as f64
-    }
 }
 
 /// Per rule: mean KD px@512, % of the person, arms px@512, tracks where the

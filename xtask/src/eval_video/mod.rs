@@ -31,6 +31,7 @@ mod predict;
 pub use interpolation::{run_interpolation, EvalInterpolationArgs};
 pub use predict::{run_video_predict, EvalVideoPredictArgs};
 
+use crate::stats::mean;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{sync_channel, SyncSender};
 use std::thread::JoinHandle;
@@ -174,15 +175,6 @@ struct Scores {
     ssim: Vec<f64>,
     psnr_box: Vec<f64>,
     ssim_box: Vec<f64>,
-}
-
-fn mean(v: &[f64]) -> f64 {
-    let f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if f.is_empty() {
-        f64::NAN
-    } else {
-        f.iter().sum::<f64>() / f.len() as f64
-    }
 }
 
 /// Per method, the mean of its per-video KD over the videos where every

@@ -230,11 +230,9 @@ enum Output {
     },
 }
 
-/// The most output cells (frames × joints) one synthesis may produce: 10
-/// million (the same bound as concrete-program execution,
-/// `mp_concrete::exec::MAX_FRAME_JOINTS`), i.e. at most 240 MB of positions
-/// at 3 dimensions × 8 bytes.
-pub const MAX_FRAME_JOINTS: usize = 10_000_000;
+/// The most output cells (frames × joints) one synthesis may produce (the
+/// bound of concrete-program execution, `mp_geom::track::MAX_FRAME_JOINTS`).
+pub use mp_geom::track::MAX_FRAME_JOINTS;
 
 /// The most segments a synthesis may request (`segments` of
 /// [`Stitcher::synthesize`] and [`Stitcher::synthesize_fsm`]), whatever

@@ -27,6 +27,7 @@
 //! * [`foot_slide`]: the slide of a track — horizontal travel of the foot
 //!   joints per second over the frames where they are in contact.
 
+use mp_geom::stats::median;
 use ndarray::{Array2, Array3, ArrayView3};
 use serde::{Deserialize, Serialize};
 
@@ -260,18 +261,6 @@ pub fn guard_refills(
     kept
 }
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        0.0
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Holds slides of planted feet (see the module docs) in place; `legs` are
 /// groups of foot joints ([`foot_legs`]). Returns the held runs, one per
 /// joint.
@@ -301,7 +290,7 @@ pub fn hold_slides(
                 let idx: Vec<usize> = (lo..=hi).filter(|&g| c[[g, k]]).collect();
                 for (x, &ax) in h.iter().enumerate() {
                     let mut v: Vec<f64> = idx.iter().map(|&g| pos[[g, j, ax]]).collect();
-                    dev[f * leg.len() + k][x] = pos[[f, j, ax]] - median(&mut v);
+                    dev[f * leg.len() + k][x] = pos[[f, j, ax]] - median(&mut v).unwrap_or(0.0);
                 }
             }
         }

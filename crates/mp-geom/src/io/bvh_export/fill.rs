@@ -6,24 +6,12 @@ use nalgebra::Matrix3;
 
 use super::tree::Tree;
 use super::MIN_LENGTH;
+use crate::stats::median;
 use crate::track::Track;
 
 pub(super) fn point(track: &Track, t: usize, j: usize) -> DVec3 {
     let p = track.point(t, j);
     DVec3::new(p[0], p[1], p[2])
-}
-
-pub(super) fn median(v: &mut [f64]) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    Some(if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    })
 }
 
 /// The rigid motion (rotation, then translation) that best takes the

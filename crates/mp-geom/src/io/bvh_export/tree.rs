@@ -1,8 +1,9 @@
 //! The hierarchy of an exported BVH: the most rigid spanning tree of the
 //! skeleton's bones.
 
-use super::fill::{median, point};
+use super::fill::point;
 use crate::skeleton::Skeleton;
+use crate::stats::median;
 use crate::track::Track;
 
 /// The hierarchy of a skeleton as a tree over its joints.
