@@ -22,7 +22,7 @@ use mp_abstract::pipeline::predict_constant;
 use mp_abstract::repetition::{
     estimate_period, segment_repetitions, PeriodParams, PeriodicSegment, SegmentParams,
 };
-use mp_abstract::{analyze, predict, AbstractParams, PredictParams, RepetitiveInterval};
+use mp_abstract::{analyse, predict, AbstractParams, PredictParams, RepetitiveInterval};
 use mp_concrete::Scale;
 use mp_geom::io::datasets::{AistPlusPlus, PennAction};
 use mp_geom::io::npz::Npz;
@@ -195,7 +195,7 @@ fn eval_aist(files: &[PathBuf]) -> anyhow::Result<Value> {
                 p.synth.scale = Scale::FrameSize { frame_px };
                 let mut v = v.clone();
                 v.fill_missing();
-                Ok(analyze(&v, &p)?)
+                Ok(analyse(&v, &p)?)
             })
             .collect();
         let mut views = Vec::new();
@@ -363,7 +363,7 @@ fn penn_clip(penn: &PennAction, i: usize) -> anyhow::Result<Value> {
     let truth_conf = track.confidence().to_owned();
     track.fill_missing();
     let n = track.n_frames();
-    let full = { analyze(&track, &params.analysis).ok() };
+    let full = { analyse(&track, &params.analysis).ok() };
     let loop_found = full.as_ref().is_some_and(|a| !a.intervals.is_empty());
     let observe = n / 2;
     let mut out = json!({"clip_id": info.clip_id, "frames": n, "loop_found": loop_found,
@@ -444,7 +444,7 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
         let product = mp_pipeline::count(&track, None, &mp_pipeline::Params::default())?;
         let pred = product.total;
         track.fill_missing();
-        let an = analyze(&track, &AbstractParams::default())?;
+        let an = analyse(&track, &AbstractParams::default())?;
         let loops_count: usize = an.intervals.iter().map(|i| i.count).sum();
         let lmae = (loops_count as f64 - true_count as f64).abs() / true_count.max(1) as f64;
         lmaes.push(lmae);

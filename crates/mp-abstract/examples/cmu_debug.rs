@@ -1,6 +1,6 @@
 //! Prints the concrete segmentation and loops of a CMU mocap6 feature file.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
-use mp_abstract::{analyze, AbstractParams};
+use mp_abstract::{analyse, AbstractParams};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args().nth(1).ok_or("usage: cmu_debug FILE")?;
     let c = mp_geom::io::datasets::CmuFeatures::open(&path)?;
@@ -18,7 +18,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Ok(t) = std::env::var("THR") {
         p.loops.threshold = t.parse()?;
     }
-    let a = analyze(&c.track, &p)?;
+    let a = analyse(&c.track, &p)?;
     println!(
         "unit_scale {:.3} scale {:.1}",
         a.unit_scale,

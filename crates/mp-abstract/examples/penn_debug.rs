@@ -1,7 +1,7 @@
 //! Prints the segmentation, loop scores and loops of one Penn Action clip.
 //! `cargo run --release -p mp-abstract --example penn_debug -- PENN.npz CLIP_INDEX`
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
-use mp_abstract::{analyze, AbstractParams};
+use mp_abstract::{analyse, AbstractParams};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = args.next().ok_or("usage: penn_debug FILE INDEX")?;
@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
     }
     p.synth.unobserved_joints = mp_concrete::UnobservedJoints::Ignore;
-    let a = analyze(&t, &p)?;
+    let a = analyse(&t, &p)?;
     println!(
         "{} {} frames {} unit_scale {:.3}",
         info.clip_id,

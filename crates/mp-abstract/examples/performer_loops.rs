@@ -3,7 +3,7 @@
 //! `cargo run --release -p mp-abstract --example performer_loops`
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
-use mp_abstract::{analyze, AbstractParams};
+use mp_abstract::{analyse, AbstractParams};
 use mp_geom::performer::{perform, PerformerParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -18,7 +18,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             s.reps.len()
         );
     }
-    let a = analyze(&perf.track_2d, &AbstractParams::default())?;
+    let a = analyse(&perf.track_2d, &AbstractParams::default())?;
     println!(
         "{} frames, {} primitives, unit_scale {:.3}",
         perf.track_2d.n_frames(),

@@ -112,20 +112,20 @@ pub fn from_concrete(
 /// Track → concrete program → abstract program, loops and repetition intervals.
 ///
 /// Errors on parameters that [`AbstractParams::validate`] rejects.
-pub fn analyze(track: &Track, params: &AbstractParams) -> Result<Analysis> {
+pub fn analyse(track: &Track, params: &AbstractParams) -> Result<Analysis> {
     params.validate()?;
-    analyze_valid(track, params)
+    analyse_valid(track, params)
 }
 
-/// [`analyze`] with parameters already validated.
-fn analyze_valid(track: &Track, params: &AbstractParams) -> Result<Analysis> {
+/// [`analyse`] with parameters already validated.
+fn analyse_valid(track: &Track, params: &AbstractParams) -> Result<Analysis> {
     let syn = synthesize_detailed(track, &params.synth)?;
-    analyze_synthesis(syn, &params.loops)
+    analyse_synthesis(syn, &params.loops)
 }
 
 /// A concrete synthesis → abstract program, loops and repetition intervals;
 /// the loop thresholds use the synthesis' `unit_scale`.
-pub fn analyze_synthesis(syn: mp_concrete::Synthesis, loops: &LoopParams) -> Result<Analysis> {
+pub fn analyse_synthesis(syn: mp_concrete::Synthesis, loops: &LoopParams) -> Result<Analysis> {
     let loops = LoopParams {
         unit_scale: syn.unit_scale,
         ..loops.clone()
@@ -521,7 +521,7 @@ pub fn predict(
             self_match: None,
         })
     };
-    let analysis = match analyze_valid(&obs, &params.analysis) {
+    let analysis = match analyse_valid(&obs, &params.analysis) {
         Ok(a) => a,
         Err(AbstractError::Empty(_)) => return constant(),
         Err(e) => return Err(e),

@@ -4,7 +4,7 @@
 
 use mp_abstract::exec::{execute, sample, ExecParams};
 use mp_abstract::{
-    analyze, predict, AbstractError, AbstractParams, AbstractProgram, PredictParams,
+    analyse, predict, AbstractError, AbstractParams, AbstractProgram, PredictParams,
 };
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
@@ -48,10 +48,10 @@ fn abstract_params_reject_bad_fields() {
     let mut p = AbstractParams::default();
     p.loops.threshold = f64::NAN;
     assert_eq!(names(p.validate().unwrap_err()), "threshold");
-    assert_eq!(names(analyze(&track(), &p).unwrap_err()), "threshold");
+    assert_eq!(names(analyse(&track(), &p).unwrap_err()), "threshold");
     let mut p = AbstractParams::default();
     p.synth.min_confidence = -0.5;
-    assert_eq!(names(analyze(&track(), &p).unwrap_err()), "min_confidence");
+    assert_eq!(names(analyse(&track(), &p).unwrap_err()), "min_confidence");
     // The loops' unit_scale is replaced by the analysis: not checked.
     let mut p = AbstractParams::default();
     p.loops.unit_scale = f64::NAN;

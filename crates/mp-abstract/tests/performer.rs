@@ -2,7 +2,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::pipeline::predict_constant;
-use mp_abstract::{analyze, predict, AbstractParams, PredictParams};
+use mp_abstract::{analyse, predict, AbstractParams, PredictParams};
 use mp_geom::performer::{perform, Move, PerformerParams};
 
 fn kd(a: &mp_geom::Track, b: &mp_geom::Track) -> f64 {
@@ -23,7 +23,7 @@ fn kd(a: &mp_geom::Track, b: &mp_geom::Track) -> f64 {
 #[test]
 fn finds_jumping_jacks_and_squats_with_their_counts() {
     let perf = perform(&PerformerParams::default()).unwrap();
-    let a = analyze(&perf.track_2d, &AbstractParams::default()).unwrap();
+    let a = analyse(&perf.track_2d, &AbstractParams::default()).unwrap();
     for (mv, reps) in [(Move::JumpingJack, 4), (Move::Squat, 3)] {
         let gt = perf.segments.iter().find(|s| s.kind == mv).unwrap();
         let hit = a
