@@ -2,7 +2,7 @@
 # Disk use of the test suite.
 #   bash scripts/disk.sh check    # free space where the build goes, and a warning if it is short
 #   bash scripts/disk.sh report   # what the build, the Python environment and the caches take
-# A full run of scripts/test.sh on a fresh clone needs about NEED_GB (docs/RESULTS.md, "Disk").
+# A full run of scripts/test.sh on a fresh clone needs about NEED_GB (docs/results/robustness.md, "Disk").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 NEED_GB="${MP_TEST_DISK_GB:-6}"

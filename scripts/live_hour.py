@@ -9,7 +9,7 @@ or ../shared/data) is encoded once at 30 fps into MPEG-TS, then looped and
 sent at its own speed without encoding again (`ffmpeg -re -stream_loop -1
 -i clip.ts -c copy -f mpegts pipe:1`), so that the sender takes almost no
 CPU from the analysis. Prints a Markdown table
-(docs/RESULTS.md, "Live analysis"): minute, frames analysed and dropped so
+(docs/results/live.md, "Live analysis"): minute, frames analysed and dropped so
 far, resident memory now and at its peak.
 """
 import argparse, json, os, subprocess, sys, tempfile, threading, time

@@ -13,7 +13,7 @@ encodes while it sends (`ffmpeg -re -i V.mp4 -c:v libx264 -tune zerolatency
 
 NAME is a video of quva_repetition/videos without `.mp4` (e.g. 023_fitness);
 the data folder is MP_DATA_DIR, else ../shared/data. Prints one Markdown table
-row per video (docs/RESULTS.md, "Live analysis").
+row per video (docs/results/live.md, "Live analysis").
 """
 import argparse, ast, json, os, struct, subprocess, sys, tempfile, time
 

@@ -55,7 +55,7 @@ impl Default for AbstractParams {
 impl AbstractParams {
     /// How long the local spread of the keypoints is held to price one
     /// segment in the default λ (chosen on the validation half of the Penn
-    /// Action clips; see RESULTS.md, "Rate–distortion frontier").
+    /// Action clips; see docs/results/concrete.md, "Rate–distortion frontier").
     pub const DEFAULT_SPREAD_SECONDS: f64 = 1.0;
 
     /// Checks every field: the synthesis parameters ([`SynthParams::validate`])

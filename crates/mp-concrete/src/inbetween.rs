@@ -82,7 +82,7 @@ impl Default for InBetween {
     /// chord away from the chord (as far as a semicircle): chosen at 2×, 4×
     /// and 8× on the validation parts of Penn Action, AIST++, the QUVA
     /// reference keypoints and MSR Action3D (`cargo xtask eval inbetween`,
-    /// `docs/RESULTS.md`), where it was closer to the truth than linear
+    /// `docs/results/video.md`), where it was closer to the truth than linear
     /// interpolation, than the program's bulge, than the program's
     /// velocities and than the curve on curved primitives only; the cut
     /// at half the chord was as good as one at 0.35 and better than none or

@@ -424,7 +424,7 @@ pub struct ArParams {
     /// average the two (test-time augmentation matching the mirror augmentation
     /// of training). Twice the inference cost. Ignored for models without
     /// left/right joint pairs. Default true: on the Penn Action validation
-    /// clips it adds 0.3–0.5 PCK points at every horizon ≥ 5 (`docs/RESULTS.md`).
+    /// clips it adds 0.3–0.5 PCK points at every horizon ≥ 5 (`docs/results/forecasting.md`).
     pub mirror_average: bool,
 }
 

@@ -193,7 +193,7 @@ fn compare(track: &Track, frame_px: Option<f64>, params: &LiveParams) -> Compare
 /// keypoints `mp live` tracks) fed frame by frame: the online program's
 /// error (KD, `mp stats`' mean distance to the keypoints, px) stays within
 /// 1.25 times the offline program's on every recording (measured: at most
-/// 1.1; docs/RESULTS.md). Run with `--nocapture` for the table.
+/// 1.1; docs/results/live.md). Run with `--nocapture` for the table.
 #[test]
 fn online_program_is_close_to_the_offline_one_on_real_keypoints() {
     let Some(dir) = mp_geom::paths::data_dir_or_skip(&mp_geom::paths::current_test_name()) else {

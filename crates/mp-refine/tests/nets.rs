@@ -411,7 +411,7 @@ fn implausible_anchor_is_repaired() {
     );
     // Measured 48.3 → 32.8 mm (−32 %): the upside-down poses are rejected
     // and bridged. Poses of other actions or phases are not (their scores
-    // stay above the thresholds), see docs/RESULTS.md.
+    // stay above the thresholds), see docs/results/refinement.md.
     assert!(after < 0.8 * before, "before {before}, after {after}");
 }
 

@@ -10,7 +10,7 @@
 //! itself one period later, over the whole count and at its ends — whose weights ([`ConfidenceModel::default`])
 //! were fitted on synthetic repetitions of real motion with known counts
 //! (`cargo xtask eval count --synthetic --fit-confidence`; reliability in
-//! RESULTS).
+//! docs/results/repetition.md).
 
 use serde::{Deserialize, Serialize};
 
@@ -89,7 +89,7 @@ pub struct ConfidenceModel {
 
 impl Default for ConfidenceModel {
     /// Fitted on seeds 0 and 1 of the synthetic validation set (1,200 cases
-    /// of keypoints; see RESULTS). The periodicity is not fitted (weight 0:
+    /// of keypoints; see docs/results/repetition.md). The periodicity is not fitted (weight 0:
     /// a more periodic motion is never less certain), nor is the frame
     /// signal, which has no synthetic cases: its counts are scored with the
     /// same features and capped at their periodicity.

@@ -128,7 +128,7 @@ pub(crate) fn cycle_mismatch(
 /// [`MISMATCH_OVER_TYPICAL`] times the recording's median mismatch, and end
 /// at the last; the span is kept whole when fewer than two periods remain.
 /// (Requiring half a period or a whole one in a row to match trimmed more of
-/// the synthetic padding but also real cycles that vary: see RESULTS.)
+/// the synthetic padding but also real cycles that vary: see docs/results/repetition.md.)
 pub(crate) fn repeating_span(
     track: &Track,
     period: usize,

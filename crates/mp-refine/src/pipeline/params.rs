@@ -95,7 +95,7 @@ pub struct NetRefineParams {
     /// without a margin more than half of a new subject's clean poses fall
     /// below. Chosen on subject 7 among 50, 100, 200 and 400 (anchor and
     /// transition steps alone: injected-flaw MPJPE −4.1 % with 200, and no
-    /// clean clip changed; see `docs/RESULTS.md`). Used only when
+    /// clean clip changed; see `docs/results/refinement.md`). Used only when
     /// [`Self::mode`] runs the anchor step.
     pub score_margin: f64,
     /// Steps to run. Default [`RefineMode::DetectorOnly`]: on subject 7 the
@@ -113,7 +113,7 @@ pub struct NetRefineParams {
     /// Repair of flawed anchors. Default [`AnchorRepair::Bridge`]: with the
     /// committed networks the anchor decoder's poses are 115 mm from the
     /// truth on held-out clips, further than a transition bridged between
-    /// the neighbouring anchors (see `docs/RESULTS.md`).
+    /// the neighbouring anchors (see `docs/results/refinement.md`).
     pub anchor_repair: AnchorRepair,
     /// In transitions regenerated for their deviation, replace only the
     /// frames whose mean joint distance to the regenerated transition
