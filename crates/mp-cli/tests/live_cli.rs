@@ -38,6 +38,17 @@ fn stream_live(video: &Path, speed: f64) -> Output {
     out
 }
 
+/// `mp live VIDEO ARGS…` on a file; expects success and returns its JSON
+/// lines (the summary last).
+fn live_on_file(video: &Path, args: &[&std::ffi::OsStr]) -> Vec<serde_json::Value> {
+    let out = mp().arg("live").arg(video).args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{}\n{err}", out.status);
+    let events = lines(&out);
+    assert_eq!(events.last().unwrap()["type"], "summary", "{events:?}");
+    events
+}
+
 fn loops_total(video: &Path) -> i64 {
     let out = mp().arg("loops").arg(video).arg("--json").output().unwrap();
     assert!(
@@ -134,6 +145,17 @@ fn missing_file_fails_cleanly() {
     let out = mp().args(["live", "no/such/video.mp4"]).output().unwrap();
     let err = failed(&out);
     assert!(err.contains("no/such/video.mp4"), "{err}");
+    // With --out: the same error, and no spool left in the folder.
+    let dir = tempfile::tempdir().unwrap();
+    let out = mp()
+        .args(["live", "no/such/video.mp4", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let err = failed(&out);
+    assert!(err.contains("no/such/video.mp4"), "{err}");
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
 }
 
 #[test]
@@ -174,17 +196,8 @@ fn stalled_stream_fails_cleanly() {
 #[test]
 fn segments_tile_each_persons_frames() {
     let video = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
-    let out = mp()
-        .arg("live")
-        .arg(&video)
-        .args(["--json", "--segments"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{}\n{err}", out.status);
-    let events = lines(&out);
+    let events = live_on_file(&video, &["--json".as_ref(), "--segments".as_ref()]);
     let summary = events.last().unwrap();
-    assert_eq!(summary["type"], "summary");
     let (frames, last_t) = (
         summary["frames"].as_f64().unwrap(),
         summary["t"].as_f64().unwrap(),
@@ -236,18 +249,9 @@ fn out_writes_what_mp_run_writes() {
     let video = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
     let dir = tempfile::tempdir().unwrap();
     let (live_dir, run_dir) = (dir.path().join("live"), dir.path().join("run"));
-    let out = mp()
-        .arg("live")
-        .arg(&video)
-        .args(["--json", "--duration", "4", "--out"])
-        .arg(&live_dir)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{}\n{err}", out.status);
-    let events = lines(&out);
+    let args = ["--json", "--duration", "4", "--out"].map(std::ffi::OsStr::new);
+    let events = live_on_file(&video, &[&args[..], &[live_dir.as_os_str()]].concat());
     let summary = events.last().unwrap();
-    assert_eq!(summary["type"], "summary");
     assert_eq!(
         summary["out"].as_str(),
         Some(live_dir.display().to_string().as_str()),
@@ -322,16 +326,9 @@ fn out_writes_what_mp_run_writes() {
 fn a_pose_rate_skips_frames_and_out_fills_them() {
     let video = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
     let dir = tempfile::tempdir().unwrap();
-    let out = mp()
-        .arg("live")
-        .arg(&video)
-        .args(["--json", "--pose-fps", "auto", "--duration", "3", "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{}\n{err}", out.status);
-    let events = lines(&out);
+    let args =
+        ["--json", "--pose-fps", "auto", "--duration", "3", "--out"].map(std::ffi::OsStr::new);
+    let events = live_on_file(&video, &[&args[..], &[dir.path().as_os_str()]].concat());
     let summary = events.last().unwrap();
     let (frames, posed) = (
         summary["frames"].as_u64().unwrap(),

@@ -447,6 +447,8 @@ fn write_out(
     state: &State,
 ) -> Result<Option<String>> {
     let (Some(dir), Some((frame_size, skeleton, model))) = (&params.out, &state.stream) else {
+        // The source never gave a frame.
+        rec.discard();
         return Ok(None);
     };
     if rec.frames() == 0 {
