@@ -6,7 +6,7 @@
 //! ([`mp_pipeline::Input::People`]).
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use mp_geom::{People, Skeleton};
@@ -158,15 +158,17 @@ fn read_spool(path: &Path, n: usize, fps: f64, skeleton: &Skeleton) -> Result<(P
         return Err(LiveError::Output("no frame came: nothing to write".into()));
     }
     let file = File::open(path).map_err(|e| io_error(path, "cannot read", e))?;
-    let len = file.metadata().map(|m| m.len()).unwrap_or(0);
     let mut reader = BufReader::new(file);
     let mut collector = PeopleCollector::new(skeleton.len());
     let mut posed = vec![false; n];
-    let mut read = 0u64;
-    while read < len {
+    // Rows until the end of the file (a row cut short is an error).
+    while !reader
+        .fill_buf()
+        .map_err(|e| io_error(path, "cannot read", e))?
+        .is_empty()
+    {
         let row: Row = bincode::serde::decode_from_std_read(&mut reader, config())
             .map_err(|e| io_error(path, "cannot read", e))?;
-        read = reader_position(&mut reader)?;
         match row {
             Row::Frame(f) => {
                 if let Some(p) = posed.get_mut(f as usize) {
@@ -198,11 +200,4 @@ fn read_spool(path: &Path, n: usize, fps: f64, skeleton: &Skeleton) -> Result<(P
     let mut per_frame = vec![0usize; n];
     let people = collector.finish(n, fps, skeleton, true, &mut per_frame)?;
     Ok((people, posed))
-}
-
-fn reader_position(reader: &mut BufReader<File>) -> Result<u64> {
-    use std::io::Seek;
-    reader
-        .stream_position()
-        .map_err(|e| LiveError::Output(format!("cannot read the pose spool: {e}")))
 }

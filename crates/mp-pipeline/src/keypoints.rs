@@ -148,6 +148,36 @@ pub struct Keypoints {
     pub overlay: Option<OverlayFrames>,
 }
 
+impl Keypoints {
+    /// Keypoints that come without the video's frames (a track file, a live
+    /// run's people): no frame signal, frame copies or overlay, nobody else.
+    fn without_frames(
+        track: Track,
+        title: String,
+        description: String,
+        frame_size: Option<(usize, usize)>,
+        frame_px: Option<f64>,
+    ) -> Self {
+        Keypoints {
+            found_fraction: mp_abstract::count::found_fraction(&track),
+            track,
+            thumbnails: None,
+            frame_choice: None,
+            title,
+            description,
+            frame_size,
+            frame_px,
+            model: None,
+            people: None,
+            person: None,
+            others: Vec::new(),
+            warning: None,
+            frames: None,
+            overlay: None,
+        }
+    }
+}
+
 /// What the caller wants kept of a video besides the keypoints.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Keep {
@@ -201,23 +231,13 @@ pub(crate) fn keypoints_timed(
                     track = track.slice_frames(0, n.max(1))?;
                 }
             }
-            Ok(Keypoints {
-                found_fraction: mp_abstract::count::found_fraction(&track),
+            Ok(Keypoints::without_frames(
                 track,
-                thumbnails: None,
-                frame_choice: None,
                 title,
                 description,
                 frame_size,
                 frame_px,
-                model: None,
-                people: None,
-                person: None,
-                others: Vec::new(),
-                warning: None,
-                frames: None,
-                overlay: None,
-            })
+            ))
         }
         Input::People {
             people,
@@ -268,22 +288,13 @@ fn from_people(
         Some(id) => people.full_track(id)?,
         None => empty,
     };
+    let frame_px = Some(frame_size.0.max(frame_size.1) as f64);
     Ok(Keypoints {
-        found_fraction: mp_abstract::count::found_fraction(&track),
-        track,
-        thumbnails: None,
-        frame_choice: None,
-        title,
-        description,
-        frame_size: Some(frame_size),
-        frame_px: Some(frame_size.0.max(frame_size.1) as f64),
         model: Some(model),
         people: Some(people),
         person: top,
         others: rest.into_iter().map(|id| (id, None)).collect(),
-        warning: None,
-        frames: None,
-        overlay: None,
+        ..Keypoints::without_frames(track, title, description, Some(frame_size), frame_px)
     })
 }
 

@@ -197,6 +197,11 @@ pub fn crop_u8(
 /// Converts 8-bit values to `f32` as `v · scale + offset`.
 pub fn to_f32(src: &[u8], scale: f32, offset: f32, out: &mut Vec<f32>) {
     out.clear();
+    extend_f32(src, scale, offset, out);
+}
+
+/// [`to_f32`] appending to `out` (several images laid end to end).
+pub fn extend_f32(src: &[u8], scale: f32, offset: f32, out: &mut Vec<f32>) {
     out.extend(src.iter().map(|&v| v as f32 * scale + offset));
 }
 

@@ -7,7 +7,7 @@ use std::path::Path;
 use ort::session::{HasSelectedOutputs, OutputSelector, RunOptions, Session};
 
 use crate::error::{PoseError, Result};
-use crate::imageops::{crop_u8, to_f32, Border, RgbView, Roi};
+use crate::imageops::{crop_u8, extend_f32, Border, RgbView, Roi};
 use crate::runtime::{self, SessionParams};
 
 /// Input side of the landmark model (pixels).
@@ -267,7 +267,12 @@ impl LandmarkModel {
 
     /// Runs the model on a prepared `[1, 256, 256, 3]` input in [0, 1].
     pub fn run_tensor(&mut self, input: &[f32]) -> Result<LandmarkOutput> {
-        let mut out = self.run_batch(input, 1)?;
+        let out = self.run_batch(input, 1)?;
+        self.single(out)
+    }
+
+    /// The one result of a run on one crop.
+    fn single(&self, mut out: Vec<LandmarkOutput>) -> Result<LandmarkOutput> {
         out.pop().ok_or_else(|| PoseError::Contract {
             model: self.name.clone(),
             reason: "a run on one crop gave no result".into(),
@@ -309,11 +314,21 @@ impl LandmarkModel {
 
     /// Crops `roi` from the image (border replicate) and runs the model.
     pub fn run(&mut self, image: RgbView<'_>, roi: &Roi) -> Result<LandmarkOutput> {
+        let out = self.run_crops(image, std::slice::from_ref(roi))?;
+        self.single(out)
+    }
+
+    /// The crops of `rois` (border replicate, in [0, 1]) laid end to end,
+    /// through one run of the model.
+    fn run_crops(&mut self, image: RgbView<'_>, rois: &[Roi]) -> Result<Vec<LandmarkOutput>> {
         let n = LANDMARK_INPUT;
-        crop_u8(image, roi, n, n, Border::Replicate, &mut self.crop);
         let mut input = std::mem::take(&mut self.input);
-        to_f32(&self.crop, 1.0 / 255.0, 0.0, &mut input);
-        let result = self.run_tensor(&input);
+        input.clear();
+        for roi in rois {
+            crop_u8(image, roi, n, n, Border::Replicate, &mut self.crop);
+            extend_f32(&self.crop, 1.0 / 255.0, 0.0, &mut input);
+        }
+        let result = self.run_batch(&input, rois.len());
         self.input = input;
         result
     }
@@ -326,18 +341,7 @@ impl LandmarkModel {
         if !self.batch_open || rois.len() < 2 {
             return rois.iter().map(|roi| self.run(image, roi)).collect();
         }
-        let n = LANDMARK_INPUT;
-        let mut input = std::mem::take(&mut self.input);
-        input.clear();
-        input.reserve(rois.len() * n * n * 3);
-        for roi in rois {
-            crop_u8(image, roi, n, n, Border::Replicate, &mut self.crop);
-            // As `to_f32(crop, 1/255, 0)` writes a single crop.
-            input.extend(self.crop.iter().map(|&v| v as f32 * (1.0 / 255.0) + 0.0));
-        }
-        let result = self.run_batch(&input, rois.len());
-        self.input = input;
-        result
+        self.run_crops(image, rois)
     }
 }
 
