@@ -9,7 +9,9 @@
 //!
 //! Anything else is 404, a method other than GET 405. The run only
 //! hands over its events and its newest frame ([`PageSink`]); it never
-//! waits on a browser.
+//! waits on a browser. Every answer is written by a thread of its own,
+//! and a browser that takes no bytes for [`WRITE_TIMEOUT`] is
+//! disconnected, so a stalled browser cannot keep a place.
 
 pub mod events;
 pub mod video;
@@ -28,6 +30,10 @@ use video::VideoHub;
 
 /// The page, compiled into the binary.
 pub const PAGE: &str = include_str!("page.html");
+
+/// How long one write to a browser may wait for the browser to take
+/// bytes before its connection is dropped.
+pub const WRITE_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// The address of `--serve` without a value.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8000";
@@ -52,6 +58,20 @@ pub fn parse_addr(text: &str) -> anyhow::Result<SocketAddr> {
         .with_context(bad)
 }
 
+/// A listening socket whose connections time out writes after
+/// `write_timeout`: the connections it accepts inherit the listening
+/// socket's send timeout (it has no receive timeout, which would also end
+/// waiting for the next connection).
+fn listen(addr: SocketAddr, write_timeout: Duration) -> std::io::Result<TcpListener> {
+    use socket2::{Domain, Protocol, Socket, Type};
+    let socket = Socket::new(Domain::for_address(addr), Type::STREAM, Some(Protocol::TCP))?;
+    socket.set_reuse_address(true)?;
+    socket.set_write_timeout(Some(write_timeout))?;
+    socket.bind(&addr.into())?;
+    socket.listen(128)?;
+    Ok(socket.into())
+}
+
 /// What the server's threads share.
 struct Shared {
     events: EventHub,
@@ -69,8 +89,8 @@ pub struct LivePage {
 impl LivePage {
     /// Binds `addr` and starts serving.
     pub fn start(addr: SocketAddr) -> anyhow::Result<Self> {
-        let listener =
-            TcpListener::bind(addr).with_context(|| format!("--serve: cannot listen at {addr}"))?;
+        let listener = listen(addr, WRITE_TIMEOUT)
+            .with_context(|| format!("--serve: cannot listen at {addr}"))?;
         let addr = listener.local_addr()?;
         let server = tiny_http::Server::from_listener(listener, None)
             .map_err(|e| anyhow::anyhow!("--serve: cannot serve at {addr}: {e}"))?;
@@ -176,15 +196,20 @@ fn route(rq: tiny_http::Request, shared: &Arc<Shared>) {
     let known = matches!(path.as_str(), "/" | "/stream.mjpg" | "/events");
     let res = match rq.method() {
         Method::Get => match path.as_str() {
-            "/" => rq.respond(with(
-                with(
-                    tiny_http::Response::from_string(PAGE),
-                    "Content-Type",
-                    "text/html; charset=utf-8",
-                ),
-                "Cache-Control",
-                "no-cache",
-            )),
+            "/" => {
+                spawn("live-page-page", move || {
+                    let _ = rq.respond(with(
+                        with(
+                            tiny_http::Response::from_string(PAGE),
+                            "Content-Type",
+                            "text/html; charset=utf-8",
+                        ),
+                        "Cache-Control",
+                        "no-cache",
+                    ));
+                });
+                Ok(())
+            }
             "/stream.mjpg" => match shared.video.watch() {
                 Some(watcher) => {
                     let s = shared.clone();
@@ -248,5 +273,33 @@ mod tests {
         let e = parse_addr("no port").unwrap_err().to_string();
         assert!(e.contains("--serve") && e.contains("no port"), "{e}");
         assert!(parse_addr("70000").is_err());
+    }
+
+    #[test]
+    fn a_browser_that_takes_no_bytes_is_cut_off() {
+        use std::io::Write;
+        let timeout = Duration::from_millis(300);
+        let listener = listen(SocketAddr::from(([127, 0, 0, 1], 0)), timeout).unwrap();
+        let browser = std::net::TcpStream::connect(listener.local_addr().unwrap()).unwrap();
+        let (mut conn, _) = listener.accept().unwrap();
+        assert_eq!(conn.write_timeout().unwrap(), Some(timeout));
+        // The browser never reads: once the buffers are full a write
+        // fails instead of waiting for ever.
+        let chunk = vec![0u8; 64 * 1024];
+        let started = std::time::Instant::now();
+        let err = loop {
+            if let Err(e) = conn.write_all(&chunk) {
+                break e;
+            }
+            assert!(started.elapsed() < Duration::from_secs(60), "never cut off");
+        };
+        assert!(
+            matches!(
+                err.kind(),
+                std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+            ),
+            "{err}"
+        );
+        drop(browser);
     }
 }
