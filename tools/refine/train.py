@@ -2,7 +2,7 @@
 """Trains the six refinement networks of mp-refine and exports them to ONNX.
 
 Run through `cargo xtask train-refine`, which builds the dataset npz
-(`mp_refine::dataset`: canonical 60-frame clips, anchor flags, concept ids)
+(`mp_eval::refine::dataset`: canonical 60-frame clips, anchor flags, concept ids)
 and calls this script with the training virtual environment's Python.
 
 Writes into --out: anchor_recognition.onnx, anchor_refinement.onnx,
@@ -719,7 +719,7 @@ def mirror_np(motion, mask):
 def warp_pair_np(motion, mask, rng, strength=0.15):
     """The same random monotone time warp of clips [B,60,60] and their masks
     [B,60,20]; a warped frame is flawed when a frame it interpolates (with
-    non-zero weight) is, as in mp_refine::dataset::canonical_mask."""
+    non-zero weight) is, as in mp_refine::motion::canonical_mask."""
     out, mout = np.empty_like(motion), np.empty_like(mask)
     for i in range(motion.shape[0]):
         i0, i1, w = warp_grid(rng, strength)

@@ -1,35 +1,17 @@
 //! Project tasks: `cargo xtask eval …`, `bench`, `models`, `setup`, `train-…`.
+//!
+//! This binary parses the arguments; the evaluations and the training live
+//! in the `mp-eval` crate, the set-up ([`setup`], [`models`]) and the
+//! benchmarks ([`bench`]) here.
 
 mod bench;
-mod eval_concrete;
-mod eval_count;
-mod eval_count_long;
-mod eval_count_long_synth;
-mod eval_count_synth;
-mod eval_count_video;
-mod eval_forecast;
-mod eval_grammar;
-mod eval_inbetween;
-mod eval_intervals;
-mod eval_loops;
-mod eval_people;
-mod eval_pose;
-mod eval_pose_rate;
-mod eval_refine;
-mod eval_refine_cv;
-mod eval_video;
-mod fit_confidence;
 mod models;
-mod pyenv;
 mod setup;
-mod stats;
-mod synth_reps;
-mod synth_select;
-mod synth_sources;
-mod synth_video;
-mod train_forecast;
-mod train_refine;
-mod train_refine_cv;
+
+use mp_eval::{
+    concrete, count, forecast, grammar, inbetween, loops, people, pose, pose_rate, refine,
+    train_forecast, train_refine, video,
+};
 
 use clap::{Parser, Subcommand};
 
@@ -60,47 +42,47 @@ enum Command {
 #[derive(Subcommand)]
 enum Eval {
     /// Repetition counts from video exactly as `mp run` makes them, against per-video labels (MAE, OBO, time per frame).
-    Count(eval_count::EvalCountArgs),
+    Count(count::EvalCountArgs),
     /// Repetition detection, counting and prediction by unrolling (CMU mocap6, AIST++, Penn Action, QUVA).
-    Loops(eval_loops::EvalLoopsArgs),
+    Loops(loops::EvalLoopsArgs),
     /// Several people in one video: composites of one-person videos side by side and crossing.
-    People(eval_people::EvalPeopleArgs),
+    People(people::EvalPeopleArgs),
     /// Motion grammars: symbols (purity, NMI), grammars (rules, DL), synthesis vs the FSM baseline.
-    Grammar(eval_grammar::EvalGrammarArgs),
+    Grammar(grammar::EvalGrammarArgs),
     /// Concrete programs on Penn Action: primitives, parameters, KD, jumps, interpolation.
-    Concrete(eval_concrete::EvalConcreteArgs),
+    Concrete(concrete::EvalConcreteArgs),
     /// Keypoints (BlazePose / MoveNet) against MediaPipe's reference, PCK on the COCO sample, speed.
-    Pose(eval_pose::EvalPoseArgs),
+    Pose(pose::EvalPoseArgs),
     /// The pose model on every 2nd or 3rd frame (`--pose-fps`) against every frame: counts, keypoints, programs, time.
-    PoseRate(eval_pose_rate::EvalPoseRateArgs),
+    PoseRate(pose_rate::EvalPoseRateArgs),
     /// Forecasting (Constant, NN, Loop, AR on Φ / Θ): PCK or (PA-)MPJPE per horizon, with and without DTW.
-    Forecast(eval_forecast::EvalForecastArgs),
+    Forecast(forecast::EvalForecastArgs),
     /// Learned motion refinement: injected flaws (MPJPE), generated motion (FID, accuracy, diversity, multimodality), ablation.
-    Refine(eval_refine::EvalRefineArgs),
+    Refine(refine::EvalRefineArgs),
     /// Program-guided frame interpolation at 2×, 4×, 8× vs linear blending and FFmpeg minterpolate (KD of arms, PSNR, SSIM).
-    Interpolation(eval_video::EvalInterpolationArgs),
+    Interpolation(video::EvalInterpolationArgs),
     /// In-between poses of `mp interpolate` on real keypoint tracks (every k-th frame kept) vs linear interpolation.
-    Inbetween(eval_inbetween::EvalInBetweenArgs),
+    Inbetween(inbetween::EvalInBetweenArgs),
     /// Video prediction by unrolling the last loop on pixels vs constant and nearest-neighbour frames (KD, PSNR, SSIM).
-    VideoPredict(eval_video::EvalVideoPredictArgs),
+    VideoPredict(video::EvalVideoPredictArgs),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result: anyhow::Result<()> = match cli.command {
         Command::Eval(e) => match e {
-            Eval::Concrete(a) => eval_concrete::run(&a),
-            Eval::Count(a) => eval_count::run(&a),
-            Eval::Loops(a) => eval_loops::run(&a),
-            Eval::People(a) => eval_people::run(&a),
-            Eval::Grammar(a) => eval_grammar::run(&a),
-            Eval::Pose(a) => eval_pose::run(&a),
-            Eval::PoseRate(a) => eval_pose_rate::run(&a),
-            Eval::Forecast(a) => eval_forecast::run(&a),
-            Eval::Refine(a) => eval_refine::run(&a),
-            Eval::Interpolation(a) => eval_video::run_interpolation(&a),
-            Eval::Inbetween(a) => eval_inbetween::run(&a),
-            Eval::VideoPredict(a) => eval_video::run_video_predict(&a),
+            Eval::Concrete(a) => concrete::run(&a),
+            Eval::Count(a) => count::run(&a),
+            Eval::Loops(a) => loops::run(&a),
+            Eval::People(a) => people::run(&a),
+            Eval::Grammar(a) => grammar::run(&a),
+            Eval::Pose(a) => pose::run(&a),
+            Eval::PoseRate(a) => pose_rate::run(&a),
+            Eval::Forecast(a) => forecast::run(&a),
+            Eval::Refine(a) => refine::run(&a),
+            Eval::Interpolation(a) => video::run_interpolation(&a),
+            Eval::Inbetween(a) => inbetween::run(&a),
+            Eval::VideoPredict(a) => video::run_video_predict(&a),
         },
         Command::Setup(a) => setup::run(&a),
         Command::Models(a) => models::run(&a),
@@ -114,11 +96,4 @@ fn main() {
     }
 }
 
-/// Writes a report or model file through a temporary file renamed into
-/// place, so an interrupted task leaves the old file or the new one.
-pub(crate) fn write_file(
-    path: impl AsRef<std::path::Path>,
-    bytes: impl AsRef<[u8]>,
-) -> mp_geom::Result<()> {
-    mp_geom::io::write_atomic(path, bytes.as_ref())
-}
+pub(crate) use mp_eval::write_file;

@@ -205,11 +205,11 @@ fn cut_masks(root: &Path, out: &Path) -> Result<()> {
     if todo.is_empty() {
         return Ok(());
     }
-    let python = crate::pyenv::venv(root, ".cache/venv-onnx", "models")?;
-    crate::pyenv::ensure_packages(&python, "onnx", &[ONNX_PACKAGE], "models", "")?;
+    let python = mp_eval::pyenv::venv(root, ".cache/venv-onnx", "models")?;
+    mp_eval::pyenv::ensure_packages(&python, "onnx", &[ONNX_PACKAGE], "models", "")?;
     for (src, cut) in todo {
         println!("models: cutting the mask head off {}", file_name_of(&src));
-        crate::pyenv::run_script(
+        mp_eval::pyenv::run_script(
             &python,
             root,
             "tools/cut_mask.py",
@@ -238,7 +238,7 @@ fn run_cmd(cmd: &mut Command, what: &str) -> Result<()> {
 
 fn venv_python(root: &Path) -> Result<PathBuf> {
     let venv = root.join(".cache/venv-models");
-    let python = crate::pyenv::venv(root, ".cache/venv-models", "models")?;
+    let python = mp_eval::pyenv::venv(root, ".cache/venv-models", "models")?;
     let marker = venv.join(".mp-tools-installed");
     if !marker.is_file() {
         println!(

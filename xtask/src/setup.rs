@@ -26,11 +26,7 @@ pub struct SetupArgs {
     pub gpu: bool,
 }
 
-/// The workspace root (the folder holding `xtask/`).
-pub fn workspace_root() -> PathBuf {
-    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    manifest.parent().map(Path::to_path_buf).unwrap_or(manifest)
-}
+pub use mp_eval::workspace_root;
 
 pub fn run(args: &SetupArgs) -> Result<()> {
     let root = workspace_root();
@@ -55,9 +51,9 @@ const GPU_PACKAGE: &str = "onnxruntime-gpu[cuda,cudnn]";
 /// the pose models on the GPU, and falls back to the CPU where there is no
 /// GPU.
 fn install_gpu_runtime(root: &Path) -> Result<()> {
-    let python = crate::pyenv::venv(root, ".cache/venv-gpu", "setup")?;
+    let python = mp_eval::pyenv::venv(root, ".cache/venv-gpu", "setup")?;
     let spec = format!("{GPU_PACKAGE}=={ORT_VERSION}");
-    crate::pyenv::ensure_packages(
+    mp_eval::pyenv::ensure_packages(
         &python,
         "onnxruntime, nvidia.cudnn",
         &[&spec],

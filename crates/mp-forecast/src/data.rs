@@ -12,9 +12,24 @@ use std::path::Path;
 
 use mp_geom::io::datasets::{MsrAction3D, PennAction};
 use mp_geom::io::npz::Npz;
+use mp_geom::Track;
 
 use crate::error::{ForecastError, Result};
-use crate::eval::EvalClip;
+
+/// One clip of a data set: the whole motion and its action.
+#[derive(Debug, Clone)]
+pub struct Clip {
+    /// Identifier (clip id or name).
+    pub name: String,
+    /// Action class.
+    pub action: String,
+    /// The whole clip.
+    pub track: Track,
+    /// 2D only: the PCK reference size of every frame (e.g. the larger side
+    /// of the data set's annotated person box, as the paper's evaluation
+    /// uses). `None`: the extent of the visible true joints.
+    pub box_sizes: Option<Vec<f64>>,
+}
 
 /// Every `VALIDATION_EVERY`-th clip (index % 10 == 0) is a validation clip.
 pub const VALIDATION_EVERY: usize = 10;
@@ -41,7 +56,7 @@ pub struct ForecastDataset {
     /// `penn_action` or `msr_action3d` (the model-folder name).
     pub kind: &'static str,
     /// Every clip, in file order.
-    pub clips: Vec<EvalClip>,
+    pub clips: Vec<Clip>,
 }
 
 impl ForecastDataset {
@@ -56,7 +71,7 @@ impl ForecastDataset {
                 .clips()
                 .iter()
                 .map(|c| {
-                    Ok(EvalClip {
+                    Ok(Clip {
                         name: c.clip_id.clone(),
                         action: c.action.clone(),
                         track: d.clip(c.index)?,
@@ -80,7 +95,7 @@ impl ForecastDataset {
                 .clips()
                 .iter()
                 .map(|c| {
-                    Ok(EvalClip {
+                    Ok(Clip {
                         name: c.name.clone(),
                         action: c.action_name.to_string(),
                         track: d.clip(c.index)?,
@@ -103,7 +118,7 @@ impl ForecastDataset {
     }
 
     /// (training clips, validation clips) by [`is_validation_clip`].
-    pub fn split(&self) -> (Vec<&EvalClip>, Vec<&EvalClip>) {
+    pub fn split(&self) -> (Vec<&Clip>, Vec<&Clip>) {
         let (mut tr, mut va) = (Vec::new(), Vec::new());
         for (i, c) in self.clips.iter().enumerate() {
             if is_validation_clip(i) {

@@ -23,14 +23,11 @@
 //!   Penn Action / MSR Action3D models ([`MappedForecaster`]).
 //! * [`normalize`]: the root-relative, torso-scaled keypoint normalisation
 //!   shared with the training code.
-//! * [`eval`]: the evaluation protocol — PCK@0.05 (2D), MPJPE and PA-MPJPE (3D),
-//!   with and without DTW, per horizon, overall and per action.
 //! * [`statue`]: the frame after which prediction accuracy improves most.
 //! * [`data`]: Penn Action / MSR Action3D clips and the validation split.
 
 pub mod data;
 pub mod error;
-pub mod eval;
 pub mod forecaster;
 pub mod mapped;
 pub mod model;
@@ -40,7 +37,6 @@ pub mod predict;
 pub mod statue;
 
 pub use error::{ForecastError, Result};
-pub use eval::{evaluate, EvalClip, EvalParams, MethodReport};
 pub use forecaster::{Constant, ForecastMethod, Forecaster, LoopUnroll};
 pub use mapped::{map_to_model, model_dataset, MappedForecaster};
 pub use model::{ArForecaster, ArParams, ArSpace, ForecastModels};

@@ -142,7 +142,7 @@ fn bench(c: &mut Criterion) {
     // The generated-motion preset on a generator sample of the same action.
     let gen_params = NetRefineParams::for_generated();
     let gen_refiner = NetRefiner::new(&nets, &concepts, &gen_params).unwrap();
-    let (gen, labels) = mp_refine::eval_refine::generate_clips(&nets, 1, 0).unwrap();
+    let (gen, labels) = mp_refine::nets::generate_clips(&nets, 1, 0).unwrap();
     let row = labels.iter().position(|&a| a == info.action).unwrap_or(0);
     let sample = Track::new(
         mp_refine::motion::from_features(gen.outer_iter().nth(row).unwrap()).unwrap(),

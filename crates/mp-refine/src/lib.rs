@@ -16,9 +16,7 @@
 //!   mask of the frames touched.
 //! * [`baseline`]: a non-learned refinement — detect flawed frames (frozen
 //!   runs, velocity/acceleration outliers, low-scoring anchors) and re-fit
-//!   splines between the neighbouring good frames — and
-//!   [`baseline::evaluate_injected`], MPJPE to the clean motion before and
-//!   after refinement on MSR Action3D with injected flaws.
+//!   splines between the neighbouring good frames.
 //! * [`nets`], [`pipeline`]: the seven refinement networks (ONNX Runtime) and
 //!   the learned refinement — a learned flaw detector (and a held-pose rule)
 //!   whose flagged frames and joints are refilled in the input's own frames,
@@ -30,31 +28,24 @@
 //! * [`api`]: [`refine_default`], the learned refinement in one call with
 //!   the defaults of `mp refine` ([`RefineOptions`]: model folder, concepts,
 //!   action, steps and thresholds).
-//! * [`quality`], [`eval_refine`], [`eval_generated`], [`eval_ablation`]: FID, accuracy,
-//!   diversity, multimodality and the evaluation on injected flaws and
-//!   generated motion; [`eval_split`]: the subjects an evaluation scores
-//!   (those the training manifest does not name).
+//!
+//! The evaluations (injected flaws, generated motion, ablations, quality
+//! metrics, training-set export) are not part of this crate: they live in
+//! the workspace's evaluation crate, `mp-eval`.
 
 pub mod api;
 pub mod baseline;
 pub mod concepts;
-pub mod dataset;
 pub mod error;
-pub mod eval_ablation;
-pub mod eval_cv;
-pub mod eval_generated;
-pub mod eval_refine;
-pub mod eval_split;
 pub mod flaws;
 pub mod mapped;
 pub mod motion;
 pub mod nets;
 pub mod pipeline;
-pub mod quality;
 pub mod segment;
 
 pub use api::{refine_default, RefineOptions};
-pub use baseline::{evaluate_injected, refine, EvalParams, EvalReport, RefineParams, Refinement};
+pub use baseline::{refine, RefineParams, Refinement};
 pub use concepts::{learn_concepts, ActionConcepts, ClusterMethod, ConceptParams, Concepts, Gmm};
 pub use error::{RefineError, Result};
 pub use flaws::{inject, Flaw, Injected};

@@ -313,6 +313,45 @@ pub fn bvh_to_msr20(bvh: &Bvh, length_scale: f64, fps: f64) -> Result<Track> {
     )?)
 }
 
+/// Per canonical frame and joint: whether a source frame in the frame's
+/// support (the one or two source frames it interpolates, with non-zero
+/// weight) is flagged in `src` (`T × J`).
+pub fn canonical_mask(src: &Array2<bool>, n: usize) -> Array2<bool> {
+    let (t, j) = src.dim();
+    let mut out = Array2::from_elem((n, j), false);
+    if t == 0 {
+        return out;
+    }
+    for f in 0..n {
+        let (i0, i1, w) = resample_bracket(f, n, t);
+        for a in 0..j {
+            out[[f, a]] = (w < 1.0 - 1e-9 && src[[i0, a]]) || (w > 1e-9 && src[[i1, a]]);
+        }
+    }
+    out
+}
+
+/// Joints of `flawed` that differ from `clean` by more than `eps` (`T × J`).
+pub fn changed_joints(clean: &Track, flawed: &Track, eps: f64) -> Array2<bool> {
+    let (a, b) = (clean.positions(), flawed.positions());
+    let (t, j, d) = a.dim();
+    let mut out = Array2::from_elem((t, j), false);
+    if b.dim() != a.dim() {
+        return out;
+    }
+    for f in 0..t {
+        for k in 0..j {
+            let mut s = 0.0;
+            for x in 0..d {
+                let v = b[[f, k, x]] - a[[f, k, x]];
+                s += v * v;
+            }
+            out[[f, k]] = s.sqrt() > eps;
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,6 @@ mod common;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
 use mp_refine::baseline::full_confidence;
-use mp_refine::eval_refine::clips_of_subjects;
 use mp_refine::flaws::{foot_joints, inject, Flaw, FootSlide};
 use mp_refine::mpjpe_abs;
 use mp_refine::pipeline::foot_contact::{guard_refills, hold_slides};
@@ -230,7 +229,7 @@ fn refinement_never_increases_the_foot_slide_of_the_evaluation_cases() {
         drift_m: 0.1,
         up_axis: 1,
     });
-    let idx = clips_of_subjects(&data, &[9, 1], 8, 180);
+    let idx = data.clips_of_subjects(&[9, 1], 8, 180);
     let pick: Vec<usize> = (0..24).map(|i| idx[i * idx.len() / 24]).collect();
     let (mut b, mut a, mut a_off, mut e_b, mut e_a) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for &i in &pick {

@@ -14,8 +14,7 @@ use mp_geom::io::npz::Npz;
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use mp_refine::baseline::full_confidence;
-use mp_refine::dataset::{canonical_mask, changed_joints};
-use mp_refine::eval_refine::clips_of_subjects;
+use mp_refine::motion::{canonical_mask, changed_joints};
 use mp_refine::flaws::{inject, AnchorSource, Flaw};
 use mp_refine::nets::{find_model_dir, NetKind, RefineNets};
 use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode};
@@ -324,7 +323,7 @@ fn frozen_frames_are_found_and_refilled() {
 
 /// Held-out clips (subject 9), every 4th, with full confidence.
 fn heldout(f: &Fixture) -> Vec<(Track, u32)> {
-    clips_of_subjects(&f.data, &[9], 8, 180)
+    f.data.clips_of_subjects(&[9], 8, 180)
         .into_iter()
         .step_by(4)
         .map(|i| {
@@ -439,90 +438,3 @@ fn anchor_only_mode_touches_no_deviation_transition() {
     }
 }
 
-#[test]
-fn generator_and_evaluator_run_and_are_seeded() {
-    let f = models();
-    let (a, la) = mp_refine::eval_refine::generate_clips(&f.nets, 2, 7).unwrap();
-    let (b, _) = mp_refine::eval_refine::generate_clips(&f.nets, 2, 7).unwrap();
-    assert_eq!(a, b);
-    assert_eq!(la.len(), 40);
-    let (feats, logits) = mp_refine::eval_refine::evaluator_outputs(&f.nets, &a).unwrap();
-    assert_eq!(feats.nrows(), 40);
-    assert_eq!(logits.ncols(), 20);
-}
-
-#[test]
-fn generated_motion_moves_to_its_concepts_and_gets_closer_to_real() {
-    use mp_refine::concepts::anchor_feature;
-    use mp_refine::eval_refine::{
-        evaluator_outputs, generate_clips, real_clips, refine_clips_report,
-    };
-    use mp_refine::motion::{from_features, HIP_CENTRE};
-    use mp_refine::quality::{accuracy, fid};
-    let f = fixture_or_return!();
-    let params = NetRefineParams::for_generated();
-    let r = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
-    // Seed 5: neither the selection seed (1) nor the reported one (0).
-    let (gen, labels) = generate_clips(&f.nets, 15, 5).unwrap();
-
-    // Every repaired anchor now has its concept's pose (the centre at unit
-    // scale), up to the anchor's root and scale; the first and last frames
-    // stay.
-    let mut repaired = 0;
-    for i in (0..labels.len()).step_by(20) {
-        let clip = from_features(gen.index_axis(ndarray::Axis(0), i)).unwrap();
-        let out = r.refine_canonical(clip.view(), Some(labels[i])).unwrap();
-        let ac = f.concepts.action(labels[i]).unwrap();
-        for a in out.report.anchors.iter().filter(|a| a.repaired) {
-            repaired += 1;
-            let c = a.concept.unwrap() - (labels[i] as usize - 1) * 4;
-            let feat = anchor_feature(
-                out.clip.index_axis(ndarray::Axis(0), a.frame),
-                Some(HIP_CENTRE),
-                true,
-            )
-            .unwrap();
-            let cen = &ac.centroids[c];
-            let rms = (cen.iter().map(|v| v * v).sum::<f64>() / 20.0).sqrt();
-            let d: f64 = feat
-                .iter()
-                .zip(cen)
-                .map(|(x, y)| (x - y / rms).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            assert!(d < 1e-4, "anchor {} is {d} from concept {c}", a.frame);
-        }
-        for fr in [0, 59] {
-            let moved = (&out.clip.index_axis(ndarray::Axis(0), fr)
-                - &clip.index_axis(ndarray::Axis(0), fr))
-                .iter()
-                .fold(0.0f64, |m, v| m.max(v.abs()));
-            assert!(moved < 1e-6, "end frame {fr} moved by {moved}");
-        }
-    }
-    assert!(repaired > 0, "no anchor was moved to a concept");
-
-    // Against the real clips the refined set is closer (measured on this
-    // seed: FID 1.229 → 0.983, accuracy 0.787 → 0.803) and no less recognisable.
-    let idx = clips_of_subjects(&f.data, &[1, 3, 5, 7, 9], 8, 180);
-    let (real, _) = real_clips(&f.data, &idx).unwrap();
-    let (real_f, _) = evaluator_outputs(&f.nets, &real).unwrap();
-    let (gf, gl) = evaluator_outputs(&f.nets, &gen).unwrap();
-    let refined = refine_clips_report(&r, &gen, &labels).unwrap();
-    let (rf, rl) = evaluator_outputs(&f.nets, &refined.clips).unwrap();
-    let (fid_b, fid_a) = (
-        fid(gf.view(), real_f.view()).unwrap(),
-        fid(rf.view(), real_f.view()).unwrap(),
-    );
-    let (acc_b, acc_a) = (
-        accuracy(gl.view(), &labels).unwrap(),
-        accuracy(rl.view(), &labels).unwrap(),
-    );
-    eprintln!(
-        "generated (seed 5): FID {fid_b:.3} → {fid_a:.3}, accuracy {acc_b:.3} → {acc_a:.3}, {:.1} anchors/clip, moved {:.1} mm",
-        refined.repaired_anchors_per_clip,
-        refined.mean_change_m * 1e3
-    );
-    assert!(fid_a < 0.92 * fid_b, "FID {fid_b} → {fid_a}");
-    assert!(acc_a >= acc_b - 0.01, "accuracy {acc_b} → {acc_a}");
-}

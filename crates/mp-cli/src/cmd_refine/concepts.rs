@@ -7,8 +7,7 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use mp_geom::io::datasets::MsrAction3D;
 use mp_refine::concepts::Linkage;
-use mp_refine::dataset::DatasetParams;
-use mp_refine::eval_refine::{canonical_anchor_samples, msr_anchor_samples};
+use mp_refine::concepts::{canonical_anchor_samples, msr_anchor_samples, msr_training_clips};
 use mp_refine::motion::{DEFAULT_BVH_LENGTH_SCALE, HIP_CENTRE};
 use mp_refine::{learn_concepts, ClusterMethod, ConceptParams, SegmentParams};
 
@@ -159,17 +158,7 @@ pub fn concepts_cmd(a: &ConceptsArgs) -> anyhow::Result<()> {
                 a.data.display()
             )
         })?;
-        let ds = DatasetParams::default();
-        let idx: Vec<usize> = data
-            .clips()
-            .iter()
-            .filter(|c| match &a.subjects {
-                Some(s) => s.contains(&c.subject),
-                None => !ds.val_subjects.contains(&c.subject),
-            })
-            .filter(|c| c.rows.len() >= ds.min_clip_frames)
-            .map(|c| c.index)
-            .collect();
+        let idx = msr_training_clips(&data, a.subjects.as_deref());
         let s = msr_anchor_samples(&data, &idx, &seg, &params)?;
         println!("{} clips, {} anchors", idx.len(), s.len());
         s

@@ -502,6 +502,33 @@ impl MsrAction3D {
     pub fn clips(&self) -> &[MsrClip] {
         &self.clips
     }
+    /// The clips of `subjects` with `min_frames..=max_frames` frames and a
+    /// tracked joint in every frame (the Kinect lost the body in none).
+    pub fn clips_of_subjects(
+        &self,
+        subjects: &[u32],
+        min_frames: usize,
+        max_frames: usize,
+    ) -> Vec<usize> {
+        self.clips
+            .iter()
+            .filter(|c| {
+                subjects.contains(&c.subject)
+                    && c.rows.len() >= min_frames
+                    && c.rows.len() <= max_frames
+            })
+            .filter(|c| {
+                self.clip(c.index)
+                    .map(|t| {
+                        t.confidence()
+                            .outer_iter()
+                            .all(|row| row.iter().any(|&v| v > 0.0))
+                    })
+                    .unwrap_or(false)
+            })
+            .map(|c| c.index)
+            .collect()
+    }
     /// Metadata of clip `i`.
     pub fn clip_info(&self, i: usize) -> Result<&MsrClip> {
         self.clips.get(i).ok_or_else(|| {

@@ -24,7 +24,8 @@
 //! clustering step), `gmm` (the quality model), `params` (the learning
 //! parameters), `model` (the learned [`Concepts`] and their checks) and
 //! `learn` ([`learn_concepts`]: clustering and quality model, action by
-//! action).
+//! action), `samples` (the anchor samples of tracks and of MSR Action3D
+//! clips that concepts are learned from).
 
 mod cluster;
 mod feature;
@@ -32,6 +33,7 @@ mod gmm;
 mod learn;
 mod model;
 mod params;
+mod samples;
 
 pub use cluster::{optics_clusters, ClusterMethod, Linkage};
 pub use feature::{anchor_feature, collect_anchors, feature_rms, root_of, AnchorSample};
@@ -39,6 +41,10 @@ pub use gmm::Gmm;
 pub use learn::learn_concepts;
 pub use model::{ActionConcepts, Concepts};
 pub use params::ConceptParams;
+pub use samples::{
+    canonical_anchor_samples, msr_anchor_samples, msr_training_clips, HELD_OUT_SUBJECTS,
+    MIN_CLIP_FRAMES,
+};
 
 /// Anchor samples and learning parameters shared by the tests of the
 /// submodules.

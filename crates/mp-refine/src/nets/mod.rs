@@ -33,9 +33,11 @@ use crate::motion::{FRAME_FEATURES, MSR_JOINTS, NET_FRAMES};
 use serde_json::Value;
 
 mod contract;
+mod generate;
 
 use contract::check_spec;
 pub use contract::*;
+pub use generate::generate_clips;
 
 /// One network of the folder and its place in the contract.
 struct Net {
