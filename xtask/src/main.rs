@@ -2,7 +2,7 @@
 //!
 //! This binary parses the arguments; the evaluations and the training live
 //! in the `mp-eval` crate, the set-up ([`setup`], [`models`]) and the
-//! benchmarks ([`bench`]) here.
+//! benchmarks ([`mod@bench`]) here.
 
 mod bench;
 mod models;

@@ -42,7 +42,7 @@ const OPSET: &str = "17";
 
 #[derive(clap::Args, Debug, Default)]
 pub struct ModelsArgs {
-    /// Output folder (default: <workspace>/.cache/models).
+    /// Output folder (default: WORKSPACE/.cache/models).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Convert from the registry packages even when converted models exist.

@@ -13,7 +13,7 @@ pub struct ForecastOpts {
     /// split is indexed). Default: the shared Penn Action train split, if present.
     #[arg(long)]
     pub train: Option<PathBuf>,
-    /// Model folder of the `ar` / `ar-pose` methods (default: models/forecast/<dataset>:
+    /// Model folder of the `ar` / `ar-pose` methods (default: models/forecast/DATASET:
     /// penn_action for 2D Penn-13, COCO-17 and BlazePose-33 tracks, msr_action3d for 3D MSR-20
     /// tracks and BlazePose-33 world landmarks).
     #[arg(long)]

@@ -30,7 +30,7 @@
 //!   stays in one exercise), in segments.
 //!
 //! Then, unless `--no-heldout`, the held-out evaluation
-//! ([`heldout`], `eval_grammar_heldout.rs`): symbols and grammar learned on
+//! (`grammar_heldout.rs`): symbols and grammar learned on
 //! all takes of a group but one, the held-out take labelled with the learned
 //! symbols and scored in bits per symbol under the grammar, the FSM and a
 //! unigram model.

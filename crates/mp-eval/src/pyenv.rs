@@ -76,12 +76,7 @@ pub fn training_python(root: &Path, who: &str) -> Result<PathBuf> {
 }
 
 /// Runs `python root/script args…` in `root`; fails when the script does.
-pub fn run_script(
-    python: &Path,
-    root: &Path,
-    script: &str,
-    args: &[OsString],
-) -> Result<()> {
+pub fn run_script(python: &Path, root: &Path, script: &str, args: &[OsString]) -> Result<()> {
     let st = Command::new(python)
         .arg(root.join(script))
         .args(args)
@@ -106,12 +101,7 @@ pub fn command_line(base: String, extra: &[String]) -> String {
 
 /// The arguments every training script takes after its own: `--epochs`,
 /// `--seed`, `--command` (recorded in the manifest), then the user's extra ones.
-pub fn training_args(
-    epochs: usize,
-    seed: u64,
-    command: String,
-    extra: &[String],
-) -> Vec<OsString> {
+pub fn training_args(epochs: usize, seed: u64, command: String, extra: &[String]) -> Vec<OsString> {
     let mut v: Vec<OsString> = vec![
         "--epochs".into(),
         epochs.to_string().into(),

@@ -9,11 +9,11 @@
 
 use std::path::Path;
 
+use crate::refine::cv::{choose_setting, fold_dir, folds, pool, Pooled};
+use crate::refine::evaluation::{evaluate_injected_on, InjectedReport, RefineEvalParams};
 use anyhow::{Context, Result};
 use mp_geom::io::datasets::MsrAction3D;
 use mp_pose::SessionParams;
-use crate::refine::cv::{choose_setting, fold_dir, folds, pool, Pooled};
-use crate::refine::evaluation::{evaluate_injected_on, InjectedReport, RefineEvalParams};
 use mp_refine::nets::RefineNets;
 use mp_refine::pipeline::{NetRefineParams, NetRefiner};
 use mp_refine::Concepts;

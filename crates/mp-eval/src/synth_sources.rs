@@ -62,7 +62,7 @@ pub fn make_clip(name: &str, pos: Array3<f64>, conf: Array2<f64>, fps: f64) -> O
 }
 
 /// The runs of frames of a track where at least half of the joints are seen,
-/// each at least [`MIN_CLIP_S`] long, gaps filled, as clips named
+/// each at least `MIN_CLIP_S` long, gaps filled, as clips named
 /// `name` (`name@start` for a run that does not start at frame 0).
 pub fn clips_of(name: &str, track: &Track) -> Vec<Clip> {
     let (t, j) = (track.n_frames(), track.n_joints());

@@ -23,7 +23,7 @@ pub struct TrainForecastArgs {
     /// Curriculum epochs (the latent model also pre-trains with teacher forcing first).
     #[arg(long, default_value_t = 8)]
     pub epochs: usize,
-    /// Output folder; the models go to OUT/<dataset>/.
+    /// Output folder; the models go to OUT/DATASET/.
     #[arg(long, default_value = "models/forecast")]
     pub out: PathBuf,
     /// Training seed.

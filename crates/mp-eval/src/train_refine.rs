@@ -14,10 +14,10 @@ use std::ffi::OsString;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use crate::refine::dataset::{build_flaw_set, build_training_set, DatasetParams, FlawSetParams};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use mp_geom::io::datasets::MsrAction3D;
-use crate::refine::dataset::{build_flaw_set, build_training_set, DatasetParams, FlawSetParams};
 
 use crate::pyenv::{command_line, ensure_packages, run_script, training_args, training_python};
 

@@ -13,10 +13,10 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::refine::cv::{fold_dir, folds};
+use crate::refine::dataset::{build_flaw_set, FlawSetParams};
 use anyhow::{bail, Context, Result};
 use mp_geom::io::datasets::MsrAction3D;
-use crate::refine::dataset::{build_flaw_set, FlawSetParams};
-use crate::refine::cv::{fold_dir, folds};
 
 use crate::pyenv::{command_line, run_script, training_args};
 use crate::train_refine::TrainRefineArgs;

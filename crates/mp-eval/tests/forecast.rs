@@ -13,8 +13,8 @@ use mp_eval::forecast::protocol::{evaluate, evaluate_clip, EvalParams, MethodRep
 use mp_forecast::data::Clip;
 use mp_forecast::model::{find_model_dir, ArSpace, ForecastModels};
 use mp_forecast::{ArForecaster, ArParams, Constant};
-use mp_onnx::SessionParams;
 use mp_geom::{Skeleton, Track, Units};
+use mp_onnx::SessionParams;
 use ndarray::Array3;
 
 fn one_clip(track: Track) -> Vec<Clip> {
@@ -26,7 +26,7 @@ fn one_clip(track: Track) -> Vec<Clip> {
     }]
 }
 
-fn overall(r: &mp_forecast::MethodReport, metric: &str, h: usize) -> f64 {
+fn overall(r: &MethodReport, metric: &str, h: usize) -> f64 {
     r.metrics[metric].overall[&format!("h{h}")]
 }
 
@@ -315,7 +315,12 @@ fn learned_model_beats_constant_on_real_penn_action_clips() {
         start_stride_frames: 5,
         ..EvalParams::default()
     };
-    let ar = ArForecaster::new(models_of("penn_action"), ArSpace::Latent, ArParams::default()).unwrap();
+    let ar = ArForecaster::new(
+        models_of("penn_action"),
+        ArSpace::Latent,
+        ArParams::default(),
+    )
+    .unwrap();
     let a = evaluate(&ar, &clips, &params, |_, _| {}).unwrap();
     let c = evaluate(&Constant, &clips, &params, |_, _| {}).unwrap();
     let later = |r: &MethodReport| {
@@ -332,7 +337,6 @@ fn learned_model_beats_constant_on_real_penn_action_clips() {
         later(&c)
     );
 }
-
 
 #[test]
 fn learned_3d_model_beats_constant_on_real_msr_action3d_clips() {

@@ -9,13 +9,13 @@
 
 use std::path::Path;
 
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::io::npz::NpzOut;
 use mp_eval::refine::baseline::{evaluate_injected, EvalFlaw, EvalParams};
 use mp_eval::refine::evaluation::{evaluate, RefineEvalParams, RefineEvalReport};
 use mp_eval::refine::generated::{evaluator_outputs, real_clips, refine_clips_report};
 use mp_eval::refine::quality::{accuracy, fid};
 use mp_eval::refine::split::{split_for, split_params, subjects_of, TrainingSubjects};
+use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::io::npz::NpzOut;
 use mp_refine::flaws::Flaw;
 use mp_refine::nets::{find_model_dir, generate_clips, RefineNets};
 use mp_refine::pipeline::{NetRefineParams, NetRefiner};
@@ -248,7 +248,7 @@ fn generated_motion_moves_to_its_concepts_and_gets_closer_to_real() {
 
     // Against the real clips the refined set is closer (measured on this
     // seed: FID 1.229 → 0.983, accuracy 0.787 → 0.803) and no less recognisable.
-    let idx = data.clips_of_subjects( &[1, 3, 5, 7, 9], 8, 180);
+    let idx = data.clips_of_subjects(&[1, 3, 5, 7, 9], 8, 180);
     let (real, _) = real_clips(&data, &idx).unwrap();
     let (real_f, _) = evaluator_outputs(&nets, &real).unwrap();
     let (gf, gl) = evaluator_outputs(&nets, &gen).unwrap();

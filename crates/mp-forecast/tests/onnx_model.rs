@@ -240,8 +240,6 @@ fn missing_joints_are_masked_not_fatal() {
     assert_eq!(pred.n_frames(), 20);
 }
 
-
-
 #[test]
 fn statue_frame_is_where_the_error_drops_most() {
     // a forecaster that is right only once frame 25 has been observed

@@ -12,7 +12,7 @@
 //!   for a partition of the symbol string into sentences (§5).
 //! * [`abl`], [`grammar`], [`sequitur`]: grammar induction, grammars and
 //!   their description length, and the single-string baseline.
-//! * [`derive`], [`synth`]: random derivation, the finite-state-machine
+//! * [`mod@derive`], [`synth`]: random derivation, the finite-state-machine
 //!   baseline, greedy segment selection, stitching and subtree
 //!   regeneration (§6).
 //! * [`model`], [`data`]: the whole pipeline as JSON files, and motion input.

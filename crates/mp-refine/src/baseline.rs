@@ -25,8 +25,6 @@
 
 #![allow(clippy::needless_range_loop, clippy::manual_memcpy)]
 
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::metrics::nanmean;
 use mp_geom::stats::median;
 use mp_geom::Track;
 use ndarray::s;
@@ -34,10 +32,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::concepts::{anchor_feature, root_of, Concepts};
 use crate::error::{RefineError, Result};
-use crate::flaws::{inject, AnchorSource, Flaw, FootSlide, Injected};
-use crate::segment::{
-    check_track, fit_joint, per_frame_error, segment_track, JointData, SegmentParams,
-};
+use crate::segment::{check_track, fit_joint, segment_track, JointData, SegmentParams};
 
 /// Parameters of the baseline refinement.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -380,7 +375,7 @@ pub fn repair(track: &Track, flagged: &[bool], context_frames: usize) -> Result<
 ///
 /// MSR Action3D's `conf` is the Kinect tracking state: 0 marks an *inferred*
 /// joint whose position is still an estimate (the hip centre is inferred in
-/// almost every frame), so [`evaluate_injected`] uses every joint.
+/// almost every frame), so refinement and its evaluations use every joint.
 /// Frames without any tracked joint (lost tracking) stay at confidence 0.
 pub fn full_confidence(track: &Track) -> Result<Track> {
     let c = track.confidence();

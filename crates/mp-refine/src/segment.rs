@@ -443,7 +443,7 @@ pub fn mpjpe_abs(pred: &Track, reference: &Track) -> Result<f64> {
 }
 
 /// Mean joint error per frame (NaN where the reference has no valid joint).
-pub(crate) fn per_frame_error(pred: ndarray::ArrayView3<'_, f64>, reference: &Track) -> Vec<f64> {
+pub fn per_frame_error(pred: ndarray::ArrayView3<'_, f64>, reference: &Track) -> Vec<f64> {
     let r = reference.positions();
     let c = reference.confidence();
     let (t, j, d) = r.dim();

@@ -14,8 +14,8 @@ use mp_geom::io::npz::Npz;
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use mp_refine::baseline::full_confidence;
-use mp_refine::motion::{canonical_mask, changed_joints};
 use mp_refine::flaws::{inject, AnchorSource, Flaw};
+use mp_refine::motion::{canonical_mask, changed_joints};
 use mp_refine::nets::{find_model_dir, NetKind, RefineNets};
 use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode};
 use mp_refine::{mpjpe_abs, Concepts, RefineError};
@@ -323,7 +323,8 @@ fn frozen_frames_are_found_and_refilled() {
 
 /// Held-out clips (subject 9), every 4th, with full confidence.
 fn heldout(f: &Fixture) -> Vec<(Track, u32)> {
-    f.data.clips_of_subjects(&[9], 8, 180)
+    f.data
+        .clips_of_subjects(&[9], 8, 180)
         .into_iter()
         .step_by(4)
         .map(|i| {
@@ -437,4 +438,3 @@ fn anchor_only_mode_touches_no_deviation_transition() {
         assert!(fr.windows(2).all(|w| w[0] < w[1]));
     }
 }
-

@@ -4,7 +4,6 @@
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
-use mp_refine::baseline;
 use mp_refine::baseline::full_confidence;
 use mp_refine::concepts::{collect_anchors, AnchorSample};
 use mp_refine::flaws::{AnchorSource, FootSlide};
@@ -252,4 +251,3 @@ fn refining_clean_msr_changes_little() {
         assert!(e < 0.006, "clip {i}: {e}");
     }
 }
-

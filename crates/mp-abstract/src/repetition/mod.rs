@@ -3,8 +3,8 @@
 //!
 //! Three steps live in their own modules: the loop intervals of an abstract
 //! program (here), the dominant period of a stretch of motion
-//! ([`period`]: autocorrelation of joint velocities) and the repetitive
-//! intervals of a long recording ([`segment`]: local periodicity and dynamic
+//! (`period`: autocorrelation of joint velocities) and the repetitive
+//! intervals of a long recording (`segment`: local periodicity and dynamic
 //! programming). [`crate::count`] combines them into the counts a user gets.
 
 mod period;

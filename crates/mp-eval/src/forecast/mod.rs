@@ -11,9 +11,9 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use mp_forecast::data::Clip;
 use mp_forecast::data::{ForecastDataset, PENN_REPETITIVE_CLASSES};
 use mp_forecast::model::find_model_dir;
-use mp_forecast::data::Clip;
 use mp_forecast::{
     ArForecaster, ArParams, ArSpace, Constant, ForecastModels, Forecaster, LoopUnroll,
     NearestNeighbour, NnParams,
@@ -50,7 +50,7 @@ pub struct EvalForecastArgs {
     /// Frames between prediction start frames (default: 1 for 2D, 25 for 3D).
     #[arg(long)]
     pub stride: Option<usize>,
-    /// Model folder (default: models/forecast/<dataset>).
+    /// Model folder (default: models/forecast/DATASET).
     #[arg(long)]
     pub models: Option<PathBuf>,
     /// Also write the tables as Markdown to this file.

@@ -47,7 +47,7 @@ pub struct EvalParams {
     pub context_frames: usize,
     /// Horizons reported, in frames. Default 1, 5, 10, 20, 30.
     pub horizons: Vec<usize>,
-    /// Frames between start frames. Default 1 (2D); use 25 for 3D ([`EvalParams::for_dims`]).
+    /// Frames between start frames. Default 1 (2D); use 25 for 3D ([`EvalParams::for_track`]).
     pub start_stride_frames: usize,
     /// PCK settings (2D). Default α = 0.05, at least 6 visible joints.
     pub pck: PckParams,

@@ -16,20 +16,19 @@ use mp_geom::io::datasets::MsrAction3D;
 use ndarray::{Array2, Array3};
 use serde::{Deserialize, Serialize};
 
-use mp_refine::concepts::{learn_concepts, ConceptParams, Concepts};
-use mp_refine::error::Result;
 use crate::refine::evaluation::{
-    evaluate_injected_nets, evaluator_outputs, msr_anchor_samples, refine_clips, usable_clips,
-    RefineEvalParams,
+    evaluate_injected_nets, evaluator_outputs, refine_clips, usable_clips, RefineEvalParams,
 };
+use crate::refine::quality::{accuracy, fid};
 use crate::refine::split::subjects_of;
+use mp_refine::concepts::{learn_concepts, msr_anchor_samples, ConceptParams, Concepts};
+use mp_refine::error::Result;
 use mp_refine::motion::HIP_CENTRE;
 use mp_refine::nets::RefineNets;
 use mp_refine::pipeline::{
     nearest_concept_thresholds, AnchorDetection, AnchorRepair, NetRefineParams, NetRefiner,
     RefineMode, TransitionMethod,
 };
-use crate::refine::quality::{accuracy, fid};
 
 /// One ablation setting on generated clips and injected flaws.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

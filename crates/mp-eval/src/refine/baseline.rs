@@ -4,13 +4,13 @@
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::metrics::nanmean;
-use mp_geom::stats::median;
 use mp_geom::Track;
 use serde::{Deserialize, Serialize};
 
 use mp_refine::baseline::{full_confidence, refine, RefineParams};
 use mp_refine::error::{RefineError, Result};
 use mp_refine::flaws::{inject, AnchorSource, Flaw, FootSlide, Injected};
+use mp_refine::segment::{per_frame_error, segment_track};
 
 /// A flaw to inject in [`evaluate_injected`].
 #[allow(clippy::large_enum_variant)]
@@ -197,7 +197,10 @@ pub fn evaluate_injected(data: &MsrAction3D, params: &EvalParams) -> Result<Eval
                 &params.concepts,
             )?);
         }
-        Some(mp_refine::concepts::learn_concepts(&samples, &params.concepts)?)
+        Some(mp_refine::concepts::learn_concepts(
+            &samples,
+            &params.concepts,
+        )?)
     } else {
         None
     };

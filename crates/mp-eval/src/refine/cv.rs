@@ -15,8 +15,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use mp_refine::error::{RefineError, Result};
 use crate::refine::evaluation::InjectedReport;
+use mp_refine::error::{RefineError, Result};
 
 /// One cross-validation fold.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

@@ -24,21 +24,22 @@
 use mp_geom::metrics::nanmean;
 
 use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::{Skeleton, Track, Units};
+use mp_geom::Track;
 use ndarray::{Array2, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::refine::baseline::EvalFlaw;
-use mp_refine::baseline::full_confidence;
-use mp_refine::concepts::{anchor_feature, AnchorSample, ClusterMethod, ConceptParams, Concepts};
-use mp_refine::error::{RefineError, Result};
-use crate::refine::split::subjects_of;
-use mp_refine::flaws::{foot_joints, AnchorSource, Flaw, FootSlide};
-use mp_refine::motion::{canonicalize, HIP_CENTRE, NET_FRAMES};
-use mp_refine::nets::{generate_clips, RefineNets};
-use mp_refine::pipeline::{foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner};
 use crate::refine::quality::QualityParams;
-use mp_refine::segment::{mpjpe_abs, segment_track, SegmentParams};
+use crate::refine::split::subjects_of;
+use mp_refine::baseline::full_confidence;
+use mp_refine::concepts::{ClusterMethod, Concepts};
+use mp_refine::error::{RefineError, Result};
+use mp_refine::flaws::{foot_joints, AnchorSource, Flaw, FootSlide};
+use mp_refine::nets::{generate_clips, RefineNets};
+use mp_refine::pipeline::{
+    foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner,
+};
+use mp_refine::segment::{mpjpe_abs, SegmentParams};
 
 /// Parameters of the evaluation.
 #[derive(Debug, Clone, PartialEq)]
@@ -398,8 +399,7 @@ pub fn evaluate_injected_on(
 
 use crate::refine::generated::set_quality;
 pub use crate::refine::generated::{
-    evaluator_outputs, real_clips, refine_clips, refine_clips_report, RefinedClips,
-    SetQuality,
+    evaluator_outputs, real_clips, refine_clips, refine_clips_report, RefinedClips, SetQuality,
 };
 
 /// Generated-motion results.
@@ -452,10 +452,7 @@ pub(crate) fn usable_clips(
     subjects: &[u32],
     params: &RefineEvalParams,
 ) -> Vec<usize> {
-    data.clips_of_subjects(subjects,
-        params.min_clip_frames,
-        params.max_clip_frames,
-    )
+    data.clips_of_subjects(subjects, params.min_clip_frames, params.max_clip_frames)
 }
 
 /// Runs the whole evaluation with `concepts` (GMM scoring) and the networks.

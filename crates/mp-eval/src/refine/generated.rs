@@ -8,16 +8,15 @@ use std::time::Instant;
 
 use mp_geom::io::datasets::MsrAction3D;
 use ndarray::{Array2, Array3, Axis};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
+use crate::refine::quality::{
+    accuracy, diversity, fid, multimodality, per_action_fid, QualityParams,
+};
 use mp_refine::error::{RefineError, Result};
 use mp_refine::motion::{canonicalize, to_features, FRAME_FEATURES, NET_FRAMES};
 use mp_refine::nets::{RefineNets, N_ACTIONS};
 use mp_refine::pipeline::NetRefiner;
-use crate::refine::quality::{accuracy, diversity, fid, multimodality, per_action_fid, QualityParams};
 
 /// Evaluator features and logits of canonical clips (`N × 60 × 60` features), in batches.
 pub fn evaluator_outputs(

@@ -28,14 +28,14 @@ pub mod split;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
-use clap::Args;
-use mp_geom::io::datasets::MsrAction3D;
-use mp_pose::SessionParams;
 use crate::refine::evaluation::{
     evaluate, generated_selection_grid, selection_grid, RefineEvalParams, SetQuality,
 };
 use crate::refine::split::{split_for, split_params, subjects_of, TrainingSubjects};
+use anyhow::{Context, Result};
+use clap::Args;
+use mp_geom::io::datasets::MsrAction3D;
+use mp_pose::SessionParams;
 use mp_refine::nets::{find_model_dir, RefineNets};
 use mp_refine::pipeline::{AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode};
 use mp_refine::Concepts;

@@ -19,8 +19,8 @@ use mp_geom::io::datasets::MsrAction3D;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use mp_refine::error::{RefineError, Result};
 use crate::refine::evaluation::RefineEvalParams;
+use mp_refine::error::{RefineError, Result};
 use mp_refine::nets::read_manifest;
 
 /// The subjects recorded in a training manifest (ascending, no repeats).

@@ -123,7 +123,7 @@ impl FlawFindings {
 ///
 /// Canonical frame `f` interpolates the source frames within one frame of
 /// `u = f·(t − 1)/59` (its support), and the training labels
-/// ([`crate::dataset::canonical_mask`]) flag it when any frame of its
+/// ([`crate::motion::canonical_mask`]) flag it when any frame of its
 /// support is flawed — so a flawed source frame has *every* canonical frame
 /// of its support flagged, while a clean neighbour has only some. A source
 /// frame therefore takes the smallest probability of the canonical frames

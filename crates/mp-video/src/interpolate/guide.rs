@@ -97,7 +97,7 @@ impl Guide {
     /// between the detected keypoints of frames `i` and `i + 1`.
     ///
     /// This is the pose before the pixels are consulted: the warp of
-    /// [`interpolate_frames`] also leaves in place the joints whose detected
+    /// [`super::interpolate_frames`] also leaves in place the joints whose detected
     /// motion the pixels do not show ([`InterpParams::pixel_check`]).
     pub fn target_pose(&self, i: usize, w: f64) -> Result<Vec<Option<[f64; 2]>>> {
         Ok(self

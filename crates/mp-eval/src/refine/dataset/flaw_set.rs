@@ -20,9 +20,8 @@ use serde::{Deserialize, Serialize};
 use super::write_npz_file;
 use mp_refine::error::{RefineError, Result};
 use mp_refine::motion::{
-    canonical_mask, changed_joints,
-    bvh_to_msr20, canonicalize, to_features, DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, MSR_JOINTS,
-    NET_FRAMES,
+    bvh_to_msr20, canonical_mask, canonicalize, changed_joints, to_features,
+    DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, MSR_JOINTS, NET_FRAMES,
 };
 
 /// Parameters of [`build_flaw_set`], the training set of the flaw detector.
@@ -256,11 +255,7 @@ pub fn build_flaw_set(
     // (track, action (0 = none), subject (−1 = mocap), split, name)
     let mut clean: Vec<(Track, u32, i64, i64, String)> = Vec::new();
     for (split, subjects) in [(0i64, &params.train_subjects), (1, &params.select_subjects)] {
-        let idx = msr.clips_of_subjects(
-            subjects,
-            params.clip_frames.0,
-            params.clip_frames.1,
-        );
+        let idx = msr.clips_of_subjects(subjects, params.clip_frames.0, params.clip_frames.1);
         for i in idx {
             let info = msr.clip_info(i)?;
             let t = mp_refine::baseline::full_confidence(&msr.clip(i)?)?;

@@ -15,7 +15,7 @@
 //!
 //! The flaw detector's training set — clean clips and flawed copies with a
 //! per-frame, per-joint flaw mask ([`build_flaw_set`], [`FlawSet`],
-//! [`canonical_mask`], [`changed_joints`]) — is in `flaw_set` and
+//! [`mp_refine::motion::canonical_mask`], [`mp_refine::motion::changed_joints`]) — is in `flaw_set` and
 //! re-exported here.
 
 /// The shared MSR Action3D file, or returns from the test (recording the
@@ -38,7 +38,9 @@ use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{s, Array1, Array2, Array3, ArrayView3};
 use serde::{Deserialize, Serialize};
 
-use mp_refine::concepts::{anchor_feature, learn_concepts, AnchorSample, ConceptParams};
+use mp_refine::concepts::{
+    anchor_feature, learn_concepts, AnchorSample, ConceptParams, HELD_OUT_SUBJECTS, MIN_CLIP_FRAMES,
+};
 use mp_refine::error::{RefineError, Result};
 use mp_refine::motion::{
     bvh_to_msr20, canonicalize, to_features, DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, HIP_CENTRE,
@@ -93,13 +95,13 @@ impl Default for DatasetParams {
         DatasetParams {
             segment: SegmentParams::default(),
             concepts: ConceptParams::default(),
-            val_subjects: vec![9],
+            val_subjects: HELD_OUT_SUBJECTS.to_vec(),
             subjects: None,
             bvh_fps: 15.0,
             bvh_length_scale: DEFAULT_BVH_LENGTH_SCALE,
             bvh_window_frames: NET_FRAMES,
             bvh_stride_frames: 30,
-            min_clip_frames: 8,
+            min_clip_frames: MIN_CLIP_FRAMES,
             seed: 0,
         }
     }
@@ -389,8 +391,8 @@ impl TrainingSet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mp_refine::concepts::ClusterMethod;
     use mp_geom::io::npz::Npz;
+    use mp_refine::concepts::ClusterMethod;
 
     fn small_params(seed: u64) -> DatasetParams {
         DatasetParams {
