@@ -23,6 +23,7 @@ use crate::model::{AbstractProgram, DetPrim, Gaussian, Loop, ProbPrim, Stmt};
 
 /// How loops are executed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum LoopReplay {
     /// Every iteration executes the body's means (mean duration, rounded).
     #[default]

@@ -172,6 +172,7 @@ pub struct Loop {
 /// A statement of an abstract program.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum Stmt {
     /// A deterministic primitive.
     Prim(DetPrim),

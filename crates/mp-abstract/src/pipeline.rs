@@ -330,6 +330,7 @@ impl PeriodFallback {
 
 /// What each unrolled iteration of a loop executes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum UnrollSource {
     /// The concrete primitives of the last observed iteration, repeated.
     #[default]
@@ -390,6 +391,7 @@ pub struct Prediction {
 
 /// Which path of [`predict`] produced a prediction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum PredictMethod {
     /// A loop of the abstract program was unrolled.
     Loop,

@@ -52,6 +52,7 @@ pub fn check_output_frames(
 /// What happens between the last frame of a segment and the first frame of the next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum Transition {
     /// Linear blend from the segment's last frame to the next segment's first frame.
     #[default]

@@ -39,6 +39,7 @@ use crate::program::Program;
 /// Where the velocities of a Hermite in-between come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum Tangents {
     /// Central differences of the keypoints (Catmull–Rom).
     Keypoints,
@@ -49,6 +50,7 @@ pub enum Tangents {
 /// How the pose between two frames is made (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "rule", rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum InBetween {
     /// The keypoints of the two frames interpolated linearly.
     Linear,

@@ -55,13 +55,26 @@ fn bad_fit_params_are_rejected_once_at_synthesis() {
 }
 
 #[test]
-fn unchecked_fit_matches_the_checked_one() {
+fn a_fit_with_checked_params_matches_the_checking_one() {
+    use mp_geom::checked::Validate;
     let track = synthetic_track(30, 7).unwrap();
     let fit = mp_geom::fit::FitParams::default();
+    let checked = fit.clone().check().unwrap();
     for j in 0..track.n_joints() {
         let pts = track.positions().slice(ndarray::s![.., j, ..]).to_owned();
         let a = mp_geom::fit::fit_best(pts.view(), None, &fit).unwrap();
-        let b = mp_geom::fit::fit_best_unchecked(pts.view(), None, &fit).unwrap();
+        let b = mp_geom::fit::fit_best_checked(pts.view(), None, &checked).unwrap();
         assert_eq!(a, b);
     }
+}
+
+#[test]
+fn bad_fit_params_never_become_checked() {
+    use mp_geom::checked::Validate;
+    let fit = mp_geom::fit::FitParams {
+        unit_scale: f64::NAN,
+        ..Default::default()
+    };
+    let e = fit.check().unwrap_err().to_string();
+    assert!(e.contains("unit_scale"), "{e}");
 }

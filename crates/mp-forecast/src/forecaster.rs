@@ -34,6 +34,7 @@ pub trait Forecaster: Send + Sync {
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
 )]
+#[non_exhaustive]
 pub enum ForecastMethod {
     /// Hold the last observed pose ([`Constant`]).
     Constant,

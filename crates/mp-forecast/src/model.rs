@@ -398,6 +398,7 @@ impl ForecastModels {
 
 /// Where the autoregressive model runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum ArSpace {
     /// AR on the latent "movie strip" Φ (the paper's model).
     Latent,

@@ -206,6 +206,7 @@ pub struct LearnedModel {
 
 /// Which path produced a [`Prediction`].
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum PredictPath {
     /// [`ForecastMethod::Constant`]: the last observed pose held.
     Constant,

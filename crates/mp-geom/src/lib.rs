@@ -18,6 +18,7 @@
 //! * [`cancel`]: a [`CancelToken`] that long runs check between steps.
 
 pub mod cancel;
+pub mod checked;
 pub mod error;
 pub mod fit;
 pub mod io;

@@ -31,6 +31,7 @@ use crate::track::{Track, Units};
 
 /// A move of the routine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum Move {
     /// Jumping jacks: arms from the sides to overhead while the feet hop apart.
     JumpingJack,
@@ -66,6 +67,7 @@ impl Move {
 
 /// How the 3D body is seen in pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum Projection {
     /// Parallel projection onto the x–y plane.
     Orthographic,

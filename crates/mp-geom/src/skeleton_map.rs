@@ -35,6 +35,7 @@ use crate::track::Track;
 
 /// How one target joint is made from the source skeleton's joints.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum JointSource {
     /// The source joint itself.
     Joint(usize),
@@ -68,6 +69,7 @@ impl JointSource {
 
 /// Which reference frame an output frame is carried back from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum FramePairing {
     /// Output frame `f` with reference frame `f` (same frame count): a
     /// refinement of the reference.
@@ -552,6 +554,7 @@ impl SkeletonMap {
 
 /// How a source joint comes back from the target skeleton.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Carrier {
     /// The joint is target joint `a`.
     Is(usize),

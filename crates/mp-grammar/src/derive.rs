@@ -51,6 +51,7 @@ use crate::grammar::{Grammar, Sym, Tree};
 
 /// How a rule is chosen among the candidates of a nonterminal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum RuleWeighting {
     /// Every candidate rule equally likely (the paper: "any rules can be a
     /// candidate"). Default.
@@ -526,6 +527,7 @@ pub fn regenerate(
 
 /// How the finite-state machine picks the next symbol.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum FsmWeighting {
     /// Proportional to the transition count (a first-order Markov chain).
     /// Default.

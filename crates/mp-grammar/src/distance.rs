@@ -67,6 +67,7 @@ impl Segment {
 
 /// Which point is subtracted from every joint to make a pose root-relative.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum RootMode {
     /// The skeleton's root joint (`Skeleton::root`); the mean of the joints
     /// when the skeleton has none or that joint is never valid. Default.

@@ -28,6 +28,7 @@ use crate::error::{GrammarError, Result};
 
 /// A grammar symbol: terminal or nonterminal id.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum Sym {
     /// Terminal (index into [`Grammar::terminals`]).
     T(u32),
@@ -62,6 +63,7 @@ pub struct Grammar {
 
 /// A derivation tree.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum Tree {
     /// A terminal.
     Leaf(u32),

@@ -157,6 +157,7 @@ pub struct Clustering {
 
 /// Which swap strategy to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum SwapMethod {
     /// Best swap per iteration (classic PAM SWAP).
     Pam,

@@ -30,6 +30,7 @@ pub const MODEL_FORMAT: &str = "mp-grammar-model/1";
 /// What kind of motion the symbols were found on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum SourceKind {
     /// BVH files (synthesis can write BVH).
     Bvh,

@@ -110,6 +110,7 @@ impl CodeLength {
 /// One piece of the grammar's parse of a string.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum Piece {
     /// Symbols `start..end` derived from the start symbol.
     Sentence {

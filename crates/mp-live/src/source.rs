@@ -39,6 +39,7 @@ pub const RECONNECT_PAUSE: Duration = Duration::from_secs(1);
 
 /// Where the frames come from.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum LiveSource {
     /// A video file.
     File(PathBuf),
@@ -488,6 +489,7 @@ pub struct Slot {
 }
 
 /// What [`Slot::take`] gives.
+#[non_exhaustive]
 pub enum Taken {
     /// The next frame.
     Frame(Frame),

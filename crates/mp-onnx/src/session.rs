@@ -9,6 +9,7 @@ use crate::library::environment;
 
 /// Where a model runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum Device {
     /// The GPU (CUDA device 0) where the ONNX Runtime library loaded has
     /// its CUDA execution provider and a GPU takes the session; the CPU

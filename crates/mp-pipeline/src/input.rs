@@ -22,6 +22,7 @@ pub fn is_video(path: &Path) -> bool {
 /// The input of a run.
 #[derive(Debug, Clone)]
 #[allow(clippy::large_enum_variant)]
+#[non_exhaustive]
 pub enum Input {
     /// A video, run through the pose model.
     Video {

@@ -72,6 +72,7 @@ impl Default for PoseParams {
 
 /// Whose motion is analysed when several people are in view.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum PersonChoice {
     /// Everyone seen long enough; the main person's results are the
     /// top-level ones. Default.

@@ -29,6 +29,7 @@ pub const AUTO_POSE_FPS: f64 = 12.0;
 
 /// How often the pose model runs on a video.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[non_exhaustive]
 pub enum PoseRate {
     /// On every frame. Default.
     #[default]

@@ -9,6 +9,7 @@ use crate::error::{PipelineError, Result};
 
 /// The stages of a run, in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Stage {
     /// Video decoding (FFmpeg), on its own thread alongside the pose model.
     Decode,

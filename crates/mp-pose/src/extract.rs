@@ -19,6 +19,7 @@ use crate::video::{open_source, Frame, FrameSource};
 
 /// Which model to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[non_exhaustive]
 pub enum ModelChoice {
     /// BlazePose with the full landmark model. Default.
     #[default]

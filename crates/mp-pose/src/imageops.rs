@@ -78,6 +78,7 @@ impl Roi {
 
 /// What a crop reads outside the image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Border {
     /// The nearest edge pixel.
     Replicate,

@@ -26,6 +26,7 @@ pub const MODEL_DIR_IN_WORKSPACE: &str = ".cache/models";
 
 /// The ONNX models this crate uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum ModelFile {
     /// BlazePose person detector (`pose_detection.onnx`).
     PoseDetection,

@@ -24,6 +24,7 @@ use crate::error::{RefineError, Result};
 /// Where a wrong anchor pose comes from.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum AnchorSource {
     /// A frame of the same clip at least a third of its length away (another phase).
     OtherPhase,
@@ -35,6 +36,7 @@ pub enum AnchorSource {
 /// A flaw and its size.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum Flaw {
     /// `frames` consecutive frames repeat the pose before them.
     Frozen {

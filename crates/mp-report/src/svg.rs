@@ -46,6 +46,7 @@ pub struct Svg {
 
 /// Horizontal anchor of a text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Anchor {
     /// Text starts at x.
     Start,

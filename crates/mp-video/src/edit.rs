@@ -22,6 +22,7 @@ use crate::plan::{render_to_file, Plan, PlanFrame, RenderParams};
 
 /// What to do with the interval's repetitions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum EditChange {
     /// Set the count to this many repetitions.
     Count(usize),

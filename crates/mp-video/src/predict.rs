@@ -32,6 +32,7 @@ pub const MAX_SECONDS: f64 = 3600.0;
 
 /// How the future frames are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[non_exhaustive]
 pub enum PredictMethod {
     /// Unroll the last counted repetition (ours).
     #[default]

@@ -42,6 +42,7 @@ use mp_geom::Track;
 /// Which signal a count was read from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum CountSignal {
     /// Joint positions of the performer.
     Keypoints,
@@ -62,6 +63,7 @@ impl CountSignal {
 /// How a count was reached.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum CountMethod {
     /// One repetitive activity: active length over the recording's period.
     Period,

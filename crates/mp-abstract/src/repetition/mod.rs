@@ -95,6 +95,7 @@ pub fn iou(a: (usize, usize), b: (usize, usize)) -> f64 {
 /// Which joints the periodicity analyses ([`estimate_period`],
 /// [`segment_repetitions`]) read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum JointSelection {
     /// Every joint of the track.
     All,

@@ -9,6 +9,7 @@ use crate::smooth::Continuity;
 
 /// How numbers are printed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum NumberFormat {
     /// Shortest text that parses back to the same `f64` (lossless).
     #[default]

@@ -323,7 +323,8 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
     use super::*;
     use crate::search::testutil::{acc_of, moved, steps_of, track};
-    use mp_geom::fit::{fit_best_unchecked, fit_kind};
+    use mp_geom::checked::Validate;
+    use mp_geom::fit::{fit_best_checked, fit_kind};
     use mp_geom::{Primitive, PrimitiveKind};
     use ndarray::Array2;
     use rand::{Rng, SeedableRng};
@@ -395,7 +396,7 @@ mod tests {
     /// below).
     #[test]
     fn bounds_are_below_the_exact_errors() {
-        let fit = FitParams::default();
+        let fit = FitParams::default().check().unwrap();
         let rules = Rules::new(&fit);
         let mut rng = ChaCha8Rng::seed_from_u64(21);
         let (mut checked, mut circles) = (0, 0);
@@ -418,7 +419,7 @@ mod tests {
                         // (Up to rounding: a square root of a rounded sum of
                         // squares, √SSE, is off by up to √(ε·Σx²), 10⁻⁴ px here.)
                         let below = |lb: f64, e: f64| lb <= e * (1.0 + 1e-9) + 1e-4 * scale;
-                        let cost = fit_best_unchecked(seg, w, &fit).unwrap().error;
+                        let cost = fit_best_checked(seg, w, &fit).unwrap().error;
                         assert!(below(q.lb, cost), "joint {k}..{n}: {} > {cost}", q.lb);
                         let kind = |kd| fit_kind(kd, seg, w, &fit).ok();
                         let e = kind(PrimitiveKind::Stationary).unwrap().error;

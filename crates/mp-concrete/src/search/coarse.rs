@@ -267,7 +267,8 @@ mod tests {
     use crate::search::bounds::quick;
     use crate::search::exact::cheap2;
     use crate::search::testutil::{acc_of, moved, steps_of, track};
-    use mp_geom::fit::{fit_best_unchecked, FitParams};
+    use mp_geom::checked::Validate;
+    use mp_geom::fit::{fit_best_checked, FitParams};
     use ndarray::Array2;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
@@ -280,7 +281,7 @@ mod tests {
     /// squares overflow `f32`.
     #[test]
     fn single_precision_bounds_are_below_the_exact_errors() {
-        let fit = FitParams::default();
+        let fit = FitParams::default().check().unwrap();
         let rules = Rules::new(&fit);
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let mut checked = 0;
@@ -323,7 +324,7 @@ mod tests {
                                 "kind {kind} {k}..{n}: {lo} far below {ex} (scale {scale})"
                             );
                         }
-                        let cost = fit_best_unchecked(
+                        let cost = fit_best_checked(
                             arr.slice(ndarray::s![k..n, ..]),
                             Some(&wts[k..n]),
                             &fit,

@@ -60,7 +60,7 @@
 //! gets each kind's bound raised by the triangle inequality from the measured
 //! error (`carry`, Euclidean norm, 2D joints).
 //!
-//! Joints in 3D, or with the spline kind allowed, use [`fit_best_unchecked`]
+//! Joints in 3D, or with the spline kind allowed, use [`fit_best_checked`]
 //! for their exact cost (still with the bounds of the other joints and the
 //! early exit).
 //!
@@ -73,7 +73,8 @@
 //! Memory: `O(T·J·D)` for the points, `O(T)` for the DP and `O(W·J)` for
 //! what is carried; no `T × W` table.
 
-use mp_geom::fit::{fit_best_unchecked, ErrorNorm, FitParams};
+use mp_geom::checked::Checked;
+use mp_geom::fit::{fit_best_checked, ErrorNorm, FitParams};
 use mp_geom::PrimitiveKind;
 use ndarray::{s, Array2};
 
@@ -206,7 +207,7 @@ fn joint_stage(
     acc: &Acc2,
     q: &Quick,
     rules: &Rules,
-    fit: &FitParams,
+    fit: &Checked<FitParams>,
     k: usize,
     n: usize,
 ) -> std::result::Result<Staged, mp_geom::GeomError> {
@@ -216,8 +217,7 @@ fn joint_stage(
     let p = match pts {
         Some(p) if !rules.quadratic => p,
         _ => {
-            let e =
-                fit_best_unchecked(jt.points.slice(s![k..n, ..]), Some(&jt.weights[k..n]), fit)?;
+            let e = fit_best_checked(jt.points.slice(s![k..n, ..]), Some(&jt.weights[k..n]), fit)?;
             return Ok((Stage::Done(Some(e.error)), None));
         }
     };
@@ -293,7 +293,7 @@ fn joint_err(
 pub(crate) fn segment_search(
     joints: &[JointTrack<'_>],
     names: &[String],
-    fit: &FitParams,
+    fit: &Checked<FitParams>,
     lambda: &[f64],
     window: usize,
 ) -> Result<(Segmentation, SearchStats)> {

@@ -87,6 +87,7 @@ use solve::solve;
 /// Whether consecutive segments of a program share their boundary pose.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum Continuity {
     /// Segments fitted independently: the pose may jump at a boundary.
     /// Programs written before the field existed read as this.
@@ -133,6 +134,7 @@ impl std::str::FromStr for Continuity {
 /// What the C0 refit minimises per joint.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum RefitNorm {
     /// `Σ w‖rᵢ‖²`: one least-squares solve per joint.
     #[default]

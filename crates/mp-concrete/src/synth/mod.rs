@@ -12,7 +12,8 @@
 //! The parameters (scale, λ, [`SynthParams`]) and their units are described in
 //! [`params`].
 
-use mp_geom::fit::{fit_best_unchecked, FitParams};
+use mp_geom::checked::{Checked, Validate};
+use mp_geom::fit::{fit_best_checked, FitParams};
 use mp_geom::{Primitive, Track};
 use ndarray::{s, Array2};
 use rayon::prelude::*;
@@ -119,7 +120,7 @@ fn joint_name(track: &Track, j: usize) -> String {
 
 fn segment_cost(
     prep: &Prepared,
-    fit: &FitParams,
+    fit: &Checked<FitParams>,
     track: &Track,
     k: usize,
     n: usize,
@@ -129,7 +130,7 @@ fn segment_cost(
         if prep.prefix_valid[ji][n] == prep.prefix_valid[ji][k] {
             continue; // joint unobserved in this segment: no evidence, no cost
         }
-        let f = fit_best_unchecked(pts.slice(s![k..n, ..]), Some(&prep.weights[ji][k..n]), fit)
+        let f = fit_best_checked(pts.slice(s![k..n, ..]), Some(&prep.weights[ji][k..n]), fit)
             .map_err(|e| {
                 ConcreteError::Track(format!(
                     "fitting joint `{}` on frames {k}..{n}: {e}",
@@ -144,7 +145,7 @@ fn segment_cost(
 /// Fills the cost table (fit errors summed over joints + λ of the segment's last frame) in parallel.
 fn cost_table(
     prep: &Prepared,
-    fit: &FitParams,
+    fit: &Checked<FitParams>,
     track: &Track,
     lambda: &[f64],
     window: usize,
@@ -158,7 +159,7 @@ fn cost_table(
 /// the whole segment gets the best fit to its gap-filled trajectory.
 fn fit_segment(
     prep: &Prepared,
-    fit: &FitParams,
+    fit: &Checked<FitParams>,
     track: &Track,
     k: usize,
     n: usize,
@@ -169,7 +170,7 @@ fn fit_segment(
         .map(|(ji, pts)| {
             let observed = prep.prefix_valid[ji][n] > prep.prefix_valid[ji][k];
             let w = observed.then(|| &prep.weights[ji][k..n]);
-            fit_best_unchecked(pts.slice(s![k..n, ..]), w, fit)
+            fit_best_checked(pts.slice(s![k..n, ..]), w, fit)
                 .map(|f| f.primitive)
                 .map_err(|e| {
                     ConcreteError::Track(format!(
@@ -181,13 +182,12 @@ fn fit_segment(
         .collect()
 }
 
-/// The fit parameters at the track's `unit_scale`, validated once here: the
-/// DP then fits every candidate segment with [`fit_best_unchecked`].
-fn scaled_fit(params: &SynthParams, unit_scale: f64) -> Result<FitParams> {
+/// The fit parameters at the track's `unit_scale`, checked once here: the
+/// DP then fits every candidate segment with [`fit_best_checked`].
+fn scaled_fit(params: &SynthParams, unit_scale: f64) -> Result<Checked<FitParams>> {
     let mut fit = params.fit.clone();
     fit.unit_scale = unit_scale;
-    fit.validate()?;
-    Ok(fit)
+    Ok(fit.check()?)
 }
 
 /// The DP's cost table for a track: `cost(k, n)` = Σ over joints of the best
@@ -212,7 +212,7 @@ struct Setup {
     /// The joints' points and weights.
     prep: Prepared,
     /// The fit parameters at the track's scale.
-    fit: FitParams,
+    fit: Checked<FitParams>,
     unit_scale: f64,
     /// λ per frame (track units).
     lambda: Vec<f64>,

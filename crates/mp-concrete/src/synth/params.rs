@@ -56,6 +56,7 @@ pub const REFERENCE_EXTENT_PX: f64 = 256.0;
 /// How the segment penalty λ is chosen (values at the 512-px reference scale).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum Lambda {
     /// The same λ for every segment.
     Fixed {
@@ -192,6 +193,7 @@ impl Default for Lambda {
 /// How `unit_scale` (track units per reference pixel) is found.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(tag = "type", rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum Scale {
     /// `track.scale() / REFERENCE_EXTENT_PX` (1 when the track has no extent).
     #[default]
@@ -241,6 +243,7 @@ fn default_continuity() -> Continuity {
 /// Policy for joints that are observed in no frame of the track.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[non_exhaustive]
 pub enum UnobservedJoints {
     /// Refuse the track, naming the joint ([`ConcreteError::Track`]).
     #[default]

@@ -65,6 +65,7 @@ pub use circle::{
     bullock_circle, bullock_from_sums, bullock_terms, unwrap_degrees, unwrapped_angles,
 };
 
+use crate::checked::{Checked, Validate};
 use crate::error::{GeomError, Result};
 use crate::primitive::{Primitive, PrimitiveKind};
 
@@ -123,6 +124,14 @@ impl Default for FitParams {
             quadratic_angle: false,
             max_angle_acc_deg: 0.4,
         }
+    }
+}
+
+impl Validate for FitParams {
+    type Error = GeomError;
+
+    fn validate(&self) -> Result<()> {
+        FitParams::validate(self)
     }
 }
 
@@ -532,13 +541,22 @@ pub fn fit_best(
     params: &FitParams,
 ) -> Result<Fit> {
     params.validate()?;
-    fit_best_unchecked(points, weights, params)
+    best_fit(points, weights, params)
 }
 
-/// [`fit_best`] without [`FitParams::validate`]: for callers that fit many
-/// segments with the same parameters and validated them once beforehand.
-/// Parameters that `validate` rejects give unspecified (but memory-safe) results.
-pub fn fit_best_unchecked(
+/// [`fit_best`] with parameters checked once beforehand
+/// ([`crate::checked::Validate::check`]): for callers that fit many
+/// segments with the same parameters.
+pub fn fit_best_checked(
+    points: ArrayView2<'_, f64>,
+    weights: Option<&[f64]>,
+    params: &Checked<FitParams>,
+) -> Result<Fit> {
+    best_fit(points, weights, params)
+}
+
+/// The best fit; `params` passed [`FitParams::validate`].
+fn best_fit(
     points: ArrayView2<'_, f64>,
     weights: Option<&[f64]>,
     params: &FitParams,

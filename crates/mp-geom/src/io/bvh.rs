@@ -22,6 +22,7 @@ use crate::track::{Track, Units};
 
 /// One BVH channel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Channel {
     /// Translation along x.
     Xposition,

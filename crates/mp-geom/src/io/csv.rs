@@ -49,6 +49,7 @@ pub const MAX_SPARSE_CELLS: usize = 10_000_000;
 
 /// Which CSV layout to write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum CsvLayout {
     /// `frame,joint,x,y[,z],confidence`, one row per frame and joint (joint by name).
     Long,

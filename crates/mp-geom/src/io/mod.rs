@@ -88,6 +88,7 @@ pub const DEFAULT_FPS: f64 = 30.0;
 
 /// Where the frame rate of a track read from a file came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum RateSource {
     /// The file states it.
     File,

@@ -25,6 +25,7 @@ use crate::error::{GeomError, Result};
 
 /// Element type of an `.npy` array.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum DType {
     /// Boolean (`|b1`).
     Bool,

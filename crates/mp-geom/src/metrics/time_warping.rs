@@ -17,6 +17,7 @@ use crate::error::{GeomError, Result};
 /// whole-frame vectors, i.e. with the *sum* over joints where this uses the
 /// mean (for fully visible frames, tslearn's value = `sqrt(J)·` ours).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum DtwCost {
     /// Local cost `d(i, j)`; distance = sum along the path.
     #[default]

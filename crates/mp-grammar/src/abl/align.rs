@@ -245,6 +245,7 @@ impl Aligner for EditDistanceAligner {
 
 /// Suffix-tree alignment variant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum StVariant {
     /// Hypotheses `(begin, n)`.
     St1,
@@ -389,6 +390,7 @@ impl Aligner for SuffixTreeAligner {
 
 /// Alignment method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum Alignment {
     /// Edit distance (`wm` / `wb`).
     EditDistance(EditDistanceAligner),

@@ -117,6 +117,7 @@ use select::{best_set, crosses};
 
 /// Selection method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum Selection {
     /// Memoised best-combination recursion (reference `-s b`). Default.
     #[default]
@@ -138,6 +139,7 @@ impl Selection {
 /// How hypothesis labels become nonterminals (see the module
 /// documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum Clustering {
     /// Labels sharing a span merged transitively (union-find), then
     /// nonterminals with identical rule sets merged to a fixed point.

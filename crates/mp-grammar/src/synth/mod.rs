@@ -85,6 +85,7 @@ use frames::FrameSpace;
 
 /// Axes along which segments are translated so the root does not jump.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum RootAlignment {
     /// x and z for 3-D positions and BVH (y up), x for 2-D positions,
     /// none for feature tracks. Default.
@@ -98,6 +99,7 @@ pub enum RootAlignment {
 
 /// How the first segment of a synthesis is chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[non_exhaustive]
 pub enum FirstSegment {
     /// At random among the symbol's segments (seeded). Default.
     #[default]

@@ -14,6 +14,7 @@ use super::{BatchError, Result, RESULT_FILE};
 /// What became of an item.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum ItemStatus {
     /// Run now, and complete.
     Ok,

@@ -33,6 +33,7 @@ pub const WORLD_NAME: &str = "Identity_4";
 
 /// Which landmark model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum LandmarkModelKind {
     /// `pose_landmark_lite.onnx`
     Lite,

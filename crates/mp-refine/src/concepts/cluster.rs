@@ -17,6 +17,7 @@ use crate::error::{RefineError, Result};
 
 /// Which clustering algorithm learns the anchor concepts.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum ClusterMethod {
     /// K-means with L2 distance (paper default).
     KMeans {
@@ -58,6 +59,7 @@ pub enum ClusterMethod {
 
 /// Linkage of [`ClusterMethod::Hierarchical`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum Linkage {
     /// Ward's minimum variance. Default.
     #[default]

@@ -23,6 +23,7 @@ pub const N_ACTIONS: usize = 20;
 
 /// One of the seven networks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum NetKind {
     /// Per-frame anchor logits.
     AnchorRecognition,

@@ -10,6 +10,7 @@ use crate::segment::SegmentParams;
 
 /// Which steps run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum RefineMode {
     /// Anchor recognition, scoring and anchor refinement (neighbouring
     /// transitions rebuilt by the generator) only.
@@ -23,6 +24,7 @@ pub enum RefineMode {
 /// How flagged source frames of a joint are refilled from the nearest
 /// unflagged frames before (`a`) and after (`b`) the run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum FlawRepair {
     /// Straight line from `a` to `b`.
     Linear,
@@ -40,6 +42,7 @@ pub enum FlawRepair {
 
 /// Which network regenerates transitions in the transition step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum TransitionMethod {
     /// The transition refinement network (default).
     Refinement,
@@ -49,6 +52,7 @@ pub enum TransitionMethod {
 
 /// Where the anchors come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum AnchorDetection {
     /// Peaks of the anchor recognition network (paper, default).
     Network,
@@ -60,6 +64,7 @@ pub enum AnchorDetection {
 
 /// How a flawed anchor is repaired.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum AnchorRepair {
     /// The anchor refinement network produces a new anchor pose; both
     /// neighbouring transitions are rebuilt by the transition generator

@@ -32,6 +32,7 @@ pub struct AnchorReport {
 
 /// Why a transition was regenerated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub enum TransitionReason {
     /// Next to a refined anchor.
     NextToRefinedAnchor,

@@ -51,6 +51,7 @@ pub const FACTORS: [usize; 3] = [2, 4, 8];
 
 /// How the in-between frames are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[non_exhaustive]
 pub enum InterpMethod {
     /// Warp both neighbours towards the program's pose, then blend (ours).
     #[default]
@@ -75,6 +76,7 @@ impl InterpMethod {
 /// How the person's pixels are moved from a neighbouring frame to the
 /// target pose.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[non_exhaustive]
 pub enum Warp {
     /// A smooth displacement field: the Gaussian-weighted average of the
     /// displacements of the keypoints and of points along the bones.
