@@ -70,7 +70,7 @@ impl ExecParams {
 }
 
 /// Concrete primitive for one joint of a deterministic abstract primitive.
-pub fn concretize(
+pub(crate) fn concretize(
     points: &[f64],
     duration: usize,
     dims: usize,
@@ -118,7 +118,7 @@ pub fn concretize(
 
 /// Draws one sample of a Gaussian (Cholesky with jitter; falls back to the
 /// diagonal when the covariance is not positive definite).
-pub fn sample_gaussian(g: &Gaussian, rng: &mut ChaCha8Rng, jitter: f64) -> Result<Vec<f64>> {
+pub(crate) fn sample_gaussian(g: &Gaussian, rng: &mut ChaCha8Rng, jitter: f64) -> Result<Vec<f64>> {
     g.validate("Gaussian")?;
     let n = g.dim();
     let mut cov = DMatrix::from_row_slice(n, n, &g.cov);
@@ -163,7 +163,7 @@ fn sample_prim(p: &ProbPrim, rng: &mut ChaCha8Rng, jitter: f64) -> Result<DetPri
 }
 
 /// Unrolls a loop into deterministic primitives.
-pub fn unroll_loop(l: &Loop, replay: LoopReplay) -> Result<Vec<DetPrim>> {
+pub(crate) fn unroll_loop(l: &Loop, replay: LoopReplay) -> Result<Vec<DetPrim>> {
     let mut out = Vec::new();
     for it in 0..l.iterations {
         match (replay, l.observed.get(it)) {
@@ -260,7 +260,7 @@ pub fn render(prims: &[DetPrim], prog: &AbstractProgram, fit: &FitParams) -> Res
 }
 
 /// The fit parameters of `params` at the program's scale.
-pub fn fit_for(prog: &AbstractProgram, params: &ExecParams) -> FitParams {
+pub(crate) fn fit_for(prog: &AbstractProgram, params: &ExecParams) -> FitParams {
     FitParams {
         unit_scale: prog.unit_scale,
         ..params.fit.clone()

@@ -10,7 +10,7 @@ use crate::model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim,
 /// Translates one segment (duration in frames, one concrete primitive per joint)
 /// into a deterministic abstract primitive: per joint the positions at the
 /// segment's first frame (`t = 0`), middle (`t = (d − 1)/2`) and last frame (`t = d − 1`).
-pub fn translate_segment(duration: usize, prims: &[Primitive]) -> Result<DetPrim> {
+pub(crate) fn translate_segment(duration: usize, prims: &[Primitive]) -> Result<DetPrim> {
     if duration == 0 {
         return Err(AbstractError::param(
             "duration",

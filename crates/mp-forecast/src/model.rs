@@ -157,15 +157,6 @@ pub fn find_model_dir(dataset: &str) -> Result<PathBuf> {
         })
 }
 
-/// The data set whose models suit a skeleton (`penn13` → `penn_action`, `msr20` → `msr_action3d`).
-pub fn dataset_for_skeleton(skeleton_name: &str) -> Option<&'static str> {
-    match skeleton_name {
-        "penn13" => Some("penn_action"),
-        "msr20" => Some("msr_action3d"),
-        _ => None,
-    }
-}
-
 /// One network of a model folder.
 struct Net {
     net: Network,

@@ -192,7 +192,7 @@ impl Normalizer {
 /// Model features of frames `start..end` of a track: per frame the normalised
 /// coordinates (`J·D`, joint-major, 0 for missing joints) followed by the masks
 /// (`J`, 1 valid / 0 missing), appended to `out` as `f32`.
-pub fn push_features(
+pub(crate) fn push_features(
     track: &Track,
     start: usize,
     end: usize,

@@ -298,7 +298,7 @@ fn check_observe(track: &Track, observe: usize, min: usize, method: ForecastMeth
 }
 
 /// Checks a horizon: at least 1 frame, at most [`max_horizon_frames`] at the track's frame rate.
-pub fn check_horizon_for(track: &Track, horizon: usize) -> Result<()> {
+pub(crate) fn check_horizon_for(track: &Track, horizon: usize) -> Result<()> {
     if horizon == 0 {
         return Err(ForecastError::param("horizon", "must be ≥ 1 frame"));
     }
@@ -385,7 +385,7 @@ pub fn predict(
 
 /// The nearest-neighbour forecaster over the training split of `train`
 /// (default: the shared Penn Action train split), with the file it read.
-pub fn nearest_neighbour(
+pub(crate) fn nearest_neighbour(
     train: Option<&Path>,
     params: &NnParams,
 ) -> Result<(NearestNeighbour, PathBuf)> {
@@ -420,7 +420,7 @@ pub fn nearest_neighbour(
 
 /// The model folder for a track: `models` when given, else the folder of the
 /// data set that [`model_dataset`] names for the track's skeleton.
-pub fn model_dir_for(track: &Track, models: Option<&Path>) -> Result<PathBuf> {
+pub(crate) fn model_dir_for(track: &Track, models: Option<&Path>) -> Result<PathBuf> {
     match models {
         Some(d) => Ok(d.to_path_buf()),
         None => {
@@ -438,7 +438,7 @@ pub fn model_dir_for(track: &Track, models: Option<&Path>) -> Result<PathBuf> {
 /// The learned forecaster (AR on Φ for [`ArSpace::Latent`], on Θ for
 /// [`ArSpace::Pose`]) for a track, through the map onto the model's joints
 /// when the track has another skeleton ([`crate::mapped`]), with the model it runs.
-pub fn learned_forecaster(
+pub(crate) fn learned_forecaster(
     track: &Track,
     models: Option<&Path>,
     space: ArSpace,

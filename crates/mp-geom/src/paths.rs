@@ -65,7 +65,7 @@ pub fn data_file(rel: impl AsRef<Path>) -> Option<PathBuf> {
 /// True when `MP_NO_SHARED_DATA` is set to a non-empty value other than `0`:
 /// [`data_dir`] (and so [`data_file`]) then reports no data sets, so a test
 /// run can behave as on a clone without `../shared/data`.
-pub fn shared_data_disabled() -> bool {
+pub(crate) fn shared_data_disabled() -> bool {
     std::env::var("MP_NO_SHARED_DATA").is_ok_and(|v| !v.is_empty() && v != "0")
 }
 
@@ -158,7 +158,7 @@ pub fn workspace_root() -> Option<PathBuf> {
 
 /// Where `scripts/setup.sh` puts public test footage that packages ship
 /// (under the workspace root): `MP_FOOTAGE_DIR` when set.
-pub const FOOTAGE_DIR_IN_WORKSPACE: &str = ".cache/footage";
+pub(crate) const FOOTAGE_DIR_IN_WORKSPACE: &str = ".cache/footage";
 
 /// A public test video fetched by the set-up (`.cache/footage/{name}` or
 /// `MP_FOOTAGE_DIR/{name}`), if present.

@@ -22,7 +22,7 @@ pub struct Skeleton {
 }
 
 /// COCO-17 joint names in order.
-pub const COCO17_JOINTS: [&str; 17] = [
+pub(crate) const COCO17_JOINTS: [&str; 17] = [
     "nose",
     "left_eye",
     "right_eye",
@@ -62,7 +62,7 @@ const COCO17_BONES: [(usize, usize); 16] = [
 ];
 
 /// BlazePose-33 landmark names in order.
-pub const BLAZEPOSE33_JOINTS: [&str; 33] = [
+pub(crate) const BLAZEPOSE33_JOINTS: [&str; 33] = [
     "nose",
     "left_eye_inner",
     "left_eye",
@@ -142,7 +142,7 @@ const BLAZEPOSE33_BONES: [(usize, usize); 35] = [
 ];
 
 /// Penn Action-13 joint names in order.
-pub const PENN13_JOINTS: [&str; 13] = [
+pub(crate) const PENN13_JOINTS: [&str; 13] = [
     "head",
     "left_shoulder",
     "right_shoulder",
@@ -174,7 +174,7 @@ const PENN13_BONES: [(usize, usize); 12] = [
 ];
 
 /// MSR Action3D-20 joint names in order (as stored in the shared npz).
-pub const MSR20_JOINTS: [&str; 20] = [
+pub(crate) const MSR20_JOINTS: [&str; 20] = [
     "right_shoulder",
     "left_shoulder",
     "neck",

@@ -32,7 +32,7 @@ use crate::symbols::{SearchStats, SymbolParams, SymbolSegment, SymbolString};
 
 /// Largest number of grid segments (positions × widths) the segmentation
 /// considers.
-pub const MAX_ASSIGN_CANDIDATES: usize = 50_000_000;
+pub(crate) const MAX_ASSIGN_CANDIDATES: usize = 50_000_000;
 
 /// Labels `new` with the symbols of `learned` (found on `train`): see the
 /// module documentation. `params` are the parameters the symbols were

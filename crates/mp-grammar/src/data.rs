@@ -46,12 +46,6 @@ pub fn subsample_bvh(bvh: &Bvh, step: usize) -> Result<Bvh> {
     )?)
 }
 
-/// Reads a motion: BVH files keep their [`Bvh`]; everything else goes
-/// through [`mp_geom::io::read_track`].
-pub fn read_motion(path: impl AsRef<Path>) -> Result<Motion> {
-    read_motions(&[path.as_ref().to_path_buf()], 1)
-}
-
 /// Frame step of [`read_motions`] when none is chosen: 1, every frame is kept.
 pub const DEFAULT_FRAME_STEP: usize = 1;
 
@@ -119,7 +113,7 @@ pub fn concat_tracks(tracks: &[Track]) -> Result<Track> {
 }
 
 /// Frame range of each take in a joined track.
-pub type TakeRanges = Vec<(PathBuf, Range<usize>)>;
+pub(crate) type TakeRanges = Vec<(PathBuf, Range<usize>)>;
 
 /// The `.bvh` files of a folder, sorted by name.
 pub fn bvh_files(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>> {

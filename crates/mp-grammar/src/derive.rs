@@ -261,7 +261,7 @@ fn heights(g: &Grammar) -> (Vec<usize>, Vec<usize>) {
 
 /// A grammar prepared for random derivation.
 #[derive(Debug, Clone)]
-pub struct Deriver<'g> {
+pub(crate) struct Deriver<'g> {
     grammar: &'g Grammar,
     params: DeriveParams,
     rules_of: Vec<Vec<usize>>,

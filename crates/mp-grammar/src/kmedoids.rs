@@ -63,7 +63,7 @@ impl<S: ndarray::Data<Elem = f64>> Dissimilarity for ndarray::ArrayBase<S, ndarr
 
 /// A dense row-major `n × n` matrix.
 #[derive(Debug, Clone, PartialEq)]
-pub struct DenseMatrix {
+pub(crate) struct DenseMatrix {
     n: usize,
     data: Vec<f64>,
 }

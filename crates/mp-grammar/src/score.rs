@@ -39,7 +39,7 @@ use crate::model::{GrammarModel, SymbolsFile, SYMBOLS_FORMAT};
 /// Longest sentence a parse may cover ([`ScoreParams::max_sentence_len`]).
 pub const MAX_SCORE_SENTENCE_LEN: usize = 1_000;
 /// Longest string that can be scored, symbols.
-pub const MAX_SCORED_SYMBOLS: usize = 1_000_000;
+pub(crate) const MAX_SCORED_SYMBOLS: usize = 1_000_000;
 /// Largest parse chart (nonterminals × positions × span lengths).
 pub const MAX_CHART_CELLS: usize = 1 << 27;
 

@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 use crate::{LiveError, Result};
 
 /// The spool's name in the output folder (removed once the folder is written).
-pub const SPOOL_NAME: &str = ".mp-live-poses.spool";
+pub(crate) const SPOOL_NAME: &str = ".mp-live-poses.spool";
 
 /// One entry of the spool.
 #[derive(Serialize, Deserialize)]

@@ -168,7 +168,7 @@ impl Input {
 }
 
 /// "keypoint track NAME · T frames × J joints (skeleton, 2D, px) at F fps".
-pub fn describe_track(track: &Track, name: &str) -> String {
+pub(crate) fn describe_track(track: &Track, name: &str) -> String {
     format!(
         "keypoint track {} · {} frames × {} joints ({}, {}D, {}) at {} fps",
         name,

@@ -37,12 +37,12 @@ use crate::progress::{check, Observer, Stage, StageTime, Timings};
 
 /// Full-size frames kept in memory during the pose pass for the overlay
 /// video, up to this many bytes; longer videos are decoded a second time.
-pub const KEEP_FRAMES_BUDGET_BYTES: usize = 512 << 20;
+pub(crate) const KEEP_FRAMES_BUDGET_BYTES: usize = 512 << 20;
 
 /// Quality of the report's frame copies on FFmpeg's `-q:v` scale (2 best,
 /// 31 worst). 4 gives about the PSNR of libjpeg quality 72 at full chroma
 /// resolution (≈ 40 dB on the golf swing) in files about 25 % smaller.
-pub const REPORT_JPEG_QSCALE: u32 = 4;
+pub(crate) const REPORT_JPEG_QSCALE: u32 = 4;
 
 /// The frames of the overlay video.
 pub struct OverlayFrames {
@@ -565,7 +565,7 @@ fn pose_people(
 
 /// The person whose results are the top-level ones, and the others to analyse
 /// ([`crate::PersonParams`]).
-pub fn chosen_people(
+pub(crate) fn chosen_people(
     people: &People,
     params: &Params,
 ) -> Result<(Option<PersonId>, Vec<PersonId>)> {

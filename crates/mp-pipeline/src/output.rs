@@ -18,7 +18,7 @@ use crate::Outcome;
 
 /// x264 preset of the overlay video (about twice as fast as the default
 /// preset, and smaller files on this kind of footage).
-pub const OVERLAY_PRESET: &str = "veryfast";
+pub(crate) const OVERLAY_PRESET: &str = "veryfast";
 
 /// The content of `loops.json` (layout [`mp_abstract::LOOPS_VERSION`],
 /// documented in `docs/LOOPS_JSON.md`). Every frame range is inclusive
@@ -110,7 +110,7 @@ pub fn loops_json(outcome: &Outcome) -> serde_json::Value {
 /// `abstract.json`; for every other analysed person the programs go to
 /// `people/<id>/` (over the person's own frames, from `first_frame`).
 /// Returns the files written.
-pub fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<String>> {
+pub(crate) fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<String>> {
     let track = &outcome.keypoints.track;
     let mut files = Vec::new();
     let mut put = |rel: &str, bytes: &[u8]| -> Result<()> {
@@ -168,7 +168,7 @@ pub fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<String>>
 /// Colours of the people besides the top-level one in the overlay (by id,
 /// in turn): Okabe and Ito's colour-blind-safe palette, the colours least
 /// like the top-level skeleton's left/right orange and blue first.
-pub const PERSON_COLOURS: [[u8; 3]; 7] = [
+pub(crate) const PERSON_COLOURS: [[u8; 3]; 7] = [
     [0, 158, 115],
     [204, 121, 167],
     [240, 228, 66],
@@ -179,13 +179,13 @@ pub const PERSON_COLOURS: [[u8; 3]; 7] = [
 ];
 
 /// The colour of a person's skeleton in the overlay.
-pub fn person_colour(id: mp_geom::PersonId) -> [u8; 3] {
+pub(crate) fn person_colour(id: mp_geom::PersonId) -> [u8; 3] {
     PERSON_COLOURS[(id as usize).saturating_sub(1) % PERSON_COLOURS.len()]
 }
 
 /// Every tracked person but the top-level one, over the whole video, with
 /// their colour.
-pub fn other_people(kp: &crate::Keypoints) -> Vec<([u8; 3], Track)> {
+pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<([u8; 3], Track)> {
     let Some(people) = &kp.people else {
         return Vec::new();
     };
@@ -202,7 +202,7 @@ pub fn other_people(kp: &crate::Keypoints) -> Vec<([u8; 3], Track)> {
 /// first and last frames: before and after, it holds their first and last
 /// pose where nobody is), and the other people (`others`) each in their own
 /// colour; `progress` is called after each frame.
-pub fn write_overlay(
+pub(crate) fn write_overlay(
     out: &OutputDir,
     src: OverlayFrames,
     track: &Track,

@@ -305,7 +305,7 @@ pub(crate) fn posed_fraction(found: &[bool], posed: &[bool]) -> f64 {
 
 /// Frames per second from per-frame milliseconds: 1000 over the median (0
 /// without frames or time).
-pub fn median_fps(ms: &[f64]) -> f64 {
+pub(crate) fn median_fps(ms: &[f64]) -> f64 {
     let mut v = ms.to_vec();
     if v.is_empty() {
         return 0.0;

@@ -75,7 +75,7 @@ impl OneEuroParams {
 
 /// First-order low-pass `y = α·x + (1 − α)·y_prev`; the first value passes through.
 #[derive(Debug, Clone, Default)]
-pub struct LowPass {
+pub(crate) struct LowPass {
     state: Option<(f64, f64)>, // (last raw, last filtered)
 }
 
@@ -93,15 +93,11 @@ impl LowPass {
     pub fn last_raw(&self) -> Option<f64> {
         self.state.map(|s| s.0)
     }
-    /// Forgets the state.
-    pub fn reset(&mut self) {
-        self.state = None;
-    }
 }
 
 /// A One-Euro filter of one scalar.
 #[derive(Debug, Clone)]
-pub struct OneEuro {
+pub(crate) struct OneEuro {
     params: OneEuroParams,
     x: LowPass,
     dx: LowPass,
@@ -159,7 +155,7 @@ pub struct PointsFilter {
 }
 
 /// Below this object scale (pixels) MediaPipe returns landmarks unfiltered.
-pub const MIN_OBJECT_SCALE: f64 = 1e-6;
+pub(crate) const MIN_OBJECT_SCALE: f64 = 1e-6;
 
 impl PointsFilter {
     /// Filters for points with these parameters.

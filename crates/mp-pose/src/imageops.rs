@@ -79,7 +79,7 @@ impl Roi {
 /// What a crop reads outside the image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
-pub enum Border {
+pub(crate) enum Border {
     /// The nearest edge pixel.
     Replicate,
     /// Black.
@@ -107,7 +107,7 @@ fn round_fixed(v: f64) -> i64 {
 
 /// Crops the rotated rectangle `roi` of `src` into an `out_w × out_h` RGB
 /// image (written to `out`, resized as needed).
-pub fn crop_u8(
+pub(crate) fn crop_u8(
     src: RgbView<'_>,
     roi: &Roi,
     out_w: usize,
@@ -202,7 +202,7 @@ pub fn to_f32(src: &[u8], scale: f32, offset: f32, out: &mut Vec<f32>) {
 }
 
 /// [`to_f32`] appending to `out` (several images laid end to end).
-pub fn extend_f32(src: &[u8], scale: f32, offset: f32, out: &mut Vec<f32>) {
+pub(crate) fn extend_f32(src: &[u8], scale: f32, offset: f32, out: &mut Vec<f32>) {
     out.extend(src.iter().map(|&v| v as f32 * scale + offset));
 }
 

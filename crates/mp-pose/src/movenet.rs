@@ -14,11 +14,11 @@ use crate::runtime::{self, ModelFile, SessionParams};
 use crate::video::Frame;
 
 /// Input side (pixels).
-pub const MOVENET_INPUT: usize = 192;
+pub(crate) const MOVENET_INPUT: usize = 192;
 /// Input tensor name.
-pub const INPUT_NAME: &str = "serving_default_input:0";
+pub(crate) const INPUT_NAME: &str = "serving_default_input:0";
 /// Output tensor name (`[1, 1, 17, 3]`).
-pub const OUTPUT_NAME: &str = "StatefulPartitionedCall:0";
+pub(crate) const OUTPUT_NAME: &str = "StatefulPartitionedCall:0";
 
 /// Parameters of the MoveNet estimator.
 #[derive(Debug, Clone, PartialEq)]

@@ -122,7 +122,7 @@ pub fn run_model_path(model: ModelFile) -> Result<PathBuf> {
 }
 
 /// Path of a model file by name (see [`model_path`]).
-pub fn find_model_file(file: &str) -> Result<PathBuf> {
+pub(crate) fn find_model_file(file: &str) -> Result<PathBuf> {
     let dirs = model_search();
     dirs.find_file(file).ok_or_else(|| PoseError::ModelMissing {
         file: file.to_string(),

@@ -146,7 +146,7 @@ fn json_num(v: &serde_json::Value) -> Option<f64> {
 }
 
 /// Parses `ffprobe -print_format json -show_streams -show_format` output.
-pub fn parse_probe_json(path: &Path, json: &str) -> Result<VideoInfo> {
+pub(crate) fn parse_probe_json(path: &Path, json: &str) -> Result<VideoInfo> {
     let bad = |reason: String| PoseError::Video {
         path: path.to_path_buf(),
         reason,
@@ -532,7 +532,7 @@ pub fn read_image(path: impl AsRef<Path>) -> Result<Frame> {
 }
 
 /// Whether a path names a still image (by extension: png, jpg, jpeg).
-pub fn is_image_path(path: &Path) -> bool {
+pub(crate) fn is_image_path(path: &Path) -> bool {
     matches!(
         path.extension()
             .and_then(|e| e.to_str())

@@ -138,12 +138,6 @@ pub fn held_frames(pos: ndarray::ArrayView3<'_, f64>, tol: f64) -> Vec<usize> {
         .collect()
 }
 
-/// Per-frame flags from frozen runs and acceleration outliers (before dilation).
-pub fn detect_motion_flaws(track: &Track, params: &RefineParams) -> Result<Vec<bool>> {
-    let (a, b) = detect_parts(track, params)?;
-    Ok(a.iter().zip(&b).map(|(x, y)| *x || *y).collect())
-}
-
 /// (frozen frames, acceleration outliers), undilated.
 fn detect_parts(track: &Track, params: &RefineParams) -> Result<(Vec<bool>, Vec<bool>)> {
     params.validate()?;

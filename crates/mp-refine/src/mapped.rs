@@ -31,7 +31,7 @@ use crate::pipeline::{NetRefinement, NetRefiner};
 /// How a track reaches the refinement networks: `None` for a 20-joint MSR
 /// track in 3D, the map for BlazePose-33 world landmarks. Errors say what
 /// is needed for 2D tracks and other skeletons.
-pub fn msr20_map(track: &Track) -> Result<Option<SkeletonMap>> {
+pub(crate) fn msr20_map(track: &Track) -> Result<Option<SkeletonMap>> {
     let name = track.skeleton().name.as_str();
     if track.dims() != 3 {
         return Err(RefineError::Dims {

@@ -32,9 +32,9 @@ pub const MSR_JOINTS: usize = 20;
 /// Features per frame (`MSR_JOINTS × 3`).
 pub const FRAME_FEATURES: usize = MSR_JOINTS * 3;
 /// Index of the right hip in the MSR order.
-pub const R_HIP: usize = 4;
+pub(crate) const R_HIP: usize = 4;
 /// Index of the left hip in the MSR order.
-pub const L_HIP: usize = 5;
+pub(crate) const L_HIP: usize = 5;
 /// Index of the hip centre (root) in the MSR order.
 pub const HIP_CENTRE: usize = 6;
 
@@ -237,7 +237,7 @@ pub fn from_features(x: ndarray::ArrayView2<'_, f32>) -> Result<Array3<f64>> {
 
 /// BVH joint (CMU naming) that stands for each MSR joint, in MSR order.
 /// `*_end` is the end site of the named joint.
-pub const CMU_BVH_TO_MSR20: [&str; MSR_JOINTS] = [
+pub(crate) const CMU_BVH_TO_MSR20: [&str; MSR_JOINTS] = [
     "rShldr",    // R shoulder
     "lShldr",    // L shoulder
     "neck",      // neck

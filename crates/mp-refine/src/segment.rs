@@ -333,7 +333,7 @@ pub(crate) fn check_track(track: &Track, n_joints: Option<usize>, what: &str) ->
 /// The DP cost table over frame intervals: entry `(k, n)` is the fit error of
 /// frames `k..=n` plus λ (`+∞` outside the allowed transition lengths).
 /// Filled in parallel.
-pub fn transition_costs(track: &Track, params: &SegmentParams) -> Result<CostTable> {
+pub(crate) fn transition_costs(track: &Track, params: &SegmentParams) -> Result<CostTable> {
     params.validate()?;
     check_track(track, params.n_joints, "spline segmentation")?;
     let data = JointData::new(track, params.min_confidence);

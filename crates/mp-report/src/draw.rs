@@ -270,7 +270,7 @@ pub fn draw_skeleton(
 }
 
 /// A blank dark canvas with a faint grid, for tracks without video.
-pub fn blank_canvas(width: u32, height: u32) -> Result<Pixmap> {
+pub(crate) fn blank_canvas(width: u32, height: u32) -> Result<Pixmap> {
     let mut p = Pixmap::new(width.max(1), height.max(1)).ok_or_else(|| {
         ReportError::Mismatch(format!("cannot allocate a {width}×{height} picture"))
     })?;
@@ -306,7 +306,7 @@ pub fn blank_canvas(width: u32, height: u32) -> Result<Pixmap> {
 }
 
 /// Draws `src` scaled to fill `dst` (bilinear).
-pub fn blit_scaled(dst: &mut Pixmap, src: &Pixmap) {
+pub(crate) fn blit_scaled(dst: &mut Pixmap, src: &Pixmap) {
     let sx = dst.width() as f32 / src.width().max(1) as f32;
     let sy = dst.height() as f32 / src.height().max(1) as f32;
     let pp = PixmapPaint {

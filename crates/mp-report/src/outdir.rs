@@ -46,7 +46,7 @@ pub fn emergency_cleanup() -> MutexGuard<'static, Vec<PathBuf>> {
 pub const RUN_FILES: &str = "mp-run-files.txt";
 
 /// Name of the staging folder of this process inside an output folder.
-pub fn staging_name() -> String {
+pub(crate) fn staging_name() -> String {
     format!(".mp-partial-{}", std::process::id())
 }
 

@@ -66,7 +66,7 @@ fn spans(ranges: impl IntoIterator<Item = (f64, f64)>, keep_px: f64) -> Vec<(f64
 /// block; spans less than a pixel apart drawn as one), over `n_frames`
 /// frames at `fps`. Rows with an analysis carry `data-person` (the picker's
 /// index) for the page's script.
-pub fn people_strip_svg(rows: &[PersonRow], n_frames: usize, fps: f64) -> String {
+pub(crate) fn people_strip_svg(rows: &[PersonRow], n_frames: usize, fps: f64) -> String {
     let (left, right, row_h, top) = (215.0, 16.0, 22.0, 8.0);
     let width = 1100.0;
     let axis_h = 24.0;

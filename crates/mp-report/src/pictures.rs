@@ -18,7 +18,7 @@ use crate::raster::{pixmap_to_png, rgb_to_pixmap, svg_to_png};
 use crate::timeline::{timeline_svg, TimelineParams};
 
 /// Tiles of the contact sheet.
-pub const CONTACT_SHEET_TILES: usize = 12;
+pub(crate) const CONTACT_SHEET_TILES: usize = 12;
 
 /// What the pictures and the report show.
 pub struct Analysed<'a> {
@@ -43,7 +43,7 @@ pub struct Analysed<'a> {
 }
 
 /// A file-system-safe stem (letters, digits, `_`, `-`; anything else `_`).
-pub fn file_stem_safe(name: &str) -> String {
+pub(crate) fn file_stem_safe(name: &str) -> String {
     name.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
@@ -56,7 +56,7 @@ pub fn file_stem_safe(name: &str) -> String {
 }
 
 /// "rep i/n" for a frame inside a counted interval.
-pub fn repetition_caption(intervals: &[RepetitiveInterval], f: usize) -> Option<String> {
+pub(crate) fn repetition_caption(intervals: &[RepetitiveInterval], f: usize) -> Option<String> {
     intervals
         .iter()
         .find(|iv| f >= iv.start_frame && f < iv.end_frame)

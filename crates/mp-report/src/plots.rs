@@ -60,7 +60,7 @@ impl PlotParams {
 }
 
 /// Checks that a program describes a track: same joints count, dimensions and frame count.
-pub fn check_agree(track: &Track, program: &Program) -> Result<()> {
+pub(crate) fn check_agree(track: &Track, program: &Program) -> Result<()> {
     if track.n_joints() != program.n_joints() || track.dims() != program.dims {
         return Err(ReportError::Mismatch(format!(
             "the track has {} joints × {} dimensions, the program {} × {}",

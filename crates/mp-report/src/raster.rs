@@ -16,7 +16,7 @@ const SANS_FAMILY: &str = "DejaVu Sans";
 
 /// At most this many bytes of font files are held in memory (the text
 /// family's files always are).
-pub const FONT_MEMORY_BUDGET_BYTES: u64 = 32 << 20;
+pub(crate) const FONT_MEMORY_BUDGET_BYTES: u64 = 32 << 20;
 
 fn fonts() -> Arc<usvg::fontdb::Database> {
     static FONTS: OnceLock<Arc<usvg::fontdb::Database>> = OnceLock::new();
@@ -120,21 +120,21 @@ pub fn svg_to_pixmap(name: &str, svg: &str, scale: f32) -> Result<Pixmap> {
 }
 
 /// Draws an SVG document over an existing pixmap (same coordinate system).
-pub fn render_svg_onto(name: &str, svg: &str, pixmap: &mut Pixmap) -> Result<()> {
+pub(crate) fn render_svg_onto(name: &str, svg: &str, pixmap: &mut Pixmap) -> Result<()> {
     let tree = parse(name, svg)?;
     resvg::render(&tree, Transform::identity(), &mut pixmap.as_mut());
     Ok(())
 }
 
 /// Rasterises an SVG document to PNG bytes at `scale` × its size.
-pub fn svg_to_png(name: &str, svg: &str, scale: f32) -> Result<Vec<u8>> {
+pub(crate) fn svg_to_png(name: &str, svg: &str, scale: f32) -> Result<Vec<u8>> {
     let pixmap = svg_to_pixmap(name, svg, scale)?;
     pixmap_to_png(name, &pixmap)
 }
 
 /// Encodes a pixmap as PNG with fast compression: 8-bit RGB when every
 /// pixel is opaque, 8-bit RGBA (colours un-premultiplied) otherwise.
-pub fn pixmap_to_png(name: &str, p: &Pixmap) -> Result<Vec<u8>> {
+pub(crate) fn pixmap_to_png(name: &str, p: &Pixmap) -> Result<Vec<u8>> {
     let opaque = p.pixels().iter().all(|px| px.alpha() == 255);
     let (w, h) = (p.width(), p.height());
     let (bytes, colour) = if opaque {
@@ -194,7 +194,8 @@ pub fn rgb_to_pixmap(rgb: &[u8], width: usize, height: usize) -> Result<Pixmap> 
 }
 
 /// Encodes RGB bytes as PNG.
-pub fn encode_png(rgb: &[u8], width: usize, height: usize) -> Result<Vec<u8>> {
+#[cfg(test)]
+fn encode_png(rgb: &[u8], width: usize, height: usize) -> Result<Vec<u8>> {
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out)
         .write_image_checked(rgb, width, height)
@@ -218,7 +219,7 @@ pub fn encode_jpeg(rgb: &[u8], width: usize, height: usize, quality: u8) -> Resu
 }
 
 /// Decodes a JPEG or PNG into RGB bytes, width and height.
-pub fn decode_rgb(bytes: &[u8], what: &str) -> Result<(Vec<u8>, usize, usize)> {
+pub(crate) fn decode_rgb(bytes: &[u8], what: &str) -> Result<(Vec<u8>, usize, usize)> {
     let img = image::load_from_memory(bytes).map_err(|e| ReportError::Image {
         what: what.to_string(),
         reason: e.to_string(),

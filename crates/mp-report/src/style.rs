@@ -3,7 +3,7 @@
 use mp_geom::PrimitiveKind;
 
 /// Fill/stroke colour of a primitive kind.
-pub fn kind_color(kind: PrimitiveKind) -> &'static str {
+pub(crate) fn kind_color(kind: PrimitiveKind) -> &'static str {
     match kind {
         PrimitiveKind::Stationary => "#94a3b8",
         PrimitiveKind::Line => "#2563eb",
@@ -13,33 +13,33 @@ pub fn kind_color(kind: PrimitiveKind) -> &'static str {
 }
 
 /// Colour of the detected keypoints (dots in plots).
-pub const KEYPOINT_DOT: &str = "#475569";
+pub(crate) const KEYPOINT_DOT: &str = "#475569";
 /// Colour of counted repetitions in the timeline and the plots.
-pub const LOOP_FILL: &str = "#14b8a6";
+pub(crate) const LOOP_FILL: &str = "#14b8a6";
 /// Darker repetition colour (repetition boundaries, labels).
-pub const LOOP_DARK: &str = "#0f766e";
+pub(crate) const LOOP_DARK: &str = "#0f766e";
 /// Colour of the abstract program's loops (its `for` statements) in the timeline.
-pub const PROGRAM_LOOP: &str = "#6366f1";
+pub(crate) const PROGRAM_LOOP: &str = "#6366f1";
 /// Text colour.
-pub const INK: &str = "#0f172a";
+pub(crate) const INK: &str = "#0f172a";
 /// Secondary text colour.
-pub const MUTED: &str = "#64748b";
+pub(crate) const MUTED: &str = "#64748b";
 /// Grid lines.
-pub const GRID: &str = "#e2e8f0";
+pub(crate) const GRID: &str = "#e2e8f0";
 /// Picture background.
-pub const PAPER: &str = "#ffffff";
+pub(crate) const PAPER: &str = "#ffffff";
 
 /// Skeleton colours as RGB: left side, right side, centre, program.
-pub const SKELETON_LEFT: [u8; 3] = [255, 159, 28];
+pub(crate) const SKELETON_LEFT: [u8; 3] = [255, 159, 28];
 /// Right side of the body.
-pub const SKELETON_RIGHT: [u8; 3] = [56, 189, 248];
+pub(crate) const SKELETON_RIGHT: [u8; 3] = [56, 189, 248];
 /// Bones in the middle and joint dots.
-pub const SKELETON_CENTER: [u8; 3] = [241, 245, 249];
+pub(crate) const SKELETON_CENTER: [u8; 3] = [241, 245, 249];
 /// The skeleton of the executed program.
-pub const SKELETON_PROGRAM: [u8; 3] = [244, 63, 144];
+pub(crate) const SKELETON_PROGRAM: [u8; 3] = [244, 63, 144];
 
 /// `#rrggbb` of an RGB triple.
-pub fn hex(rgb: [u8; 3]) -> String {
+pub(crate) fn hex(rgb: [u8; 3]) -> String {
     format!("#{:02x}{:02x}{:02x}", rgb[0], rgb[1], rgb[2])
 }
 
@@ -56,7 +56,7 @@ pub fn side(name: &str) -> i32 {
 }
 
 /// Colour of a bone between joints `a` and `b` (by the sides of their names).
-pub fn bone_rgb(a: &str, b: &str) -> [u8; 3] {
+pub(crate) fn bone_rgb(a: &str, b: &str) -> [u8; 3] {
     match (side(a) + side(b)).signum() {
         -1 => SKELETON_LEFT,
         1 => SKELETON_RIGHT,

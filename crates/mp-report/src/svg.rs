@@ -4,7 +4,7 @@
 use std::fmt::Write;
 
 /// Font stack of every picture (DejaVu Sans is what `scripts/setup.sh` installs).
-pub const FONT_FAMILY: &str = "DejaVu Sans, Liberation Sans, Arial, Helvetica, sans-serif";
+pub(crate) const FONT_FAMILY: &str = "DejaVu Sans, Liberation Sans, Arial, Helvetica, sans-serif";
 
 /// Escapes text for XML content and attribute values.
 pub fn esc(s: &str) -> String {
@@ -239,7 +239,7 @@ pub fn ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
 }
 
 /// Formats a tick label without trailing zeros.
-pub fn tick_label(v: f64) -> String {
+pub(crate) fn tick_label(v: f64) -> String {
     let s = format!("{:.2}", v);
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" {

@@ -215,7 +215,7 @@ pub fn render(
 
 /// Renders `plan` from `input` into the video file `output` at `fps`
 /// (written atomically). Returns the number of frames written.
-pub fn render_to_file(
+pub(crate) fn render_to_file(
     input: &Path,
     plan: &Plan,
     output: &Path,

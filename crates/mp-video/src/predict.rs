@@ -28,7 +28,7 @@ use crate::motion::{analyse_video, VideoMotion};
 use crate::plan::{render_to_file, Plan, PlanFrame, RenderParams};
 
 /// Longest prediction, seconds.
-pub const MAX_SECONDS: f64 = 3600.0;
+pub(crate) const MAX_SECONDS: f64 = 3600.0;
 
 /// How the future frames are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
@@ -108,7 +108,7 @@ pub struct PredictReport {
 }
 
 /// Checks a prediction length and turns it into frames.
-pub fn horizon_frames(seconds: f64, fps: f64) -> Result<usize> {
+pub(crate) fn horizon_frames(seconds: f64, fps: f64) -> Result<usize> {
     if !(seconds.is_finite() && seconds > 0.0 && seconds <= MAX_SECONDS) {
         return Err(VideoError::Seconds {
             seconds,

@@ -346,7 +346,7 @@ const BVH_COCO_ALIASES: [&[&str]; 17] = [
 /// BVH aliases (CMU `lShldr`/`lForeArm`/`lHand`/`lThigh`/`lShin`/`lFoot`,
 /// `LeftArm`/`LeftForeArm`/`LeftUpLeg`/`LeftLeg`, Acclaim `lhumerus`…; the
 /// head stands in for the nose). Empty when nothing matches.
-pub fn bvh_coco17_mapping(joints: &[String]) -> Vec<Option<usize>> {
+pub(crate) fn bvh_coco17_mapping(joints: &[String]) -> Vec<Option<usize>> {
     let norm: Vec<String> = joints
         .iter()
         .map(|n| {
@@ -787,14 +787,4 @@ impl Bvh {
             self.skeleton(params.include_end_sites),
         )
     }
-}
-
-/// Reads a BVH file and returns it with its track (default parameters but `length_scale`).
-pub fn read_bvh_track(path: impl AsRef<Path>, length_scale: f64) -> Result<(Bvh, Track)> {
-    let b = Bvh::read(path)?;
-    let t = b.to_track(&BvhTrackParams {
-        length_scale,
-        ..Default::default()
-    })?;
-    Ok((b, t))
 }

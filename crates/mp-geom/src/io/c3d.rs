@@ -217,11 +217,6 @@ pub(crate) fn read_c3d_rated(path: &Path, opts: &ReadOptions) -> Result<(Track, 
     track_from_c3d_bytes_rated(&bytes, path, opts)
 }
 
-/// Parses C3D bytes as [`read_c3d`] does; `path` names the source in errors.
-pub fn track_from_c3d_bytes(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Track> {
-    track_from_c3d_bytes_rated(bytes, path, opts).map(|(t, _)| t)
-}
-
 fn track_from_c3d_bytes_rated(
     bytes: &[u8],
     path: &Path,
@@ -402,7 +397,7 @@ fn parameter_section(entries: &[Entry<'_>]) -> Vec<u8> {
 }
 
 /// The C3D bytes of a 3D track in metres (see the module docs).
-pub fn track_to_c3d_bytes(track: &Track) -> Result<Vec<u8>> {
+pub(crate) fn track_to_c3d_bytes(track: &Track) -> Result<Vec<u8>> {
     if track.dims() != 3 {
         return Err(GeomError::param(
             "track",
@@ -530,6 +525,6 @@ pub fn track_to_c3d_bytes(track: &Track) -> Result<Vec<u8>> {
 }
 
 /// Writes a 3D track as a C3D file (atomic; see the module docs).
-pub fn write_c3d(path: impl AsRef<Path>, track: &Track) -> Result<()> {
+pub(crate) fn write_c3d(path: impl AsRef<Path>, track: &Track) -> Result<()> {
     write_atomic(path, &track_to_c3d_bytes(track)?)
 }

@@ -44,9 +44,9 @@ use crate::skeleton::Skeleton;
 use crate::track::{Track, Units};
 
 /// Value of the `format` field of the JSON track format.
-pub const JSON_FORMAT: &str = "mp-track";
+pub(crate) const JSON_FORMAT: &str = "mp-track";
 /// Version written in both formats.
-pub const FORMAT_VERSION: i64 = 1;
+pub(crate) const FORMAT_VERSION: i64 = 1;
 /// Magic bytes that open the binary track format.
 pub const BINARY_MAGIC: &[u8] = b"mp-track";
 /// Version of the binary track format.
@@ -122,12 +122,6 @@ pub(crate) fn add_track_arrays(out: &mut NpzOut, track: &Track) -> Result<()> {
     out.add("root", &arr0(sk.root.map_or(-1, |r| r as i64)))?;
     out.add("mp_track_version", &arr0(FORMAT_VERSION))?;
     Ok(())
-}
-
-/// Writes a track as npz (atomic).
-pub fn write_track_npz(path: impl AsRef<Path>, track: &Track) -> Result<()> {
-    let bytes = track_to_npz_bytes(track)?;
-    write_atomic(path, &bytes)
 }
 
 fn index(v: i64, n: usize, what: &str, path: &Path) -> Result<usize> {
@@ -283,13 +277,13 @@ fn track_doc(track: &Track) -> TrackDoc {
 }
 
 /// Writes a track as JSON (atomic).
-pub fn write_track_json(path: impl AsRef<Path>, track: &Track) -> Result<()> {
+pub(crate) fn write_track_json(path: impl AsRef<Path>, track: &Track) -> Result<()> {
     let text = track_to_json_string(track)?;
     write_atomic(path, text.as_bytes())
 }
 
 /// Decodes a parsed JSON document in the project's format.
-pub fn track_from_json_value(value: serde_json::Value, path: &Path) -> Result<Track> {
+pub(crate) fn track_from_json_value(value: serde_json::Value, path: &Path) -> Result<Track> {
     let doc: TrackDoc = serde_json::from_value(value)
         .map_err(|e| GeomError::format(path, format!("not an mp track: {e}")))?;
     if doc.format != JSON_FORMAT {
@@ -422,7 +416,7 @@ pub fn track_from_bincode(bytes: &[u8]) -> Result<Track> {
 }
 
 /// [`track_from_bincode`] naming `path` in errors.
-pub fn track_from_bincode_at(bytes: &[u8], path: &Path) -> Result<Track> {
+pub(crate) fn track_from_bincode_at(bytes: &[u8], path: &Path) -> Result<Track> {
     let rec: TrackBin = binary::decode(BINARY_MAGIC, BINARY_VERSION, bytes, path)?;
     track_from_record(rec, path)
 }
@@ -462,15 +456,8 @@ pub(crate) fn track_from_record(rec: TrackBin, path: &Path) -> Result<Track> {
 }
 
 /// Writes a track in the binary form (atomic).
-pub fn write_track_bincode(path: impl AsRef<Path>, track: &Track) -> Result<()> {
+pub(crate) fn write_track_bincode(path: impl AsRef<Path>, track: &Track) -> Result<()> {
     write_atomic(path, &track_to_bincode(track)?)
-}
-
-/// Reads a track from a binary (`.mpt`) file.
-pub fn read_track_bincode(path: impl AsRef<Path>) -> Result<Track> {
-    let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| GeomError::io(path, e))?;
-    track_from_bincode_at(&bytes, path)
 }
 
 /// Refuses positions without values before a skeleton of `j` joints is

@@ -24,7 +24,7 @@ use crate::skeleton::Skeleton;
 use crate::track::Track;
 
 /// OpenPose BODY_25 joint names in order.
-pub const BODY25_JOINTS: [&str; 25] = [
+pub(crate) const BODY25_JOINTS: [&str; 25] = [
     "nose",
     "neck",
     "right_shoulder",
@@ -80,7 +80,7 @@ const BODY25_BONES: [(usize, usize); 24] = [
 ];
 
 /// OpenPose COCO-18 joint names in order.
-pub const COCO18_JOINTS: [&str; 18] = [
+pub(crate) const COCO18_JOINTS: [&str; 18] = [
     "nose",
     "neck",
     "right_shoulder",

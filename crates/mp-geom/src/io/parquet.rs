@@ -682,7 +682,7 @@ fn meta_of(
 }
 
 /// The Parquet bytes of a track (see the module docs).
-pub fn track_to_parquet_bytes(
+pub(crate) fn track_to_parquet_bytes(
     track: &Track,
     frame_size: Option<(usize, usize)>,
 ) -> Result<Vec<u8>> {
@@ -701,7 +701,7 @@ pub fn track_to_parquet_bytes(
 
 /// The Parquet bytes of people: rows of each person over their span, with
 /// a `person` column.
-pub fn people_to_parquet_bytes(
+pub(crate) fn people_to_parquet_bytes(
     people: &People,
     frame_size: Option<(usize, usize)>,
 ) -> Result<Vec<u8>> {
@@ -737,7 +737,7 @@ pub fn write_parquet(
 }
 
 /// Writes people as a Parquet table (atomic).
-pub fn write_people_parquet(
+pub(crate) fn write_people_parquet(
     path: impl AsRef<Path>,
     people: &People,
     frame_size: Option<(usize, usize)>,

@@ -61,11 +61,11 @@ use crate::people::{People, Person, PersonId};
 use crate::track::Track;
 
 /// Value of the `format` field of the JSON people format.
-pub const JSON_FORMAT: &str = "mp-people";
+pub(crate) const JSON_FORMAT: &str = "mp-people";
 /// Version written in the npz (`mp_people_version`) and JSON formats.
-pub const FORMAT_VERSION: i64 = 1;
+pub(crate) const FORMAT_VERSION: i64 = 1;
 /// The npz array whose presence marks a people file.
-pub const NPZ_VERSION_KEY: &str = "mp_people_version";
+pub(crate) const NPZ_VERSION_KEY: &str = "mp_people_version";
 /// Magic bytes that open the binary people format.
 pub const BINARY_MAGIC: &[u8] = b"mp-people";
 /// Version of the binary people format.
@@ -153,11 +153,6 @@ pub fn people_to_npz_bytes_framed(
     out.add(NPZ_VERSION_KEY, &arr0(FORMAT_VERSION))?;
     native::add_frame_size(&mut out, frame_size)?;
     out.finish()
-}
-
-/// Writes people as npz (atomic).
-pub fn write_people_npz(path: impl AsRef<Path>, people: &People) -> Result<()> {
-    write_atomic(path, &people_to_npz_bytes(people)?)
 }
 
 /// Whether an opened npz is a people file (has `mp_people_version`).
@@ -267,11 +262,6 @@ pub fn people_from_npz(z: &Npz) -> Result<People> {
     build(t, fps, people, &path)
 }
 
-/// Reads people from an npz file in the people format.
-pub fn read_people_npz(path: impl AsRef<Path>) -> Result<People> {
-    people_from_npz(&Npz::open(path)?)
-}
-
 // ---------------------------------------------------------------- JSON
 
 #[derive(Serialize, Deserialize)]
@@ -313,7 +303,7 @@ pub fn people_to_json_string(people: &People) -> Result<String> {
 }
 
 /// Writes people as JSON (atomic).
-pub fn write_people_json(path: impl AsRef<Path>, people: &People) -> Result<()> {
+pub(crate) fn write_people_json(path: impl AsRef<Path>, people: &People) -> Result<()> {
     write_atomic(path, people_to_json_string(people)?.as_bytes())
 }
 
@@ -324,7 +314,7 @@ pub fn is_people_json(value: &serde_json::Value) -> bool {
 
 /// Decodes a parsed JSON document in the people format; `path` names the
 /// source in errors.
-pub fn people_from_json_value(value: serde_json::Value, path: &Path) -> Result<People> {
+pub(crate) fn people_from_json_value(value: serde_json::Value, path: &Path) -> Result<People> {
     let doc: PeopleDoc = serde_json::from_value(value)
         .map_err(|e| GeomError::format(path, format!("not an mp people file: {e}")))?;
     if doc.format != JSON_FORMAT {
@@ -363,13 +353,6 @@ pub fn people_from_json_str(text: &str, path: &Path) -> Result<People> {
     let value: serde_json::Value = serde_json::from_str(text)
         .map_err(|e| GeomError::format(path, format!("invalid JSON: {e}")))?;
     people_from_json_value(value, path)
-}
-
-/// Reads people from a JSON file in the people format.
-pub fn read_people_json(path: impl AsRef<Path>) -> Result<People> {
-    let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| GeomError::io(path, e))?;
-    people_from_json_str(&text, path)
 }
 
 // ---------------------------------------------------------------- binary
@@ -416,7 +399,7 @@ pub fn people_from_bincode(bytes: &[u8]) -> Result<People> {
 }
 
 /// [`people_from_bincode`] naming `path` in errors.
-pub fn people_from_bincode_at(bytes: &[u8], path: &Path) -> Result<People> {
+pub(crate) fn people_from_bincode_at(bytes: &[u8], path: &Path) -> Result<People> {
     let rec: PeopleBin = binary::decode(BINARY_MAGIC, BINARY_VERSION, bytes, path)?;
     let bad = |reason: String| GeomError::format(path, reason);
     let n_frames = usize::try_from(rec.n_frames)
@@ -448,13 +431,6 @@ pub fn is_people_bincode(bytes: &[u8]) -> bool {
 }
 
 /// Writes people in the binary form (atomic).
-pub fn write_people_bincode(path: impl AsRef<Path>, people: &People) -> Result<()> {
+pub(crate) fn write_people_bincode(path: impl AsRef<Path>, people: &People) -> Result<()> {
     write_atomic(path, &people_to_bincode(people)?)
-}
-
-/// Reads people from a binary (`.mpt`) file.
-pub fn read_people_bincode(path: impl AsRef<Path>) -> Result<People> {
-    let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| GeomError::io(path, e))?;
-    people_from_bincode_at(&bytes, path)
 }

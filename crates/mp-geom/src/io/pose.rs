@@ -462,15 +462,6 @@ pub(crate) fn read_pose_any(
     Ok((Content::People(people), frame_size))
 }
 
-/// Reads a `.pose` file as one track (the main person of several).
-pub fn read_pose(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
-    let path = path.as_ref();
-    match read_pose_any(path, opts)?.0 {
-        Content::Track(t) => Ok(*t),
-        Content::People(p) => super::people::main_track_of(&p, path),
-    }
-}
-
 /// The component that holds tracks of `skeleton` in `dims` dimensions.
 fn component_of(skeleton: &Skeleton, dims: usize) -> Result<PoseComponent> {
     let n = skeleton.len();
@@ -587,12 +578,15 @@ fn pose_of(
 }
 
 /// The `.pose` bytes of a track (see the module docs).
-pub fn track_to_pose_bytes(track: &Track, frame_size: Option<(usize, usize)>) -> Result<Vec<u8>> {
+pub(crate) fn track_to_pose_bytes(
+    track: &Track,
+    frame_size: Option<(usize, usize)>,
+) -> Result<Vec<u8>> {
     Ok(pose_of(&[(track, 0)], track.n_frames(), track.fps(), frame_size)?.to_bytes())
 }
 
 /// The `.pose` bytes of people: one slot per person, in id order.
-pub fn people_to_pose_bytes(
+pub(crate) fn people_to_pose_bytes(
     people: &People,
     frame_size: Option<(usize, usize)>,
 ) -> Result<Vec<u8>> {
@@ -605,7 +599,7 @@ pub fn people_to_pose_bytes(
 }
 
 /// Writes a track as a `.pose` file (atomic).
-pub fn write_pose(
+pub(crate) fn write_pose(
     path: impl AsRef<Path>,
     track: &Track,
     frame_size: Option<(usize, usize)>,
@@ -614,7 +608,7 @@ pub fn write_pose(
 }
 
 /// Writes people as a `.pose` file (atomic).
-pub fn write_people_pose(
+pub(crate) fn write_people_pose(
     path: impl AsRef<Path>,
     people: &People,
     frame_size: Option<(usize, usize)>,

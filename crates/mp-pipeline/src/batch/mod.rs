@@ -73,7 +73,7 @@ pub const MANIFEST: &str = "manifest.jsonl";
 pub const RESULT_FILE: &str = "loops.json";
 
 /// Most items at once.
-pub const MAX_JOBS: usize = 1024;
+pub(crate) const MAX_JOBS: usize = 1024;
 
 /// Everything that stops a whole batch (an item's own failure does not: it
 /// is recorded in its [`ItemReport`]).
@@ -315,7 +315,7 @@ impl Observer for ItemObserver<'_> {
 }
 
 /// The error message followed by its causes (each once).
-pub fn error_chain(e: &dyn std::error::Error) -> String {
+pub(crate) fn error_chain(e: &dyn std::error::Error) -> String {
     let mut s = e.to_string();
     let mut source = e.source();
     while let Some(c) = source {

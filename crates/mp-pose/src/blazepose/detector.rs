@@ -11,17 +11,17 @@ use crate::imageops::{crop_u8, to_f32, Border, RgbView, Roi};
 use crate::runtime::{self, SessionParams};
 
 /// Input side of the detector (pixels).
-pub const DETECTOR_INPUT: usize = 224;
+pub(crate) const DETECTOR_INPUT: usize = 224;
 /// Number of SSD anchors of the detector.
 pub const NUM_ANCHORS: usize = 2254;
 /// Values per anchor in the regressor output: box (4) + 4 keypoints × 2.
-pub const NUM_COORDS: usize = 12;
+pub(crate) const NUM_COORDS: usize = 12;
 /// Input tensor name.
-pub const INPUT_NAME: &str = "input_1";
+pub(crate) const INPUT_NAME: &str = "input_1";
 /// Regressor output name (`[1, 2254, 12]`).
-pub const BOXES_NAME: &str = "Identity";
+pub(crate) const BOXES_NAME: &str = "Identity";
 /// Score-logit output name (`[1, 2254, 1]`).
-pub const SCORES_NAME: &str = "Identity_1";
+pub(crate) const SCORES_NAME: &str = "Identity_1";
 
 /// SSD anchor centres `(x, y)` in the normalised 224×224 input: strides 8,
 /// 16, 32, 32, 32, two anchors per layer and cell, offset 0.5, fixed size 1.
@@ -173,7 +173,7 @@ fn iou(a: &[f32; 4], b: &[f32; 4]) -> f32 {
 /// detection, gather every remaining detection overlapping it by more than
 /// `iou_threshold` (itself included), and output the best one's score with
 /// the score-weighted mean of their boxes and keypoints. Ordered by score.
-pub fn weighted_nms(mut dets: Vec<Detection>, iou_threshold: f32) -> Vec<Detection> {
+pub(crate) fn weighted_nms(mut dets: Vec<Detection>, iou_threshold: f32) -> Vec<Detection> {
     dets.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut out = Vec::new();
     let mut remaining = dets;
@@ -241,7 +241,7 @@ pub fn roi_from_points(p0: [f64; 2], p1: [f64; 2], scale: f64) -> Roi {
 }
 
 /// Wraps an angle to [−π, π).
-pub fn normalize_radians(a: f64) -> f64 {
+pub(crate) fn normalize_radians(a: f64) -> f64 {
     use std::f64::consts::PI;
     a - 2.0 * PI * ((a + PI) / (2.0 * PI)).floor()
 }

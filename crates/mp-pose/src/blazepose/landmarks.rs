@@ -11,25 +11,23 @@ use crate::imageops::{crop_u8, extend_f32, Border, RgbView, Roi};
 use crate::runtime::{self, SessionParams};
 
 /// Input side of the landmark model (pixels).
-pub const LANDMARK_INPUT: usize = 256;
+pub(crate) const LANDMARK_INPUT: usize = 256;
 /// Landmarks in the model's output (33 body, 2 auxiliary, 4 more).
-pub const NUM_LANDMARKS_ALL: usize = 39;
+pub(crate) const NUM_LANDMARKS_ALL: usize = 39;
 /// Body landmarks (BlazePose-33).
-pub const NUM_BODY: usize = 33;
+pub(crate) const NUM_BODY: usize = 33;
 /// Heatmap side.
-pub const HEATMAP_SIZE: usize = 64;
+pub(crate) const HEATMAP_SIZE: usize = 64;
 /// Input tensor name.
-pub const INPUT_NAME: &str = "input_1";
+pub(crate) const INPUT_NAME: &str = "input_1";
 /// Landmarks output (`[1, 195]`).
-pub const LANDMARKS_NAME: &str = "Identity";
+pub(crate) const LANDMARKS_NAME: &str = "Identity";
 /// Pose presence output (`[1, 1]`, a probability).
-pub const PRESENCE_NAME: &str = "Identity_1";
-/// Segmentation logits output (`[1, 256, 256, 1]`).
-pub const SEGMENTATION_NAME: &str = "Identity_2";
+pub(crate) const PRESENCE_NAME: &str = "Identity_1";
 /// Heatmap output (`[1, 64, 64, 39]`).
-pub const HEATMAP_NAME: &str = "Identity_3";
+pub(crate) const HEATMAP_NAME: &str = "Identity_3";
 /// World landmarks output (`[1, 117]`).
-pub const WORLD_NAME: &str = "Identity_4";
+pub(crate) const WORLD_NAME: &str = "Identity_4";
 
 /// Which landmark model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -137,7 +135,7 @@ fn sigmoid(x: f32) -> f32 {
 
 /// Decodes the raw `[195]` landmark tensor (39 × x, y, z, visibility logit,
 /// presence logit; pixels of the 256 input).
-pub fn decode_landmarks(raw: &[f32]) -> Vec<CropLandmark> {
+pub(crate) fn decode_landmarks(raw: &[f32]) -> Vec<CropLandmark> {
     let s = LANDMARK_INPUT as f32;
     raw.chunks_exact(5)
         .take(NUM_LANDMARKS_ALL)
@@ -156,7 +154,11 @@ pub fn decode_landmarks(raw: &[f32]) -> Vec<CropLandmark> {
 /// sigmoid-weighted mean of the cell indices replaces the position when the
 /// window's maximum reaches `min_confidence`. Landmarks outside the heatmap
 /// are left alone. (Cell indices are used as they are, as MediaPipe does.)
-pub fn refine_with_heatmap(landmarks: &mut [CropLandmark], heatmap: &[f32], params: &RefineParams) {
+pub(crate) fn refine_with_heatmap(
+    landmarks: &mut [CropLandmark],
+    heatmap: &[f32],
+    params: &RefineParams,
+) {
     let (hw, hh, ch) = (HEATMAP_SIZE as i64, HEATMAP_SIZE as i64, NUM_LANDMARKS_ALL);
     if heatmap.len() != (hw * hh) as usize * ch {
         return;
@@ -353,7 +355,7 @@ pub fn project(roi: &Roi, lm: &CropLandmark) -> ([f64; 2], f64) {
 }
 
 /// World point rotated by the crop's rotation (the model predicts in the crop's frame).
-pub fn rotate_world(roi: &Roi, w: &[f32; 3]) -> [f64; 3] {
+pub(crate) fn rotate_world(roi: &Roi, w: &[f32; 3]) -> [f64; 3] {
     let (s, c) = roi.rotation_rad.sin_cos();
     let (x, y) = (w[0] as f64, w[1] as f64);
     [c * x - s * y, s * x + c * y, w[2] as f64]

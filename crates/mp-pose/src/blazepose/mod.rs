@@ -28,9 +28,9 @@ pub use detector::{DetectorParams, ImageDetection, PoseDetector};
 pub use landmarks::{LandmarkModel, LandmarkModelKind, LandmarkOutput, RefineParams};
 
 /// Index of the first auxiliary landmark (crop centre for tracking).
-pub const AUX_CENTER: usize = 33;
+pub(crate) const AUX_CENTER: usize = 33;
 /// Index of the second auxiliary landmark (crop scale/rotation point).
-pub const AUX_SCALE: usize = 34;
+pub(crate) const AUX_SCALE: usize = 34;
 
 /// Parameters of the BlazePose pipeline; defaults are MediaPipe's
 /// (`model_complexity=1`, `min_detection_confidence=0.5`,

@@ -58,7 +58,7 @@ impl MultiPoseParams {
 }
 
 /// What one frame gave.
-pub type PeopleFrame = FrameResult<Pose>;
+pub(crate) type PeopleFrame = FrameResult<Pose>;
 
 /// BlazePose for several people (see the module docs).
 pub struct MultiPose {

@@ -320,7 +320,7 @@ impl Track {
 }
 
 /// Axis-aligned box `[x0, y0, x1, y1]` of a region (its rotated corners).
-pub fn roi_box(r: &Roi) -> [f64; 4] {
+pub(crate) fn roi_box(r: &Roi) -> [f64; 4] {
     let (s, c) = r.rotation_rad.sin_cos();
     let hw = (c.abs() * r.width_px + s.abs() * r.height_px) / 2.0;
     let hh = (s.abs() * r.width_px + c.abs() * r.height_px) / 2.0;
@@ -333,7 +333,7 @@ pub fn roi_box(r: &Roi) -> [f64; 4] {
 }
 
 /// Intersection over union of two boxes.
-pub fn box_iou(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+pub(crate) fn box_iou(a: &[f64; 4], b: &[f64; 4]) -> f64 {
     let ix = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
     let iy = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
     let inter = ix * iy;
@@ -351,7 +351,7 @@ fn roi_iou(a: &Roi, b: &Roi) -> f64 {
 }
 
 /// Intersection of two boxes over the smaller one's area (1 when one holds the other).
-pub fn box_ios(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+pub(crate) fn box_ios(a: &[f64; 4], b: &[f64; 4]) -> f64 {
     let ix = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
     let iy = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
     let area = |r: &[f64; 4]| (r[2] - r[0]).max(0.0) * (r[3] - r[1]).max(0.0);
@@ -376,7 +376,7 @@ fn same_person(a: &Roi, b: &Roi, iou: f64) -> bool {
 pub const CONTAINED: f64 = 0.8;
 
 /// Side of the square searched for a lost person, in sides of their last crop.
-pub const LOST_SEARCH_SCALE: f64 = 1.5;
+pub(crate) const LOST_SEARCH_SCALE: f64 = 1.5;
 
 /// Pairs `(row, column)` of the assignment of rows to columns that maximises
 /// the summed `score`, keeping only pairs whose score reaches `min`.
@@ -415,7 +415,7 @@ fn assign(
 
 /// Merges detections of one person from overlapping tiles: the best scored
 /// of every group overlapping by more than `iou`.
-pub fn merge_candidates(mut c: Vec<Candidate>, iou: f64) -> Vec<Candidate> {
+pub(crate) fn merge_candidates(mut c: Vec<Candidate>, iou: f64) -> Vec<Candidate> {
     c.sort_by(|a, b| b.score.total_cmp(&a.score));
     let mut out: Vec<Candidate> = Vec::new();
     for d in c {

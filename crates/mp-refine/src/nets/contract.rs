@@ -17,7 +17,7 @@ pub const MODEL_DIR_IN_WORKSPACE: &str = "models/refine";
 /// Frames of the transition input of the transition refinement network.
 pub const TRANSITION_FRAMES: usize = 16;
 /// Cubic coefficients per feature.
-pub const N_COEFFS: usize = 4;
+pub(crate) const N_COEFFS: usize = 4;
 /// Action classes of the generator and the evaluator (MSR Action3D).
 pub const N_ACTIONS: usize = 20;
 

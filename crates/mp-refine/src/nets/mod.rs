@@ -46,9 +46,9 @@ struct Net {
 }
 
 /// A named input: name, shape, row-major data.
-pub type NamedInput<'a> = (&'a str, Vec<usize>, &'a [f32]);
+pub(crate) type NamedInput<'a> = (&'a str, Vec<usize>, &'a [f32]);
 /// A named output: name, shape, row-major data.
-pub type NamedOutput = (String, Vec<usize>, Vec<f32>);
+pub(crate) type NamedOutput = (String, Vec<usize>, Vec<f32>);
 
 impl Net {
     fn open(dir: &Path, kind: NetKind, params: &SessionParams) -> Result<(Self, Vec<usize>)> {

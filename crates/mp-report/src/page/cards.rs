@@ -133,7 +133,7 @@ fn program_cards(track: &Track, pv: &ProgramView<'_>) -> Vec<Card> {
 
 /// The repetitions card: the counted total, and in one line the signal,
 /// method and confidence that decided and the intervals.
-pub fn repetitions_card(counts: &Counts) -> Card {
+pub(crate) fn repetitions_card(counts: &Counts) -> Card {
     Card::new(
         "repetitions",
         counts.total.to_string(),
@@ -152,7 +152,7 @@ pub const CARD_INTERVALS: usize = 3;
 
 /// "in 3 intervals: ×4, ×3, ×3": at most [`CARD_INTERVALS`] of them (those
 /// with most repetitions, in time order) and "and N more".
-pub fn intervals_line(counts: impl IntoIterator<Item = usize>) -> String {
+pub(crate) fn intervals_line(counts: impl IntoIterator<Item = usize>) -> String {
     let counts: Vec<usize> = counts.into_iter().collect();
     if counts.is_empty() {
         return "no repetition counted".to_string();
@@ -177,7 +177,7 @@ pub fn intervals_line(counts: impl IntoIterator<Item = usize>) -> String {
 }
 
 /// The cards' HTML.
-pub fn cards_html(cards: &[Card]) -> String {
+pub(crate) fn cards_html(cards: &[Card]) -> String {
     let mut s = String::new();
     for c in cards {
         let _ = write!(

@@ -59,7 +59,7 @@ pub const OVERVIEW_POINTS: usize = 2400;
 /// The frames the page shows: every frame of the store, or every 2nd, 4th…
 /// until their bytes fit [`FRAMES_BUDGET_BYTES`]. Returns (frame index,
 /// JPEG) pairs in frame order.
-pub fn frames_within_budget(store: &FrameStore, budget: usize) -> Vec<(usize, &[u8])> {
+pub(crate) fn frames_within_budget(store: &FrameStore, budget: usize) -> Vec<(usize, &[u8])> {
     let mut every = 1usize;
     loop {
         let kept: Vec<(usize, &[u8])> = store
@@ -77,26 +77,26 @@ pub fn frames_within_budget(store: &FrameStore, budget: usize) -> Vec<(usize, &[
 }
 
 /// Path of a frame's picture, relative to the page.
-pub fn frame_file(index: usize) -> String {
+pub(crate) fn frame_file(index: usize) -> String {
     format!("{FOLDER}/frames/{index:06}.jpg")
 }
 
 /// The stride of the per-frame data: 1 while everyone's frames × numbers per
 /// frame fit [`DATA_BUDGET_VALUES`], else the smallest stride that fits.
-pub fn data_stride(frames_values: impl IntoIterator<Item = (usize, usize)>) -> usize {
+pub(crate) fn data_stride(frames_values: impl IntoIterator<Item = (usize, usize)>) -> usize {
     let total: usize = frames_values.into_iter().map(|(f, v)| f * v).sum();
     total.div_ceil(DATA_BUDGET_VALUES).max(1)
 }
 
 /// Numbers per frame of a person's data: keypoints and program (D each per
 /// joint) and a confidence per joint.
-pub fn values_per_frame(track: &Track) -> usize {
+pub(crate) fn values_per_frame(track: &Track) -> usize {
     let (_, j, d) = track.positions().dim();
     j * (2 * d + 1)
 }
 
 /// Quantisation step of positions in `units`.
-pub fn position_step(units: Units) -> f64 {
+pub(crate) fn position_step(units: Units) -> f64 {
     if units == Units::Pixels {
         0.1
     } else {
@@ -240,13 +240,13 @@ pub fn chunk(
 }
 
 /// Number of data frames of a track of `frames` frames at `stride`.
-pub fn data_frames(frames: usize, stride: usize) -> usize {
+pub(crate) fn data_frames(frames: usize, stride: usize) -> usize {
     frames.div_ceil(stride.max(1))
 }
 
 /// Joint `ji`'s trajectory over the whole track, every `step`-th frame (1
 /// up to [`OVERVIEW_POINTS`] frames): keypoints, confidence, program.
-pub fn overview(track: &Track, executed: &Track, ji: usize) -> serde_json::Value {
+pub(crate) fn overview(track: &Track, executed: &Track, ji: usize) -> serde_json::Value {
     let (t, _, d) = track.positions().dim();
     let step = t.div_ceil(OVERVIEW_POINTS).max(1);
     let q = position_step(track.units());

@@ -20,7 +20,7 @@ const JS: &str = include_str!("../../assets/report.js");
 
 /// The canvas size and view the page draws skeletons with: the frames' when
 /// there are frames, else the main person's motion fitted to 640 × 480.
-pub fn stage_view(input: &ReportInput<'_>, main: &PersonPage<'_>) -> ((usize, usize), View) {
+pub(crate) fn stage_view(input: &ReportInput<'_>, main: &PersonPage<'_>) -> ((usize, usize), View) {
     match input.frames {
         Some(fs) => (fs.size, View::frame(fs.scale())),
         None => {

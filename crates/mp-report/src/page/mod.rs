@@ -278,7 +278,7 @@ fn person_content(title: &str, p: &PersonPage<'_>) -> Result<serde_json::Value> 
 }
 
 /// The joint that moves most (largest spread of its valid positions).
-pub fn most_moving_joint(track: &Track) -> usize {
+pub(crate) fn most_moving_joint(track: &Track) -> usize {
     let (t, j, d) = track.positions().dim();
     let mut best = (0usize, -1.0f64);
     for ji in 0..j {

@@ -31,7 +31,7 @@ pub fn joint_statements(program: &Program, ji: usize) -> Vec<String> {
 /// `mp edit` command lines offered for each counted interval when the input
 /// is a video (`--interval` is the interval's number as the table shows it,
 /// from 1).
-pub fn edit_command(title: &str, number: usize) -> Option<String> {
+pub(crate) fn edit_command(title: &str, number: usize) -> Option<String> {
     const VIDEO: [&str; 6] = ["mp4", "mov", "avi", "webm", "mkv", "m4v"];
     let (stem, ext) = title.rsplit_once('.')?;
     if !VIDEO.contains(&ext.to_ascii_lowercase().as_str()) {
@@ -57,7 +57,7 @@ pub fn edit_command(title: &str, number: usize) -> Option<String> {
 /// and each repetition's frames (frames of the person's track, shown from
 /// video frame `offset`); `title` (the video's file name, or empty) decides
 /// whether the `mp edit` command is offered.
-pub fn repetitions_table(
+pub(crate) fn repetitions_table(
     intervals: &[CountedInterval],
     fps: f64,
     title: &str,
@@ -109,7 +109,7 @@ pub fn repetitions_table(
 /// The program loops (the abstract program's `for` statements) with their
 /// frames, iterations and body, then the abstract program itself (at most
 /// [`ABSTRACT_PAGE_LINES`] lines).
-pub fn abstract_panel(pv: &ProgramView<'_>, fps: f64, offset: usize) -> String {
+pub(crate) fn abstract_panel(pv: &ProgramView<'_>, fps: f64, offset: usize) -> String {
     let mut s = String::new();
     if pv.loops.is_empty() {
         s.push_str(r#"<div class="empty">The abstract program has no loop.</div>"#);
