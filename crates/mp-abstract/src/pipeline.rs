@@ -21,17 +21,17 @@ use crate::synth::{synthesize, translate};
 
 /// Parameters of the whole track → abstract-program analysis.
 ///
-/// The default segmentation chooses λ from the motion (paper §3.1: "in
+/// The default segmentation ([`SynthParams::default`]) chooses λ from the motion (paper §3.1: "in
 /// practice, we adaptively choose λ at runtime to match the range of the
 /// keypoint motion"): with the fixed reference λ, short or small repetitions
 /// (a rope jump of a dozen frames) are swallowed by a single primitive and no
 /// loop can be seen. The rule is [`Lambda::Spread`](mp_concrete::Lambda::Spread)
-/// with one second ([`Self::DEFAULT_SPREAD_SECONDS`]): a new segment is worth
+/// with one second ([`SynthParams::DEFAULT_SPREAD_SECONDS`]): a new segment is worth
 /// the local spread of the keypoints held for one second, so λ keeps its
 /// meaning across frame rates and body sizes. The C0 refit minimises the
 /// Euclidean error ([`RefitNorm::Euclidean`](mp_concrete::RefitNorm::Euclidean)),
 /// the norm the segmentation itself minimises.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct AbstractParams {
     /// Concrete synthesis (segmentation, fitting, scale rule).
     pub synth: SynthParams,
@@ -39,25 +39,7 @@ pub struct AbstractParams {
     pub loops: LoopParams,
 }
 
-impl Default for AbstractParams {
-    fn default() -> Self {
-        AbstractParams {
-            synth: SynthParams {
-                lambda: mp_concrete::Lambda::spread(Self::DEFAULT_SPREAD_SECONDS),
-                refit_norm: mp_concrete::RefitNorm::Euclidean,
-                ..SynthParams::default()
-            },
-            loops: LoopParams::default(),
-        }
-    }
-}
-
 impl AbstractParams {
-    /// How long the local spread of the keypoints is held to price one
-    /// segment in the default λ (chosen on the validation half of the Penn
-    /// Action clips; see docs/results/concrete.md, "Rate–distortion frontier").
-    pub const DEFAULT_SPREAD_SECONDS: f64 = 1.0;
-
     /// Checks every field: the synthesis parameters ([`SynthParams::validate`])
     /// and the loop parameters ([`LoopParams::validate`]; their `unit_scale`
     /// is not checked since the analysis replaces it).

@@ -36,7 +36,7 @@ fn repeated_performer(reps: usize) -> Track {
 fn bench(c: &mut Criterion) {
     let params = SynthParams {
         scale: Scale::UnitScale { unit_scale: 1.0 },
-        ..SynthParams::default()
+        ..SynthParams::paper()
     };
     let mut g = c.benchmark_group("synthesize_13_joints");
     g.sampling_mode(SamplingMode::Flat);
@@ -60,7 +60,7 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.warm_up_time(Duration::from_millis(100));
     g.measurement_time(Duration::from_secs(20));
-    let defaults = SynthParams::default();
+    let defaults = SynthParams::paper();
     let long = repeated_performer(18);
     g.bench_with_input(
         BenchmarkId::new("search", long.n_frames()),

@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let params = SynthParams {
         scale: Scale::FrameSize { frame_px },
         unobserved_joints: UnobservedJoints::Ignore,
-        ..SynthParams::default()
+        ..SynthParams::paper()
     };
     let program = synthesize(&track, &params)?;
     let wrist = program.joint_index("right_wrist").ok_or("no right wrist")?;

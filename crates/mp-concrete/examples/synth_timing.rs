@@ -5,7 +5,7 @@
 //! `cargo run --release -p mp-concrete --example synth_timing -- [reps] [synthetic T…] [--reference]
 //! [--squared λ] [--spread seconds]`: `--spread` prices segments as the
 //! product does (`Lambda::Spread`, the Euclidean refit) instead of the fixed
-//! λ of `SynthParams::default()`.
+//! λ of `SynthParams::paper()`.
 
 use std::time::Instant;
 
@@ -57,7 +57,7 @@ fn main() -> Res<()> {
     let reps = nums.first().copied().unwrap_or(18);
     let sizes: Vec<usize> = nums.iter().skip(1).copied().collect();
     let track = repeated_performer(reps)?;
-    let mut params = SynthParams::default();
+    let mut params = SynthParams::paper();
     if let Some(l) = squared {
         params.fit.norm = mp_geom::fit::ErrorNorm::Squared;
         params.lambda = mp_concrete::Lambda::fixed(l);

@@ -40,7 +40,7 @@ impl InterpParams {
     pub fn new(step: usize) -> Self {
         InterpParams {
             step,
-            synth: SynthParams::default(),
+            synth: SynthParams::paper(),
             transition: Transition::Blend,
             lambda_per_time: true,
         }

@@ -53,7 +53,7 @@ fn all_kinds_3d() -> Program {
 
 fn synthesised() -> Program {
     let track = synthetic_track(90, 3).unwrap();
-    synthesize(&track, &SynthParams::default()).unwrap()
+    synthesize(&track, &SynthParams::paper()).unwrap()
 }
 
 #[test]

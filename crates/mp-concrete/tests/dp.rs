@@ -131,7 +131,7 @@ mod on_real_costs {
                 lambda: Lambda::fixed(lambda),
                 max_segment_frames: w,
                 scale: Scale::UnitScale { unit_scale: 1.0 },
-                ..SynthParams::default()
+                ..SynthParams::paper()
             };
             let table = segment_costs(&track, &params).unwrap();
             let bf = segment_brute_force(t, w, |k, n| table.get(k, n)).unwrap();

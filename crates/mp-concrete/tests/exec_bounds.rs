@@ -13,7 +13,7 @@ fn program() -> mp_concrete::Program {
         pos[[t, 1, 1]] = 50.0 + t as f64;
     }
     let track = Track::new(pos, None, 30.0, Units::Pixels, Skeleton::generic(2)).unwrap();
-    synthesize(&track, &SynthParams::default()).unwrap()
+    synthesize(&track, &SynthParams::paper()).unwrap()
 }
 
 #[test]

@@ -15,7 +15,7 @@ fn param_name(e: ConcreteError) -> String {
 
 fn program() -> Program {
     let track = synthetic_track(60, 3).unwrap();
-    synthesize(&track, &SynthParams::default()).unwrap()
+    synthesize(&track, &SynthParams::paper()).unwrap()
 }
 
 #[test]
@@ -40,13 +40,13 @@ fn exec_params_reject_bad_fps_out() {
 #[test]
 fn bad_fit_params_are_rejected_once_at_synthesis() {
     let track = synthetic_track(40, 5).unwrap();
-    let mut p = SynthParams::default();
+    let mut p = SynthParams::paper();
     p.fit.min_span_px = f64::NAN;
     assert_eq!(
         param_name(synthesize(&track, &p).unwrap_err()),
         "min_span_px"
     );
-    let mut p = SynthParams::default();
+    let mut p = SynthParams::paper();
     p.fit.radius_penalty = -1.0;
     assert_eq!(
         param_name(mp_concrete::synthesize_detailed(&track, &p).unwrap_err()),

@@ -38,7 +38,7 @@ fn golf_swings_are_compact_and_accurate() {
             scale: Scale::FrameSize { frame_px },
             unobserved_joints: UnobservedJoints::Ignore,
             continuity: Continuity::None,
-            ..SynthParams::default()
+            ..SynthParams::paper()
         };
         let p = synthesize(&track, &params).unwrap();
         // The real program survives the text and JSON round trips.

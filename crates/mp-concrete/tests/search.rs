@@ -59,7 +59,7 @@ fn px_params(lambda: f64, w: usize) -> SynthParams {
         lambda: Lambda::fixed(lambda),
         max_segment_frames: w,
         scale: Scale::UnitScale { unit_scale: 1.0 },
-        ..SynthParams::default()
+        ..SynthParams::paper()
     }
 }
 
@@ -154,7 +154,7 @@ fn synthetic_track_same_optimum() {
     }
     let auto = SynthParams {
         lambda: Lambda::adaptive(),
-        ..SynthParams::default()
+        ..SynthParams::paper()
     };
     same_optimum(&track, &auto);
 }
@@ -217,7 +217,7 @@ fn penn_action_same_optimum() {
                 let mut p = SynthParams {
                     scale: Scale::FrameSize { frame_px },
                     unobserved_joints: UnobservedJoints::Ignore,
-                    ..SynthParams::default()
+                    ..SynthParams::paper()
                 };
                 if squared {
                     p.fit.norm = ErrorNorm::Squared;

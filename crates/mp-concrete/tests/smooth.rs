@@ -30,11 +30,11 @@ fn assert_c0(p: &Program, scale: f64) {
 
 #[test]
 fn default_is_c0_and_none_is_independent() {
-    assert_eq!(SynthParams::default().continuity, Continuity::C0);
+    assert_eq!(SynthParams::paper().continuity, Continuity::C0);
     let track = synthetic_track(400, 3).unwrap();
-    let smooth = synthesize(&track, &SynthParams::default()).unwrap();
+    let smooth = synthesize(&track, &SynthParams::paper()).unwrap();
     assert_c0(&smooth, 1000.0);
-    let free = synthesize(&track, &with(Continuity::None, &SynthParams::default())).unwrap();
+    let free = synthesize(&track, &with(Continuity::None, &SynthParams::paper())).unwrap();
     assert_eq!(free.continuity, Continuity::None);
     // Same segmentation, independent fits jump at boundaries.
     assert_eq!(free.boundaries(), smooth.boundaries());
@@ -99,7 +99,7 @@ fn c0_with_all_kinds_missing_frames_and_3d() {
                 kinds: PrimitiveKind::ALL.to_vec(),
                 ..Default::default()
             },
-            ..SynthParams::default()
+            ..SynthParams::paper()
         };
         let p = synthesize(&track, &params).unwrap();
         assert!(p.n_segments() > 3, "{} segments", p.n_segments());
@@ -126,12 +126,12 @@ fn c0_with_all_kinds_missing_frames_and_3d() {
 #[test]
 fn c0_start_poses_are_not_free_parameters() {
     let track = synthetic_track(400, 3).unwrap();
-    let c0 = synthesize(&track, &SynthParams::default()).unwrap();
+    let c0 = synthesize(&track, &SynthParams::paper()).unwrap();
     let (s, j, d) = (c0.n_segments(), c0.n_joints(), c0.dims);
     assert!(s > 3);
     assert_eq!(c0.n_shared_params(), d * j * (s - 1));
     assert_eq!(c0.n_params() + d * j * (s - 1), c0.n_numbers());
-    let free = synthesize(&track, &with(Continuity::None, &SynthParams::default())).unwrap();
+    let free = synthesize(&track, &with(Continuity::None, &SynthParams::paper())).unwrap();
     assert_eq!(free.n_shared_params(), 0);
     assert_eq!(free.n_params(), free.n_numbers());
     // The same primitives labelled independent: every number counts.
@@ -156,7 +156,7 @@ fn c0_start_poses_are_not_free_parameters() {
 #[test]
 fn continuity_survives_json_dsl_and_binary_and_old_files_load() {
     let track = synthetic_track(200, 5).unwrap();
-    let p = synthesize(&track, &SynthParams::default()).unwrap();
+    let p = synthesize(&track, &SynthParams::paper()).unwrap();
     assert_eq!(p.continuity, Continuity::C0);
     assert_eq!(Program::from_json(&p.to_json().unwrap()).unwrap(), p);
     assert!(p.to_dsl().starts_with("program(") && p.to_dsl().contains("continuity=c0"));
@@ -255,7 +255,7 @@ fn penn_action_golf_swings_c0() {
     let base = SynthParams {
         lambda: Lambda::adaptive(),
         unobserved_joints: UnobservedJoints::Ignore,
-        ..SynthParams::default()
+        ..SynthParams::paper()
     };
     let (mut kd_free, mut kd_c0, mut jr, mut jf, mut jc) = (0.0, 0.0, 0.0, 0.0, 0.0);
     let (mut pf, mut pc, mut raw) = (0usize, 0usize, 0usize);
@@ -364,7 +364,7 @@ mod random_tracks {
                 scale: Scale::UnitScale { unit_scale: 1.0 },
                 unobserved_joints: UnobservedJoints::Ignore,
                 refit_norm: if euclidean { RefitNorm::Euclidean } else { RefitNorm::Squared },
-                ..SynthParams::default()
+                ..SynthParams::paper()
             };
             if all_kinds {
                 params.fit.kinds = PrimitiveKind::ALL.to_vec();

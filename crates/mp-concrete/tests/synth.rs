@@ -77,7 +77,7 @@ fn params_px() -> SynthParams {
         scale: Scale::UnitScale { unit_scale: 1.0 },
         lambda: Lambda::fixed(300.0),
         continuity: mp_concrete::Continuity::None,
-        ..SynthParams::default()
+        ..SynthParams::paper()
     }
 }
 
@@ -133,10 +133,10 @@ fn scaling_the_track_scales_nothing_else() {
     // With Scale::Auto thresholds and λ follow the track's size: a track
     // scaled by 3 gets the same segmentation.
     let track = known_program().execute().unwrap();
-    let p1 = synthesize(&track, &SynthParams::default()).unwrap();
+    let p1 = synthesize(&track, &SynthParams::paper()).unwrap();
     let (pos, conf, fps, units, skel) = track.clone().into_parts();
     let big = Track::new(pos.mapv(|v| v * 3.0), Some(conf), fps, units, skel).unwrap();
-    let p3 = synthesize(&big, &SynthParams::default()).unwrap();
+    let p3 = synthesize(&big, &SynthParams::paper()).unwrap();
     assert_eq!(p1.boundaries(), p3.boundaries());
 }
 
@@ -430,7 +430,7 @@ fn track_of(t: usize, j: usize) -> Track {
 
 #[test]
 fn bad_input_is_a_typed_error() {
-    let ok = SynthParams::default();
+    let ok = SynthParams::paper();
     // Empty track and a single frame.
     assert!(matches!(
         synthesize(&track_of(0, 2), &ok),
@@ -453,7 +453,7 @@ fn bad_input_is_a_typed_error() {
     // …unless asked to ignore it.
     let ign = SynthParams {
         unobserved_joints: UnobservedJoints::Ignore,
-        ..SynthParams::default()
+        ..SynthParams::paper()
     };
     assert_eq!(synthesize(&nan, &ign).unwrap().n_joints(), 3);
     // Zero confidence everywhere.
@@ -472,21 +472,21 @@ fn bad_input_is_a_typed_error() {
     bad(
         SynthParams {
             lambda: Lambda::fixed(-1.0),
-            ..SynthParams::default()
+            ..SynthParams::paper()
         },
         "lambda",
     );
     bad(
         SynthParams {
             lambda: Lambda::fixed(f64::NAN),
-            ..SynthParams::default()
+            ..SynthParams::paper()
         },
         "lambda",
     );
     bad(
         SynthParams {
             max_segment_frames: 0,
-            ..SynthParams::default()
+            ..SynthParams::paper()
         },
         "max_segment_frames",
     );
@@ -497,7 +497,7 @@ fn bad_input_is_a_typed_error() {
                 min_ref: 2000.0,
                 max_ref: 100.0,
             },
-            ..SynthParams::default()
+            ..SynthParams::paper()
         },
         "lambda.min_ref",
     );
@@ -505,7 +505,7 @@ fn bad_input_is_a_typed_error() {
         bad(
             SynthParams {
                 lambda: Lambda::spread(seconds),
-                ..SynthParams::default()
+                ..SynthParams::paper()
             },
             "lambda.seconds",
         );
@@ -518,25 +518,25 @@ fn bad_input_is_a_typed_error() {
                 min_ref: 100.0,
                 max_ref: 1600.0,
             },
-            ..SynthParams::default()
+            ..SynthParams::paper()
         },
         "lambda.window_frames",
     );
     bad(
         SynthParams {
             scale: Scale::FrameSize { frame_px: f64::NAN },
-            ..SynthParams::default()
+            ..SynthParams::paper()
         },
         "scale.frame_px",
     );
     bad(
         SynthParams {
             min_confidence: 1.5,
-            ..SynthParams::default()
+            ..SynthParams::paper()
         },
         "min_confidence",
     );
-    let mut no_kinds = SynthParams::default();
+    let mut no_kinds = SynthParams::paper();
     no_kinds.fit.kinds.clear();
     bad(no_kinds, "fit.kinds");
 }

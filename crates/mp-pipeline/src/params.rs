@@ -1,7 +1,7 @@
 //! The parameters of a whole run, with the libraries' defaults, validated once.
 
 use mp_abstract::{AbstractParams, CountParams};
-use mp_concrete::{Scale, SynthParams, UnobservedJoints};
+use mp_concrete::{Scale, SynthParams};
 use mp_geom::PersonId;
 pub use mp_pose::ModelChoice;
 
@@ -144,10 +144,11 @@ impl Default for OutputParams {
 
 /// Every parameter of a run. `Params::default()` is what `mp run`, `mp fit`,
 /// `mp abstract`, `mp loops`, the evaluations and the Python package use.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Params {
     /// Concrete synthesis (λ from the local spread of the keypoints held
-    /// for one second, Euclidean C0 refit) and loop detection. The scale rule
+    /// for one second, Euclidean C0 refit, joints the model never saw fitted
+    /// to their stored positions) and loop detection. The scale rule
     /// ([`SynthParams::scale`]) is replaced per input: the frame size of a
     /// video (or the one given for a track), else the motion's own extent.
     pub analysis: AbstractParams,
@@ -159,22 +160,6 @@ pub struct Params {
     pub output: OutputParams,
     /// Whom to analyse when several people are in view.
     pub person: PersonParams,
-}
-
-impl Default for Params {
-    fn default() -> Self {
-        let mut analysis = AbstractParams::default();
-        // Video tracks often have joints the model never saw (a cropped
-        // body): they are fitted to their stored positions, not an error.
-        analysis.synth.unobserved_joints = UnobservedJoints::Ignore;
-        Params {
-            analysis,
-            count: CountParams::default(),
-            pose: PoseParams::default(),
-            output: OutputParams::default(),
-            person: PersonParams::default(),
-        }
-    }
 }
 
 impl Params {

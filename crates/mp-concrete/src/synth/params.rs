@@ -184,12 +184,6 @@ pub const BUDGET_LAMBDA_RANGE: (f64, f64) = (1.0, 1e7);
 /// narrow (the ratio of its ends).
 pub const BUDGET_LAMBDA_STEP: f64 = 1.02;
 
-impl Default for Lambda {
-    fn default() -> Self {
-        Lambda::fixed(Self::DEFAULT_FIXED)
-    }
-}
-
 /// How `unit_scale` (track units per reference pixel) is found.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(tag = "type", rename_all = "lowercase")]
@@ -210,10 +204,12 @@ pub enum Scale {
     },
 }
 
-/// Parameters of synthesis. Defaults: the product's (docs/ALGORITHMS.md).
+/// Parameters of synthesis. `default()` is the product's, [`SynthParams::paper`]
+/// the first paper's (docs/ALGORITHMS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SynthParams {
-    /// Segment penalty. Default: fixed 1600.
+    /// Segment penalty. Default: the local spread held for one second
+    /// ([`Lambda::spread`]); paper: fixed 1600.
     pub lambda: Lambda,
     /// Maximum segment length W in frames (the DP is O(T·W)). Default 60.
     pub max_segment_frames: usize,
@@ -224,14 +220,17 @@ pub struct SynthParams {
     /// A joint counts as observed in a frame when its confidence is above this. Default 0.
     pub min_confidence: f64,
     /// What to do with a joint that is observed in no frame at all (e.g. an
-    /// all-NaN column, or a joint occluded for a whole clip). Default: error.
+    /// all-NaN column, or a joint occluded for a whole clip). Default: fitted
+    /// to its stored positions ([`UnobservedJoints::Ignore`]); paper: an error.
     pub unobserved_joints: UnobservedJoints,
     /// Whether consecutive segments share their boundary pose (the chosen
     /// segmentation refitted per joint, [`crate::smooth`]). Default: C0.
     /// Parameters serialised before the field existed read as C0.
     #[serde(default = "default_continuity")]
     pub continuity: Continuity,
-    /// What the C0 refit minimises ([`crate::smooth`]). Default: squared residuals.
+    /// What the C0 refit minimises ([`crate::smooth`]). Default: Euclidean
+    /// residuals; paper, and parameters serialised before the field existed:
+    /// squared residuals.
     #[serde(default)]
     pub refit_norm: RefitNorm,
 }
@@ -254,16 +253,16 @@ pub enum UnobservedJoints {
 }
 
 impl Default for SynthParams {
+    /// The product's synthesis, what `mp fit`, `mp run` and the Python
+    /// package use: λ from the local spread of the keypoints held for
+    /// [`SynthParams::DEFAULT_SPREAD_SECONDS`], the Euclidean C0 refit, and
+    /// joints never observed fitted to their stored positions.
     fn default() -> Self {
         SynthParams {
-            lambda: Lambda::default(),
-            max_segment_frames: 60,
-            fit: FitParams::default(),
-            scale: Scale::Auto,
-            min_confidence: 0.0,
-            unobserved_joints: UnobservedJoints::Error,
-            continuity: Self::DEFAULT_CONTINUITY,
-            refit_norm: RefitNorm::Squared,
+            lambda: Lambda::spread(Self::DEFAULT_SPREAD_SECONDS),
+            refit_norm: RefitNorm::Euclidean,
+            unobserved_joints: UnobservedJoints::Ignore,
+            ..Self::paper()
         }
     }
 }
@@ -295,6 +294,28 @@ fn finite_nonneg(name: &'static str, v: f64) -> Result<()> {
 }
 
 impl SynthParams {
+    /// How long the local spread of the keypoints is held to price one
+    /// segment in the default λ (chosen on the validation half of the Penn
+    /// Action clips; see docs/results/concrete.md, "Rate–distortion frontier").
+    pub const DEFAULT_SPREAD_SECONDS: f64 = 1.0;
+
+    /// The first paper's settings, which its test vectors and the
+    /// published comparisons use: a fixed λ = 1600 at the 512-pixel
+    /// reference, the squared-residual C0 refit, and an error for a joint
+    /// that is never observed.
+    pub fn paper() -> Self {
+        SynthParams {
+            lambda: Lambda::fixed(Lambda::DEFAULT_FIXED),
+            max_segment_frames: 60,
+            fit: FitParams::default(),
+            scale: Scale::Auto,
+            min_confidence: 0.0,
+            unobserved_joints: UnobservedJoints::Error,
+            continuity: Self::DEFAULT_CONTINUITY,
+            refit_norm: RefitNorm::Squared,
+        }
+    }
+
     /// The default of [`SynthParams::continuity`].
     pub const DEFAULT_CONTINUITY: Continuity = Continuity::C0;
 
