@@ -4,13 +4,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 
 use mp_geom::{Track, Units};
+use mp_pipeline::{CancelToken, ExtractParams, Poses};
 use mp_pose::draw::{contact_sheet, draw_pose, resize, Canvas, ContactSheetParams, DrawStyle};
-use mp_pose::extract::{
-    extract, open_estimator_with, ExtractOptions, ModelChoice, SmoothingParams,
-};
+use mp_pose::extract::ModelChoice;
 use mp_pose::video::{open_source, VideoWriter};
 use mp_pose::SessionParams;
 
@@ -68,22 +66,6 @@ fn pose_err(e: mp_pose::PoseError) -> anyhow::Error {
     anyhow::anyhow!("{e}")
 }
 
-fn progress_bar(total: Option<usize>, quiet: bool) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    let pb = match total {
-        Some(n) => ProgressBar::new(n as u64),
-        None => ProgressBar::new_spinner(),
-    };
-    if let Ok(style) = ProgressStyle::with_template(
-        "{spinner} {msg} [{bar:40}] {pos}/{len} frames ({per_sec}, eta {eta})",
-    ) {
-        pb.set_style(style.progress_chars("=> "));
-    }
-    pb
-}
-
 /// ` (pose model on N of M frames)` when it skipped some, else nothing.
 fn posed_note(posed: &[bool]) -> String {
     let n = posed.iter().filter(|&&p| p).count();
@@ -94,186 +76,86 @@ fn posed_note(posed: &[bool]) -> String {
     }
 }
 
-/// The progress bar and extraction options of `mp extract`.
-fn progress_and_options(
-    a: &ExtractArgs,
-    frame_count: Option<usize>,
-    fps: f64,
-    rate: mp_pipeline::PoseRate,
-    name: &str,
-) -> (ProgressBar, ExtractOptions) {
-    let total = match (frame_count, a.max_frames) {
-        (Some(n), Some(m)) => Some(n.min(m)),
-        (n, None) => n,
-        (None, m) => m,
+/// `mp extract`'s settings as the library's parameters.
+fn extract_params(a: &ExtractArgs) -> Result<(mp_pipeline::Params, ExtractParams)> {
+    let mut params = mp_pipeline::Params::default();
+    let pose = &mut params.pose;
+    pose.model = ModelChoice::parse(&a.model).map_err(pose_err)?;
+    pose.rate = mp_pipeline::PoseRate::parse(&a.pose_fps)?;
+    pose.device = mp_pose::runtime::Device::parse(&a.device).map_err(|e| anyhow::anyhow!("{e}"))?;
+    pose.threads = a.threads;
+    pose.recover_s = a.recover;
+    pose.max_frames = a.max_frames;
+    pose.all_joints = a.all_joints;
+    pose.people = !a.single_person;
+    pose.tracker.max_people = a.max_people;
+    let what = if a.world {
+        ExtractParams::world(a.smooth)
+    } else {
+        ExtractParams::pixels(a.smooth)
     };
-    let pb = progress_bar(total, a.quiet);
-    pb.set_message(name.to_string());
-    let opts = ExtractOptions {
-        smoothing: a.smooth.then(SmoothingParams::default),
-        max_frames: a.max_frames,
-        pose_every: rate.stride(fps),
-        ..ExtractOptions::default()
-    };
-    (pb, opts)
+    Ok((params, what))
 }
 
 /// `mp extract`: keypoints of a video or image written as a track.
 pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     crate::track_arg::refuse_track_for_extract(&a.video)?;
-    let model = ModelChoice::parse(&a.model).map_err(pose_err)?;
-    let rate = mp_pipeline::PoseRate::parse(&a.pose_fps)?;
-    let device = mp_pose::runtime::Device::parse(&a.device).map_err(|e| anyhow::anyhow!("{e}"))?;
-    if a.world && model == ModelChoice::MoveNet {
-        bail!("--world needs a BlazePose model (full or lite); MoveNet has no world coordinates");
-    }
-    if !a.world && mp_geom::io::needs_3d(&a.output) {
-        bail!(
-            "{} holds 3D motion and keypoints are 2D pixels: add --world for BlazePose's 3D \
-             world coordinates (metres), or write .npz, .csv, .parquet or .pose",
-            a.output.display()
-        );
-    }
-    let people = !a.single_person
-        && !a.world
-        && model.landmark_model().is_some()
-        && mp_pipeline::is_video(&a.video);
-    if people {
-        return extract_people_cmd(a, model, rate, device);
-    }
-    let source = open_source(&a.video).map_err(pose_err)?;
-    let mut est = open_estimator_with(
-        model,
-        SessionParams {
-            intra_threads: a.threads,
-            device,
-            ..Default::default()
-        },
-        a.recover,
-    )
-    .map_err(pose_err)?;
-    let (pb, opts) = progress_and_options(a, source.frame_count, source.fps, rate, est.name());
-    let ex = extract(source, est.as_mut(), &opts, |done, _| {
-        pb.set_position(done as u64)
-    })
-    .map_err(pose_err)
-    .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
-    pb.finish_and_clear();
-    let track: Track = if a.world {
-        ex.world
-            .clone()
-            .context("the model gave no world coordinates")?
-    } else {
-        ex.track.clone()
-    };
-    let mut track = mp_pipeline::pose_rate::fill_track(&track, &ex.posed)?;
-    if !a.all_joints && !a.world && track.skeleton().name != "coco17" {
-        track = track.to_coco17().context("mapping to COCO-17")?;
-    }
-    // Pixels keep the frame they are in (the scale of their programs);
-    // world coordinates are metres.
-    let frame = (!a.world).then_some((ex.width, ex.height));
-    mp_geom::io::write_track_framed(&a.output, &track, frame)
+    let (params, what) = extract_params(a)?;
+    mp_pipeline::extract::check_output(&a.output, what)?;
+    let bars = crate::progress::Bars::new(a.quiet);
+    let ex = mp_pipeline::extract(&a.video, &params, what, &bars, &CancelToken::new())
+        .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
+    drop(bars);
+    ex.write(&a.output)
         .with_context(|| format!("writing {}", a.output.display()))?;
-    if !a.quiet {
-        println!(
+    if let Some(w) = &ex.warning {
+        eprintln!("note: {w}");
+    }
+    if a.quiet {
+        return Ok(());
+    }
+    match &ex.poses {
+        Poses::One(track) => println!(
             "{}: {} frames at {:.3} fps{}, pose in {:.1}% ({} joints, {}), {:.1} frames/s → {}",
             a.video.display(),
             track.n_frames(),
             track.fps(),
             posed_note(&ex.posed),
-            100.0 * ex.found_fraction(),
+            100.0 * ex.found_fraction,
             track.n_joints(),
             track.units().as_str(),
-            ex.estimator_fps(),
+            ex.model_fps,
             a.output.display()
-        );
-    }
-    Ok(())
-}
-
-/// `mp extract` on a video with several-people tracking: every person with
-/// their id (npz with a person axis, JSON or `.mpt`; a CSV holds the main
-/// person only).
-fn extract_people_cmd(
-    a: &ExtractArgs,
-    model: ModelChoice,
-    rate: mp_pipeline::PoseRate,
-    device: mp_pose::runtime::Device,
-) -> Result<()> {
-    let source = open_source(&a.video).map_err(pose_err)?;
-    let Some(lm) = model.landmark_model() else {
-        bail!("several people need BlazePose (full or lite)");
-    };
-    let mut est = mp_pose::MultiPose::new(mp_pose::MultiPoseParams {
-        pose: mp_pose::BlazePoseParams {
-            model: lm,
-            session: SessionParams {
-                intra_threads: a.threads,
-                device,
-                ..Default::default()
-            },
-            recover_s: a.recover,
-            ..Default::default()
-        },
-        people: mp_pose::PeopleParams {
-            max_people: a.max_people,
-            ..Default::default()
-        },
-    })
-    .map_err(pose_err)?;
-    let (pb, opts) = progress_and_options(a, source.frame_count, source.fps, rate, est.name());
-    let ex = mp_pose::extract_people(source, &mut est, &opts, |done, _| {
-        pb.set_position(done as u64)
-    })
-    .map_err(pose_err)
-    .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;
-    pb.finish_and_clear();
-    let people = mp_pipeline::pose_rate::fill_people(ex.people.clone(), &ex.posed)?;
-    let people = if !a.all_joints {
-        people.map_tracks(|t| t.to_coco17())?
-    } else {
-        people
-    };
-    if !mp_geom::io::holds_people(&a.output) {
-        let track = people
-            .main_track()
-            .with_context(|| format!("nobody was found in {}", a.video.display()))?;
-        mp_geom::io::write_track(&a.output, &track)
-    } else {
-        mp_geom::io::write_people_framed(&a.output, &people, Some((ex.width, ex.height)))
-    }
-    .with_context(|| format!("writing {}", a.output.display()))?;
-    if let Some(w) = ex.warning() {
-        eprintln!("note: {w}");
-    }
-    if !a.quiet {
-        println!(
-            "{}: {} frames at {:.3} fps{}, {} {} tracked (someone in {:.1}% of frames), {:.1} frames/s → {}",
-            a.video.display(),
-            people.n_frames(),
-            people.fps(),
-            posed_note(&ex.posed),
-            people.len(),
-            if people.len() == 1 { "person" } else { "people" },
-            100.0 * ex.found_fraction(),
-            ex.estimator_fps(),
-            a.output.display()
-        );
-        for p in people.people() {
+        ),
+        Poses::People(people) => {
             println!(
-                "  person {}{}: frames {}–{} (found in {})",
-                p.id,
-                if people.main_person().map(|m| m.id) == Some(p.id) {
-                    " (main)"
-                } else {
-                    ""
-                },
-                p.first_frame,
-                p.last_frame(),
-                p.frames_found()
+                "{}: {} frames at {:.3} fps{}, {} {} tracked (someone in {:.1}% of frames), {:.1} frames/s → {}",
+                a.video.display(),
+                people.n_frames(),
+                people.fps(),
+                posed_note(&ex.posed),
+                people.len(),
+                if people.len() == 1 { "person" } else { "people" },
+                100.0 * ex.found_fraction,
+                ex.model_fps,
+                a.output.display()
             );
+            for p in people.people() {
+                println!(
+                    "  person {}{}: frames {}–{} (found in {})",
+                    p.id,
+                    if people.main_person().map(|m| m.id) == Some(p.id) {
+                        " (main)"
+                    } else {
+                        ""
+                    },
+                    p.first_frame,
+                    p.last_frame(),
+                    p.frames_found()
+                );
+            }
         }
+        _ => {}
     }
     Ok(())
 }
@@ -395,7 +277,7 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
         }
         "mp4" | "mkv" | "mov" => {
             let mut writer = VideoWriter::create(&a.output, w, h, source.fps).map_err(pose_err)?;
-            let pb = progress_bar(source.frame_count, a.quiet);
+            let pb = crate::progress::bar(source.frame_count, "overlay", a.quiet);
             for frame in source.frames.by_ref() {
                 let mut f = frame.map_err(pose_err)?;
                 draw_frame(&mut f.rgb, w, h, &track, f.index, &style);

@@ -17,6 +17,9 @@
 //!    kept loaded between videos.
 //! 7. [`batch()`]: [`run`] over a folder or a list of inputs, several at
 //!    once, each into its own folder, with a resumable `manifest.jsonl`.
+//! 8. [`extract()`]: a video or still image → keypoints (everyone in view,
+//!    or one person, or BlazePose's world coordinates) to write as a track
+//!    file (`mp extract`).
 //!
 //! [`Params::default()`] holds the libraries' defaults, validated once; an
 //! [`Observer`] receives progress and stage timings, and a
@@ -34,6 +37,7 @@
 pub mod analysis;
 pub mod batch;
 pub mod error;
+pub mod extract;
 pub mod frame_signal;
 pub mod input;
 pub mod keypoints;
@@ -52,6 +56,7 @@ pub use batch::{
     ItemStatus,
 };
 pub use error::{PipelineError, Result};
+pub use extract::{extract, ExtractParams, Extracted, Poses};
 pub use input::{is_video, Input, VIDEO_EXTENSIONS};
 pub use keypoints::{keypoints, Keep, Keypoints, ModelSlot};
 pub use mp_abstract::{Analysis, CountMethod, CountSignal, CountedInterval, Counts};

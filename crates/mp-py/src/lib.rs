@@ -16,7 +16,7 @@ mod track;
 
 use std::path::PathBuf;
 
-use mp_pipeline::{CancelToken, Input, Keep, Params, Silent};
+use mp_pipeline::{CancelToken, Input, Params, Silent};
 use pyo3::prelude::*;
 
 use people::PyPeople;
@@ -101,24 +101,26 @@ fn read_track(py: Python<'_>, path: PathBuf, fps: Option<f64>) -> PyResult<PyTra
     Ok(PyTrack::new(track::read_track_file(py, &path, fps)?.track))
 }
 
-/// Keypoints of a video (as `mp extract`, COCO-17 joints unless
+/// Keypoints of a video or a still image, as `mp extract` makes them (the
+/// same library call, `mp_pipeline::extract`; COCO-17 joints unless
 /// `all_joints`): BlazePose `full` (default), `lite`, or `movenet`.
-/// `recover_s` (BlazePose, `single_person`): after the tracked person is
-/// lost, the seconds during which the region of the last pose is tried again
-/// (default 0, MediaPipe's tracking). Every person in view is tracked (at
+/// `recover_s` (BlazePose): after the tracked person is lost, the seconds
+/// during which the region of the last pose is tried again (default 0,
+/// MediaPipe's tracking). Every person in view of a video is tracked (at
 /// most `max_people` at once) unless `single_person` (MediaPipe's
 /// single-person pipeline); the `Track` returned is the main person's over
-/// the whole video, or with `people=True` every tracked person, as `People`
-/// (the keypoint stage of `mp run`). `world=True`: BlazePose's world
-/// landmarks instead (metres, hip-centred, 3D, all 33; as `mp extract
-/// --world`), the input of `refine`. `pose_fps`: how often the pose model
-/// runs, a number of poses a second, `"auto"` (12 a second) or `"all"`
-/// (default); the frames between are filled from the motion (as `mp
-/// extract --pose-fps`). `device`: where the pose model runs, `"auto"`
-/// (default: the GPU where ONNX Runtime's CUDA build and a GPU are there),
-/// `"cpu"`, `"cuda"` or `"cuda:N"`.
+/// the whole video, or with `people=True` every tracked person, as `People`.
+/// `world=True`: BlazePose's world landmarks instead (metres, hip-centred,
+/// 3D, all 33; as `mp extract --world`), the input of `refine`. `pose_fps`:
+/// how often the pose model runs, a number of poses a second, `"auto"` (12 a
+/// second) or `"all"` (default); the frames between are filled from the
+/// motion (as `mp extract --pose-fps`). `device`: where the pose model runs,
+/// `"auto"` (default: the GPU where ONNX Runtime's CUDA build and a GPU are
+/// there), `"cpu"`, `"cuda"` or `"cuda:N"`. `smooth=True`: One-Euro
+/// smoothing of the keypoints (MediaPipe's `smooth_landmarks`, `mp extract
+/// --smooth`).
 #[pyfunction]
-#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false, world=false, pose_fps=None, device=None))]
+#[pyo3(signature = (video, model="full", max_frames=None, threads=None, all_joints=false, recover_s=None, people=false, max_people=None, single_person=false, world=false, pose_fps=None, device=None, smooth=false))]
 #[allow(clippy::too_many_arguments)]
 fn extract<'py>(
     py: Python<'py>,
@@ -134,73 +136,45 @@ fn extract<'py>(
     world: bool,
     pose_fps: Option<&Bound<'py, PyAny>>,
     device: Option<&str>,
+    smooth: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let mut params = params_with(Some(model), threads, max_frames, all_joints, None, None)?;
     pose_rate_arg(&mut params, pose_fps)?;
     device_arg(&mut params, device)?;
-    if world {
-        if params.pose.rate != mp_pipeline::PoseRate::Every {
-            return Err(errors::ParamError::new_err(
-                "world=True poses every frame: pose_fps applies to image keypoints",
-            ));
-        }
-        if people {
-            return Err(errors::ParamError::new_err(
-                "world=True follows one person (MediaPipe's world landmarks); people=True needs \
-                 image coordinates",
-            ));
-        }
-        let session = params.pose.session();
-        let opts = mp_pose::extract::ExtractOptions {
-            max_frames,
-            ..Default::default()
-        };
-        let model = params.pose.model;
-        let t = py
-            .detach(|| mp_pose::extract::world_landmarks(&video, model, session, &opts))
-            .map_err(|e| errors::pipeline(mp_pipeline::PipelineError::Pose(e)))?;
-        return Ok(Bound::new(py, PyTrack::new(t))?.into_any());
-    }
     if let Some(r) = recover_s {
         params.pose.recover_s = r;
     }
     people::apply(&mut params, None, max_people, single_person)?;
-    // The track of the main person needs no one else's analysis (nor the
-    // second decoding pass that reads their boxes).
-    params.person.choice = mp_pipeline::PersonChoice::Main;
+    if world && people {
+        return Err(errors::ParamError::new_err(
+            "world=True follows one person (MediaPipe's world landmarks); people=True needs \
+             image coordinates",
+        ));
+    }
     if people && (single_person || params.pose.model.landmark_model().is_none()) {
         return Err(errors::ParamError::new_err(
             "people=True needs the people tracker: a BlazePose model (full, lite or heavy) \
              without single_person",
         ));
     }
-    let input = Input::open(&video, None).map_err(errors::pipeline)?;
-    if !matches!(input, Input::Video { .. }) {
-        return Err(errors::PoseError::new_err(format!(
-            "{} is not a video (extensions: {})",
-            video.display(),
-            mp_pipeline::VIDEO_EXTENSIONS.join(", ")
-        )));
-    }
-    let (kp, _) = py
-        .detach(|| {
-            mp_pipeline::keypoints(
-                input,
-                &params,
-                Keep::default(),
-                &Silent,
-                &CancelToken::new(),
-            )
-        })
+    let what = if world {
+        mp_pipeline::ExtractParams::world(smooth)
+    } else {
+        mp_pipeline::ExtractParams::pixels(smooth)
+    };
+    let ex = py
+        .detach(|| mp_pipeline::extract(&video, &params, what, &Silent, &CancelToken::new()))
         .map_err(errors::pipeline)?;
     if people {
-        let p = match kp.people {
-            Some(p) => p,
-            None => mp_geom::People::from_track(kp.track).map_err(errors::geom)?,
+        let p = match ex.poses {
+            mp_pipeline::Poses::People(p) => p,
+            mp_pipeline::Poses::One(t) => mp_geom::People::from_track(t).map_err(errors::geom)?,
+            _ => return Err(errors::PoseError::new_err("no keypoints were extracted")),
         };
         return Ok(Bound::new(py, PyPeople::new(p))?.into_any());
     }
-    Ok(Bound::new(py, PyTrack::new(kp.track))?.into_any())
+    let track = ex.main_track().map_err(errors::pipeline)?;
+    Ok(Bound::new(py, PyTrack::new(track))?.into_any())
 }
 
 /// The concrete program of a track (as `mp fit`): `frame_size` is the

@@ -182,8 +182,23 @@ def test_pose_on_half_the_frames(data):
     for bad in [0, -1.5, "fast"]:
         with pytest.raises(mp.ParamError, match="pose_fps"):
             mp.extract(video, max_frames=2, pose_fps=bad)
-    with pytest.raises(mp.ParamError, match="pose_fps"):
-        mp.extract(video, max_frames=2, pose_fps=15, world=True)
+    # World coordinates on half the frames, as `mp extract --world --pose-fps`.
+    world = mp.extract(video, max_frames=4, pose_fps=15, world=True)
+    assert world.n_frames == 4 and world.units == "m" and world.positions.shape[2] == 3
+
+
+def test_extract_reads_a_still_image_and_smooths_as_mp_extract(data):
+    image = str(data("coco_sample/000000000785.jpg"))
+    still = mp.extract(image)
+    assert still.n_frames == 1 and still.units == "px" and still.skeleton == "coco17"
+    assert (still.confidence > 0).sum() >= 10
+    video = str(data("golfdb/golf_swing.mp4"))
+    raw = mp.extract(video, max_frames=12)
+    smooth = mp.extract(video, max_frames=12, smooth=True)
+    assert smooth.n_frames == raw.n_frames == 12
+    moved = np.linalg.norm(smooth.positions - raw.positions, axis=-1)
+    # One-Euro smoothing changes the keypoints, by a few pixels at most.
+    assert 0.0 < np.median(moved) < 10.0
 
 
 def test_device_is_checked(data):

@@ -237,6 +237,7 @@ def extract(
     world: bool = False,
     pose_fps: Union[float, str, None] = None,
     device: Optional[str] = None,
+    smooth: bool = False,
 ) -> Track: ...
 @overload
 def extract(
@@ -253,6 +254,7 @@ def extract(
     world: Literal[False] = False,
     pose_fps: Union[float, str, None] = None,
     device: Optional[str] = None,
+    smooth: bool = False,
 ) -> People: ...
 def fit(
     track: TrackLike,
