@@ -11,6 +11,7 @@ use anyhow::Context;
 use clap::Args;
 use mp_concrete::synthetic::synthetic_track;
 use mp_concrete::{segment_exhaustive, synthesize, Scale, SynthParams};
+use mp_eval::table::{Align::Left, Align::Right, Table};
 
 /// Arguments of `cargo xtask bench`.
 #[derive(Args, Debug)]
@@ -61,7 +62,7 @@ fn repeated_performer(reps: usize) -> anyhow::Result<mp_geom::Track> {
     )?)
 }
 
-/// The 17-joint performer at 10,206 frames (default `SynthParams`: scale from
+/// The 17-joint performer at 10,206 frames (`SynthParams::paper()`: scale from
 /// the track, λ = 1600; and the analysis default that `mp fit` and `mp run`
 /// use, the spread λ with the Euclidean refit), and the exhaustive reference
 /// DP against the search at 1,134 frames.
@@ -69,19 +70,24 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
     let analysis = mp_pipeline::Params::default().analysis.synth;
     // (track repetitions, parameters, their label, the exhaustive reference too)
     let runs = [
-        (2usize, SynthParams::default(), "`SynthParams`", true),
-        (18, SynthParams::default(), "`SynthParams`", false),
+        (2usize, SynthParams::paper(), "`paper()`", true),
+        (18, SynthParams::paper(), "`paper()`", false),
         (18, analysis, "analysis", false),
     ];
     writeln!(
         md,
-        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D) repeated to T frames, with the default `SynthParams` (fixed λ = 1600) and with the analysis default that `mp fit` and `mp run` use (`mp_pipeline::Params::default()`: λ from the local spread held for one second, the Euclidean C0 refit); `search` is `mp_concrete::synthesize` (exact branch and bound), `exhaustive` the reference `mp_concrete::segment_exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
+        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D) repeated to T frames, with `SynthParams::paper()` (fixed λ = 1600) and with the analysis default that `mp fit` and `mp run` use (`mp_pipeline::Params::default()`: λ from the local spread held for one second, the Euclidean C0 refit); `search` is `mp_concrete::synthesize` (exact branch and bound), `exhaustive` the reference `mp_concrete::segment_exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
     )?;
-    writeln!(
-        md,
-        "| track | parameters | method | wall (s) | CPU (s) | segments | cost |"
-    )?;
-    writeln!(md, "|---|---|---|---:|---:|---:|---:|")?;
+    let mut table = Table::new([
+        "track",
+        "parameters",
+        "method",
+        "wall (s)",
+        "CPU (s)",
+        "segments",
+        "cost",
+    ])
+    .align([Left, Left, Left, Right, Right, Right, Right]);
     for (reps, params, label, exhaustive) in &runs {
         let track = repeated_performer(*reps)?;
         let c0 = cpu_seconds();
@@ -92,13 +98,15 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
             cpu_seconds().zip(c0).map(|(a, b)| a - b),
         );
         let cpu = cpu.map_or("–".into(), |c| format!("{c:.2}"));
-        writeln!(
-            md,
-            "| performer ×{reps} ({} frames, 17 joints) | {label} | search | {wall:.3} | {cpu} | {} | {:.1} |",
-            track.n_frames(),
-            syn.program.n_segments(),
-            syn.segmentation.cost
-        )?;
+        table.row([
+            format!("performer ×{reps} ({} frames, 17 joints)", track.n_frames()),
+            label.to_string(),
+            "search".to_string(),
+            format!("{wall:.3}"),
+            cpu,
+            syn.program.n_segments().to_string(),
+            format!("{:.1}", syn.segmentation.cost),
+        ]);
         eprintln!("performer ×{reps} ({label}): search {wall:.3} s");
         if *exhaustive {
             let c0 = cpu_seconds();
@@ -109,54 +117,64 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
                 cpu_seconds().zip(c0).map(|(a, b)| a - b),
             );
             let cpu = cpu.map_or("–".into(), |c| format!("{c:.2}"));
-            writeln!(
-                md,
-                "| performer ×{reps} ({} frames, 17 joints) | {label} | exhaustive | {wall:.3} | {cpu} | {} | {:.1} |",
-                track.n_frames(),
-                s.n_segments(),
-                s.cost
-            )?;
+            table.row([
+                format!("performer ×{reps} ({} frames, 17 joints)", track.n_frames()),
+                label.to_string(),
+                "exhaustive".to_string(),
+                format!("{wall:.3}"),
+                cpu,
+                s.n_segments().to_string(),
+                format!("{:.1}", s.cost),
+            ]);
             eprintln!("performer ×{reps}: exhaustive {wall:.3} s");
         }
     }
+    md.push_str(&table.markdown());
     writeln!(
         md,
         "\nThe search's work on the same tracks (`mp_concrete::segment_with_stats`; counts, the same on every machine): candidates (start, end) visited, dropped on `E[k] + λ`, dropped by the O(1) bounds, survivors, survivors dropped on the single-precision pass and the frames it read, exact joint evaluations per survivor and the frames they read, exact circle fits and their frames:\n"
     )?;
-    writeln!(
-        md,
-        "| track | parameters | candidates | dropped on λ | dropped by bounds | survivors | dropped in single precision | single-precision frames | exact joints / survivor | exact frames | circle fits | circle frames |"
-    )?;
-    writeln!(
-        md,
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    )?;
+    let mut table = Table::new([
+        "track",
+        "parameters",
+        "candidates",
+        "dropped on λ",
+        "dropped by bounds",
+        "survivors",
+        "dropped in single precision",
+        "single-precision frames",
+        "exact joints / survivor",
+        "exact frames",
+        "circle fits",
+        "circle frames",
+    ])
+    .align([Left, Left].into_iter().chain([Right; 10]));
     for (reps, params, label, _) in &runs {
         let track = repeated_performer(*reps)?;
         let (_, st) = mp_concrete::segment_with_stats(&track, params)?;
-        writeln!(
-            md,
-            "| performer ×{reps} ({} frames) | {label} | {} | {} | {} | {} | {} | {} | {:.1} | {} | {} | {} |",
-            track.n_frames(),
-            st.candidates,
-            st.pruned_lambda,
-            st.pruned_bounds,
-            st.survivors,
-            st.dropped_coarse,
-            st.coarse_frames,
-            st.joints_per_survivor(),
-            st.exact_frames,
-            st.circle_fits,
-            st.circle_frames
-        )?;
+        table.row([
+            format!("performer ×{reps} ({} frames)", track.n_frames()),
+            label.to_string(),
+            st.candidates.to_string(),
+            st.pruned_lambda.to_string(),
+            st.pruned_bounds.to_string(),
+            st.survivors.to_string(),
+            st.dropped_coarse.to_string(),
+            st.coarse_frames.to_string(),
+            format!("{:.1}", st.joints_per_survivor()),
+            st.exact_frames.to_string(),
+            st.circle_fits.to_string(),
+            st.circle_frames.to_string(),
+        ]);
     }
+    md.push_str(&table.markdown());
     Ok(())
 }
 
 fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     let params = SynthParams {
         scale: Scale::UnitScale { unit_scale: 1.0 },
-        ..SynthParams::default()
+        ..SynthParams::paper()
     };
     writeln!(
         md,
@@ -167,11 +185,15 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
          CPU = user + system seconds of the process (other jobs sharing the machine inflate wall time, not CPU time).\n",
         rayon::current_num_threads()
     )?;
-    writeln!(
-        md,
-        "| frames T | runs | median time (s) | median CPU (s) | frames / s | segments |"
-    )?;
-    writeln!(md, "|---:|---:|---:|---:|---:|---:|")?;
+    let mut table = Table::new([
+        "frames T",
+        "runs",
+        "median time (s)",
+        "median CPU (s)",
+        "frames / s",
+        "segments",
+    ])
+    .align([Right; 6]);
     let mut times: Vec<(usize, f64)> = Vec::new();
     let mut cpu_times: Vec<(usize, f64)> = Vec::new();
     for &n in &a.sizes {
@@ -197,16 +219,20 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
             .get(cs.len() / 2)
             .map_or("–".into(), |c| format!("{c:.2}"));
         eprintln!("T = {n}: {med:.3} s ({runs} runs), {segs} segments");
-        writeln!(
-            md,
-            "| {n} | {runs} | {med:.3} | {cpu} | {:.0} | {segs} |",
-            n as f64 / med
-        )?;
+        table.row([
+            n.to_string(),
+            runs.to_string(),
+            format!("{med:.3}"),
+            cpu,
+            format!("{:.0}", n as f64 / med),
+            segs.to_string(),
+        ]);
         times.push((n, med));
         if let Some(c) = cs.get(cs.len() / 2) {
             cpu_times.push((n, *c));
         }
     }
+    md.push_str(&table.markdown());
     let get = |n: usize| times.iter().find(|(m, _)| *m == n).map(|(_, t)| *t);
     if let (Some(a10), Some(a100)) = (get(10_000), get(100_000)) {
         writeln!(
@@ -230,8 +256,9 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Parses criterion's report (`name\n   time:   [a b c]` or `name   time:   [a b c]`) into rows.
-fn parse_criterion(stdout: &str, md: &mut String) -> std::fmt::Result {
+/// Parses criterion's report (`name\n   time:   [a b c]` or `name   time:   [a b c]`) into rows
+/// (bench, time) of `table`.
+fn parse_criterion(stdout: &str, table: &mut Table) {
     let mut last_name = String::new();
     for line in stdout.lines() {
         let trimmed = line.trim();
@@ -243,7 +270,7 @@ fn parse_criterion(stdout: &str, md: &mut String) -> std::fmt::Result {
                 name.to_string()
             };
             let value = trimmed[pos + 5..].trim();
-            writeln!(md, "| `{name}` | {value} |")?;
+            table.row([format!("`{name}`"), value.to_string()]);
         } else if !trimmed.is_empty()
             && !line.starts_with(' ')
             && !trimmed.starts_with("Benchmarking")
@@ -254,7 +281,6 @@ fn parse_criterion(stdout: &str, md: &mut String) -> std::fmt::Result {
             last_name = trimmed.to_string();
         }
     }
-    Ok(())
 }
 
 fn criterion(a: &BenchArgs, md: &mut String) -> anyhow::Result<bool> {
@@ -283,9 +309,9 @@ fn criterion(a: &BenchArgs, md: &mut String) -> anyhow::Result<bool> {
             )?;
             continue;
         }
-        writeln!(md, "| bench | time |")?;
-        writeln!(md, "|---|---|")?;
-        parse_criterion(&stdout, md)?;
+        let mut table = Table::new(["bench", "time"]);
+        parse_criterion(&stdout, &mut table);
+        md.push_str(&table.markdown());
         writeln!(md)?;
     }
     Ok(all_ok)
@@ -311,4 +337,20 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
         anyhow::bail!("some criterion benches failed (see {})", out.display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn criterion_rows() {
+        let stdout = "Benchmarking a/b\nfit/line\n                        time:   [1.0 ms 1.1 ms 1.2 ms]\nsolo   time:   [2 µs 3 µs 4 µs]\n";
+        let mut table = Table::new(["bench", "time"]);
+        parse_criterion(stdout, &mut table);
+        assert_eq!(
+            table.markdown(),
+            "| bench | time |\n|---|---|\n| `fit/line` | [1.0 ms 1.1 ms 1.2 ms] |\n| `solo` | [2 µs 3 µs 4 µs] |\n"
+        );
+    }
 }

@@ -36,8 +36,8 @@
 //! unigram model.
 
 use crate::stats::mean;
+use crate::table::{Align::Left, Align::Right, Table};
 use std::collections::HashMap;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -448,57 +448,75 @@ fn f(v: &Value) -> String {
 }
 
 fn markdown(rows: &[Value]) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "| motion | frames @ fps | K | segments | F | purity | NMI | sentences | NT | rules | DL bits (one sentence) | d(t, t+1) source | time sym / gram / synth s |"
-    );
-    let _ = writeln!(
-        s,
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
+    let mut t = Table::new([
+        "motion",
+        "frames @ fps",
+        "K",
+        "segments",
+        "F",
+        "purity",
+        "NMI",
+        "sentences",
+        "NT",
+        "rules",
+        "DL bits (one sentence)",
+        "d(t, t+1) source",
+        "time sym / gram / synth s",
+    ])
+    .align([Left].into_iter().chain([Right; 12]));
     for r in rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} @ {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({}) | {} | {:.1} / {:.1} / {:.1} |",
-            r["name"].as_str().unwrap_or(""),
-            r["frames"],
-            f(&r["fps"]),
-            r["k"],
-            r["symbols"]["segments"],
+        t.row([
+            r["name"].as_str().unwrap_or("").to_string(),
+            format!("{} @ {}", r["frames"], f(&r["fps"])),
+            r["k"].to_string(),
+            r["symbols"]["segments"].to_string(),
             f(&r["symbols"]["f"]),
             f(&r["symbols"]["purity"]),
             f(&r["symbols"]["nmi"]),
-            r["grammar"]["sentences"],
-            r["grammar"]["nonterminals"],
-            r["grammar"]["rules"],
-            f(&r["grammar"]["dl_bits"]),
-            f(&r["grammar"]["dl_single_sentence_bits"]),
+            r["grammar"]["sentences"].to_string(),
+            r["grammar"]["nonterminals"].to_string(),
+            r["grammar"]["rules"].to_string(),
+            format!(
+                "{} ({})",
+                f(&r["grammar"]["dl_bits"]),
+                f(&r["grammar"]["dl_single_sentence_bits"])
+            ),
             f(&r["synthesis"]["source_frame_step_distance_mean"]),
-            r["seconds"]["symbols"].as_f64().unwrap_or(0.0),
-            r["seconds"]["grammar"].as_f64().unwrap_or(0.0),
-            r["seconds"]["synthesis"].as_f64().unwrap_or(0.0),
-        );
+            format!(
+                "{:.1} / {:.1} / {:.1}",
+                r["seconds"]["symbols"].as_f64().unwrap_or(0.0),
+                r["seconds"]["grammar"].as_f64().unwrap_or(0.0),
+                r["seconds"]["synthesis"].as_f64().unwrap_or(0.0)
+            ),
+        ]);
     }
-    let _ = writeln!(s);
-    let _ = writeln!(
-        s,
-        "| motion | K | method | segments | seam mean | seam p90 | gap mean (unblended) | gap p90 | 2-gram | 3-gram | 4-gram | symbol run (source) | label run (source) | novel sentences |"
-    );
-    let _ = writeln!(
-        s,
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
+    let mut s = t.markdown();
+    s.push('\n');
+    let mut t = Table::new([
+        "motion",
+        "K",
+        "method",
+        "segments",
+        "seam mean",
+        "seam p90",
+        "gap mean (unblended)",
+        "gap p90",
+        "2-gram",
+        "3-gram",
+        "4-gram",
+        "symbol run (source)",
+        "label run (source)",
+        "novel sentences",
+    ])
+    .align([Left, Right, Left].into_iter().chain([Right; 11]));
     for r in rows {
         for m in ["grammar", "fsm"] {
             let x = &r["synthesis"][m];
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {} | {} | {} ({}) | {} ({}) | {} |",
-                r["name"].as_str().unwrap_or(""),
-                r["k"],
-                m,
-                x["segments_mean"].as_f64().unwrap_or(0.0),
+            t.row([
+                r["name"].as_str().unwrap_or("").to_string(),
+                r["k"].to_string(),
+                m.to_string(),
+                format!("{:.1}", x["segments_mean"].as_f64().unwrap_or(0.0)),
                 f(&x["seam_distance"]["mean"]),
                 f(&x["seam_distance"]["p90"]),
                 f(&x["seam_gap_before_blending"]["mean"]),
@@ -506,14 +524,21 @@ fn markdown(rows: &[Value]) -> String {
                 f(&x["ngram_in_training"]["2"]),
                 f(&x["ngram_in_training"]["3"]),
                 f(&x["ngram_in_training"]["4"]),
-                f(&x["symbol_run_length"]),
-                f(&r["symbols"]["symbol_run_length"]),
-                f(&x["label_run_length_segments"]),
-                f(&r["symbols"]["label_run_length_segments"]),
+                format!(
+                    "{} ({})",
+                    f(&x["symbol_run_length"]),
+                    f(&r["symbols"]["symbol_run_length"])
+                ),
+                format!(
+                    "{} ({})",
+                    f(&x["label_run_length_segments"]),
+                    f(&r["symbols"]["label_run_length_segments"])
+                ),
                 f(&x["novel_sentences"]),
-            );
+            ]);
         }
     }
+    s.push_str(&t.markdown());
     s
 }
 
@@ -584,6 +609,36 @@ mod tests {
         assert_eq!(
             p90(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]),
             9.0
+        );
+    }
+
+    #[test]
+    fn markdown_tables_layout() {
+        let x = json!({"segments_mean": 4.0, "seam_distance": {"mean": 0.5, "p90": 1.0},
+            "seam_gap_before_blending": {"mean": 2.0, "p90": 150.0},
+            "ngram_in_training": {"2": 1.0, "3": 0.5, "4": null},
+            "symbol_run_length": 1.5, "label_run_length_segments": 2.5, "novel_sentences": 0.25});
+        let row = json!({"name": "walk", "frames": 100, "fps": 30.0, "k": 6,
+            "symbols": {"segments": 12, "f": 0.9, "purity": 0.8, "nmi": 0.7,
+                "symbol_run_length": 1.0, "label_run_length_segments": 2.0},
+            "grammar": {"sentences": 3, "nonterminals": 2, "rules": 5, "dl_bits": 1234.5,
+                "dl_single_sentence_bits": 99.0},
+            "synthesis": {"source_frame_step_distance_mean": 0.125, "grammar": x.clone(), "fsm": x},
+            "seconds": {"symbols": 1.25, "grammar": 0.5, "synthesis": 2.0}});
+        let line = "| walk | 4.0 | 0.500 | 1.000 | 2.000 | 150 | 1.000 | 0.500 | – | 1.500 (1.000) | 2.500 (2.000) | 0.250 |";
+        assert_eq!(
+            markdown(&[row]),
+            format!(
+                "| motion | frames @ fps | K | segments | F | purity | NMI | sentences | NT | rules | DL bits (one sentence) | d(t, t+1) source | time sym / gram / synth s |\n\
+                 |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n\
+                 | walk | 100 @ 30.000 | 6 | 12 | 0.900 | 0.800 | 0.700 | 3 | 2 | 5 | 1234 (99.000) | 0.125 | 1.2 / 0.5 / 2.0 |\n\
+                 \n\
+                 | motion | K | method | segments | seam mean | seam p90 | gap mean (unblended) | gap p90 | 2-gram | 3-gram | 4-gram | symbol run (source) | label run (source) | novel sentences |\n\
+                 |---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n\
+                 {}\n{}\n",
+                line.replacen("| walk | 4.0", "| walk | 6 | grammar | 4.0", 1),
+                line.replacen("| walk | 4.0", "| walk | 6 | fsm | 4.0", 1)
+            )
         );
     }
 }

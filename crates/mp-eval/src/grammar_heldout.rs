@@ -12,7 +12,6 @@
 //! smoothing. The training string's own code lengths (in-sample) are
 //! reported beside them.
 
-use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
@@ -26,6 +25,7 @@ use mp_grammar::PoseDistanceParams;
 use serde_json::{json, Value};
 
 use crate::grammar::{symbol_params, EvalGrammarArgs};
+use crate::table::{Align::Left, Align::Right, Table};
 
 /// A group of takes: one is held out at a time.
 struct Group {
@@ -190,47 +190,67 @@ fn bps(v: &Value, which: &str, model: &str) -> f64 {
 /// The held-out tables as Markdown: one row per rotation, then the means
 /// per group and K.
 pub fn markdown(rows: &[Value]) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "| data | held out | K | train / held-out segments | 2- / 3-grams seen | sentences | NT | rules | grammar | FSM | unigram | in sentences | in-sample grammar / FSM |"
-    );
-    let _ = writeln!(
-        s,
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
+    let mut t = Table::new([
+        "data",
+        "held out",
+        "K",
+        "train / held-out segments",
+        "2- / 3-grams seen",
+        "sentences",
+        "NT",
+        "rules",
+        "grammar",
+        "FSM",
+        "unigram",
+        "in sentences",
+        "in-sample grammar / FSM",
+    ])
+    .align([Left, Left].into_iter().chain([Right; 11]));
     for r in rows {
         let n = r["held_out_segments"].as_f64().unwrap_or(0.0);
         let inside = r["held_out_score"]["symbols_in_sentences"]
             .as_f64()
             .unwrap_or(0.0);
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} / {} | {:.2} / {:.2} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.0} % | {:.3} / {:.3} |",
-            r["group"].as_str().unwrap_or(""),
-            r["held_out"].as_str().unwrap_or(""),
-            r["k"],
-            r["train_segments"],
-            r["held_out_segments"],
-            r["held_out_ngrams_in_training"]["2"].as_f64().unwrap_or(f64::NAN),
-            r["held_out_ngrams_in_training"]["3"].as_f64().unwrap_or(f64::NAN),
-            r["sentences"],
-            r["nonterminals"],
-            r["rules"],
-            bps(r, "held_out_score", "grammar"),
-            bps(r, "held_out_score", "fsm"),
-            bps(r, "held_out_score", "unigram"),
-            100.0 * inside / n.max(1.0),
-            bps(r, "in_sample_score", "grammar"),
-            bps(r, "in_sample_score", "fsm"),
-        );
+        t.row([
+            r["group"].as_str().unwrap_or("").to_string(),
+            r["held_out"].as_str().unwrap_or("").to_string(),
+            r["k"].to_string(),
+            format!("{} / {}", r["train_segments"], r["held_out_segments"]),
+            format!(
+                "{:.2} / {:.2}",
+                r["held_out_ngrams_in_training"]["2"]
+                    .as_f64()
+                    .unwrap_or(f64::NAN),
+                r["held_out_ngrams_in_training"]["3"]
+                    .as_f64()
+                    .unwrap_or(f64::NAN)
+            ),
+            r["sentences"].to_string(),
+            r["nonterminals"].to_string(),
+            r["rules"].to_string(),
+            format!("{:.3}", bps(r, "held_out_score", "grammar")),
+            format!("{:.3}", bps(r, "held_out_score", "fsm")),
+            format!("{:.3}", bps(r, "held_out_score", "unigram")),
+            format!("{:.0} %", 100.0 * inside / n.max(1.0)),
+            format!(
+                "{:.3} / {:.3}",
+                bps(r, "in_sample_score", "grammar"),
+                bps(r, "in_sample_score", "fsm")
+            ),
+        ]);
     }
-    let _ = writeln!(s);
-    let _ = writeln!(
-        s,
-        "| data | K | rotations | grammar (mean) | FSM (mean) | unigram (mean) | grammar < FSM |"
-    );
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|");
+    let mut s = t.markdown();
+    s.push('\n');
+    let mut t = Table::new([
+        "data",
+        "K",
+        "rotations",
+        "grammar (mean)",
+        "FSM (mean)",
+        "unigram (mean)",
+        "grammar < FSM",
+    ])
+    .align([Left, Right, Right, Right, Right, Right, Right]);
     let mut keys: Vec<(String, u64)> = Vec::new();
     for r in rows {
         let key = (
@@ -256,15 +276,41 @@ pub fn markdown(rows: &[Value]) -> String {
             .iter()
             .filter(|r| bps(r, "held_out_score", "grammar") < bps(r, "held_out_score", "fsm"))
             .count();
-        let _ = writeln!(
-            s,
-            "| {g} | {k} | {} | {:.3} | {:.3} | {:.3} | {wins} of {} |",
-            sel.len(),
-            m("grammar"),
-            m("fsm"),
-            m("unigram"),
-            sel.len()
+        t.row([
+            g.clone(),
+            k.to_string(),
+            sel.len().to_string(),
+            format!("{:.3}", m("grammar")),
+            format!("{:.3}", m("fsm")),
+            format!("{:.3}", m("unigram")),
+            format!("{wins} of {}", sel.len()),
+        ]);
+    }
+    s.push_str(&t.markdown());
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markdown_tables_layout() {
+        let row = json!({"group": "cmu", "held_out": "t1", "k": 4, "train_segments": 10,
+            "held_out_segments": 5, "held_out_ngrams_in_training": {"2": 0.5, "3": 0.25},
+            "sentences": 3, "nonterminals": 2, "rules": 6,
+            "held_out_score": {"grammar": {"bits_per_symbol": 1.5}, "fsm": {"bits_per_symbol": 2.0},
+                "unigram": {"bits_per_symbol": 3.0}, "symbols_in_sentences": 4},
+            "in_sample_score": {"grammar": {"bits_per_symbol": 1.0}, "fsm": {"bits_per_symbol": 1.25}}});
+        assert_eq!(
+            markdown(&[row]),
+            "| data | held out | K | train / held-out segments | 2- / 3-grams seen | sentences | NT | rules | grammar | FSM | unigram | in sentences | in-sample grammar / FSM |\n\
+             |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n\
+             | cmu | t1 | 4 | 10 / 5 | 0.50 / 0.25 | 3 | 2 | 6 | 1.500 | 2.000 | 3.000 | 80 % | 1.000 / 1.250 |\n\
+             \n\
+             | data | K | rotations | grammar (mean) | FSM (mean) | unigram (mean) | grammar < FSM |\n\
+             |---|---:|---:|---:|---:|---:|---:|\n\
+             | cmu | 4 | 1 | 1.500 | 2.000 | 3.000 | 1 of 1 |\n"
         );
     }
-    s
 }

@@ -22,6 +22,8 @@ use mp_pose::extract::{extract, ExtractOptions, ModelChoice, SmoothingParams};
 use mp_pose::video::{open_source, read_image};
 use mp_pose::{BlazePose, BlazePoseParams, MoveNet, MoveNetParams, PoseEstimator, SessionParams};
 
+use crate::table::Table;
+
 #[derive(clap::Args, Debug)]
 pub struct EvalPoseArgs {
     /// Folders with videos (repeatable). Default: shared golfdb/ and quva_repetition/videos/.
@@ -390,45 +392,66 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
     Ok(())
 }
 
-fn print_markdown(model: ModelChoice, report: &Value, rows: &[(String, Value)]) {
-    println!();
-    println!("| video | frames | median px | p90 px | found (ours / MediaPipe) | agree | fps (all / tracking) | MediaPipe fps | ms/frame median (ours / MediaPipe) |");
-    println!("|---|---|---|---|---|---|---|---|---|");
+/// The per-video table of [`print_markdown`], with the overall row last.
+fn markdown_table(model: ModelChoice, report: &Value, rows: &[(String, Value)]) -> String {
     let f = |v: &Value| match v {
         Value::Null => "–".to_string(),
         other => other.to_string(),
     };
+    let mut t = Table::new([
+        "video",
+        "frames",
+        "median px",
+        "p90 px",
+        "found (ours / MediaPipe)",
+        "agree",
+        "fps (all / tracking)",
+        "MediaPipe fps",
+        "ms/frame median (ours / MediaPipe)",
+    ]);
     for (stem, e) in rows {
-        println!(
-            "| {stem} | {} | {} | {} | {} / {} | {} | {} / {} | {} | {} / {} |",
-            e["frames"],
+        t.row([
+            stem.clone(),
+            e["frames"].to_string(),
             f(&e["median_px"]),
             f(&e["p90_px"]),
-            e["found_frac"],
-            e["reference_found_frac"],
-            e["found_agreement"],
-            f(&e["fps"]),
-            f(&e["fps_tracking"]),
+            format!("{} / {}", e["found_frac"], e["reference_found_frac"]),
+            e["found_agreement"].to_string(),
+            format!("{} / {}", f(&e["fps"]), f(&e["fps_tracking"])),
             f(&e["reference_fps"]),
-            f(&e["ms_per_frame_median"]),
-            f(&e["reference_ms_per_frame_median"])
-        );
+            format!(
+                "{} / {}",
+                f(&e["ms_per_frame_median"]),
+                f(&e["reference_ms_per_frame_median"])
+            ),
+        ]);
     }
     let o = &report["overall"];
-    println!(
-        "| **all ({})** | {} | **{}** | **{}** | {} | {} | **{} / {}** | {} | {} / {} |",
-        model.as_str(),
-        o["frames"],
-        f(&o["median_px"]),
-        f(&o["p90_px"]),
-        o["found_frac"],
-        o["found_agreement"],
-        f(&o["fps"]),
-        f(&o["fps_tracking"]),
+    t.row([
+        format!("**all ({})**", model.as_str()),
+        o["frames"].to_string(),
+        format!("**{}**", f(&o["median_px"])),
+        format!("**{}**", f(&o["p90_px"])),
+        o["found_frac"].to_string(),
+        o["found_agreement"].to_string(),
+        format!("**{} / {}**", f(&o["fps"]), f(&o["fps_tracking"])),
         f(&o["reference_fps"]),
-        f(&o["ms_per_frame_median"]),
-        f(&o["reference_ms_per_frame_median"])
-    );
+        format!(
+            "{} / {}",
+            f(&o["ms_per_frame_median"]),
+            f(&o["reference_ms_per_frame_median"])
+        ),
+    ]);
+    t.markdown()
+}
+
+fn print_markdown(model: ModelChoice, report: &Value, rows: &[(String, Value)]) {
+    println!();
+    print!("{}", markdown_table(model, report, rows));
+    let f = |v: &Value| match v {
+        Value::Null => "–".to_string(),
+        other => other.to_string(),
+    };
     if let Some(c) = report.get("coco_sample").filter(|c| !c.is_null()) {
         println!();
         println!(
@@ -603,4 +626,23 @@ fn eval_coco(dir: &Path, model: ModelChoice, threads: usize) -> Result<Value> {
         ),
         "per_image": per_image,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markdown_table_keeps_the_old_layout() {
+        let e = json!({"frames": 10, "median_px": 1.5, "p90_px": null, "found_frac": 0.9,
+            "reference_found_frac": 1.0, "found_agreement": 0.8, "fps": 30.0, "fps_tracking": null,
+            "reference_fps": 25.0, "ms_per_frame_median": 3.0, "reference_ms_per_frame_median": 4.0});
+        let report = json!({ "overall": e.clone() });
+        let got = markdown_table(ModelChoice::Full, &report, &[("v1".to_string(), e)]);
+        let want = "| video | frames | median px | p90 px | found (ours / MediaPipe) | agree | fps (all / tracking) | MediaPipe fps | ms/frame median (ours / MediaPipe) |\n\
+            |---|---|---|---|---|---|---|---|---|\n\
+            | v1 | 10 | 1.5 | – | 0.9 / 1.0 | 0.8 | 30.0 / – | 25.0 | 3.0 / 4.0 |\n\
+            | **all (full)** | 10 | **1.5** | **–** | 0.9 | 0.8 | **30.0 / –** | 25.0 | 3.0 / 4.0 |\n";
+        assert_eq!(got, want);
+    }
 }

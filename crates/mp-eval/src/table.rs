@@ -2,11 +2,23 @@
 
 use std::fmt::Write;
 
+/// How a column's cells are aligned: the delimiter row writes `---` for
+/// [`Align::Left`] (the default) and `---:` for [`Align::Right`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Align {
+    /// `---`: text, the default.
+    #[default]
+    Left,
+    /// `---:`: numbers.
+    Right,
+}
+
 /// A Markdown table: a header row, the delimiter row and the body rows.
 /// Cells are written as given (a `|` inside a cell is escaped).
 #[derive(Debug, Clone, Default)]
 pub struct Table {
     header: Vec<String>,
+    align: Vec<Align>,
     rows: Vec<Vec<String>>,
 }
 
@@ -15,8 +27,25 @@ impl Table {
     pub fn new<S: Into<String>>(header: impl IntoIterator<Item = S>) -> Self {
         Table {
             header: header.into_iter().map(Into::into).collect(),
+            align: Vec::new(),
             rows: Vec::new(),
         }
+    }
+
+    /// Sets the columns' alignments, first column first; a column without
+    /// one is [`Align::Left`].
+    pub fn align(mut self, align: impl IntoIterator<Item = Align>) -> Self {
+        self.align = align.into_iter().collect();
+        self
+    }
+
+    /// Adds a column named `name` with alignment `align` after the present
+    /// ones (for headers built in a loop).
+    pub fn column(&mut self, name: impl Into<String>, align: Align) -> &mut Self {
+        self.align.resize(self.header.len(), Align::Left);
+        self.header.push(name.into());
+        self.align.push(align);
+        self
     }
 
     /// Adds a row; a row shorter than the header is padded with empty
@@ -56,8 +85,11 @@ impl Table {
         };
         line(&mut out, &self.header);
         out.push('|');
-        for _ in 0..width {
-            out.push_str("---|");
+        for i in 0..width {
+            out.push_str(match self.align.get(i).copied().unwrap_or_default() {
+                Align::Left => "---|",
+                Align::Right => "---:|",
+            });
         }
         out.push('\n');
         for r in &self.rows {
@@ -93,5 +125,19 @@ mod tests {
         let t = Table::new(["x"]);
         assert!(t.is_empty());
         assert_eq!(t.to_string(), "| x |\n|---|\n");
+    }
+
+    #[test]
+    fn right_aligned_columns_end_with_a_colon() {
+        let mut t = Table::new(["name", "n"]).align([Align::Left, Align::Right]);
+        t.row(["a", "1"]);
+        assert_eq!(t.markdown(), "| name | n |\n|---|---:|\n| a | 1 |\n");
+        let mut t = Table::new(["name"]);
+        t.column("n", Align::Right).column("note", Align::Left);
+        t.row(["a", "1", "x"]);
+        assert_eq!(
+            t.markdown(),
+            "| name | n | note |\n|---|---:|---|\n| a | 1 | x |\n"
+        );
     }
 }

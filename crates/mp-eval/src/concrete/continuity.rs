@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use serde_json::{json, Value};
 
 use super::{fit, mean, num, EvalConcreteArgs};
+use crate::table::{Align::Left, Align::Right, Table};
 
 /// One clip under one continuity: its action, the program's stats, and the factor to 512-px pixels.
 type ContinuityRow = (String, ProgramStats, f64);
@@ -95,9 +96,16 @@ pub(super) fn compare_continuity(
         })
     };
     let mut by_action = serde_json::Map::new();
-    let mut md = String::from(
-        "| action | clips | continuity | KD px@512 | params ratio (numbers written) | max jump raw / program (px@512) | clips with program jump > raw |\n|---|---:|---|---:|---:|---:|---:|\n",
-    );
+    let mut table = Table::new([
+        "action",
+        "clips",
+        "continuity",
+        "KD px@512",
+        "params ratio (numbers written)",
+        "max jump raw / program (px@512)",
+        "clips with program jump > raw",
+    ])
+    .align([Left, Right, Left, Right, Right, Right, Right]);
     let mut names: Vec<String> = rows.keys().map(|k| k.1.clone()).collect();
     names.sort();
     names.dedup();
@@ -110,20 +118,28 @@ pub(super) fn compare_continuity(
                 continue;
             };
             let v = summarise(rs);
-            md.push_str(&format!(
-                "| {name} | {} | {mode} | {:.2} | {:.3} ({:.3}) | {:.1} / {:.1} | {} |\n",
-                num(&v, &["clips"]),
-                num(&v, &["kd_px_512"]),
-                num(&v, &["params_ratio"]),
-                num(&v, &["numbers_ratio"]),
-                num(&v, &["max_jump_raw_px_512"]),
-                num(&v, &["max_jump_program_px_512"]),
-                num(&v, &["clips_program_jump_above_raw"]),
-            ));
+            table.row([
+                name.clone(),
+                num(&v, &["clips"]).to_string(),
+                mode.to_string(),
+                format!("{:.2}", num(&v, &["kd_px_512"])),
+                format!(
+                    "{:.3} ({:.3})",
+                    num(&v, &["params_ratio"]),
+                    num(&v, &["numbers_ratio"])
+                ),
+                format!(
+                    "{:.1} / {:.1}",
+                    num(&v, &["max_jump_raw_px_512"]),
+                    num(&v, &["max_jump_program_px_512"])
+                ),
+                num(&v, &["clips_program_jump_above_raw"]).to_string(),
+            ]);
             entry.insert(mode.to_string(), v);
         }
         by_action.insert(name.clone(), Value::Object(entry));
     }
+    let md = table.markdown();
     let report = json!({
         "data": path.display().to_string(),
         "split": format!("{:?}", a.split),

@@ -30,6 +30,7 @@ mod continuity;
 mod sweep;
 
 use crate::stats::mean;
+use crate::table::{Align::Left, Align::Right, Table};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -280,19 +281,19 @@ fn num(v: &Value, path: &[&str]) -> f64 {
 }
 
 fn markdown(report: &Value, steps: &[usize]) -> String {
-    let mut s = String::new();
-    let interp_head: Vec<String> = steps
-        .iter()
-        .map(|k| format!("interp ×{k} prog / lin"))
-        .collect();
-    s.push_str(&format!(
-        "| action | clips | frames | primitives | params prog / raw (ratio) | KD px@512 | max jump raw / prog | {} |\n",
-        interp_head.join(" | ")
-    ));
-    s.push_str(&format!(
-        "|---|---:|---:|---:|---:|---:|---:|{}\n",
-        "---:|".repeat(steps.len())
-    ));
+    let mut t = Table::new([
+        "action",
+        "clips",
+        "frames",
+        "primitives",
+        "params prog / raw (ratio)",
+        "KD px@512",
+        "max jump raw / prog",
+    ])
+    .align([Left, Right, Right, Right, Right, Right, Right]);
+    for k in steps {
+        t.column(format!("interp ×{k} prog / lin"), Right);
+    }
     let mut rows: Vec<(String, &Value)> = Vec::new();
     if let Some(m) = report["by_action"].as_object() {
         for (k, v) in m {
@@ -301,32 +302,35 @@ fn markdown(report: &Value, steps: &[usize]) -> String {
     }
     rows.push(("**overall**".into(), &report["overall"]));
     for (name, v) in rows {
-        let interp: Vec<String> = steps
-            .iter()
-            .map(|k| {
-                let key = format!("x{k}");
-                format!(
-                    "{:.2} / {:.2}",
-                    num(v, &["interpolation", &key, "kd_program_px_512"]),
-                    num(v, &["interpolation", &key, "kd_linear_px_512"])
-                )
-            })
-            .collect();
-        s.push_str(&format!(
-            "| {name} | {} | {:.1} | {:.2} | {:.0} / {:.0} ({:.3}) | {:.2} | {:.1} / {:.1} | {} |\n",
-            num(v, &["clips"]),
-            num(v, &["frames_per_clip"]),
-            num(v, &["primitives_per_clip"]),
-            num(v, &["params_program"]),
-            num(v, &["params_raw"]),
-            num(v, &["params_ratio"]),
-            num(v, &["kd_px_512"]),
-            num(v, &["max_jump_raw_px_512"]),
-            num(v, &["max_jump_program_px_512"]),
-            interp.join(" | ")
-        ));
+        let mut cells = vec![
+            name,
+            num(v, &["clips"]).to_string(),
+            format!("{:.1}", num(v, &["frames_per_clip"])),
+            format!("{:.2}", num(v, &["primitives_per_clip"])),
+            format!(
+                "{:.0} / {:.0} ({:.3})",
+                num(v, &["params_program"]),
+                num(v, &["params_raw"]),
+                num(v, &["params_ratio"])
+            ),
+            format!("{:.2}", num(v, &["kd_px_512"])),
+            format!(
+                "{:.1} / {:.1}",
+                num(v, &["max_jump_raw_px_512"]),
+                num(v, &["max_jump_program_px_512"])
+            ),
+        ];
+        for k in steps {
+            let key = format!("x{k}");
+            cells.push(format!(
+                "{:.2} / {:.2}",
+                num(v, &["interpolation", &key, "kd_program_px_512"]),
+                num(v, &["interpolation", &key, "kd_linear_px_512"])
+            ));
+        }
+        t.row(cells);
     }
-    s
+    t.markdown()
 }
 
 /// Runs the evaluation and writes the report.
@@ -441,4 +445,25 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
         a.out.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markdown_table_layout() {
+        let v = json!({"clips": 3, "frames_per_clip": 10.0, "primitives_per_clip": 2.5,
+            "params_program": 100.0, "params_raw": 400.0, "params_ratio": 0.25, "kd_px_512": 1.234,
+            "max_jump_raw_px_512": 5.0, "max_jump_program_px_512": 4.0,
+            "interpolation": {"x2": {"kd_program_px_512": 1.0, "kd_linear_px_512": 2.0}}});
+        let report = json!({"by_action": {"golf": v.clone()}, "overall": v});
+        assert_eq!(
+            markdown(&report, &[2]),
+            "| action | clips | frames | primitives | params prog / raw (ratio) | KD px@512 | max jump raw / prog | interp ×2 prog / lin |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|\n\
+             | golf | 3 | 10.0 | 2.50 | 100 / 400 (0.250) | 1.23 | 5.0 / 4.0 | 1.00 / 2.00 |\n\
+             | **overall** | 3 | 10.0 | 2.50 | 100 / 400 (0.250) | 1.23 | 5.0 / 4.0 | 1.00 / 2.00 |\n"
+        );
+    }
 }

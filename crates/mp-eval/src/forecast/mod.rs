@@ -25,6 +25,8 @@ pub mod protocol;
 
 pub use protocol::{evaluate, EvalParams, MethodReport};
 
+use crate::table::{Align, Table};
+
 /// Arguments of `cargo xtask eval forecast`.
 #[derive(Args, Debug)]
 pub struct EvalForecastArgs {
@@ -129,28 +131,23 @@ fn method(
 }
 
 fn table_md(reports: &[MethodReport], metric: &str, horizons: &[usize]) -> String {
-    let mut s = format!("| {metric} |");
+    let mut table = Table::new([metric.to_string()]);
     for h in horizons {
-        s += &format!(" {h} |");
+        table.column(h.to_string(), Align::Left);
     }
-    s += "\n|---|";
-    for _ in horizons {
-        s += "---|";
-    }
-    s += "\n";
     for r in reports {
         if let Some(t) = r.metrics.get(metric) {
-            s += &format!("| {} |", r.method);
+            let mut cells = vec![r.method.clone()];
             for h in horizons {
-                s += &format!(
-                    " {:.1} |",
+                cells.push(format!(
+                    "{:.1}",
                     t.overall.get(&format!("h{h}")).copied().unwrap_or(f64::NAN)
-                );
+                ));
             }
-            s += "\n";
+            table.row(cells);
         }
     }
-    s
+    table.markdown()
 }
 
 fn per_action_md(reports: &[MethodReport], metric: &str, h: usize) -> String {
@@ -164,15 +161,10 @@ fn per_action_md(reports: &[MethodReport], metric: &str, h: usize) -> String {
             }
         }
     }
-    let mut s = format!("| {metric} @ h{h} |");
+    let mut table = Table::new([format!("{metric} @ h{h}")]);
     for r in reports {
-        s += &format!(" {} |", r.method);
+        table.column(r.method.clone(), Align::Left);
     }
-    s += "\n|---|";
-    for _ in reports {
-        s += "---|";
-    }
-    s += "\n";
     let mut groups: Vec<String> = Vec::new();
     for r in reports {
         if let Some(t) = r.metrics.get(metric) {
@@ -188,7 +180,7 @@ fn per_action_md(reports: &[MethodReport], metric: &str, h: usize) -> String {
         .map(|a| (a.clone(), a, false))
         .chain(groups.iter().map(|g| (format!("**{g}** (group)"), g, true)));
     for (label, key, group) in rows {
-        s += &format!("| {label} |");
+        let mut cells = vec![label];
         for r in reports {
             let v = r
                 .metrics
@@ -203,11 +195,11 @@ fn per_action_md(reports: &[MethodReport], metric: &str, h: usize) -> String {
                 .and_then(|x| x.get(&format!("h{h}")))
                 .copied()
                 .unwrap_or(f64::NAN);
-            s += &format!(" {v:.1} |");
+            cells.push(format!("{v:.1}"));
         }
-        s += "\n";
+        table.row(cells);
     }
-    s
+    table.markdown()
 }
 
 pub fn run(a: &EvalForecastArgs) -> Result<()> {
@@ -351,4 +343,41 @@ pub fn run(a: &EvalForecastArgs) -> Result<()> {
         crate::write_file(p, &md).with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::protocol::MetricTable;
+    use super::*;
+
+    fn report(method: &str, x: f64) -> MethodReport {
+        let scores: BTreeMap<String, f64> = [("h10".to_string(), x), ("h30".to_string(), 2.0 * x)]
+            .into_iter()
+            .collect();
+        let table = MetricTable {
+            overall: scores.clone(),
+            per_action: [("golf".to_string(), scores.clone())].into_iter().collect(),
+            per_group: [("repetitive".to_string(), scores)].into_iter().collect(),
+        };
+        MethodReport {
+            method: method.into(),
+            clips: 1,
+            predictions: 1,
+            seconds: 0.0,
+            metrics: [("pck".to_string(), table)].into_iter().collect(),
+        }
+    }
+
+    #[test]
+    fn markdown_tables_layout() {
+        let reports = [report("nn", 1.0), report("ar", 2.0)];
+        assert_eq!(
+            table_md(&reports, "pck", &[10, 30]),
+            "| pck | 10 | 30 |\n|---|---|---|\n| nn | 1.0 | 2.0 |\n| ar | 2.0 | 4.0 |\n"
+        );
+        assert_eq!(
+            per_action_md(&reports, "pck", 30),
+            "| pck @ h30 | nn | ar |\n|---|---|---|\n| golf | 2.0 | 4.0 |\n| **repetitive** (group) | 2.0 | 4.0 |\n"
+        );
+    }
 }

@@ -23,6 +23,7 @@
 mod sources;
 
 use crate::stats::mean;
+use crate::table::{Align::Left, Align::Right, Table};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -260,11 +261,13 @@ pub fn run(a: &EvalInBetweenArgs) -> anyhow::Result<()> {
     };
     for part in parts {
         md += &format!(
-            "\n{} — KD % of the person's size (px at 512); rule / linear\n\n| source | factor | tracks | {} |\n|---|---:|---:|{}\n",
-            part.as_str(),
-            labels.join(" | "),
-            "---:|".repeat(labels.len())
+            "\n{} — KD % of the person's size (px at 512); rule / linear\n\n",
+            part.as_str()
         );
+        let mut table = Table::new(["source", "factor", "tracks"]).align([Left, Right, Right]);
+        for l in &labels {
+            table.column(l.clone(), Right);
+        }
         for &k in &a.factors {
             let mut per_source = Vec::new();
             for s in &a.sources {
@@ -276,7 +279,7 @@ pub fn run(a: &EvalInBetweenArgs) -> anyhow::Result<()> {
                     continue;
                 }
                 let v = summarise(&rs, rules.len());
-                md += &row(s, k, &v, rules.len());
+                table.row(row(s, k, &v, rules.len()));
                 groups.insert(format!("{}/{s}/x{k}", part.as_str()), v.clone());
                 per_source.push(v);
             }
@@ -291,9 +294,10 @@ pub fn run(a: &EvalInBetweenArgs) -> anyhow::Result<()> {
                 .collect();
             let tracks: u64 = per_source.iter().filter_map(|v| v["tracks"].as_u64()).sum();
             let v = json!({"tracks": tracks, "rules": macro_rules});
-            md += &row("**mean of sources**", k, &v, rules.len());
+            table.row(row("**mean of sources**", k, &v, rules.len()));
             groups.insert(format!("{}/mean/x{k}", part.as_str()), v);
         }
+        md += &table.markdown();
     }
     let per_track: Vec<Value> = ok
         .iter()
@@ -329,23 +333,23 @@ pub fn run(a: &EvalInBetweenArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn row(name: &str, k: usize, v: &Value, n_rules: usize) -> String {
+/// The cells of one table row: source, factor, tracks, then one per rule.
+fn row(name: &str, k: usize, v: &Value, n_rules: usize) -> Vec<String> {
     let lin = f(&v["rules"][0], &["kd_pct_person"]);
-    let cells: Vec<String> = (0..n_rules)
-        .map(|ri| {
-            let r = &v["rules"][ri];
-            let pct = f(r, &["kd_pct_person"]);
-            let px = f(r, &["kd_px_512"]);
-            if ri == 0 {
-                format!("{pct:.2} ({px:.2})")
-            } else {
-                format!("{pct:.2} ({px:.2}) {:.3}", pct / lin)
-            }
-        })
-        .collect();
-    format!(
-        "| {name} | {k}× | {} | {} |\n",
-        v["tracks"].as_u64().unwrap_or(0),
-        cells.join(" | ")
-    )
+    let mut cells = vec![
+        name.to_string(),
+        format!("{k}×"),
+        v["tracks"].as_u64().unwrap_or(0).to_string(),
+    ];
+    cells.extend((0..n_rules).map(|ri| {
+        let r = &v["rules"][ri];
+        let pct = f(r, &["kd_pct_person"]);
+        let px = f(r, &["kd_px_512"]);
+        if ri == 0 {
+            format!("{pct:.2} ({px:.2})")
+        } else {
+            format!("{pct:.2} ({px:.2}) {:.3}", pct / lin)
+        }
+    }));
+    cells
 }
