@@ -25,6 +25,8 @@
 
 use std::fmt::Write;
 
+use mp_concrete::dsl::lex::{self as shared, LexRules};
+
 use crate::error::{AbstractError, Result};
 use crate::model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
 
@@ -194,90 +196,46 @@ struct Lexer {
     end: (usize, usize),
 }
 
+/// The tokens of `src` by the workspace's one lexer
+/// ([`mp_concrete::dsl::lex`], [`LexRules::ABSTRACT`]), numbers read as `f64`.
 fn lex(src: &str) -> Result<Lexer> {
-    let mut toks = Vec::new();
-    let (mut line, mut col) = (1usize, 1usize);
-    let chars: Vec<char> = src.chars().collect();
-    let mut i = 0;
-    while i < chars.len() {
-        let c = chars[i];
-        if c == '\n' {
-            line += 1;
-            col = 1;
-            i += 1;
-            continue;
-        }
-        if c.is_whitespace() {
-            i += 1;
-            col += 1;
-            continue;
-        }
-        if c == '#' {
-            while i < chars.len() && chars[i] != '\n' {
-                i += 1;
+    let located = |line, column, message: String| AbstractError::Parse {
+        line,
+        column,
+        message,
+    };
+    let tokens = shared::lex(src, &LexRules::ABSTRACT).map_err(|e| {
+        located(
+            e.line,
+            e.column,
+            format!("expected {}, found {}", e.expected, e.found),
+        )
+    })?;
+    let mut toks = Vec::with_capacity(tokens.len());
+    let mut end = (1, 1);
+    for t in tokens {
+        let tok = match t.tok {
+            shared::Tok::Number(text) => Tok::Num(
+                text.parse()
+                    .map_err(|_| located(t.line, t.column, format!("`{text}` is not a number")))?,
+            ),
+            shared::Tok::Ident(s) => Tok::Ident(s),
+            shared::Tok::Punct(c) => Tok::Punct(c),
+            shared::Tok::Eof => {
+                end = (t.line, t.column);
+                continue;
             }
-            continue;
-        }
-        let start_col = col;
-        if "(){}<>[],:=".contains(c) {
-            toks.push((Tok::Punct(c), line, start_col));
-            i += 1;
-            col += 1;
-            continue;
-        }
-        let is_num_start = c.is_ascii_digit()
-            || ((c == '-' || c == '+' || c == '.')
-                && chars
-                    .get(i + 1)
-                    .is_some_and(|n| n.is_ascii_digit() || *n == '.'));
-        if is_num_start {
-            let s = i;
-            i += 1;
-            while i < chars.len() {
-                let d = chars[i];
-                let prev = chars[i - 1];
-                if d.is_ascii_digit()
-                    || d == '.'
-                    || d == 'e'
-                    || d == 'E'
-                    || ((d == '-' || d == '+') && (prev == 'e' || prev == 'E'))
-                {
-                    i += 1;
-                } else {
-                    break;
-                }
+            other => {
+                return Err(located(
+                    t.line,
+                    t.column,
+                    format!("unexpected {}", other.describe()),
+                ))
             }
-            let text: String = chars[s..i].iter().collect();
-            let v: f64 = text.parse().map_err(|_| AbstractError::Parse {
-                line,
-                column: start_col,
-                message: format!("`{text}` is not a number"),
-            })?;
-            col += i - s;
-            toks.push((Tok::Num(v), line, start_col));
-            continue;
-        }
-        if c.is_alphanumeric() || c == '_' || c == '-' || c == '.' || c == '|' {
-            let s = i;
-            while i < chars.len() && (chars[i].is_alphanumeric() || "_-.|".contains(chars[i])) {
-                i += 1;
-            }
-            let text: String = chars[s..i].iter().collect();
-            col += i - s;
-            toks.push((Tok::Ident(text), line, start_col));
-            continue;
-        }
-        return Err(AbstractError::Parse {
-            line,
-            column: col,
-            message: format!("unexpected character `{c}`"),
-        });
+        };
+        toks.push((tok, t.line, t.column));
     }
-    Ok(Lexer {
-        toks,
-        pos: 0,
-        end: (line, col),
-    })
+    Ok(Lexer { toks, pos: 0, end })
 }
 
 impl Lexer {
@@ -518,15 +476,18 @@ fn dist_total_fits(counts: &std::collections::BTreeMap<usize, usize>, c: usize) 
 /// Whether `s` reads back as one name in the text form (a joint name):
 /// letters, digits, `_`, `-`, `.` and `|`, not starting like a number.
 pub fn is_name(s: &str) -> bool {
-    let mut chars = s.chars();
-    let Some(first) = chars.next() else {
-        return false;
-    };
-    let second = chars.next();
-    let number_start = first.is_ascii_digit()
-        || ((first == '-' || first == '.')
-            && second.is_some_and(|n| n.is_ascii_digit() || n == '.'));
-    !number_start && s.chars().all(|c| c.is_alphanumeric() || "_-.|".contains(c))
+    match shared::lex(s, &LexRules::ABSTRACT).as_deref() {
+        Ok(
+            [shared::Token {
+                tok: shared::Tok::Ident(name),
+                ..
+            }, shared::Token {
+                tok: shared::Tok::Eof,
+                ..
+            }],
+        ) => name == s,
+        _ => false,
+    }
 }
 
 /// Parses the text form back into a program (and validates it).

@@ -14,7 +14,7 @@
 //! `parse(&print(&p)) == p` exactly; [`print_pretty`] rounds to a fixed
 //! number of decimals, like the paper's figures.
 
-mod lex;
+pub mod lex;
 mod parse;
 mod print;
 

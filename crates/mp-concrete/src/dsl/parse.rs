@@ -2,7 +2,7 @@
 
 use mp_geom::{Primitive, Units};
 
-use super::lex::{lex, Tok, Token};
+use super::lex::{lex, LexRules, Tok, Token};
 use super::print::axis_name;
 use crate::error::{ConcreteError, ParseError, Result};
 use crate::program::{Program, Segment};
@@ -124,10 +124,10 @@ impl Parser {
     /// `[+|-] NUMBER` as a finite f64.
     fn signed_number(&mut self) -> PResult<(f64, (usize, usize))> {
         let at = self.at();
-        let neg = if self.eat(&Tok::Minus) {
+        let neg = if self.eat(&Tok::Punct('-')) {
             true
         } else {
-            self.eat(&Tok::Plus);
+            self.eat(&Tok::Punct('+'));
             false
         };
         let nat = self.at();
@@ -165,12 +165,12 @@ impl Parser {
     }
     /// `( n, n, … )`
     fn tuple(&mut self) -> PResult<Vec<f64>> {
-        self.expect(Tok::LParen, "`(`")?;
+        self.expect(Tok::Punct('('), "`(`")?;
         let mut v = vec![self.signed_number()?.0];
-        while self.eat(&Tok::Comma) {
+        while self.eat(&Tok::Punct(',')) {
             v.push(self.signed_number()?.0);
         }
-        self.expect(Tok::RParen, "`,` or `)`")?;
+        self.expect(Tok::Punct(')'), "`,` or `)`")?;
         Ok(v)
     }
     /// `term ((+|-) term)*` with `term = [+|-] NUMBER [* t [^ INT]]`.
@@ -178,8 +178,8 @@ impl Parser {
         let mut terms = vec![self.term(false)?];
         loop {
             let neg = match self.peek().tok {
-                Tok::Plus => false,
-                Tok::Minus => true,
+                Tok::Punct('+') => false,
+                Tok::Punct('-') => true,
                 _ => break,
             };
             self.bump();
@@ -191,7 +191,7 @@ impl Parser {
         let (c, at) = self.signed_number()?;
         let coef = if negate { -c } else { c };
         let mut power = 0;
-        if self.eat(&Tok::Star) {
+        if self.eat(&Tok::Punct('*')) {
             match &self.peek().tok {
                 Tok::Ident(s) if s == "t" => {
                     self.bump();
@@ -199,7 +199,7 @@ impl Parser {
                 _ => return self.unexpected("`t`"),
             }
             power = 1;
-            if self.eat(&Tok::Caret) {
+            if self.eat(&Tok::Punct('^')) {
                 let (p, pat) = self.integer("an integer power")?;
                 power = u32::try_from(p)
                     .map_err(|_| perr(pat, "a power 1, 2 or 3", format!("`{p}`")))?;
@@ -210,11 +210,11 @@ impl Parser {
 
     fn header(&mut self) -> PResult<Header> {
         self.keyword("program")?;
-        self.expect(Tok::LParen, "`(`")?;
+        self.expect(Tok::Punct('('), "`(`")?;
         let (mut fps, mut units, mut dims, mut skel, mut cont) = (None, None, None, None, None);
         loop {
             let (key, kat) = self.ident("`fps`, `units`, `dims`, `skeleton` or `continuity`")?;
-            self.expect(Tok::Eq, "`=`")?;
+            self.expect(Tok::Punct('='), "`=`")?;
             let dup = match key.as_str() {
                 "fps" => {
                     let (v, at) = self.signed_number()?;
@@ -261,13 +261,13 @@ impl Parser {
                     format!("`{key}` again"),
                 ));
             }
-            if !self.eat(&Tok::Comma) {
+            if !self.eat(&Tok::Punct(',')) {
                 break;
             }
         }
         let close = self.at();
-        self.expect(Tok::RParen, "`,` or `)`")?;
-        self.eat(&Tok::Semi);
+        self.expect(Tok::Punct(')'), "`,` or `)`")?;
+        self.eat(&Tok::Punct(';'));
         let missing = |what: &str| perr(close, format!("`{what}=` in the program header"), "`)`");
         Ok(Header {
             fps: fps.ok_or_else(|| missing("fps"))?,
@@ -279,7 +279,7 @@ impl Parser {
     }
 
     fn args(&mut self) -> PResult<(Vec<Arg>, (usize, usize))> {
-        self.expect(Tok::LParen, "`(`")?;
+        self.expect(Tok::Punct('('), "`(`")?;
         let mut args: Vec<Arg> = Vec::new();
         loop {
             let (key, key_at) = self.ident("an argument name")?;
@@ -290,7 +290,7 @@ impl Parser {
                     format!("`{key}` again"),
                 ));
             }
-            self.expect(Tok::Eq, "`=`")?;
+            self.expect(Tok::Punct('='), "`=`")?;
             let value_at = self.at();
             let value = if key == "duration" {
                 let (d, at) = self.integer("a duration in frames (an integer ≥ 1)")?;
@@ -298,7 +298,7 @@ impl Parser {
                     return Err(perr(at, "a duration in frames (an integer ≥ 1)", "`0`"));
                 }
                 Value::Int(d)
-            } else if self.peek().tok == Tok::LParen {
+            } else if self.peek().tok == Tok::Punct('(') {
                 Value::Tuple(self.tuple()?)
             } else {
                 Value::Poly(self.poly()?)
@@ -309,12 +309,12 @@ impl Parser {
                 value,
                 value_at,
             });
-            if !self.eat(&Tok::Comma) {
+            if !self.eat(&Tok::Punct(',')) {
                 break;
             }
         }
         let close = self.at();
-        self.expect(Tok::RParen, "`,` or `)`")?;
+        self.expect(Tok::Punct(')'), "`,` or `)`")?;
         Ok((args, close))
     }
 
@@ -329,7 +329,7 @@ impl Parser {
             return Err(perr(name_at, PRIMS, format!("`{name}`")));
         }
         let (args, close) = self.args()?;
-        self.eat(&Tok::Semi);
+        self.eat(&Tok::Punct(';'));
         // The axes are named one by one, never listed in full: `dims` comes
         // from the header and may be far larger than the statement.
         const CIRCLE_KEYS: [&str; 5] = ["center", "radius", "angle", "u", "v"];
@@ -502,10 +502,10 @@ impl Parser {
                     format!("{jname:?} again"),
                 ));
             }
-            self.expect(Tok::LBrace, "`{`")?;
+            self.expect(Tok::Punct('{'), "`{`")?;
             let first = joints.is_empty();
             let mut i = 0usize;
-            while self.peek().tok != Tok::RBrace {
+            while self.peek().tok != Tok::Punct('}') {
                 if self.peek().tok == Tok::Eof {
                     return self.unexpected("a statement or `}`");
                 }
@@ -577,7 +577,7 @@ fn is_axis(key: &str, dims: usize) -> bool {
 
 /// Parses the text of a whole program (see `docs/DSL.md`) and validates it.
 pub fn parse(text: &str) -> Result<Program> {
-    let toks = lex(text)?;
+    let toks = lex(text, &LexRules::CONCRETE)?;
     let mut p = Parser { toks, pos: 0 };
     let prog = p.program().map_err(ConcreteError::from)?;
     prog.validate()?;
@@ -586,7 +586,7 @@ pub fn parse(text: &str) -> Result<Program> {
 
 /// Parses one statement (e.g. `stationary(x=1, y=2, duration=3)`) for a program of `dims` dimensions.
 pub fn parse_statement(text: &str, dims: usize) -> Result<(Primitive, usize)> {
-    let toks = lex(text)?;
+    let toks = lex(text, &LexRules::CONCRETE)?;
     let mut p = Parser { toks, pos: 0 };
     let (prim, dur, _) = p.statement(dims)?;
     if p.peek().tok != Tok::Eof {
