@@ -25,6 +25,8 @@
 //!   anchors moved to their nearest concept), transition refinement.
 //! * [`mapped`]: refinement of BlazePose-33 world landmarks through the 20
 //!   MSR joints, carried back onto the input's joints.
+//! * [`refiner`]: the [`Refiner`] trait that both refinements implement
+//!   ([`pipeline::NetRefiner`], [`BaselineRefiner`]).
 //! * [`api`]: [`refine_default`], the learned refinement in one call with
 //!   the defaults of `mp refine` ([`RefineOptions`]: model folder, concepts,
 //!   action, steps and thresholds).
@@ -42,6 +44,7 @@ pub mod mapped;
 pub mod motion;
 pub mod nets;
 pub mod pipeline;
+pub mod refiner;
 pub mod segment;
 
 pub use api::{refine_default, RefineOptions};
@@ -49,6 +52,7 @@ pub use baseline::{refine, RefineParams, Refinement};
 pub use concepts::{learn_concepts, ActionConcepts, ClusterMethod, ConceptParams, Concepts, Gmm};
 pub use error::{RefineError, Result};
 pub use flaws::{inject, Flaw, Injected};
+pub use refiner::{BaselineRefiner, Refined, Refiner};
 pub use segment::{
     mpjpe_abs, segment_track, segmentation_from_anchors, SegmentParams, Segmentation3d, Transition,
 };

@@ -321,6 +321,38 @@ fn frozen_frames_are_found_and_refilled() {
     assert!(after < after_off, "{after} vs rule off {after_off}");
 }
 
+#[test]
+fn both_refiners_answer_through_one_trait() {
+    use mp_refine::{BaselineRefiner, RefineParams, Refiner};
+    let f = fixture_or_return!();
+    let params = NetRefineParams::default();
+    let net = NetRefiner::new(&f.nets, &f.concepts, &params).unwrap();
+    let base_params = RefineParams::default();
+    // The baseline without concepts, as its evaluation runs it.
+    let base = BaselineRefiner {
+        params: &base_params,
+        concepts: None,
+    };
+    for r in [&net as &dyn Refiner, &base] {
+        let (mut before, mut after, mut n, mut changed) = (0.0, 0.0, 0, 0);
+        for (i, (clean, action)) in heldout(f).iter().enumerate().take(6) {
+            let Ok(inj) = inject(clean, &Flaw::Frozen { frames: 6 }, 300 + i as u64) else {
+                continue;
+            };
+            let out = r.refine(&inj.track, Some(*action)).unwrap();
+            assert_eq!(out.track.n_frames(), clean.n_frames());
+            assert_eq!(out.changed.len(), clean.n_frames());
+            changed += usize::from(out.changed.iter().any(|&c| c));
+            before += mpjpe_abs(&inj.track, clean).unwrap();
+            after += mpjpe_abs(&out.track, clean).unwrap();
+            n += 1;
+        }
+        assert!(n >= 4, "{}: only {n} clips", r.name());
+        assert!(changed > 0, "{} changed no clip", r.name());
+        assert!(after < before, "{}: MPJPE {before} → {after}", r.name());
+    }
+}
+
 /// Held-out clips (subject 9), every 4th, with full confidence.
 fn heldout(f: &Fixture) -> Vec<(Track, u32)> {
     f.data
