@@ -5,12 +5,15 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
-use mp_geom::{Track, Units};
+use mp_geom::Units;
 use mp_pipeline::{CancelToken, ExtractParams, Poses};
-use mp_pose::draw::{contact_sheet, draw_pose, resize, Canvas, ContactSheetParams, DrawStyle};
 use mp_pose::extract::ModelChoice;
 use mp_pose::video::{open_source, VideoWriter};
 use mp_pose::SessionParams;
+use mp_report::draw::{
+    contact_sheet, draw_skeleton, frame_tile, ContactSheetParams, SkeletonStyle, Tile, View,
+};
+use mp_report::raster::{pixmap_to_png, pixmap_to_rgb, rgb_to_pixmap};
 
 /// Arguments of `mp extract`.
 #[derive(clap::Args, Debug)]
@@ -178,34 +181,18 @@ pub struct OverlayArgs {
     pub cols: usize,
     /// Width of each contact-sheet tile in pixels.
     #[arg(long, default_value_t = ContactSheetParams::default().tile_width_px)]
-    pub tile_width: usize,
+    pub tile_width: u32,
     /// Joints with confidence at or below this are not drawn.
-    #[arg(long, default_value_t = DrawStyle::default().min_confidence)]
+    #[arg(long, default_value_t = SkeletonStyle::default().min_confidence)]
     pub min_confidence: f64,
     /// No progress bar.
     #[arg(long, short)]
     pub quiet: bool,
 }
 
-fn draw_frame(rgb: &mut [u8], w: usize, h: usize, track: &Track, t: usize, style: &DrawStyle) {
-    if t >= track.n_frames() {
-        return;
-    }
-    let j = track.n_joints();
-    let pos = track.positions();
-    let conf = track.confidence();
-    let kps: Vec<[f64; 2]> = (0..j).map(|k| [pos[[t, k, 0]], pos[[t, k, 1]]]).collect();
-    let c: Vec<f64> = (0..j).map(|k| conf[[t, k]]).collect();
-    let mut canvas = Canvas {
-        width: w,
-        height: h,
-        data: rgb,
-    };
-    draw_pose(&mut canvas, track.skeleton(), &kps, &c, style);
-}
-
 /// `mp overlay`: a track's skeleton drawn on its video, as a contact sheet
-/// (`.png`) or a video (`.mp4`, `.mkv`, `.mov`).
+/// (`.png`) or a video (`.mp4`, `.mkv`, `.mov`), with the renderer of
+/// `mp run`'s overlay video and report.
 pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
     let track = mp_geom::io::read_track(&a.track)
         .with_context(|| format!("reading {}", a.track.display()))?;
@@ -219,17 +206,16 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
     }
     let mut source = open_source(&a.video).map_err(pose_err)?;
     let (w, h) = (source.width, source.height);
-    let style = DrawStyle {
-        min_confidence: a.min_confidence,
-        ..DrawStyle::default()
-    }
-    .scaled_to(w, h);
     let ext = extension(&a.output);
     match ext.as_str() {
         "png" => {
             if a.frames == 0 || a.tile_width == 0 {
                 bail!("--frames and --tile-width must be ≥ 1");
             }
+            let style = SkeletonStyle {
+                min_confidence: a.min_confidence,
+                ..SkeletonStyle::default()
+            };
             let n = source
                 .frame_count
                 .unwrap_or(track.n_frames())
@@ -239,49 +225,59 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
             let wanted: Vec<usize> = (0..k)
                 .map(|i| if k == 1 { 0 } else { i * (n - 1) / (k - 1) })
                 .collect();
-            let tile_h = ((a.tile_width as f64) * h as f64 / w as f64)
-                .round()
-                .max(1.0) as usize;
             let mut tiles = Vec::new();
             for frame in source.frames.by_ref() {
-                let mut f = frame.map_err(pose_err)?;
+                let f = frame.map_err(pose_err)?;
                 if !wanted.contains(&f.index) {
                     if f.index > *wanted.last().unwrap_or(&0) {
                         break;
                     }
                     continue;
                 }
-                draw_frame(&mut f.rgb, w, h, &track, f.index, &style);
-                tiles.push(resize(f.view(), a.tile_width, tile_h));
+                let pixmap = frame_tile(&f.rgb, (w, h), a.tile_width, |tile, view| {
+                    draw_skeleton(tile, &track, f.index, view, &style)
+                })?;
+                let secs = f.index as f64 / track.fps();
+                tiles.push(Tile {
+                    pixmap,
+                    caption: format!("frame {} · {secs:.2} s", f.index),
+                });
             }
             if tiles.is_empty() {
                 bail!("{}: no frames decoded", a.video.display());
             }
-            let gap = ContactSheetParams::default().gap_px;
-            let (px, sw, sh) = contact_sheet(&tiles, a.tile_width, tile_h, a.cols, gap);
-            image::save_buffer(
-                &a.output,
-                &px,
-                sw as u32,
-                sh as u32,
-                image::ExtendedColorType::Rgb8,
-            )
-            .with_context(|| format!("writing {}", a.output.display()))?;
+            let title = a
+                .video
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let sheet = contact_sheet(&tiles, a.cols, &format!("{title} — keypoints"))?;
+            let png = pixmap_to_png("contact sheet", &sheet)?;
+            mp_geom::io::write_atomic(&a.output, &png)
+                .with_context(|| format!("writing {}", a.output.display()))?;
             if !a.quiet {
                 println!(
-                    "{}: contact sheet of {} frames ({sw}×{sh})",
+                    "{}: contact sheet of {} frames ({}×{})",
                     a.output.display(),
-                    tiles.len()
+                    tiles.len(),
+                    sheet.width(),
+                    sheet.height()
                 );
             }
         }
         "mp4" | "mkv" | "mov" => {
+            let style = SkeletonStyle {
+                min_confidence: a.min_confidence,
+                ..SkeletonStyle::for_frame(w, h)
+            };
+            let view = View::frame(1.0);
             let mut writer = VideoWriter::create(&a.output, w, h, source.fps).map_err(pose_err)?;
             let pb = crate::progress::bar(source.frame_count, "overlay", a.quiet);
             for frame in source.frames.by_ref() {
-                let mut f = frame.map_err(pose_err)?;
-                draw_frame(&mut f.rgb, w, h, &track, f.index, &style);
-                writer.write(&f.rgb).map_err(pose_err)?;
+                let f = frame.map_err(pose_err)?;
+                let mut pm = rgb_to_pixmap(&f.rgb, w, h)?;
+                draw_skeleton(&mut pm, &track, f.index, &view, &style);
+                writer.write(&pixmap_to_rgb(&pm)).map_err(pose_err)?;
                 pb.inc(1);
             }
             pb.finish_and_clear();

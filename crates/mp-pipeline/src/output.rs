@@ -215,9 +215,8 @@ pub(crate) fn write_overlay(
     let (width, height, fps) = (src.info.width, src.info.height, src.info.fps);
     let staged = out.staging_file("overlay.mp4");
     let mut writer = VideoWriter::create_with_preset(&staged, width, height, fps, OVERLAY_PRESET)?;
-    let s = (width.max(height) as f32 / 512.0).max(0.6);
-    let kp_style = SkeletonStyle::default().scaled(s);
-    let prog_style = SkeletonStyle::program().scaled(s);
+    let kp_style = SkeletonStyle::for_frame(width, height);
+    let prog_style = SkeletonStyle::program().scaled(SkeletonStyle::frame_scale(width, height));
     let view = View::frame(1.0);
     let span = track.found_span();
     let mut done = 0usize;

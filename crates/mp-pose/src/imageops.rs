@@ -206,6 +206,20 @@ pub(crate) fn extend_f32(src: &[u8], scale: f32, offset: f32, out: &mut Vec<f32>
     out.extend(src.iter().map(|&v| v as f32 * scale + offset));
 }
 
+/// Scales an RGB image to `out_w × out_h` (bilinear).
+pub fn resize_rgb(src: RgbView<'_>, out_w: usize, out_h: usize) -> Vec<u8> {
+    let roi = Roi {
+        center_x_px: src.width as f64 / 2.0 - 0.5 + 0.5 * src.width as f64 / out_w as f64,
+        center_y_px: src.height as f64 / 2.0 - 0.5 + 0.5 * src.height as f64 / out_h as f64,
+        width_px: src.width as f64,
+        height_px: src.height as f64,
+        rotation_rad: 0.0,
+    };
+    let mut out = Vec::new();
+    crop_u8(src, &roi, out_w, out_h, Border::Replicate, &mut out);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -331,5 +345,20 @@ mod tests {
         assert_eq!((r.width_px, r.height_px), (640.0, 640.0));
         let (x, y) = r.to_image(0.0, 0.0);
         assert_eq!((x, y), (0.0, -140.0));
+    }
+
+    #[test]
+    fn resize_keeps_constant_images() {
+        let img = vec![77u8; 10 * 6 * 3];
+        let out = resize_rgb(
+            RgbView {
+                width: 10,
+                height: 6,
+                data: &img,
+            },
+            5,
+            3,
+        );
+        assert!(out.iter().all(|&v| v == 77));
     }
 }

@@ -12,7 +12,6 @@
 //! * [`pose::PoseEstimator`]: the trait both implement.
 //! * [`extract()`]: a whole video to an `mp_geom::Track` (pixels, and metres for
 //!   BlazePose), frames without a person marked with confidence 0.
-//! * [`draw`]: skeletons drawn on frames, contact sheets.
 //! * [`decode`]: decoding on its own thread ahead of the pose model, and
 //!   reduced JPEG copies of the frames from a second FFmpeg process.
 //! * [`thumbs`]: grey thumbnails of whole frames (a feature track for
@@ -30,7 +29,6 @@
 
 pub mod blazepose;
 pub mod decode;
-pub mod draw;
 pub mod error;
 pub mod extract;
 pub mod filter;

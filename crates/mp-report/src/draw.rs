@@ -139,6 +139,18 @@ impl SkeletonStyle {
         }
     }
 
+    /// How much thicker skeletons are drawn on a `width × height` video
+    /// frame: its larger side / 512, at least 0.6.
+    pub fn frame_scale(width: usize, height: usize) -> f32 {
+        (width.max(height) as f32 / 512.0).max(0.6)
+    }
+
+    /// The keypoints' style on a `width × height` video frame
+    /// ([`Self::frame_scale`]).
+    pub fn for_frame(width: usize, height: usize) -> Self {
+        SkeletonStyle::default().scaled(Self::frame_scale(width, height))
+    }
+
     /// The same style `s` × thicker.
     pub fn scaled(&self, s: f32) -> Self {
         SkeletonStyle {
@@ -172,17 +184,33 @@ pub fn draw_skeleton(
     if t >= track.n_frames() || track.dims() < 2 {
         return;
     }
-    let sk: &Skeleton = track.skeleton();
-    let pos = track.positions();
-    let conf = track.confidence();
-    let j = track.n_joints();
+    let (pos, conf) = (track.positions(), track.confidence());
+    let points: Vec<[f64; 2]> = (0..track.n_joints())
+        .map(|k| [pos[[t, k, 0]], pos[[t, k, 1]]])
+        .collect();
+    let confidence: Vec<f64> = conf.row(t).to_vec();
+    draw_pose(pixmap, track.skeleton(), &points, &confidence, view, st);
+}
+
+/// Draws one pose (`points` and `confidence` in the skeleton's joint
+/// order) onto `pixmap` through `view`: the one skeleton renderer of the
+/// workspace (reports, overlay videos, `mp overlay`, the live page).
+pub fn draw_pose(
+    pixmap: &mut Pixmap,
+    sk: &Skeleton,
+    points: &[[f64; 2]],
+    confidence: &[f64],
+    view: &View,
+    st: &SkeletonStyle,
+) {
+    let j = points.len().min(confidence.len());
     let ok = |k: usize| {
         k < j
-            && conf[[t, k]] > st.min_confidence
-            && pos[[t, k, 0]].is_finite()
-            && pos[[t, k, 1]].is_finite()
+            && confidence[k] > st.min_confidence
+            && points[k][0].is_finite()
+            && points[k][1].is_finite()
     };
-    let at = |k: usize| view.apply(pos[[t, k, 0]], pos[[t, k, 1]]);
+    let at = |k: usize| view.apply(points[k][0], points[k][1]);
     let stroke = Stroke {
         width: st.line_width_px,
         line_cap: resvg::tiny_skia::LineCap::Round,
@@ -314,6 +342,50 @@ pub(crate) fn blit_scaled(dst: &mut Pixmap, src: &Pixmap) {
         ..PixmapPaint::default()
     };
     dst.draw_pixmap(0, 0, src.as_ref(), &pp, Transform::from_scale(sx, sy), None);
+}
+
+/// A `tile_w`-pixel-wide tile of the RGB frame `rgb` (`size` = width,
+/// height), with `draw` drawing on it through the view that maps the
+/// frame's pixels onto the tile (skeletons are drawn after scaling, so
+/// their lines stay sharp).
+pub fn frame_tile(
+    rgb: &[u8],
+    size: (usize, usize),
+    tile_w: u32,
+    draw: impl FnOnce(&mut Pixmap, &View),
+) -> Result<Pixmap> {
+    let (w, h) = size;
+    let tile_h = ((h as f64 / w.max(1) as f64) * tile_w as f64)
+        .round()
+        .max(1.0) as u32;
+    let frame = crate::raster::rgb_to_pixmap(rgb, w, h)?;
+    let mut tile = blank_canvas(tile_w, tile_h)?;
+    blit_scaled(&mut tile, &frame);
+    draw(&mut tile, &View::frame(tile_w as f64 / w.max(1) as f64));
+    Ok(tile)
+}
+
+/// Layout of a contact sheet of evenly spaced frames of a video
+/// (`mp overlay … -o sheet.png`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ContactSheetParams {
+    /// Frames on the sheet. Default 12.
+    pub frames: usize,
+    /// Columns. Default 4.
+    pub cols: usize,
+    /// Width of each tile in pixels (the height keeps the frame's aspect).
+    /// Default 320.
+    pub tile_width_px: u32,
+}
+
+impl Default for ContactSheetParams {
+    fn default() -> Self {
+        ContactSheetParams {
+            frames: 12,
+            cols: 4,
+            tile_width_px: 320,
+        }
+    }
 }
 
 /// One tile of a contact sheet: a finished picture and its caption.

@@ -8,13 +8,13 @@ use mp_geom::Track;
 use rayon::prelude::*;
 
 use crate::draw::{
-    blank_canvas, blit_scaled, contact_sheet, draw_skeleton, SkeletonStyle, Tile, View,
+    blank_canvas, contact_sheet, draw_skeleton, frame_tile, SkeletonStyle, Tile, View,
 };
 use crate::error::{ReportError, Result};
 use crate::frames::FrameStore;
 use crate::outdir::{check_cancel, OutputDir};
 use crate::plots::{joint_trajectory_svg, PlotParams};
-use crate::raster::{pixmap_to_png, rgb_to_pixmap, svg_to_png};
+use crate::raster::{pixmap_to_png, svg_to_png};
 use crate::timeline::{timeline_svg, TimelineParams};
 
 /// Tiles of the contact sheet.
@@ -154,20 +154,18 @@ fn contact_sheet_of(
                 None => format!("frame {f} · {secs:.2} s"),
             };
             let pixmap = match (a.frames, a.frame_size) {
-                (Some(store), Some((w, h))) => {
-                    let tile_w = 240u32;
-                    let tile_h = ((h as f64 / w as f64) * tile_w as f64).round().max(1.0) as u32;
+                (Some(store), Some(size)) => {
                     let pos = store.nearest(f).ok_or_else(|| {
                         ReportError::Mismatch(format!("no stored frame near {f}"))
                     })?;
                     let rgb = store.rgb(pos)?;
-                    let small = rgb_to_pixmap(&rgb, store.size.0, store.size.1)?;
-                    let mut tile = blank_canvas(tile_w, tile_h)?;
-                    blit_scaled(&mut tile, &small);
-                    let view = View::frame(tile_w as f64 / w as f64);
-                    draw_skeleton(&mut tile, a.executed, f, &view, &prog_style);
-                    draw_skeleton(&mut tile, a.track, f, &view, &kp_style);
-                    tile
+                    // The stored frame is reduced: the view maps the video's pixels.
+                    let tile_w = 240u32;
+                    frame_tile(&rgb, store.size, tile_w, |tile, _| {
+                        let view = View::frame(tile_w as f64 / size.0 as f64);
+                        draw_skeleton(tile, a.executed, f, &view, &prog_style);
+                        draw_skeleton(tile, a.track, f, &view, &kp_style);
+                    })?
                 }
                 _ => {
                     let (tw, th) = (240u32, 240u32);

@@ -134,7 +134,7 @@ pub(crate) fn svg_to_png(name: &str, svg: &str, scale: f32) -> Result<Vec<u8>> {
 
 /// Encodes a pixmap as PNG with fast compression: 8-bit RGB when every
 /// pixel is opaque, 8-bit RGBA (colours un-premultiplied) otherwise.
-pub(crate) fn pixmap_to_png(name: &str, p: &Pixmap) -> Result<Vec<u8>> {
+pub fn pixmap_to_png(name: &str, p: &Pixmap) -> Result<Vec<u8>> {
     let opaque = p.pixels().iter().all(|px| px.alpha() == 255);
     let (w, h) = (p.width(), p.height());
     let (bytes, colour) = if opaque {

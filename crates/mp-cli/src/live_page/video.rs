@@ -16,9 +16,10 @@ use std::time::{Duration, Instant};
 
 use mp_geom::Skeleton;
 use mp_live::PersonPose;
-use mp_pose::draw::{draw_pose, resize, Canvas, DrawStyle};
-use mp_pose::imageops::RgbView;
+use mp_pose::imageops::{resize_rgb, RgbView};
 use mp_pose::Frame;
+use mp_report::draw::{draw_pose, SkeletonStyle, View};
+use mp_report::raster::{pixmap_to_rgb, rgb_to_pixmap};
 
 /// Frames encoded per second at most.
 pub const MAX_FPS: f64 = 15.0;
@@ -254,8 +255,8 @@ fn draw_and_encode(shot: &Shot, labels: &mut Labels) -> Option<Vec<u8>> {
         ((f.width as f64 * scale).round() as usize).max(1),
         ((f.height as f64 * scale).round() as usize).max(1),
     );
-    let mut rgb = if scale < 1.0 {
-        resize(
+    let rgb = if scale < 1.0 {
+        resize_rgb(
             RgbView {
                 width: f.width,
                 height: f.height,
@@ -268,21 +269,36 @@ fn draw_and_encode(shot: &Shot, labels: &mut Labels) -> Option<Vec<u8>> {
         f.rgb.clone()
     };
     let skeleton = Skeleton::blazepose33();
-    let style = DrawStyle::default().scaled_to(w, h);
-    for p in &shot.people {
-        let kp: Vec<[f64; 2]> = p
-            .keypoints_px
-            .iter()
-            .map(|k| [k[0] * scale, k[1] * scale])
-            .collect();
-        let mut canvas = Canvas {
-            width: w,
-            height: h,
-            data: &mut rgb,
-        };
+    let style = SkeletonStyle::for_frame(w, h);
+    let poses: Vec<(&PersonPose, Vec<[f64; 2]>)> = shot
+        .people
+        .iter()
+        .map(|p| {
+            let kp = p
+                .keypoints_px
+                .iter()
+                .map(|k| [k[0] * scale, k[1] * scale])
+                .collect();
+            (p, kp)
+        })
+        .collect();
+    // The skeletons with the renderer of the reports and overlay videos,
+    // then each person's label over them.
+    let mut pixmap = rgb_to_pixmap(&rgb, w, h).ok()?;
+    for (p, kp) in &poses {
         if kp.len() == skeleton.joints.len() {
-            draw_pose(&mut canvas, &skeleton, &kp, &p.visibility, &style);
+            draw_pose(
+                &mut pixmap,
+                &skeleton,
+                kp,
+                &p.visibility,
+                &View::frame(1.0),
+                &style,
+            );
         }
+    }
+    let mut rgb = pixmap_to_rgb(&pixmap);
+    for (p, kp) in &poses {
         let seen: Vec<&[f64; 2]> = kp
             .iter()
             .zip(&p.visibility)
