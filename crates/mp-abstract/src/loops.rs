@@ -40,6 +40,7 @@ pub const MAX_WINDOW: usize = 1_000_000;
 
 /// Parameters of loop detection. Defaults: the product's (docs/ALGORITHMS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct LoopParams {
     /// Largest loop-body size tried (default 10).
     pub max_body: usize,

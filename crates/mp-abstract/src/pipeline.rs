@@ -32,6 +32,7 @@ use crate::synth::{synthesize, translate};
 /// Euclidean error ([`RefitNorm::Euclidean`](mp_concrete::RefitNorm::Euclidean)),
 /// the norm the segmentation itself minimises.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct AbstractParams {
     /// Concrete synthesis (segmentation, fitting, scale rule).
     pub synth: SynthParams,

@@ -183,7 +183,7 @@ pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
 /// signal and method that decided), from a track or a video.
 pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
     let mut params = a.opts.pipeline_params();
-    a.people.apply(&mut params)?;
+    a.people.apply(&mut params, false)?;
     let input = crate::track_arg::open_input(&a.track, a.opts.frame_size, &a.opts.rate)?;
     let out = mp_pipeline::analyse_input(
         input,

@@ -54,6 +54,9 @@ pub struct BatchArgs {
     /// Do not write the overlay videos.
     #[arg(long)]
     pub no_video: bool,
+    /// Every setting of each run from a JSON file (`mp params` prints them); the options given here apply on top.
+    #[arg(long, value_name = "FILE")]
+    pub params: Option<PathBuf>,
     /// No progress bars and no summary (failures are still reported).
     #[arg(long, short)]
     pub quiet: bool,
@@ -69,13 +72,28 @@ impl BatchArgs {
             fps: self.rate.fps,
             ..BatchParams::default()
         };
-        p.params.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
-        p.params.pose.max_frames = self.max_frames;
-        p.params.pose.all_joints = self.all_joints;
-        p.params.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
-        p.params.pose.device = mp_pose::runtime::Device::parse(&self.device)?;
-        p.params.output.overlay_video = !self.no_video;
-        self.people.apply(&mut p.params)?;
+        p.params = crate::cmd_run::params_file(self.params.as_deref())?;
+        let only_given = self.params.is_some();
+        let set = |id: &str| !only_given || crate::given(id);
+        if set("model") {
+            p.params.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
+        }
+        if set("max_frames") {
+            p.params.pose.max_frames = self.max_frames;
+        }
+        if set("all_joints") {
+            p.params.pose.all_joints = self.all_joints;
+        }
+        if set("pose_fps") {
+            p.params.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
+        }
+        if set("device") {
+            p.params.pose.device = mp_pose::runtime::Device::parse(&self.device)?;
+        }
+        if set("no_video") {
+            p.params.output.overlay_video = !self.no_video;
+        }
+        self.people.apply(&mut p.params, only_given)?;
         p.validate()?;
         Ok(p)
     }

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use mp_pipeline::{Input, Params, RunSummary};
 
@@ -29,6 +29,9 @@ pub struct RunArgs {
     /// Do not write the overlay video.
     #[arg(long)]
     pub no_video: bool,
+    /// Every setting of the run from a JSON file (`mp params` prints them); the options given here apply on top.
+    #[arg(long, value_name = "FILE")]
+    pub params: Option<PathBuf>,
     /// No progress bars and no summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -58,16 +61,54 @@ pub struct PoseOpts {
 }
 
 impl PoseOpts {
-    /// Sets the pose parameters of `p`.
-    pub fn apply(&self, p: &mut Params) -> Result<()> {
-        p.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
-        p.pose.max_frames = self.max_frames;
-        p.pose.all_joints = self.all_joints;
-        p.pose.threads = self.threads;
-        p.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
-        p.pose.device = mp_pose::runtime::Device::parse(&self.device)?;
+    /// Sets the pose parameters of `p`; with `only_given` (a `--params`
+    /// file is the base) only those given on the command line.
+    pub fn apply(&self, p: &mut Params, only_given: bool) -> Result<()> {
+        let set = |id: &str| !only_given || crate::given(id);
+        if set("model") {
+            p.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
+        }
+        if set("max_frames") {
+            p.pose.max_frames = self.max_frames;
+        }
+        if set("all_joints") {
+            p.pose.all_joints = self.all_joints;
+        }
+        if set("threads") {
+            p.pose.threads = self.threads;
+        }
+        if set("pose_fps") {
+            p.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
+        }
+        if set("device") {
+            p.pose.device = mp_pose::runtime::Device::parse(&self.device)?;
+        }
         Ok(())
     }
+}
+
+/// The parameters of a `--params` file (completed with the defaults and
+/// checked), or the defaults.
+pub fn params_file(path: Option<&Path>) -> Result<Params> {
+    let Some(path) = path else {
+        return Ok(Params::default());
+    };
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    Params::from_json(&text).with_context(|| format!("{}", path.display()))
+}
+
+/// Arguments of `mp params`.
+#[derive(Args, Debug)]
+pub struct ParamsArgs {
+    /// A JSON file of settings, partial or whole: printed completed with the defaults, after its check.
+    pub file: Option<PathBuf>,
+}
+
+/// `mp params`: every setting of a run as JSON.
+pub fn params_cmd(a: &ParamsArgs) -> Result<()> {
+    println!("{}", params_file(a.file.as_deref())?.to_json()?);
+    Ok(())
 }
 
 /// Options for videos with several people.
@@ -85,21 +126,32 @@ pub struct PeopleOpts {
 }
 
 impl PeopleOpts {
-    /// Sets the people parameters of `p`.
-    pub fn apply(&self, p: &mut Params) -> Result<()> {
-        p.person.choice = mp_pipeline::PersonChoice::parse(&self.person)?;
-        p.pose.tracker.max_people = self.max_people;
-        p.pose.people = !self.single_person;
+    /// Sets the people parameters of `p`; with `only_given` only those
+    /// given on the command line.
+    pub fn apply(&self, p: &mut Params, only_given: bool) -> Result<()> {
+        let set = |id: &str| !only_given || crate::given(id);
+        if set("person") {
+            p.person.choice = mp_pipeline::PersonChoice::parse(&self.person)?;
+        }
+        if set("max_people") {
+            p.pose.tracker.max_people = self.max_people;
+        }
+        if set("single_person") {
+            p.pose.people = !self.single_person;
+        }
         Ok(())
     }
 }
 
 /// `mp run`.
 pub fn run_cmd(a: &RunArgs) -> Result<()> {
-    let mut params = Params::default();
-    a.pose.apply(&mut params)?;
-    a.people.apply(&mut params)?;
-    params.output.overlay_video = !a.no_video;
+    let mut params = params_file(a.params.as_deref())?;
+    let from_file = a.params.is_some();
+    a.pose.apply(&mut params, from_file)?;
+    a.people.apply(&mut params, from_file)?;
+    if !from_file || a.no_video {
+        params.output.overlay_video = !a.no_video;
+    }
     crate::track_arg::check_out_dir(&a.out)?;
     let input = crate::track_arg::open_input(&a.input, a.frame_size, &a.rate)?;
     let summary = run_or_exit(input, &a.out, &params, a.quiet)?;

@@ -19,7 +19,9 @@ mod live_view;
 mod progress;
 mod track_arg;
 
-use clap::{Parser, Subcommand};
+use std::sync::OnceLock;
+
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Motion programs: keypoints → concrete programs → abstract programs, grammars, forecasts.
 #[derive(Parser)]
@@ -69,14 +71,33 @@ enum Command {
     Run(cmd_run::RunArgs),
     /// Many videos or tracks (a folder or a list) through `mp run`, several at once, with a resumable manifest.
     Batch(cmd_batch::BatchArgs),
+    /// Every setting of `mp run` and `mp batch` as JSON: the defaults, or a file's settings completed and checked.
+    Params(cmd_run::ParamsArgs),
     /// Refine a 20-joint 3D track: learned flaw detection and repair (anchor and transition networks as options).
     Refine(cmd_refine::RefineArgs),
     /// Learn anchor concepts (clusters + quality model) from MSR Action3D or a folder of tracks.
     Concepts(cmd_refine::ConceptsArgs),
 }
 
+/// The parsed command line, for [`given`].
+static MATCHES: OnceLock<clap::ArgMatches> = OnceLock::new();
+
+/// Whether the running subcommand's argument `id` (its field name) was
+/// given on the command line rather than left at its default.
+pub fn given(id: &str) -> bool {
+    MATCHES
+        .get()
+        .and_then(|m| m.subcommand())
+        .is_some_and(|(_, m)| {
+            m.ids().any(|i| i.as_str() == id)
+                && m.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
+        })
+}
+
 fn main() {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    let _ = MATCHES.set(matches);
     progress::install_ctrl_c();
     let result: anyhow::Result<()> = match cli.command {
         Command::Extract(a) => cmd_pose::extract_cmd(&a),
@@ -98,6 +119,7 @@ fn main() {
         Command::Grammar(a) => cmd_grammar::grammar_cmd(&a),
         Command::Run(a) => cmd_run::run_cmd(&a),
         Command::Batch(a) => cmd_batch::batch_cmd(&a),
+        Command::Params(a) => cmd_run::params_cmd(&a),
         Command::Refine(a) => cmd_refine::refine_cmd(&a),
         Command::Concepts(a) => cmd_refine::concepts_cmd(&a),
     };

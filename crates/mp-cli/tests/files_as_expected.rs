@@ -85,3 +85,53 @@ fn outputs_have_ordinary_permissions_and_a_reused_folder_is_cleaned() {
         );
     }
 }
+
+#[test]
+fn a_params_file_sets_every_setting_and_options_apply_on_top() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |name: &str| tmp.path().join(name);
+    let s = |name: &str| p(name).to_string_lossy().into_owned();
+    // `mp params` prints the defaults; a partial file comes back completed.
+    let (defaults, _) = ok(&["params"]);
+    let v: serde_json::Value = serde_json::from_str(&defaults).unwrap();
+    assert_eq!(v["pose"]["model"], "full");
+    assert_eq!(v["output"]["report"], true);
+    std::fs::write(
+        p("p.json"),
+        r#"{"output": {"report": false}, "pose": {"model": "lite"}}"#,
+    )
+    .unwrap();
+    let (completed, _) = ok(&["params", &s("p.json")]);
+    let c: serde_json::Value = serde_json::from_str(&completed).unwrap();
+    assert_eq!(c["pose"]["model"], "lite");
+    assert_eq!(c["output"]["report"], false);
+    assert_eq!(c["analysis"], v["analysis"]);
+    std::fs::write(p("bad.json"), r#"{"output": {"reprot": false}}"#).unwrap();
+    let err = common::refused(&["params", &s("bad.json")]);
+    assert!(err.contains("reprot") && err.contains("bad.json"), "{err}");
+
+    // The file's `report: false` holds for `mp run`; an option given on top wins.
+    ok(&["performer", "-o", &s("perf.npz")]);
+    ok(&[
+        "run",
+        &s("perf.npz"),
+        "--out",
+        &s("run"),
+        "--params",
+        &s("p.json"),
+        "--quiet",
+    ]);
+    assert!(p("run/loops.json").is_file());
+    assert!(!p("run/report.html").exists());
+    let err = common::refused(&[
+        "run",
+        &s("perf.npz"),
+        "--out",
+        &s("run2"),
+        "--params",
+        &s("p.json"),
+        "--pose-fps",
+        "fast",
+    ]);
+    assert!(err.contains("fast"), "{err}");
+}

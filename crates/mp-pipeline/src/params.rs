@@ -4,13 +4,16 @@ use mp_abstract::{AbstractParams, CountParams};
 use mp_concrete::{Scale, SynthParams};
 use mp_geom::PersonId;
 pub use mp_pose::ModelChoice;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{PipelineError, Result};
 
 /// Keypoints from video.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PoseParams {
     /// The pose model. Default `ModelChoice::default()` (BlazePose full).
+    #[serde(with = "as_text::model")]
     pub model: ModelChoice,
     /// ONNX Runtime threads. Default `SessionParams::default()` (2).
     pub threads: usize,
@@ -35,10 +38,12 @@ pub struct PoseParams {
     pub tracker: mp_pose::PeopleParams,
     /// How often the pose model runs; the frames between are filled from
     /// the motion ([`crate::pose_rate`]). Default every frame.
+    #[serde(with = "as_text::rate")]
     pub rate: crate::pose_rate::PoseRate,
     /// Where the pose model runs (`mp_pose::runtime::Device`): the GPU
     /// where ONNX Runtime's CUDA build and a GPU are there, else the CPU
     /// (default, `auto`); `cpu`; or a CUDA device, an error where there is none.
+    #[serde(with = "as_text::device")]
     pub device: mp_pose::runtime::Device,
 }
 
@@ -104,9 +109,12 @@ impl PersonChoice {
 }
 
 /// Several people: whom to analyse.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PersonParams {
-    /// Whose motion is analysed. Default [`PersonChoice::All`].
+    /// Whose motion is analysed. Default [`PersonChoice::All`]; in JSON
+    /// `"all"`, `"main"` or a person's id.
+    #[serde(with = "as_text::person")]
     pub choice: PersonChoice,
     /// Seconds a person must be found in for their own program and count
     /// (the main person always gets them). Default 2: two repetitions of most
@@ -124,7 +132,8 @@ impl Default for PersonParams {
 }
 
 /// What a run writes besides the programs and counts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct OutputParams {
     /// Plots, timeline, contact sheet and the report (`report.html` and its
     /// folder `report/`). Default true.
@@ -144,7 +153,13 @@ impl Default for OutputParams {
 
 /// Every parameter of a run. `Params::default()` is what `mp run`, `mp fit`,
 /// `mp abstract`, `mp loops`, the evaluations and the Python package use.
-#[derive(Debug, Clone, PartialEq, Default)]
+///
+/// `Params` reads and writes JSON ([`Params::from_json`], [`Params::to_json`]):
+/// a partial document changes only the fields it names (the others keep
+/// their defaults), and a misspelt field of the run's own sections (`pose`,
+/// `output`, `person`) is an error that names it.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Params {
     /// Concrete synthesis (λ from the local spread of the keypoints held
     /// for one second, Euclidean C0 refit, joints the model never saw fitted
@@ -223,5 +238,151 @@ impl Params {
             },
             ..self.analysis.synth.clone()
         }
+    }
+}
+
+impl Params {
+    /// Parameters from a JSON document (see [`Params`]), checked.
+    pub fn from_json(text: &str) -> Result<Self> {
+        let p: Params = serde_json::from_str(text)
+            .map_err(|e| PipelineError::param("params", format!("reading the JSON: {e}")))?;
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Every parameter as pretty JSON (what `mp params` prints).
+    pub fn to_json(&self) -> Result<String> {
+        Ok(serde_json::to_string_pretty(self)?)
+    }
+}
+
+/// The fields whose JSON form is their command-line text
+/// (`"full"`, `"auto"`, `"cuda:0"`, `"12"`, `"main"`).
+mod as_text {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    fn text<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Text {
+            S(String),
+            N(f64),
+        }
+        Ok(match Text::deserialize(d)? {
+            Text::S(s) => s,
+            Text::N(n) => n.to_string(),
+        })
+    }
+
+    pub(super) mod model {
+        use super::*;
+        use mp_pose::extract::ModelChoice;
+
+        pub(crate) fn serialize<S: Serializer>(m: &ModelChoice, s: S) -> Result<S::Ok, S::Error> {
+            s.serialize_str(m.as_str())
+        }
+
+        pub(crate) fn deserialize<'de, D: Deserializer<'de>>(
+            d: D,
+        ) -> Result<ModelChoice, D::Error> {
+            ModelChoice::parse(&text(d)?).map_err(serde::de::Error::custom)
+        }
+    }
+
+    pub(super) mod rate {
+        use super::*;
+        use crate::pose_rate::PoseRate;
+
+        pub(crate) fn serialize<S: Serializer>(r: &PoseRate, s: S) -> Result<S::Ok, S::Error> {
+            s.serialize_str(&r.label())
+        }
+
+        pub(crate) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<PoseRate, D::Error> {
+            PoseRate::parse(&text(d)?).map_err(serde::de::Error::custom)
+        }
+    }
+
+    pub(super) mod device {
+        use super::*;
+        use mp_pose::runtime::Device;
+
+        pub(crate) fn serialize<S: Serializer>(v: &Device, s: S) -> Result<S::Ok, S::Error> {
+            s.serialize_str(&v.label())
+        }
+
+        pub(crate) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Device, D::Error> {
+            Device::parse(&text(d)?).map_err(serde::de::Error::custom)
+        }
+    }
+
+    pub(super) mod person {
+        use super::*;
+        use crate::params::PersonChoice;
+
+        pub(crate) fn serialize<S: Serializer>(c: &PersonChoice, s: S) -> Result<S::Ok, S::Error> {
+            match c {
+                PersonChoice::All => s.serialize_str("all"),
+                PersonChoice::Main => s.serialize_str("main"),
+                PersonChoice::Id(id) => s.serialize_str(&id.to_string()),
+            }
+        }
+
+        pub(crate) fn deserialize<'de, D: Deserializer<'de>>(
+            d: D,
+        ) -> Result<PersonChoice, D::Error> {
+            PersonChoice::parse(&text(d)?).map_err(serde::de::Error::custom)
+        }
+    }
+}
+
+#[cfg(test)]
+mod json_tests {
+    use super::*;
+
+    #[test]
+    fn the_defaults_go_through_json_unchanged() {
+        let p = Params::default();
+        let text = p.to_json().unwrap();
+        assert_eq!(Params::from_json(&text).unwrap(), p);
+        assert!(text.contains("\"model\": \"full\""), "{text}");
+    }
+
+    #[test]
+    fn a_partial_document_changes_only_what_it_names() {
+        let p = Params::from_json(
+            r#"{"pose": {"model": "lite", "rate": 12, "tracker": {"max_people": 3}},
+                "person": {"choice": "main"},
+                "count": {"min_strength": 0.4},
+                "analysis": {"synth": {"max_segment_frames": 40}}}"#,
+        )
+        .unwrap();
+        let d = Params::default();
+        assert_eq!(p.pose.model, ModelChoice::Lite);
+        assert_eq!(p.pose.rate, crate::PoseRate::parse("12").unwrap());
+        assert_eq!(p.pose.tracker.max_people, 3);
+        assert_eq!(p.pose.tracker.lost_s, d.pose.tracker.lost_s);
+        assert_eq!(p.person.choice, PersonChoice::Main);
+        assert_eq!(p.analysis.synth.max_segment_frames, 40);
+        assert_eq!(p.count.min_strength, 0.4);
+        assert_eq!(p.count.period, d.count.period);
+        assert_eq!(p.analysis.synth.lambda, d.analysis.synth.lambda);
+        assert_eq!(p.output, d.output);
+    }
+
+    #[test]
+    fn misspelt_fields_and_bad_values_are_named() {
+        let e = Params::from_json(r#"{"pose": {"modle": "lite"}}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("modle"), "{e}");
+        let e = Params::from_json(r#"{"pose": {"model": "huge"}}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("huge"), "{e}");
+        let e = Params::from_json(r#"{"pose": {"threads": 0}}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("threads"), "{e}");
+        assert!(Params::from_json("not json").is_err());
     }
 }

@@ -33,15 +33,56 @@ pub(crate) fn params_with(
     lambda_: Option<f64>,
     max_segment_frames: Option<usize>,
 ) -> PyResult<Params> {
-    let mut p = Params::default();
+    params_from(
+        None,
+        model,
+        threads,
+        max_frames,
+        all_joints,
+        lambda_,
+        max_segment_frames,
+    )
+}
+
+/// The parameters of a dict (`params=`, the JSON form of
+/// `mp_pipeline::Params`: a partial dict changes only what it names), or
+/// the defaults; the keyword arguments given on top.
+pub(crate) fn base_params(params: Option<&Bound<'_, PyAny>>) -> PyResult<Params> {
+    let Some(d) = params else {
+        return Ok(Params::default());
+    };
+    let json = d.py().import("json")?;
+    let text: String = json
+        .call_method1("dumps", (d,))
+        .map_err(|e| errors::ParamError::new_err(format!("params: not JSON-like: {e}")))?
+        .extract()?;
+    Params::from_json(&text).map_err(errors::pipeline)
+}
+
+/// [`params_with`] on top of [`base_params`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn params_from(
+    base: Option<&Bound<'_, PyAny>>,
+    model: Option<&str>,
+    threads: Option<usize>,
+    max_frames: Option<usize>,
+    all_joints: bool,
+    lambda_: Option<f64>,
+    max_segment_frames: Option<usize>,
+) -> PyResult<Params> {
+    let mut p = base_params(base)?;
     if let Some(m) = model {
         p.pose.model = mp_pose_model(m)?;
     }
     if let Some(t) = threads {
         p.pose.threads = t;
     }
-    p.pose.max_frames = max_frames;
-    p.pose.all_joints = all_joints;
+    if max_frames.is_some() {
+        p.pose.max_frames = max_frames;
+    }
+    if all_joints {
+        p.pose.all_joints = true;
+    }
     if let Some(l) = lambda_ {
         p.analysis.synth.lambda = mp_concrete::Lambda::fixed(l);
     }
@@ -99,6 +140,14 @@ fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
 #[pyo3(signature = (path, fps = None))]
 fn read_track(py: Python<'_>, path: PathBuf, fps: Option<f64>) -> PyResult<PyTrack> {
     Ok(PyTrack::new(track::read_track_file(py, &path, fps)?.track))
+}
+
+/// Every setting of a run as a dict (what `mp params` prints): change
+/// any part of it and pass it as `params=` to `run` or `Analyser`.
+#[pyfunction]
+fn default_params(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    let text = Params::default().to_json().map_err(errors::pipeline)?;
+    py.import("json")?.call_method1("loads", (text,))
 }
 
 /// Keypoints of a video or a still image, as `mp extract` makes them (the
@@ -386,6 +435,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_track, m)?)?;
     m.add_function(wrap_pyfunction!(people::read_people, m)?)?;
     m.add_function(wrap_pyfunction!(extract, m)?)?;
+    m.add_function(wrap_pyfunction!(default_params, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(abstract_program, m)?)?;
     m.add_function(wrap_pyfunction!(count, m)?)?;

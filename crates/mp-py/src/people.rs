@@ -326,6 +326,8 @@ pub(crate) fn apply(
     if let Some(m) = max_people {
         params.pose.tracker.max_people = m;
     }
-    params.pose.people = !single_person;
+    if single_person {
+        params.pose.people = false;
+    }
     params.validate().map_err(errors::pipeline)
 }

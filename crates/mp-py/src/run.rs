@@ -9,7 +9,7 @@ use mp_geom::{People, PersonId, Track};
 use mp_grammar::data::Motion;
 use mp_grammar::model::find_symbols;
 use mp_grammar::{PoseDistanceParams, SymbolParams};
-use mp_pipeline::{Analyser, CancelToken, Input, Outcome, RunSummary, Silent};
+use mp_pipeline::{Analyser, CancelToken, Input, Outcome, Params, RunSummary, Silent};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use serde::{Deserialize, Serialize};
@@ -330,9 +330,11 @@ impl PySummary {
 /// `pose_fps`: how often the pose model runs (a number of poses a second,
 /// `"auto"` or `"all"`, the default), as `mp run --pose-fps`; `device`
 /// where the pose model runs (`"auto"`, `"cpu"`, `"cuda"`, `"cuda:N"`), as
-/// `mp run --device`.
+/// `mp run --device`. `params`: every other setting, as the dict of
+/// `default_params()` (`mp params`), partial or whole; the keywords given
+/// apply on top of it.
 #[pyfunction]
-#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=true, report=true, person=None, max_people=None, single_person=false, pose_fps=None, device=None))]
+#[pyo3(signature = (source, out_dir, model=None, threads=None, max_frames=None, all_joints=false, frame_size=None, overlay_video=None, report=None, person=None, max_people=None, single_person=false, pose_fps=None, device=None, params=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     py: Python<'_>,
@@ -343,19 +345,20 @@ pub fn run(
     max_frames: Option<usize>,
     all_joints: bool,
     frame_size: Option<f64>,
-    overlay_video: bool,
-    report: bool,
+    overlay_video: Option<bool>,
+    report: Option<bool>,
     person: Option<&Bound<'_, PyAny>>,
     max_people: Option<usize>,
     single_person: bool,
     pose_fps: Option<&Bound<'_, PyAny>>,
     device: Option<&str>,
+    params: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PySummary> {
-    let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
+    let mut params =
+        crate::params_from(params, model, threads, max_frames, all_joints, None, None)?;
     crate::pose_rate_arg(&mut params, pose_fps)?;
     crate::device_arg(&mut params, device)?;
-    params.output.overlay_video = overlay_video;
-    params.output.report = report;
+    output_args(&mut params, overlay_video, report);
     crate::people::apply(&mut params, person, max_people, single_person)?;
     let input = input_of(source, frame_size)?;
     let dir = out_dir.clone();
@@ -363,6 +366,16 @@ pub fn run(
         .detach(|| mp_pipeline::run(input, &dir, &params, &Silent, &CancelToken::new()))
         .map_err(errors::pipeline)?;
     Ok(PySummary::of_run(s, out_dir))
+}
+
+/// `overlay_video=` and `report=` where given.
+fn output_args(params: &mut Params, overlay_video: Option<bool>, report: Option<bool>) {
+    if let Some(v) = overlay_video {
+        params.output.overlay_video = v;
+    }
+    if let Some(r) = report {
+        params.output.report = r;
+    }
 }
 
 /// The input a Python call names: a `Track`, or the path of a video or track file.
@@ -393,26 +406,27 @@ pub struct PyAnalyser {
 #[pymethods]
 impl PyAnalyser {
     #[new]
-    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=true, report=true, person=None, max_people=None, single_person=false, pose_fps=None, device=None))]
+    #[pyo3(signature = (model=None, threads=None, max_frames=None, all_joints=false, overlay_video=None, report=None, person=None, max_people=None, single_person=false, pose_fps=None, device=None, params=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         model: Option<&str>,
         threads: Option<usize>,
         max_frames: Option<usize>,
         all_joints: bool,
-        overlay_video: bool,
-        report: bool,
+        overlay_video: Option<bool>,
+        report: Option<bool>,
         person: Option<&Bound<'_, PyAny>>,
         max_people: Option<usize>,
         single_person: bool,
         pose_fps: Option<&Bound<'_, PyAny>>,
         device: Option<&str>,
+        params: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let mut params = crate::params_with(model, threads, max_frames, all_joints, None, None)?;
+        let mut params =
+            crate::params_from(params, model, threads, max_frames, all_joints, None, None)?;
         crate::pose_rate_arg(&mut params, pose_fps)?;
         crate::device_arg(&mut params, device)?;
-        params.output.overlay_video = overlay_video;
-        params.output.report = report;
+        output_args(&mut params, overlay_video, report);
         crate::people::apply(&mut params, person, max_people, single_person)?;
         Ok(PyAnalyser {
             inner: Mutex::new(Analyser::new(params).map_err(errors::pipeline)?),

@@ -384,3 +384,22 @@ def test_functions_take_a_track_a_path_or_an_array(performer, tmp_path):
         mp.fit(tmp_path / "clip.mp4")
     with pytest.raises(mp.ParamError, match="takes a Track"):
         mp.fit({"not": "a track"})
+
+
+def test_params_dict_sets_every_setting_as_mp_params(performer, mp_bin, tmp_path):
+    d = mp.default_params()
+    assert d == json.loads(run_cli(mp_bin, "params"))
+    assert d["pose"]["model"] == "full" and d["output"]["report"] is True
+    # A partial dict: the report is off, everything else keeps its default.
+    s = mp.run(performer, tmp_path / "a", params={"output": {"report": False}})
+    assert (tmp_path / "a" / "loops.json").is_file()
+    assert not (tmp_path / "a" / "report.html").exists()
+    # Keywords apply on top of the dict.
+    mp.run(performer, tmp_path / "b", params={"output": {"report": False}}, report=True)
+    assert (tmp_path / "b" / "report.html").is_file()
+    whole = mp.run(performer, tmp_path / "c", params=d, report=False)
+    assert whole.counts.total == s.counts.total
+    with pytest.raises(mp.ParamError, match="reprot"):
+        mp.run(performer, tmp_path / "d", params={"output": {"reprot": False}})
+    with pytest.raises(mp.ParamError, match="min_strength"):
+        mp.Analyser(params={"count": {"min_strength": -1.0}})

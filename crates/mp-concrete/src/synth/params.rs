@@ -207,6 +207,7 @@ pub enum Scale {
 /// Parameters of synthesis. `default()` is the product's, [`SynthParams::paper`]
 /// the first paper's (docs/ALGORITHMS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct SynthParams {
     /// Segment penalty. Default: the local spread held for one second
     /// ([`Lambda::spread`]); paper: fixed 1600.

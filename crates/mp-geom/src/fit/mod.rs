@@ -80,6 +80,7 @@ pub enum ErrorNorm {
 
 /// Parameters of primitive fitting and selection. Defaults: the product's (docs/ALGORITHMS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct FitParams {
     /// Which primitive kinds may be chosen by [`fit_best`].
     pub kinds: Vec<PrimitiveKind>,

@@ -42,7 +42,8 @@ pub use mp_geom::PersonId;
 
 /// The tracker's parameters, in seconds and region overlaps so that they
 /// hold at any frame rate and frame size.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PeopleParams {
     /// Most people tracked at once. Default 8.
     pub max_people: usize,

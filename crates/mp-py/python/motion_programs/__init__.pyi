@@ -210,13 +210,14 @@ class Analyser:
         threads: Optional[int] = None,
         max_frames: Optional[int] = None,
         all_joints: bool = False,
-        overlay_video: bool = True,
-        report: bool = True,
+        overlay_video: Optional[bool] = None,
+        report: Optional[bool] = None,
         person: Optional[PersonArg] = None,
         max_people: Optional[int] = None,
         single_person: bool = False,
         pose_fps: Union[float, str, None] = None,
         device: Optional[str] = None,
+        params: Optional[dict[str, Any]] = None,
     ) -> None: ...
     def analyse(self, source: Union[PathArg, Track], frame_size: Optional[float] = None) -> Summary: ...
     def run(self, source: Union[PathArg, Track], out_dir: PathArg, frame_size: Optional[float] = None) -> Summary: ...
@@ -285,14 +286,16 @@ def run(
     max_frames: Optional[int] = None,
     all_joints: bool = False,
     frame_size: Optional[float] = None,
-    overlay_video: bool = True,
-    report: bool = True,
+    overlay_video: Optional[bool] = None,
+    report: Optional[bool] = None,
     person: Optional[PersonArg] = None,
     max_people: Optional[int] = None,
     single_person: bool = False,
     pose_fps: Union[float, str, None] = None,
     device: Optional[str] = None,
+    params: Optional[dict[str, Any]] = None,
 ) -> Summary: ...
+def default_params() -> dict[str, Any]: ...
 def grammar_symbols(track: TrackLike, k: Optional[int] = None, seed: Optional[int] = None) -> dict[str, Any]: ...
 def grammar_learn(symbols: dict[str, Any], seed: Optional[int] = None) -> dict[str, Any]: ...
 def predict(
