@@ -119,32 +119,118 @@ pub fn timeline_svg(
             format!("must be ≥ 4, got {}", params.row_height_px),
         ));
     }
-    let t_total = program.n_frames();
-    if t_total == 0 {
+    if program.n_frames() == 0 {
         return Err(ReportError::Mismatch("the program has no frames".into()));
     }
-    let j = program.n_joints();
-    let rh = params.row_height_px;
-    let label_w = 118.0;
-    let (x0, x1) = (label_w + 12.0, params.width_px - 18.0);
-    let fx = |f: f64| x0 + f / t_total as f64 * (x1 - x0);
-    let px_per_frame = (x1 - x0) / t_total as f64;
-    // The legend's line, then the summary's (the title, when drawn, beside the legend).
-    let title_h = 50.0;
-    let mix_top = title_h;
-    let mix_h = 30.0;
-    let loops_top = mix_top + mix_h + 10.0;
-    let loop_h = 40.0;
-    let plo_top = loops_top + loop_h + 6.0;
-    let plo_h = 18.0;
-    let rows_top = plo_top + plo_h + 10.0;
-    let rows_bottom = rows_top + j as f64 * rh;
-    let h = rows_bottom + 46.0;
+    let lay = Layout::new(program, params);
     let bounds = program.boundaries();
-    let columns = ((x1 - x0) * COLUMNS_PER_PX).floor().max(1.0) as usize;
-    let per_segment = program.n_segments() <= columns;
+    let cols = (program.n_segments() > lay.columns).then(|| column_kinds(program, lay.columns));
+    let mut svg = Svg::new(params.width_px, lay.h, style::PAPER);
+    header(&mut svg, &lay, program, repetitions, program_loops, params);
+    kinds_row(&mut svg, &lay, program, &bounds, cols.as_deref());
+    repetitions_row(&mut svg, &lay, repetitions);
+    program_loops_row(&mut svg, &lay, program_loops);
+    joint_rows(&mut svg, &lay, program, &bounds, cols.as_deref());
+    boundaries(&mut svg, &lay, program, &bounds, repetitions);
+    time_axis(&mut svg, &lay, program);
+    let (x0, x1, t_total) = (lay.x0, lay.x1, lay.t_total);
+    let (loops_top, rows_bottom) = (lay.loops_top, lay.rows_bottom);
+    let axis = TimeAxis {
+        x0_px: x0,
+        x1_px: x1,
+        top_px: loops_top,
+        bottom_px: rows_bottom,
+        frames: t_total,
+    };
+    let attrs = format!(
+        r#"class="mp-timeline" data-x0="{}" data-x1="{}" data-top="{}" data-bottom="{}" data-frames="{}""#,
+        num(x0),
+        num(x1),
+        num(axis.top_px),
+        num(axis.bottom_px),
+        t_total
+    );
+    Ok((svg.finish_with(&attrs), axis))
+}
 
-    let mut svg = Svg::new(params.width_px, h, style::PAPER);
+/// Where each part of the timeline goes: the label column, the time axis
+/// from `x0` to `x1`, and the rows from the top.
+#[derive(Debug, Clone, Copy)]
+struct Layout {
+    t_total: usize,
+    j: usize,
+    rh: f64,
+    label_w: f64,
+    x0: f64,
+    x1: f64,
+    px_per_frame: f64,
+    mix_top: f64,
+    mix_h: f64,
+    loops_top: f64,
+    loop_h: f64,
+    plo_top: f64,
+    plo_h: f64,
+    rows_top: f64,
+    rows_bottom: f64,
+    h: f64,
+    /// Columns of the time axis when the program is drawn per column.
+    columns: usize,
+}
+
+impl Layout {
+    fn new(program: &Program, params: &TimelineParams) -> Self {
+        let t_total = program.n_frames();
+        let j = program.n_joints();
+        let rh = params.row_height_px;
+        let label_w = 118.0;
+        let (x0, x1) = (label_w + 12.0, params.width_px - 18.0);
+        // The legend's line, then the summary's (the title, when drawn, beside the legend).
+        let title_h = 50.0;
+        let mix_top = title_h;
+        let mix_h = 30.0;
+        let loops_top = mix_top + mix_h + 10.0;
+        let loop_h = 40.0;
+        let plo_top = loops_top + loop_h + 6.0;
+        let plo_h = 18.0;
+        let rows_top = plo_top + plo_h + 10.0;
+        let rows_bottom = rows_top + j as f64 * rh;
+        Layout {
+            t_total,
+            j,
+            rh,
+            label_w,
+            x0,
+            x1,
+            px_per_frame: (x1 - x0) / t_total as f64,
+            mix_top,
+            mix_h,
+            loops_top,
+            loop_h,
+            plo_top,
+            plo_h,
+            rows_top,
+            rows_bottom,
+            h: rows_bottom + 46.0,
+            columns: ((x1 - x0) * COLUMNS_PER_PX).floor().max(1.0) as usize,
+        }
+    }
+
+    /// The x of frame `f`.
+    fn fx(&self, f: f64) -> f64 {
+        self.x0 + f / self.t_total as f64 * (self.x1 - self.x0)
+    }
+}
+
+/// The title, the summary line and the legend.
+fn header(
+    svg: &mut Svg,
+    lay: &Layout,
+    program: &Program,
+    repetitions: &[RepetitiveInterval],
+    program_loops: &[RepetitiveInterval],
+    params: &TimelineParams,
+) {
+    let Layout { j, x1, .. } = *lay;
     let reps: usize = repetitions.iter().map(|i| i.count).sum();
     if params.title {
         svg.text(
@@ -193,7 +279,27 @@ pub fn timeline_svg(
         svg.rect(lx - 12.0, 15.0, 12.0, 11.0, colour, r#"rx="2""#);
         lx -= 26.0;
     }
+}
 
+/// The mix of kinds per segment (per column for long programs).
+fn kinds_row(
+    svg: &mut Svg,
+    lay: &Layout,
+    program: &Program,
+    bounds: &[usize],
+    cols: Option<&[Vec<[usize; 4]>]>,
+) {
+    let Layout {
+        j,
+        label_w,
+        x0,
+        x1,
+        mix_top,
+        mix_h,
+        columns,
+        ..
+    } = *lay;
+    let fx = |f: f64| lay.fx(f);
     // Mix of kinds per segment (per column for long programs).
     svg.text(
         label_w,
@@ -216,7 +322,6 @@ pub fn timeline_svg(
             }
         }
     };
-    let cols = (!per_segment).then(|| column_kinds(program, columns));
     match &cols {
         None => {
             let kinds = kind_indices(program);
@@ -226,7 +331,7 @@ pub fn timeline_svg(
                 for &k in &kinds[si] {
                     per_kind[k.min(3)] += 1;
                 }
-                stack(&mut svg, a, b, per_kind);
+                stack(svg, a, b, per_kind);
                 if b - a >= MIN_LINE_GAP_PX {
                     svg.line(b, mix_top, b, mix_top + mix_h, style::PAPER, 0.8, "");
                 }
@@ -252,12 +357,25 @@ pub fn timeline_svg(
                 while e < columns && mix(e) == m {
                     e += 1;
                 }
-                stack(&mut svg, x0 + c as f64 * w, x0 + e as f64 * w, m);
+                stack(svg, x0 + c as f64 * w, x0 + e as f64 * w, m);
                 c = e;
             }
         }
     }
+}
 
+/// The counted repetitions: intervals, boundaries, numbers and counts.
+fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterval]) {
+    let Layout {
+        label_w,
+        x0,
+        x1,
+        px_per_frame,
+        loops_top,
+        loop_h,
+        ..
+    } = *lay;
+    let fx = |f: f64| lay.fx(f);
     // Counted repetitions.
     svg.text(
         label_w,
@@ -362,7 +480,19 @@ pub fn timeline_svg(
             "",
         );
     }
+}
 
+/// The abstract program's `for` statements.
+fn program_loops_row(svg: &mut Svg, lay: &Layout, program_loops: &[RepetitiveInterval]) {
+    let Layout {
+        label_w,
+        x0,
+        x1,
+        plo_top,
+        plo_h,
+        ..
+    } = *lay;
+    let fx = |f: f64| lay.fx(f);
     // Program loops: the abstract program's `for` statements.
     svg.text(
         label_w,
@@ -404,7 +534,27 @@ pub fn timeline_svg(
             lp.body_size
         ));
     }
+}
 
+/// One row per joint with its primitives' kinds.
+fn joint_rows(
+    svg: &mut Svg,
+    lay: &Layout,
+    program: &Program,
+    bounds: &[usize],
+    cols: Option<&[Vec<[usize; 4]>]>,
+) {
+    let Layout {
+        j,
+        rh,
+        label_w,
+        x0,
+        x1,
+        rows_top,
+        columns,
+        ..
+    } = *lay;
+    let fx = |f: f64| lay.fx(f);
     // One row per joint.
     for ji in 0..j {
         let y = rows_top + ji as f64 * rh;
@@ -466,6 +616,25 @@ pub fn timeline_svg(
             }
         }
     }
+}
+
+/// Segment and repetition boundaries over the rows, where wide enough to show.
+fn boundaries(
+    svg: &mut Svg,
+    lay: &Layout,
+    program: &Program,
+    bounds: &[usize],
+    repetitions: &[RepetitiveInterval],
+) {
+    let Layout {
+        px_per_frame,
+        loops_top,
+        loop_h,
+        rows_top,
+        rows_bottom,
+        ..
+    } = *lay;
+    let fx = |f: f64| lay.fx(f);
     // Segment boundaries over the rows, between segments wide enough to show.
     for si in 1..program.n_segments() {
         let wide = |s: usize| (bounds[s + 1] - bounds[s]) as f64 * px_per_frame >= MIN_LINE_GAP_PX;
@@ -498,6 +667,18 @@ pub fn timeline_svg(
             );
         }
     }
+}
+
+/// Ticks in seconds and the axis label.
+fn time_axis(svg: &mut Svg, lay: &Layout, program: &Program) {
+    let Layout {
+        t_total,
+        x0,
+        x1,
+        rows_bottom,
+        ..
+    } = *lay;
+    let fx = |f: f64| lay.fx(f);
     // Time axis.
     let fps = program.fps;
     let secs = t_total as f64 / fps;
@@ -523,22 +704,6 @@ pub fn timeline_svg(
         Anchor::Middle,
         "",
     );
-    let axis = TimeAxis {
-        x0_px: x0,
-        x1_px: x1,
-        top_px: loops_top,
-        bottom_px: rows_bottom,
-        frames: t_total,
-    };
-    let attrs = format!(
-        r#"class="mp-timeline" data-x0="{}" data-x1="{}" data-top="{}" data-bottom="{}" data-frames="{}""#,
-        num(x0),
-        num(x1),
-        num(axis.top_px),
-        num(axis.bottom_px),
-        t_total
-    );
-    Ok((svg.finish_with(&attrs), axis))
 }
 
 #[cfg(test)]
