@@ -97,7 +97,10 @@ pub(crate) fn axis_label(k: usize, d: usize, units: Units) -> String {
     }
 }
 
-/// The trajectory plot of one joint as an SVG document.
+/// The trajectory plot of one joint as an SVG document: a title and
+/// legend, then one panel per axis ([`Panel`]) with the counted intervals,
+/// the grid, the segment boundaries, the keypoints and the program, and the
+/// time axis under the last.
 pub fn joint_trajectory_svg(
     track: &Track,
     program: &Program,
@@ -114,18 +117,95 @@ pub fn joint_trajectory_svg(
         ))
     })?;
     let d = program.dims;
-    let t_total = program.n_frames();
-    let fps = program.fps;
     let (left, right, top, gap, bottom) = (70.0, 24.0, 64.0, 18.0, 46.0);
     let w = params.width_px;
     let ph = params.panel_height_px;
     let h = top + d as f64 * ph + (d as f64 - 1.0) * gap + bottom;
-    let (x0, x1) = (left, w - right);
-    let span = (t_total.saturating_sub(1)).max(1) as f64;
-    let fx = |f: f64| x0 + f / span * (x1 - x0);
-
-    // Program samples per segment (frame, value per axis).
+    let axis = TimeX {
+        x0: left,
+        x1: w - right,
+        span: (program.n_frames().saturating_sub(1)).max(1) as f64,
+    };
     let bounds = program.boundaries();
+    let curves = program_curves(program, &bounds, joint, params);
+    let mut svg = Svg::new(w, h, style::PAPER);
+    title_and_legend(&mut svg, &axis, name, program, &curves);
+    for k in 0..d {
+        let py0 = top + k as f64 * (ph + gap);
+        let (lo, hi) = value_range(track, joint, k, &curves);
+        let panel = Panel {
+            k,
+            py0,
+            py1: py0 + ph,
+            ph,
+            lo,
+            hi,
+            invert: track.units() == Units::Pixels && k == 1,
+        };
+        svg.rect(
+            axis.x0,
+            py0,
+            axis.x1 - axis.x0,
+            ph,
+            "#f8fafc",
+            r##"stroke="#cbd5e1" stroke-width="1""##,
+        );
+        // Loops behind everything.
+        intervals_layer(&mut svg, &axis, &panel, intervals, program.n_frames());
+        grid_layer(&mut svg, &axis, &panel, &bounds, d, track.units());
+        keypoints_layer(&mut svg, &axis, &panel, track, joint);
+        program_layer(&mut svg, &axis, &panel, &curves);
+        if k + 1 == d {
+            time_axis_layer(&mut svg, &axis, panel.py1, program);
+        }
+    }
+    Ok(svg.finish())
+}
+
+/// The time axis of the panels: frame `f` at `x0 + f / span · (x1 − x0)`.
+struct TimeX {
+    x0: f64,
+    x1: f64,
+    span: f64,
+}
+
+impl TimeX {
+    fn fx(&self, f: f64) -> f64 {
+        self.x0 + f / self.span * (self.x1 - self.x0)
+    }
+}
+
+/// One axis's panel: its top and bottom, and its value range.
+struct Panel {
+    k: usize,
+    py0: f64,
+    py1: f64,
+    /// Its height (`py1 − py0`).
+    ph: f64,
+    lo: f64,
+    hi: f64,
+    /// Image y grows downwards: drawn upside down.
+    invert: bool,
+}
+
+impl Panel {
+    fn fy(&self, v: f64) -> f64 {
+        let a = (v - self.lo) / (self.hi - self.lo);
+        if self.invert {
+            self.py0 + a * self.ph
+        } else {
+            self.py1 - a * self.ph
+        }
+    }
+}
+
+/// Program samples per segment (frame, value per axis).
+fn program_curves(
+    program: &Program,
+    bounds: &[usize],
+    joint: usize,
+    params: &PlotParams,
+) -> Vec<Curve> {
     let mut curves: Vec<Curve> = Vec::new();
     for (si, seg) in program.segments.iter().enumerate() {
         let Some(p) = seg.primitives.get(joint) else {
@@ -141,9 +221,12 @@ pub fn joint_trajectory_svg(
             .collect();
         curves.push((p.kind(), pts));
     }
+    curves
+}
 
-    let mut svg = Svg::new(w, h, style::PAPER);
-    // Title and legend.
+/// The joint's name, the summary line and the legend.
+fn title_and_legend(svg: &mut Svg, axis: &TimeX, name: &str, program: &Program, curves: &[Curve]) {
+    let (x0, x1) = (axis.x0, axis.x1);
     svg.text(
         x0,
         26.0,
@@ -165,8 +248,8 @@ pub fn joint_trajectory_svg(
         46.0,
         &format!(
             "{} frames at {} fps · {} primitives: {}",
-            t_total,
-            mp_geom::fps_label(fps),
+            program.n_frames(),
+            mp_geom::fps_label(program.fps),
             curves.len(),
             counts.join(", ")
         ),
@@ -201,173 +284,181 @@ pub fn joint_trajectory_svg(
         }
         lx -= 20.0;
     }
+}
 
-    for k in 0..d {
-        let py0 = top + k as f64 * (ph + gap);
-        let py1 = py0 + ph;
-        // Value range over valid keypoints and the program.
-        let mut lo = f64::INFINITY;
-        let mut hi = f64::NEG_INFINITY;
-        for t in 0..track.n_frames() {
-            if track.confidence()[[t, joint]] > 0.0 {
-                let v = track.positions()[[t, joint, k]];
+/// Value range of axis `k` over the valid keypoints and the program, padded.
+fn value_range(track: &Track, joint: usize, k: usize, curves: &[Curve]) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for t in 0..track.n_frames() {
+        if track.confidence()[[t, joint]] > 0.0 {
+            let v = track.positions()[[t, joint, k]];
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    for (_, pts) in curves {
+        for (_, v) in pts {
+            if let Some(&v) = v.get(k) {
                 if v.is_finite() {
                     lo = lo.min(v);
                     hi = hi.max(v);
                 }
             }
         }
-        for (_, pts) in &curves {
-            for (_, v) in pts {
-                if let Some(&v) = v.get(k) {
-                    if v.is_finite() {
-                        lo = lo.min(v);
-                        hi = hi.max(v);
-                    }
-                }
-            }
-        }
-        if !(lo.is_finite() && hi.is_finite()) {
-            (lo, hi) = (0.0, 1.0);
-        }
-        if hi - lo < 1e-9 {
-            (lo, hi) = (lo - 1.0, hi + 1.0);
-        }
-        let pad = 0.08 * (hi - lo);
-        let (lo, hi) = (lo - pad, hi + pad);
-        let invert = track.units() == Units::Pixels && k == 1;
-        let fy = |v: f64| {
-            let a = (v - lo) / (hi - lo);
-            if invert {
-                py0 + a * ph
-            } else {
-                py1 - a * ph
-            }
-        };
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        (lo, hi) = (0.0, 1.0);
+    }
+    if hi - lo < 1e-9 {
+        (lo, hi) = (lo - 1.0, hi + 1.0);
+    }
+    let pad = 0.08 * (hi - lo);
+    (lo - pad, hi + pad)
+}
+
+/// The counted intervals, shaded, with their repetitions' boundaries.
+fn intervals_layer(
+    svg: &mut Svg,
+    axis: &TimeX,
+    panel: &Panel,
+    intervals: &[RepetitiveInterval],
+    t_total: usize,
+) {
+    let (py0, py1) = (panel.py0, panel.py1);
+    for iv in intervals {
+        let (a, b) = (
+            axis.fx(iv.start_frame as f64),
+            axis.fx(iv.end_frame.saturating_sub(1) as f64),
+        );
         svg.rect(
-            x0,
+            a,
             py0,
-            x1 - x0,
-            ph,
-            "#f8fafc",
-            r##"stroke="#cbd5e1" stroke-width="1""##,
+            b - a,
+            panel.ph,
+            style::LOOP_FILL,
+            r#"fill-opacity="0.10""#,
         );
-        // Loops behind everything.
-        for iv in intervals {
-            let (a, b) = (
-                fx(iv.start_frame as f64),
-                fx(iv.end_frame.saturating_sub(1) as f64),
-            );
-            svg.rect(
-                a,
+        for &bf in iv.boundaries.iter() {
+            let x = axis.fx((bf.min(t_total.saturating_sub(1))) as f64);
+            svg.line(
+                x,
                 py0,
-                b - a,
-                ph,
-                style::LOOP_FILL,
-                r#"fill-opacity="0.10""#,
-            );
-            for &bf in iv.boundaries.iter() {
-                let x = fx((bf.min(t_total.saturating_sub(1))) as f64);
-                svg.line(
-                    x,
-                    py0,
-                    x,
-                    py1,
-                    style::LOOP_DARK,
-                    1.0,
-                    r#"stroke-opacity="0.45" stroke-dasharray="4 3""#,
-                );
-            }
-        }
-        // Grid and value labels.
-        for v in ticks(lo, hi, 4) {
-            let y = fy(v);
-            svg.line(x0, y, x1, y, style::GRID, 1.0, "");
-            svg.text(
-                x0 - 8.0,
-                y + 4.0,
-                &tick_label(v),
-                11.0,
-                style::MUTED,
-                Anchor::End,
-                "",
-            );
-        }
-        // Segment boundaries.
-        for &b in bounds.iter().skip(1).take(bounds.len().saturating_sub(2)) {
-            let x = fx(b as f64 - 0.5);
-            svg.line(x, py0, x, py1, "#cbd5e1", 0.6, "");
-        }
-        let label = axis_label(k, d, track.units());
-        svg.text(
-            18.0,
-            (py0 + py1) / 2.0,
-            &label,
-            12.0,
-            style::INK,
-            Anchor::Middle,
-            &format!(r#"transform="rotate(-90 18 {})""#, num((py0 + py1) / 2.0)),
-        );
-        // Keypoints.
-        svg.open_group(&format!(r#"fill="{}""#, style::KEYPOINT_DOT));
-        for t in 0..track.n_frames() {
-            let c = track.confidence()[[t, joint]];
-            let v = track.positions()[[t, joint, k]];
-            if c > 0.0 && v.is_finite() {
-                let op = 0.25 + 0.45 * c.clamp(0.0, 1.0);
-                svg.raw(&format!(
-                    "<circle cx=\"{}\" cy=\"{}\" r=\"2.3\" fill-opacity=\"{}\"/>\n",
-                    num(fx(t as f64)),
-                    num(fy(v)),
-                    num(op)
-                ));
-            }
-        }
-        svg.close_group();
-        // The program.
-        for (kind, pts) in &curves {
-            let colour = kind_color(*kind);
-            let line: Vec<(f64, f64)> = pts
-                .iter()
-                .filter_map(|(f, v)| v.get(k).map(|&v| (fx(*f), fy(v))))
-                .collect();
-            if line.len() == 1 {
-                svg.circle(line[0].0, line[0].1, 2.6, colour, "");
-            } else {
-                svg.polyline(&line, colour, 2.6, "");
-            }
-        }
-        // Time axis on the last panel.
-        if k + 1 == d {
-            for f in ticks(0.0, span, 10) {
-                let x = fx(f);
-                svg.line(x, py1, x, py1 + 5.0, style::MUTED, 1.0, "");
-                svg.text(
-                    x,
-                    py1 + 18.0,
-                    &tick_label(f),
-                    11.0,
-                    style::MUTED,
-                    Anchor::Middle,
-                    "",
-                );
-            }
-            svg.text(
-                (x0 + x1) / 2.0,
-                py1 + 38.0,
-                &format!(
-                    "frame ({} fps; {} s in all)",
-                    mp_geom::fps_label(fps),
-                    tick_label(t_total as f64 / fps)
-                ),
-                12.0,
-                style::INK,
-                Anchor::Middle,
-                "",
+                x,
+                py1,
+                style::LOOP_DARK,
+                1.0,
+                r#"stroke-opacity="0.45" stroke-dasharray="4 3""#,
             );
         }
     }
-    Ok(svg.finish())
+}
+
+/// Grid lines with value labels, segment boundaries and the axis's name.
+fn grid_layer(
+    svg: &mut Svg,
+    axis: &TimeX,
+    panel: &Panel,
+    bounds: &[usize],
+    d: usize,
+    units: Units,
+) {
+    let (x0, x1, py0, py1) = (axis.x0, axis.x1, panel.py0, panel.py1);
+    for v in ticks(panel.lo, panel.hi, 4) {
+        let y = panel.fy(v);
+        svg.line(x0, y, x1, y, style::GRID, 1.0, "");
+        svg.text(
+            x0 - 8.0,
+            y + 4.0,
+            &tick_label(v),
+            11.0,
+            style::MUTED,
+            Anchor::End,
+            "",
+        );
+    }
+    for &b in bounds.iter().skip(1).take(bounds.len().saturating_sub(2)) {
+        let x = axis.fx(b as f64 - 0.5);
+        svg.line(x, py0, x, py1, "#cbd5e1", 0.6, "");
+    }
+    let label = axis_label(panel.k, d, units);
+    svg.text(
+        18.0,
+        (py0 + py1) / 2.0,
+        &label,
+        12.0,
+        style::INK,
+        Anchor::Middle,
+        &format!(r#"transform="rotate(-90 18 {})""#, num((py0 + py1) / 2.0)),
+    );
+}
+
+/// The keypoints as dots, more opaque where more confident.
+fn keypoints_layer(svg: &mut Svg, axis: &TimeX, panel: &Panel, track: &Track, joint: usize) {
+    svg.open_group(&format!(r#"fill="{}""#, style::KEYPOINT_DOT));
+    for t in 0..track.n_frames() {
+        let c = track.confidence()[[t, joint]];
+        let v = track.positions()[[t, joint, panel.k]];
+        if c > 0.0 && v.is_finite() {
+            let op = 0.25 + 0.45 * c.clamp(0.0, 1.0);
+            svg.raw(&format!(
+                "<circle cx=\"{}\" cy=\"{}\" r=\"2.3\" fill-opacity=\"{}\"/>\n",
+                num(axis.fx(t as f64)),
+                num(panel.fy(v)),
+                num(op)
+            ));
+        }
+    }
+    svg.close_group();
+}
+
+/// The program's primitives, coloured by kind.
+fn program_layer(svg: &mut Svg, axis: &TimeX, panel: &Panel, curves: &[Curve]) {
+    for (kind, pts) in curves {
+        let colour = kind_color(*kind);
+        let line: Vec<(f64, f64)> = pts
+            .iter()
+            .filter_map(|(f, v)| v.get(panel.k).map(|&v| (axis.fx(*f), panel.fy(v))))
+            .collect();
+        if line.len() == 1 {
+            svg.circle(line[0].0, line[0].1, 2.6, colour, "");
+        } else {
+            svg.polyline(&line, colour, 2.6, "");
+        }
+    }
+}
+
+/// Frame ticks under the last panel, and the axis label.
+fn time_axis_layer(svg: &mut Svg, axis: &TimeX, py1: f64, program: &Program) {
+    let fps = program.fps;
+    for f in ticks(0.0, axis.span, 10) {
+        let x = axis.fx(f);
+        svg.line(x, py1, x, py1 + 5.0, style::MUTED, 1.0, "");
+        svg.text(
+            x,
+            py1 + 18.0,
+            &tick_label(f),
+            11.0,
+            style::MUTED,
+            Anchor::Middle,
+            "",
+        );
+    }
+    svg.text(
+        (axis.x0 + axis.x1) / 2.0,
+        py1 + 38.0,
+        &format!(
+            "frame ({} fps; {} s in all)",
+            mp_geom::fps_label(fps),
+            tick_label(program.n_frames() as f64 / fps)
+        ),
+        12.0,
+        style::INK,
+        Anchor::Middle,
+        "",
+    );
 }
 
 #[cfg(test)]
