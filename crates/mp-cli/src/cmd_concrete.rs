@@ -4,10 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use mp_concrete::{
-    dsl, program_stats, Continuity, ExecParams, Lambda, Program, RefitNorm, Transition,
-    UnobservedJoints,
-};
+use mp_concrete::{dsl, program_stats, Continuity, ExecParams, Program, RefitNorm, Transition};
 use mp_geom::PrimitiveKind;
 use mp_pipeline::Params;
 
@@ -108,24 +105,18 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
     let read = crate::track_arg::read_track_file(&a.track, &a.rate)?;
     let frame_px = crate::track_arg::frame_px(&read, a.frame_size);
     let track = read.track;
-    let mut params = Params::default();
-    if let Some(l) = a.lambda {
-        params.analysis.synth.lambda = Lambda::fixed(l);
+    let params = mp_pipeline::FitOptions {
+        lambda: a.lambda,
+        budget: a.budget,
+        lambda_spread: a.lambda_spread,
+        max_segment_frames: Some(a.window),
+        continuity: Some(a.continuity),
+        refit_norm: Some(a.refit_norm),
+        kinds: Some(a.kinds.clone()),
+        quadratic_angle: a.quadratic_angle,
+        strict_joints: a.strict_joints,
     }
-    if let Some(b) = a.budget {
-        params.analysis.synth.lambda = Lambda::budget(b);
-    }
-    if let Some(s) = a.lambda_spread {
-        params.analysis.synth.lambda = Lambda::spread(s);
-    }
-    params.analysis.synth.max_segment_frames = a.window;
-    params.analysis.synth.continuity = a.continuity;
-    params.analysis.synth.refit_norm = a.refit_norm;
-    params.analysis.synth.fit.kinds = a.kinds.clone();
-    params.analysis.synth.fit.quadratic_angle |= a.quadratic_angle;
-    if a.strict_joints {
-        params.analysis.synth.unobserved_joints = UnobservedJoints::Error;
-    }
+    .params()?;
     let syn = mp_pipeline::concrete_program(&track, frame_px, &params)
         .with_context(|| format!("fitting {}", a.track.display()))?;
     let p = &syn.program;

@@ -38,6 +38,7 @@ pub mod analysis;
 pub mod batch;
 pub mod error;
 pub mod extract;
+pub mod fit_options;
 pub mod frame_signal;
 pub mod input;
 pub mod keypoints;
@@ -57,6 +58,7 @@ pub use batch::{
 };
 pub use error::{PipelineError, Result};
 pub use extract::{extract, ExtractParams, Extracted, Poses};
+pub use fit_options::FitOptions;
 pub use input::{is_video, Input, VIDEO_EXTENSIONS};
 pub use keypoints::{keypoints, Keep, Keypoints, ModelSlot};
 pub use mp_abstract::{Analysis, CountMethod, CountSignal, CountedInterval, Counts};

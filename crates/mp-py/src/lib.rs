@@ -256,38 +256,32 @@ fn fit(
     refit_norm: Option<&str>,
     lambda_spread: Option<f64>,
 ) -> PyResult<PyProgram> {
-    let mut params = params_with(None, None, None, false, lambda_, max_segment_frames)?;
-    let rules = [lambda_.is_some(), budget.is_some(), lambda_spread.is_some()];
-    if rules.iter().filter(|&&r| r).count() > 1 {
-        return Err(errors::ParamError::new_err(
-            "give at most one of lambda_, budget and lambda_spread",
-        ));
-    }
-    // (Checked with every other parameter by `concrete_program`.)
-    if let Some(b) = budget {
-        params.analysis.synth.lambda = mp_concrete::Lambda::budget(b);
-    }
-    if let Some(s) = lambda_spread {
-        params.analysis.synth.lambda = mp_concrete::Lambda::spread(s);
-    }
-    if let Some(c) = continuity {
-        params.analysis.synth.continuity = c
-            .parse::<mp_concrete::Continuity>()
-            .map_err(errors::ParamError::new_err)?;
-    }
-    if let Some(k) = kinds {
-        params.analysis.synth.fit.kinds = k
-            .iter()
-            .map(|s| s.parse::<mp_geom::PrimitiveKind>())
-            .collect::<Result<_, _>>()
-            .map_err(errors::ParamError::new_err)?;
-    }
-    params.analysis.synth.fit.quadratic_angle |= quadratic_angle;
-    if let Some(n) = refit_norm {
-        params.analysis.synth.refit_norm = n
-            .parse::<mp_concrete::RefitNorm>()
-            .map_err(errors::ParamError::new_err)?;
-    }
+    let parse = |what: &str, e: String| errors::ParamError::new_err(format!("{what}: {e}"));
+    let options = mp_pipeline::FitOptions {
+        lambda: lambda_,
+        budget,
+        lambda_spread,
+        max_segment_frames,
+        continuity: continuity
+            .map(|c| c.parse::<mp_concrete::Continuity>())
+            .transpose()
+            .map_err(|e| parse("continuity", e))?,
+        refit_norm: refit_norm
+            .map(|n| n.parse::<mp_concrete::RefitNorm>())
+            .transpose()
+            .map_err(|e| parse("refit_norm", e))?,
+        kinds: kinds
+            .map(|k| {
+                k.iter()
+                    .map(|s| s.parse::<mp_geom::PrimitiveKind>())
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .transpose()
+            .map_err(|e| parse("kinds", e))?,
+        quadratic_angle,
+        strict_joints: false,
+    };
+    let params = options.params().map_err(errors::pipeline)?;
     let (t, frame) = track::track_arg_framed(track, "fit")?;
     let t = &t;
     // A track file that states its video frame (`mp run`'s and `mp

@@ -39,7 +39,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_concrete::{
-    interpolation_experiment, program_stats, Continuity, InterpParams, Lambda, Program, RefitNorm,
+    interpolation_experiment, program_stats, Continuity, InterpParams, Program, RefitNorm,
     Transition,
 };
 use mp_geom::io::datasets::PennAction;
@@ -146,19 +146,23 @@ impl Split {
     }
 }
 
-/// The product's parameters (`mp fit`, `mp run`) with the window, continuity,
-/// kinds and circle options given (λ as the product's unless set later).
-fn product_params(a: &EvalConcreteArgs) -> mp_pipeline::Params {
-    let mut p = mp_pipeline::Params::default();
-    p.analysis.synth.max_segment_frames = a.window;
-    p.analysis.synth.continuity = a.continuity;
-    p.analysis.synth.refit_norm = a.refit_norm;
-    p.analysis.synth.fit.kinds = a.kinds.clone();
-    p.analysis.synth.fit.quadratic_angle |= a.quadratic_angle;
-    if let Some(s) = a.lambda_spread {
-        p.analysis.synth.lambda = Lambda::spread(s);
+/// The product's parameters (`mp fit`, `mp run`) with the window,
+/// continuity, kinds and circle options given, through the options type of
+/// `mp fit` ([`mp_pipeline::FitOptions`]); `with_lambda` adds `--lambda` and
+/// `--budget` (the sweep sets its own λ).
+fn product_params(a: &EvalConcreteArgs, with_lambda: bool) -> anyhow::Result<mp_pipeline::Params> {
+    Ok(mp_pipeline::FitOptions {
+        lambda: a.lambda.filter(|_| with_lambda),
+        budget: a.budget.filter(|_| with_lambda),
+        lambda_spread: a.lambda_spread,
+        max_segment_frames: Some(a.window),
+        continuity: Some(a.continuity),
+        refit_norm: Some(a.refit_norm),
+        kinds: Some(a.kinds.clone()),
+        quadratic_angle: a.quadratic_angle,
+        ..mp_pipeline::FitOptions::default()
     }
-    p
+    .params()?)
 }
 
 #[derive(Debug, Clone, Default)]
@@ -342,14 +346,7 @@ pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
     };
     let pa = PennAction::open(&path).with_context(|| format!("opening {}", path.display()))?;
     // The product's parameters (`mp fit`, `mp run`), with the options given.
-    let mut base = product_params(a);
-    if let Some(l) = a.lambda {
-        base.analysis.synth.lambda = Lambda::fixed(l);
-    }
-    if let Some(b) = a.budget {
-        base.analysis.synth.lambda = Lambda::budget(b);
-    }
-    base.validate()?;
+    let base = product_params(a, true)?;
     let mut per_action: BTreeMap<&str, usize> = BTreeMap::new();
     let mut position: BTreeMap<&str, usize> = BTreeMap::new();
     let clips: Vec<usize> = pa

@@ -176,7 +176,7 @@ pub(super) fn sweep(
     clips: &[usize],
     path: &std::path::Path,
 ) -> anyhow::Result<()> {
-    let product = product_params(a);
+    let product = product_params(a, false)?;
     let mut settings: Vec<(String, mp_pipeline::Params)> = a
         .sweep_lambdas
         .iter()
