@@ -287,6 +287,147 @@ fn joint_err(
     ConcreteError::Track(format!("fitting joint `{name}` on frames {k}..{n}: {e}"))
 }
 
+/// What the search reads of each joint besides its points: the 2D fast
+/// path's points (missing frames zeroed), the points the moments are taken
+/// about, the step lengths between consecutive valid frames, and the
+/// single-precision copy. `None` (or empty) for a joint off the fast path
+/// (3D, or with the spline kind allowed).
+struct JointPaths {
+    fast: Vec<Option<Vec<[f64; 2]>>>,
+    anchor: Vec<Option<Vec<[f64; 2]>>>,
+    steps: Vec<Vec<f64>>,
+    coarse: Vec<Option<Coarse>>,
+}
+
+impl JointPaths {
+    fn new(joints: &[JointTrack<'_>], rules: &Rules, spline: bool, t: usize) -> Self {
+        // Per joint: 2D fast path data (points with missing frames zeroed).
+        let fast: Vec<Option<Vec<[f64; 2]>>> = joints
+            .iter()
+            .map(|jt| {
+                if jt.points.ncols() != 2 || spline {
+                    return None;
+                }
+                Some(
+                    jt.points
+                        .outer_iter()
+                        .zip(jt.weights)
+                        .map(|(r, &w)| if w > 0.0 { [r[0], r[1]] } else { [0.0, 0.0] })
+                        .collect(),
+                )
+            })
+            .collect();
+        // Per joint: the points the moments are taken about (see `moments::anchors`).
+        let anchor: Vec<Option<Vec<[f64; 2]>>> = fast
+            .iter()
+            .zip(joints)
+            .map(|(f, jt)| f.as_ref().map(|p| anchors(p, jt.weights)))
+            .collect();
+        // Step lengths of consecutive valid frames (−1 where a frame is missing).
+        let steps: Vec<Vec<f64>> = fast
+            .iter()
+            .zip(joints)
+            .map(|(f, jt)| match f {
+                Some(p) => (0..t)
+                    .map(|i| {
+                        if i + 1 < t && jt.weights[i] > 0.0 && jt.weights[i + 1] > 0.0 {
+                            let (dx, dy) = (p[i + 1][0] - p[i][0], p[i + 1][1] - p[i][1]);
+                            (dx * dx + dy * dy).sqrt()
+                        } else {
+                            -1.0
+                        }
+                    })
+                    .collect(),
+                None => Vec::new(),
+            })
+            .collect();
+        // Per joint: the single-precision copy (Euclidean norm, fast path).
+        let coarse: Vec<Option<Coarse>> = fast
+            .iter()
+            .zip(joints)
+            .zip(&steps)
+            .map(|((f, jt), st)| match f {
+                Some(p) if !rules.squared && !rules.quadratic => {
+                    Some(Coarse::new(p, jt.weights, st))
+                }
+                _ => None,
+            })
+            .collect();
+        JointPaths {
+            fast,
+            anchor,
+            steps,
+            coarse,
+        }
+    }
+}
+
+/// The search's running state: the DP's best costs and arguments, the
+/// per-joint accumulators and bounds of the candidate in hand, the joint
+/// order, the statistics and the ring of what the exact stage measured.
+struct SearchState {
+    best: Vec<f64>,
+    arg: Vec<usize>,
+    accs: Vec<Acc2>,
+    quicks: Vec<Quick>,
+    lbs: Vec<f64>,
+    costs: Vec<f64>,
+    deferred: Vec<(usize, f64, f64)>,
+    circ: Vec<f64>,
+    bounded: Vec<bool>,
+    gaps: Vec<f64>,
+    order: Vec<usize>,
+    stats: SearchStats,
+    scratch: CircleScratch,
+    ring: usize,
+    known: Vec<Known>,
+}
+
+impl SearchState {
+    fn new(nj: usize, t: usize, window: usize) -> Self {
+        let mut best = vec![f64::INFINITY; t + 1];
+        let arg = vec![0usize; t + 1];
+        best[0] = 0.0;
+        let accs = vec![Acc2::default(); nj];
+        let quicks = vec![Quick::default(); nj];
+        let lbs = vec![0.0f64; nj];
+        let costs = vec![0.0f64; nj];
+        let deferred: Vec<(usize, f64, f64)> = Vec::with_capacity(nj);
+        // Per joint, for the candidate in hand: the exact circle's own cost
+        // where it was fitted (`NaN`: not fitted), and whether its cost so far is
+        // a single-precision bound.
+        let circ = vec![f64::NAN; nj];
+        let bounded = vec![false; nj];
+        // Joints by how much their exact cost has exceeded their O(1) bound so
+        // far (most first): the candidates that cannot win are dropped sooner.
+        let gaps = vec![0.0f64; nj];
+        let order: Vec<usize> = (0..nj).collect();
+        let stats = SearchStats::default();
+        let scratch = CircleScratch::default();
+        // What the exact stage measured, per joint, on the candidates of this
+        // end frame and the previous one (slot `k mod (W + 2)`).
+        let ring = window + 2;
+        let known = vec![Known::NONE; nj * ring];
+        SearchState {
+            best,
+            arg,
+            accs,
+            quicks,
+            lbs,
+            costs,
+            deferred,
+            circ,
+            bounded,
+            gaps,
+            order,
+            stats,
+            scratch,
+            ring,
+            known,
+        }
+    }
+}
+
 /// Branch-and-bound DP (see the module docs): the optimal segmentation of
 /// `0..T` with segments of at most `window` frames, `lambda[n − 1]` paid by a
 /// segment ending at `n`.
@@ -305,81 +446,35 @@ pub(crate) fn segment_search(
         return Err(ConcreteError::param("max_segment_frames", "must be ≥ 1"));
     }
     let rules = Rules::new(fit);
-    let spline = fit.kinds.contains(&PrimitiveKind::Spline);
     let nj = joints.len();
-    // Per joint: 2D fast path data (points with missing frames zeroed).
-    let fast: Vec<Option<Vec<[f64; 2]>>> = joints
-        .iter()
-        .map(|jt| {
-            if jt.points.ncols() != 2 || spline {
-                return None;
-            }
-            Some(
-                jt.points
-                    .outer_iter()
-                    .zip(jt.weights)
-                    .map(|(r, &w)| if w > 0.0 { [r[0], r[1]] } else { [0.0, 0.0] })
-                    .collect(),
-            )
-        })
-        .collect();
-    // Per joint: the points the moments are taken about (see `moments::anchors`).
-    let anchor: Vec<Option<Vec<[f64; 2]>>> = fast
-        .iter()
-        .zip(joints)
-        .map(|(f, jt)| f.as_ref().map(|p| anchors(p, jt.weights)))
-        .collect();
-    // Step lengths of consecutive valid frames (−1 where a frame is missing).
-    let steps: Vec<Vec<f64>> = fast
-        .iter()
-        .zip(joints)
-        .map(|(f, jt)| match f {
-            Some(p) => (0..t)
-                .map(|i| {
-                    if i + 1 < t && jt.weights[i] > 0.0 && jt.weights[i + 1] > 0.0 {
-                        let (dx, dy) = (p[i + 1][0] - p[i][0], p[i + 1][1] - p[i][1]);
-                        (dx * dx + dy * dy).sqrt()
-                    } else {
-                        -1.0
-                    }
-                })
-                .collect(),
-            None => Vec::new(),
-        })
-        .collect();
-    // Per joint: the single-precision copy (Euclidean norm, fast path).
-    let coarse: Vec<Option<Coarse>> = fast
-        .iter()
-        .zip(joints)
-        .zip(&steps)
-        .map(|((f, jt), st)| match f {
-            Some(p) if !rules.squared && !rules.quadratic => Some(Coarse::new(p, jt.weights, st)),
-            _ => None,
-        })
-        .collect();
-    let mut best = vec![f64::INFINITY; t + 1];
-    let mut arg = vec![0usize; t + 1];
-    best[0] = 0.0;
-    let mut accs = vec![Acc2::default(); nj];
-    let mut quicks = vec![Quick::default(); nj];
-    let mut lbs = vec![0.0f64; nj];
-    let mut costs = vec![0.0f64; nj];
-    let mut deferred: Vec<(usize, f64, f64)> = Vec::with_capacity(nj);
-    // Per joint, for the candidate in hand: the exact circle's own cost
-    // where it was fitted (`NaN`: not fitted), and whether its cost so far is
-    // a single-precision bound.
-    let mut circ = vec![f64::NAN; nj];
-    let mut bounded = vec![false; nj];
-    // Joints by how much their exact cost has exceeded their O(1) bound so
-    // far (most first): the candidates that cannot win are dropped sooner.
-    let mut gaps = vec![0.0f64; nj];
-    let mut order: Vec<usize> = (0..nj).collect();
-    let mut stats = SearchStats::default();
-    let mut scratch = CircleScratch::default();
-    // What the exact stage measured, per joint, on the candidates of this
-    // end frame and the previous one (slot `k mod (W + 2)`).
-    let ring = window + 2;
-    let mut known = vec![Known::NONE; nj * ring];
+    let JointPaths {
+        fast,
+        anchor,
+        steps,
+        coarse,
+    } = JointPaths::new(
+        joints,
+        &rules,
+        fit.kinds.contains(&PrimitiveKind::Spline),
+        t,
+    );
+    let SearchState {
+        mut best,
+        mut arg,
+        mut accs,
+        mut quicks,
+        mut lbs,
+        mut costs,
+        mut deferred,
+        mut circ,
+        mut bounded,
+        mut gaps,
+        mut order,
+        mut stats,
+        mut scratch,
+        ring,
+        mut known,
+    } = SearchState::new(nj, t, window);
     for n in 1..=t {
         if n % 64 == 0 {
             order.sort_by(|&a, &b| gaps[b].total_cmp(&gaps[a]).then(a.cmp(&b)));
