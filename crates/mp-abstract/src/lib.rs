@@ -13,6 +13,21 @@
 //! [`count`] turns these into the repetition counts a user gets (intervals,
 //! count per interval, total, the signal and method that decided, a
 //! confidence), from keypoints and, for video, from frame thumbnails.
+//!
+//! ```
+//! use mp_abstract::{analyse, AbstractParams};
+//! use mp_geom::performer::{perform, PerformerParams};
+//!
+//! // The product's analysis (what `mp abstract` and `mp run` use): the
+//! // concrete program, its loops and the repetitions they count.
+//! let track = perform(&PerformerParams::default())?.track_2d;
+//! let analysis = analyse(&track, &AbstractParams::default())?;
+//! assert!(!analysis.intervals.is_empty());
+//! for iv in &analysis.intervals {
+//!     println!("frames {}–{}: {} repetitions", iv.start_frame, iv.end_frame, iv.count);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod count;
 pub mod dsl;

@@ -25,6 +25,19 @@
 //!   shared with the training code.
 //! * [`statue`]: the frame after which prediction accuracy improves most.
 //! * [`data`]: Penn Action / MSR Action3D clips and the validation split.
+//!
+//! ```
+//! use mp_forecast::{Constant, Forecaster};
+//! use mp_geom::performer::{perform, PerformerParams};
+//!
+//! // Two seconds seen, one predicted by the Constant baseline (the learned
+//! // models need their ONNX files: `ArForecaster`, `predict`).
+//! let track = perform(&PerformerParams::default())?.track_2d;
+//! let past = track.slice_frames(0, 60)?;
+//! let future = Constant.predict(&past, 30)?;
+//! assert_eq!(future.n_frames(), 30);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod data;
 pub mod error;

@@ -16,6 +16,21 @@
 //! * [`performer`]: a procedurally generated performer (jumping jacks,
 //!   squats, arm circles, golf swing) with ground-truth repetitions.
 //! * [`cancel`]: a [`CancelToken`] that long runs check between steps.
+//!
+//! ```
+//! use mp_geom::fit::{fit_best, FitParams};
+//! use mp_geom::performer::{perform, PerformerParams};
+//!
+//! // The procedural performer (COCO-17, pixels) and the best primitive of its
+//! // right wrist over the first second, with the product's fitting rules.
+//! let track = perform(&PerformerParams::default())?.track_2d;
+//! assert_eq!(track.skeleton().name, "coco17");
+//! let wrist = track.skeleton().joints.iter().position(|j| j == "right_wrist").unwrap();
+//! let first_second = track.positions().slice(ndarray::s![0..30, wrist, ..]).to_owned();
+//! let fit = fit_best(first_second.view(), None, &FitParams::default())?;
+//! println!("{} with error {:.1} px", fit.primitive.kind().as_str(), fit.error);
+//! # Ok::<(), mp_geom::GeomError>(())
+//! ```
 
 pub mod cancel;
 pub mod checked;

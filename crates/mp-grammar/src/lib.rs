@@ -16,6 +16,20 @@
 //!   baseline, greedy segment selection, stitching and subtree
 //!   regeneration (§6).
 //! * [`model`], [`data`]: the whole pipeline as JSON files, and motion input.
+//!
+//! ```no_run
+//! use mp_grammar::data::Motion;
+//! use mp_grammar::{learn_model, PipelineParams};
+//! use mp_geom::performer::{perform, PerformerParams};
+//!
+//! // Symbols (PAM, genetic search, annealing), sentences and an ABL grammar of
+//! // the procedural performer, with the product's parameters (`mp grammar`).
+//! let track = perform(&PerformerParams::default())?.track_2d;
+//! let motion = Motion { track, bvh: None, paths: Vec::new(), frame_step: 1 };
+//! let model = learn_model(&motion, &PipelineParams::default())?;
+//! println!("{} rules", model.grammar.rules.len());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod assign;
 pub mod data;

@@ -15,6 +15,24 @@
 //! - [`run()`]: the loop over the frames, reporting [`Event`]s.
 //! - `record`: with [`LiveParams::out`], every pose kept in a spool file
 //!   and, when the stream ends, `mp run`'s files written from them.
+//!
+//! ```no_run
+//! use mp_live::{run, Event, LiveParams, LiveSource};
+//! use mp_geom::CancelToken;
+//!
+//! // A file read at its own speed (`mp live squats.mp4 --realtime`), each
+//! // repetition printed once it is confirmed.
+//! let params = LiveParams { realtime: true, ..LiveParams::default() };
+//! let mut print = |e: &Event| {
+//!     if let Event::Rep { person, count, .. } = e {
+//!         println!("person {person}: {count}");
+//!     }
+//! };
+//! let source = LiveSource::File("squats.mp4".into());
+//! let summary = run(&source, &params, &CancelToken::new(), &mut print)?;
+//! println!("{} frames", summary.frames);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod counter;
 mod poses;

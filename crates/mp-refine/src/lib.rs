@@ -34,6 +34,17 @@
 //! The evaluations (injected flaws, generated motion, ablations, quality
 //! metrics, training-set export) are not part of this crate: they live in
 //! the workspace's evaluation crate, `mp-eval`.
+//!
+//! ```no_run
+//! use mp_refine::{refine_default, RefineOptions};
+//!
+//! // A 20-joint MSR Action3D track in metres (`mp extract --world` tracks are
+//! // carried through `mapped`), refined with the shipped networks and concepts.
+//! let track = mp_geom::io::read_track("clip_msr20.npz")?;
+//! let refined = refine_default(&track, &RefineOptions::default())?;
+//! refined.track.positions();
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod api;
 pub mod baseline;

@@ -21,6 +21,23 @@
 //! bounded cache of the frames still to be used, and every video is written
 //! to a temporary file in the output's folder, then renamed
 //! ([`plan::AtomicVideo`]).
+//!
+//! ```no_run
+//! use mp_video::{predict_video, PredictMethod, PredictParams};
+//!
+//! // Three more seconds of a video, by unrolling its last repetition on the
+//! // video's own frames (`mp predict squats.mp4 --seconds 3`).
+//! let params = mp_pipeline::Params::default();
+//! predict_video(
+//!     "squats.mp4".as_ref(),
+//!     3.0,
+//!     PredictMethod::default(),
+//!     &PredictParams::default(),
+//!     &params,
+//!     "more.mp4".as_ref(),
+//! )?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod edit;
 pub mod error;
