@@ -98,7 +98,7 @@ pub(crate) fn axis_label(k: usize, d: usize, units: Units) -> String {
 }
 
 /// The trajectory plot of one joint as an SVG document: a title and
-/// legend, then one panel per axis  with the counted intervals,
+/// legend, then one panel per axis with the counted intervals,
 /// the grid, the segment boundaries, the keypoints and the program, and the
 /// time axis under the last.
 pub fn joint_trajectory_svg(
