@@ -32,7 +32,7 @@
 pub mod count;
 pub mod dsl;
 pub mod edit;
-pub mod error;
+mod error;
 pub mod exec;
 pub mod loops;
 pub mod model;

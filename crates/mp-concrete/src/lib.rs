@@ -33,15 +33,15 @@
 
 pub mod dp;
 pub mod dsl;
-pub mod error;
+mod error;
 pub mod exec;
-pub mod inbetween;
+mod inbetween;
 pub mod interp;
 pub mod program;
 pub mod search;
 pub mod smooth;
-pub mod stats;
-pub mod synth;
+mod stats;
+mod synth;
 pub mod synthetic;
 
 pub use dp::{segment_brute_force, segment_dp, CostTable, Segmentation};
@@ -56,4 +56,5 @@ pub use stats::{program_stats, ProgramStats};
 pub use synth::{
     segment, segment_costs, segment_exhaustive, segment_with_stats, synthesize,
     synthesize_detailed, Lambda, Scale, SynthParams, Synthesis, UnobservedJoints,
+    REFERENCE_EXTENT_PX, REFERENCE_FRAME_PX,
 };

@@ -21,9 +21,9 @@
 //!   the path taken ([`PredictPath`]).
 //! * [`mapped`]: the product's skeletons (COCO-17, BlazePose-33) on the
 //!   Penn Action / MSR Action3D models ([`MappedForecaster`]).
-//! * [`normalize`]: the root-relative, torso-scaled keypoint normalisation
+//! * `normalize`: the root-relative, torso-scaled keypoint normalisation
 //!   shared with the training code.
-//! * [`statue`]: the frame after which prediction accuracy improves most.
+//! * `statue`: the frame after which prediction accuracy improves most.
 //! * [`data`]: Penn Action / MSR Action3D clips and the validation split.
 //!
 //! ```
@@ -44,10 +44,10 @@ pub mod error;
 pub mod forecaster;
 pub mod mapped;
 pub mod model;
-pub mod nn;
-pub mod normalize;
+mod nn;
+mod normalize;
 pub mod predict;
-pub mod statue;
+mod statue;
 
 pub use error::{ForecastError, Result};
 pub use forecaster::{Constant, ForecastMethod, Forecaster, LoopUnroll};

@@ -10,7 +10,7 @@
 //! | `pose_ar_step.onnx` | `frames (B, 13, F)` | `next_pose (B, P)` |
 //! | `manifest.json` | joints, dims, channels, context, training record | |
 //!
-//! `F = J·D + J` (normalised coordinates then masks, see [`crate::normalize`]),
+//! `F = J·D + J` (normalised coordinates then masks, see `normalize`),
 //! `P = J·D`, `C` latent channels. Every network is causal with a receptive
 //! field of 13 frames, so a step model sees exactly the last 13 frames.
 //!

@@ -15,7 +15,7 @@
 //! * [`metrics`]: KD, PCK, MPJPE, PA-MPJPE, DTW, max adjacent-frame jump.
 //! * [`performer`]: a procedurally generated performer (jumping jacks,
 //!   squats, arm circles, golf swing) with ground-truth repetitions.
-//! * [`cancel`]: a [`CancelToken`] that long runs check between steps.
+//! * `cancel`: a [`CancelToken`] that long runs check between steps.
 //!
 //! ```
 //! use mp_geom::fit::{fit_best, FitParams};
@@ -32,9 +32,9 @@
 //! # Ok::<(), mp_geom::GeomError>(())
 //! ```
 
-pub mod cancel;
+mod cancel;
 pub mod checked;
-pub mod error;
+mod error;
 pub mod fit;
 pub mod io;
 pub mod lanes;
@@ -42,7 +42,7 @@ pub mod metrics;
 pub mod paths;
 pub mod people;
 pub mod performer;
-pub mod primitive;
+mod primitive;
 pub mod skeleton;
 pub mod skeleton_map;
 pub mod stats;

@@ -4,7 +4,7 @@
 //! data": identify terminal symbols in a motion, learn a context-free grammar
 //! over the symbol string, and synthesise new motion from the grammar.
 //!
-//! * [`distance`]: pose distance and segment distance (eq. 1).
+//! * `distance`: pose distance and segment distance (eq. 1).
 //! * [`kmedoids`]: PAM and FasterPAM from given initial medoids.
 //! * [`objective`], [`symbols`]: the segmentation objective and the GA + SA
 //!   search for terminal symbols (§4).
@@ -33,8 +33,8 @@
 
 pub mod assign;
 pub mod data;
-pub mod distance;
-pub mod error;
+mod distance;
+mod error;
 pub mod kmedoids;
 
 pub use distance::{PoseDistanceParams, PoseFeatures, RootMode, Segment};

@@ -6,7 +6,7 @@
 //! - [`source`]: the frames, decoded by FFmpeg on a thread of their own; when
 //!   the pose model falls behind a live source, only the newest frame waits
 //!   and the others are dropped (and counted).
-//! - [`counter`]: the online repetition counter of one person: a sliding
+//! - `counter`: the online repetition counter of one person: a sliding
 //!   window of their recent keypoints, counted again every half second with
 //!   the offline counting, turned into a running total that only grows.
 //! - [`program`]: the online concrete program of one person: a buffer of
@@ -34,7 +34,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod counter;
+mod counter;
 mod poses;
 pub mod program;
 mod record;

@@ -1,6 +1,6 @@
 //! The live loop: frames from the [`crate::source`], every person tracked
 //! with BlazePose and the people tracker (`mp run`'s), each confirmed
-//! person's repetitions counted online ([`crate::counter`]) and, with
+//! person's repetitions counted online (`counter`) and, with
 //! `LiveParams::program`, their concrete program ([`crate::program`]).
 
 use std::collections::{BTreeMap, HashMap};

@@ -8,12 +8,12 @@
 //!   the executable) and loading it once per process ([`environment`]).
 //!   Nothing in `ort` is touched before the library has been found, so a
 //!   missing library is an [`OnnxError`], not a panic.
-//! * [`session`]: session settings ([`SessionParams`]), opening a model
+//! * `session`: session settings ([`SessionParams`]), opening a model
 //!   ([`open_session`]) and describing its tensors ([`TensorInfo`]).
-//! * [`network`]: [`Network`], one opened model with its input and output
+//! * `network`: [`Network`], one opened model with its input and output
 //!   names and shapes, run on `f32` tensors after checking every input's
 //!   name, shape and length against the graph.
-//! * [`lookup`]: [`ModelDirs`], the ordered folders searched for model
+//! * `lookup`: [`ModelDirs`], the ordered folders searched for model
 //!   files (an environment variable, the workspace, the current directory's
 //!   ancestors).
 //!
@@ -26,11 +26,11 @@
 //! # Ok::<(), mp_onnx::OnnxError>(())
 //! ```
 
-pub mod error;
+mod error;
 pub mod library;
-pub mod lookup;
-pub mod network;
-pub mod session;
+mod lookup;
+mod network;
+mod session;
 
 pub use error::{format_shape, OnnxError, Result};
 pub use library::{

@@ -34,18 +34,18 @@
 //! # Ok::<(), mp_pipeline::PipelineError>(())
 //! ```
 
-pub mod analysis;
+mod analysis;
 pub mod batch;
-pub mod error;
+mod error;
 pub mod extract;
-pub mod fit_options;
+mod fit_options;
 pub mod frame_signal;
-pub mod input;
+mod input;
 pub mod keypoints;
 pub mod output;
 pub mod params;
 pub mod pose_rate;
-pub mod progress;
+mod progress;
 mod report_people;
 
 use std::path::{Path, PathBuf};

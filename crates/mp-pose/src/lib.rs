@@ -29,14 +29,14 @@
 
 pub mod blazepose;
 pub mod decode;
-pub mod error;
+mod error;
 pub mod extract;
-pub mod filter;
+mod filter;
 pub mod imageops;
 pub mod motion;
 pub mod movenet;
 pub mod people;
-pub mod pose;
+mod pose;
 pub mod runtime;
 pub mod thumbs;
 pub mod video;

@@ -25,7 +25,7 @@
 //!   anchors moved to their nearest concept), transition refinement.
 //! * [`mapped`]: refinement of BlazePose-33 world landmarks through the 20
 //!   MSR joints, carried back onto the input's joints.
-//! * [`refiner`]: the [`Refiner`] trait that both refinements implement
+//! * `refiner`: the [`Refiner`] trait that both refinements implement
 //!   ([`pipeline::NetRefiner`], [`BaselineRefiner`]).
 //! * [`api`]: [`refine_default`], the learned refinement in one call with
 //!   the defaults of `mp refine` ([`RefineOptions`]: model folder, concepts,
@@ -55,7 +55,7 @@ pub mod mapped;
 pub mod motion;
 pub mod nets;
 pub mod pipeline;
-pub mod refiner;
+mod refiner;
 pub mod segment;
 
 pub use api::{refine_default, RefineOptions};

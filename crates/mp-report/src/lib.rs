@@ -1,8 +1,8 @@
 //! # mp-report — pictures and the HTML report of a motion-program analysis
 //!
-//! * [`plots`]: per-joint trajectory plots (each coordinate against time,
+//! * `plots`: per-joint trajectory plots (each coordinate against time,
 //!   keypoints as dots, the executed program coloured by primitive kind).
-//! * [`timeline`]: primitives of every joint by kind, the counted
+//! * `timeline`: primitives of every joint by kind, the counted
 //!   repetitions and the abstract program's loops, over one time axis.
 //! * [`draw`]: skeletons on frames or on a blank canvas, contact sheets.
 //! * [`frames`]: reduced JPEG copies of video frames for the report.
@@ -34,17 +34,17 @@
 //! ```
 
 pub mod draw;
-pub mod error;
+mod error;
 pub mod frames;
 pub mod outdir;
 pub mod page;
 pub mod people;
 pub mod pictures;
-pub mod plots;
+mod plots;
 pub mod raster;
-pub mod style;
-pub mod svg;
-pub mod timeline;
+mod style;
+mod svg;
+mod timeline;
 
 pub use error::{ReportError, Result};
 pub use frames::{FrameStore, FrameStoreParams};

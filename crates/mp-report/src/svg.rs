@@ -78,16 +78,6 @@ impl Svg {
         s
     }
 
-    /// Width in pixels.
-    pub fn width(&self) -> f64 {
-        self.width
-    }
-
-    /// Height in pixels.
-    pub fn height(&self) -> f64 {
-        self.height
-    }
-
     /// Appends raw SVG markup.
     pub fn raw(&mut self, markup: &str) {
         self.body.push_str(markup);

@@ -3,7 +3,7 @@
 //! The programs and loops that `mp run` finds in a video, applied to the
 //! video's own frames:
 //!
-//! * [`edit`]: more or fewer repetitions in a counted interval (`mp edit`):
+//! * `edit`: more or fewer repetitions in a counted interval (`mp edit`):
 //!   the repetition closest to the interval's mean is repeated or removed, seams are
 //!   placed where pose and pixels match best within a few frames and
 //!   cross-faded.
@@ -14,7 +14,7 @@
 //!   frames' keypoints (`mp interpolate`): both neighbouring frames are
 //!   warped towards the program's pose and blended; linear blending and
 //!   FFmpeg's `minterpolate` as baselines.
-//! * [`metrics`]: PSNR and SSIM, on the whole frame or a box.
+//! * `metrics`: PSNR and SSIM, on the whole frame or a box.
 //!
 //! Frames stream through FFmpeg pipes (`mp_pose::video`): an output is a
 //! [`plan::Plan`] of source frames (copied or blended) rendered with a
@@ -39,10 +39,10 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod edit;
-pub mod error;
+mod edit;
+mod error;
 pub mod interpolate;
-pub mod metrics;
+mod metrics;
 pub mod motion;
 pub mod plan;
 pub mod predict;

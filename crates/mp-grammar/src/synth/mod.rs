@@ -8,7 +8,7 @@
 //! (seeded; the paper: "an arbitrary segment"), or is the symbol's medoid
 //! ([`FirstSegment`]). Every following segment is the one of its symbol
 //! whose **first** pose is closest to the **last** pose of the previous
-//! segment, by the pose distance `d` of [`crate::distance`] (ties: the
+//! segment, by the pose distance `d` of `distance` (ties: the
 //! earlier segment). When a segment must also lead into a fixed one (the
 //! last segment of a regenerated region), the sum of both seam distances is
 //! minimised.
