@@ -230,7 +230,6 @@ fn header(
     program_loops: &[RepetitiveInterval],
     params: &TimelineParams,
 ) {
-    let Layout { j, x1, .. } = *lay;
     let reps: usize = repetitions.iter().map(|i| i.count).sum();
     if params.title {
         svg.text(
@@ -251,7 +250,7 @@ fn header(
         &format!(
             "{} segments × {} joints · {} in {} · {}",
             program.n_segments(),
-            j,
+            lay.j,
             plural(reps, "repetition", "repetitions"),
             plural(repetitions.len(), "interval", "intervals"),
             plural(program_loops.len(), "program loop", "program loops"),
@@ -262,7 +261,7 @@ fn header(
         "",
     );
     // Legend.
-    let mut lx = x1;
+    let mut lx = lay.x1;
     for k in PrimitiveKind::ALL.iter().rev() {
         let label = k.as_str();
         svg.text(lx, 24.0, label, 11.5, style::INK, Anchor::End, "");
@@ -289,21 +288,10 @@ fn kinds_row(
     bounds: &[usize],
     cols: Option<&[Vec<[usize; 4]>]>,
 ) {
-    let Layout {
-        j,
-        label_w,
-        x0,
-        x1,
-        mix_top,
-        mix_h,
-        columns,
-        ..
-    } = *lay;
-    let fx = |f: f64| lay.fx(f);
     // Mix of kinds per segment (per column for long programs).
     svg.text(
-        label_w,
-        mix_top + mix_h / 2.0 + 4.0,
+        lay.label_w,
+        lay.mix_top + lay.mix_h / 2.0 + 4.0,
         "kinds per segment",
         11.0,
         style::INK,
@@ -312,11 +300,11 @@ fn kinds_row(
     );
     let stack = |svg: &mut Svg, a: f64, b: f64, per_kind: [usize; 4]| {
         let n = per_kind.iter().sum::<usize>().max(1) as f64;
-        let mut y = mix_top;
+        let mut y = lay.mix_top;
         for (ki, k) in PrimitiveKind::ALL.iter().enumerate() {
             let c = per_kind.get(ki).copied().unwrap_or(0) as f64;
             if c > 0.0 {
-                let hh = mix_h * c / n;
+                let hh = lay.mix_h * c / n;
                 svg.rect(a, y, (b - a).max(0.5), hh, kind_color(*k), "");
                 y += hh;
             }
@@ -326,20 +314,28 @@ fn kinds_row(
         None => {
             let kinds = kind_indices(program);
             for si in 0..program.n_segments() {
-                let (a, b) = (fx(bounds[si] as f64), fx(bounds[si + 1] as f64));
+                let (a, b) = (lay.fx(bounds[si] as f64), lay.fx(bounds[si + 1] as f64));
                 let mut per_kind = [0usize; 4];
                 for &k in &kinds[si] {
                     per_kind[k.min(3)] += 1;
                 }
                 stack(svg, a, b, per_kind);
                 if b - a >= MIN_LINE_GAP_PX {
-                    svg.line(b, mix_top, b, mix_top + mix_h, style::PAPER, 0.8, "");
+                    svg.line(
+                        b,
+                        lay.mix_top,
+                        b,
+                        lay.mix_top + lay.mix_h,
+                        style::PAPER,
+                        0.8,
+                        "",
+                    );
                 }
             }
         }
         Some(cols) => {
             // Columns with the same mix (in whole joints) are drawn as one.
-            let w = (x1 - x0) / columns as f64;
+            let w = (lay.x1 - lay.x0) / lay.columns as f64;
             let mix = |c: usize| -> [usize; 4] {
                 let mut m = [0usize; 4];
                 for joint in &cols[c] {
@@ -348,16 +344,16 @@ fn kinds_row(
                     }
                 }
                 let total = m.iter().sum::<usize>().max(1);
-                m.map(|n| (n * j.max(1) + total / 2) / total)
+                m.map(|n| (n * lay.j.max(1) + total / 2) / total)
             };
             let mut c = 0;
-            while c < columns {
+            while c < lay.columns {
                 let m = mix(c);
                 let mut e = c + 1;
-                while e < columns && mix(e) == m {
+                while e < lay.columns && mix(e) == m {
                     e += 1;
                 }
-                stack(svg, x0 + c as f64 * w, x0 + e as f64 * w, m);
+                stack(svg, lay.x0 + c as f64 * w, lay.x0 + e as f64 * w, m);
                 c = e;
             }
         }
@@ -366,47 +362,44 @@ fn kinds_row(
 
 /// The counted repetitions: intervals, boundaries, numbers and counts.
 fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterval]) {
-    let Layout {
-        label_w,
-        x0,
-        x1,
-        px_per_frame,
-        loops_top,
-        loop_h,
-        ..
-    } = *lay;
-    let fx = |f: f64| lay.fx(f);
     // Counted repetitions.
     svg.text(
-        label_w,
-        loops_top + loop_h / 2.0 + 4.0,
+        lay.label_w,
+        lay.loops_top + lay.loop_h / 2.0 + 4.0,
         "repetitions",
         11.0,
         style::INK,
         Anchor::End,
         "",
     );
-    svg.rect(x0, loops_top, x1 - x0, loop_h, "#f1f5f9", r#"rx="3""#);
+    svg.rect(
+        lay.x0,
+        lay.loops_top,
+        lay.x1 - lay.x0,
+        lay.loop_h,
+        "#f1f5f9",
+        r#"rx="3""#,
+    );
     for (li, iv) in repetitions.iter().enumerate() {
-        let (a, b) = (fx(iv.start_frame as f64), fx(iv.end_frame as f64));
+        let (a, b) = (lay.fx(iv.start_frame as f64), lay.fx(iv.end_frame as f64));
         svg.rect(
             a,
-            loops_top + 3.0,
+            lay.loops_top + 3.0,
             (b - a).max(0.5),
-            loop_h - 6.0,
+            lay.loop_h - 6.0,
             style::LOOP_FILL,
             r#"fill-opacity="0.85" rx="3""#,
         );
         for w in iv.boundaries.windows(2).skip(1) {
-            let x = fx(w[0] as f64);
-            if (w[0] - iv.boundaries[0]) as f64 * px_per_frame >= MIN_LINE_GAP_PX
-                && (w[1] - w[0]) as f64 * px_per_frame >= MIN_LINE_GAP_PX
+            let x = lay.fx(w[0] as f64);
+            if (w[0] - iv.boundaries[0]) as f64 * lay.px_per_frame >= MIN_LINE_GAP_PX
+                && (w[1] - w[0]) as f64 * lay.px_per_frame >= MIN_LINE_GAP_PX
             {
                 svg.line(
                     x,
-                    loops_top + 3.0,
+                    lay.loops_top + 3.0,
                     x,
-                    loops_top + loop_h - 3.0,
+                    lay.loops_top + lay.loop_h - 3.0,
                     style::PAPER,
                     1.5,
                     "",
@@ -415,11 +408,11 @@ fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterva
         }
         // Repetition numbers, where they fit.
         for (k, w) in iv.boundaries.windows(2).enumerate() {
-            let (ia, ib) = (fx(w[0] as f64), fx(w[1] as f64));
+            let (ia, ib) = (lay.fx(w[0] as f64), lay.fx(w[1] as f64));
             if ib - ia >= 14.0 {
                 svg.text(
                     (ia + ib) / 2.0,
-                    loops_top + loop_h - 7.0,
+                    lay.loops_top + lay.loop_h - 7.0,
                     &(k + 1).to_string(),
                     9.5,
                     "#ffffff",
@@ -436,7 +429,7 @@ fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterva
         if b - a >= lw + 4.0 {
             svg.rect(
                 cx - lw / 2.0,
-                loops_top + 6.0,
+                lay.loops_top + 6.0,
                 lw,
                 19.0,
                 style::LOOP_DARK,
@@ -444,7 +437,7 @@ fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterva
             );
             svg.text(
                 cx,
-                loops_top + 20.0,
+                lay.loops_top + 20.0,
                 &label,
                 13.0,
                 "#ffffff",
@@ -454,7 +447,7 @@ fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterva
         } else if b - a >= 10.0 {
             svg.text(
                 cx,
-                loops_top - 2.0,
+                lay.loops_top - 2.0,
                 &label,
                 11.0,
                 style::LOOP_DARK,
@@ -471,8 +464,8 @@ fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterva
     }
     if repetitions.is_empty() {
         svg.text(
-            (x0 + x1) / 2.0,
-            loops_top + loop_h / 2.0 + 4.0,
+            (lay.x0 + lay.x1) / 2.0,
+            lay.loops_top + lay.loop_h / 2.0 + 4.0,
             "no repetition counted",
             11.0,
             style::MUTED,
@@ -484,33 +477,31 @@ fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterva
 
 /// The abstract program's `for` statements.
 fn program_loops_row(svg: &mut Svg, lay: &Layout, program_loops: &[RepetitiveInterval]) {
-    let Layout {
-        label_w,
-        x0,
-        x1,
-        plo_top,
-        plo_h,
-        ..
-    } = *lay;
-    let fx = |f: f64| lay.fx(f);
     // Program loops: the abstract program's `for` statements.
     svg.text(
-        label_w,
-        plo_top + plo_h / 2.0 + 4.0,
+        lay.label_w,
+        lay.plo_top + lay.plo_h / 2.0 + 4.0,
         "program loops",
         11.0,
         style::INK,
         Anchor::End,
         "",
     );
-    svg.rect(x0, plo_top, x1 - x0, plo_h, "#f1f5f9", r#"rx="3""#);
+    svg.rect(
+        lay.x0,
+        lay.plo_top,
+        lay.x1 - lay.x0,
+        lay.plo_h,
+        "#f1f5f9",
+        r#"rx="3""#,
+    );
     for (li, lp) in program_loops.iter().enumerate() {
-        let (a, b) = (fx(lp.start_frame as f64), fx(lp.end_frame as f64));
+        let (a, b) = (lay.fx(lp.start_frame as f64), lay.fx(lp.end_frame as f64));
         svg.rect(
             a,
-            plo_top + 2.0,
+            lay.plo_top + 2.0,
             (b - a).max(0.5),
-            plo_h - 4.0,
+            lay.plo_h - 4.0,
             style::PROGRAM_LOOP,
             r#"fill-opacity="0.85" rx="2""#,
         );
@@ -518,7 +509,7 @@ fn program_loops_row(svg: &mut Svg, lay: &Layout, program_loops: &[RepetitiveInt
         if b - a >= 10.0 + 7.0 * label.chars().count() as f64 {
             svg.text(
                 (a + b) / 2.0,
-                plo_top + plo_h - 5.0,
+                lay.plo_top + lay.plo_h - 5.0,
                 &label,
                 10.5,
                 "#ffffff",
@@ -544,26 +535,15 @@ fn joint_rows(
     bounds: &[usize],
     cols: Option<&[Vec<[usize; 4]>]>,
 ) {
-    let Layout {
-        j,
-        rh,
-        label_w,
-        x0,
-        x1,
-        rows_top,
-        columns,
-        ..
-    } = *lay;
-    let fx = |f: f64| lay.fx(f);
     // One row per joint.
-    for ji in 0..j {
-        let y = rows_top + ji as f64 * rh;
+    for ji in 0..lay.j {
+        let y = lay.rows_top + ji as f64 * lay.rh;
         let name = program.joints.get(ji).map(String::as_str).unwrap_or("?");
         svg.text(
-            label_w,
-            y + rh * 0.8,
+            lay.label_w,
+            y + lay.rh * 0.8,
             name,
-            (rh * 0.78).min(11.0),
+            (lay.rh * 0.78).min(11.0),
             style::INK,
             Anchor::End,
             "",
@@ -581,15 +561,22 @@ fn joint_rows(
                         e += 1;
                     }
                     if let Some(k) = k {
-                        let (a, b) = (fx(bounds[si] as f64), fx(bounds[e] as f64));
-                        svg.rect(a, y + 0.5, (b - a).max(0.5), rh - 1.0, kind_color(k), "");
+                        let (a, b) = (lay.fx(bounds[si] as f64), lay.fx(bounds[e] as f64));
+                        svg.rect(
+                            a,
+                            y + 0.5,
+                            (b - a).max(0.5),
+                            lay.rh - 1.0,
+                            kind_color(k),
+                            "",
+                        );
                     }
                     si = e;
                 }
             }
             Some(cols) => {
                 // The kind covering most of each column; runs of one kind as one.
-                let w = (x1 - x0) / columns as f64;
+                let w = (lay.x1 - lay.x0) / lay.columns as f64;
                 let major = |c: usize| -> usize {
                     let k = &cols[c][ji];
                     (0..4)
@@ -597,17 +584,17 @@ fn joint_rows(
                         .unwrap_or(0)
                 };
                 let mut c = 0;
-                while c < columns {
+                while c < lay.columns {
                     let k = major(c);
                     let mut e = c + 1;
-                    while e < columns && major(e) == k {
+                    while e < lay.columns && major(e) == k {
                         e += 1;
                     }
                     svg.rect(
-                        x0 + c as f64 * w,
+                        lay.x0 + c as f64 * w,
                         y + 0.5,
                         (e - c) as f64 * w,
-                        rh - 1.0,
+                        lay.rh - 1.0,
                         kind_color(PrimitiveKind::ALL[k.min(PrimitiveKind::ALL.len() - 1)]),
                         "",
                     );
@@ -626,21 +613,13 @@ fn boundaries(
     bounds: &[usize],
     repetitions: &[RepetitiveInterval],
 ) {
-    let Layout {
-        px_per_frame,
-        loops_top,
-        loop_h,
-        rows_top,
-        rows_bottom,
-        ..
-    } = *lay;
-    let fx = |f: f64| lay.fx(f);
     // Segment boundaries over the rows, between segments wide enough to show.
     for si in 1..program.n_segments() {
-        let wide = |s: usize| (bounds[s + 1] - bounds[s]) as f64 * px_per_frame >= MIN_LINE_GAP_PX;
+        let wide =
+            |s: usize| (bounds[s + 1] - bounds[s]) as f64 * lay.px_per_frame >= MIN_LINE_GAP_PX;
         if wide(si - 1) && wide(si) {
-            let x = fx(bounds[si] as f64);
-            svg.line(x, rows_top, x, rows_bottom, style::PAPER, 0.8, "");
+            let x = lay.fx(bounds[si] as f64);
+            svg.line(x, lay.rows_top, x, lay.rows_bottom, style::PAPER, 0.8, "");
         }
     }
     // Repetition boundaries over the rows, where the repetitions are wide enough.
@@ -651,16 +630,16 @@ fn boundaries(
             let wide = before
                 .into_iter()
                 .chain(after)
-                .all(|n| n as f64 * px_per_frame >= MIN_LINE_GAP_PX);
+                .all(|n| n as f64 * lay.px_per_frame >= MIN_LINE_GAP_PX);
             if !wide {
                 continue;
             }
-            let x = fx(bf as f64);
+            let x = lay.fx(bf as f64);
             svg.line(
                 x,
-                loops_top + loop_h,
+                lay.loops_top + lay.loop_h,
                 x,
-                rows_bottom,
+                lay.rows_bottom,
                 style::LOOP_DARK,
                 1.2,
                 r#"stroke-dasharray="3 2" stroke-opacity="0.8""#,
@@ -671,23 +650,23 @@ fn boundaries(
 
 /// Ticks in seconds and the axis label.
 fn time_axis(svg: &mut Svg, lay: &Layout, program: &Program) {
-    let Layout {
-        t_total,
-        x0,
-        x1,
-        rows_bottom,
-        ..
-    } = *lay;
-    let fx = |f: f64| lay.fx(f);
     // Time axis.
     let fps = program.fps;
-    let secs = t_total as f64 / fps;
+    let secs = lay.t_total as f64 / fps;
     for s in ticks(0.0, secs, 10) {
-        let x = fx(s * fps);
-        svg.line(x, rows_bottom, x, rows_bottom + 5.0, style::MUTED, 1.0, "");
+        let x = lay.fx(s * fps);
+        svg.line(
+            x,
+            lay.rows_bottom,
+            x,
+            lay.rows_bottom + 5.0,
+            style::MUTED,
+            1.0,
+            "",
+        );
         svg.text(
             x,
-            rows_bottom + 18.0,
+            lay.rows_bottom + 18.0,
             &format!("{} s", tick_label(s)),
             11.0,
             style::MUTED,
@@ -696,9 +675,13 @@ fn time_axis(svg: &mut Svg, lay: &Layout, program: &Program) {
         );
     }
     svg.text(
-        (x0 + x1) / 2.0,
-        rows_bottom + 36.0,
-        &format!("time ({t_total} frames at {} fps)", mp_geom::fps_label(fps)),
+        (lay.x0 + lay.x1) / 2.0,
+        lay.rows_bottom + 36.0,
+        &format!(
+            "time ({} frames at {} fps)",
+            lay.t_total,
+            mp_geom::fps_label(fps)
+        ),
         12.0,
         style::INK,
         Anchor::Middle,
