@@ -1,6 +1,6 @@
 //! Prints what prediction by unrolling does on a jumping-jack performer.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
-use mp_abstract::{analyse, predict, AbstractParams, PredictParams};
+use mp_abstract::{analyse, unroll, AbstractParams, PredictParams};
 use mp_geom::performer::{perform, Move, PerformerParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let a = analyse(&track.slice_frames(0, observe)?, &AbstractParams::default())?;
     println!("intervals {:?}", a.intervals);
-    let p = predict(track, observe, 30, &PredictParams::default())?;
+    let p = unroll(track, observe, 30, &PredictParams::default())?;
     for h in [0, 5, 10, 20, 29] {
         let pr = p.track.point(h, 9);
         let gt = track.point(observe + h, 9);

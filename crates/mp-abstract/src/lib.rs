@@ -52,7 +52,7 @@ pub use error::{AbstractError, Result};
 pub use loops::{detect_loops, DetectedLoop, LoopParams};
 pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
 pub use pipeline::{
-    analyse, predict, read_program, write_program, AbstractParams, Analysis, PredictMethod,
+    analyse, read_program, unroll, write_program, AbstractParams, Analysis, PredictMethod,
     PredictParams, Prediction,
 };
 pub use repetition::{

@@ -356,7 +356,7 @@ pub(crate) fn future_track(obs: &Track, pos: Array3<f64>) -> Result<Track> {
     )?)
 }
 
-/// The result of [`predict`].
+/// The result of [`unroll`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prediction {
     /// The predicted frames (`horizon` frames after the observed ones).
@@ -372,7 +372,7 @@ pub struct Prediction {
     pub self_match: Option<SelfMatch>,
 }
 
-/// Which path of [`predict`] produced a prediction.
+/// Which path of [`unroll`] produced a prediction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub enum PredictMethod {
@@ -458,7 +458,7 @@ pub fn predict_constant(observed: &Track, horizon: usize) -> Result<Track> {
 /// which its recent frames match an earlier part ([`SelfMatchFallback`], from
 /// about one cycle), else the last pose is held. [`Prediction::method`] says
 /// which path was taken.
-pub fn predict(
+pub fn unroll(
     track: &Track,
     observe: usize,
     horizon: usize,

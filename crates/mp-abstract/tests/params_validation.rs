@@ -3,9 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::exec::{execute, sample, ExecParams};
-use mp_abstract::{
-    analyse, predict, AbstractError, AbstractParams, AbstractProgram, PredictParams,
-};
+use mp_abstract::{analyse, unroll, AbstractError, AbstractParams, AbstractProgram, PredictParams};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
 
@@ -67,7 +65,7 @@ fn predict_params_reject_bad_fields() {
         ..PredictParams::default()
     };
     assert_eq!(
-        names(predict(&t, 30, 5, &p).unwrap_err()),
+        names(unroll(&t, 30, 5, &p).unwrap_err()),
         "max_tail_periods"
     );
     let p = PredictParams {
@@ -75,15 +73,15 @@ fn predict_params_reject_bad_fields() {
         ..PredictParams::default()
     };
     assert_eq!(
-        names(predict(&t, 30, 5, &p).unwrap_err()),
+        names(unroll(&t, 30, 5, &p).unwrap_err()),
         "offset_decay_periods"
     );
     let mut p = PredictParams::default();
     p.period_fallback.as_mut().unwrap().min_strength = f64::NAN;
-    assert_eq!(names(predict(&t, 30, 5, &p).unwrap_err()), "min_strength");
+    assert_eq!(names(unroll(&t, 30, 5, &p).unwrap_err()), "min_strength");
     let mut p = PredictParams::default();
     p.analysis.loops.threshold = -1.0;
-    assert_eq!(names(predict(&t, 30, 5, &p).unwrap_err()), "threshold");
+    assert_eq!(names(unroll(&t, 30, 5, &p).unwrap_err()), "threshold");
 }
 
 #[test]

@@ -2,7 +2,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::pipeline::predict_constant;
-use mp_abstract::{analyse, predict, AbstractParams, PredictParams};
+use mp_abstract::{analyse, unroll, AbstractParams, PredictParams};
 use mp_geom::performer::{perform, Move, PerformerParams};
 
 fn kd(a: &mp_geom::Track, b: &mp_geom::Track) -> f64 {
@@ -62,7 +62,7 @@ fn unrolling_beats_constant_on_repetitive_motion() {
     let track = &perf.track_2d;
     let observe = track.n_frames() / 2 + 7;
     let horizon = 30;
-    let p = predict(track, observe, horizon, &PredictParams::default()).unwrap();
+    let p = unroll(track, observe, horizon, &PredictParams::default()).unwrap();
     assert!(p.used.is_some(), "a loop should be unrolled");
     assert_eq!(p.track.n_frames(), horizon);
     let truth = track.slice_frames(observe, observe + horizon).unwrap();
@@ -74,9 +74,9 @@ fn unrolling_beats_constant_on_repetitive_motion() {
 #[test]
 fn prediction_rejects_bad_arguments() {
     let perf = perform(&PerformerParams::default()).unwrap();
-    assert!(predict(&perf.track_2d, 1, 10, &PredictParams::default()).is_err());
-    assert!(predict(&perf.track_2d, 100, 0, &PredictParams::default()).is_err());
-    assert!(predict(&perf.track_2d, 10_000, 10, &PredictParams::default()).is_err());
+    assert!(unroll(&perf.track_2d, 1, 10, &PredictParams::default()).is_err());
+    assert!(unroll(&perf.track_2d, 100, 0, &PredictParams::default()).is_err());
+    assert!(unroll(&perf.track_2d, 10_000, 10, &PredictParams::default()).is_err());
 }
 
 #[test]

@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::pipeline::predict_constant;
-use mp_abstract::{predict, AbstractError, PredictMethod, PredictParams};
+use mp_abstract::{unroll, AbstractError, PredictMethod, PredictParams};
 use mp_abstract::{SelfMatchFallback, SelfMatchKind};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
@@ -60,7 +60,7 @@ fn one_observed_cycle_and_a_third_is_replayed_with_the_true_period() {
     assert!(e_sm < 1.0, "self-match error {e_sm} px");
     assert!(e_c > 15.0, "constant error {e_c} px");
     // The whole predictor takes this path (no loop program, fewer than 3 cycles).
-    let p = predict(&track, observe, horizon, &PredictParams::default()).unwrap();
+    let p = unroll(&track, observe, horizon, &PredictParams::default()).unwrap();
     assert_eq!(p.method(), PredictMethod::SelfMatch);
     assert!(mean_err(&p.track, &truth) < 0.2 * e_c);
 }
@@ -114,7 +114,7 @@ fn a_still_track_holds_the_last_pose() {
     let still = Track::new(p, None, 30.0, Units::Pixels, Skeleton::coco17()).unwrap();
     let sm = SelfMatchFallback::default();
     assert!(sm.unroll(&still, 20).unwrap().is_none());
-    let pr = predict(&still, 60, 20, &PredictParams::default()).unwrap();
+    let pr = unroll(&still, 60, 20, &PredictParams::default()).unwrap();
     assert_eq!(pr.method(), PredictMethod::Constant);
 }
 

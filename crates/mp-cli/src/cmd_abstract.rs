@@ -304,7 +304,7 @@ pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
 }
 
 /// `mp predict`: the frames after the observed ones, by the chosen method
-/// (`mp_forecast::predict`), with their KD to the actual frames when the track has them.
+/// (`mp_forecast::forecast`), with their KD to the actual frames when the track has them.
 pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
     if mp_pipeline::is_video(&a.track) {
         return crate::cmd_video::predict_video_cmd(
@@ -329,7 +329,7 @@ pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
         ..PredictOptions::default()
     };
     opts.loop_params.analysis = a.opts.params_at(frame_px);
-    let p = mp_forecast::predict(&track, observe, horizon, &opts)?;
+    let p = mp_forecast::forecast(&track, observe, horizon, &opts)?;
     if let Some(text) = p.explanation() {
         eprintln!("{text}");
     }

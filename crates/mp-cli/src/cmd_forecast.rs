@@ -1,5 +1,5 @@
 //! `mp statue`, and the options of `mp predict` read by its nearest-neighbour
-//! and learned methods (`mp_forecast::predict`, `mp_forecast::search_statue`).
+//! and learned methods (`mp_forecast::forecast`, `mp_forecast::search_statue`).
 
 use std::path::PathBuf;
 

@@ -22,7 +22,7 @@ use mp_abstract::pipeline::predict_constant;
 use mp_abstract::repetition::{
     estimate_period, segment_repetitions, PeriodParams, PeriodicSegment, SegmentParams,
 };
-use mp_abstract::{analyse, predict, AbstractParams, PredictParams, RepetitiveInterval};
+use mp_abstract::{analyse, unroll, AbstractParams, PredictParams, RepetitiveInterval};
 use mp_concrete::Scale;
 use mp_geom::io::datasets::{AistPlusPlus, PennAction};
 use mp_geom::io::npz::Npz;
@@ -348,7 +348,7 @@ fn eval_penn(path: &Path, max_clips: usize) -> anyhow::Result<Value> {
         "overall": agg(&all),
         "by_action": by,
         "errors": errors,
-        "protocol": "observe the first half of each clip, predict the next 5/10/20/30 frames (clips too short for a horizon are skipped at that horizon); KD in px rescaled to a 512-px frame; PCK@0.05 of the bbox after the optimal scale+translation fit; path_fraction: share of clips predicted by each path of mp_abstract::predict (loop, autocorrelation period, self-match by lag or reflection, constant)",
+        "protocol": "observe the first half of each clip, predict the next 5/10/20/30 frames (clips too short for a horizon are skipped at that horizon); KD in px rescaled to a 512-px frame; PCK@0.05 of the bbox after the optimal scale+translation fit; path_fraction: share of clips predicted by each path of mp_abstract::unroll (loop, autocorrelation period, self-match by lag or reflection, constant)",
     }))
 }
 
@@ -379,7 +379,7 @@ fn penn_clip(penn: &PennAction, i: usize) -> anyhow::Result<Value> {
     if max_h == 0 {
         return Ok(out);
     }
-    let pred_loop = predict(&track, observe, max_h, &params)?;
+    let pred_loop = unroll(&track, observe, max_h, &params)?;
     let pred_const = predict_constant(&track.slice_frames(0, observe)?, max_h)?;
     let truth = track.slice_frames(observe, observe + max_h)?;
     let tconf = truth_conf

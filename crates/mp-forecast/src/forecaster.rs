@@ -39,7 +39,7 @@ pub enum ForecastMethod {
     /// Hold the last observed pose ([`Constant`]).
     Constant,
     /// Unroll the last loop of the observed frames' abstract program, with
-    /// its period and self-match fallbacks (`mp_abstract::predict`). Default.
+    /// its period and self-match fallbacks (`mp_abstract::unroll`). Default.
     #[default]
     Loop,
     /// Nearest neighbour in a training set ([`crate::NearestNeighbour`]).
@@ -128,7 +128,7 @@ impl Forecaster for Constant {
 }
 
 /// Prediction by unrolling the last detected loop of the observed frames
-/// (`mp_abstract::predict`). Where the program abstraction finds no usable
+/// (`mp_abstract::unroll`). Where the program abstraction finds no usable
 /// loop, the last period of the observed motion measured by autocorrelation
 /// is repeated when the motion is periodic (`PredictParams::period_fallback`);
 /// otherwise the last pose is held.
@@ -195,7 +195,7 @@ impl Forecaster for LoopUnroll {
             past.clone()
         };
         let n = obs.n_frames();
-        let p = mp_abstract::predict(&obs, n, horizon, &self.params)?;
+        let p = mp_abstract::unroll(&obs, n, horizon, &self.params)?;
         let (pos, _, _, _, _) = p.track.into_parts();
         let (h, j, _) = pos.dim();
         // Joints never observed cannot be placed: confidence 0, like the constant baseline.

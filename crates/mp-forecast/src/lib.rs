@@ -15,7 +15,7 @@
 //!   latents to poses ([`ArSpace::Latent`], "AR on Φ"). The ablation
 //!   [`ArSpace::Pose`] ("AR on Θ") runs the same autoregressive network on
 //!   poses. Trained by `tools/forecast/train.py` (`cargo xtask train-forecast`).
-//! * [`predict()`], [`search_statue`]: one call per job with the defaults of
+//! * [`forecast()`], [`search_statue`]: one call per job with the defaults of
 //!   `mp predict` and `mp statue` ([`PredictOptions`], [`StatueOptions`]):
 //!   training set and model lookup, the map onto the model's joints, and
 //!   the path taken ([`PredictPath`]).
@@ -31,7 +31,7 @@
 //! use mp_geom::performer::{perform, PerformerParams};
 //!
 //! // Two seconds seen, one predicted by the Constant baseline (the learned
-//! // models need their ONNX files: `ArForecaster`, `predict`).
+//! // models need their ONNX files: `ArForecaster`, `forecast`).
 //! let track = perform(&PerformerParams::default())?.track_2d;
 //! let past = track.slice_frames(0, 60)?;
 //! let future = Constant.predict(&past, 30)?;
@@ -55,7 +55,7 @@ pub use mapped::{map_to_model, model_dataset, MappedForecaster};
 pub use model::{ArForecaster, ArParams, ArSpace, ForecastModels};
 pub use nn::{NearestNeighbour, NnParams};
 pub use predict::{
-    predict, search_statue, LearnedModel, ModelMapping, PredictOptions, PredictPath, Prediction,
+    forecast, search_statue, LearnedModel, ModelMapping, PredictOptions, PredictPath, Prediction,
     StatueOptions, StatueSearch,
 };
 pub use statue::{find_statue, Statue, StatueParams};

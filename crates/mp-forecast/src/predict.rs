@@ -1,4 +1,4 @@
-//! One entry point per job: [`predict`] (the frames after the observed ones,
+//! One entry point per job: [`forecast`] (the frames after the observed ones,
 //! by any [`ForecastMethod`]) and [`search_statue`] (the statue moment of a
 //! track under the learned forecaster), with the defaults of `mp predict` and
 //! `mp statue`.
@@ -29,9 +29,9 @@ use crate::model::{find_model_dir, ArForecaster, ArParams, ArSpace, ForecastMode
 use crate::nn::{NearestNeighbour, NnParams};
 use crate::statue::{find_statue, Statue, StatueParams};
 
-/// The longest horizon [`predict`] accepts, in frames (whatever the frame rate).
+/// The longest horizon [`forecast`] accepts, in frames (whatever the frame rate).
 pub const MAX_HORIZON_FRAMES: usize = 100_000;
-/// The longest horizon [`predict`] accepts, in seconds of motion at the track's frame rate.
+/// The longest horizon [`forecast`] accepts, in seconds of motion at the track's frame rate.
 pub const MAX_HORIZON_SECONDS: f64 = 3600.0;
 
 /// The longest horizon accepted for a track of `fps` frames per second: the
@@ -71,7 +71,7 @@ impl FromStr for ForecastMethod {
     }
 }
 
-/// Everything [`predict`] needs besides the track; `PredictOptions::default()`
+/// Everything [`forecast`] needs besides the track; `PredictOptions::default()`
 /// is what `mp predict` uses without flags.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PredictOptions {
@@ -261,7 +261,7 @@ impl PredictPath {
     }
 }
 
-/// The result of [`predict`].
+/// The result of [`forecast`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Prediction {
     /// The predicted frames: `horizon` frames after the observed ones, with
@@ -321,7 +321,7 @@ pub(crate) fn check_horizon_for(track: &Track, horizon: usize) -> Result<()> {
 /// a horizon of 0 frames or beyond [`max_horizon_frames`], no model for the
 /// track's skeleton, no training set for the nearest-neighbour method, and
 /// the errors of the method itself.
-pub fn predict(
+pub fn forecast(
     track: &Track,
     observe: usize,
     horizon: usize,
@@ -334,7 +334,7 @@ pub fn predict(
     let (pred, path) = match opts.method {
         ForecastMethod::Constant => (Constant.predict(&past, horizon)?, PredictPath::Constant),
         ForecastMethod::Loop => {
-            let p = mp_abstract::predict(track, observe, horizon, &opts.loop_params)?;
+            let p = mp_abstract::unroll(track, observe, horizon, &opts.loop_params)?;
             let path = match (p.used, p.period, p.self_match) {
                 (Some(i), _, _) => PredictPath::Loop(i),
                 (None, Some(e), _) => PredictPath::Period(e),
@@ -528,7 +528,7 @@ pub struct StatueSearch {
 }
 
 /// The statue moment of `track` under the learned forecaster ([`find_statue`]),
-/// with the model found as for [`predict`].
+/// with the model found as for [`forecast`].
 pub fn search_statue(track: &Track, opts: &StatueOptions) -> Result<StatueSearch> {
     opts.validate()?;
     let (f, model) = learned_forecaster(
@@ -577,7 +577,7 @@ mod tests {
             train: Some(train),
             ..PredictOptions::with_method(ForecastMethod::Nn)
         };
-        let p = predict(&track, 60, 15, &opts).unwrap();
+        let p = forecast(&track, 60, 15, &opts).unwrap();
         assert_eq!(p.track.skeleton().name, "coco17");
         assert_eq!((p.track.n_frames(), p.track.n_joints()), (15, 17));
         // Within a body's reach of the truth, which a prediction of the
@@ -591,7 +591,7 @@ mod tests {
         let track = performer();
         let observe = 40;
         let opts = PredictOptions::with_method(ForecastMethod::Constant);
-        let p = predict(&track, observe, 12, &opts).unwrap();
+        let p = forecast(&track, observe, 12, &opts).unwrap();
         assert_eq!(p.method, ForecastMethod::Constant);
         assert_eq!(p.path, PredictPath::Constant);
         assert!(p.explanation().is_none());
@@ -611,7 +611,7 @@ mod tests {
         assert!(kd.is_finite() && kd >= 0.0);
         // at the track's end there is nothing to compare with
         let n = track.n_frames();
-        let p = predict(&track, n, 5, &opts).unwrap();
+        let p = forecast(&track, n, 5, &opts).unwrap();
         assert_eq!(p.track.n_frames(), 5);
         assert!(p.actual_kd.is_none());
     }
@@ -626,7 +626,7 @@ mod tests {
         let observe = first.reps[2].end;
         let horizon = first.reps[3].end - observe;
         let opts = PredictOptions::default();
-        let p = predict(&track, observe, horizon, &opts).unwrap();
+        let p = forecast(&track, observe, horizon, &opts).unwrap();
         assert_eq!(p.method, ForecastMethod::Loop);
         assert_eq!(p.track.n_frames(), horizon);
         assert!(p.track.positions().iter().all(|v| v.is_finite()));
@@ -637,7 +637,7 @@ mod tests {
             !matches!(p.path, PredictPath::Hold),
             "a repetitive routine is not held: {text}"
         );
-        let held = predict(
+        let held = forecast(
             &track,
             observe,
             horizon,
@@ -651,7 +651,7 @@ mod tests {
             "{text}: loop KD {kd_loop:.2} vs holding {kd_hold:.2}"
         );
         // the same options give the same prediction
-        assert_eq!(predict(&track, observe, horizon, &opts).unwrap(), p);
+        assert_eq!(forecast(&track, observe, horizon, &opts).unwrap(), p);
     }
 
     #[test]
@@ -667,7 +667,7 @@ mod tests {
             let conf = ndarray::Array2::from_shape_fn((30, conf.dim().1), |(_, j)| conf[[0, j]]);
             Track::new(pos, Some(conf), fps, units, sk).unwrap()
         };
-        let p = predict(&still, 30, 10, &PredictOptions::default()).unwrap();
+        let p = forecast(&still, 30, 10, &PredictOptions::default()).unwrap();
         assert_eq!(p.path, PredictPath::Hold);
         assert_eq!(
             p.explanation().unwrap(),
@@ -686,7 +686,8 @@ mod tests {
             (ForecastMethod::Nn, 0, 1),
             (ForecastMethod::Ar, n + 5, 1),
         ] {
-            let e = predict(&track, observe, 10, &PredictOptions::with_method(method)).unwrap_err();
+            let e =
+                forecast(&track, observe, 10, &PredictOptions::with_method(method)).unwrap_err();
             assert!(
                 matches!(e, ForecastError::ObserveOutOfRange { observe: o, min: m, frames, .. }
                     if o == observe && m == min && frames == n),
@@ -715,14 +716,14 @@ mod tests {
         ] {
             let opts = PredictOptions::with_method(method);
             for horizon in [limit + 1, usize::MAX] {
-                let e = predict(&track, 20, horizon, &opts).unwrap_err();
+                let e = forecast(&track, 20, horizon, &opts).unwrap_err();
                 assert!(
                     matches!(e, ForecastError::HorizonTooLong { limit: l, .. } if l == limit),
                     "{method:?}: {e}"
                 );
                 assert!(e.to_string().contains(&limit.to_string()), "{e}");
             }
-            let e = predict(&track, 20, 0, &opts).unwrap_err();
+            let e = forecast(&track, 20, 0, &opts).unwrap_err();
             assert!(
                 matches!(
                     e,
@@ -735,7 +736,7 @@ mod tests {
             );
         }
         // the bound itself is accepted
-        let p = predict(
+        let p = forecast(
             &track,
             20,
             limit,
@@ -761,7 +762,7 @@ mod tests {
             ),
         )
         .unwrap();
-        let e = predict(
+        let e = forecast(
             &custom,
             10,
             5,
@@ -774,7 +775,7 @@ mod tests {
         );
         assert!(e.to_string().contains("`five`"), "{e}");
         // an absent training set is named too
-        let e = predict(
+        let e = forecast(
             &track,
             20,
             5,

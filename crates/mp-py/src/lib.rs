@@ -382,7 +382,7 @@ fn predict(
     let t = &track::track_arg(track, "predict")?;
     let observe = observe.unwrap_or(t.n_frames());
     let p = py
-        .detach(|| mp_forecast::predict(t, observe, horizon, &opts))
+        .detach(|| mp_forecast::forecast(t, observe, horizon, &opts))
         .map_err(errors::forecast)?;
     let why = p.explanation();
     Ok((PyTrack::new(p.track), why))
