@@ -29,6 +29,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod analysis;
 pub mod count;
 pub mod dsl;
 pub mod edit;
@@ -36,11 +37,14 @@ mod error;
 pub mod exec;
 pub mod loops;
 pub mod model;
-pub mod pipeline;
 pub mod repetition;
 pub mod selfmatch;
 pub mod synth;
 
+pub use analysis::{
+    analyse, read_program, unroll, write_program, AbstractParams, Analysis, PredictMethod,
+    PredictParams, Prediction,
+};
 pub use count::json::{
     CountedIntervalJson, ProgramLoopJson, RepetitionsJson, LOOPS_SCHEMA, LOOPS_VERSION,
 };
@@ -51,10 +55,6 @@ pub use count::{
 pub use error::{AbstractError, Result};
 pub use loops::{detect_loops, DetectedLoop, LoopParams};
 pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-pub use pipeline::{
-    analyse, read_program, unroll, write_program, AbstractParams, Analysis, PredictMethod,
-    PredictParams, Prediction,
-};
 pub use repetition::{
     estimate_period, segment_repetitions, JointSelection, PeriodParams, PeriodicSegment,
     RepetitiveInterval, SegmentParams,

@@ -419,7 +419,7 @@ impl SelfMatchFallback {
                 }
             }
         }
-        Ok(Some((crate::pipeline::future_track(obs, pos)?, m)))
+        Ok(Some((crate::analysis::future_track(obs, pos)?, m)))
     }
 }
 

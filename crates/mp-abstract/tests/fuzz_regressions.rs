@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use mp_abstract::pipeline::program_from_str;
+use mp_abstract::analysis::program_from_str;
 use mp_abstract::{dsl, AbstractError, AbstractProgram};
 
 /// A joint called `right\x7fwrist` (DEL inside the name).

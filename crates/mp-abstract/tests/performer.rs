@@ -1,7 +1,7 @@
 //! End-to-end on the procedural performer: track → concrete → abstract, loops, prediction.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_abstract::pipeline::predict_constant;
+use mp_abstract::analysis::predict_constant;
 use mp_abstract::{analyse, unroll, AbstractParams, PredictParams};
 use mp_geom::performer::{perform, Move, PerformerParams};
 

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use mp_abstract::pipeline::read_program;
+use mp_abstract::analysis::read_program;
 use mp_abstract::AbstractError;
 use serde_json::{json, Value};
 

@@ -90,10 +90,10 @@ fn refine_repairs_an_injected_jump_and_rejects_a_useless_flag_set() {
 fn refine_generated_moves_flawed_anchors_to_concepts() {
     use mp_geom::{Skeleton, Track, Units};
     use mp_pose::SessionParams;
+    use mp_refine::learned::{NetRefineParams, NetRefiner};
     use mp_refine::motion::from_features;
     use mp_refine::nets::generate_clips;
     use mp_refine::nets::{find_model_dir, RefineNets};
-    use mp_refine::pipeline::{NetRefineParams, NetRefiner};
     use mp_refine::Concepts;
 
     let dir = find_model_dir().expect("models/refine");

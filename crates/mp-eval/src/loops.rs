@@ -18,7 +18,7 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use mp_abstract::pipeline::predict_constant;
+use mp_abstract::analysis::predict_constant;
 use mp_abstract::repetition::{
     estimate_period, segment_repetitions, PeriodParams, PeriodicSegment, SegmentParams,
 };

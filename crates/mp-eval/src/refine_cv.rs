@@ -14,8 +14,8 @@ use crate::refine::evaluation::{evaluate_injected_on, InjectedReport, RefineEval
 use anyhow::{Context, Result};
 use mp_geom::io::datasets::MsrAction3D;
 use mp_pose::SessionParams;
+use mp_refine::learned::{NetRefineParams, NetRefiner};
 use mp_refine::nets::RefineNets;
-use mp_refine::pipeline::{NetRefineParams, NetRefiner};
 use mp_refine::Concepts;
 use serde_json::{json, Value};
 

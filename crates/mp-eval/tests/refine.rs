@@ -17,8 +17,8 @@ use mp_eval::refine::split::{split_for, split_params, subjects_of, TrainingSubje
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::io::npz::NpzOut;
 use mp_refine::flaws::Flaw;
+use mp_refine::learned::{NetRefineParams, NetRefiner};
 use mp_refine::nets::{find_model_dir, generate_clips, RefineNets};
-use mp_refine::pipeline::{NetRefineParams, NetRefiner};
 use mp_refine::Concepts;
 use ndarray::{concatenate, Array1, Axis};
 

@@ -16,9 +16,9 @@
 //! | target | reader |
 //! |---|---|
 //! | `concrete_dsl` | [`mp_concrete::dsl::parse`] |
-//! | `abstract_dsl` | [`mp_abstract::pipeline::program_from_str`] (text form) |
+//! | `abstract_dsl` | [`mp_abstract::analysis::program_from_str`] (text form) |
 //! | `program_json` | [`mp_concrete::Program::from_json`] |
-//! | `abstract_json` | [`mp_abstract::pipeline::program_from_str`] (JSON) |
+//! | `abstract_json` | [`mp_abstract::analysis::program_from_str`] (JSON) |
 //! | `grammar_json` | [`mp_grammar::GrammarModel::from_json`] |
 //! | `grammar_text` | [`mp_grammar::Grammar::from_text`], [`mp_grammar::Corpus::from_lines`], [`mp_grammar::strings`] |
 //! | `npz` | [`mp_geom::io::npz::Npz::from_bytes`], [`mp_geom::io::native::track_from_npz`] |
@@ -34,7 +34,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mp_abstract::pipeline::program_from_str;
+use mp_abstract::analysis::program_from_str;
 use mp_concrete::Program;
 use mp_geom::io::bvh::{Bvh, BvhTrackParams};
 use mp_geom::io::csv::{track_from_csv_str, track_to_csv_string, CsvLayout};

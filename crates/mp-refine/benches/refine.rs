@@ -13,9 +13,9 @@ use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use mp_refine::baseline::full_confidence;
 use mp_refine::flaws::{inject, AnchorSource, Flaw};
+use mp_refine::learned::{AnchorRepair, NetRefineParams, NetRefiner, RefineMode};
 use mp_refine::motion::{resample, NET_FRAMES};
 use mp_refine::nets::{find_model_dir, RefineNets};
-use mp_refine::pipeline::{AnchorRepair, NetRefineParams, NetRefiner, RefineMode};
 use mp_refine::Concepts;
 
 fn bench(c: &mut Criterion) {

@@ -15,10 +15,10 @@ use mp_onnx::SessionParams;
 
 use crate::concepts::Concepts;
 use crate::error::{RefineError, Result};
+use crate::learned::{NetRefineParams, NetRefiner, RefineMode};
 use crate::mapped::{msr20_map, refine_any, MappedRefinement};
 use crate::motion::bvh_to_msr20;
 use crate::nets::{find_model_dir, RefineNets};
-use crate::pipeline::{NetRefineParams, NetRefiner, RefineMode};
 
 /// File name of the anchor concepts in a model folder.
 pub const CONCEPTS_FILE: &str = "concepts.json";
@@ -157,7 +157,7 @@ pub fn refine_default(track: &Track, opts: &RefineOptions) -> Result<MappedRefin
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::AnchorRepair;
+    use crate::learned::AnchorRepair;
 
     #[test]
     fn defaults_are_those_of_the_refinement() {

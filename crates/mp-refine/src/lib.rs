@@ -17,16 +17,16 @@
 //! * [`baseline`]: a non-learned refinement — detect flawed frames (frozen
 //!   runs, velocity/acceleration outliers, low-scoring anchors) and re-fit
 //!   splines between the neighbouring good frames.
-//! * [`nets`], [`pipeline`]: the seven refinement networks (ONNX Runtime) and
+//! * [`nets`], [`learned`]: the seven refinement networks (ONNX Runtime) and
 //!   the learned refinement — a learned flaw detector (and a held-pose rule)
 //!   whose flagged frames and joints are refilled in the input's own frames,
 //!   then anchor recognition, GMM anchor scores, anchor repair (for
-//!   generated motion, [`pipeline::NetRefineParams::for_generated`]: flawed
+//!   generated motion, [`learned::NetRefineParams::for_generated`]: flawed
 //!   anchors moved to their nearest concept), transition refinement.
 //! * [`mapped`]: refinement of BlazePose-33 world landmarks through the 20
 //!   MSR joints, carried back onto the input's joints.
 //! * `refiner`: the [`Refiner`] trait that both refinements implement
-//!   ([`pipeline::NetRefiner`], [`BaselineRefiner`]).
+//!   ([`learned::NetRefiner`], [`BaselineRefiner`]).
 //! * [`api`]: [`refine_default`], the learned refinement in one call with
 //!   the defaults of `mp refine` ([`RefineOptions`]: model folder, concepts,
 //!   action, steps and thresholds).
@@ -51,10 +51,10 @@ pub mod baseline;
 pub mod concepts;
 pub mod error;
 pub mod flaws;
+pub mod learned;
 pub mod mapped;
 pub mod motion;
 pub mod nets;
-pub mod pipeline;
 mod refiner;
 pub mod segment;
 

@@ -25,8 +25,8 @@ use mp_geom::skeleton_map::{FramePairing, SkeletonMap};
 use mp_geom::Track;
 
 use crate::error::{RefineError, Result};
+use crate::learned::{NetRefinement, NetRefiner};
 use crate::motion::MSR_JOINTS;
-use crate::pipeline::{NetRefinement, NetRefiner};
 
 /// How a track reaches the refinement networks: `None` for a 20-joint MSR
 /// track in 3D, the map for BlazePose-33 world landmarks. Errors say what

@@ -8,7 +8,7 @@ use mp_geom::Track;
 use crate::baseline::{refine, RefineParams};
 use crate::concepts::Concepts;
 use crate::error::Result;
-use crate::pipeline::NetRefiner;
+use crate::learned::NetRefiner;
 
 /// A refined track and the frames the refinement changed.
 #[derive(Debug, Clone, PartialEq)]

@@ -9,12 +9,12 @@ use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
 use mp_refine::baseline::full_confidence;
 use mp_refine::flaws::{foot_joints, inject, Flaw, FootSlide};
-use mp_refine::mpjpe_abs;
-use mp_refine::pipeline::foot_contact::{guard_refills, hold_slides};
-use mp_refine::pipeline::{
+use mp_refine::learned::foot_contact::{guard_refills, hold_slides};
+use mp_refine::learned::{
     foot_contacts, foot_legs, foot_slide, FootContactParams, NetRefineParams, NetRefiner,
     RepairedRun,
 };
+use mp_refine::mpjpe_abs;
 use ndarray::Array3;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};

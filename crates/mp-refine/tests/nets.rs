@@ -15,9 +15,9 @@ use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use mp_refine::baseline::full_confidence;
 use mp_refine::flaws::{inject, AnchorSource, Flaw};
+use mp_refine::learned::{NetRefineParams, NetRefiner, RefineMode};
 use mp_refine::motion::{canonical_mask, changed_joints};
 use mp_refine::nets::{find_model_dir, NetKind, RefineNets};
-use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode};
 use mp_refine::{mpjpe_abs, Concepts, RefineError};
 use ndarray::Array3;
 
@@ -460,7 +460,7 @@ fn anchor_only_mode_touches_no_deviation_transition() {
         for t in &out.report.transitions {
             assert_ne!(
                 t.refined,
-                Some(mp_refine::pipeline::TransitionReason::Deviation)
+                Some(mp_refine::learned::TransitionReason::Deviation)
             );
         }
         // Anchors are increasing, first and last frame included.

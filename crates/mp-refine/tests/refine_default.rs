@@ -7,8 +7,8 @@
 use mp_geom::io::datasets::MsrAction3D;
 use mp_refine::baseline::full_confidence;
 use mp_refine::flaws::{inject, Flaw};
+use mp_refine::learned::{NetRefineParams, NetRefiner, RefineMode};
 use mp_refine::nets::{find_model_dir, RefineNets};
-use mp_refine::pipeline::{NetRefineParams, NetRefiner, RefineMode};
 use mp_refine::{mpjpe_abs, refine_default, Concepts, RefineError, RefineOptions};
 
 #[test]

@@ -12,9 +12,9 @@ use clap::Args;
 use mp_geom::io::write_track;
 use mp_geom::Track;
 use mp_refine::api::read_input;
+use mp_refine::learned::{NetRefineParams, RefineMode, TransitionMethod};
 use mp_refine::mapped::MappedRefinement;
 use mp_refine::motion::DEFAULT_BVH_LENGTH_SCALE;
-use mp_refine::pipeline::{NetRefineParams, RefineMode, TransitionMethod};
 use mp_refine::{refine_default, RefineOptions};
 
 pub use concepts::{concepts_cmd, ConceptsArgs};
@@ -219,7 +219,7 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
                 t.deviation_m
                     .map_or("-".into(), |d| format!("{:.1} mm", d * 1e3)),
                 t.refined
-                    .unwrap_or(mp_refine::pipeline::TransitionReason::Deviation)
+                    .unwrap_or(mp_refine::learned::TransitionReason::Deviation)
             );
         }
     }

@@ -23,12 +23,12 @@ use crate::refine::quality::{accuracy, fid};
 use crate::refine::split::subjects_of;
 use mp_refine::concepts::{learn_concepts, msr_anchor_samples, ConceptParams, Concepts};
 use mp_refine::error::Result;
-use mp_refine::motion::HIP_CENTRE;
-use mp_refine::nets::RefineNets;
-use mp_refine::pipeline::{
+use mp_refine::learned::{
     nearest_concept_thresholds, AnchorDetection, AnchorRepair, NetRefineParams, NetRefiner,
     RefineMode, TransitionMethod,
 };
+use mp_refine::motion::HIP_CENTRE;
+use mp_refine::nets::RefineNets;
 
 /// One ablation setting on generated clips and injected flaws.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

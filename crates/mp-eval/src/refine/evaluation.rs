@@ -1,4 +1,4 @@
-//! Evaluation of the learned refinement ([`mp_refine::pipeline`]).
+//! Evaluation of the learned refinement ([`mp_refine::learned`]).
 //!
 //! * **Injected flaws** ([`evaluate_injected_nets`]): clips of the held-out
 //!   subjects of MSR Action3D (subject 9 by default; any subjects the
@@ -35,10 +35,10 @@ use mp_refine::baseline::full_confidence;
 use mp_refine::concepts::{ClusterMethod, Concepts};
 use mp_refine::error::{RefineError, Result};
 use mp_refine::flaws::{foot_joints, AnchorSource, Flaw, FootSlide};
-use mp_refine::nets::{generate_clips, RefineNets};
-use mp_refine::pipeline::{
+use mp_refine::learned::{
     foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner,
 };
+use mp_refine::nets::{generate_clips, RefineNets};
 use mp_refine::segment::{mpjpe_abs, SegmentParams};
 
 /// Parameters of the evaluation.
@@ -225,7 +225,7 @@ pub struct InjectedFlawReport {
     pub detector_precision: f64,
     /// Flaw detector: injected frames that were flagged / injected frames.
     pub detector_recall: f64,
-    /// Foot slide of the flawed clips ([`mp_refine::pipeline::foot_slide`]: horizontal
+    /// Foot slide of the flawed clips ([`mp_refine::learned::foot_slide`]: horizontal
     /// travel of the feet, track units per second, over the frames where the
     /// clean clip's feet are in contact).
     pub foot_slide_before: f64,

@@ -14,9 +14,9 @@ use crate::refine::quality::{
     accuracy, diversity, fid, multimodality, per_action_fid, QualityParams,
 };
 use mp_refine::error::{RefineError, Result};
+use mp_refine::learned::NetRefiner;
 use mp_refine::motion::{canonicalize, to_features, FRAME_FEATURES, NET_FRAMES};
 use mp_refine::nets::{RefineNets, N_ACTIONS};
-use mp_refine::pipeline::NetRefiner;
 
 /// Evaluator features and logits of canonical clips (`N × 60 × 60` features), in batches.
 pub fn evaluator_outputs(

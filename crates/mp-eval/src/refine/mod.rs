@@ -1,4 +1,4 @@
-//! `cargo xtask eval refine`: the learned refinement of `mp_refine::pipeline`
+//! `cargo xtask eval refine`: the learned refinement of `mp_refine::learned`
 //! on MSR Action3D — injected flaws on every subject the networks never saw
 //! (the training manifest next to the models names the training and
 //! selection subjects; subject 9 of the shared file) or on the subjects of
@@ -36,8 +36,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_pose::SessionParams;
+use mp_refine::learned::{AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode};
 use mp_refine::nets::{find_model_dir, RefineNets};
-use mp_refine::pipeline::{AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode};
 use mp_refine::Concepts;
 use serde_json::{json, Value};
 
