@@ -56,7 +56,7 @@ pub use error::{AbstractError, Result};
 pub use loops::{detect_loops, DetectedLoop, LoopParams};
 pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
 pub use repetition::{
-    estimate_period, segment_repetitions, JointSelection, PeriodParams, PeriodicSegment,
-    RepetitiveInterval, SegmentParams,
+    estimate_period, segment_repetitions, IntervalParams, JointSelection, PeriodParams,
+    PeriodicSegment, RepetitiveInterval,
 };
 pub use selfmatch::{SelfMatch, SelfMatchFallback, SelfMatchKind};

@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_abstract::repetition::{
-    estimate_period, iou, segment_repetitions, JointSelection, PeriodParams, SegmentParams,
+    estimate_period, iou, segment_repetitions, IntervalParams, JointSelection, PeriodParams,
 };
 use mp_abstract::AbstractError;
 use mp_geom::{Skeleton, Track, Units};
@@ -93,7 +93,7 @@ fn period_counter_counts_k_noisy_repetitions() {
 #[test]
 fn segmenter_counts_one_repetitive_track() {
     let t = cyclic_track(8, 30, 6, 2.0, 7);
-    let segs = segment_repetitions(&t, &SegmentParams::default()).unwrap();
+    let segs = segment_repetitions(&t, &IntervalParams::default()).unwrap();
     assert_eq!(segs.len(), 1, "{segs:?}");
     let s = &segs[0];
     assert!((s.period_frames as i64 - 30).abs() <= 1, "{s:?}");
@@ -115,7 +115,7 @@ fn segmenter_finds_two_blocks_separated_by_rest() {
     rows.extend(block(92, 23.0, 40.0, &mut rng)); // 4 cycles of 2.3 s
     rows.extend(rest(20, &mut rng));
     let t = feature_track(&rows, fps);
-    let segs = segment_repetitions(&t, &SegmentParams::default()).unwrap();
+    let segs = segment_repetitions(&t, &IntervalParams::default()).unwrap();
     assert_eq!(segs.len(), 2, "{segs:?}");
     let truth = [(25, 91, 11.0, 6.0), (131, 223, 23.0, 4.0)];
     for (s, (a, b, per, k)) in segs.iter().zip(truth) {
@@ -136,7 +136,7 @@ fn segmenter_splits_back_to_back_exercises() {
     let mut rows = block(70, 10.0, 0.0, &mut rng);
     rows.extend(block(100, 25.0, 60.0, &mut rng));
     let t = feature_track(&rows, 10.0);
-    let segs = segment_repetitions(&t, &SegmentParams::default()).unwrap();
+    let segs = segment_repetitions(&t, &IntervalParams::default()).unwrap();
     assert_eq!(segs.len(), 2, "{segs:?}");
     assert!(iou((segs[0].start_frame, segs[0].end_frame), (0, 70)) >= 0.8);
     assert!(iou((segs[1].start_frame, segs[1].end_frame), (70, 170)) >= 0.8);
@@ -146,7 +146,7 @@ fn segmenter_splits_back_to_back_exercises() {
 fn segmenter_finds_nothing_in_rest_or_drift() {
     let mut rng = ChaCha8Rng::seed_from_u64(13);
     let t = feature_track(&rest(120, &mut rng), 10.0);
-    assert!(segment_repetitions(&t, &SegmentParams::default())
+    assert!(segment_repetitions(&t, &IntervalParams::default())
         .unwrap()
         .is_empty());
     // A slow monotonic drift is not a repetition.
@@ -157,11 +157,11 @@ fn segmenter_finds_nothing_in_rest_or_drift() {
         })
         .collect();
     let segs =
-        segment_repetitions(&feature_track(&drift, 10.0), &SegmentParams::default()).unwrap();
+        segment_repetitions(&feature_track(&drift, 10.0), &IntervalParams::default()).unwrap();
     assert!(segs.is_empty(), "{segs:?}");
     // Shorter than the shortest interval.
     let short = feature_track(&block(8, 4.0, 0.0, &mut rng), 10.0);
-    assert!(segment_repetitions(&short, &SegmentParams::default())
+    assert!(segment_repetitions(&short, &IntervalParams::default())
         .unwrap()
         .is_empty());
 }
@@ -170,31 +170,31 @@ fn segmenter_finds_nothing_in_rest_or_drift() {
 fn bad_parameters_and_frames_give_typed_errors() {
     let t = cyclic_track(4, 20, 3, 1.0, 5);
     let bad_seg = [
-        SegmentParams {
+        IntervalParams {
             threshold: f64::NAN,
-            ..SegmentParams::default()
+            ..IntervalParams::default()
         },
-        SegmentParams {
+        IntervalParams {
             min_period_s: 2.0,
             max_period_s: 1.0,
-            ..SegmentParams::default()
+            ..IntervalParams::default()
         },
-        SegmentParams {
+        IntervalParams {
             min_cycles: 0.5,
-            ..SegmentParams::default()
+            ..IntervalParams::default()
         },
-        SegmentParams {
+        IntervalParams {
             grid_s: 0.0,
-            ..SegmentParams::default()
+            ..IntervalParams::default()
         },
-        SegmentParams {
+        IntervalParams {
             interval_penalty_s: -1.0,
-            ..SegmentParams::default()
+            ..IntervalParams::default()
         },
-        SegmentParams {
+        IntervalParams {
             min_duration_s: 10.0,
             max_duration_s: 5.0,
-            ..SegmentParams::default()
+            ..IntervalParams::default()
         },
     ];
     for p in bad_seg {
@@ -235,7 +235,7 @@ fn tracks_without_valid_joints_have_no_repetition() {
     let p = Array3::zeros((n, 3, 2));
     let conf = Array2::zeros((n, 3));
     let t = Track::new(p, Some(conf), 30.0, Units::Pixels, Skeleton::generic(3)).unwrap();
-    assert!(segment_repetitions(&t, &SegmentParams::default())
+    assert!(segment_repetitions(&t, &IntervalParams::default())
         .unwrap()
         .is_empty());
     assert!(estimate_period(&t, 0, n, &PeriodParams::default())
@@ -287,7 +287,7 @@ fn cmu_exercise_blocks_are_segmented() {
         }
     }
     assert_eq!(blocks.len(), 6);
-    let segs = segment_repetitions(&c.track, &SegmentParams::default()).unwrap();
+    let segs = segment_repetitions(&c.track, &IntervalParams::default()).unwrap();
     let d: Vec<(usize, usize)> = segs.iter().map(|x| (x.start_frame, x.end_frame)).collect();
     let found = blocks
         .iter()

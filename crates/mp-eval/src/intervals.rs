@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use mp_abstract::repetition::{iom, iou, segment_repetitions, SegmentParams};
+use mp_abstract::repetition::{iom, iou, segment_repetitions, IntervalParams};
 use mp_geom::io::datasets::CmuFeatures;
 use mp_pipeline::Params;
 use serde_json::{json, Map, Value};
@@ -210,7 +210,7 @@ pub fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
         let d = product_intervals(&c.track, &defaults)?;
         let m = Match::of(&d, g);
         product.add(m);
-        let segs = segment_repetitions(&c.track, &SegmentParams::default())?;
+        let segs = segment_repetitions(&c.track, &IntervalParams::default())?;
         let ds: Vec<(usize, usize)> = segs.iter().map(|s| (s.start_frame, s.end_frame)).collect();
         seg.add(Match::of(&ds, g));
         let an = mp_pipeline::analyse_track(&c.track, None, &defaults)?;
@@ -242,7 +242,7 @@ pub fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
             "folds": folds,
             "left_out": loro.json(),
         }));
-        m.insert("segmenter".into(), json!({"method": "mp_abstract::repetition::segment_repetitions with SegmentParams::default()", "figures": seg.json()}));
+        m.insert("segmenter".into(), json!({"method": "mp_abstract::repetition::segment_repetitions with IntervalParams::default()", "figures": seg.json()}));
         m.insert(
             "loops".into(),
             json!({"method": "loops of the abstract program", "figures": loops.json()}),

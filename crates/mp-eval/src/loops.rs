@@ -20,7 +20,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mp_abstract::analysis::predict_constant;
 use mp_abstract::repetition::{
-    estimate_period, segment_repetitions, PeriodParams, PeriodicSegment, SegmentParams,
+    estimate_period, segment_repetitions, IntervalParams, PeriodParams, PeriodicSegment,
 };
 use mp_abstract::{analyse, unroll, AbstractParams, PredictParams, RepetitiveInterval};
 use mp_concrete::Scale;
@@ -463,7 +463,7 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
         let rmae = (rc as f64 - true_count as f64).abs() / true_count.max(1) as f64;
         rmaes.push(rmae);
         robos.push((rc as i64 - true_count as i64).abs() <= 1);
-        let segs = segment_repetitions(&track, &SegmentParams::default())?;
+        let segs = segment_repetitions(&track, &IntervalParams::default())?;
         let sc = segs.iter().map(|s| s.count).sum::<f64>().round() as usize;
         let smae = (sc as f64 - true_count as f64).abs() / true_count.max(1) as f64;
         smaes.push(smae);
@@ -497,7 +497,7 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
         "segments": {
             "count_mae": smaes.iter().sum::<f64>() / smaes.len().max(1) as f64,
             "obo_acc": sobos.iter().filter(|&&b| b).count() as f64 / sobos.len().max(1) as f64,
-            "params": serde_json::to_value(SegmentParams::default())?,
+            "params": serde_json::to_value(IntervalParams::default())?,
         },
         "skipped": skipped,
         "by_video": by_video,

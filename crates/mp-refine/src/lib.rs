@@ -65,5 +65,6 @@ pub use error::{RefineError, Result};
 pub use flaws::{inject, Flaw, Injected};
 pub use refiner::{BaselineRefiner, Refined, Refiner};
 pub use segment::{
-    mpjpe_abs, segment_track, segmentation_from_anchors, SegmentParams, Segmentation3d, Transition,
+    mpjpe_abs, segment_track, segmentation_from_anchors, SegmentParams, Segmentation3d,
+    SplineTransition,
 };

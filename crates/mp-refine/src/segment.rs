@@ -112,7 +112,7 @@ impl SegmentParams {
 /// One transition: frames `start..=end` and one cubic spline per joint
 /// (`t = 0` at `start`, `t = end − start` at `end`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Transition {
+pub struct SplineTransition {
     /// First frame (an anchor).
     pub start: usize,
     /// Last frame, inclusive (the next anchor).
@@ -123,7 +123,7 @@ pub struct Transition {
     pub error: f64,
 }
 
-impl Transition {
+impl SplineTransition {
     /// Duration in frame intervals (`end − start`, the paper's `T_s`).
     pub fn duration_frames(&self) -> usize {
         self.end - self.start
@@ -136,7 +136,7 @@ pub struct Segmentation3d {
     /// Anchor frames, increasing: `0`, the junctions, `T − 1`.
     pub anchors: Vec<usize>,
     /// Transitions between consecutive anchors.
-    pub transitions: Vec<Transition>,
+    pub transitions: Vec<SplineTransition>,
     /// Frames T of the segmented track.
     pub n_frames: usize,
     /// Joints J.
@@ -396,7 +396,7 @@ fn from_anchors(
         .into_par_iter()
         .map(|w| {
             let (splines, error) = transition_fit(&data, &fit, params, w[0], w[1])?;
-            Ok(Transition {
+            Ok(SplineTransition {
                 start: w[0],
                 end: w[1],
                 splines,

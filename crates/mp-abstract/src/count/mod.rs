@@ -34,8 +34,8 @@ use span::{active_span, cycle_mismatch, repeating_span};
 
 use crate::error::{AbstractError, Result};
 use crate::repetition::{
-    estimate_period, segment_repetitions, PeriodEstimate, PeriodParams, PeriodicSegment,
-    RepetitiveInterval, SegmentParams,
+    estimate_period, segment_repetitions, IntervalParams, PeriodEstimate, PeriodParams,
+    PeriodicSegment, RepetitiveInterval,
 };
 use mp_geom::Track;
 
@@ -93,7 +93,7 @@ pub struct CountParams {
     /// Period of the whole recording, frame signal ([`PeriodParams::frames`]).
     pub frame_period: PeriodParams,
     /// Repetitive intervals (for recordings with several activities).
-    pub segment: SegmentParams,
+    pub segment: IntervalParams,
     /// A recording repeats when the autocorrelation of its motion at the
     /// period reaches this (0..1). Default 0.05: a single golf swing scores
     /// about 0.01, repeated exercises 0.06–0.75 on keypoints.
@@ -105,7 +105,7 @@ pub struct CountParams {
     /// of the activity's level (the median speed, or half that of the most
     /// active tenth of the frames when rest is the larger part) are rest,
     /// trimmed from the ends of the activity.
-    /// Default 0.2 (as [`SegmentParams::rest_fraction`]).
+    /// Default 0.2 (as [`IntervalParams::rest_fraction`]).
     pub rest_fraction: f64,
     /// Keypoints count only where a person is found in at least this fraction
     /// of the frames. Default 0.5.
@@ -132,7 +132,7 @@ impl Default for CountParams {
         CountParams {
             period: PeriodParams::default(),
             frame_period: PeriodParams::frames(),
-            segment: SegmentParams::default(),
+            segment: IntervalParams::default(),
             min_strength: 0.05,
             period_tolerance: 0.25,
             rest_fraction: 0.2,

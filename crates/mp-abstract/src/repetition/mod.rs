@@ -11,7 +11,7 @@ mod period;
 mod segment;
 
 pub use period::{estimate_period, PeriodEstimate, PeriodParams};
-pub use segment::{segment_repetitions, PeriodicSegment, SegmentParams};
+pub use segment::{segment_repetitions, IntervalParams, PeriodicSegment};
 
 use serde::{Deserialize, Serialize};
 

@@ -8,7 +8,7 @@ use super::{channels, standardise, JointSelection, RepetitiveInterval};
 /// Parameters of the repetition segmenter (see [`segment_repetitions`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
-pub struct SegmentParams {
+pub struct IntervalParams {
     /// Joints analysed. Default [`JointSelection::Limbs`].
     pub joints: JointSelection,
     /// Subtract each frame's centroid of the selected joints (per coordinate)
@@ -22,7 +22,7 @@ pub struct SegmentParams {
     /// An interval holds at least this many periods (≥ 1). Default 1.5:
     /// slow exercises (a torso twist, a toe touch) are often done only one
     /// and a half times in a row. Intervals of fewer than two periods must
-    /// pass the stricter [`SegmentParams::short_threshold`].
+    /// pass the stricter [`IntervalParams::short_threshold`].
     pub min_cycles: f64,
     /// The score an interval holding fewer than two periods must exceed
     /// (≥ `threshold`, ≤ 2): its self-match is measured over less than one
@@ -75,9 +75,9 @@ pub struct SegmentParams {
     pub length_resolution: f64,
 }
 
-impl Default for SegmentParams {
+impl Default for IntervalParams {
     fn default() -> Self {
-        SegmentParams {
+        IntervalParams {
             joints: JointSelection::Limbs,
             centre_frames: true,
             min_period_s: 0.4,
@@ -98,7 +98,7 @@ impl Default for SegmentParams {
     }
 }
 
-impl SegmentParams {
+impl IntervalParams {
     /// Checks every field.
     pub fn validate(&self) -> crate::Result<()> {
         use crate::AbstractError;
@@ -307,10 +307,10 @@ impl Concordance {
 /// does not; a slowly drifting, non-periodic signal has a high `C` at every
 /// lag and so a low score. Channels of a unitless feature track are first
 /// divided by their standard deviation over the track
-/// ([`SegmentParams::standardise_features`]). Dynamic programming picks the
+/// ([`IntervalParams::standardise_features`]). Dynamic programming picks the
 /// partition that maximises `Σ length · (score − threshold) − interval_penalty`
 /// over the repetitive intervals (rest scores 0; an interval of fewer than two
-/// periods is held to [`SegmentParams::short_threshold`] instead of
+/// periods is held to [`IntervalParams::short_threshold`] instead of
 /// `threshold`), so a change of exercise, where the
 /// motion stops repeating, ends an interval even without a pause. Intervals
 /// shorter than `min_duration_s` are not considered. The count of an interval
@@ -320,7 +320,7 @@ impl Concordance {
 /// are bounded by `max_duration_s`.
 pub fn segment_repetitions(
     track: &mp_geom::Track,
-    params: &SegmentParams,
+    params: &IntervalParams,
 ) -> crate::Result<Vec<PeriodicSegment>> {
     use crate::AbstractError;
     params.validate()?;
@@ -525,9 +525,9 @@ fn candidate_lengths(max_steps: usize, resolution: f64) -> Vec<usize> {
 }
 
 /// The score an interval of `len` frames with a period of `period` frames
-/// must exceed: [`SegmentParams::short_threshold`] below two periods,
-/// [`SegmentParams::threshold`] otherwise.
-fn threshold_for(params: &SegmentParams, len: usize, period: usize) -> f64 {
+/// must exceed: [`IntervalParams::short_threshold`] below two periods,
+/// [`IntervalParams::threshold`] otherwise.
+fn threshold_for(params: &IntervalParams, len: usize, period: usize) -> f64 {
     if len < 2 * period {
         params.short_threshold
     } else {
