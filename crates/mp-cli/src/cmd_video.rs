@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use mp_pipeline::Params;
-use mp_video::{EditChange, EditParams, InterpMethod, InterpParams, PredictMethod, PredictParams};
+use mp_video::{
+    EditChange, EditParams, InterpMethod, InterpParams, VideoPredictMethod, VideoPredictParams,
+};
 
 /// Arguments of `mp edit`.
 #[derive(Args, Debug)]
@@ -189,9 +191,9 @@ pub fn predict_video_cmd(
         bail!("a video input needs -o OUT.mp4 (the video followed by the prediction)");
     };
     let method = match method {
-        F::Loop => PredictMethod::Loop,
-        F::Constant => PredictMethod::Constant,
-        F::Nn => PredictMethod::Nearest,
+        F::Loop => VideoPredictMethod::Loop,
+        F::Constant => VideoPredictMethod::Constant,
+        F::Nn => VideoPredictMethod::Nearest,
         other => bail!(
             "--method {} predicts keypoints, not frames; for a video use loop, constant or nn",
             other.as_str()
@@ -201,7 +203,7 @@ pub fn predict_video_cmd(
         video,
         seconds,
         method,
-        &PredictParams::default(),
+        &VideoPredictParams::default(),
         &Params::default(),
         output,
     )

@@ -23,7 +23,7 @@
 //! ([`plan::AtomicVideo`]).
 //!
 //! ```no_run
-//! use mp_video::{predict_video, PredictMethod, PredictParams};
+//! use mp_video::{predict_video, VideoPredictMethod, VideoPredictParams};
 //!
 //! // Three more seconds of a video, by unrolling its last repetition on the
 //! // video's own frames (`mp predict squats.mp4 --seconds 3`).
@@ -31,8 +31,8 @@
 //! predict_video(
 //!     "squats.mp4".as_ref(),
 //!     3.0,
-//!     PredictMethod::default(),
-//!     &PredictParams::default(),
+//!     VideoPredictMethod::default(),
+//!     &VideoPredictParams::default(),
 //!     &params,
 //!     "more.mp4".as_ref(),
 //! )?;
@@ -53,4 +53,6 @@ pub use interpolate::{interpolate_video, InterpMethod, InterpParams, InterpRepor
 pub use metrics::{psnr, ssim, PixelBox};
 pub use motion::{analyse_video, VideoMotion};
 pub use plan::{AtomicVideo, Plan, PlanFrame};
-pub use predict::{plan_prediction, predict_video, PredictMethod, PredictParams, PredictReport};
+pub use predict::{
+    plan_prediction, predict_video, PredictReport, VideoPredictMethod, VideoPredictParams,
+};

@@ -3,17 +3,17 @@
 //!
 //! The last repetition of the last counted interval is the cycle: its start is placed
 //! where the frames before it match the video's last frames best (pose and
-//! pixels, within [`PredictParams::seam_search`] frames of one period
+//! pixels, within [`VideoPredictParams::seam_search`] frames of one period
 //! earlier), so the cycle is phase-aligned with the end of the video; it is
-//! then played again and again, the last [`PredictParams::crossfade`] frames
+//! then played again and again, the last [`VideoPredictParams::crossfade`] frames
 //! of each repeat faded into the frames one cycle earlier so that every seam
 //! joins frames that followed each other in the video. Without counted
 //! repetitions in the observed frames, the dominant period of the keypoints (else of
 //! the frame thumbnails) is the cycle's length; without any, the
 //! nearest-neighbour continuation is used.
 //!
-//! Baselines (§4.4 of the paper, on frames): [`PredictMethod::Constant`]
-//! holds the last frame; [`PredictMethod::Nearest`] plays on from the
+//! Baselines (§4.4 of the paper, on frames): [`VideoPredictMethod::Constant`]
+//! holds the last frame; [`VideoPredictMethod::Nearest`] plays on from the
 //! earlier frame most like the last one (pose and pixels), jumping back the
 //! same way whenever it reaches the end, without seam search or fades.
 
@@ -33,7 +33,7 @@ pub(crate) const MAX_SECONDS: f64 = 3600.0;
 /// How the future frames are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[non_exhaustive]
-pub enum PredictMethod {
+pub enum VideoPredictMethod {
     /// Unroll the last counted repetition (ours).
     #[default]
     Loop,
@@ -43,20 +43,20 @@ pub enum PredictMethod {
     Nearest,
 }
 
-impl PredictMethod {
+impl VideoPredictMethod {
     /// Name.
     pub fn as_str(self) -> &'static str {
         match self {
-            PredictMethod::Loop => "loop",
-            PredictMethod::Constant => "constant",
-            PredictMethod::Nearest => "nearest",
+            VideoPredictMethod::Loop => "loop",
+            VideoPredictMethod::Constant => "constant",
+            VideoPredictMethod::Nearest => "nearest",
         }
     }
 }
 
 /// Parameters of a prediction.
 #[derive(Debug, Clone, PartialEq)]
-pub struct PredictParams {
+pub struct VideoPredictParams {
     /// The cycle's start is searched within this many frames of one period
     /// before the end. Default 4.
     pub seam_search: usize,
@@ -68,9 +68,9 @@ pub struct PredictParams {
     pub render: RenderParams,
 }
 
-impl Default for PredictParams {
+impl Default for VideoPredictParams {
     fn default() -> Self {
-        PredictParams {
+        VideoPredictParams {
             seam_search: 4,
             crossfade: 3,
             min_lag_s: 0.2,
@@ -83,9 +83,9 @@ impl Default for PredictParams {
 #[derive(Debug, Clone, Serialize)]
 pub struct PredictReport {
     /// The method asked for.
-    pub method: PredictMethod,
+    pub method: VideoPredictMethod,
     /// The method used (`Nearest` when nothing repeats).
-    pub used: PredictMethod,
+    pub used: VideoPredictMethod,
     /// Where the cycle's length came from: `counted repetitions` (the last
     /// interval of `loops.json`'s repetitions), `autocorrelation period`
     /// (no repetition counted in the
@@ -163,8 +163,8 @@ fn loop_period(m: &VideoMotion) -> Result<Option<(usize, &'static str)>> {
 pub fn plan_prediction(
     m: &VideoMotion,
     horizon: usize,
-    method: PredictMethod,
-    params: &PredictParams,
+    method: VideoPredictMethod,
+    params: &VideoPredictParams,
 ) -> Result<PredictReport> {
     let n = m.n_frames();
     if n < 2 {
@@ -177,14 +177,14 @@ pub fn plan_prediction(
     let mut used = method;
     let mut fade = 0;
     let mut source = match method {
-        PredictMethod::Loop => "counted repetitions",
-        PredictMethod::Constant => "last frame",
-        PredictMethod::Nearest => "nearest frame",
+        VideoPredictMethod::Loop => "counted repetitions",
+        VideoPredictMethod::Constant => "last frame",
+        VideoPredictMethod::Nearest => "nearest frame",
     };
     let cycle = match method {
-        PredictMethod::Constant => (n - 1, n),
-        PredictMethod::Nearest => nearest_cycle(m, min_lag).unwrap_or((n - 1, n)),
-        PredictMethod::Loop => {
+        VideoPredictMethod::Constant => (n - 1, n),
+        VideoPredictMethod::Nearest => nearest_cycle(m, min_lag).unwrap_or((n - 1, n)),
+        VideoPredictMethod::Loop => {
             m.require_person()?;
             match loop_period(m)? {
                 Some((p, src)) if p >= 2 => {
@@ -205,7 +205,7 @@ pub fn plan_prediction(
                     (best.0, n)
                 }
                 _ => {
-                    used = PredictMethod::Nearest;
+                    used = VideoPredictMethod::Nearest;
                     nearest_cycle(m, min_lag).unwrap_or((n - 1, n))
                 }
             }
@@ -227,7 +227,7 @@ pub fn plan_prediction(
             plan.frames.push(PlanFrame::copy(f.min(n - 1)));
         }
     }
-    if used == PredictMethod::Nearest {
+    if used == VideoPredictMethod::Nearest {
         source = "nearest frame";
     }
     Ok(PredictReport {
@@ -248,8 +248,8 @@ pub fn plan_prediction(
 pub fn predict_video(
     input: &Path,
     seconds: f64,
-    method: PredictMethod,
-    params: &PredictParams,
+    method: VideoPredictMethod,
+    params: &VideoPredictParams,
     analysis: &Params,
     output: &Path,
 ) -> Result<PredictReport> {

@@ -11,7 +11,7 @@ use mp_pose::video::VideoReader;
 use mp_video::interpolate::{interpolate_frames, keep_every};
 use mp_video::{
     analyse_video, edit_video, interpolate_video, predict_video, EditChange, EditParams,
-    InterpMethod, InterpParams, PredictMethod, PredictParams, VideoError,
+    InterpMethod, InterpParams, VideoError, VideoPredictMethod, VideoPredictParams,
 };
 
 /// The first `seconds` of `video`, re-encoded losslessly into `dir`.
@@ -84,15 +84,19 @@ fn predict_writes_the_expected_length() {
     let r = predict_video(
         &input,
         1.5,
-        PredictMethod::Loop,
-        &PredictParams::default(),
+        VideoPredictMethod::Loop,
+        &VideoPredictParams::default(),
         &Params::default(),
         &out,
     )
     .unwrap();
     let expect = (1.5 * info.fps).round() as usize;
     assert_eq!(r.predicted, expect);
-    assert_eq!(r.used, PredictMethod::Loop, "a loop is counted in the clip");
+    assert_eq!(
+        r.used,
+        VideoPredictMethod::Loop,
+        "a loop is counted in the clip"
+    );
     assert_eq!(frames(&out), n + expect);
 }
 
@@ -181,8 +185,8 @@ fn errors_are_typed() {
         let e = predict_video(
             &input,
             s,
-            PredictMethod::Loop,
-            &PredictParams::default(),
+            VideoPredictMethod::Loop,
+            &VideoPredictParams::default(),
             &params,
             &out,
         )
@@ -267,8 +271,8 @@ fn a_video_without_a_person_is_an_error() {
     let e = predict_video(
         &video,
         1.0,
-        PredictMethod::Loop,
-        &PredictParams::default(),
+        VideoPredictMethod::Loop,
+        &VideoPredictParams::default(),
         &params,
         &out,
     )

@@ -10,7 +10,7 @@ use mp_pipeline::Params;
 use mp_pose::video::VideoReader;
 use mp_video::plan::render;
 use mp_video::predict::plan_prediction;
-use mp_video::{analyse_video, PixelBox, PredictMethod, PredictParams};
+use mp_video::{analyse_video, PixelBox, VideoPredictMethod, VideoPredictParams};
 use serde_json::{json, Map, Value};
 
 use super::{common_kd, kd, mean, num, shared_videos, stem, PoseStream, Scores, MIN_CONF};
@@ -35,11 +35,11 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
         a.videos.clone()
     };
     let params = Params::default();
-    let pparams = PredictParams::default();
+    let pparams = VideoPredictParams::default();
     let methods = [
-        PredictMethod::Loop,
-        PredictMethod::Nearest,
-        PredictMethod::Constant,
+        VideoPredictMethod::Loop,
+        VideoPredictMethod::Nearest,
+        VideoPredictMethod::Constant,
     ];
     let mut per_video = Map::new();
     let mut pooled: std::collections::BTreeMap<&'static str, (Vec<f64>, Scores)> =
