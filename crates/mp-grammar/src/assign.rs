@@ -24,7 +24,7 @@
 use std::time::Instant;
 
 use crate::data::Motion;
-use crate::distance::{PoseFeatures, Segment};
+use crate::distance::{FrameSpan, PoseFeatures};
 use crate::error::{GrammarError, Result};
 use crate::model::{GrammarModel, SourceInfo, SymbolsFile, MODEL_FORMAT, SYMBOLS_FORMAT};
 use crate::objective::ClusterQuality;
@@ -62,7 +62,7 @@ pub fn assign_symbols(
             learned.k
         )));
     }
-    let mut medoids: Vec<(Segment, usize)> = Vec::with_capacity(learned.k);
+    let mut medoids: Vec<(FrameSpan, usize)> = Vec::with_capacity(learned.k);
     for (k, &m) in learned.medoids.iter().enumerate() {
         let seg = learned.segments.get(m).ok_or_else(|| {
             GrammarError::Invalid(format!(
@@ -101,7 +101,7 @@ pub fn assign_symbols(
             ),
         ));
     }
-    let nearest = |s: Segment| -> Result<(f64, usize)> {
+    let nearest = |s: FrameSpan| -> Result<(f64, usize)> {
         let mut best = (f64::INFINITY, 0);
         for &(m, k) in &medoids {
             let d = new.segment_distance_to(s, train, m)?;
@@ -125,7 +125,7 @@ pub fn assign_symbols(
             if !best[a].is_finite() || len < params.min_segment_frames {
                 continue;
             }
-            let (d, k) = nearest(Segment::new(points[a], points[b]))?;
+            let (d, k) = nearest(FrameSpan::new(points[a], points[b]))?;
             let cost = best[a] + len as f64 * d;
             if cost < best[b] {
                 best[b] = cost;
@@ -324,7 +324,7 @@ mod tests {
     fn cross_track_distance_matches_the_single_track_one() {
         let f = feats(&[(7, 0.0), (5, 3.0), (9, 1.0)]);
         for (a, b) in [((0, 7), (7, 12)), ((2, 20), (5, 9)), ((3, 4), (0, 21))] {
-            let (a, b) = (Segment::new(a.0, a.1), Segment::new(b.0, b.1));
+            let (a, b) = (FrameSpan::new(a.0, a.1), FrameSpan::new(b.0, b.1));
             let d1 = f.segment_distance(a, b).unwrap();
             let d2 = f.segment_distance_to(a, &f, b).unwrap();
             let d3 = f.segment_distance_to(b, &f, a).unwrap();
@@ -334,7 +334,7 @@ mod tests {
             );
         }
         assert!(f
-            .segment_distance_to(Segment::new(0, 30), &f, Segment::new(0, 3))
+            .segment_distance_to(FrameSpan::new(0, 30), &f, FrameSpan::new(0, 3))
             .is_err());
     }
 

@@ -43,17 +43,17 @@ use crate::error::{GrammarError, Result};
 
 /// A segment of frames `[start, end)` (end exclusive).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-pub struct Segment {
+pub struct FrameSpan {
     /// First frame.
     pub start: usize,
     /// One past the last frame.
     pub end: usize,
 }
 
-impl Segment {
+impl FrameSpan {
     /// Builds a segment; `start < end` is checked by the functions that use it.
     pub fn new(start: usize, end: usize) -> Self {
-        Segment { start, end }
+        FrameSpan { start, end }
     }
     /// Number of frames.
     pub fn len(&self) -> usize {
@@ -353,7 +353,7 @@ impl PoseFeatures {
     /// Segment distance (eq. 1) without bounds checks; both segments must be
     /// non-empty and inside the track.
     #[inline]
-    pub(crate) fn segment_distance_unchecked(&self, a: Segment, b: Segment) -> f64 {
+    pub(crate) fn segment_distance_unchecked(&self, a: FrameSpan, b: FrameSpan) -> f64 {
         let (long, short) = if a.len() >= b.len() { (a, b) } else { (b, a) };
         let l = long.len();
         let ls = short.len();
@@ -370,7 +370,7 @@ impl PoseFeatures {
 
     /// Segment distance `D(s, s')` (eq. 1). Errors when a segment is empty or
     /// extends past the last frame.
-    pub fn segment_distance(&self, a: Segment, b: Segment) -> Result<f64> {
+    pub fn segment_distance(&self, a: FrameSpan, b: FrameSpan) -> Result<f64> {
         self.check_segment(a)?;
         self.check_segment(b)?;
         Ok(self.segment_distance_unchecked(a, b))
@@ -380,7 +380,12 @@ impl PoseFeatures {
     /// segment `b` of `other` (same feature layout, e.g. a new take compared
     /// with learned medoids). Errors when a segment is empty or outside its
     /// track, or the feature lengths differ.
-    pub fn segment_distance_to(&self, a: Segment, other: &PoseFeatures, b: Segment) -> Result<f64> {
+    pub fn segment_distance_to(
+        &self,
+        a: FrameSpan,
+        other: &PoseFeatures,
+        b: FrameSpan,
+    ) -> Result<f64> {
         self.check_segment(a)?;
         other.check_segment(b)?;
         if self.dim != other.dim || self.stride != other.stride {
@@ -407,7 +412,7 @@ impl PoseFeatures {
     }
 
     /// Checks that a segment is non-empty and inside the track.
-    pub fn check_segment(&self, s: Segment) -> Result<()> {
+    pub fn check_segment(&self, s: FrameSpan) -> Result<()> {
         if s.is_empty() || s.end > self.n_frames {
             return Err(GrammarError::Invalid(format!(
                 "segment {}..{} is empty or outside 0..{}",
@@ -541,23 +546,23 @@ mod tests {
         // long [0,4) vs short [6,8): m=0..3 ↔ k = 0,0,1,1 → frames 6,6,7,7.
         // |0-6| + |1-6| + |2-7| + |3-7| = 6+5+5+4 = 20 → 20/4 = 5.
         let d = f
-            .segment_distance(Segment::new(0, 4), Segment::new(6, 8))
+            .segment_distance(FrameSpan::new(0, 4), FrameSpan::new(6, 8))
             .unwrap();
         assert!((d - 5.0).abs() < 1e-9);
         let d2 = f
-            .segment_distance(Segment::new(6, 8), Segment::new(0, 4))
+            .segment_distance(FrameSpan::new(6, 8), FrameSpan::new(0, 4))
             .unwrap();
         assert_eq!(d, d2);
         assert_eq!(
-            f.segment_distance(Segment::new(2, 5), Segment::new(2, 5))
+            f.segment_distance(FrameSpan::new(2, 5), FrameSpan::new(2, 5))
                 .unwrap(),
             0.0
         );
         assert!(f
-            .segment_distance(Segment::new(3, 3), Segment::new(0, 2))
+            .segment_distance(FrameSpan::new(3, 3), FrameSpan::new(0, 2))
             .is_err());
         assert!(f
-            .segment_distance(Segment::new(8, 11), Segment::new(0, 2))
+            .segment_distance(FrameSpan::new(8, 11), FrameSpan::new(0, 2))
             .is_err());
     }
 

@@ -37,7 +37,7 @@ mod distance;
 mod error;
 pub mod kmedoids;
 
-pub use distance::{PoseDistanceParams, PoseFeatures, RootMode, Segment};
+pub use distance::{FrameSpan, PoseDistanceParams, PoseFeatures, RootMode};
 pub use error::{GrammarError, Result};
 pub mod objective;
 pub mod symbols;

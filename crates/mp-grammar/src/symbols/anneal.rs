@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::cluster::FxBuild;
 use super::{SaParams, SearchStats, SymbolParams, SymbolSegment, SymbolString};
-use crate::distance::{PoseFeatures, Segment};
+use crate::distance::{FrameSpan, PoseFeatures};
 use crate::kmedoids::Clustering;
 use crate::objective::ClusterQuality;
 
@@ -86,8 +86,8 @@ impl<'a> Annealer<'a> {
         a
     }
 
-    fn seg(&self, i: usize) -> Segment {
-        Segment::new(self.bounds[i], self.bounds[i + 1])
+    fn seg(&self, i: usize) -> FrameSpan {
+        FrameSpan::new(self.bounds[i], self.bounds[i + 1])
     }
 
     fn dist(&mut self, i: usize, j: usize) -> f64 {

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use rayon::prelude::*;
 
 use super::SymbolParams;
-use crate::distance::{PoseFeatures, Segment};
+use crate::distance::{FrameSpan, PoseFeatures};
 use crate::error::{GrammarError, Result};
 use crate::kmedoids::{first_k, Clustering, DenseMatrix};
 use crate::objective::{evaluate, ClusterQuality};
@@ -189,9 +189,9 @@ pub(super) fn cluster_bounds(
     d_max: f64,
 ) -> Result<(Clustering, ClusterQuality)> {
     let n = bounds.len() - 1;
-    let segs: Vec<Segment> = bounds
+    let segs: Vec<FrameSpan> = bounds
         .windows(2)
-        .map(|w| Segment::new(w[0], w[1]))
+        .map(|w| FrameSpan::new(w[0], w[1]))
         .collect();
     let rows: Vec<Vec<f64>> = (0..n)
         .into_par_iter()

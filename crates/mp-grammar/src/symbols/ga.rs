@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use super::cluster::{Grid, PairCache};
 use super::{SearchStats, SymbolParams};
 use crate::derive::pick_weighted;
-use crate::distance::{PoseFeatures, Segment};
+use crate::distance::{FrameSpan, PoseFeatures};
 use crate::error::Result;
 use crate::kmedoids::{first_k, DenseMatrix};
 use crate::objective::evaluate;
@@ -52,8 +52,8 @@ impl Problem<'_> {
         let n = gb.len() - 1;
         let pts = &self.grid.points;
         let ids: Vec<usize> = (0..n).map(|i| self.grid.id(gb[i], gb[i + 1])).collect();
-        let segs: Vec<Segment> = (0..n)
-            .map(|i| Segment::new(pts[gb[i]], pts[gb[i + 1]]))
+        let segs: Vec<FrameSpan> = (0..n)
+            .map(|i| FrameSpan::new(pts[gb[i]], pts[gb[i + 1]]))
             .collect();
         let m = DenseMatrix::from_fn(n, |i, j| {
             self.cache.get_or(ids[i], ids[j], || {

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::distance::Segment;
+use crate::distance::FrameSpan;
 use crate::objective::ClusterQuality;
 
 /// One labelled segment of the symbol string.
@@ -19,8 +19,8 @@ pub struct SymbolSegment {
 
 impl SymbolSegment {
     /// The frame interval.
-    pub fn segment(&self) -> Segment {
-        Segment::new(self.start, self.end)
+    pub fn segment(&self) -> FrameSpan {
+        FrameSpan::new(self.start, self.end)
     }
     /// Number of frames.
     pub fn len(&self) -> usize {

@@ -70,7 +70,7 @@ use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
 use crate::derive::{Derivation, Regeneration};
-use crate::distance::{PoseDistanceParams, PoseFeatures, Segment};
+use crate::distance::{FrameSpan, PoseDistanceParams, PoseFeatures};
 use crate::error::{GrammarError, Result};
 use crate::symbols::SymbolSegment;
 
@@ -164,7 +164,7 @@ pub struct Piece {
     /// Index of the source segment (into the symbol string's segments).
     pub segment: usize,
     /// Frames of the source motion.
-    pub source: Segment,
+    pub source: FrameSpan,
     /// First frame in the synthesised motion.
     pub start_frame: usize,
 }
