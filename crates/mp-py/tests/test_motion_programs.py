@@ -157,11 +157,16 @@ def test_run_writes_what_mp_run_writes(performer, mp_bin, tmp_path):
     assert [n for n, _, _ in s.stages][:2] == ["concrete", "abstract"]
 
 
-def test_extract_a_video(data):
+def test_extract_a_video(data, mp_bin, tmp_path):
     video = data("golfdb/golf_swing.mp4")
     t = mp.extract(str(video), max_frames=20)
     assert t.n_frames == 20 and t.skeleton == "coco17" and t.units == "px"
     assert (t.confidence > 0.5).mean() > 0.5
+    # The same library call as `mp extract`: the same keypoints.
+    run_cli(mp_bin, "extract", video, "--max-frames", 20, "-o", tmp_path / "k.npz", "-q")
+    cli = mp.read_track(tmp_path / "k.npz")
+    np.testing.assert_allclose(t.positions, cli.positions, atol=1e-6)
+    np.testing.assert_allclose(t.confidence, cli.confidence, atol=1e-6)
     # The golf swing is tracked throughout: recovery changes nothing there.
     r = mp.extract(str(video), max_frames=20, recover_s=1.0)
     assert np.array_equal(r.positions, t.positions)
