@@ -291,6 +291,15 @@ fn action_groups_average_the_clips_of_their_classes() {
     assert!(!t.per_group.contains_key("none"));
 }
 
+/// `metric` averaged over the horizons 5, 10, 20 and 30 frames.
+fn later_horizons(r: &MethodReport, metric: &str) -> f64 {
+    ["h5", "h10", "h20", "h30"]
+        .iter()
+        .map(|h| r.metrics[metric].overall[*h])
+        .sum::<f64>()
+        / 4.0
+}
+
 /// The committed models of `dataset` (models/forecast/DATASET).
 fn models_of(dataset: &str) -> Arc<ForecastModels> {
     let dir = find_model_dir(dataset)
@@ -323,13 +332,7 @@ fn learned_model_beats_constant_on_real_penn_action_clips() {
     .unwrap();
     let a = evaluate(&ar, &clips, &params, |_, _| {}).unwrap();
     let c = evaluate(&Constant, &clips, &params, |_, _| {}).unwrap();
-    let later = |r: &MethodReport| {
-        ["h5", "h10", "h20", "h30"]
-            .iter()
-            .map(|h| r.metrics["pck_dtw"].overall[*h])
-            .sum::<f64>()
-            / 4.0
-    };
+    let later = |r: &MethodReport| later_horizons(r, "pck_dtw");
     assert!(
         later(&a) > later(&c),
         "AR {:.1} vs constant {:.1}",
@@ -357,13 +360,7 @@ fn learned_3d_model_beats_constant_on_real_msr_action3d_clips() {
     .unwrap();
     let a = evaluate(&ar, &clips, &params, |_, _| {}).unwrap();
     let c = evaluate(&Constant, &clips, &params, |_, _| {}).unwrap();
-    let later = |r: &MethodReport| {
-        ["h5", "h10", "h20", "h30"]
-            .iter()
-            .map(|h| r.metrics["pa_mpjpe_dtw"].overall[*h])
-            .sum::<f64>()
-            / 4.0
-    };
+    let later = |r: &MethodReport| later_horizons(r, "pa_mpjpe_dtw");
     assert!(
         later(&a) < 0.9 * later(&c),
         "AR {:.1} mm vs constant {:.1} mm",
