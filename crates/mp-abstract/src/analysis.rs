@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use mp_concrete::{synthesize_detailed, Program, SynthParams};
+use mp_geom::checked::{Checked, Validate};
 use mp_geom::{Track, Units};
 use ndarray::Array3;
 use serde::{Deserialize, Serialize};
@@ -38,6 +39,14 @@ pub struct AbstractParams {
     pub synth: SynthParams,
     /// Loop detection; its `unit_scale` is replaced by the one synthesis found for the track.
     pub loops: LoopParams,
+}
+
+impl Validate for AbstractParams {
+    type Error = AbstractError;
+
+    fn validate(&self) -> Result<()> {
+        AbstractParams::validate(self)
+    }
 }
 
 impl AbstractParams {
@@ -96,12 +105,11 @@ pub fn from_concrete(
 ///
 /// Errors on parameters that [`AbstractParams::validate`] rejects.
 pub fn analyse(track: &Track, params: &AbstractParams) -> Result<Analysis> {
-    params.validate()?;
-    analyse_valid(track, params)
+    analyse_valid(track, &params.check()?)
 }
 
-/// [`analyse`] with parameters already validated.
-fn analyse_valid(track: &Track, params: &AbstractParams) -> Result<Analysis> {
+/// [`analyse`] with its parameters checked.
+fn analyse_valid(track: &Track, params: &Checked<&AbstractParams>) -> Result<Analysis> {
     let syn = synthesize_detailed(track, &params.synth)?;
     analyse_synthesis(syn, &params.loops)
 }
@@ -506,7 +514,7 @@ pub fn unroll(
             self_match: None,
         })
     };
-    let analysis = match analyse_valid(&obs, &params.analysis) {
+    let analysis = match analyse_valid(&obs, &(&params.analysis).check()?) {
         Ok(a) => a,
         Err(AbstractError::Empty(_)) => return constant(),
         Err(e) => return Err(e),

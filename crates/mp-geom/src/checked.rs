@@ -36,6 +36,16 @@ pub trait Validate: Sized {
     }
 }
 
+/// Borrowed parameters check as their owner does: `(&params).check()?`
+/// gives a `Checked<&P>` without copying them.
+impl<P: Validate> Validate for &P {
+    type Error = P::Error;
+
+    fn validate(&self) -> Result<(), Self::Error> {
+        (**self).validate()
+    }
+}
+
 /// Parameters that [`Validate::validate`] accepted; read them through
 /// `Deref`. Made only by [`Validate::check`].
 #[derive(Debug, Clone, PartialEq)]

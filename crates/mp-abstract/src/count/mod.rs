@@ -37,6 +37,7 @@ use crate::repetition::{
     estimate_period, segment_repetitions, IntervalParams, PeriodEstimate, PeriodParams,
     PeriodicSegment, RepetitiveInterval,
 };
+use mp_geom::checked::{Checked, Validate};
 use mp_geom::Track;
 
 /// Which signal a count was read from.
@@ -141,6 +142,14 @@ impl Default for CountParams {
             max_segment_channels: 64,
             confidence: ConfidenceModel::default(),
         }
+    }
+}
+
+impl Validate for CountParams {
+    type Error = crate::error::AbstractError;
+
+    fn validate(&self) -> Result<()> {
+        CountParams::validate(self)
     }
 }
 
@@ -317,12 +326,15 @@ pub fn count_repetitions(
     kind: CountSignal,
     params: &CountParams,
 ) -> Result<Counts> {
-    params.validate()?;
-    count_checked(signal, kind, params)
+    count_checked(signal, kind, &params.check()?)
 }
 
-/// [`count_repetitions`] with parameters already validated.
-fn count_checked(signal: &Track, kind: CountSignal, params: &CountParams) -> Result<Counts> {
+/// [`count_repetitions`] with its parameters checked.
+fn count_checked(
+    signal: &Track,
+    kind: CountSignal,
+    params: &Checked<&CountParams>,
+) -> Result<Counts> {
     let n = signal.n_frames();
     let fps = signal.fps();
     if n < 4 || signal.valid_count() == 0 {
@@ -429,7 +441,7 @@ pub fn count_signals(
     frames: Option<&Track>,
     params: &CountParams,
 ) -> Result<Counts> {
-    params.validate()?;
+    let params = &params.check()?;
     let mut best: Option<Counts> = None;
     let mut consider = |c: Counts| {
         let better = match &best {
