@@ -74,23 +74,16 @@ impl BatchArgs {
         };
         p.params = crate::cmd_run::params_file(self.params.as_deref())?;
         let only_given = self.params.is_some();
-        let set = |id: &str| !only_given || crate::given(id);
-        if set("model") {
-            p.params.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
-        }
-        if set("max_frames") {
-            p.params.pose.max_frames = self.max_frames;
-        }
-        if set("all_joints") {
-            p.params.pose.all_joints = self.all_joints;
-        }
-        if set("pose_fps") {
-            p.params.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
-        }
-        if set("device") {
-            p.params.pose.device = mp_pose::runtime::Device::parse(&self.device)?;
-        }
-        if set("no_video") {
+        crate::cmd_run::set_pose(
+            &mut p.params,
+            only_given,
+            &self.model,
+            self.max_frames,
+            self.all_joints,
+            &self.pose_fps,
+            &self.device,
+        )?;
+        if !only_given || crate::given("no_video") {
             p.params.output.overlay_video = !self.no_video;
         }
         self.people.apply(&mut p.params, only_given)?;

@@ -64,27 +64,51 @@ impl PoseOpts {
     /// Sets the pose parameters of `p`; with `only_given` (a `--params`
     /// file is the base) only those given on the command line.
     pub fn apply(&self, p: &mut Params, only_given: bool) -> Result<()> {
-        let set = |id: &str| !only_given || crate::given(id);
-        if set("model") {
-            p.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
-        }
-        if set("max_frames") {
-            p.pose.max_frames = self.max_frames;
-        }
-        if set("all_joints") {
-            p.pose.all_joints = self.all_joints;
-        }
-        if set("threads") {
+        set_pose(
+            p,
+            only_given,
+            &self.model,
+            self.max_frames,
+            self.all_joints,
+            &self.pose_fps,
+            &self.device,
+        )?;
+        if !only_given || crate::given("threads") {
             p.pose.threads = self.threads;
-        }
-        if set("pose_fps") {
-            p.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
-        }
-        if set("device") {
-            p.pose.device = mp_pose::runtime::Device::parse(&self.device)?;
         }
         Ok(())
     }
+}
+
+/// Sets the pose options that `mp run` and `mp batch` share (model, first
+/// frames, all joints, pose rate, device); with `only_given` (a `--params`
+/// file is the base) only those given on the command line.
+pub fn set_pose(
+    p: &mut Params,
+    only_given: bool,
+    model: &str,
+    max_frames: Option<usize>,
+    all_joints: bool,
+    pose_fps: &str,
+    device: &str,
+) -> Result<()> {
+    let set = |id: &str| !only_given || crate::given(id);
+    if set("model") {
+        p.pose.model = mp_pose::ModelChoice::parse(model)?;
+    }
+    if set("max_frames") {
+        p.pose.max_frames = max_frames;
+    }
+    if set("all_joints") {
+        p.pose.all_joints = all_joints;
+    }
+    if set("pose_fps") {
+        p.pose.rate = mp_pipeline::PoseRate::parse(pose_fps)?;
+    }
+    if set("device") {
+        p.pose.device = mp_pose::runtime::Device::parse(device)?;
+    }
+    Ok(())
 }
 
 /// The parameters of a `--params` file (completed with the defaults and

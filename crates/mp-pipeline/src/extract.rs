@@ -92,14 +92,6 @@ impl Extracted {
         }
     }
 
-    /// Frames in the result.
-    pub fn n_frames(&self) -> usize {
-        match &self.poses {
-            Poses::One(t) => t.n_frames(),
-            Poses::People(p) => p.n_frames(),
-        }
-    }
-
     /// Writes the keypoints to `path` in the format of its extension
     /// (`mp_geom::io::write_track`); a format that holds several people
     /// gets everyone, another the main person. Pixels keep the frame they
@@ -201,7 +193,9 @@ pub fn extract(
             observer.progress(Stage::Pose, done)
         })?;
         finished(ex.posed.len());
-        let people = fill_people(ex.people.clone(), &ex.posed)?;
+        let (found_fraction, model_fps, warning) =
+            (ex.found_fraction(), ex.estimator_fps(), ex.warning());
+        let people = fill_people(ex.people, &ex.posed)?;
         let people = if pose.all_joints {
             people
         } else {
@@ -210,9 +204,9 @@ pub fn extract(
         return Ok(Extracted {
             poses: Poses::People(people),
             frame: Some((ex.width, ex.height)),
-            found_fraction: ex.found_fraction(),
-            model_fps: ex.estimator_fps(),
-            warning: ex.warning(),
+            found_fraction,
+            model_fps,
+            warning,
             posed: ex.posed,
         });
     }
@@ -222,14 +216,14 @@ pub fn extract(
     })?;
     finished(ex.posed.len());
     let track = if what.world {
-        ex.world.clone().ok_or_else(|| PipelineError::Stage {
+        ex.world.as_ref().ok_or_else(|| PipelineError::Stage {
             stage: "extract".into(),
             message: "the model gave no world coordinates".into(),
         })?
     } else {
-        ex.track.clone()
+        &ex.track
     };
-    let mut track = fill_track(&track, &ex.posed)?;
+    let mut track = fill_track(track, &ex.posed)?;
     if !pose.all_joints && !what.world && track.skeleton().name != "coco17" {
         track = track.to_coco17()?;
     }
