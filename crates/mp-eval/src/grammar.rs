@@ -44,11 +44,11 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use clap::Args;
 use mp_geom::io::datasets::CmuFeatures;
-use mp_grammar::data::{bvh_files, read_motions, Motion};
-use mp_grammar::model::{find_symbols, learn_grammar, GrammarModel};
-use mp_grammar::sentences::score_partition;
-use mp_grammar::synth::{mean_run_length, ngram_overlap, StitchParams, Synthesis};
+use mp_grammar::score_partition;
+use mp_grammar::{bvh_files, read_motions, Motion};
+use mp_grammar::{find_symbols, learn_grammar, GrammarModel};
 use mp_grammar::{symbol_name, DeriveParams, Fsm, FsmWeighting, PoseDistanceParams, SymbolParams};
+use mp_grammar::{StitchParams, Synthesis};
 use serde_json::{json, Value};
 
 #[path = "grammar_heldout.rs"]
@@ -319,7 +319,7 @@ fn eval_one(input: &Input, k: usize, a: &EvalGrammarArgs) -> anyhow::Result<Valu
         .with_context(|| format!("{}: symbols, K = {k}", input.name))?;
     let t_sym = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let mut pp = mp_grammar::sentences::PartitionParams {
+    let mut pp = mp_grammar::PartitionParams {
         seed: a.seed,
         ..Default::default()
     };
@@ -640,5 +640,40 @@ mod tests {
                 line.replacen("| walk | 4.0", "| walk | 6 | fsm | 4.0", 1)
             )
         );
+    }
+}
+
+/// Fraction of the `n`-grams (windows of `n` consecutive symbols) of
+/// `generated` that occur somewhere in `training` (1 when `generated` is
+/// shorter than `n`).
+pub fn ngram_overlap(generated: &[usize], training: &[usize], n: usize) -> f64 {
+    if n == 0 || generated.len() < n {
+        return 1.0;
+    }
+    let seen: std::collections::HashSet<&[usize]> = training.windows(n).collect();
+    let w: Vec<&[usize]> = generated.windows(n).collect();
+    w.iter().filter(|g| seen.contains(*g)).count() as f64 / w.len() as f64
+}
+
+/// Mean length of the runs of equal consecutive symbols (0 for an empty
+/// string).
+pub fn mean_run_length(symbols: &[usize]) -> f64 {
+    if symbols.is_empty() {
+        return 0.0;
+    }
+    let runs = 1 + symbols.windows(2).filter(|w| w[0] != w[1]).count();
+    symbols.len() as f64 / runs as f64
+}
+
+#[cfg(test)]
+mod structure_tests {
+    use super::{mean_run_length, ngram_overlap};
+
+    #[test]
+    fn structure_measures() {
+        assert_eq!(mean_run_length(&[1, 1, 2, 2, 2, 3]), 2.0);
+        assert_eq!(mean_run_length(&[]), 0.0);
+        assert_eq!(ngram_overlap(&[1, 2, 3], &[1, 2, 4], 2), 0.5);
+        assert_eq!(ngram_overlap(&[1], &[1, 2], 2), 1.0);
     }
 }

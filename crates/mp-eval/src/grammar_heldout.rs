@@ -15,13 +15,13 @@
 use std::path::Path;
 use std::time::Instant;
 
+use crate::grammar::ngram_overlap;
 use anyhow::Context;
 use mp_geom::io::datasets::CmuFeatures;
-use mp_grammar::data::{bvh_files, concat_tracks, read_motions, Motion};
-use mp_grammar::model::{find_symbols, learn_grammar};
-use mp_grammar::score::ScoreParams;
-use mp_grammar::synth::ngram_overlap;
 use mp_grammar::PoseDistanceParams;
+use mp_grammar::ScoreParams;
+use mp_grammar::{bvh_files, concat_tracks, read_motions, Motion};
+use mp_grammar::{find_symbols, learn_grammar};
 use serde_json::{json, Value};
 
 use crate::grammar::{symbol_params, EvalGrammarArgs};
@@ -111,7 +111,7 @@ fn one(g: &Group, held: usize, k: usize, a: &EvalGrammarArgs) -> anyhow::Result<
         &symbol_params(g.features, k, a.seed),
     )
     .with_context(|| format!("{}: symbols without {held_name}, K = {k}", g.name))?;
-    let mut pp = mp_grammar::sentences::PartitionParams {
+    let mut pp = mp_grammar::PartitionParams {
         seed: a.seed,
         ..Default::default()
     };

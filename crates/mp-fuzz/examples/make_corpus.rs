@@ -347,7 +347,7 @@ fn main() -> Res<()> {
     put(&dir, "grammar_text", "symbols.txt", "abxcdabycdabxcd")?;
 
     // A grammar model learned from a small periodic motion.
-    let motion = mp_grammar::data::Motion {
+    let motion = mp_grammar::Motion {
         track: {
             let t = 240;
             let pos = Array3::from_shape_fn((t, 3, 3), |(f, k, a)| {
@@ -360,12 +360,12 @@ fn main() -> Res<()> {
         paths: vec![PathBuf::from("periodic.npz")],
         frame_step: 1,
     };
-    let mut params = mp_grammar::model::PipelineParams::default();
+    let mut params = mp_grammar::PipelineParams::default();
     params.symbols.k = 3;
     params.symbols.candidate_step_frames = 10;
     params.symbols.min_segment_frames = 5;
     params.symbols.max_segment_frames = 40;
-    match mp_grammar::model::learn_model(&motion, &params) {
+    match mp_grammar::learn_model(&motion, &params) {
         Ok(m) => put(
             &dir,
             "grammar_json",

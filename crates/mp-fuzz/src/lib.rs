@@ -50,7 +50,7 @@ use mp_geom::io::people::{
 };
 use mp_geom::io::ReadOptions;
 use mp_geom::{People, Track};
-use mp_grammar::{strings, Corpus, Grammar, GrammarModel};
+use mp_grammar::{fuzzing as strings, Corpus, Grammar, GrammarModel};
 use mp_refine::Concepts;
 
 /// A fuzz target: takes any bytes, never panics.

@@ -15,19 +15,19 @@
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use mp_grammar::data::read_motions;
-use mp_grammar::model::{find_symbols, learn_grammar};
-use mp_grammar::sentences::{search_partition, PartitionParams};
+use mp_grammar::read_motions;
+use mp_grammar::{find_symbols, learn_grammar};
 use mp_grammar::{
     identify_symbols, symbol_name, DeriveParams, PoseFeatures, StitchParams, SymbolParams,
 };
+use mp_grammar::{search_partition, PartitionParams};
 
 fn salsa_dir() -> std::path::PathBuf {
     mp_geom::paths::data_file("cmu_salsa_bvh").expect("shared data cmu_salsa_bvh is missing")
 }
 
 fn symbols(c: &mut Criterion) {
-    let track = mp_grammar::data::salsa_track(salsa_dir(), 8677).unwrap();
+    let track = mp_grammar::salsa_track(salsa_dir(), 8677).unwrap();
     let feat = PoseFeatures::from_track(&track, &Default::default()).unwrap();
     let mut g = c.benchmark_group("identify_symbols");
     g.sample_size(10);

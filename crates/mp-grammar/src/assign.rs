@@ -176,7 +176,7 @@ pub fn assign_symbols(
 }
 
 impl SymbolsFile {
-    /// Labels `motion` with these symbols ([`assign_symbols`]); `train` is
+    /// Labels `motion` with these symbols (`assign_symbols`); `train` is
     /// the motion they were found on (read it with
     /// [`SourceInfo::load`](crate::model::SourceInfo::load)).
     pub fn assign(&self, train: &Motion, motion: &Motion) -> Result<SymbolsFile> {

@@ -163,7 +163,7 @@ pub fn bvh_folder_track(dir: impl AsRef<Path>, max_frames: usize) -> Result<(Tra
 }
 
 /// The CMU salsa takes of a folder joined into one track of at most
-/// `max_frames` frames (see [`bvh_folder_track`]).
+/// `max_frames` frames (see `bvh_folder_track`).
 pub fn salsa_track(dir: impl AsRef<Path>, max_frames: usize) -> Result<Track> {
     Ok(bvh_folder_track(dir, max_frames)?.0)
 }

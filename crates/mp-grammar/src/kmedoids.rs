@@ -99,13 +99,15 @@ impl Dissimilarity for DenseMatrix {
 
 /// The strict lower triangle in row order without the diagonal:
 /// `data = [d(1,0), d(2,0), d(2,1), d(3,0), …]` (the layout of the
-/// `kmedoids` crate's `LowerTriangle`).
+/// `kmedoids` crate's `LowerTriangle`); the tests' dissimilarities.
+#[cfg(test)]
 #[derive(Debug, Clone, PartialEq)]
 pub struct LowerTriangle {
     n: usize,
     data: Vec<f64>,
 }
 
+#[cfg(test)]
 impl LowerTriangle {
     /// Checks that `data` holds `n (n − 1) / 2` values.
     pub fn new(n: usize, data: Vec<f64>) -> Result<Self> {
@@ -120,6 +122,7 @@ impl LowerTriangle {
     }
 }
 
+#[cfg(test)]
 impl Dissimilarity for LowerTriangle {
     fn len(&self) -> usize {
         self.n

@@ -4,22 +4,24 @@
 //! data": identify terminal symbols in a motion, learn a context-free grammar
 //! over the symbol string, and synthesise new motion from the grammar.
 //!
-//! * `distance`: pose distance and segment distance (eq. 1).
-//! * [`kmedoids`]: PAM and FasterPAM from given initial medoids.
-//! * [`objective`], [`symbols`]: the segmentation objective and the GA + SA
-//!   search for terminal symbols (§4).
-//! * [`strings`], [`sentences`]: repeats (suffix array) and the MDL search
-//!   for a partition of the symbol string into sentences (§5).
-//! * [`abl`], [`grammar`], [`sequitur`]: grammar induction, grammars and
-//!   their description length, and the single-string baseline.
-//! * [`mod@derive`], [`synth`]: random derivation, the finite-state-machine
-//!   baseline, greedy segment selection, stitching and subtree
-//!   regeneration (§6).
-//! * [`model`], [`data`]: the whole pipeline as JSON files, and motion input.
+//! The steps, each in its own module of the source:
+//!
+//! * `distance`: pose distance and segment distance (eq. 1), [`PoseFeatures`].
+//! * `kmedoids`: PAM and FasterPAM from given initial medoids.
+//! * `objective`, `symbols`: the segmentation objective ([`ClusterQuality`])
+//!   and the GA + SA search for terminal symbols (§4), [`identify_symbols`].
+//! * `strings`, `sentences`: repeats (suffix array) and the MDL search for a
+//!   partition of the symbol string into sentences (§5), [`search_partition`].
+//! * `abl`, `grammar`: grammar induction ([`learn`]), grammars and their
+//!   description length ([`Grammar`]).
+//! * `derive`, `synth`: random derivation ([`derive`](crate::derive())), the
+//!   finite-state-machine baseline ([`Fsm`]), greedy segment selection,
+//!   stitching and subtree regeneration (§6), [`Stitcher`].
+//! * `model`, `data`: the whole pipeline as JSON files ([`learn_model`],
+//!   [`GrammarModel`]), and motion input ([`read_motions`]).
 //!
 //! ```no_run
-//! use mp_grammar::data::Motion;
-//! use mp_grammar::{learn_model, PipelineParams};
+//! use mp_grammar::{learn_model, Motion, PipelineParams};
 //! use mp_geom::performer::{perform, PerformerParams};
 //!
 //! // Symbols (PAM, genetic search, annealing), sentences and an ABL grammar of
@@ -31,37 +33,53 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod assign;
-pub mod data;
+mod abl;
+mod assign;
+mod data;
+mod derive;
 mod distance;
 mod error;
-pub mod kmedoids;
+mod grammar;
+mod kmedoids;
+mod model;
+mod objective;
+mod score;
+mod sentences;
+mod strings;
+mod symbols;
+mod synth;
 
-pub use distance::{FrameSpan, PoseDistanceParams, PoseFeatures, RootMode};
-pub use error::{GrammarError, Result};
-pub mod objective;
-pub mod symbols;
-
-pub use objective::ClusterQuality;
-pub use symbols::{identify_symbols, symbol_name, SymbolParams, SymbolSegment, SymbolString};
-pub mod abl;
-pub mod grammar;
-pub mod score;
-pub mod sentences;
-pub mod sequitur;
-pub mod strings;
-
-pub use abl::{AblParams, AblResult, Alignment, Clustering, Corpus, Selection};
-pub use grammar::{DescriptionLength, Grammar, Rule, Sym, Tree};
-pub mod derive;
-pub mod model;
-pub mod synth;
-
+pub use abl::{learn, AblParams, AblResult, Alignment, Clustering, Corpus, Selection};
+pub use assign::load_learned_symbols;
+pub use data::{
+    bvh_files, concat_tracks, read_motions, salsa_track, subsample_bvh, Motion, DEFAULT_FRAME_STEP,
+};
 pub use derive::{
     derive, derive_at_least, regenerate, Derivation, DeriveParams, Fsm, FsmWeighting, RuleWeighting,
 };
+pub use distance::{FrameSpan, PoseDistanceParams, PoseFeatures, RootMode};
+pub use error::{GrammarError, Result};
+pub use grammar::{DescriptionLength, Grammar, Rule, Sym, Tree};
 pub use model::{
     find_symbols, learn_grammar, learn_model, GrammarModel, PipelineParams, SourceInfo, SourceKind,
     SymbolsFile,
 };
+pub use objective::ClusterQuality;
+pub use score::{load_symbol_string, ScoreParams};
+pub use sentences::{score_partition, search_partition, PartitionParams};
+pub use symbols::{
+    identify_symbols, symbol_name, GaParams, SaParams, SearchStats, SymbolParams, SymbolSegment,
+    SymbolString,
+};
 pub use synth::{RootAlignment, StitchParams, Stitcher, Synthesis};
+
+/// Not part of the API: the string algorithms the fuzz targets call directly.
+#[doc(hidden)]
+pub mod fuzzing {
+    pub use crate::strings::{
+        allowed_cuts, lcp_array, protected_spans, repeat_classes, suffix_array,
+    };
+}
+
+#[cfg(test)]
+mod tests;

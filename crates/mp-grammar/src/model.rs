@@ -122,7 +122,7 @@ impl SourceInfo {
 /// Terminal symbols of a motion, as written by `mp grammar symbols`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SymbolsFile {
-    /// [`SYMBOLS_FORMAT`].
+    /// `SYMBOLS_FORMAT`.
     pub format: String,
     /// The motion.
     pub source: SourceInfo,
@@ -152,7 +152,7 @@ pub struct PipelineParams {
 /// A learned motion grammar with everything needed to synthesise from it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GrammarModel {
-    /// [`MODEL_FORMAT`].
+    /// `MODEL_FORMAT`.
     pub format: String,
     /// The motion.
     pub source: SourceInfo,

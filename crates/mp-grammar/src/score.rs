@@ -43,7 +43,7 @@ pub(crate) const MAX_SCORED_SYMBOLS: usize = 1_000_000;
 /// Largest parse chart (nonterminals × positions × span lengths).
 pub const MAX_CHART_CELLS: usize = 1 << 27;
 
-/// Parameters of [`score_string`].
+/// Parameters of `score_string`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ScoreParams {
     /// Additive smoothing `α` of every count table, in `(0, 1000]`.
@@ -461,7 +461,7 @@ impl<'a> Chart<'a> {
 
 impl GrammarModel {
     /// Scores a symbol string under this model's grammar, and the FSM and
-    /// unigram model of its training string ([`score_string`]).
+    /// unigram model of its training string (`score_string`).
     pub fn score(&self, string: &[u32], params: &ScoreParams) -> Result<StringScore> {
         let training: Vec<u32> = self.training_string().iter().map(|&s| s as u32).collect();
         score_string(&self.grammar, &training, string, params)
@@ -469,7 +469,7 @@ impl GrammarModel {
 }
 
 /// Reads a symbol string to score against `grammar`: a symbols JSON file
-/// (`mp grammar symbols`, format [`SYMBOLS_FORMAT`]) or a text file of
+/// (`mp grammar symbols`, format `SYMBOLS_FORMAT`) or a text file of
 /// symbol names separated by whitespace (lines are joined).
 ///
 /// Errors ([`GrammarError::File`], naming the file and the field or

@@ -4,8 +4,8 @@
 //! the regenerated subtree.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_grammar::abl::{learn, AblParams, Alignment};
 use mp_grammar::{derive_at_least, regenerate, DeriveParams};
+use mp_grammar::{learn, AblParams, Alignment};
 use proptest::prelude::*;
 
 fn corpus() -> impl Strategy<Value = Vec<Vec<u32>>> {

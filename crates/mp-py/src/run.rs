@@ -6,8 +6,8 @@ use std::sync::Mutex;
 
 use mp_abstract::{Analysis, Counts};
 use mp_geom::{People, PersonId, Track};
-use mp_grammar::data::Motion;
-use mp_grammar::model::find_symbols;
+use mp_grammar::find_symbols;
+use mp_grammar::Motion;
 use mp_grammar::{PoseDistanceParams, SymbolParams};
 use mp_pipeline::{Analyser, CancelToken, Input, Outcome, Params, RunSummary, Silent};
 use pyo3::prelude::*;
@@ -521,14 +521,14 @@ pub fn grammar_learn<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let json = py.import("json")?;
     let text: String = json.getattr("dumps")?.call1((symbols,))?.extract()?;
-    let sf: mp_grammar::model::SymbolsFile = serde_json::from_str(&text)
+    let sf: mp_grammar::SymbolsFile = serde_json::from_str(&text)
         .map_err(|e| errors::GrammarError::new_err(format!("not a symbols dict: {e}")))?;
-    let mut p = mp_grammar::sentences::PartitionParams::default();
+    let mut p = mp_grammar::PartitionParams::default();
     if let Some(s) = seed {
         p.seed = s;
     }
     let g = py
-        .detach(|| mp_grammar::model::learn_grammar(&sf, &p))
+        .detach(|| mp_grammar::learn_grammar(&sf, &p))
         .map_err(errors::grammar)?;
     let out = serde_json::to_string(&g).map_err(|e| errors::MpError::new_err(e.to_string()))?;
     json.getattr("loads")?.call1((out,))

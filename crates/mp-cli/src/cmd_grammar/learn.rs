@@ -5,9 +5,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use mp_grammar::abl::{learn, AblParams, Alignment, Clustering, Corpus, Selection};
-use mp_grammar::model::{learn_grammar, SymbolsFile};
-use mp_grammar::sentences::PartitionParams;
+use mp_grammar::PartitionParams;
+use mp_grammar::{learn, AblParams, Alignment, Clustering, Corpus, Selection};
+use mp_grammar::{learn_grammar, SymbolsFile};
 
 /// ABL alignment flag.
 #[derive(ValueEnum, Clone, Copy, Debug)]

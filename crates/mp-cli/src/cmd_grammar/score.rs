@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use mp_grammar::model::GrammarModel;
-use mp_grammar::score::{load_symbol_string, ScoreParams};
+use mp_grammar::GrammarModel;
+use mp_grammar::{load_symbol_string, ScoreParams};
 
 /// Arguments of `mp grammar score`.
 #[derive(Args, Debug)]

@@ -5,9 +5,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use mp_grammar::assign::load_learned_symbols;
-use mp_grammar::data::{read_motions, DEFAULT_FRAME_STEP};
-use mp_grammar::model::find_symbols;
+use mp_grammar::find_symbols;
+use mp_grammar::load_learned_symbols;
+use mp_grammar::{read_motions, DEFAULT_FRAME_STEP};
 use mp_grammar::{PoseDistanceParams, SymbolParams};
 
 /// Arguments of `mp grammar symbols`.

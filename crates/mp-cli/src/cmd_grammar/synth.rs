@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use anyhow::{bail, Context};
 use clap::Args;
 use mp_geom::io::write_track;
-use mp_grammar::model::GrammarModel;
-use mp_grammar::synth::{StitchParams, Synthesis};
+use mp_grammar::GrammarModel;
 use mp_grammar::{symbol_name, DeriveParams, Fsm, FsmWeighting, RuleWeighting, Stitcher};
+use mp_grammar::{StitchParams, Synthesis};
 
 /// Arguments of `mp grammar synth`.
 #[derive(Args, Debug)]

@@ -106,10 +106,8 @@ mod cluster;
 mod read;
 mod select;
 
-pub use align::{
-    Aligner, Alignment, EditDistanceAligner, Hypothesis, HypothesisStore, StVariant,
-    SuffixTreeAligner,
-};
+pub use align::Alignment;
+pub(crate) use align::{Aligner, Hypothesis, HypothesisStore, SuffixTreeAligner};
 
 use cluster::{cluster, cluster_union_find, merge_equivalent_nonterminals};
 use read::read_grammar;

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::SymbolParams;
 use crate::distance::{FrameSpan, PoseFeatures};
-use crate::error::{GrammarError, Result};
+use crate::error::Result;
 use crate::kmedoids::{first_k, Clustering, DenseMatrix};
 use crate::objective::{evaluate, ClusterQuality};
 
@@ -146,38 +146,6 @@ impl PairCache {
             }
         }
     }
-}
-
-/// Scores a given segmentation (boundaries `0 = b_0 < … < b_n = T`): the
-/// clustering from the first `K` segments and `F`. Useful to compare
-/// segmentations (e.g. ground-truth blocks) under the same objective.
-pub fn score_segmentation(
-    features: &PoseFeatures,
-    bounds: &[usize],
-    params: &SymbolParams,
-) -> Result<(Clustering, ClusterQuality)> {
-    params.validate()?;
-    let t = features.n_frames();
-    if bounds.len() < 2 || bounds[0] != 0 || bounds[bounds.len() - 1] != t {
-        return Err(GrammarError::Invalid(format!(
-            "segment boundaries must start at 0 and end at {t}"
-        )));
-    }
-    if let Some(w) = bounds.windows(2).find(|w| w[1] <= w[0]) {
-        return Err(GrammarError::Invalid(format!(
-            "segment boundaries must increase, got {} then {}",
-            w[0], w[1]
-        )));
-    }
-    let n = bounds.len() - 1;
-    if n < params.k {
-        return Err(GrammarError::too_short(
-            format!("clustering into k = {} symbols (segments)", params.k),
-            params.k,
-            n,
-        ));
-    }
-    cluster_bounds(features, bounds, params, features.max_pose_distance())
 }
 
 /// Clusters a segmentation from its first `K` segments (distances computed

@@ -46,7 +46,7 @@
 //!   [`SearchStats`], and [`symbol_name`].
 //! * `cluster`: segment distances and the clustering of a segmentation —
 //!   the candidate grid, the shared segment-distance table, k-medoids from
-//!   the first `K` segments and `F` ([`score_segmentation`]).
+//!   the first `K` segments and `F`.
 //! * `ga`: stage 1, the genetic algorithm with genome repair.
 //! * `anneal`: stage 2, the simulated annealing with incremental cluster
 //!   updates.
@@ -67,11 +67,9 @@ mod ga;
 mod params;
 mod string;
 
-pub use cluster::score_segmentation;
-pub use params::{
-    GaParams, SaParams, SymbolParams, MAX_ITERATIONS, MAX_POPULATION, MAX_SEGMENT_FRAMES,
-    MAX_SYMBOLS,
-};
+pub use params::{GaParams, SaParams, SymbolParams};
+#[cfg(test)]
+pub(crate) use params::{MAX_ITERATIONS, MAX_POPULATION, MAX_SEGMENT_FRAMES, MAX_SYMBOLS};
 pub use string::{symbol_name, SearchStats, SymbolSegment, SymbolString};
 
 use anneal::Annealer;

@@ -59,8 +59,7 @@
 //!   finite-state machine.
 //! * `regenerate`: [`Stitcher::regenerate`], re-deriving and re-stitching
 //!   one region.
-//! * this module: the parameters, the result types, the limits, and the
-//!   structure measures [`ngram_overlap`] and [`mean_run_length`].
+//! * this module: the parameters, the result types and the limits.
 
 use std::ops::Range;
 
@@ -119,7 +118,7 @@ pub struct StitchParams {
     /// Pose distance for choosing segments (should be the one the symbols
     /// were found with). Default: [`PoseDistanceParams::default`].
     pub distance: PoseDistanceParams,
-    /// First segment. Default [`FirstSegment::Random`].
+    /// First segment. Default `FirstSegment::Random`.
     pub first_segment: FirstSegment,
 }
 
@@ -283,28 +282,6 @@ impl Stitcher {
     }
 }
 
-/// Fraction of the `n`-grams (windows of `n` consecutive symbols) of
-/// `generated` that occur somewhere in `training` (1 when `generated` is
-/// shorter than `n`).
-pub fn ngram_overlap(generated: &[usize], training: &[usize], n: usize) -> f64 {
-    if n == 0 || generated.len() < n {
-        return 1.0;
-    }
-    let seen: std::collections::HashSet<&[usize]> = training.windows(n).collect();
-    let w: Vec<&[usize]> = generated.windows(n).collect();
-    w.iter().filter(|g| seen.contains(*g)).count() as f64 / w.len() as f64
-}
-
-/// Mean length of the runs of equal consecutive symbols (0 for an empty
-/// string).
-pub fn mean_run_length(symbols: &[usize]) -> f64 {
-    if symbols.is_empty() {
-        return 0.0;
-    }
-    let runs = 1 + symbols.windows(2).filter(|w| w[0] != w[1]).count();
-    symbols.len() as f64 / runs as f64
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -332,13 +309,5 @@ mod tests {
                 ..
             })
         ));
-    }
-
-    #[test]
-    fn structure_measures() {
-        assert_eq!(mean_run_length(&[1, 1, 2, 2, 2, 3]), 2.0);
-        assert_eq!(mean_run_length(&[]), 0.0);
-        assert_eq!(ngram_overlap(&[1, 2, 3], &[1, 2, 4], 2), 0.5);
-        assert_eq!(ngram_overlap(&[1], &[1, 2], 2), 1.0);
     }
 }

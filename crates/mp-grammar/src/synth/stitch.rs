@@ -116,7 +116,7 @@ impl Stitcher {
             .collect()
     }
 
-    /// Checks a requested segment count against [`MAX_SEGMENTS`] and, at the
+    /// Checks a requested segment count against `MAX_SEGMENTS` and, at the
     /// source's longest segment, against [`MAX_FRAME_JOINTS`]; the error
     /// names `segments`, the value and the limit.
     pub fn check_segments(&self, segments: usize) -> Result<()> {

@@ -3,15 +3,14 @@
 //! failure.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
+use crate::derive::{MAX_DEPTH, MAX_TERMINALS};
+use crate::derive_at_least;
+use crate::symbols::{MAX_ITERATIONS, MAX_POPULATION, MAX_SEGMENT_FRAMES, MAX_SYMBOLS};
+use crate::synth::{MAX_FRAME_JOINTS, MAX_SEGMENTS};
+use crate::ClusterQuality;
+use crate::{DeriveParams, Fsm, FsmWeighting, Grammar, GrammarError, StitchParams, Stitcher};
+use crate::{GaParams, SaParams, SearchStats, SymbolParams, SymbolSegment, SymbolString};
 use mp_geom::{Skeleton, Track, Units};
-use mp_grammar::derive::{derive_at_least, MAX_DEPTH, MAX_TERMINALS};
-use mp_grammar::objective::ClusterQuality;
-use mp_grammar::symbols::{
-    GaParams, SaParams, SearchStats, SymbolParams, SymbolSegment, SymbolString, MAX_ITERATIONS,
-    MAX_POPULATION, MAX_SEGMENT_FRAMES, MAX_SYMBOLS,
-};
-use mp_grammar::synth::{MAX_FRAME_JOINTS, MAX_SEGMENTS};
-use mp_grammar::{DeriveParams, Fsm, FsmWeighting, Grammar, GrammarError, StitchParams, Stitcher};
 use ndarray::Array3;
 
 const SEG: usize = 15;

@@ -2,7 +2,7 @@
 //! crate (Schubert & Lenssen), used here only as a test-time reference.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_grammar::kmedoids::{first_k, FasterPam, LowerTriangle, MedoidSwap, Pam};
+use crate::kmedoids::{first_k, FasterPam, LowerTriangle, MedoidSwap, Pam};
 use ndarray::Array2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

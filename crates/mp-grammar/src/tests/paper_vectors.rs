@@ -1,12 +1,11 @@
-//! Test vectors from the motion-grammar paper (Park, Lee & Lee 2011), the
-//! ABL reference documentation and the Sequitur documentation.
+//! Test vectors from the motion-grammar paper (Park, Lee & Lee 2011) and the
+//! ABL reference documentation.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_grammar::abl::{
-    align_and_cluster, learn, AblParams, Alignment, Clustering, Corpus, Selection,
-};
-use mp_grammar::grammar::Grammar;
-use mp_grammar::sentences::{score_partition, search_partition, PartitionParams};
+use crate::abl::align_and_cluster;
+use crate::Grammar;
+use crate::{learn, AblParams, Alignment, Clustering, Corpus, Selection};
+use crate::{score_partition, search_partition, PartitionParams};
 
 fn chars(s: &str) -> Vec<String> {
     s.chars().map(|c| c.to_string()).collect()
@@ -169,8 +168,8 @@ fn basketball_six_strings() {
 
 /// Every node of a tree uses a rule of its own nonterminal whose right-hand
 /// side matches the children.
-fn check_tree(g: &Grammar, t: &mp_grammar::grammar::Tree) {
-    use mp_grammar::grammar::{Sym, Tree};
+fn check_tree(g: &Grammar, t: &crate::Tree) {
+    use crate::{Sym, Tree};
     if let Tree::Node { nt, rule, children } = t {
         let r = &g.rules[*rule];
         assert_eq!(r.lhs, *nt);
