@@ -8,9 +8,9 @@ use std::process::Command;
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::io::{read_track, write_track};
-use mp_refine::baseline::full_confidence;
-use mp_refine::flaws::{inject, Flaw};
+use mp_refine::full_confidence;
 use mp_refine::mpjpe_abs;
+use mp_refine::{inject, Flaw};
 
 /// Runs `mp refine INPUT -o OUTPUT --report REPORT EXTRA…`, asserts that it
 /// succeeds and returns its standard output.
@@ -90,11 +90,11 @@ fn refine_repairs_an_injected_jump_and_rejects_a_useless_flag_set() {
 fn refine_generated_moves_flawed_anchors_to_concepts() {
     use mp_geom::{Skeleton, Track, Units};
     use mp_pose::SessionParams;
-    use mp_refine::learned::{NetRefineParams, NetRefiner};
-    use mp_refine::motion::from_features;
-    use mp_refine::nets::generate_clips;
-    use mp_refine::nets::{find_model_dir, RefineNets};
+    use mp_refine::from_features;
+    use mp_refine::generate_clips;
     use mp_refine::Concepts;
+    use mp_refine::{find_model_dir, RefineNets};
+    use mp_refine::{NetRefineParams, NetRefiner};
 
     let dir = find_model_dir().expect("models/refine");
     let nets = RefineNets::load(&dir, &SessionParams::default()).unwrap();

@@ -14,9 +14,9 @@ use crate::refine::evaluation::{evaluate_injected_on, InjectedReport, RefineEval
 use anyhow::{Context, Result};
 use mp_geom::io::datasets::MsrAction3D;
 use mp_pose::SessionParams;
-use mp_refine::learned::{NetRefineParams, NetRefiner};
-use mp_refine::nets::RefineNets;
 use mp_refine::Concepts;
+use mp_refine::RefineNets;
+use mp_refine::{NetRefineParams, NetRefiner};
 use serde_json::{json, Value};
 
 /// Detector thresholds of the grid.

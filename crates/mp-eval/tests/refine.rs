@@ -16,10 +16,10 @@ use mp_eval::refine::quality::{accuracy, fid};
 use mp_eval::refine::split::{split_for, split_params, subjects_of, TrainingSubjects};
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::io::npz::NpzOut;
-use mp_refine::flaws::Flaw;
-use mp_refine::learned::{NetRefineParams, NetRefiner};
-use mp_refine::nets::{find_model_dir, generate_clips, RefineNets};
 use mp_refine::Concepts;
+use mp_refine::Flaw;
+use mp_refine::{find_model_dir, generate_clips, RefineNets};
+use mp_refine::{NetRefineParams, NetRefiner};
 use ndarray::{concatenate, Array1, Axis};
 
 /// The networks and anchor concepts of `models/refine`.
@@ -28,7 +28,7 @@ pub fn shipped() -> (RefineNets, Concepts) {
     let nets = RefineNets::load_default()
         .unwrap_or_else(|e| panic!("loading {}: {e} (run `cargo xtask setup`)", dir.display()));
     let concepts =
-        mp_refine::api::read_concepts(&dir.join("concepts.json")).unwrap_or_else(|e| panic!("{e}"));
+        mp_refine::read_concepts(&dir.join("concepts.json")).unwrap_or_else(|e| panic!("{e}"));
     (nets, concepts)
 }
 
@@ -200,8 +200,8 @@ fn generator_and_evaluator_run_and_are_seeded() {
 
 #[test]
 fn generated_motion_moves_to_its_concepts_and_gets_closer_to_real() {
-    use mp_refine::concepts::anchor_feature;
-    use mp_refine::motion::{from_features, HIP_CENTRE};
+    use mp_refine::anchor_feature;
+    use mp_refine::{from_features, HIP_CENTRE};
     let data = msr_or_return!();
     let (nets, concepts) = shipped();
     let params = NetRefineParams::for_generated();

@@ -376,8 +376,8 @@ fn main() -> Res<()> {
     }
 
     // Anchor concepts of two actions.
-    let samples: Vec<mp_refine::concepts::AnchorSample> = (0..24)
-        .map(|i| mp_refine::concepts::AnchorSample {
+    let samples: Vec<mp_refine::AnchorSample> = (0..24)
+        .map(|i| mp_refine::AnchorSample {
             action: 1 + (i % 2) as u32,
             feature: (0..4)
                 .map(|k| ((i * 7 + k * 3) % 11) as f64 * 0.25 + (i % 3) as f64)

@@ -11,12 +11,12 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
-use mp_refine::baseline::full_confidence;
-use mp_refine::flaws::{inject, AnchorSource, Flaw};
-use mp_refine::learned::{AnchorRepair, NetRefineParams, NetRefiner, RefineMode};
-use mp_refine::motion::{resample, NET_FRAMES};
-use mp_refine::nets::{find_model_dir, RefineNets};
+use mp_refine::full_confidence;
 use mp_refine::Concepts;
+use mp_refine::{find_model_dir, RefineNets};
+use mp_refine::{inject, AnchorSource, Flaw};
+use mp_refine::{resample, NET_FRAMES};
+use mp_refine::{AnchorRepair, NetRefineParams, NetRefiner, RefineMode};
 
 fn bench(c: &mut Criterion) {
     let dir = match find_model_dir() {
@@ -142,10 +142,10 @@ fn bench(c: &mut Criterion) {
     // The generated-motion preset on a generator sample of the same action.
     let gen_params = NetRefineParams::for_generated();
     let gen_refiner = NetRefiner::new(&nets, &concepts, &gen_params).unwrap();
-    let (gen, labels) = mp_refine::nets::generate_clips(&nets, 1, 0).unwrap();
+    let (gen, labels) = mp_refine::generate_clips(&nets, 1, 0).unwrap();
     let row = labels.iter().position(|&a| a == info.action).unwrap_or(0);
     let sample = Track::new(
-        mp_refine::motion::from_features(gen.outer_iter().nth(row).unwrap()).unwrap(),
+        mp_refine::from_features(gen.outer_iter().nth(row).unwrap()).unwrap(),
         None,
         15.0,
         Units::Metres,

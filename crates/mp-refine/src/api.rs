@@ -30,7 +30,7 @@ pub struct RefineOptions {
     /// Model folder. Default `None`: `MP_REFINE_MODELS` or `models/refine`
     /// ([`find_model_dir`]).
     pub models: Option<PathBuf>,
-    /// Anchor concepts JSON. Default `None`: [`CONCEPTS_FILE`] in the model folder.
+    /// Anchor concepts JSON. Default `None`: `CONCEPTS_FILE` in the model folder.
     pub concepts: Option<PathBuf>,
     /// MSR action (1–20) of the motion. Default `None`: the evaluator's prediction.
     pub action: Option<u32>,
@@ -140,7 +140,7 @@ pub fn read_input(path: &Path, bvh_scale: f64) -> Result<Track> {
 }
 
 /// Refines `track` (20 MSR joints in 3D, or BlazePose-33 world landmarks,
-/// see [`crate::mapped`]) with the networks and concepts that `opts` names:
+/// see `crate::mapped`) with the networks and concepts that `opts` names:
 /// options checked, the track checked before the networks are loaded, the
 /// model folder found, the networks loaded, the concepts read, then
 /// [`refine_any`] with `opts.action`.

@@ -4,30 +4,30 @@
 //! action-conditioned 3D human motion with unsupervised learned motion
 //! concepts"):
 //!
-//! * [`segment`]: spline DP segmentation of a joint sequence into anchors
+//! * `segment`: spline DP segmentation of a joint sequence into anchors
 //!   (junction frames, plus first and last) and transitions (one cubic spline
 //!   per joint and axis), and reconstruction from anchors + splines.
-//! * [`concepts`]: anchor concepts — anchor poses (root-relative, optionally
+//! * `concepts`: anchor concepts — anchor poses (root-relative, optionally
 //!   scale-normalised) clustered per action (k-means by default, DBSCAN as an
 //!   option) and a 2-component Gaussian mixture whose log-likelihood scores
 //!   anchor quality.
-//! * [`flaws`]: seeded injection of known flaws (wrong anchor pose, frozen
+//! * `flaws`: seeded injection of known flaws (wrong anchor pose, frozen
 //!   frames, jitter, temporal jump, foot sliding) into clean motion, with the
 //!   mask of the frames touched.
-//! * [`baseline`]: a non-learned refinement — detect flawed frames (frozen
+//! * `baseline`: a non-learned refinement — detect flawed frames (frozen
 //!   runs, velocity/acceleration outliers, low-scoring anchors) and re-fit
 //!   splines between the neighbouring good frames.
-//! * [`nets`], [`learned`]: the seven refinement networks (ONNX Runtime) and
+//! * `nets`, `learned`: the seven refinement networks (ONNX Runtime) and
 //!   the learned refinement — a learned flaw detector (and a held-pose rule)
 //!   whose flagged frames and joints are refilled in the input's own frames,
 //!   then anchor recognition, GMM anchor scores, anchor repair (for
 //!   generated motion, [`learned::NetRefineParams::for_generated`]: flawed
 //!   anchors moved to their nearest concept), transition refinement.
-//! * [`mapped`]: refinement of BlazePose-33 world landmarks through the 20
+//! * `mapped`: refinement of BlazePose-33 world landmarks through the 20
 //!   MSR joints, carried back onto the input's joints.
 //! * `refiner`: the [`Refiner`] trait that both refinements implement
 //!   ([`learned::NetRefiner`], [`BaselineRefiner`]).
-//! * [`api`]: [`refine_default`], the learned refinement in one call with
+//! * `api`: [`refine_default`], the learned refinement in one call with
 //!   the defaults of `mp refine` ([`RefineOptions`]: model folder, concepts,
 //!   action, steps and thresholds).
 //!
@@ -46,17 +46,17 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod api;
-pub mod baseline;
-pub mod concepts;
-pub mod error;
-pub mod flaws;
-pub mod learned;
-pub mod mapped;
-pub mod motion;
-pub mod nets;
+mod api;
+mod baseline;
+mod concepts;
+mod error;
+mod flaws;
+mod learned;
+mod mapped;
+mod motion;
+mod nets;
 mod refiner;
-pub mod segment;
+mod segment;
 
 pub use api::{refine_default, RefineOptions};
 pub use baseline::{refine, RefineParams, Refinement};
@@ -68,3 +68,30 @@ pub use segment::{
     mpjpe_abs, segment_track, segmentation_from_anchors, SegmentParams, Segmentation3d,
     SplineTransition,
 };
+
+pub use api::{read_concepts, read_input};
+pub use baseline::full_confidence;
+pub use concepts::{
+    anchor_feature, canonical_anchor_samples, collect_anchors, msr_anchor_samples,
+    msr_training_clips, AnchorSample, Linkage, HELD_OUT_SUBJECTS, MIN_CLIP_FRAMES,
+};
+pub use flaws::{foot_joints, AnchorSource, FootSlide};
+pub use learned::{
+    foot_contacts, foot_slide, nearest_concept_thresholds, AnchorDetection, AnchorRepair,
+    FlawRepair, FootContactParams, NetRefineParams, NetRefiner, RefineMode, TransitionMethod,
+    TransitionReason,
+};
+pub use mapped::MappedRefinement;
+pub use motion::{
+    bvh_to_msr20, canonical_mask, canonicalize, changed_joints, from_features, to_features,
+    DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, HIP_CENTRE, MSR_JOINTS, NET_FRAMES,
+};
+pub use nets::{find_model_dir, generate_clips, read_manifest, RefineNets, N_ACTIONS};
+pub use segment::per_frame_error;
+
+pub use mapped::refine_any;
+pub use motion::resample;
+pub use nets::NetKind;
+
+#[cfg(test)]
+mod tests;

@@ -8,8 +8,8 @@ mod common;
 
 use mp_geom::io::datasets::MediaPipeReference;
 use mp_geom::metrics::nanmean;
-use mp_refine::learned::{NetRefineParams, NetRefiner};
-use mp_refine::mapped::refine_any;
+use mp_refine::refine_any;
+use mp_refine::{NetRefineParams, NetRefiner};
 
 #[test]
 fn blazepose_world_landmarks_are_refined_on_their_own_skeleton() {

@@ -13,12 +13,12 @@ use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::io::npz::Npz;
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
-use mp_refine::baseline::full_confidence;
-use mp_refine::flaws::{inject, AnchorSource, Flaw};
-use mp_refine::learned::{NetRefineParams, NetRefiner, RefineMode};
-use mp_refine::motion::{canonical_mask, changed_joints};
-use mp_refine::nets::{find_model_dir, NetKind, RefineNets};
+use mp_refine::full_confidence;
+use mp_refine::{canonical_mask, changed_joints};
+use mp_refine::{find_model_dir, NetKind, RefineNets};
+use mp_refine::{inject, AnchorSource, Flaw};
 use mp_refine::{mpjpe_abs, Concepts, RefineError};
+use mp_refine::{NetRefineParams, NetRefiner, RefineMode};
 use ndarray::Array3;
 
 /// Lower bounds of the detector's recall on injected jumps and jitter of
@@ -458,10 +458,7 @@ fn anchor_only_mode_touches_no_deviation_transition() {
     for (clean, action) in heldout(f).iter().take(6) {
         let out = r.refine_track(clean, Some(*action)).unwrap();
         for t in &out.report.transitions {
-            assert_ne!(
-                t.refined,
-                Some(mp_refine::learned::TransitionReason::Deviation)
-            );
+            assert_ne!(t.refined, Some(mp_refine::TransitionReason::Deviation));
         }
         // Anchors are increasing, first and last frame included.
         let fr: Vec<usize> = out.report.anchors.iter().map(|a| a.frame).collect();

@@ -4,10 +4,10 @@
 
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
-use mp_refine::baseline::full_confidence;
-use mp_refine::concepts::{collect_anchors, AnchorSample};
-use mp_refine::flaws::{AnchorSource, FootSlide};
+use mp_refine::full_confidence;
 use mp_refine::*;
+use mp_refine::{collect_anchors, AnchorSample};
+use mp_refine::{AnchorSource, FootSlide};
 use ndarray::Array3;
 
 /// The shared MSR Action3D file, or returns from the test (recording the

@@ -5,11 +5,11 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_geom::io::datasets::MsrAction3D;
-use mp_refine::baseline::full_confidence;
-use mp_refine::flaws::{inject, Flaw};
-use mp_refine::learned::{NetRefineParams, NetRefiner, RefineMode};
-use mp_refine::nets::{find_model_dir, RefineNets};
+use mp_refine::full_confidence;
+use mp_refine::{find_model_dir, RefineNets};
+use mp_refine::{inject, Flaw};
 use mp_refine::{mpjpe_abs, refine_default, Concepts, RefineError, RefineOptions};
+use mp_refine::{NetRefineParams, NetRefiner, RefineMode};
 
 #[test]
 fn refine_default_repairs_an_injected_jump_as_the_hand_built_refiner_does() {

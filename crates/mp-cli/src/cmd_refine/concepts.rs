@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use mp_geom::io::datasets::MsrAction3D;
-use mp_refine::concepts::Linkage;
-use mp_refine::concepts::{canonical_anchor_samples, msr_anchor_samples, msr_training_clips};
-use mp_refine::motion::{DEFAULT_BVH_LENGTH_SCALE, HIP_CENTRE};
+use mp_refine::Linkage;
+use mp_refine::{canonical_anchor_samples, msr_anchor_samples, msr_training_clips};
 use mp_refine::{learn_concepts, ClusterMethod, ConceptParams, SegmentParams};
+use mp_refine::{DEFAULT_BVH_LENGTH_SCALE, HIP_CENTRE};
 
 use super::folder_track;
 

@@ -11,11 +11,11 @@ use anyhow::{bail, Context};
 use clap::Args;
 use mp_geom::io::write_track;
 use mp_geom::Track;
-use mp_refine::api::read_input;
-use mp_refine::learned::{NetRefineParams, RefineMode, TransitionMethod};
-use mp_refine::mapped::MappedRefinement;
-use mp_refine::motion::DEFAULT_BVH_LENGTH_SCALE;
+use mp_refine::read_input;
+use mp_refine::MappedRefinement;
+use mp_refine::DEFAULT_BVH_LENGTH_SCALE;
 use mp_refine::{refine_default, RefineOptions};
+use mp_refine::{NetRefineParams, RefineMode, TransitionMethod};
 
 pub use concepts::{concepts_cmd, ConceptsArgs};
 
@@ -218,8 +218,7 @@ pub fn refine_cmd(a: &RefineArgs) -> anyhow::Result<()> {
                 t.source_frames.1,
                 t.deviation_m
                     .map_or("-".into(), |d| format!("{:.1} mm", d * 1e3)),
-                t.refined
-                    .unwrap_or(mp_refine::learned::TransitionReason::Deviation)
+                t.refined.unwrap_or(mp_refine::TransitionReason::Deviation)
             );
         }
     }
@@ -239,7 +238,7 @@ fn finish(a: &RefineArgs, r: &MappedRefinement, track: &Track) -> anyhow::Result
 }
 
 /// A track file, or a CMU BVH file mapped onto the 20 MSR joints at MSR's
-/// frame rate (`bvh_scale`: BVH length unit → metres; `mp_refine::api::read_input`).
+/// frame rate (`bvh_scale`: BVH length unit → metres; `mp_refine::read_input`).
 fn folder_track(p: &Path, bvh_scale: f64) -> anyhow::Result<Track> {
     Ok(read_input(p, bvh_scale)?)
 }

@@ -21,14 +21,14 @@ use crate::refine::evaluation::{
 };
 use crate::refine::quality::{accuracy, fid};
 use crate::refine::split::subjects_of;
-use mp_refine::concepts::{learn_concepts, msr_anchor_samples, ConceptParams, Concepts};
-use mp_refine::error::Result;
-use mp_refine::learned::{
+use mp_refine::RefineNets;
+use mp_refine::Result;
+use mp_refine::HIP_CENTRE;
+use mp_refine::{learn_concepts, msr_anchor_samples, ConceptParams, Concepts};
+use mp_refine::{
     nearest_concept_thresholds, AnchorDetection, AnchorRepair, NetRefineParams, NetRefiner,
     RefineMode, TransitionMethod,
 };
-use mp_refine::motion::HIP_CENTRE;
-use mp_refine::nets::RefineNets;
 
 /// One ablation setting on generated clips and injected flaws.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -104,7 +104,7 @@ fn relearn(
         ..concepts.params.clone()
     };
     let samples = msr_anchor_samples(data, &train_idx, &params.segment, &kmeans_params)?;
-    let with = |method: &mp_refine::concepts::ClusterMethod| ConceptParams {
+    let with = |method: &mp_refine::ClusterMethod| ConceptParams {
         method: method.clone(),
         ..kmeans_params.clone()
     };

@@ -1,4 +1,4 @@
-//! The non-learned refinement baseline ([`mp_refine::baseline::refine`]) on
+//! The non-learned refinement baseline ([`mp_refine::refine`]) on
 //! MSR Action3D clips with injected flaws: MPJPE to the clean clip before
 //! and after.
 
@@ -7,10 +7,10 @@ use mp_geom::metrics::nanmean;
 use mp_geom::Track;
 use serde::{Deserialize, Serialize};
 
-use mp_refine::baseline::{full_confidence, refine, RefineParams};
-use mp_refine::error::{RefineError, Result};
-use mp_refine::flaws::{inject, AnchorSource, Flaw, FootSlide, Injected};
-use mp_refine::segment::{per_frame_error, segment_track};
+use mp_refine::{full_confidence, refine, RefineParams};
+use mp_refine::{inject, AnchorSource, Flaw, FootSlide, Injected};
+use mp_refine::{per_frame_error, segment_track};
+use mp_refine::{RefineError, Result};
 
 /// A flaw to inject in [`evaluate_injected`].
 #[allow(clippy::large_enum_variant)]
@@ -84,7 +84,7 @@ pub struct EvalParams {
     /// GMM scores in the detection. Default false.
     pub use_concepts: bool,
     /// Concept parameters (when `use_concepts`).
-    pub concepts: mp_refine::concepts::ConceptParams,
+    pub concepts: mp_refine::ConceptParams,
     /// Seed; clip `i` uses `seed + i`.
     pub seed: u64,
 }
@@ -119,7 +119,7 @@ impl Default for EvalParams {
             ],
             refine: RefineParams::default(),
             use_concepts: false,
-            concepts: mp_refine::concepts::ConceptParams::default(),
+            concepts: mp_refine::ConceptParams::default(),
             seed: 0,
         }
     }
@@ -190,17 +190,14 @@ pub fn evaluate_injected(data: &MsrAction3D, params: &EvalParams) -> Result<Eval
                 continue;
             }
             let action = data.clip_info(i)?.action;
-            samples.extend(mp_refine::concepts::collect_anchors(
+            samples.extend(mp_refine::collect_anchors(
                 &tr,
                 action,
                 &params.refine.segment,
                 &params.concepts,
             )?);
         }
-        Some(mp_refine::concepts::learn_concepts(
-            &samples,
-            &params.concepts,
-        )?)
+        Some(mp_refine::learn_concepts(&samples, &params.concepts)?)
     } else {
         None
     };
@@ -220,12 +217,12 @@ pub fn evaluate_injected(data: &MsrAction3D, params: &EvalParams) -> Result<Eval
         let seg = segment_track(&clean, &params.refine.segment)?;
         anchors.push(seg.anchors.len() as f64);
         frames.push(clean.n_frames() as f64);
-        recon.push(mp_refine::segment::mpjpe_abs(
+        recon.push(mp_refine::mpjpe_abs(
             &seg.reconstruct_track(&clean)?,
             &clean,
         )?);
         let rc = refine(&clean, cref, &params.refine)?;
-        clean_change.push(mp_refine::segment::mpjpe_abs(&rc.track, &clean)?);
+        clean_change.push(mp_refine::mpjpe_abs(&rc.track, &clean)?);
         for (fi, ef) in params.flaws.iter().enumerate() {
             let Some(inj) = ef.inject_into(&clean, data, i, info.action, params.seed)? else {
                 continue;

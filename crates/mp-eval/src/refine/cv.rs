@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::refine::evaluation::InjectedReport;
-use mp_refine::error::{RefineError, Result};
+use mp_refine::{RefineError, Result};
 
 /// One cross-validation fold.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

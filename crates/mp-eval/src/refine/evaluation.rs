@@ -7,7 +7,7 @@
 //!   one known flaw each
 //!   ([`mp_refine::flaws`]); MPJPE (absolute, no alignment) to the clean clip
 //!   before and after refinement, per flaw and overall, next to the
-//!   non-learned baseline ([`mp_refine::baseline::refine`]); and the MPJPE
+//!   non-learned baseline ([`mp_refine::refine`]); and the MPJPE
 //!   between each clean clip and its refinement (how much refinement
 //!   disturbs clean motion), and the flaw detector's frame-level precision
 //!   and recall against the injected frames.
@@ -31,15 +31,13 @@ use serde::{Deserialize, Serialize};
 use crate::refine::baseline::EvalFlaw;
 use crate::refine::quality::QualityParams;
 use crate::refine::split::subjects_of;
-use mp_refine::baseline::full_confidence;
-use mp_refine::concepts::{ClusterMethod, Concepts};
-use mp_refine::error::{RefineError, Result};
-use mp_refine::flaws::{foot_joints, AnchorSource, Flaw, FootSlide};
-use mp_refine::learned::{
-    foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner,
-};
-use mp_refine::nets::{generate_clips, RefineNets};
-use mp_refine::segment::{mpjpe_abs, SegmentParams};
+use mp_refine::full_confidence;
+use mp_refine::{foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner};
+use mp_refine::{foot_joints, AnchorSource, Flaw, FootSlide};
+use mp_refine::{generate_clips, RefineNets};
+use mp_refine::{mpjpe_abs, SegmentParams};
+use mp_refine::{ClusterMethod, Concepts};
+use mp_refine::{RefineError, Result};
 
 /// Parameters of the evaluation.
 #[derive(Debug, Clone, PartialEq)]
@@ -225,7 +223,7 @@ pub struct InjectedFlawReport {
     pub detector_precision: f64,
     /// Flaw detector: injected frames that were flagged / injected frames.
     pub detector_recall: f64,
-    /// Foot slide of the flawed clips ([`mp_refine::learned::foot_slide`]: horizontal
+    /// Foot slide of the flawed clips ([`mp_refine::foot_slide`]: horizontal
     /// travel of the feet, track units per second, over the frames where the
     /// clean clip's feet are in contact).
     pub foot_slide_before: f64,
@@ -305,7 +303,7 @@ pub fn evaluate_injected_on(
             got: 0,
         });
     }
-    let base = mp_refine::baseline::RefineParams::default();
+    let base = mp_refine::RefineParams::default();
     let nf = params.flaws.len();
     let mut acc: Vec<[Vec<f64>; 6]> = (0..nf).map(|_| Default::default()).collect();
     let slide_params = FootContactParams::default();
@@ -337,7 +335,7 @@ pub fn evaluate_injected_on(
                 continue;
             };
             let r = refiner.refine_track(&inj.track, Some(action))?;
-            let b = mp_refine::baseline::refine(&inj.track, None, &base)?;
+            let b = mp_refine::refine(&inj.track, None, &base)?;
             let a = &mut acc[fi];
             a[0].push(mpjpe_abs(&inj.track, &clean)?);
             a[1].push(mpjpe_abs(&r.track, &clean)?);

@@ -13,10 +13,10 @@ use serde::{Deserialize, Serialize};
 use crate::refine::quality::{
     accuracy, diversity, fid, multimodality, per_action_fid, QualityParams,
 };
-use mp_refine::error::{RefineError, Result};
-use mp_refine::learned::NetRefiner;
-use mp_refine::motion::{canonicalize, to_features, FRAME_FEATURES, NET_FRAMES};
-use mp_refine::nets::{RefineNets, N_ACTIONS};
+use mp_refine::NetRefiner;
+use mp_refine::{canonicalize, to_features, FRAME_FEATURES, NET_FRAMES};
+use mp_refine::{RefineError, Result};
+use mp_refine::{RefineNets, N_ACTIONS};
 
 /// Evaluator features and logits of canonical clips (`N × 60 × 60` features), in batches.
 pub fn evaluator_outputs(
@@ -99,7 +99,7 @@ pub fn refine_clips_report(
     let (mut changed, mut det, mut cells, mut anchors) = (0usize, 0usize, 0usize, 0usize);
     let mut moved = 0.0;
     for (i, &a) in labels.iter().enumerate() {
-        let c = mp_refine::motion::from_features(clips.index_axis(Axis(0), i))?;
+        let c = mp_refine::from_features(clips.index_axis(Axis(0), i))?;
         let r = refiner.refine_canonical(c.view(), Some(a))?;
         if r.report.changed() {
             changed += 1;

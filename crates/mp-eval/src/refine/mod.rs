@@ -36,9 +36,9 @@ use anyhow::{Context, Result};
 use clap::Args;
 use mp_geom::io::datasets::MsrAction3D;
 use mp_pose::SessionParams;
-use mp_refine::learned::{AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode};
-use mp_refine::nets::{find_model_dir, RefineNets};
 use mp_refine::Concepts;
+use mp_refine::{find_model_dir, RefineNets};
+use mp_refine::{AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode};
 use serde_json::{json, Value};
 
 /// Arguments of `cargo xtask eval refine`.

@@ -24,7 +24,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use mp_refine::error::{RefineError, Result};
+use mp_refine::{RefineError, Result};
 
 /// Parameters of the random-pair metrics.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

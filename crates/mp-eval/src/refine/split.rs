@@ -20,8 +20,8 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::refine::evaluation::RefineEvalParams;
-use mp_refine::error::{RefineError, Result};
-use mp_refine::nets::read_manifest;
+use mp_refine::read_manifest;
+use mp_refine::{RefineError, Result};
 
 /// The subjects recorded in a training manifest (ascending, no repeats).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

@@ -36,7 +36,7 @@ pub enum ClusterMethod {
         tolerance: f64,
     },
     /// OPTICS ordering (linfa-clustering) up to radius `tolerance`, cut into
-    /// clusters at radius `cut` ≤ `tolerance` ([`optics_clusters`]); noise
+    /// clusters at radius `cut` ≤ `tolerance` (`optics_clusters`); noise
     /// anchors belong to no concept.
     Optics {
         /// Neighbours (including the point) needed for a core point.

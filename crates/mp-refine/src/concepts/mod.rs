@@ -35,7 +35,7 @@ mod model;
 mod params;
 mod samples;
 
-pub use cluster::{optics_clusters, ClusterMethod, Linkage};
+pub use cluster::{ClusterMethod, Linkage};
 pub use feature::{anchor_feature, collect_anchors, feature_rms, root_of, AnchorSample};
 pub use gmm::Gmm;
 pub use learn::learn_concepts;

@@ -196,6 +196,7 @@ pub fn hysteresis_flags(p: &Array2<f64>, seed: f64, extend: f64) -> Array2<bool>
 
 /// Source-frame flags (`t × J`) from canonical probabilities (`60 × J`):
 /// [`source_probabilities`] above `thr`, widened by `dilate` frames.
+#[cfg(test)]
 pub fn source_flags(prob: &Array2<f64>, t: usize, thr: f64, dilate: usize) -> Array2<bool> {
     let out = source_probabilities(prob, t).mapv(|v| v > thr);
     if dilate > 0 {

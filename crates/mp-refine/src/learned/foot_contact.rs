@@ -60,7 +60,7 @@ pub struct FootContactParams {
     /// Longest slide (seconds); a foot away for longer was moved on
     /// purpose. Default 1.4.
     pub max_slide_s: f64,
-    /// Hold slides ([`hold_slides`]); otherwise only the refill guard runs.
+    /// Hold slides (`hold_slides`); otherwise only the refill guard runs.
     /// Default true.
     pub hold_slides: bool,
 }

@@ -69,20 +69,15 @@ use std::collections::BTreeMap;
 use mp_geom::{Skeleton, Track};
 use ndarray::{s, Array2, Array3, ArrayView3};
 
-pub use anchors::{anchor_peaks, nearest_concept_thresholds};
-pub use flaw_detection::{
-    dilate_flags, hysteresis_flags, promote_frames, source_flags, source_probabilities,
-};
+pub use anchors::nearest_concept_thresholds;
 pub use foot_contact::{foot_contacts, foot_legs, foot_slide, FootContactParams};
 pub use params::{
     AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode, TransitionMethod,
 };
-pub use refill::repair_flagged;
 pub use report::{
     changed_frames, AnchorReport, FlawCell, RefineReport, RepairedRun, TransitionReason,
     TransitionReport,
 };
-pub use transitions::cubic_deviation;
 
 use crate::concepts::Concepts;
 use crate::error::{RefineError, Result};

@@ -185,7 +185,7 @@ pub struct NetRefineParams {
     pub max_repair_run_frames: usize,
     /// A frame (after the first) whose mean joint displacement from the
     /// previous frame is below this (track units: metres for the MSR
-    /// skeletons; [`crate::baseline::held_frames`], the baseline's frozen
+    /// skeletons; `crate::baseline::held_frames`, the baseline's frozen
     /// test) repeats a held pose, as a tracker that froze does: all its
     /// joints are flagged and refilled with the detector's flags. `None`
     /// switches the rule off. Default `Some(1e-4)` (0.1 mm), far below the
@@ -194,7 +194,7 @@ pub struct NetRefineParams {
     /// a tracked clip. Held runs longer than
     /// [`Self::max_repair_run_frames`] are reported but kept.
     pub held_pose_tolerance: Option<f64>,
-    /// Foot contact in the refill of a track ([`super::foot_contact`]): a
+    /// Foot contact in the refill of a track (`super::foot_contact`): a
     /// refill never makes a planted foot travel further horizontally than
     /// the input did, and planted feet that slide away and back are held.
     /// `None` switches it off. Default on with

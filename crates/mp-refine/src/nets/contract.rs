@@ -144,15 +144,6 @@ impl NetKind {
     }
 }
 
-/// Candidate model folders, in search order: `MP_REFINE_MODELS`,
-/// `<workspace>/models/refine`, and `models/refine` above the current
-/// directory (where it exists).
-pub fn model_dir_candidates() -> Vec<PathBuf> {
-    ModelDirs::standard(MODEL_DIR_ENV, MODEL_DIR_IN_WORKSPACE)
-        .dirs()
-        .to_vec()
-}
-
 /// The first candidate folder holding a `manifest.json`.
 pub fn find_model_dir() -> Result<PathBuf> {
     let dirs = ModelDirs::standard(MODEL_DIR_ENV, MODEL_DIR_IN_WORKSPACE);

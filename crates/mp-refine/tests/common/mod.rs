@@ -1,7 +1,7 @@
 //! The shipped refinement networks and concepts (`models/refine`), as the tests load them.
 
-use mp_refine::nets::{find_model_dir, RefineNets};
 use mp_refine::Concepts;
+use mp_refine::{find_model_dir, RefineNets};
 
 /// The networks and anchor concepts of `models/refine`.
 pub fn shipped() -> (RefineNets, Concepts) {
@@ -9,6 +9,6 @@ pub fn shipped() -> (RefineNets, Concepts) {
     let nets = RefineNets::load_default()
         .unwrap_or_else(|e| panic!("loading {}: {e} (run `cargo xtask setup`)", dir.display()));
     let concepts =
-        mp_refine::api::read_concepts(&dir.join("concepts.json")).unwrap_or_else(|e| panic!("{e}"));
+        mp_refine::read_concepts(&dir.join("concepts.json")).unwrap_or_else(|e| panic!("{e}"));
     (nets, concepts)
 }

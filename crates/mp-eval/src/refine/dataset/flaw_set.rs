@@ -1,7 +1,7 @@
 //! The flaw detector's training set.
 //!
 //! [`build_flaw_set`] gives every clip of the training and selection
-//! subjects (and every BVH window) flawed copies ([`mp_refine::flaws::inject`])
+//! subjects (and every BVH window) flawed copies ([`mp_refine::inject`])
 //! next to the clean clip, canonicalised to 60 frames ([`mp_refine::motion`]),
 //! with a per-frame, per-joint mask of the joints a flaw moved
 //! ([`changed_joints`] on the source frames, carried to the canonical
@@ -18,17 +18,17 @@ use ndarray::{s, Array1, Array2, Array3};
 use serde::{Deserialize, Serialize};
 
 use super::write_npz_file;
-use mp_refine::error::{RefineError, Result};
-use mp_refine::motion::{
+use mp_refine::{
     bvh_to_msr20, canonical_mask, canonicalize, changed_joints, to_features,
     DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, MSR_JOINTS, NET_FRAMES,
 };
+use mp_refine::{RefineError, Result};
 
 /// Parameters of [`build_flaw_set`], the training set of the flaw detector.
 ///
 /// Every clip of the training and selection subjects (and every BVH window,
 /// as training data) gets [`Self::copies_per_clip`] flawed copies, each with
-/// one or two flaws ([`mp_refine::flaws::inject`]) of random kind and random
+/// one or two flaws ([`mp_refine::inject`]) of random kind and random
 /// size, plus the clean clip itself. Sizes are drawn from ranges around
 /// the sizes of the evaluation ([`crate::refine::evaluation::RefineEvalParams`]),
 /// so the detector does not learn one size per flaw.
@@ -194,8 +194,8 @@ fn random_flaw(
     rng: &mut rand_chacha::ChaCha8Rng,
     p: &FlawSetParams,
     others: &[Track],
-) -> mp_refine::flaws::Flaw {
-    use mp_refine::flaws::{AnchorSource, Flaw, FootSlide};
+) -> mp_refine::Flaw {
+    use mp_refine::{AnchorSource, Flaw, FootSlide};
     use rand::Rng;
     let ur = |rng: &mut rand_chacha::ChaCha8Rng, r: (usize, usize)| rng.random_range(r.0..=r.1);
     let fr = |rng: &mut rand_chacha::ChaCha8Rng, r: (f64, f64)| {
@@ -258,7 +258,7 @@ pub fn build_flaw_set(
         let idx = msr.clips_of_subjects(subjects, params.clip_frames.0, params.clip_frames.1);
         for i in idx {
             let info = msr.clip_info(i)?;
-            let t = mp_refine::baseline::full_confidence(&msr.clip(i)?)?;
+            let t = mp_refine::full_confidence(&msr.clip(i)?)?;
             clean.push((
                 t,
                 info.action,
@@ -337,7 +337,7 @@ pub fn build_flaw_set(
             for _ in 0..n {
                 let flaw = random_flaw(&mut rng, params, &others);
                 let seed: u64 = rng.random();
-                match mp_refine::flaws::inject(&cur, &flaw, seed) {
+                match mp_refine::inject(&cur, &flaw, seed) {
                     Ok(inj) => {
                         cur = inj.track;
                         names.push(flaw.name());
@@ -402,7 +402,7 @@ impl FlawSet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mp_refine::motion::HIP_CENTRE;
+    use mp_refine::HIP_CENTRE;
 
     #[test]
     fn canonical_mask_flags_the_frames_whose_support_changed() {

@@ -15,7 +15,7 @@
 //!
 //! The flaw detector's training set — clean clips and flawed copies with a
 //! per-frame, per-joint flaw mask ([`build_flaw_set`], [`FlawSet`],
-//! [`mp_refine::motion::canonical_mask`], [`mp_refine::motion::changed_joints`]) — is in `flaw_set` and
+//! [`mp_refine::canonical_mask`], [`mp_refine::changed_joints`]) — is in `flaw_set` and
 //! re-exported here.
 
 /// The shared MSR Action3D file, or returns from the test (recording the
@@ -38,16 +38,16 @@ use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{s, Array1, Array2, Array3, ArrayView3};
 use serde::{Deserialize, Serialize};
 
-use mp_refine::concepts::{
+use mp_refine::Concepts;
+use mp_refine::{
     anchor_feature, learn_concepts, AnchorSample, ConceptParams, HELD_OUT_SUBJECTS, MIN_CLIP_FRAMES,
 };
-use mp_refine::error::{RefineError, Result};
-use mp_refine::motion::{
+use mp_refine::{
     bvh_to_msr20, canonicalize, to_features, DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, HIP_CENTRE,
     MSR_JOINTS, NET_FRAMES,
 };
-use mp_refine::segment::{segment_track, SegmentParams};
-use mp_refine::Concepts;
+use mp_refine::{segment_track, SegmentParams};
+use mp_refine::{RefineError, Result};
 
 pub use flaw_set::{build_flaw_set, FlawSet, FlawSetParams};
 
@@ -392,7 +392,7 @@ impl TrainingSet {
 mod tests {
     use super::*;
     use mp_geom::io::npz::Npz;
-    use mp_refine::concepts::ClusterMethod;
+    use mp_refine::ClusterMethod;
 
     fn small_params(seed: u64) -> DatasetParams {
         DatasetParams {

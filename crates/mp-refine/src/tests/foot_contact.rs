@@ -3,18 +3,14 @@
 //! slide of the evaluation's foot-slide cases.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-mod common;
-
+use crate::full_confidence;
+use crate::learned::foot_contact::{guard_refills, hold_slides};
+use crate::learned::{foot_legs, RepairedRun};
+use crate::mpjpe_abs;
+use crate::{foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner};
+use crate::{foot_joints, inject, Flaw, FootSlide};
 use mp_geom::io::datasets::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
-use mp_refine::baseline::full_confidence;
-use mp_refine::flaws::{foot_joints, inject, Flaw, FootSlide};
-use mp_refine::learned::foot_contact::{guard_refills, hold_slides};
-use mp_refine::learned::{
-    foot_contacts, foot_legs, foot_slide, FootContactParams, NetRefineParams, NetRefiner,
-    RepairedRun,
-};
-use mp_refine::mpjpe_abs;
 use ndarray::Array3;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -214,7 +210,7 @@ fn a_refill_never_adds_horizontal_travel_to_a_planted_foot() {
 fn refinement_never_increases_the_foot_slide_of_the_evaluation_cases() {
     let path = mp_geom::data_or_return!(MsrAction3D::FILE);
     let data = MsrAction3D::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let (nets, concepts) = common::shipped();
+    let (nets, concepts) = super::shipped();
     let params = NetRefineParams::default();
     let off = NetRefineParams {
         foot_contact: None,
