@@ -189,7 +189,7 @@ const ONNX_PACKAGE: &str = "onnx==1.23.2";
 /// (`<name>_nomask.onnx`, `tools/cut_mask.py`), which the estimators open
 /// instead: the same values in about half the time.
 fn cut_masks(root: &Path, out: &Path) -> Result<()> {
-    use mp_pose::runtime::ModelFile;
+    use mp_pose::ModelFile;
     let todo: Vec<(PathBuf, PathBuf)> = [
         ModelFile::LandmarkFull,
         ModelFile::LandmarkLite,

@@ -241,10 +241,10 @@ fn link_stable_names(lib_dir: &Path) -> Result<()> {
 
 fn check_runtime(lib: &Path) -> Result<()> {
     // The library search of mp-pose must find what was just installed.
-    let found = mp_pose::runtime::find_library()
+    let found = mp_onnx::find_library()
         .map_err(|e| anyhow::anyhow!("{e}"))
         .context("ONNX Runtime was installed but mp-pose cannot find it")?;
-    mp_pose::runtime::environment()
+    mp_onnx::environment()
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("loading {}", lib.display()))?;
     println!("setup: ONNX Runtime loads from {}", found.display());

@@ -260,7 +260,7 @@ fn frames_count_where_no_person_is_found() {
 #[test]
 fn frame_signal_counts_the_same_in_either_layout() {
     // A thumbnail as 64 channels of one value, or as 8 rows of 8 cells (how
-    // `mp_pose::thumbs::thumbnail_track` lays it out): the same channels in the
+    // `mp_pose::thumbnail_track` lays it out): the same channels in the
     // same order, so the same count, period and intervals. A lead-in of still
     // frames makes the active span (the speed per channel) matter.
     let moving = thumbnails(300, 45.0, 64, 3);

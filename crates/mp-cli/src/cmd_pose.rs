@@ -7,9 +7,9 @@ use anyhow::{bail, Context, Result};
 
 use mp_geom::Units;
 use mp_pipeline::{CancelToken, ExtractParams, Poses};
-use mp_pose::extract::ModelChoice;
-use mp_pose::video::{open_source, VideoWriter};
+use mp_pose::ModelChoice;
 use mp_pose::SessionParams;
+use mp_pose::{open_source, VideoWriter};
 use mp_report::draw::{
     contact_sheet, draw_skeleton, frame_tile, ContactSheetParams, SkeletonStyle, Tile, View,
 };
@@ -85,7 +85,7 @@ fn extract_params(a: &ExtractArgs) -> Result<(mp_pipeline::Params, ExtractParams
     let pose = &mut params.pose;
     pose.model = ModelChoice::parse(&a.model).map_err(pose_err)?;
     pose.rate = mp_pipeline::PoseRate::parse(&a.pose_fps)?;
-    pose.device = mp_pose::runtime::Device::parse(&a.device).map_err(|e| anyhow::anyhow!("{e}"))?;
+    pose.device = mp_pose::Device::parse(&a.device).map_err(|e| anyhow::anyhow!("{e}"))?;
     pose.threads = a.threads;
     pose.recover_s = a.recover;
     pose.max_frames = a.max_frames;

@@ -106,7 +106,7 @@ pub fn set_pose(
         p.pose.rate = mp_pipeline::PoseRate::parse(pose_fps)?;
     }
     if set("device") {
-        p.pose.device = mp_pose::runtime::Device::parse(device)?;
+        p.pose.device = mp_pose::Device::parse(device)?;
     }
     Ok(())
 }

@@ -48,7 +48,7 @@ fn overlay_draws_the_track_on_a_contact_sheet_and_a_video() {
     let drawn = sheet("sheet.png", &[]);
     let bare = sheet("bare.png", &["--min-confidence", "1.0"]);
     // Three columns of 160-pixel tiles with 8-pixel gaps; two rows under the title.
-    let src = mp_pose::video::open_source(&video).unwrap();
+    let src = mp_pose::open_source(&video).unwrap();
     let tile_h = (160.0 * src.height as f64 / src.width as f64).round() as u32;
     assert_eq!(
         drawn.dimensions(),

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use mp_pose::video::VideoReader;
+use mp_pose::VideoReader;
 
 const CLIP_VIDEO: &str = "quva_repetition/videos/023_fitness.mp4";
 

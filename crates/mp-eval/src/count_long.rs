@@ -27,8 +27,8 @@ use mp_geom::Track;
 #[cfg(test)]
 use mp_geom::{Skeleton, Units};
 use mp_pipeline::{CancelToken, Input, Keep, Params, Silent};
-use mp_pose::thumbs::{grey_thumbnail_region, thumbnail_track};
-use mp_pose::video::VideoReader;
+use mp_pose::VideoReader;
+use mp_pose::{grey_thumbnail_region, thumbnail_track};
 use serde_json::{json, Value};
 
 use crate::intervals::one_to_one_pairs;

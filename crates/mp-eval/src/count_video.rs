@@ -24,7 +24,7 @@ pub fn frame_signal_json(choice: Option<&mp_pipeline::frame_signal::FrameChoice>
     let Some(ch) = choice else {
         return Value::Null;
     };
-    let reg = |r: &mp_pose::motion::CellRegion| json!([r.r0, r.c0, r.r1, r.c1]);
+    let reg = |r: &mp_pose::CellRegion| json!([r.r0, r.c0, r.r1, r.c1]);
     json!({
         "region": ch.region.as_ref().map(reg),
         "usual_periodicity": ch.base_periodicity,

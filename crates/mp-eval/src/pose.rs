@@ -18,8 +18,8 @@ use ndarray_npy::NpzReader;
 use serde_json::{json, Value};
 
 use mp_geom::skeleton::BLAZEPOSE_TO_COCO17;
-use mp_pose::extract::{extract, ExtractOptions, ModelChoice, SmoothingParams};
-use mp_pose::video::{open_source, read_image};
+use mp_pose::{extract, ExtractOptions, ModelChoice, SmoothingParams};
+use mp_pose::{open_source, read_image};
 use mp_pose::{BlazePose, BlazePoseParams, MoveNet, MoveNetParams, PoseEstimator, SessionParams};
 
 use crate::table::Table;

@@ -113,7 +113,7 @@ pub fn run(a: &EvalPoseRateArgs) -> anyhow::Result<()> {
     let mut frames = 0usize;
     for (video, label) in &items {
         let (name, truth) = crate::count::name_and_count(video, label)?;
-        let fps = mp_pose::video::VideoReader::open(video)?.info().fps;
+        let fps = mp_pose::VideoReader::open(video)?.info().fps;
         let runs = a
             .strides
             .iter()
@@ -126,7 +126,7 @@ pub fn run(a: &EvalPoseRateArgs) -> anyhow::Result<()> {
         let mut per = Map::new();
         for (i, (&s, r)) in a.strides.iter().zip(&runs).enumerate() {
             let n = r.track.n_frames();
-            let posed = |t: usize| mp_pose::extract::is_posed_frame(t, s, Some(n));
+            let posed = |t: usize| mp_pose::is_posed_frame(t, s, Some(n));
             let dp = distances(&r.track, &full.track, posed);
             let df = distances(&r.track, &full.track, |t| !posed(t));
             let prog = match &r.program {

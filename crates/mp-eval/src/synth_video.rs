@@ -94,7 +94,7 @@ pub fn sources(videos: &Path, labels: &Path) -> anyhow::Result<Vec<Source>> {
         if ends.len() < 3 {
             continue;
         }
-        let info = mp_pose::video::probe(&path)?;
+        let info = mp_pose::probe(&path)?;
         let (width, height, fps) = (info.width, info.height, info.fps);
         out.push(Source {
             path,

@@ -10,8 +10,8 @@ use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use mp_geom::{People, Skeleton};
-use mp_pose::people::{PeopleCollector, TrackEvent, TrackedPose};
 use mp_pose::Pose;
+use mp_pose::{PeopleCollector, TrackEvent, TrackedPose};
 use serde::{Deserialize, Serialize};
 
 use crate::{LiveError, Result};

@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
 
 use mp_geom::CancelToken;
-use mp_pose::people::TrackEvent;
+use mp_pose::TrackEvent;
 use mp_pose::{BlazePoseParams, MultiPose, MultiPoseParams, VideoInfo};
 
 use crate::counter::{OnlineCounter, Repetition};

@@ -1,5 +1,5 @@
 //! Frames from a file, standard input, a camera or a network stream,
-//! decoded by FFmpeg ([`mp_pose::video::VideoReader`]) on a thread of their
+//! decoded by FFmpeg ([`mp_pose::VideoReader`]) on a thread of their
 //! own.
 //!
 //! Standard input carries a video container that can be read from a pipe
@@ -27,7 +27,7 @@ use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
-use mp_pose::video::{probe_bytes, Frame, ReadOptions, VideoInfo, VideoReader};
+use mp_pose::{probe_bytes, Frame, ReadOptions, VideoInfo, VideoReader};
 
 use crate::{LiveError, Result};
 

@@ -12,8 +12,8 @@
 use std::path::Path;
 
 use mp_geom::{CancelToken, People, Track};
-use mp_pose::extract::{open_estimator_with, ExtractOptions, SmoothingParams};
-use mp_pose::video::open_source;
+use mp_pose::open_source;
+use mp_pose::{open_estimator_with, ExtractOptions, SmoothingParams};
 
 use crate::error::{PipelineError, Result};
 use crate::input::is_video;
@@ -211,7 +211,7 @@ pub fn extract(
         });
     }
     let mut est = open_estimator_with(pose.model, pose.session(), pose.recover_s)?;
-    let ex = mp_pose::extract::extract(source, est.as_mut(), &options, |done, _| {
+    let ex = mp_pose::extract(source, est.as_mut(), &options, |done, _| {
         observer.progress(Stage::Pose, done)
     })?;
     finished(ex.posed.len());
@@ -255,7 +255,7 @@ mod tests {
     #[test]
     fn movenet_has_no_world_coordinates_and_a_missing_file_is_named() {
         let mut params = Params::default();
-        params.pose.model = mp_pose::extract::ModelChoice::MoveNet;
+        params.pose.model = mp_pose::ModelChoice::MoveNet;
         let cancel = CancelToken::new();
         let e = extract(
             Path::new("nowhere.mp4"),

@@ -15,7 +15,7 @@
 
 use mp_abstract::repetition::estimate_period;
 use mp_geom::Track;
-use mp_pose::motion::{moving_regions, region_track, CellRegion, MotionEnergy};
+use mp_pose::{moving_regions, region_track, CellRegion, MotionEnergy};
 
 use crate::error::Result;
 use crate::params::Params;
@@ -94,7 +94,7 @@ pub fn choose_frame_signal(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mp_pose::thumbs::thumbnail_track;
+    use mp_pose::thumbnail_track;
 
     /// 32 × 32 thumbnails of a picture whose every cell flickers at random
     /// (clutter, ±10 grey levels), with, when `rep`, a 6 × 6 patch at rows

@@ -19,14 +19,14 @@ use std::path::Path;
 use std::time::Instant;
 
 use mp_geom::{CancelToken, People, PersonId, Track};
-use mp_pose::decode::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
-use mp_pose::extract::{extract, open_estimator_with, ExtractOptions};
-use mp_pose::thumbs::{grey_thumbnail_region, thumbnail_track};
-use mp_pose::video::FrameSource;
-use mp_pose::video::{VideoInfo, VideoReader};
+use mp_pose::FrameSource;
 use mp_pose::SessionParams;
+use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
+use mp_pose::{extract, open_estimator_with, ExtractOptions};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams};
+use mp_pose::{grey_thumbnail_region, thumbnail_track};
 use mp_pose::{ModelChoice, PoseEstimator};
+use mp_pose::{VideoInfo, VideoReader};
 use mp_report::{FrameStore, FrameStoreParams};
 
 use crate::error::{PipelineError, Result};

@@ -5,7 +5,7 @@
 use mp_abstract::{Analysis, ProgramLoopJson, RepetitionsJson};
 use mp_geom::PersonId;
 use mp_geom::{CancelToken, Track};
-use mp_pose::video::{VideoReader, VideoWriter};
+use mp_pose::{VideoReader, VideoWriter};
 use mp_report::draw::{draw_skeleton, SkeletonStyle, View};
 use mp_report::outdir::check_cancel;
 use mp_report::raster::{pixmap_to_rgb, rgb_to_pixmap};

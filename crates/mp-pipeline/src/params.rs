@@ -40,11 +40,11 @@ pub struct PoseParams {
     /// the motion ([`crate::pose_rate`]). Default every frame.
     #[serde(with = "as_text::rate")]
     pub rate: crate::pose_rate::PoseRate,
-    /// Where the pose model runs (`mp_pose::runtime::Device`): the GPU
+    /// Where the pose model runs (`mp_pose::Device`): the GPU
     /// where ONNX Runtime's CUDA build and a GPU are there, else the CPU
     /// (default, `auto`); `cpu`; or a CUDA device, an error where there is none.
     #[serde(with = "as_text::device")]
-    pub device: mp_pose::runtime::Device,
+    pub device: mp_pose::Device,
 }
 
 impl PoseParams {
@@ -65,12 +65,12 @@ impl Default for PoseParams {
             threads: mp_pose::SessionParams::default().intra_threads,
             all_joints: false,
             max_frames: None,
-            thumbnail_size: mp_pose::thumbs::DEFAULT_THUMBNAIL_SIZE,
+            thumbnail_size: mp_pose::DEFAULT_THUMBNAIL_SIZE,
             recover_s: mp_pose::BlazePoseParams::default().recover_s,
             people: true,
             tracker: mp_pose::PeopleParams::default(),
             rate: crate::pose_rate::PoseRate::default(),
-            device: mp_pose::runtime::Device::default(),
+            device: mp_pose::Device::default(),
         }
     }
 }
@@ -276,7 +276,7 @@ mod as_text {
 
     pub(super) mod model {
         use super::*;
-        use mp_pose::extract::ModelChoice;
+        use mp_pose::ModelChoice;
 
         pub(crate) fn serialize<S: Serializer>(m: &ModelChoice, s: S) -> Result<S::Ok, S::Error> {
             s.serialize_str(m.as_str())
@@ -304,7 +304,7 @@ mod as_text {
 
     pub(super) mod device {
         use super::*;
-        use mp_pose::runtime::Device;
+        use mp_pose::Device;
 
         pub(crate) fn serialize<S: Serializer>(v: &Device, s: S) -> Result<S::Ok, S::Error> {
             s.serialize_str(&v.label())

@@ -15,9 +15,9 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use std::time::Duration;
 
-use mp_pose::blazepose::detector::roi_from_points;
-use mp_pose::blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
-use mp_pose::video::{Frame, VideoReader};
+use mp_pose::roi_from_points;
+use mp_pose::{BlazePose, BlazePoseParams, LandmarkModelKind};
+use mp_pose::{Frame, VideoReader};
 use mp_pose::{MoveNet, MoveNetParams, MultiPose, MultiPoseParams, PoseEstimator};
 
 fn frame() -> Frame {

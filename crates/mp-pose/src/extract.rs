@@ -227,28 +227,6 @@ pub fn is_posed_frame(index: usize, every: usize, total: Option<usize>) -> bool 
     every <= 1 || index.is_multiple_of(every) || total.is_some_and(|n| index + 1 == n)
 }
 
-/// BlazePose's world landmarks of a video or image (metres, hip-centred, 3D,
-/// the model's 33 landmarks): what `mp extract --world` writes. MoveNet has
-/// no world coordinates.
-pub fn world_landmarks(
-    path: impl AsRef<std::path::Path>,
-    model: ModelChoice,
-    session: SessionParams,
-    options: &ExtractOptions,
-) -> Result<Track> {
-    if model.landmark_model().is_none() {
-        return Err(PoseError::param(
-            "model",
-            "world coordinates need a BlazePose model (full, lite or heavy); MoveNet has none",
-        ));
-    }
-    let source = crate::video::open_source(path)?;
-    let mut est = open_estimator(model, session)?;
-    let ex = extract(source, est.as_mut(), options, |_, _| {})?;
-    ex.world
-        .ok_or_else(|| PoseError::param("model", "the model gave no world coordinates"))
-}
-
 /// Result of running an estimator over a video.
 #[derive(Debug, Clone)]
 pub struct Extraction {

@@ -1,24 +1,24 @@
 //! # mp-pose — video to keypoints
 //!
-//! * [`video`]: frames from videos through the `ffmpeg`/`ffprobe` programs
+//! * `video`: frames from videos through the `ffmpeg`/`ffprobe` programs
 //!   (streamed, one frame in memory) and from still images.
-//! * [`blazepose`]: MediaPipe's BlazePose (person detector + GHUM landmark
+//! * `blazepose`: MediaPipe's BlazePose (person detector + GHUM landmark
 //!   model, 33 keypoints, world coordinates in metres) with the same crop,
 //!   tracking and filtering steps as MediaPipe's legacy Pose solution.
-//! * [`movenet`]: MoveNet SinglePose Lightning (COCO-17, whole frame).
-//! * [`people`]: several people per video: the detector over tiles of the
+//! * `movenet`: MoveNet SinglePose Lightning (COCO-17, whole frame).
+//! * `people`: several people per video: the detector over tiles of the
 //!   frame, one landmark crop per person, a tracker that keeps each
 //!   person's id and drops crops the detector does not confirm.
 //! * [`pose::PoseEstimator`]: the trait both implement.
 //! * [`extract()`]: a whole video to an `mp_geom::Track` (pixels, and metres for
 //!   BlazePose), frames without a person marked with confidence 0.
-//! * [`decode`]: decoding on its own thread ahead of the pose model, and
+//! * `decode`: decoding on its own thread ahead of the pose model, and
 //!   reduced JPEG copies of the frames from a second FFmpeg process.
-//! * [`thumbs`]: grey thumbnails of whole frames (a feature track for
+//! * `thumbs`: grey thumbnails of whole frames (a feature track for
 //!   counting repetitions where no person is found).
 //!
 //! ONNX Runtime is loaded at run time (`cargo xtask setup` installs it; see
-//! [`runtime`]); the models come from `cargo xtask models`.
+//! `runtime`); the models come from `cargo xtask models`.
 //!
 //! ```no_run
 //! use mp_pose::{extract_file, ExtractOptions, ModelChoice};
@@ -27,19 +27,19 @@
 //! # Ok::<(), mp_pose::PoseError>(())
 //! ```
 
-pub mod blazepose;
-pub mod decode;
+mod blazepose;
+mod decode;
 mod error;
-pub mod extract;
+mod extract;
 mod filter;
-pub mod imageops;
-pub mod motion;
-pub mod movenet;
-pub mod people;
+mod imageops;
+mod motion;
+mod movenet;
+mod people;
 mod pose;
-pub mod runtime;
-pub mod thumbs;
-pub mod video;
+mod runtime;
+mod thumbs;
+mod video;
 
 pub use blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
 pub use error::{PoseError, Result};
@@ -56,3 +56,17 @@ pub use people::{
 pub use pose::{Pose, PoseEstimator};
 pub use runtime::ModelFile;
 pub use video::{open_source, probe, read_image, Frame, FrameSource, VideoInfo, VideoReader};
+
+pub use blazepose::detector::{roi_from_points, PoseDetector};
+pub use blazepose::landmarks::{project, LandmarkModel};
+pub use decode::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
+pub use extract::is_posed_frame;
+pub use imageops::{resize_rgb, RgbView};
+pub use motion::{moving_regions, region_track, CellRegion, MotionEnergy};
+pub use people::{PeopleCollector, TrackEvent, TrackedPose};
+pub use runtime::{cuda_available, model_path, Device};
+pub use thumbs::{grey_thumbnail_region, thumbnail_track, DEFAULT_THUMBNAIL_SIZE};
+pub use video::{probe_bytes, ReadOptions, VideoWriter, X264_PRESETS};
+
+#[cfg(test)]
+mod tests;

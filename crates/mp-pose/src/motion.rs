@@ -96,7 +96,7 @@ pub fn global_motion(prev: &[f64], cur: &[f64], size: usize) -> (GlobalMotion, V
 }
 
 /// The motion energy of every cell of a thumbnail track (the mean squared
-/// residual difference of [`global_motion`] between consecutive frames),
+/// residual difference of `global_motion` between consecutive frames),
 /// accumulated one frame at a time.
 #[derive(Debug, Clone)]
 pub struct MotionEnergy {

@@ -1,5 +1,5 @@
 //! ONNX Runtime for the pose models: the library, sessions and tensor
-//! descriptions come from `mp-onnx` (re-exported here); this module adds the
+//! descriptions come from `mp-onnx`; this module adds the
 //! pose model files and where they are found.
 //!
 //! The library is looked up, in order, at `ORT_DYLIB_PATH`, at
@@ -12,9 +12,8 @@
 use std::path::PathBuf;
 
 pub use mp_onnx::{
-    check_tensor, cuda_available, environment, find_library, inputs_of, library_candidates,
-    open_session, outputs_of, Device, ModelDirs, OnnxError, SessionParams, TensorInfo,
-    LIBRARY_DIR_IN_WORKSPACE, LIBRARY_FILE,
+    check_tensor, cuda_available, inputs_of, open_session, outputs_of, Device, ModelDirs,
+    SessionParams,
 };
 
 use crate::error::{PoseError, Result};
@@ -97,14 +96,9 @@ fn model_search() -> ModelDirs {
     }
 }
 
-/// Folders searched for model files, in order: `MP_MODEL_DIR`,
-/// `<workspace>/.cache/models`, `.cache/models` above the current directory
-/// (where it exists), `<shared>/models`.
-pub fn model_dirs() -> Vec<PathBuf> {
-    model_search().dirs().to_vec()
-}
-
-/// Path of a model file, from the first folder of [`model_dirs`] that has it.
+/// Path of a model file, from the first of the folders searched that has it:
+/// `MP_MODEL_DIR`, `<workspace>/.cache/models`, `.cache/models` above the
+/// current directory (where it exists), `<shared>/models`.
 pub fn model_path(model: ModelFile) -> Result<PathBuf> {
     find_model_file(model.file_name())
 }

@@ -23,7 +23,7 @@ pub fn grey_thumbnail(frame: &Frame, size: usize) -> Result<Vec<f32>> {
     grey_thumbnail_region(frame, size, [0.0, 0.0, w, h])
 }
 
-/// [`grey_thumbnail`] of one region of the frame, `[x0, y0, x1, y1]` in
+/// `grey_thumbnail` of one region of the frame, `[x0, y0, x1, y1]` in
 /// pixels (clamped to the frame): a person's own box, so that the pixels of
 /// the people beside them stay out of their signal. A region with no pixel in
 /// the frame gives zeros.

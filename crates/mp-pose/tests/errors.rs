@@ -5,7 +5,7 @@ mod common;
 
 use std::io::Write;
 
-use mp_pose::video::{probe, read_image, VideoReader};
+use mp_pose::{probe, read_image, VideoReader};
 use mp_pose::{BlazePose, BlazePoseParams, MoveNet, MoveNetParams, PoseError};
 
 #[test]

@@ -5,9 +5,9 @@
 
 mod common;
 
-use mp_pose::blazepose::{BlazePose, BlazePoseParams};
-use mp_pose::extract::{extract, ExtractOptions};
-use mp_pose::video::{open_source, read_image, Frame, VideoReader};
+use mp_pose::{extract, ExtractOptions};
+use mp_pose::{open_source, read_image, Frame, VideoReader};
+use mp_pose::{BlazePose, BlazePoseParams};
 use mp_pose::{MoveNet, MoveNetParams, PoseEstimator};
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -8,7 +8,7 @@ use mp_pose::{BlazePose, BlazePoseParams, OnnxError, PoseError};
 fn missing_library_says_run_setup() {
     // SAFETY: this test binary has a single test, so no other thread reads the environment.
     unsafe { std::env::set_var("ORT_DYLIB_PATH", "/nonexistent/libonnxruntime.so") };
-    let err = mp_pose::runtime::environment().expect_err("must fail");
+    let err = mp_onnx::environment().expect_err("must fail");
     assert!(matches!(err, OnnxError::RuntimeMissing { .. }), "{err:?}");
     let msg = err.to_string();
     assert!(

@@ -120,8 +120,8 @@ pub(crate) fn pose_rate_arg(
 /// `"cuda"`, `"cuda:N"`; None: the library's default).
 pub(crate) fn device_arg(params: &mut Params, device: Option<&str>) -> PyResult<()> {
     if let Some(d) = device {
-        params.pose.device = mp_pose::runtime::Device::parse(d)
-            .map_err(|e| errors::ParamError::new_err(e.to_string()))?;
+        params.pose.device =
+            mp_pose::Device::parse(d).map_err(|e| errors::ParamError::new_err(e.to_string()))?;
     }
     Ok(())
 }

@@ -12,7 +12,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use mp_pose::video::{VideoReader, VideoWriter};
+use mp_pose::{VideoReader, VideoWriter};
 
 use crate::error::{Result, VideoError};
 
@@ -237,7 +237,7 @@ pub struct AtomicVideo {
 }
 
 impl AtomicVideo {
-    /// Starts the encoder (H.264; `preset` one of `mp_pose::video::X264_PRESETS`).
+    /// Starts the encoder (H.264; `preset` one of `mp_pose::X264_PRESETS`).
     pub fn create(
         target: &Path,
         width: usize,

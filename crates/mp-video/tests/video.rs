@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use mp_pipeline::Params;
-use mp_pose::video::VideoReader;
+use mp_pose::VideoReader;
 use mp_video::interpolate::{interpolate_frames, keep_every};
 use mp_video::{
     analyse_video, edit_video, interpolate_video, predict_video, EditChange, EditParams,

@@ -16,8 +16,8 @@ use std::time::{Duration, Instant};
 
 use mp_geom::Skeleton;
 use mp_live::PersonPose;
-use mp_pose::imageops::{resize_rgb, RgbView};
 use mp_pose::Frame;
+use mp_pose::{resize_rgb, RgbView};
 use mp_report::draw::{draw_pose, SkeletonStyle, View};
 use mp_report::raster::{pixmap_to_rgb, rgb_to_pixmap};
 

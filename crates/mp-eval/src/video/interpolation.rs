@@ -9,8 +9,8 @@ use anyhow::bail;
 use clap::Args;
 use mp_geom::Track;
 use mp_pipeline::Params;
-use mp_pose::video::{Frame, VideoReader};
 use mp_pose::SessionParams;
+use mp_pose::{Frame, VideoReader};
 use mp_video::interpolate::{interpolate_frames, keep_every, Guide};
 use mp_video::{InterpMethod, InterpParams, PixelBox};
 use serde_json::{json, Map, Value};
@@ -58,7 +58,7 @@ impl CropTruth {
         let Some(Some(roi)) = self.rois.get(t).copied() else {
             return Ok((0.0, 0));
         };
-        let view = mp_pose::imageops::RgbView {
+        let view = mp_pose::RgbView {
             width: w,
             height: h,
             data: rgb,
@@ -68,7 +68,7 @@ impl CropTruth {
             out.landmarks
                 .get(j)
                 .filter(|lm| lm.visibility as f64 > MIN_CONF)
-                .map(|lm| mp_pose::blazepose::landmarks::project(&roi, lm).0)
+                .map(|lm| mp_pose::project(&roi, lm).0)
         });
         Ok(arm_distances(&found, &self.arms[t]))
     }

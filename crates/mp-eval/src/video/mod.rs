@@ -39,8 +39,8 @@ use std::thread::JoinHandle;
 use anyhow::{bail, Context};
 use mp_geom::Track;
 use mp_pipeline::Params;
-use mp_pose::video::{Frame, FrameSource};
 use mp_pose::{extract, open_estimator, ExtractOptions, SessionParams};
+use mp_pose::{Frame, FrameSource};
 use mp_video::PixelBox;
 use serde_json::{json, Value};
 

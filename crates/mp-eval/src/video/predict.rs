@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use clap::Args;
 use mp_pipeline::Params;
-use mp_pose::video::VideoReader;
+use mp_pose::VideoReader;
 use mp_video::plan::render;
 use mp_video::predict::plan_prediction;
 use mp_video::{analyse_video, PixelBox, VideoPredictMethod, VideoPredictParams};

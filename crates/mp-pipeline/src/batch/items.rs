@@ -137,7 +137,7 @@ pub fn output_names(items: &[PathBuf]) -> Vec<String> {
 /// container) before track files (bytes), which need no pose model.
 pub(super) fn work_estimate(path: &Path, max_frames: Option<usize>) -> (bool, u64) {
     if is_video(path) {
-        let frames = mp_pose::video::probe(path)
+        let frames = mp_pose::probe(path)
             .ok()
             .and_then(|info| {
                 info.frame_count

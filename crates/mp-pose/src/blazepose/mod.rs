@@ -24,7 +24,7 @@ use crate::pose::{Pose, PoseEstimator};
 use crate::runtime::{self, ModelFile, SessionParams};
 use crate::video::Frame;
 
-pub use detector::{DetectorParams, ImageDetection, PoseDetector};
+pub use detector::{DetectorParams, PoseDetector};
 pub use landmarks::{LandmarkModel, LandmarkModelKind, LandmarkOutput, RefineParams};
 
 /// Index of the first auxiliary landmark (crop centre for tracking).
@@ -66,7 +66,7 @@ pub struct BlazePoseParams {
     pub fixed_frame_interval_s: Option<f64>,
     /// ONNX Runtime session settings.
     pub session: SessionParams,
-    /// Folder of the ONNX files; `None` = the usual search (see [`runtime::model_dirs`]).
+    /// Folder of the ONNX files; `None` = the usual search (see `runtime::model_dirs`).
     pub model_dir: Option<PathBuf>,
 }
 

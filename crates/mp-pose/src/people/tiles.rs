@@ -91,16 +91,6 @@ impl TileCycle {
         }
     }
 
-    /// Number of tiles in one cycle.
-    pub fn len(&self) -> usize {
-        self.tiles.len()
-    }
-
-    /// Whether there are no tiles.
-    pub fn is_empty(&self) -> bool {
-        self.tiles.is_empty()
-    }
-
     /// The tiles to search on a frame `dt_s` after the previous one, when the
     /// whole frame is to be covered every `cycle_s` seconds (none on some
     /// frames when there are more frames than tiles in a cycle, at most the
@@ -132,12 +122,6 @@ impl TileCycle {
         self.next = 0;
         self.owed = 0.0;
         self.tiles.clone()
-    }
-
-    /// Starts the cycle again from the whole frame.
-    pub fn restart(&mut self) {
-        self.next = 0;
-        self.owed = 0.0;
     }
 }
 

@@ -37,7 +37,7 @@ pub fn reference(stem: &str) -> Option<Reference> {
 /// The MoveNet model's path, or `None` (skip recorded): the set-up converts
 /// it only from the shared models or a `.tflite` the user gives.
 pub fn movenet_model() -> Option<PathBuf> {
-    use mp_pose::runtime::{model_path, ModelFile};
+    use mp_pose::{model_path, ModelFile};
     match model_path(ModelFile::MoveNetLightning) {
         Ok(p) => Some(p),
         Err(_) => {

@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 
 use mp_concrete::InBetween;
 use mp_pipeline::Params;
-use mp_pose::video::VideoReader;
+use mp_pose::VideoReader;
 use serde::Serialize;
 
 use crate::error::{Result, VideoError};

@@ -5,14 +5,13 @@
 //! Needs ONNX Runtime (`cargo xtask setup`) and the models (`cargo xtask models`).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-mod common;
-
-use mp_pose::blazepose::detector::{self, PoseDetector};
-use mp_pose::blazepose::landmarks::{LandmarkModel, LandmarkModelKind, RefineParams};
-use mp_pose::blazepose::DetectorParams;
-use mp_pose::imageops::{RgbView, Roi};
-use mp_pose::movenet::{MoveNet, MoveNetParams};
-use mp_pose::runtime::{self, ModelFile, SessionParams, TensorInfo};
+use crate::blazepose::detector::{self, PoseDetector};
+use crate::blazepose::landmarks::{LandmarkModel, LandmarkModelKind, RefineParams};
+use crate::blazepose::DetectorParams;
+use crate::imageops::{RgbView, Roi};
+use crate::movenet::{MoveNet, MoveNetParams};
+use crate::runtime::{self, ModelFile, SessionParams};
+use mp_onnx::TensorInfo;
 use serde_json::Value;
 
 fn fixtures() -> Value {
@@ -342,7 +341,7 @@ fn several_crops_in_one_run_give_each_crops_values() {
 
 #[test]
 fn movenet_contract_and_fixed_output() {
-    if common::movenet_model().is_none() {
+    if super::movenet_model().is_none() {
         return;
     }
     let s = session(ModelFile::MoveNetLightning);
@@ -387,7 +386,7 @@ fn movenet_contract_and_fixed_output() {
 #[test]
 fn wrong_model_file_breaks_the_contract() {
     // Opening the MoveNet file as a landmark model must be refused with a clear message.
-    let Some(path) = common::movenet_model() else {
+    let Some(path) = super::movenet_model() else {
         return;
     };
     let err = LandmarkModel::open(

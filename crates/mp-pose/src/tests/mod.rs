@@ -1,0 +1,18 @@
+//! Tests of the crate's inner parts: the tensor contracts of the models.
+
+mod contracts;
+
+/// The MoveNet model's path, or `None` (skip recorded): the set-up converts
+/// it only from the shared models or a `.tflite` the user gives.
+fn movenet_model() -> Option<std::path::PathBuf> {
+    match crate::model_path(crate::ModelFile::MoveNetLightning) {
+        Ok(p) => Some(p),
+        Err(_) => {
+            mp_geom::paths::skip_test(
+                &mp_geom::paths::current_test_name(),
+                "models/movenet_singlepose_lightning_int8.onnx (`cargo xtask models --movenet-tflite FILE`)",
+            );
+            None
+        }
+    }
+}
