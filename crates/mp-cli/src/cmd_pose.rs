@@ -10,10 +10,10 @@ use mp_pipeline::{CancelToken, ExtractParams, Poses};
 use mp_pose::ModelChoice;
 use mp_pose::SessionParams;
 use mp_pose::{open_source, VideoWriter};
-use mp_report::draw::{
+use mp_report::{
     contact_sheet, draw_skeleton, frame_tile, ContactSheetParams, SkeletonStyle, Tile, View,
 };
-use mp_report::raster::{pixmap_to_png, pixmap_to_rgb, rgb_to_pixmap};
+use mp_report::{pixmap_to_png, pixmap_to_rgb, rgb_to_pixmap};
 
 /// Arguments of `mp extract`.
 #[derive(clap::Args, Debug)]

@@ -100,7 +100,7 @@ static OBSERVED: AtomicBool = AtomicBool::new(false);
 /// renames take so that nothing appears meanwhile.
 fn exit_interrupted() -> ! {
     let _files = mp_geom::io::abandon_partial_writes();
-    let _staging = mp_report::outdir::emergency_cleanup();
+    let _staging = mp_report::emergency_cleanup();
     eprintln!("\ninterrupted");
     std::process::exit(130);
 }

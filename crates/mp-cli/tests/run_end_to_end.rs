@@ -63,7 +63,7 @@ fn leftovers(dir: &Path) -> Vec<String> {
 /// The content of one of the report's data files (`report/…`).
 fn report_file(dir: &Path, rel: &str) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"));
-    mp_report::page::data::registered(&text)
+    mp_report::registered(&text)
         .unwrap_or_else(|| panic!("{rel} does not register its content"))
         .2
 }
@@ -278,7 +278,7 @@ fn run_on_golf_clip_writes_consistent_outputs() {
     // The frames lie beside the report, one per analysed frame.
     for f in 0..GOLF_FRAMES {
         let jpg = std::fs::read(dir.join(format!("report/frames/{f:06}.jpg"))).unwrap();
-        assert_eq!(mp_report::frames::jpeg_size(&jpg), Some((354, 492)));
+        assert_eq!(mp_report::jpeg_size(&jpg), Some((354, 492)));
     }
 }
 

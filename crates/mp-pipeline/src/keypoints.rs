@@ -683,7 +683,7 @@ fn start_jpeg_copies(
                     if limit.is_some_and(|n| index >= n) {
                         break;
                     }
-                    match mp_report::frames::read_jpeg(r, &what, k) {
+                    match mp_report::read_jpeg(r, &what, k) {
                         Ok(Some(jpg)) => {
                             if let Err(e) = store.push_jpeg(index, jpg) {
                                 result = Err(e.into());

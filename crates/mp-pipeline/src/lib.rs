@@ -67,7 +67,7 @@ pub use params::{OutputParams, Params, PersonChoice, PersonParams, PoseParams};
 pub use pose_rate::PoseRate;
 pub use progress::{Observer, Silent, Stage, StageTime};
 
-use mp_report::pictures::Analysed;
+use mp_report::Analysed;
 use mp_report::{Card, OutputDir};
 use progress::{check, Timings};
 
@@ -467,7 +467,7 @@ pub(crate) fn run_with(
     check(cancel)?;
     // What an earlier run into the same folder wrote and this one did not
     // (another input's people, plots or overlay) does not stay beside it.
-    files.push(mp_report::outdir::RUN_FILES.into());
+    files.push(mp_report::RUN_FILES.into());
     out.replace_previous_run(&files)
         .map_err(PipelineError::from_report)?;
     drop(out);
@@ -493,7 +493,7 @@ fn write_page(
     let t_write = Instant::now();
     files.extend(page.files.iter().cloned());
     let path = page.write(out).map_err(PipelineError::from_report)?;
-    files.push(mp_report::page::PAGE.into());
+    files.push(mp_report::PAGE.into());
     timings.push(Stage::Report, page_time + t_write.elapsed(), n);
     Ok(path)
 }

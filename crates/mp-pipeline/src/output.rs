@@ -6,10 +6,10 @@ use mp_abstract::{Analysis, ProgramLoopJson, RepetitionsJson};
 use mp_geom::PersonId;
 use mp_geom::{CancelToken, Track};
 use mp_pose::{VideoReader, VideoWriter};
-use mp_report::draw::{draw_skeleton, SkeletonStyle, View};
-use mp_report::outdir::check_cancel;
-use mp_report::raster::{pixmap_to_rgb, rgb_to_pixmap};
+use mp_report::check_cancel;
 use mp_report::OutputDir;
+use mp_report::{draw_skeleton, SkeletonStyle, View};
+use mp_report::{pixmap_to_rgb, rgb_to_pixmap};
 use serde::Serialize;
 
 use crate::error::{PipelineError, Result};

@@ -127,7 +127,7 @@ pub(crate) fn people_views<'a>(
             };
             let found = all
                 .get(p.id)
-                .map(|person| mp_report::people::found_runs(&person.track, person.first_frame))
+                .map(|person| mp_report::found_runs(&person.track, person.first_frame))
                 .unwrap_or_default();
             let repetitions = p
                 .counts

@@ -135,7 +135,7 @@ pub struct MjpegOptions {
 
 /// An FFmpeg process writing reduced frames of a video as JPEG files back to
 /// back on its standard output (read them with a JPEG splitter such as
-/// `mp_report::frames::read_jpeg`).
+/// `mp_report::read_jpeg`).
 pub struct MjpegStream {
     path: PathBuf,
     child: Child,

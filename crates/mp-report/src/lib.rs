@@ -4,17 +4,17 @@
 //!   keypoints as dots, the executed program coloured by primitive kind).
 //! * `timeline`: primitives of every joint by kind, the counted
 //!   repetitions and the abstract program's loops, over one time axis.
-//! * [`draw`]: skeletons on frames or on a blank canvas, contact sheets.
-//! * [`frames`]: reduced JPEG copies of video frames for the report.
-//! * [`page`]: the report, `report.html` and the folder `report/` beside it
-//!   whose frames and data the page loads as it plays ([`page::cards`]: the
-//!   summary cards; [`page::panels`]: the panels' contents; [`page::data`]:
+//! * `draw`: skeletons on frames or on a blank canvas, contact sheets.
+//! * `frames`: reduced JPEG copies of video frames for the report.
+//! * `page`: the report, `report.html` and the folder `report/` beside it
+//!   whose frames and data the page loads as it plays (`page::cards`: the
+//!   summary cards; `page::panels`: the panels' contents; `page::data`:
 //!   the folder's files and their size budgets).
-//! * [`people`]: several people on the page (the people strip).
-//! * [`pictures`]: every picture of an analysis, written into an output
+//! * `people`: several people on the page (the people strip).
+//! * `pictures`: every picture of an analysis, written into an output
 //!   folder.
-//! * [`raster`]: SVG → PNG (resvg, pure Rust), PNG/JPEG encoding.
-//! * [`outdir`]: an output folder whose files appear complete or not at all,
+//! * `raster`: SVG → PNG (resvg, pure Rust), PNG/JPEG encoding.
+//! * `outdir`: an output folder whose files appear complete or not at all,
 //!   cancelled through a `CancelToken`.
 //!
 //! Pictures are written as SVG (exact, small, readable in any browser) and
@@ -33,15 +33,15 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod draw;
+mod draw;
 mod error;
-pub mod frames;
-pub mod outdir;
-pub mod page;
-pub mod people;
-pub mod pictures;
+mod frames;
+mod outdir;
+mod page;
+mod people;
+mod pictures;
 mod plots;
-pub mod raster;
+mod raster;
 mod style;
 mod svg;
 mod timeline;
@@ -56,3 +56,16 @@ pub use people::PersonRow;
 pub use pictures::{write_pictures, Analysed};
 pub use plots::{joint_trajectory_svg, PlotParams};
 pub use timeline::{timeline_svg, TimeAxis, TimelineParams};
+
+pub use draw::{
+    contact_sheet, draw_pose, draw_skeleton, frame_tile, ContactSheetParams, SkeletonStyle, Tile,
+    View,
+};
+pub use frames::{jpeg_size, read_jpeg};
+pub use outdir::{check_cancel, emergency_cleanup, RUN_FILES};
+pub use page::data::registered;
+pub use page::data::{CHUNK_FRAMES, FOLDER_BUDGET_BYTES, FRAMES_BUDGET_BYTES};
+pub use page::PAGE;
+pub use people::found_runs;
+pub use raster::encode_jpeg;
+pub use raster::{pixmap_to_png, pixmap_to_rgb, rgb_to_pixmap, svg_to_pixmap};

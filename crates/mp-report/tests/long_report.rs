@@ -13,7 +13,7 @@ use hour_input::*;
 use mp_abstract::{AbstractProgram, RepetitiveInterval};
 use mp_concrete::Program;
 use mp_geom::Track;
-use mp_report::page::data;
+
 use mp_report::{OutputDir, PersonPage, PersonRow, ProgramView, ReportInput};
 
 /// A person's analysis: program, executed program, keypoints, abstract
@@ -79,7 +79,7 @@ fn write(input: &ReportInput<'_>) -> Written {
     let html_bytes = std::fs::metadata(tmp.path().join("report.html"))
         .unwrap()
         .len();
-    let (folder, files) = folder_bytes(&tmp.path().join(data::FOLDER));
+    let (folder, files) = folder_bytes(&tmp.path().join("report"));
     assert_eq!(files, page.files.len(), "every file is listed for the run");
     let bytes_of = |pick: &dyn Fn(&str) -> bool| -> u64 {
         page.files
@@ -187,7 +187,7 @@ fn an_hour_makes_a_small_page_and_a_bounded_folder() {
         "report.html is {} B",
         one.html_bytes
     );
-    assert!(one.frames_bytes <= data::FRAMES_BUDGET_BYTES as u64);
+    assert!(one.frames_bytes <= mp_report::FRAMES_BUDGET_BYTES as u64);
     // The frame store's 1,200 frames are all there (they fit the budget).
     assert_eq!(
         one.page
@@ -203,13 +203,13 @@ fn an_hour_makes_a_small_page_and_a_bounded_folder() {
             .iter()
             .filter(|f| f.contains("/data-"))
             .count(),
-        HOUR.div_ceil(data::CHUNK_FRAMES)
+        HOUR.div_ceil(mp_report::CHUNK_FRAMES)
     );
     assert!(
-        one.folder <= data::FOLDER_BUDGET_BYTES as u64,
+        one.folder <= mp_report::FOLDER_BUDGET_BYTES as u64,
         "report/ is {} B, over its budget of {} B",
         one.folder,
-        data::FOLDER_BUDGET_BYTES
+        mp_report::FOLDER_BUDGET_BYTES
     );
     // Six people and a strip of forty-six: the data keeps every second
     // frame, and the folder stays within the budget.
@@ -227,10 +227,10 @@ fn an_hour_makes_a_small_page_and_a_bounded_folder() {
         all.data_bytes
     );
     assert!(
-        all.folder <= data::FOLDER_BUDGET_BYTES as u64,
+        all.folder <= mp_report::FOLDER_BUDGET_BYTES as u64,
         "report/ is {} B, over its budget of {} B",
         all.folder,
-        data::FOLDER_BUDGET_BYTES
+        mp_report::FOLDER_BUDGET_BYTES
     );
     if let Some(keep) = std::env::var_os("MP_KEEP_HOUR") {
         let keep = std::path::PathBuf::from(keep);

@@ -18,8 +18,8 @@ use mp_geom::Skeleton;
 use mp_live::PersonPose;
 use mp_pose::Frame;
 use mp_pose::{resize_rgb, RgbView};
-use mp_report::draw::{draw_pose, SkeletonStyle, View};
-use mp_report::raster::{pixmap_to_rgb, rgb_to_pixmap};
+use mp_report::{draw_pose, SkeletonStyle, View};
+use mp_report::{pixmap_to_rgb, rgb_to_pixmap};
 
 /// Frames encoded per second at most.
 pub const MAX_FPS: f64 = 15.0;
@@ -232,7 +232,7 @@ impl Labels {
                     r##"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="26"><rect width="{w}" height="26" rx="5" fill="{colour}" fill-opacity="0.85"/><text x="{}" y="19" font-family="sans-serif" font-size="17" font-weight="bold" fill="#fff" text-anchor="middle">{text}</text></svg>"##,
                     w / 2
                 );
-                let p = mp_report::raster::svg_to_pixmap("label", &svg, 1.0).ok()?;
+                let p = mp_report::svg_to_pixmap("label", &svg, 1.0).ok()?;
                 Some(Label {
                     width: p.width() as usize,
                     height: p.height() as usize,

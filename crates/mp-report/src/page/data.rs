@@ -128,8 +128,9 @@ pub fn pack(values: &[i64], slots: usize) -> String {
     base64::engine::general_purpose::STANDARD.encode(bytes)
 }
 
-/// The inverse of [`pack`] (for tests and tools): `None` if it is not base64
+/// The inverse of [`pack`] (for the tests): `None` if it is not base64
 /// or ends inside a number.
+#[cfg(test)]
 pub fn unpack(text: &str, slots: usize) -> Option<Vec<i64>> {
     let bytes = base64::engine::general_purpose::STANDARD
         .decode(text)
@@ -172,7 +173,7 @@ pub fn registration(kind: &str, key: &str, content: &serde_json::Value) -> Resul
     ))
 }
 
-/// The content of a registration script written by [`registration`]:
+/// The content of a registration script written by `registration`:
 /// (kind, key, content), or `None` when `script` is not one.
 pub fn registered(script: &str) -> Option<(String, String, serde_json::Value)> {
     let body = script

@@ -161,7 +161,7 @@ pub fn pictures(w: usize, h: usize, n: usize) -> Vec<Vec<u8>> {
                     });
                 }
             }
-            mp_report::raster::encode_jpeg(&rgb, w, h, 75).unwrap()
+            mp_report::encode_jpeg(&rgb, w, h, 75).unwrap()
         })
         .collect()
 }
