@@ -47,7 +47,7 @@ pub struct EvalLoopsArgs {
     pub max_clips: usize,
 }
 
-use mp_forecast::data::PENN_REPETITIVE_CLASSES as PENN_REPETITIVE;
+use crate::forecast::PENN_REPETITIVE_CLASSES as PENN_REPETITIVE;
 const HORIZONS: [usize; 4] = [5, 10, 20, 30];
 
 fn bar(n: usize, what: &str) -> ProgressBar {

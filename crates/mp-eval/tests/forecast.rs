@@ -10,8 +10,8 @@ use common::*;
 use std::sync::Arc;
 
 use mp_eval::forecast::protocol::{evaluate, evaluate_clip, EvalParams, MethodReport};
-use mp_forecast::data::Clip;
-use mp_forecast::model::{find_model_dir, ArSpace, ForecastModels};
+use mp_forecast::Clip;
+use mp_forecast::{find_model_dir, ArSpace, ForecastModels};
 use mp_forecast::{ArForecaster, ArParams, Constant};
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
@@ -314,7 +314,7 @@ fn models_of(dataset: &str) -> Arc<ForecastModels> {
 fn learned_model_beats_constant_on_real_penn_action_clips() {
     // every 6th validation clip (21 clips, all 15 actions): AR on Φ vs Constant, PCK with
     // DTW averaged over the horizons 5–30
-    let ds = mp_forecast::data::ForecastDataset::open(mp_geom::data_or_return!(
+    let ds = mp_forecast::ForecastDataset::open(mp_geom::data_or_return!(
         "penn_action/penn_action_train.npz"
     ))
     .unwrap();
@@ -345,7 +345,7 @@ fn learned_model_beats_constant_on_real_penn_action_clips() {
 fn learned_3d_model_beats_constant_on_real_msr_action3d_clips() {
     // the 30 validation clips, a start every 25th frame (the 3D protocol of paper 002): PA-MPJPE with
     // DTW averaged over the horizons 5–30 (mm, lower is better)
-    let ds = mp_forecast::data::ForecastDataset::open(mp_geom::data_or_return!(
+    let ds = mp_forecast::ForecastDataset::open(mp_geom::data_or_return!(
         "msr_action3d/msr_action3d_odd_subjects.npz"
     ))
     .unwrap();

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use mp_forecast::model::{find_model_dir, ArSpace, ForecastModels};
+use mp_forecast::{find_model_dir, ArSpace, ForecastModels};
 use mp_forecast::{ArForecaster, ArParams, Forecaster};
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;

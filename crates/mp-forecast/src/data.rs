@@ -34,17 +34,6 @@ pub struct Clip {
 /// Every `VALIDATION_EVERY`-th clip (index % 10 == 0) is a validation clip.
 pub const VALIDATION_EVERY: usize = 10;
 
-/// Penn Action's repetitive classes (exercises performed as repetitions).
-pub const PENN_REPETITIVE_CLASSES: [&str; 7] = [
-    "bench_press",
-    "jump_rope",
-    "jumping_jacks",
-    "pullup",
-    "pushup",
-    "situp",
-    "squat",
-];
-
 /// Whether clip `index` belongs to the validation split.
 pub fn is_validation_clip(index: usize) -> bool {
     index.is_multiple_of(VALIDATION_EVERY)
@@ -117,7 +106,7 @@ impl ForecastDataset {
         }
     }
 
-    /// (training clips, validation clips) by [`is_validation_clip`].
+    /// (training clips, validation clips) by `is_validation_clip`.
     pub fn split(&self) -> (Vec<&Clip>, Vec<&Clip>) {
         let (mut tr, mut va) = (Vec::new(), Vec::new());
         for (i, c) in self.clips.iter().enumerate() {

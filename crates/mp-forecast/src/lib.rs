@@ -19,12 +19,12 @@
 //!   `mp predict` and `mp statue` ([`PredictOptions`], [`StatueOptions`]):
 //!   training set and model lookup, the map onto the model's joints, and
 //!   the path taken ([`PredictPath`]).
-//! * [`mapped`]: the product's skeletons (COCO-17, BlazePose-33) on the
-//!   Penn Action / MSR Action3D models ([`MappedForecaster`]).
+//! * `mapped`: the product's skeletons (COCO-17, BlazePose-33) on the
+//!   Penn Action / MSR Action3D models (`MappedForecaster`).
 //! * `normalize`: the root-relative, torso-scaled keypoint normalisation
 //!   shared with the training code.
 //! * `statue`: the frame after which prediction accuracy improves most.
-//! * [`data`]: Penn Action / MSR Action3D clips and the validation split.
+//! * `data`: Penn Action / MSR Action3D clips and the validation split.
 //!
 //! ```
 //! use mp_forecast::{Constant, Forecaster};
@@ -39,19 +39,18 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod data;
-pub mod error;
-pub mod forecaster;
-pub mod mapped;
-pub mod model;
+mod data;
+mod error;
+mod forecaster;
+mod mapped;
+mod model;
 mod nn;
 mod normalize;
-pub mod predict;
+mod predict;
 mod statue;
 
 pub use error::{ForecastError, Result};
 pub use forecaster::{Constant, ForecastMethod, Forecaster, LoopUnroll};
-pub use mapped::{map_to_model, model_dataset, MappedForecaster};
 pub use model::{ArForecaster, ArParams, ArSpace, ForecastModels};
 pub use nn::{NearestNeighbour, NnParams};
 pub use predict::{
@@ -59,3 +58,6 @@ pub use predict::{
     StatueOptions, StatueSearch,
 };
 pub use statue::{find_statue, Statue, StatueParams};
+
+pub use data::{Clip, ForecastDataset};
+pub use model::find_model_dir;

@@ -100,16 +100,6 @@ impl<F: Forecaster> MappedForecaster<F> {
     pub fn new(inner: F, map: SkeletonMap) -> Self {
         MappedForecaster { inner, map }
     }
-
-    /// The map.
-    pub fn map(&self) -> &SkeletonMap {
-        &self.map
-    }
-
-    /// The forecaster of the model's skeleton.
-    pub fn inner(&self) -> &F {
-        &self.inner
-    }
 }
 
 impl<F: Forecaster> Forecaster for MappedForecaster<F> {

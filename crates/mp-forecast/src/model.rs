@@ -137,10 +137,6 @@ impl Manifest {
 /// Candidate model folders for a data set, in search order: `MP_FORECAST_MODELS`
 /// (itself or its `<dataset>` subfolder), `<workspace>/models/forecast/<dataset>`,
 /// and `models/forecast/<dataset>` above the current directory (where it exists).
-pub fn model_dir_candidates(dataset: &str) -> Vec<PathBuf> {
-    model_search(dataset).dirs().to_vec()
-}
-
 fn model_search(dataset: &str) -> ModelDirs {
     ModelDirs::new()
         .with_env(MODEL_DIR_ENV, &[dataset])

@@ -174,7 +174,7 @@ impl NearestNeighbour {
     }
 
     /// The skeleton of the training tracks (what a track must have, or map
-    /// onto: [`crate::mapped`]).
+    /// onto: `crate::mapped`).
     pub fn skeleton(&self) -> &mp_geom::Skeleton {
         &self.skeleton
     }

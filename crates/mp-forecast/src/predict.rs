@@ -78,12 +78,12 @@ pub struct PredictOptions {
     /// The method. Default [`ForecastMethod::Loop`].
     pub method: ForecastMethod,
     /// Training set of [`ForecastMethod::Nn`] (a Penn Action or MSR Action3D
-    /// npz; its training split is indexed, see [`crate::data`]). Default
+    /// npz; its training split is indexed, see `crate::data`). Default
     /// `None`: the shared Penn Action train split, if present.
     pub train: Option<PathBuf>,
     /// Model folder of [`ForecastMethod::Ar`] / [`ForecastMethod::ArPose`].
     /// Default `None`: `models/forecast/<dataset>` with the data set that
-    /// [`model_dataset`] names for the track's skeleton.
+    /// `model_dataset` names for the track's skeleton.
     pub models: Option<PathBuf>,
     /// Loop unrolling of [`ForecastMethod::Loop`]. Default
     /// [`LoopUnroll::default_params`]: `mp-abstract`'s prediction defaults
@@ -318,7 +318,7 @@ pub(crate) fn check_horizon_for(track: &Track, horizon: usize) -> Result<()> {
 /// models come from).
 ///
 /// Errors: `observe` outside `1..=frames` (`2..=frames` for loop unrolling),
-/// a horizon of 0 frames or beyond [`max_horizon_frames`], no model for the
+/// a horizon of 0 frames or beyond `max_horizon_frames`, no model for the
 /// track's skeleton, no training set for the nearest-neighbour method, and
 /// the errors of the method itself.
 pub fn forecast(

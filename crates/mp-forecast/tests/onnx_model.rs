@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use common::*;
-use mp_forecast::model::{find_model_dir, ArSpace, ForecastModels};
+use mp_forecast::{find_model_dir, ArSpace, ForecastModels};
 use mp_forecast::{
     find_statue, ArForecaster, ArParams, Constant, ForecastError, Forecaster, StatueParams,
 };

@@ -11,9 +11,9 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use mp_forecast::data::Clip;
-use mp_forecast::data::{ForecastDataset, PENN_REPETITIVE_CLASSES};
-use mp_forecast::model::find_model_dir;
+use mp_forecast::find_model_dir;
+use mp_forecast::Clip;
+use mp_forecast::ForecastDataset;
 use mp_forecast::{
     ArForecaster, ArParams, ArSpace, Constant, ForecastModels, Forecaster, LoopUnroll,
     NearestNeighbour, NnParams,
@@ -22,6 +22,17 @@ use mp_pose::SessionParams;
 use serde_json::{json, Value};
 
 pub mod protocol;
+
+/// Penn Action's repetitive classes (exercises performed as repetitions).
+pub const PENN_REPETITIVE_CLASSES: [&str; 7] = [
+    "bench_press",
+    "jump_rope",
+    "jumping_jacks",
+    "pullup",
+    "pushup",
+    "situp",
+    "squat",
+];
 
 pub use protocol::{evaluate, EvalParams, MethodReport};
 

@@ -36,9 +36,9 @@ use mp_geom::{Track, Units};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use mp_forecast::data::Clip;
-use mp_forecast::error::{ForecastError, Result};
-use mp_forecast::forecaster::Forecaster;
+use mp_forecast::Clip;
+use mp_forecast::Forecaster;
+use mp_forecast::{ForecastError, Result};
 
 /// Parameters of [`evaluate`].
 #[derive(Debug, Clone, PartialEq)]
