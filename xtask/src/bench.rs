@@ -50,7 +50,7 @@ fn cpu_seconds() -> Option<f64> {
 
 /// The default procedural performer (COCO-17, 567 frames) repeated `reps` times.
 fn repeated_performer(reps: usize) -> anyhow::Result<mp_geom::Track> {
-    let tr = mp_geom::performer::perform(&mp_geom::performer::PerformerParams::default())?.track_2d;
+    let tr = mp_geom::perform(&mp_geom::PerformerParams::default())?.track_2d;
     let pos: Vec<_> = (0..reps).map(|_| tr.positions()).collect();
     let conf: Vec<_> = (0..reps).map(|_| tr.confidence()).collect();
     Ok(mp_geom::Track::new(

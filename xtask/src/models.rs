@@ -103,7 +103,7 @@ fn existing_model_dirs(out: &Path) -> Vec<PathBuf> {
             dirs.push(PathBuf::from(p));
         }
     }
-    if let Some(shared) = mp_geom::paths::shared_dir() {
+    if let Some(shared) = mp_geom::shared_dir() {
         dirs.push(shared.join("models"));
     }
     let out_c = out.canonicalize().unwrap_or_else(|_| out.to_path_buf());
@@ -258,7 +258,7 @@ fn venv_python(root: &Path) -> Result<PathBuf> {
 }
 
 fn default_verify_image() -> Option<PathBuf> {
-    mp_geom::paths::data_file("coco_sample/000000000785.jpg")
+    mp_geom::data_file("coco_sample/000000000785.jpg")
 }
 
 fn convert(root: &Path, out: &Path, wanted: &[&Conversion], args: &ModelsArgs) -> Result<()> {

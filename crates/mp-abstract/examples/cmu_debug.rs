@@ -3,7 +3,7 @@
 use mp_abstract::{analyse, AbstractParams};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args().nth(1).ok_or("usage: cmu_debug FILE")?;
-    let c = mp_geom::io::datasets::CmuFeatures::open(&path)?;
+    let c = mp_geom::CmuFeatures::open(&path)?;
     let mut p = AbstractParams::default();
     if let Ok(l) = std::env::var("LAMBDA") {
         p.synth.lambda = if l == "adaptive" {

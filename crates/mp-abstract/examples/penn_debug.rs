@@ -6,7 +6,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = args.next().ok_or("usage: penn_debug FILE INDEX")?;
     let idx: usize = args.next().ok_or("usage: penn_debug FILE INDEX")?.parse()?;
-    let penn = mp_geom::io::datasets::PennAction::open(&path)?;
+    let penn = mp_geom::PennAction::open(&path)?;
     let info = penn.clip_info(idx)?.clone();
     let mut t = penn.clip(idx)?;
     t.fill_missing();

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
 use mp_abstract::{analyse, AbstractParams};
-use mp_geom::performer::{perform, PerformerParams};
+use mp_geom::{perform, PerformerParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let perf = perform(&PerformerParams::default())?;

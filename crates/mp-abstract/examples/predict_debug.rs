@@ -1,7 +1,7 @@
 //! Prints what prediction by unrolling does on a jumping-jack performer.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 use mp_abstract::{analyse, unroll, AbstractParams, PredictParams};
-use mp_geom::performer::{perform, Move, PerformerParams};
+use mp_geom::{perform, Move, PerformerParams};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let params = PerformerParams {

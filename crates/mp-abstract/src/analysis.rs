@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use mp_concrete::{synthesize_detailed, Program, SynthParams};
-use mp_geom::checked::{Checked, Validate};
+use mp_geom::{Checked, Validate};
 use mp_geom::{Track, Units};
 use ndarray::Array3;
 use serde::{Deserialize, Serialize};
@@ -549,7 +549,7 @@ pub fn unroll(
             unrolled.iterations = iters;
             unrolled.observed.clear();
             let prims = unroll_loop(&unrolled, LoopReplay::Mean)?;
-            let fit = mp_geom::fit::FitParams {
+            let fit = mp_geom::FitParams {
                 unit_scale: analysis.unit_scale,
                 ..params.analysis.synth.fit.clone()
             };

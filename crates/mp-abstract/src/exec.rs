@@ -4,7 +4,7 @@
 //! To execute an abstract primitive with duration `d` and points
 //! `start, mid, end` for a joint, the three points are placed at
 //! `t = 0, (d−1)/2, d−1`, the quadratic through them is sampled at every frame,
-//! and the best concrete primitive ([`mp_geom::fit::fit_best`]) is fitted to
+//! and the best concrete primitive ([`mp_geom::fit_best`]) is fitted to
 //! those samples and executed (paper §3: "pick the concrete primitive c that
 //! best fits the sample, and then execute c").
 
@@ -15,7 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
 
-use mp_geom::fit::{fit_best, FitParams};
+use mp_geom::{fit_best, FitParams};
 use mp_geom::{Primitive, Skeleton, Track, Units};
 
 use crate::error::{AbstractError, Result};

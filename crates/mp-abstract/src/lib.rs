@@ -16,7 +16,7 @@
 //!
 //! ```
 //! use mp_abstract::{analyse, AbstractParams};
-//! use mp_geom::performer::{perform, PerformerParams};
+//! use mp_geom::{perform, PerformerParams};
 //!
 //! // The product's analysis (what `mp abstract` and `mp run` use): the
 //! // concrete program, its loops and the repetitions they count.

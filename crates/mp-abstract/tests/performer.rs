@@ -3,7 +3,7 @@
 
 use mp_abstract::analysis::predict_constant;
 use mp_abstract::{analyse, unroll, AbstractParams, PredictParams};
-use mp_geom::performer::{perform, Move, PerformerParams};
+use mp_geom::{perform, Move, PerformerParams};
 
 fn kd(a: &mp_geom::Track, b: &mp_geom::Track) -> f64 {
     let (t, j, d) = a.positions().dim();

@@ -261,12 +261,8 @@ fn quva_reference_keypoints_count() {
     let name = "023_fitness";
     let path = mp_geom::data_or_return!(format!("reference_keypoints/{name}.npz"));
     let ann = mp_geom::data_or_return!(format!("quva_repetition/annotations/{name}.npy"));
-    let truth = mp_geom::io::npz::read_npy(ann)
-        .unwrap()
-        .to_i64()
-        .unwrap()
-        .len();
-    let t = mp_geom::io::read_track(&path).unwrap();
+    let truth = mp_geom::read_npy(ann).unwrap().to_i64().unwrap().len();
+    let t = mp_geom::read_track(&path).unwrap();
     let p = estimate_period(&t, 0, t.n_frames(), &PeriodParams::default())
         .unwrap()
         .expect("a period");
@@ -277,7 +273,7 @@ fn quva_reference_keypoints_count() {
 fn cmu_exercise_blocks_are_segmented() {
     // Real data: 6 labelled exercise blocks back to back, 12 joint angles at 10 fps.
     let path = mp_geom::data_or_return!("cmu_mocap6_exercise/14_14_features10fps.npz");
-    let c = mp_geom::io::datasets::CmuFeatures::open(&path).unwrap();
+    let c = mp_geom::CmuFeatures::open(&path).unwrap();
     let mut blocks = Vec::new();
     let mut s = 0;
     for i in 1..=c.labels.len() {

@@ -8,7 +8,7 @@ use mp_abstract::edit::set_iterations;
 use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};
 use mp_abstract::{read_program, write_program, AbstractParams};
 use mp_forecast::{ForecastMethod, PredictOptions};
-use mp_geom::io::write_track;
+use mp_geom::write_track;
 use mp_pipeline::{analyse_track, Params};
 
 /// Options shared by the commands that analyse a track.

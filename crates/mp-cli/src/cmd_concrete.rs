@@ -74,7 +74,7 @@ pub struct FitArgs {
 pub struct ExecuteArgs {
     /// Input program (`.json` or DSL text).
     pub program: PathBuf,
-    /// Output track (format by extension, as `mp_geom::io::write_track` writes).
+    /// Output track (format by extension, as `mp_geom::write_track` writes).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Output frame rate (default: the program's).
@@ -153,7 +153,7 @@ pub fn execute(a: &ExecuteArgs) -> anyhow::Result<()> {
         params.transition = Transition::Extrapolate;
     }
     let track = p.execute_with(&params)?;
-    mp_geom::io::write_track(&a.output, &track)
+    mp_geom::write_track(&a.output, &track)
         .with_context(|| format!("writing {}", a.output.display()))?;
     eprintln!(
         "{} frames at {} fps → {}",

@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use mp_geom::io::write_track;
-use mp_geom::performer::{perform, PerformerParams};
+use mp_geom::write_track;
+use mp_geom::{perform, PerformerParams};
 
 use mp_pipeline::{Input, Params};
 
@@ -15,7 +15,7 @@ use crate::cmd_run;
 /// Arguments of `mp performer`.
 #[derive(Args, Debug)]
 pub struct PerformerArgs {
-    /// Output track (format by extension, as `mp_geom::io::write_track` writes; `.bvh` and `.c3d` with --3d).
+    /// Output track (format by extension, as `mp_geom::write_track` writes; `.bvh` and `.c3d` with --3d).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Write the 3D track (metres) instead of the 2D one (pixels).
@@ -168,7 +168,7 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
 }
 
 /// The performer's labelled move overlapping frames `a..b` (IoM > 0.5).
-fn truth(perf: &mp_geom::performer::Performance, a: usize, b: usize) -> String {
+fn truth(perf: &mp_geom::Performance, a: usize, b: usize) -> String {
     perf.segments
         .iter()
         .find(|s| mp_abstract::repetition::iom((a, b), (s.frames.start, s.frames.end)) > 0.5)

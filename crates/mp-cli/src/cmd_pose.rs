@@ -194,8 +194,8 @@ pub struct OverlayArgs {
 /// (`.png`) or a video (`.mp4`, `.mkv`, `.mov`), with the renderer of
 /// `mp run`'s overlay video and report.
 pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
-    let track = mp_geom::io::read_track(&a.track)
-        .with_context(|| format!("reading {}", a.track.display()))?;
+    let track =
+        mp_geom::read_track(&a.track).with_context(|| format!("reading {}", a.track.display()))?;
     if track.units() != Units::Pixels || track.dims() != 2 {
         bail!(
             "{}: overlay needs a 2D track in pixels, this one is {}D in {}",
@@ -253,7 +253,7 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
                 .unwrap_or_default();
             let sheet = contact_sheet(&tiles, a.cols, &format!("{title} — keypoints"))?;
             let png = pixmap_to_png("contact sheet", &sheet)?;
-            mp_geom::io::write_atomic(&a.output, &png)
+            mp_geom::write_atomic(&a.output, &png)
                 .with_context(|| format!("writing {}", a.output.display()))?;
             if !a.quiet {
                 println!(

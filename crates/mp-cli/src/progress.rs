@@ -99,7 +99,7 @@ static OBSERVED: AtomicBool = AtomicBool::new(false);
 /// staging folders) and exits with status 130, holding the locks that
 /// renames take so that nothing appears meanwhile.
 fn exit_interrupted() -> ! {
-    let _files = mp_geom::io::abandon_partial_writes();
+    let _files = mp_geom::abandon_partial_writes();
     let _staging = mp_report::emergency_cleanup();
     eprintln!("\ninterrupted");
     std::process::exit(130);

@@ -6,8 +6,8 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use mp_geom::io::{read_track_rated, RateSource, ReadOptions, TrackRead, DEFAULT_FPS};
 use mp_geom::Track;
+use mp_geom::{read_track_rated, RateSource, ReadOptions, TrackRead, DEFAULT_FPS};
 use mp_pipeline::{is_video, Input};
 
 /// The frame-rate option of every command that reads a track.
@@ -22,7 +22,7 @@ pub struct RateOpt {
 const IMAGE_EXTENSIONS: [&str; 7] = ["png", "jpg", "jpeg", "bmp", "webp", "tif", "tiff"];
 
 /// Extensions of keypoint tracks.
-pub const TRACK_EXTENSIONS: [&str; 9] = mp_geom::io::TRACK_EXTENSIONS;
+pub const TRACK_EXTENSIONS: [&str; 9] = mp_geom::TRACK_EXTENSIONS;
 
 fn extension(path: &Path) -> String {
     path.extension()

@@ -9,7 +9,7 @@ mod common;
 use common::{ok, refused};
 
 fn golf() -> String {
-    mp_geom::paths::data_file("golfdb/golf_swing.mp4")
+    mp_geom::data_file("golfdb/golf_swing.mp4")
         .expect("the shared golf swing")
         .display()
         .to_string()
@@ -57,7 +57,7 @@ fn devices_are_checked_and_the_cpu_build_says_why_not_cuda() {
             device,
             "--quiet",
         ]);
-        tracks.push(mp_geom::io::read_track(&path).unwrap());
+        tracks.push(mp_geom::read_track(&path).unwrap());
     }
     let (a, b) = (&tracks[0], &tracks[1]);
     assert_eq!(a.n_frames(), 3);

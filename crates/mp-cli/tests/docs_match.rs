@@ -330,8 +330,8 @@ fn the_matching_can_fail() {
 
 #[test]
 fn commands_of_the_docs_print_what_the_docs_show() {
-    let Some(shared) = mp_geom::paths::shared_dir() else {
-        mp_geom::paths::skip_test(
+    let Some(shared) = mp_geom::shared_dir() else {
+        mp_geom::test_support::skip_test(
             "commands_of_the_docs_print_what_the_docs_show",
             "the shared data folder",
         );

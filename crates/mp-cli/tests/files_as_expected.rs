@@ -53,7 +53,7 @@ fn outputs_have_ordinary_permissions_and_a_reused_folder_is_cleaned() {
     };
     let first = plots("run");
     assert!(first.iter().any(|f| f.ends_with("_nose.svg")), "{first:?}");
-    let Some(bvh) = mp_geom::paths::data_file_or_skip(
+    let Some(bvh) = mp_geom::test_support::data_file_or_skip(
         "cmu_salsa_bvh/60_01_scaled.bvh",
         "outputs_have_ordinary_permissions_and_a_reused_folder_is_cleaned",
     ) else {

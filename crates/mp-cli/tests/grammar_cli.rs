@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use mp_geom::io::bvh::Bvh;
+use mp_geom::Bvh;
 
 fn mp(args: &[&str]) -> (String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_mp"))
@@ -199,7 +199,7 @@ fn symbols_learn_synth_round_trip() {
         9,
         "{fsm}"
     );
-    let t = mp_geom::io::read_track(&npz).unwrap();
+    let t = mp_geom::read_track(&npz).unwrap();
     assert_eq!(t.n_joints(), full.joints().len());
     let regen = dir.path().join("regen.bvh");
     let (out, err) = mp(&[

@@ -7,7 +7,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use mp_geom::io::read_track;
+use mp_geom::read_track;
 
 fn mp() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mp"))

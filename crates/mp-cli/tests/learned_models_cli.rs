@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
-use mp_geom::io::read_track;
+use mp_geom::read_track;
 use mp_geom::Track;
 
 const FRAMES: usize = 60;

@@ -298,7 +298,7 @@ fn out_writes_what_mp_run_writes() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let read = |d: &Path| mp_geom::io::read_track(d.join("track.npz")).unwrap();
+    let read = |d: &Path| mp_geom::read_track(d.join("track.npz")).unwrap();
     let (a, b) = (read(&live_dir), read(&run_dir));
     assert_eq!(a.n_frames(), b.n_frames());
     assert_eq!(a.skeleton().joints, b.skeleton().joints);
@@ -339,7 +339,7 @@ fn a_pose_rate_skips_frames_and_out_fills_them() {
         events.iter().any(|e| e["type"] == "rep"),
         "no repetition at half the poses"
     );
-    let track = mp_geom::io::read_track(dir.path().join("track.npz")).unwrap();
+    let track = mp_geom::read_track(dir.path().join("track.npz")).unwrap();
     assert_eq!(track.n_frames() as u64, frames);
     // The person is seen throughout: every frame has keypoints, the skipped
     // ones filled between their neighbours.

@@ -8,9 +8,9 @@ use common::{ok, refused};
 
 #[test]
 fn overlay_draws_the_track_on_a_contact_sheet_and_a_video() {
-    let Some(video) = mp_geom::paths::data_file_or_skip(
+    let Some(video) = mp_geom::test_support::data_file_or_skip(
         "golfdb/golf_swing.mp4",
-        &mp_geom::paths::current_test_name(),
+        &mp_geom::test_support::current_test_name(),
     ) else {
         return;
     };

@@ -13,7 +13,7 @@ use mp_geom::Track;
 const FRAMES: usize = 61;
 
 fn golf() -> String {
-    mp_geom::paths::data_file("golfdb/golf_swing.mp4")
+    mp_geom::data_file("golfdb/golf_swing.mp4")
         .expect("the shared golf swing")
         .display()
         .to_string()
@@ -36,7 +36,7 @@ fn extract(dir: &std::path::Path, name: &str, extra: &[&str]) -> (Track, String)
     args.extend_from_slice(extra);
     let (stdout, _) = ok(&args);
     (
-        mp_geom::io::read_track(&out).expect("the written track"),
+        mp_geom::read_track(&out).expect("the written track"),
         stdout,
     )
 }
@@ -107,7 +107,7 @@ fn the_summary_says_how_many_frames_were_posed() {
         stdout.contains("(pose model on 21 of 61 frames)"),
         "summary: {stdout}"
     );
-    let t = mp_geom::io::read_track(&out).unwrap();
+    let t = mp_geom::read_track(&out).unwrap();
     assert_eq!(t.n_frames(), FRAMES);
 }
 

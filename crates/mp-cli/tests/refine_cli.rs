@@ -6,8 +6,8 @@
 use std::path::Path;
 use std::process::Command;
 
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::io::{read_track, write_track};
+use mp_geom::MsrAction3D;
+use mp_geom::{read_track, write_track};
 use mp_refine::full_confidence;
 use mp_refine::mpjpe_abs;
 use mp_refine::{inject, Flaw};

@@ -134,8 +134,8 @@ fn a_video_with_nobody_gets_a_report() {
         .arg(&video)
         .status();
     if !st.is_ok_and(|s| s.success()) {
-        mp_geom::paths::skip_test(
-            &mp_geom::paths::current_test_name(),
+        mp_geom::test_support::skip_test(
+            &mp_geom::test_support::current_test_name(),
             "ffmpeg's lavfi testsrc2",
         );
         return;
@@ -204,14 +204,14 @@ fn a_video_with_nobody_gets_a_report() {
 /// other person opens the page on their analysis.
 #[test]
 fn report_picks_the_person_a_link_names() {
-    let test = mp_geom::paths::current_test_name();
+    let test = mp_geom::test_support::current_test_name();
     let Some(a) =
-        mp_geom::paths::data_file_or_skip("quva_repetition/videos/020_fitness.mp4", &test)
+        mp_geom::test_support::data_file_or_skip("quva_repetition/videos/020_fitness.mp4", &test)
     else {
         return;
     };
     let Some(b) =
-        mp_geom::paths::data_file_or_skip("quva_repetition/videos/027_fitness.mp4", &test)
+        mp_geom::test_support::data_file_or_skip("quva_repetition/videos/027_fitness.mp4", &test)
     else {
         return;
     };

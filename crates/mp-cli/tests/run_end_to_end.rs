@@ -11,7 +11,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use mp_concrete::Program;
-use mp_geom::io::read_track;
+use mp_geom::read_track;
 use mp_geom::Track;
 
 const GOLF_FRAMES: usize = 60;
@@ -21,9 +21,9 @@ use common::{mp_command as mp, report_data, run_ok};
 /// One run of `mp run` on the first 60 frames of the golf swing, shared by the tests below;
 /// `None` (the skip recorded for the running test) where the shared video is absent.
 fn golf_run() -> Option<&'static Path> {
-    let video = mp_geom::paths::data_file_or_skip(
+    let video = mp_geom::test_support::data_file_or_skip(
         "golfdb/golf_swing.mp4",
-        &mp_geom::paths::current_test_name(),
+        &mp_geom::test_support::current_test_name(),
     )?;
     static RUN: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
     let (_, dir) = RUN.get_or_init(|| {
@@ -215,7 +215,7 @@ fn check_outputs(
 
     // The program reproduces the keypoints.
     let exec = program.execute().unwrap();
-    let kd = mp_geom::metrics::kd(&track, &exec).unwrap();
+    let kd = mp_geom::kd(&track, &exec).unwrap();
     // 10 px at the 512-px reference frame.
     assert!(
         kd < 10.0 * frame_px / 512.0,
@@ -289,7 +289,7 @@ fn fit_on_the_runs_track_reproduces_its_program() {
     };
     // The track keeps the video frame it is in, so its program is fitted
     // at the same scale as `mp run`'s.
-    let read = mp_geom::io::read_track_rated(dir.join("track.npz"), &Default::default()).unwrap();
+    let read = mp_geom::read_track_rated(dir.join("track.npz"), &Default::default()).unwrap();
     assert_eq!(read.frame_size, Some((354, 492)));
     let tmp = tempfile::tempdir().unwrap();
     let p = tmp.path().join("p.txt");

@@ -40,8 +40,10 @@ fn run_err(cmd: &mut Command) -> String {
 /// The first `seconds` of the shared QUVA video, re-encoded losslessly into
 /// `dir`; `None` (the skip recorded) where the shared data are absent.
 fn clip(seconds: f64, dir: &Path) -> Option<PathBuf> {
-    let video =
-        mp_geom::paths::data_file_or_skip(CLIP_VIDEO, &mp_geom::paths::current_test_name())?;
+    let video = mp_geom::test_support::data_file_or_skip(
+        CLIP_VIDEO,
+        &mp_geom::test_support::current_test_name(),
+    )?;
     let out = dir.join("clip.mkv");
     let st = Command::new("ffmpeg")
         .args(["-v", "error", "-nostdin", "-y", "-i"])
@@ -175,7 +177,11 @@ fn errors_name_what_is_wrong() {
 #[test]
 fn a_video_without_a_person_is_a_clear_error() {
     // The pose model is found through the shared data's workspace; skip with them.
-    if mp_geom::paths::data_file_or_skip(CLIP_VIDEO, &mp_geom::paths::current_test_name()).is_none()
+    if mp_geom::test_support::data_file_or_skip(
+        CLIP_VIDEO,
+        &mp_geom::test_support::current_test_name(),
+    )
+    .is_none()
     {
         return;
     }
@@ -188,8 +194,8 @@ fn a_video_without_a_person_is_a_clear_error() {
         .arg(&video)
         .status();
     if !st.is_ok_and(|s| s.success()) {
-        mp_geom::paths::skip_test(
-            &mp_geom::paths::current_test_name(),
+        mp_geom::test_support::skip_test(
+            &mp_geom::test_support::current_test_name(),
             "ffmpeg's lavfi testsrc",
         );
         return;

@@ -13,8 +13,8 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
 use mp_concrete::synthetic::synthetic_track;
 use mp_concrete::{segment, segment_exhaustive, synthesize, Scale, SynthParams};
-use mp_geom::performer::{perform, PerformerParams};
 use mp_geom::Track;
+use mp_geom::{perform, PerformerParams};
 use ndarray::{concatenate, Axis};
 use std::time::Duration;
 

@@ -7,7 +7,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
 use mp_concrete::{dsl, program_stats, synthesize, Scale, SynthParams, UnobservedJoints};
-use mp_geom::io::datasets::PennAction;
+use mp_geom::PennAction;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let nth: usize = std::env::args()

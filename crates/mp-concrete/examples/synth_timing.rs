@@ -13,8 +13,8 @@ use mp_concrete::synthetic::synthetic_track;
 use mp_concrete::{
     segment, segment_exhaustive, segment_with_stats, synthesize, Continuity, Scale, SynthParams,
 };
-use mp_geom::performer::{perform, PerformerParams};
 use mp_geom::Track;
+use mp_geom::{perform, PerformerParams};
 use ndarray::{concatenate, Axis};
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
@@ -59,7 +59,7 @@ fn main() -> Res<()> {
     let track = repeated_performer(reps)?;
     let mut params = SynthParams::paper();
     if let Some(l) = squared {
-        params.fit.norm = mp_geom::fit::ErrorNorm::Squared;
+        params.fit.norm = mp_geom::ErrorNorm::Squared;
         params.lambda = mp_concrete::Lambda::fixed(l);
     }
     if let Some(sec) = spread {

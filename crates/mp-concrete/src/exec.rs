@@ -16,10 +16,10 @@ use crate::error::{ConcreteError, Result};
 use crate::program::Program;
 
 /// The most output cells (frames × joints) one execution may produce
-/// (`mp_geom::track::MAX_FRAME_JOINTS`): larger requests (an absurd
+/// (`mp_geom::MAX_FRAME_JOINTS`): larger requests (an absurd
 /// `fps_out`, a program of absurd durations) are a
 /// [`ConcreteError::TooLarge`] instead of an allocation failure.
-pub use mp_geom::track::MAX_FRAME_JOINTS;
+pub use mp_geom::MAX_FRAME_JOINTS;
 
 /// The most output frames for `joints` joints: `MAX_FRAME_JOINTS / joints` (at least 1).
 pub fn max_output_frames(joints: usize) -> usize {

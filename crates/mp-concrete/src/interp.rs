@@ -142,7 +142,7 @@ pub fn interpolation_experiment(track: &Track, ip: &InterpParams) -> Result<Inte
             if conf[[f, ji]] <= min_conf {
                 continue;
             }
-            let Some((a, b, w)) = mp_geom::track::bracket(&valid, f) else {
+            let Some((a, b, w)) = mp_geom::bracket(&valid, f) else {
                 continue;
             };
             let tw = between[row].get(ji).and_then(|p| p.as_ref());

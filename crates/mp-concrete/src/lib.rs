@@ -7,7 +7,7 @@
 //! * [`Program`], [`Segment`]: the data type, with JSON via serde and the
 //!   text DSL ([`dsl::print`], [`dsl::parse`]; `docs/DSL.md`).
 //! * [`synthesize`]: the program of a track by dynamic-programming
-//!   segmentation ([`dp`]) over primitive fits from [`mp_geom::fit`].
+//!   segmentation ([`dp`]) over primitive fits from [`mp_geom::fit_best`].
 //! * [`Program::execute`] and friends: rendering at any time resolution.
 //! * [`program_stats`], [`interpolation_experiment`]: the measurements of
 //!   the paper's §4.1 and §4.2.

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use mp_geom::io::{binary, write_atomic};
+use mp_geom::{binary, write_atomic};
 use mp_geom::{Primitive, PrimitiveKind, Skeleton, Units};
 use serde::{Deserialize, Serialize};
 
@@ -279,7 +279,7 @@ impl Program {
     }
 
     /// Encodes the program in the compact binary form (`.mpb`): the framing
-    /// of [`mp_geom::io::binary`] with magic `mp-program` and version 2, then
+    /// of [`mp_geom::binary`] with magic `mp-program` and version 2, then
     /// the record `fps: f64`, `units` (variant 0 = px, 1 = m, 2 = unitless),
     /// `dims`, `skeleton`, `joints`, `segments` (each `duration_frames`, then
     /// per joint a primitive: variant 0 stationary `{point}`, 1 line `{start,

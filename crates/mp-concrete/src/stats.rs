@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 
-use mp_geom::metrics::{self, Poses};
+use mp_geom::Poses;
 use mp_geom::{GeomError, Track};
 use serde::{Deserialize, Serialize};
 
@@ -66,7 +66,7 @@ pub fn program_stats(program: &Program, track: &Track) -> Result<ProgramStats> {
     program.validate()?;
     check_compatible(program, track)?;
     let exec = program.execute_with(&ExecParams::default())?;
-    let kd = metrics::kd(&exec, track).map_err(|e| match e {
+    let kd = mp_geom::kd(&exec, track).map_err(|e| match e {
         GeomError::NoData(_) => ConcreteError::Track("no observed keypoint to compare".into()),
         e => e.into(),
     })?;
@@ -76,7 +76,7 @@ pub fn program_stats(program: &Program, track: &Track) -> Result<ProgramStats> {
         if track.n_frames() < 2 {
             return Ok(0.0);
         }
-        match metrics::max_adjacent_jump(p) {
+        match mp_geom::max_adjacent_jump(p) {
             Err(GeomError::NoData(_)) => Ok(0.0),
             r => Ok(r?),
         }

@@ -172,7 +172,7 @@ fn read_names_the_file() {
     );
     // A track is not a program.
     let track = synthetic_track(10, 1).unwrap();
-    std::fs::write(&path, mp_geom::io::track_to_bincode(&track).unwrap()).unwrap();
+    std::fs::write(&path, mp_geom::track_to_bincode(&track).unwrap()).unwrap();
     let msg = Program::read(&path).unwrap_err().to_string();
     assert!(msg.contains("not an mp-program binary"), "{msg}");
 }

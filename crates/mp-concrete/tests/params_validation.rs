@@ -56,22 +56,22 @@ fn bad_fit_params_are_rejected_once_at_synthesis() {
 
 #[test]
 fn a_fit_with_checked_params_matches_the_checking_one() {
-    use mp_geom::checked::Validate;
+    use mp_geom::Validate;
     let track = synthetic_track(30, 7).unwrap();
-    let fit = mp_geom::fit::FitParams::default();
+    let fit = mp_geom::FitParams::default();
     let checked = fit.clone().check().unwrap();
     for j in 0..track.n_joints() {
         let pts = track.positions().slice(ndarray::s![.., j, ..]).to_owned();
-        let a = mp_geom::fit::fit_best(pts.view(), None, &fit).unwrap();
-        let b = mp_geom::fit::fit_best_checked(pts.view(), None, &checked).unwrap();
+        let a = mp_geom::fit_best(pts.view(), None, &fit).unwrap();
+        let b = mp_geom::fit_best_checked(pts.view(), None, &checked).unwrap();
         assert_eq!(a, b);
     }
 }
 
 #[test]
 fn bad_fit_params_never_become_checked() {
-    use mp_geom::checked::Validate;
-    let fit = mp_geom::fit::FitParams {
+    use mp_geom::Validate;
+    let fit = mp_geom::FitParams {
         unit_scale: f64::NAN,
         ..Default::default()
     };

@@ -4,13 +4,13 @@
 use mp_concrete::{
     program_stats, synthesize, Continuity, Program, Scale, SynthParams, UnobservedJoints,
 };
-use mp_geom::io::datasets::PennAction;
+use mp_geom::PennAction;
 
 /// Penn Action, or `None` (the running test's skip is recorded).
 fn penn() -> Option<PennAction> {
-    let path = mp_geom::paths::data_file_or_skip(
+    let path = mp_geom::test_support::data_file_or_skip(
         PennAction::TRAIN_FILE,
-        &mp_geom::paths::current_test_name(),
+        &mp_geom::test_support::current_test_name(),
     )?;
     Some(PennAction::open(&path).unwrap())
 }

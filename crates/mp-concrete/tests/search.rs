@@ -7,7 +7,7 @@ use mp_concrete::synthetic::synthetic_track;
 use mp_concrete::{
     segment, segment_costs, segment_exhaustive, segment_with_stats, Lambda, Scale, SynthParams,
 };
-use mp_geom::fit::ErrorNorm;
+use mp_geom::ErrorNorm;
 use mp_geom::{PrimitiveKind, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 use proptest::prelude::*;
@@ -199,7 +199,7 @@ fn search_stats_account_for_every_candidate() {
 #[test]
 fn penn_action_same_optimum() {
     use mp_concrete::UnobservedJoints;
-    use mp_geom::io::datasets::PennAction;
+    use mp_geom::PennAction;
     let path = mp_geom::data_or_return!(PennAction::TRAIN_FILE);
     let pa = PennAction::open(&path).unwrap();
     let mut n = 0;

@@ -6,7 +6,7 @@ use mp_concrete::{
     max_boundary_gap, program_stats, synthesize, Continuity, Lambda, Program, RefitNorm, Scale,
     SynthParams, UnobservedJoints,
 };
-use mp_geom::io::datasets::PennAction;
+use mp_geom::PennAction;
 use mp_geom::{Primitive, PrimitiveKind, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 
@@ -95,7 +95,7 @@ fn c0_with_all_kinds_missing_frames_and_3d() {
             lambda: Lambda::fixed(400.0),
             scale: Scale::UnitScale { unit_scale: 1.0 },
             unobserved_joints: UnobservedJoints::Ignore,
-            fit: mp_geom::fit::FitParams {
+            fit: mp_geom::FitParams {
                 kinds: PrimitiveKind::ALL.to_vec(),
                 ..Default::default()
             },
@@ -222,7 +222,7 @@ fn binary_version_1_reads_as_independent() {
             }],
         )],
     };
-    let bytes = mp_geom::io::binary::encode(b"mp-program", 1, &rec).unwrap();
+    let bytes = mp_geom::binary::encode(b"mp-program", 1, &rec).unwrap();
     let p = Program::from_bincode(&bytes).unwrap();
     assert_eq!(p.continuity, Continuity::None);
     assert_eq!(
@@ -240,9 +240,9 @@ fn binary_version_1_reads_as_independent() {
 /// independent fits'.
 #[test]
 fn penn_action_golf_swings_c0() {
-    let Some(path) = mp_geom::paths::data_file_or_skip(
+    let Some(path) = mp_geom::test_support::data_file_or_skip(
         PennAction::TRAIN_FILE,
-        &mp_geom::paths::current_test_name(),
+        &mp_geom::test_support::current_test_name(),
     ) else {
         return;
     };

@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
 use mp_eval::refine::baseline::{evaluate_injected, EvalParams};
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();

@@ -117,7 +117,7 @@ pub(crate) fn analyse_video(video: &Path, params: &Params) -> anyhow::Result<mp_
 /// A labelled video's name (its file stem) and its labelled count (the
 /// label file's length).
 pub(crate) fn name_and_count(video: &Path, label: &Path) -> anyhow::Result<(String, usize)> {
-    let truth = mp_geom::io::npz::read_npy(label)?.to_i64()?.len();
+    let truth = mp_geom::read_npy(label)?.to_i64()?.len();
     let name = video
         .file_stem()
         .map(|s| s.to_string_lossy().to_string())
@@ -282,7 +282,7 @@ pub fn run(a: &EvalCountArgs) -> anyhow::Result<()> {
             std::fs::create_dir_all(dir)?;
         }
     }
-    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    mp_geom::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     let mut summary = report.clone();
     if let Value::Object(m) = &mut summary {
         m.remove("by_video");

@@ -90,7 +90,7 @@ fn clip_keypoints(
         cache.join(format!("{stem}.box.json")),
     );
     if tp.is_file() && bp.is_file() {
-        let track = mp_geom::io::read_track(&tp)?;
+        let track = mp_geom::read_track(&tp)?;
         let b: Value = serde_json::from_slice(&std::fs::read(&bp)?)?;
         let person_box = serde_json::from_value(b["box"].clone())?;
         return Ok((track, person_box));
@@ -108,7 +108,7 @@ fn clip_keypoints(
             .and_then(|q| q.mean_box().map(|b| (b, q.frames_found()))),
         _ => None,
     };
-    mp_geom::io::write_track(&tp, &kp.track)?;
+    mp_geom::write_track(&tp, &kp.track)?;
     crate::write_file(&bp, serde_json::to_vec(&json!({ "box": person_box }))?)?;
     Ok((kp.track, person_box))
 }
@@ -189,11 +189,7 @@ fn load_clips(a: &LongArgs) -> anyhow::Result<Vec<ClipKp>> {
         let (track, person_box) = clip_keypoints(&sc, a.cache, &a.params)?;
         let truth = match label {
             Some(l) => {
-                let ends: Vec<i64> = mp_geom::io::npz::read_npy(&l)?
-                    .to_i64()?
-                    .iter()
-                    .copied()
-                    .collect();
+                let ends: Vec<i64> = mp_geom::read_npy(&l)?.to_i64()?.iter().copied().collect();
                 let fps0 = VideoReader::open(&video)?.info().fps;
                 truth_interval(&ends, fps0, FPS)
             }

@@ -19,8 +19,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::anyhow;
-use mp_geom::io::datasets::{AistPlusPlus, CmuFeatures};
 use mp_geom::Track;
+use mp_geom::{AistPlusPlus, CmuFeatures};
 use mp_pipeline::Params;
 use rayon::prelude::*;
 use serde_json::{json, Value};
@@ -216,7 +216,7 @@ fn real_cases(data: &Path, seed: u64) -> anyhow::Result<Vec<RealCase>> {
     let salsa: Vec<Track> = files(&data.join("cmu_salsa_bvh"), "bvh")
         .iter()
         .map(|f| {
-            mp_geom::io::read_track(f)
+            mp_geom::read_track(f)
                 .map_err(anyhow::Error::from)
                 .and_then(|t| Ok(to_30fps(&t)?))
         })
@@ -270,7 +270,7 @@ pub fn run(
     overrides: &[String],
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let data = mp_geom::paths::data_dir()
+    let data = mp_geom::data_dir()
         .ok_or_else(|| anyhow!("the shared data folder was not found: set MP_DATA_DIR"))?;
     let sources = load_sources(&data)?;
     let jobs: Vec<(usize, usize)> = (0..sources.len())

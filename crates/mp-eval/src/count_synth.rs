@@ -183,7 +183,7 @@ pub fn run(
     fit_seeds: &[u64],
 ) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let data = mp_geom::paths::data_dir().ok_or_else(|| {
+    let data = mp_geom::data_dir().ok_or_else(|| {
         anyhow!("the shared data folder was not found: set MP_DATA_DIR to it, or put `shared/data` (penn_action/, aistpp_keypoints2d/, cmu_salsa_bvh/, msr_action3d/, reference_keypoints/) beside the workspace")
     })?;
     let sources = load_sources(&data)?;
@@ -262,7 +262,7 @@ pub fn run(
             std::fs::create_dir_all(dir)?;
         }
     }
-    mp_geom::io::write_atomic(out, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    mp_geom::write_atomic(out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     let mut summary = report.clone();
     if let Value::Object(m) = &mut summary {
         for k in ["cases_detail", "sources", "definition", "counter"] {

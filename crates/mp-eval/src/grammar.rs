@@ -43,7 +43,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use clap::Args;
-use mp_geom::io::datasets::CmuFeatures;
+use mp_geom::CmuFeatures;
 use mp_grammar::score_partition;
 use mp_grammar::{bvh_files, read_motions, Motion};
 use mp_grammar::{find_symbols, learn_grammar, GrammarModel};
@@ -577,7 +577,7 @@ pub fn run(a: &EvalGrammarArgs) -> anyhow::Result<()> {
             std::fs::create_dir_all(dir)?;
         }
     }
-    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    mp_geom::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     let mut md = markdown(&rows);
     if !heldout_rows.is_empty() {
         md.push('\n');
@@ -585,7 +585,7 @@ pub fn run(a: &EvalGrammarArgs) -> anyhow::Result<()> {
     }
     print!("{md}");
     if let Some(m) = &a.markdown {
-        mp_geom::io::write_atomic(m, md.as_bytes())?;
+        mp_geom::write_atomic(m, md.as_bytes())?;
     }
     eprintln!(
         "{} runs in {:.1} s; wrote {}",

@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use crate::grammar::ngram_overlap;
 use anyhow::Context;
-use mp_geom::io::datasets::CmuFeatures;
+use mp_geom::CmuFeatures;
 use mp_grammar::PoseDistanceParams;
 use mp_grammar::ScoreParams;
 use mp_grammar::{bvh_files, concat_tracks, read_motions, Motion};

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use mp_abstract::repetition::{iom, iou, segment_repetitions, IntervalParams};
-use mp_geom::io::datasets::CmuFeatures;
+use mp_geom::CmuFeatures;
 use mp_pipeline::Params;
 use serde_json::{json, Map, Value};
 

@@ -24,9 +24,9 @@ use mp_abstract::repetition::{
 };
 use mp_abstract::{analyse, unroll, AbstractParams, PredictParams, RepetitiveInterval};
 use mp_concrete::Scale;
-use mp_geom::io::datasets::{AistPlusPlus, PennAction};
-use mp_geom::io::npz::Npz;
+use mp_geom::Npz;
 use mp_geom::Track;
+use mp_geom::{AistPlusPlus, PennAction};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
@@ -65,7 +65,7 @@ fn write_json(path: &Path, v: &Value) -> anyhow::Result<()> {
             std::fs::create_dir_all(dir)?;
         }
     }
-    mp_geom::io::write_atomic(path, serde_json::to_string_pretty(v)?.as_bytes())?;
+    mp_geom::write_atomic(path, serde_json::to_string_pretty(v)?.as_bytes())?;
     Ok(())
 }
 
@@ -396,10 +396,10 @@ fn penn_clip(penn: &PennAction, i: usize) -> anyhow::Result<Value> {
             }
             let p = pred.slice_frames(h - 1, h)?;
             let g = gt.slice_frames(h - 1, h)?;
-            let kd = mp_geom::metrics::kd(&p, &g)
+            let kd = mp_geom::kd(&p, &g)
                 .map(|v| v * scale512)
                 .unwrap_or(f64::NAN);
-            let pck = mp_geom::metrics::pck(&p, &g, 0.05).unwrap_or(f64::NAN);
+            let pck = mp_geom::pck(&p, &g, 0.05).unwrap_or(f64::NAN);
             kdm.insert(format!("h{h}"), json!(kd));
             pckm.insert(format!("h{h}"), json!(pck));
         }
@@ -427,13 +427,13 @@ fn eval_quva(dir: &Path, tracks: &Path) -> anyhow::Result<Value> {
     let (mut lmaes, mut lobos) = (Vec::new(), Vec::new());
     let mut skipped = Vec::new();
     for name in &names {
-        let truth = mp_geom::io::npz::read_npy(ann.join(format!("{name}.npy")))?.to_i64()?;
+        let truth = mp_geom::read_npy(ann.join(format!("{name}.npy")))?.to_i64()?;
         let true_count = truth.len();
         let Some(tp) = find_track(tracks, name) else {
             skipped.push(json!({"video": name, "reason": "no keypoint track"}));
             continue;
         };
-        let mut track: Track = mp_geom::io::read_track(&tp)?;
+        let mut track: Track = mp_geom::read_track(&tp)?;
         let valid_frames = (0..track.n_frames())
             .filter(|&t| (0..track.n_joints()).any(|j| track.confidence()[[t, j]] > 0.0))
             .count();

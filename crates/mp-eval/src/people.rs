@@ -176,7 +176,7 @@ fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(String, PathBuf
             .unwrap_or_default();
         let l = labels.join(format!("{stem}.npy"));
         if l.is_file() {
-            let truth = mp_geom::io::npz::read_npy(&l)?.to_i64()?.len();
+            let truth = mp_geom::read_npy(&l)?.to_i64()?.len();
             out.push((stem, p, truth));
         }
     }
@@ -609,7 +609,7 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
     let street_path = a
         .street
         .clone()
-        .or_else(|| mp_geom::paths::footage_file("vtest.avi"));
+        .or_else(|| mp_geom::footage_file("vtest.avi"));
     let street = match street_path {
         Some(path) => {
             let o = analyse(&path, &params)?;
@@ -665,7 +665,7 @@ pub fn run(a: &EvalPeopleArgs) -> anyhow::Result<()> {
             std::fs::create_dir_all(dir)?;
         }
     }
-    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    mp_geom::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     let mut summary = report.clone();
     if let Value::Object(m) = &mut summary {
         for k in ["composites", "crossing_results", "single"] {

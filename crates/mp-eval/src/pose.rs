@@ -17,7 +17,7 @@ use ndarray::{Array1, Array2, Array3};
 use ndarray_npy::NpzReader;
 use serde_json::{json, Value};
 
-use mp_geom::skeleton::BLAZEPOSE_TO_COCO17;
+use mp_geom::BLAZEPOSE_TO_COCO17;
 use mp_pose::{extract, ExtractOptions, ModelChoice, SmoothingParams};
 use mp_pose::{open_source, read_image};
 use mp_pose::{BlazePose, BlazePoseParams, MoveNet, MoveNetParams, PoseEstimator, SessionParams};
@@ -157,7 +157,7 @@ fn list_videos(dirs: &[PathBuf]) -> Result<Vec<PathBuf>> {
 
 pub fn run(args: &EvalPoseArgs) -> Result<()> {
     let model = ModelChoice::parse(&args.model).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let data = mp_geom::paths::data_dir();
+    let data = mp_geom::data_dir();
     let need = |what: &str| {
         anyhow::anyhow!(
             "{what} not given and no shared data folder found (set MP_DATA_DIR or pass the folder)"

@@ -196,7 +196,7 @@ pub fn run(a: &EvalPoseRateArgs) -> anyhow::Result<()> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
-    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    mp_geom::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     println!("{}", serde_json::to_string_pretty(&report["by_stride"])?);
     eprintln!("written to {}", a.out.display());
     Ok(())

@@ -12,7 +12,7 @@ use std::path::Path;
 use crate::refine::cv::{choose_setting, fold_dir, folds, pool, Pooled};
 use crate::refine::evaluation::{evaluate_injected_on, InjectedReport, RefineEvalParams};
 use anyhow::{Context, Result};
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_pose::SessionParams;
 use mp_refine::Concepts;
 use mp_refine::RefineNets;

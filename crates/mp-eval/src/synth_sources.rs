@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
-use mp_geom::io::datasets::{AistPlusPlus, MediaPipeReference, MsrAction3D, PennAction};
 use mp_geom::Track;
+use mp_geom::{AistPlusPlus, MediaPipeReference, MsrAction3D, PennAction};
 #[cfg(test)]
 use mp_geom::{Skeleton, Units};
 use ndarray::{Array2, Array3};
@@ -195,7 +195,7 @@ pub fn load_sources(data: &Path) -> anyhow::Result<Vec<Source>> {
     let bvh_dir = data.join("cmu_salsa_bvh");
     let mut src = None;
     for f in files(&bvh_dir, "bvh") {
-        let t = mp_geom::io::read_track(&f).with_context(|| format!("reading {}", f.display()))?;
+        let t = mp_geom::read_track(&f).with_context(|| format!("reading {}", f.display()))?;
         add(&mut src, "cmu_salsa", &stem(&f), &to_30fps(&t)?);
     }
     if src.is_none() {

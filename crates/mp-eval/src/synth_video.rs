@@ -86,7 +86,7 @@ pub fn sources(videos: &Path, labels: &Path) -> anyhow::Result<Vec<Source>> {
         if !label.is_file() {
             continue;
         }
-        let ends: Vec<usize> = mp_geom::io::npz::read_npy(&label)?
+        let ends: Vec<usize> = mp_geom::read_npy(&label)?
             .to_i64()?
             .into_iter()
             .map(|v| v.max(0) as usize)

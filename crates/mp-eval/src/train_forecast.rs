@@ -38,7 +38,7 @@ pub fn run(a: &TrainForecastArgs) -> Result<()> {
     let root = crate::workspace_root();
     let data = match &a.data {
         Some(p) => p.clone(),
-        None => mp_geom::paths::data_file("penn_action/penn_action_train.npz").context(
+        None => mp_geom::data_file("penn_action/penn_action_train.npz").context(
             "no --data given and the shared Penn Action train split was not found (set MP_DATA_DIR)",
         )?,
     };

@@ -17,7 +17,7 @@ use std::time::Instant;
 use crate::refine::dataset::{build_flaw_set, build_training_set, DatasetParams, FlawSetParams};
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 
 use crate::pyenv::{command_line, ensure_packages, run_script, training_args, training_python};
 
@@ -71,7 +71,7 @@ pub struct TrainRefineArgs {
 fn msr_file(data: &Option<PathBuf>) -> Result<PathBuf> {
     let p = match data {
         Some(p) => p.clone(),
-        None => mp_geom::paths::data_file(MsrAction3D::FILE).context(
+        None => mp_geom::data_file(MsrAction3D::FILE).context(
             "no --data given and the shared MSR Action3D file was not found (set MP_DATA_DIR)",
         )?,
     };
@@ -87,7 +87,7 @@ fn bvh_files(a: &TrainRefineArgs) -> Result<Vec<PathBuf>> {
     }
     let dir = match &a.bvh {
         Some(d) => d.clone(),
-        None => match mp_geom::paths::data_dir() {
+        None => match mp_geom::data_dir() {
             Some(d) if d.join("cmu_salsa_bvh").is_dir() => d.join("cmu_salsa_bvh"),
             _ => return Ok(Vec::new()),
         },

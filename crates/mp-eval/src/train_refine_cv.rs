@@ -16,7 +16,7 @@ use std::time::Instant;
 use crate::refine::cv::{fold_dir, folds};
 use crate::refine::dataset::{build_flaw_set, FlawSetParams};
 use anyhow::{bail, Context, Result};
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 
 use crate::pyenv::{command_line, run_script, training_args};
 use crate::train_refine::TrainRefineArgs;

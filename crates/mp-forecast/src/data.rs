@@ -10,9 +10,9 @@
 
 use std::path::Path;
 
-use mp_geom::io::datasets::{MsrAction3D, PennAction};
-use mp_geom::io::npz::Npz;
+use mp_geom::Npz;
 use mp_geom::Track;
+use mp_geom::{MsrAction3D, PennAction};
 
 use crate::error::{ForecastError, Result};
 

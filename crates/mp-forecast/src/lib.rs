@@ -28,7 +28,7 @@
 //!
 //! ```
 //! use mp_forecast::{Constant, Forecaster};
-//! use mp_geom::performer::{perform, PerformerParams};
+//! use mp_geom::{perform, PerformerParams};
 //!
 //! // Two seconds seen, one predicted by the Constant baseline (the learned
 //! // models need their ONNX files: `ArForecaster`, `forecast`).

@@ -19,7 +19,7 @@
 //! "Carried rigidly" means translated: the joint keeps its offset from its
 //! carrier in the last observed frame where both were seen.
 
-use mp_geom::skeleton_map::{FramePairing, SkeletonMap};
+use mp_geom::{FramePairing, SkeletonMap};
 use mp_geom::{Skeleton, Track};
 
 use crate::error::{ForecastError, Result};

@@ -18,7 +18,7 @@
 //! joint is *valid* when its confidence is > 0; a missing joint is written as 0
 //! with mask 0 in the model features.
 
-use mp_geom::stats::median;
+use mp_geom::median;
 use mp_geom::{Skeleton, Track};
 use ndarray::{ArrayView2, ArrayView3};
 

@@ -17,7 +17,7 @@ use std::sync::Arc;
 
 use mp_abstract::repetition::PeriodEstimate;
 use mp_abstract::{PredictParams, RepetitiveInterval, SelfMatch, SelfMatchKind};
-use mp_geom::io::datasets::PennAction;
+use mp_geom::PennAction;
 use mp_geom::Track;
 use mp_onnx::SessionParams;
 
@@ -371,7 +371,7 @@ pub fn forecast(
     };
     let actual_kd = if observe + horizon <= track.n_frames() {
         let truth = track.slice_frames(observe, observe + horizon)?;
-        Some(mp_geom::metrics::kd(&pred, &truth)?)
+        Some(mp_geom::kd(&pred, &truth)?)
     } else {
         None
     };
@@ -391,7 +391,7 @@ pub(crate) fn nearest_neighbour(
 ) -> Result<(NearestNeighbour, PathBuf)> {
     let path = match train {
         Some(p) => p.to_path_buf(),
-        None => mp_geom::paths::data_file(PennAction::TRAIN_FILE).ok_or_else(|| {
+        None => mp_geom::data_file(PennAction::TRAIN_FILE).ok_or_else(|| {
             ForecastError::NoTrainingData(format!(
                 "the nn method needs a training set (a Penn Action or MSR Action3D npz; \
                  `mp predict --train PATH`); the shared Penn Action train split ({}) was not found \
@@ -545,7 +545,7 @@ pub fn search_statue(track: &Track, opts: &StatueOptions) -> Result<StatueSearch
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mp_geom::performer::{perform, PerformerParams};
+    use mp_geom::{perform, PerformerParams};
 
     fn performer() -> Track {
         perform(&PerformerParams::default()).unwrap().track_2d

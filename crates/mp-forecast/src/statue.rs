@@ -136,7 +136,7 @@ pub fn find_statue(
         let lo = a.max(0) as usize;
         let hi = (b.max(0) as usize).min(errors.len());
         let v: Vec<f64> = errors.get(lo..hi).map(|s| s.to_vec()).unwrap_or_default();
-        mp_geom::metrics::nanmean(&v)
+        mp_geom::nanmean(&v)
     };
     let improvements: Vec<f64> = (0..errors.len())
         .map(|i| {

@@ -6,8 +6,8 @@ mod common;
 use common::*;
 use mp_abstract::PredictParams;
 use mp_forecast::{Constant, ForecastError, Forecaster, LoopUnroll, NearestNeighbour, NnParams};
-use mp_geom::metrics::kd;
-use mp_geom::performer::{perform, Move, PerformerParams};
+use mp_geom::kd;
+use mp_geom::{perform, Move, PerformerParams};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 

@@ -112,7 +112,7 @@ fn predictions_follow_the_track_position_and_scale() {
     let a = f.predict(&past, 10).unwrap();
     let b = f.predict(&moved, 10).unwrap();
     let a2 = map_positions(&a, |_, p| vec![2.0 * p[0] + 300.0, 2.0 * p[1] + 50.0]);
-    let d = mp_geom::metrics::kd(&a2, &b).unwrap();
+    let d = mp_geom::kd(&a2, &b).unwrap();
     assert!(d < 1e-2, "{d} px");
 }
 

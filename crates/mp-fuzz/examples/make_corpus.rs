@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 
 use mp_abstract::LoopParams;
 use mp_concrete::{Program, Segment};
-use mp_geom::io::csv::{track_to_csv_string, CsvLayout};
-use mp_geom::io::native::{track_to_bincode, track_to_json_string, track_to_npz_bytes};
-use mp_geom::io::npz::NpzOut;
-use mp_geom::io::people::{people_to_bincode, people_to_json_string, people_to_npz_bytes};
+use mp_geom::fuzzing::csv::{track_to_csv_string, CsvLayout};
+use mp_geom::fuzzing::native::{track_to_bincode, track_to_json_string, track_to_npz_bytes};
+use mp_geom::fuzzing::npz::NpzOut;
+use mp_geom::fuzzing::people::{people_to_bincode, people_to_json_string, people_to_npz_bytes};
 use mp_geom::{People, Person, Primitive, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 
@@ -277,7 +277,7 @@ fn main() -> Res<()> {
         &dir,
         "npy",
         "unicode.npy",
-        mp_geom::io::npz::unicode_npy_bytes(&["nose".into(), "hip".into()], &[2])?,
+        mp_geom::fuzzing::npz::unicode_npy_bytes(&["nose".into(), "hip".into()], &[2])?,
     )?;
 
     // OpenPose frames (BODY_25, COCO-18) and an AlphaPose result list.
@@ -328,7 +328,7 @@ fn main() -> Res<()> {
         MOTION\nFrames: 2\nFrame Time: 0.0333333\n\
         0 10 0 0 0 0 5 0 0 0 -10 0\n0.5 10.25 0 1 2 3 5 0 0 0 -12.5 0\n";
     put(&dir, "bvh", "small.bvh", bvh_text)?;
-    let b = mp_geom::io::bvh::Bvh::parse(bvh_text, "small.bvh")?;
+    let b = mp_geom::fuzzing::bvh::Bvh::parse(bvh_text, "small.bvh")?;
     put(&dir, "bvh", "small_written.bvh", b.to_bvh_string())?;
 
     // Grammar rules text and a symbol corpus.

@@ -20,35 +20,35 @@
 //! | `program_json` | [`mp_concrete::Program::from_json`] |
 //! | `abstract_json` | [`mp_abstract::analysis::program_from_str`] (JSON) |
 //! | `grammar_json` | [`mp_grammar::GrammarModel::from_json`] |
-//! | `grammar_text` | [`mp_grammar::Grammar::from_text`], [`mp_grammar::Corpus::from_lines`], [`mp_grammar::strings`] |
-//! | `npz` | [`mp_geom::io::npz::Npz::from_bytes`], [`mp_geom::io::native::track_from_npz`] |
-//! | `npy` | [`mp_geom::io::npz::NpyArray::from_bytes`], [`mp_geom::io::native::track_from_npy_bytes`] |
-//! | `csv` | [`mp_geom::io::csv::track_from_csv_str`] |
-//! | `json_track` | [`mp_geom::io::native::track_from_json_str`] |
-//! | `openpose` | [`mp_geom::io::openpose::openpose_from_frames`], [`mp_geom::io::openpose::alphapose_from_value`] |
-//! | `bvh` | [`mp_geom::io::bvh::Bvh::parse`] |
-//! | `mpt` | [`mp_geom::io::native::track_from_bincode`] |
+//! | `grammar_text` | [`mp_grammar::Grammar::from_text`], [`mp_grammar::Corpus::from_lines`], [`mp_grammar::fuzzing`] |
+//! | `npz` | [`mp_geom::fuzzing::npz::Npz::from_bytes`], [`mp_geom::fuzzing::native::track_from_npz`] |
+//! | `npy` | [`mp_geom::fuzzing::npz::NpyArray::from_bytes`], [`mp_geom::fuzzing::native::track_from_npy_bytes`] |
+//! | `csv` | [`mp_geom::fuzzing::csv::track_from_csv_str`] |
+//! | `json_track` | [`mp_geom::fuzzing::native::track_from_json_str`] |
+//! | `openpose` | [`mp_geom::fuzzing::openpose::openpose_from_frames`], [`mp_geom::fuzzing::openpose::alphapose_from_value`] |
+//! | `bvh` | [`mp_geom::fuzzing::bvh::Bvh::parse`] |
+//! | `mpt` | [`mp_geom::fuzzing::native::track_from_bincode`] |
 //! | `mpb` | [`mp_concrete::Program::from_bincode`] |
 //! | `concepts_json` | [`mp_refine::Concepts::from_json`] |
-//! | `people` | [`mp_geom::io::people::people_from_npz`], [`mp_geom::io::people::people_from_json_str`], [`mp_geom::io::people::people_from_bincode`] |
+//! | `people` | [`mp_geom::fuzzing::people::people_from_npz`], [`mp_geom::fuzzing::people::people_from_json_str`], [`mp_geom::fuzzing::people::people_from_bincode`] |
 
 use std::path::{Path, PathBuf};
 
 use mp_abstract::analysis::program_from_str;
 use mp_concrete::Program;
-use mp_geom::io::bvh::{Bvh, BvhTrackParams};
-use mp_geom::io::csv::{track_from_csv_str, track_to_csv_string, CsvLayout};
-use mp_geom::io::native::{
+use mp_geom::fuzzing::bvh::{Bvh, BvhTrackParams};
+use mp_geom::fuzzing::csv::{track_from_csv_str, track_to_csv_string, CsvLayout};
+use mp_geom::fuzzing::native::{
     track_from_bincode, track_from_json_str, track_from_npy_bytes, track_from_npz,
     track_to_bincode, track_to_json_string, track_to_npz_bytes,
 };
-use mp_geom::io::npz::{NpyArray, Npz};
-use mp_geom::io::openpose::{alphapose_from_value, openpose_from_frames};
-use mp_geom::io::people::{
+use mp_geom::fuzzing::npz::{NpyArray, Npz};
+use mp_geom::fuzzing::openpose::{alphapose_from_value, openpose_from_frames};
+use mp_geom::fuzzing::people::{
     is_people_bincode, is_people_json, is_people_npz, people_from_bincode, people_from_json_str,
     people_from_npz, people_to_bincode, people_to_json_string, people_to_npz_bytes,
 };
-use mp_geom::io::ReadOptions;
+use mp_geom::ReadOptions;
 use mp_geom::{People, Track};
 use mp_grammar::{fuzzing as strings, Corpus, Grammar, GrammarModel};
 use mp_refine::Concepts;
@@ -558,7 +558,7 @@ fn check_people(p: &People, form: &str) {
     }
 }
 
-/// The people formats ([`mp_geom::io::people`]), every input through all
+/// The people formats ([`mp_geom::fuzzing::people`]), every input through all
 /// three readers: npz ([`people_from_npz`]), JSON ([`people_from_json_str`])
 /// and binary ([`people_from_bincode`]). What one of them reads must also be
 /// recognised by the test `read_people` dispatches on ([`is_people_npz`],

@@ -178,8 +178,8 @@ fn targets_survive_corpus_and_mutations() {
 /// errors.
 #[test]
 fn people_seeds_read() {
-    use mp_geom::io::npz::Npz;
-    use mp_geom::io::people::{people_from_bincode, people_from_json_str, people_from_npz};
+    use mp_geom::fuzzing::npz::Npz;
+    use mp_geom::fuzzing::people::{people_from_bincode, people_from_json_str, people_from_npz};
 
     let corpus = read_corpus("people");
     for ext in ["npz", "json", "mpt"] {

@@ -6,9 +6,9 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use mp_geom::fit::{
-    fit_best, fit_circle, fit_line, fit_spline, fit_stationary, prefix::PrefixFits, residual_error,
-    ErrorNorm, FitParams,
+use mp_geom::{
+    fit_best, fit_circle, fit_line, fit_spline, fit_stationary, residual_error, ErrorNorm,
+    FitParams, PrefixFits,
 };
 use ndarray::Array2;
 
@@ -82,7 +82,7 @@ fn bench_fits(c: &mut Criterion) {
 }
 
 /// The circle fit's angles: 1,024 points, the C library's `atan2` one by one
-/// against the batch of `mp_geom::fit::atan` (four lanes, AVX2 where the CPU
+/// against the batch of `mp_geom::atan` (four lanes, AVX2 where the CPU
 /// has it).
 fn bench_atan2(c: &mut Criterion) {
     let n = 1024;
@@ -100,7 +100,7 @@ fn bench_atan2(c: &mut Criterion) {
         })
     });
     g.bench_function("batch", |b| {
-        b.iter(|| mp_geom::fit::atan::atan2_into(black_box(&ys), &xs, &mut out))
+        b.iter(|| mp_geom::atan2_into(black_box(&ys), &xs, &mut out))
     });
     g.finish();
 }

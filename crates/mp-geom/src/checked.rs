@@ -7,8 +7,8 @@
 //! check of its own and no unchecked twin.
 //!
 //! ```
-//! use mp_geom::checked::Validate;
-//! use mp_geom::fit::{fit_best_checked, FitParams};
+//! use mp_geom::Validate;
+//! use mp_geom::{fit_best_checked, FitParams};
 //! use ndarray::array;
 //!
 //! let params = FitParams::default().check()?;

@@ -109,7 +109,7 @@ impl Person {
 
     /// How much the person moves: the path their joints travel, in the
     /// track's units — the sum over frames `t` of the mean distance of each
-    /// joint from where it was [`ACTIVITY_LAG_S`] earlier, divided by that lag
+    /// joint from where it was `ACTIVITY_LAG_S` earlier, divided by that lag
     /// in frames (joints with confidence > 0 at both times). Measuring over a
     /// lag rather than from frame to frame keeps the keypoints' jitter, which
     /// does not grow with the lag, small beside real motion, which does.
@@ -168,7 +168,7 @@ pub struct People {
 pub const MAX_PEOPLE_VALUES: usize = 1 << 28;
 
 impl People {
-    /// Checks and builds: `n_frames ≥ 1` and at most [`MAX_PEOPLE_VALUES`]
+    /// Checks and builds: `n_frames ≥ 1` and at most `MAX_PEOPLE_VALUES`
     /// values per whole-video track; `fps` finite and > 0; every
     /// person's track has at least one frame and its span
     /// `first_frame .. first_frame + track.n_frames()` lies within

@@ -13,7 +13,8 @@
 //! Randomness (seeded, [`rand_chacha::ChaCha8Rng`]): each repetition's
 //! amplitude and duration vary by [`PerformerParams::variation`], and the
 //! pixel track gets Gaussian noise of [`PerformerParams::noise_px`]. Bone
-//! lengths in the 3D track are exact for every bone in [`RIGID_BONES`].
+//! lengths in the 3D track are exact for every rigid bone (upper arms,
+//! forearms, thighs, shins, shoulder and hip widths, face).
 
 use std::f64::consts::PI;
 use std::ops::Range;
@@ -223,6 +224,7 @@ pub struct Performance {
 
 /// COCO-17 bones whose length never changes in the 3D track: upper arms,
 /// forearms, thighs, shins, shoulder and hip widths, face.
+#[cfg(test)]
 pub const RIGID_BONES: [(usize, usize); 12] = [
     (5, 7),
     (7, 9),

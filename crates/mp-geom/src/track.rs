@@ -96,7 +96,7 @@ pub fn frames_label(start: usize, end: usize) -> String {
 impl Track {
     /// Builds a track, checking shapes and turning non-finite positions into
     /// missing joints (confidence 0); a finite coordinate beyond
-    /// ±[`MAX_COORDINATE`] is an error. Confidence values are clamped to [0, 1];
+    /// ±`MAX_COORDINATE` is an error. Confidence values are clamped to [0, 1];
     /// NaN confidence counts as 0.
     pub fn new(
         positions: Array3<f64>,

@@ -2,7 +2,8 @@
 //! so setting `MP_SKIP_LOG` races with no other test.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::paths::{data_dir, data_file_or_skip};
+use mp_geom::data_dir;
+use mp_geom::test_support::data_file_or_skip;
 
 #[test]
 fn data_file_or_skip_returns_present_files_and_logs_missing_ones() {

@@ -23,7 +23,7 @@ use mp_grammar::{
 use mp_grammar::{search_partition, PartitionParams};
 
 fn salsa_dir() -> std::path::PathBuf {
-    mp_geom::paths::data_file("cmu_salsa_bvh").expect("shared data cmu_salsa_bvh is missing")
+    mp_geom::data_file("cmu_salsa_bvh").expect("shared data cmu_salsa_bvh is missing")
 }
 
 fn symbols(c: &mut Criterion) {

@@ -27,7 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let frames: usize = args.get(1).map(|s| s.parse()).transpose()?.unwrap_or(8677);
     let k: usize = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(20);
-    let dir = mp_geom::paths::data_file("cmu_salsa_bvh").ok_or("cmu_salsa_bvh not found")?;
+    let dir = mp_geom::data_file("cmu_salsa_bvh").ok_or("cmu_salsa_bvh not found")?;
     let track = mp_grammar::salsa_track(&dir, frames)?;
     let cpu0 = cpu_seconds();
     let t0 = std::time::Instant::now();

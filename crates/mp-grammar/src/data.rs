@@ -5,8 +5,8 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use mp_geom::io::bvh::{Bvh, BvhTrackParams};
 use mp_geom::Track;
+use mp_geom::{Bvh, BvhTrackParams};
 
 use crate::error::{GrammarError, Result};
 
@@ -89,7 +89,7 @@ pub fn read_motions(paths: &[PathBuf], frame_step: usize) -> Result<Motion> {
     } else {
         let mut tracks = Vec::with_capacity(files.len());
         for f in &files {
-            let t = mp_geom::io::read_track(f)?;
+            let t = mp_geom::read_track(f)?;
             tracks.push(if frame_step > 1 {
                 t.subsample(frame_step)?
             } else {

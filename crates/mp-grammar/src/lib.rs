@@ -22,7 +22,7 @@
 //!
 //! ```no_run
 //! use mp_grammar::{learn_model, Motion, PipelineParams};
-//! use mp_geom::performer::{perform, PerformerParams};
+//! use mp_geom::{perform, PerformerParams};
 //!
 //! // Symbols (PAM, genetic search, annealing), sentences and an ABL grammar of
 //! // the procedural performer, with the product's parameters (`mp grammar`).

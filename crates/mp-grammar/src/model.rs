@@ -185,7 +185,7 @@ fn write_json<T: Serialize>(path: &Path, v: &T) -> Result<()> {
         what: path.display().to_string(),
         source: e,
     })?;
-    mp_geom::io::write_atomic(path, text.as_bytes())?;
+    mp_geom::write_atomic(path, text.as_bytes())?;
     Ok(())
 }
 

@@ -97,7 +97,7 @@ fn bad_input_is_a_typed_error() {
 #[test]
 fn cmu_exercise_features() {
     let path = mp_geom::data_or_return!("cmu_mocap6_exercise/13_29_features10fps.npz");
-    let data = mp_geom::io::datasets::CmuFeatures::open(path).unwrap();
+    let data = mp_geom::CmuFeatures::open(path).unwrap();
     let f = PoseFeatures::from_track(&data.track, &Default::default()).unwrap();
     let mut p = small_params(6, 1);
     p.candidate_step_frames = 5;

@@ -3,8 +3,8 @@
 //! pipeline through its JSON files. Skipped where the shared data are absent.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::bvh::{Bvh, BvhTrackParams};
 use mp_geom::Track;
+use mp_geom::{Bvh, BvhTrackParams};
 use mp_grammar::ClusterQuality;
 use mp_grammar::{
     learn_model, DeriveParams, Fsm, FsmWeighting, Grammar, GrammarModel, PipelineParams,
@@ -18,9 +18,9 @@ const SEG: usize = 15;
 /// The salsa take's first `frames` frames at 30 fps, or `None` (the skip
 /// recorded for the running test) where the shared data are absent.
 fn salsa_bvh(frames: usize) -> Option<Bvh> {
-    let path = mp_geom::paths::data_file_or_skip(
+    let path = mp_geom::test_support::data_file_or_skip(
         "cmu_salsa_bvh/60_01_scaled.bvh",
-        &mp_geom::paths::current_test_name(),
+        &mp_geom::test_support::current_test_name(),
     )?;
     Some(
         subsample_bvh(&Bvh::read(path).unwrap(), 4)

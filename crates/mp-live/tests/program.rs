@@ -196,7 +196,9 @@ fn compare(track: &Track, frame_px: Option<f64>, params: &LiveParams) -> Compare
 /// 1.1; docs/results/live.md). Run with `--nocapture` for the table.
 #[test]
 fn online_program_is_close_to_the_offline_one_on_real_keypoints() {
-    let Some(dir) = mp_geom::paths::data_dir_or_skip(&mp_geom::paths::current_test_name()) else {
+    let Some(dir) =
+        mp_geom::test_support::data_dir_or_skip(&mp_geom::test_support::current_test_name())
+    else {
         return;
     };
     let dir = dir.join("reference_keypoints");
@@ -214,8 +216,7 @@ fn online_program_is_close_to_the_offline_one_on_real_keypoints() {
     println!("| recording | frames | segments online (forced) | offline | KD online px | KD offline px | largest difference px | ms/frame |");
     println!("|---|---|---|---|---|---|---|---|");
     for path in files {
-        let read =
-            mp_geom::io::read_track_rated(&path, &mp_geom::io::ReadOptions::default()).unwrap();
+        let read = mp_geom::read_track_rated(&path, &mp_geom::ReadOptions::default()).unwrap();
         let frame_px = read.frame_size.map(|(w, h)| w.max(h) as f64);
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
         if !read.track.confidence().iter().any(|&c| c > 0.0) {

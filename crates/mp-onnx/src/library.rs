@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use mp_geom::paths::workspace_root;
+use mp_geom::workspace_root;
 
 use crate::error::{OnnxError, Result};
 

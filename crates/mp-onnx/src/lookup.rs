@@ -15,7 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{OnnxError, Result};
-use mp_geom::paths::workspace_root;
+use mp_geom::workspace_root;
 
 use crate::library::join_paths;
 

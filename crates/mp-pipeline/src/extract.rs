@@ -93,7 +93,7 @@ impl Extracted {
     }
 
     /// Writes the keypoints to `path` in the format of its extension
-    /// (`mp_geom::io::write_track`); a format that holds several people
+    /// (`mp_geom::write_track`); a format that holds several people
     /// gets everyone, another the main person. Pixels keep the frame they
     /// are in. Refuses a 3D format for pixel keypoints.
     pub fn write(&self, path: &Path) -> Result<()> {
@@ -105,11 +105,11 @@ impl Extracted {
             },
         )?;
         match &self.poses {
-            Poses::People(p) if mp_geom::io::holds_people(path) => {
-                mp_geom::io::write_people_framed(path, p, self.frame)?
+            Poses::People(p) if mp_geom::holds_people(path) => {
+                mp_geom::write_people_framed(path, p, self.frame)?
             }
-            Poses::People(_) => mp_geom::io::write_track(path, &self.main_track()?)?,
-            Poses::One(t) => mp_geom::io::write_track_framed(path, t, self.frame)?,
+            Poses::People(_) => mp_geom::write_track(path, &self.main_track()?)?,
+            Poses::One(t) => mp_geom::write_track_framed(path, t, self.frame)?,
         }
         Ok(())
     }
@@ -119,7 +119,7 @@ impl Extracted {
 /// format (`.c3d`, `.bvh`) needs world coordinates. Check it before
 /// [`extract`] to fail before the pose model runs.
 pub fn check_output(path: &Path, what: ExtractParams) -> Result<()> {
-    if !what.world && mp_geom::io::needs_3d(path) {
+    if !what.world && mp_geom::needs_3d(path) {
         return Err(PipelineError::param(
             "output",
             format!(

@@ -42,7 +42,7 @@ pub enum Input {
         /// Largest frame side in pixels, used as the scale; `None`: the motion's extent.
         frame_px: Option<f64>,
         /// The file states no frame rate and none was given:
-        /// [`mp_geom::io::DEFAULT_FPS`] was assumed.
+        /// [`mp_geom::DEFAULT_FPS`] was assumed.
         fps_assumed: bool,
     },
     /// Every person of a video, already found by the pose model and the
@@ -79,7 +79,7 @@ impl Input {
 
     /// [`Input::open`] with the frame rate of a track file: `Some` over
     /// what the file states; `None`, the file's own, or
-    /// [`mp_geom::io::DEFAULT_FPS`] when it states none (then
+    /// [`mp_geom::DEFAULT_FPS`] when it states none (then
     /// [`Input::fps_assumed`] is true and the description says so).
     /// Ignored for videos, whose rate is in the container.
     pub fn open_with(
@@ -96,12 +96,12 @@ impl Input {
                 path: path.to_path_buf(),
             });
         }
-        let opts = mp_geom::io::ReadOptions {
+        let opts = mp_geom::ReadOptions {
             fps,
             ..Default::default()
         };
         let read =
-            mp_geom::io::read_track_rated(path, &opts).map_err(|source| PipelineError::Track {
+            mp_geom::read_track_rated(path, &opts).map_err(|source| PipelineError::Track {
                 path: path.to_path_buf(),
                 extensions: VIDEO_EXTENSIONS.join(", "),
                 source,
@@ -110,7 +110,7 @@ impl Input {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let assumed = read.rate == mp_geom::io::RateSource::Assumed;
+        let assumed = read.rate == mp_geom::RateSource::Assumed;
         // A track that states the video frame it is in (an npz of `mp run`
         // or `mp extract`) is scaled by it, as the video was.
         let frame_px = frame_px.or(read.frame_size.map(|(w, h)| w.max(h) as f64));

@@ -105,7 +105,7 @@ pub fn loops_json(outcome: &Outcome) -> serde_json::Value {
 }
 
 /// Writes `track.npz` (with every tracked person along a person axis when
-/// people were tracked: `mp_geom::io::people`), `loops.json` and, when there
+/// people were tracked: `mp_geom::people`), `loops.json` and, when there
 /// is an analysis, `program.txt`, `program.json`, `abstract.txt` and
 /// `abstract.json`; for every other analysed person the programs go to
 /// `people/<id>/` (over the person's own frames, from `first_frame`).
@@ -125,11 +125,11 @@ pub(crate) fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<S
     match &outcome.keypoints.people {
         Some(people) if top_is_main => put(
             "track.npz",
-            &mp_geom::io::people_to_npz_bytes_framed(people, outcome.keypoints.frame_size)?,
+            &mp_geom::people_to_npz_bytes_framed(people, outcome.keypoints.frame_size)?,
         )?,
         _ => put(
             "track.npz",
-            &mp_geom::io::native::track_to_npz_bytes_framed(track, outcome.keypoints.frame_size)?,
+            &mp_geom::track_to_npz_bytes_framed(track, outcome.keypoints.frame_size)?,
         )?,
     }
     let mut programs = |dir: &str, an: &Analysis| -> Result<()> {

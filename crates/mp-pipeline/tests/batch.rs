@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use mp_geom::performer::{perform, Move, PerformerParams};
+use mp_geom::{perform, Move, PerformerParams};
 use mp_pipeline::batch::{read_manifest, MANIFEST};
 use mp_pipeline::{
     analyse_input, batch, batch_items, run, BatchObserver, BatchParams, CancelToken, Input,
@@ -24,7 +24,7 @@ fn write_performer(path: &Path, seed: u64, squats: usize) {
         ..PerformerParams::default()
     })
     .unwrap();
-    mp_geom::io::write_track(path, &perf.track_2d).unwrap();
+    mp_geom::write_track(path, &perf.track_2d).unwrap();
 }
 
 /// Programs and counts only: the batch logic does not depend on the pictures.

@@ -9,7 +9,7 @@ use std::process::Command;
 use mp_pipeline::{analyse_input, run, CancelToken, Input, Params, PersonChoice, Silent};
 
 fn data(rel: &str) -> Option<PathBuf> {
-    mp_geom::paths::data_file_or_skip(rel, &mp_geom::paths::current_test_name())
+    mp_geom::test_support::data_file_or_skip(rel, &mp_geom::test_support::current_test_name())
 }
 
 /// 020_fitness (left, 5 squat-jumps) and 027_fitness (right) side by side,
@@ -112,9 +112,9 @@ fn each_person_gets_their_own_programs_and_count() {
         );
     }
     // track.npz holds everyone along a person axis and reads back as people.
-    let people = mp_geom::io::read_people(out_dir.join("track.npz")).unwrap();
+    let people = mp_geom::read_people(out_dir.join("track.npz")).unwrap();
     assert_eq!(people.len(), o.people.len());
-    let main_track = mp_geom::io::read_track(out_dir.join("track.npz")).unwrap();
+    let main_track = mp_geom::read_track(out_dir.join("track.npz")).unwrap();
     assert_eq!(main_track.n_frames(), o.keypoints.track.n_frames());
 
     // Asking for the other person puts them at the top level, alone.

@@ -13,17 +13,13 @@ use mp_pipeline::{
 
 /// A shared data file, or `None` (the running test's skip is recorded).
 fn data(rel: &str) -> Option<PathBuf> {
-    mp_geom::paths::data_file_or_skip(rel, &mp_geom::paths::current_test_name())
+    mp_geom::test_support::data_file_or_skip(rel, &mp_geom::test_support::current_test_name())
 }
 
 fn quva(name: &str) -> Option<(PathBuf, usize)> {
     let video = data(&format!("quva_repetition/videos/{name}.mp4"))?;
     let ann = data(&format!("quva_repetition/annotations/{name}.npy"))?;
-    let truth = mp_geom::io::npz::read_npy(ann)
-        .unwrap()
-        .to_i64()
-        .unwrap()
-        .len();
+    let truth = mp_geom::read_npy(ann).unwrap().to_i64().unwrap().len();
     Some((video, truth))
 }
 
@@ -198,7 +194,7 @@ fn cmu_exercise_blocks_are_counted_one_by_one() {
     let Some(path) = data("cmu_mocap6_exercise/14_14_features10fps.npz") else {
         return;
     };
-    let c = mp_geom::io::datasets::CmuFeatures::open(path).unwrap();
+    let c = mp_geom::CmuFeatures::open(path).unwrap();
     // Labelled blocks: maximal runs of one label.
     let mut blocks = Vec::new();
     let mut s = 0;

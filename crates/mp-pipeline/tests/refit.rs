@@ -13,13 +13,13 @@ use mp_pipeline::Params;
 /// least-squares refit's does, and its KD is lower.
 #[test]
 fn euclidean_refit_keeps_unobserved_segments_in_place() {
-    let Some(path) = mp_geom::paths::data_file_or_skip(
+    let Some(path) = mp_geom::test_support::data_file_or_skip(
         "reference_keypoints/090_hoolahoop.npz",
-        &mp_geom::paths::current_test_name(),
+        &mp_geom::test_support::current_test_name(),
     ) else {
         return;
     };
-    let track = mp_geom::io::read_track(&path).unwrap();
+    let track = mp_geom::read_track(&path).unwrap();
     let mut params = Params::default();
     assert_eq!(
         params.analysis.synth.refit_norm,

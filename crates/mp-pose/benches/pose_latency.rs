@@ -21,7 +21,7 @@ use mp_pose::{Frame, VideoReader};
 use mp_pose::{MoveNet, MoveNetParams, MultiPose, MultiPoseParams, PoseEstimator};
 
 fn frame() -> Frame {
-    mp_geom::paths::data_file("golfdb/golf_swing.mp4")
+    mp_geom::data_file("golfdb/golf_swing.mp4")
         .and_then(|p| VideoReader::open(p).ok())
         .and_then(|mut r| r.next())
         .and_then(|f| f.ok())

@@ -90,7 +90,7 @@ impl ModelFile {
 /// `<shared>/models`.
 fn model_search() -> ModelDirs {
     let dirs = ModelDirs::standard(MODEL_DIR_ENV, MODEL_DIR_IN_WORKSPACE);
-    match mp_geom::paths::shared_dir() {
+    match mp_geom::shared_dir() {
         Some(shared) => dirs.with_dir(shared.join("models")),
         None => dirs,
     }

@@ -192,8 +192,8 @@ fn tracker_parameters_are_checked_before_the_models_open() {
 /// traffic cones among people walking past. The first 6 s.
 #[test]
 fn a_street_scene_tracks_the_pedestrians_and_nothing_on_the_lamp_post_or_the_tripod() {
-    let test = mp_geom::paths::current_test_name();
-    let Some(video) = mp_geom::paths::footage_file_or_skip("vtest.avi", &test) else {
+    let test = mp_geom::test_support::current_test_name();
+    let Some(video) = mp_geom::test_support::footage_file_or_skip("vtest.avi", &test) else {
         return;
     };
     let mut est = MultiPose::new(MultiPoseParams::default()).expect("models open");

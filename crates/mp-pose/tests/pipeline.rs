@@ -222,7 +222,7 @@ fn coco_image_blazepose_and_movenet_agree_with_annotation() {
     })
     .unwrap();
     let pose = bp.estimate(&frame).unwrap().unwrap();
-    let coco: Vec<[f64; 2]> = mp_geom::skeleton::BLAZEPOSE_TO_COCO17
+    let coco: Vec<[f64; 2]> = mp_geom::BLAZEPOSE_TO_COCO17
         .iter()
         .map(|&b| pose.keypoints_px[b])
         .collect();
@@ -245,9 +245,9 @@ fn coco_image_blazepose_and_movenet_agree_with_annotation() {
 /// Every 8th of the first 97 frames of the weights video (a person lying on
 /// the floor, whom the detector often misses), at 1/8 of the frame rate.
 fn weights_every_8th() -> Option<Vec<Frame>> {
-    let path = mp_geom::paths::data_file_or_skip(
+    let path = mp_geom::test_support::data_file_or_skip(
         "quva_repetition/videos/013_weights_floor.mp4",
-        &mp_geom::paths::current_test_name(),
+        &mp_geom::test_support::current_test_name(),
     )?;
     let reader = VideoReader::open(path).unwrap();
     let fps = reader.info().fps / 8.0;

@@ -80,7 +80,7 @@ impl PyPerson {
             inner: Person {
                 id,
                 first_frame,
-                track: mp_geom::io::track_from_bincode(track).map_err(errors::geom)?,
+                track: mp_geom::track_from_bincode(track).map_err(errors::geom)?,
             },
         })
     }
@@ -88,7 +88,7 @@ impl PyPerson {
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, PersonState<'py>)> {
         let py = slf.py();
         let p = &slf.get().inner;
-        let track = mp_geom::io::track_to_bincode(&p.track).map_err(errors::geom)?;
+        let track = mp_geom::track_to_bincode(&p.track).map_err(errors::geom)?;
         let from_state = py.get_type::<PyPerson>().getattr("_from_state")?;
         Ok((from_state, (p.id, p.first_frame, PyBytes::new(py, &track))))
     }
@@ -203,13 +203,13 @@ impl PyPeople {
     /// `.pose`), through a temporary file and a rename.
     fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
         let p = &self.inner;
-        py.detach(|| mp_geom::io::write_people(&path, p))
+        py.detach(|| mp_geom::write_people(&path, p))
             .map_err(errors::geom)
     }
 
     /// The people in their compact binary form (the one they pickle through).
     fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
-        let b = mp_geom::io::people::people_to_bincode(&self.inner).map_err(errors::geom)?;
+        let b = mp_geom::people_to_bincode(&self.inner).map_err(errors::geom)?;
         Ok(PyBytes::new(py, &b))
     }
 
@@ -217,7 +217,7 @@ impl PyPeople {
     #[staticmethod]
     fn from_bytes(data: &[u8]) -> PyResult<Self> {
         Ok(PyPeople::new(
-            mp_geom::io::people::people_from_bincode(data).map_err(errors::geom)?,
+            mp_geom::people_from_bincode(data).map_err(errors::geom)?,
         ))
     }
 
@@ -280,7 +280,7 @@ impl PyPeople {
 #[pyfunction]
 pub fn read_people(py: Python<'_>, path: std::path::PathBuf) -> PyResult<PyPeople> {
     let p = py
-        .detach(|| mp_geom::io::read_people(&path))
+        .detach(|| mp_geom::read_people(&path))
         .map_err(errors::geom)?;
     Ok(PyPeople::new(p))
 }

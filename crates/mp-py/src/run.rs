@@ -124,11 +124,11 @@ impl PySummary {
     /// The summary as bytes (what it pickles through).
     fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
         let state = SummaryState {
-            track: mp_geom::io::track_to_bincode(&self.track).map_err(errors::geom)?,
+            track: mp_geom::track_to_bincode(&self.track).map_err(errors::geom)?,
             tracked: self
                 .tracked
                 .as_ref()
-                .map(mp_geom::io::people::people_to_bincode)
+                .map(mp_geom::people_to_bincode)
                 .transpose()
                 .map_err(errors::geom)?,
             person: self.person,
@@ -148,7 +148,7 @@ impl PySummary {
             files: self.files.clone(),
             out_dir: self.out_dir.clone(),
         };
-        let b = mp_geom::io::binary::encode(SUMMARY_MAGIC, SUMMARY_VERSION, &state)
+        let b = mp_geom::binary::encode(SUMMARY_MAGIC, SUMMARY_VERSION, &state)
             .map_err(errors::geom)?;
         Ok(PyBytes::new(py, &b))
     }
@@ -156,7 +156,7 @@ impl PySummary {
     /// A summary from `Summary.to_bytes`'s output.
     #[staticmethod]
     fn from_bytes(data: &[u8]) -> PyResult<Self> {
-        let s: SummaryState = mp_geom::io::binary::decode(
+        let s: SummaryState = mp_geom::binary::decode(
             SUMMARY_MAGIC,
             SUMMARY_VERSION,
             data,
@@ -166,11 +166,11 @@ impl PySummary {
         let people = serde_json::from_str(&s.people)
             .map_err(|e| errors::ParamError::new_err(format!("summary bytes: people: {e}")))?;
         Ok(PySummary {
-            track: mp_geom::io::track_from_bincode(&s.track).map_err(errors::geom)?,
+            track: mp_geom::track_from_bincode(&s.track).map_err(errors::geom)?,
             tracked: s
                 .tracked
                 .as_deref()
-                .map(mp_geom::io::people::people_from_bincode)
+                .map(mp_geom::people_from_bincode)
                 .transpose()
                 .map_err(errors::geom)?,
             person: s.person,

@@ -197,13 +197,13 @@ impl PyTrack {
     /// in metres), through a temporary file and a rename.
     fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
         let t = &self.inner;
-        py.detach(|| mp_geom::io::write_track(&path, t))
+        py.detach(|| mp_geom::write_track(&path, t))
             .map_err(errors::geom)
     }
 
     /// The track in its compact binary form (the one it pickles through).
     fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
-        let b = mp_geom::io::track_to_bincode(&self.inner).map_err(errors::geom)?;
+        let b = mp_geom::track_to_bincode(&self.inner).map_err(errors::geom)?;
         Ok(PyBytes::new(py, &b))
     }
 
@@ -211,7 +211,7 @@ impl PyTrack {
     #[staticmethod]
     fn from_bytes(data: &[u8]) -> PyResult<Self> {
         Ok(PyTrack::new(
-            mp_geom::io::track_from_bincode(data).map_err(errors::geom)?,
+            mp_geom::track_from_bincode(data).map_err(errors::geom)?,
         ))
     }
 
@@ -266,21 +266,21 @@ pub(crate) fn read_track_file(
     py: Python<'_>,
     path: &std::path::Path,
     fps: Option<f64>,
-) -> PyResult<mp_geom::io::TrackRead> {
-    let opts = mp_geom::io::ReadOptions {
+) -> PyResult<mp_geom::TrackRead> {
+    let opts = mp_geom::ReadOptions {
         fps,
         ..Default::default()
     };
     let read = py
-        .detach(|| mp_geom::io::read_track_rated(path, &opts))
+        .detach(|| mp_geom::read_track_rated(path, &opts))
         .map_err(errors::geom)?;
-    if read.rate == mp_geom::io::RateSource::Assumed {
+    if read.rate == mp_geom::RateSource::Assumed {
         warn(
             py,
             &format!(
                 "{} states no frame rate: {} fps assumed (pass fps=)",
                 path.display(),
-                mp_geom::io::DEFAULT_FPS
+                mp_geom::DEFAULT_FPS
             ),
         )?;
     }
@@ -319,10 +319,10 @@ pub(crate) fn track_arg_framed(
             &format!(
                 "{func}(): an array states no frame rate: {} fps assumed (Track.from_numpy(a, fps) \
                  gives one)",
-                mp_geom::io::DEFAULT_FPS
+                mp_geom::DEFAULT_FPS
             ),
         )?;
-        let t = PyTrack::from_numpy(a, mp_geom::io::DEFAULT_FPS, None, None, None, "px")?;
+        let t = PyTrack::from_numpy(a, mp_geom::DEFAULT_FPS, None, None, None, "px")?;
         return Ok((t.inner, None));
     }
     Err(errors::ParamError::new_err(format!(

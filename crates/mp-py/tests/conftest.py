@@ -32,7 +32,7 @@ def mp_bin():
 def skip_test(test, needs, why):
     """Skips the running test because `needs` (a shared data file, a tool) is missing: prints
     `skipped: {test} needs {needs}` to stderr and appends `{test}\t{needs}` to the file named by
-    MP_SKIP_LOG when set (one write per line, as the Rust tests' `mp_geom::paths::skip_test`)."""
+    MP_SKIP_LOG when set (one write per line, as the Rust tests' `mp_geom::skip_test`)."""
     print(f"skipped: {test} needs {needs}", file=sys.stderr)
     log = os.environ.get("MP_SKIP_LOG")
     if log:

@@ -8,7 +8,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use mp_refine::full_confidence;

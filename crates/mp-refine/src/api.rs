@@ -7,9 +7,9 @@
 
 use std::path::{Path, PathBuf};
 
-use mp_geom::io::bvh::Bvh;
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::io::read_track;
+use mp_geom::read_track;
+use mp_geom::Bvh;
+use mp_geom::MsrAction3D;
 use mp_geom::Track;
 use mp_onnx::SessionParams;
 
@@ -123,7 +123,7 @@ pub fn read_concepts(path: &Path) -> Result<Concepts> {
     })
 }
 
-/// A track file (any format `mp_geom::io::read_track` reads), or a CMU BVH
+/// A track file (any format `mp_geom::read_track` reads), or a CMU BVH
 /// file (`.bvh`) mapped onto the 20 MSR joints at MSR Action3D's frame rate
 /// (`bvh_scale`: BVH length unit → metres).
 pub fn read_input(path: &Path, bvh_scale: f64) -> Result<Track> {

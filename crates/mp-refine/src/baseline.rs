@@ -25,7 +25,7 @@
 
 #![allow(clippy::needless_range_loop, clippy::manual_memcpy)]
 
-use mp_geom::stats::median;
+use mp_geom::median;
 use mp_geom::Track;
 use ndarray::s;
 use serde::{Deserialize, Serialize};
@@ -280,9 +280,9 @@ pub fn repair(track: &Track, flagged: &[bool], context_frames: usize) -> Result<
     }
     let mut pos = track.positions().to_owned();
     let data = JointData::new(track, 0.0);
-    let fit = mp_geom::fit::FitParams {
+    let fit = mp_geom::FitParams {
         kinds: vec![mp_geom::PrimitiveKind::Spline],
-        ..mp_geom::fit::FitParams::default()
+        ..mp_geom::FitParams::default()
     };
     let mut f = 0;
     while f < t {

@@ -40,7 +40,7 @@
 //!
 //! // A 20-joint MSR Action3D track in metres (`mp extract --world` tracks are
 //! // carried through `mapped`), refined with the shipped networks and concepts.
-//! let track = mp_geom::io::read_track("clip_msr20.npz")?;
+//! let track = mp_geom::read_track("clip_msr20.npz")?;
 //! let refined = refine_default(&track, &RefineOptions::default())?;
 //! refined.track.positions();
 //! # Ok::<(), Box<dyn std::error::Error>>(())

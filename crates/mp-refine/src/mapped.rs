@@ -21,8 +21,8 @@
 //! and pinky the refined hand, every other landmark the nearest MSR joint,
 //! each translated by that joint's correction.
 
-use mp_geom::skeleton_map::{FramePairing, SkeletonMap};
 use mp_geom::Track;
+use mp_geom::{FramePairing, SkeletonMap};
 
 use crate::error::{RefineError, Result};
 use crate::learned::{NetRefinement, NetRefiner};

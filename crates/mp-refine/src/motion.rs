@@ -18,7 +18,7 @@
 //! hierarchy's world positions onto the same 20 joints so mocap can be used
 //! next to MSR Action3D.
 
-use mp_geom::io::bvh::Bvh;
+use mp_geom::Bvh;
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::{Array2, Array3, ArrayView3};
 use serde::{Deserialize, Serialize};

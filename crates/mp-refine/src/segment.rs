@@ -5,7 +5,7 @@
 //! their junction frames: `{0..=k₁}, {k₁..=k₂}, …, {k_m..=T−1}`. Each
 //! transition is fitted, per joint and per axis, by a cubic
 //! `a t³ + b t² + c t + d` with `t = 0` at the transition's first frame
-//! ([`mp_geom::fit::fit_spline`]). The cut points minimise
+//! ([`mp_geom::fit_spline`]). The cut points minimise
 //!
 //! `E[n] = min_{k<n} E[k] + fit(P[k..=n]) + λ`
 //!
@@ -27,7 +27,7 @@
 //! the λ ablation in `tests/` shows how the number of anchors responds.
 
 use mp_concrete::dp::{segment_dp, CostTable, Segmentation};
-use mp_geom::fit::{fit_spline, ErrorNorm, FitParams};
+use mp_geom::{fit_spline, ErrorNorm, FitParams};
 use mp_geom::{Primitive, Track};
 use ndarray::{s, Array2, Array3, ArrayView2};
 use rayon::prelude::*;
@@ -262,7 +262,7 @@ pub(crate) fn fit_joint(
     pts: ArrayView2<'_, f64>,
     w: &[f64],
     fit: &FitParams,
-) -> mp_geom::Result<mp_geom::fit::Fit> {
+) -> mp_geom::Result<mp_geom::Fit> {
     if w.iter().any(|&x| x > 0.0) {
         fit_spline(pts, Some(w), fit)
     } else {

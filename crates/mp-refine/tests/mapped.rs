@@ -6,8 +6,8 @@
 
 mod common;
 
-use mp_geom::io::datasets::MediaPipeReference;
-use mp_geom::metrics::nanmean;
+use mp_geom::nanmean;
+use mp_geom::MediaPipeReference;
 use mp_refine::refine_any;
 use mp_refine::{NetRefineParams, NetRefiner};
 

@@ -9,8 +9,8 @@
 
 use std::sync::OnceLock;
 
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::io::npz::Npz;
+use mp_geom::MsrAction3D;
+use mp_geom::Npz;
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use mp_refine::full_confidence;
@@ -63,8 +63,10 @@ struct Fixture {
 /// The fixture, or `None` (the skip recorded for the running test) where the
 /// shared MSR Action3D file is absent.
 fn fixture() -> Option<&'static Fixture> {
-    let path =
-        mp_geom::paths::data_file_or_skip(MsrAction3D::FILE, &mp_geom::paths::current_test_name())?;
+    let path = mp_geom::test_support::data_file_or_skip(
+        MsrAction3D::FILE,
+        &mp_geom::test_support::current_test_name(),
+    )?;
     static F: OnceLock<Fixture> = OnceLock::new();
     Some(F.get_or_init(|| {
         let Models { nets, concepts } = load_models();

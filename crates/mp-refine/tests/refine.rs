@@ -2,7 +2,7 @@
 //! refinement, on synthetic motion and a few MSR Action3D clips.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
 use mp_refine::full_confidence;
 use mp_refine::*;

@@ -4,7 +4,7 @@
 //! where the shared data are absent.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_refine::full_confidence;
 use mp_refine::{find_model_dir, RefineNets};
 use mp_refine::{inject, Flaw};

@@ -22,7 +22,7 @@
 //!
 //! ```
 //! use mp_concrete::{synthesize, SynthParams};
-//! use mp_geom::performer::{perform, PerformerParams};
+//! use mp_geom::{perform, PerformerParams};
 //! use mp_report::{timeline_svg, TimelineParams};
 //!
 //! // The timeline picture of the performer's program (the product's synthesis).

@@ -316,7 +316,7 @@ fn open_in_chromium(page: &Path, fragment: &str, profile: &Path) -> Option<Strin
         .into_iter()
         .find(|p| Path::new(p).exists())
     else {
-        mp_geom::paths::skip_test(&mp_geom::paths::current_test_name(), "Chromium");
+        mp_geom::test_support::skip_test(&mp_geom::test_support::current_test_name(), "Chromium");
         return None;
     };
     let out = std::process::Command::new(exe)

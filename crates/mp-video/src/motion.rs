@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use mp_abstract::Counts;
-use mp_geom::stats::median;
+use mp_geom::median;
 use mp_geom::{CancelToken, Track};
 use mp_pipeline::{Input, Keep, Params, Silent};
 use mp_pose::VideoInfo;

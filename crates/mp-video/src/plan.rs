@@ -233,7 +233,7 @@ pub(crate) fn render_to_file(
 /// removed and the output is left as it was.
 pub struct AtomicVideo {
     writer: Option<VideoWriter>,
-    file: Option<mp_geom::io::PartialFile>,
+    file: Option<mp_geom::PartialFile>,
 }
 
 impl AtomicVideo {
@@ -245,8 +245,8 @@ impl AtomicVideo {
         fps: f64,
         preset: &str,
     ) -> Result<Self> {
-        // Registered, so an interrupted process removes it (see `mp_geom::io::PartialFile`).
-        let file = mp_geom::io::PartialFile::new(target)?;
+        // Registered, so an interrupted process removes it (see `mp_geom::PartialFile`).
+        let file = mp_geom::PartialFile::new(target)?;
         let writer = VideoWriter::create_with_preset(file.path(), width, height, fps, preset)?;
         Ok(AtomicVideo {
             writer: Some(writer),

@@ -8,8 +8,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use mp_concrete::InBetween;
-use mp_geom::io::datasets::{AistPlusPlus, PennAction};
 use mp_geom::Track;
+use mp_geom::{AistPlusPlus, PennAction};
 use mp_video::interpolate::Guide;
 use mp_video::InterpParams;
 

@@ -37,8 +37,8 @@ use crate::repetition::{
     estimate_period, segment_repetitions, IntervalParams, PeriodEstimate, PeriodParams,
     PeriodicSegment, RepetitiveInterval,
 };
-use mp_geom::checked::{Checked, Validate};
 use mp_geom::Track;
+use mp_geom::{Checked, Validate};
 
 /// Which signal a count was read from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -158,7 +158,7 @@ pub(crate) fn filled_column(
         *o = if valid.is_empty() || conf[[start + ti, ji]] > 0.0 {
             pos[[start + ti, ji, k]]
         } else {
-            match mp_geom::track::bracket(&valid, ti) {
+            match mp_geom::bracket(&valid, ti) {
                 Some((a, b, w)) => {
                     pos[[start + a, ji, k]] * (1.0 - w) + pos[[start + b, ji, k]] * w
                 }

@@ -176,7 +176,7 @@ pub fn learn_strings_cmd(a: &LearnStringsArgs) -> anyhow::Result<()> {
             "stats": r.stats,
             "trees": r.trees,
         });
-        mp_geom::io::write_atomic(out, serde_json::to_string_pretty(&v)?.as_bytes())?;
+        mp_geom::write_atomic(out, serde_json::to_string_pretty(&v)?.as_bytes())?;
         eprintln!("wrote {}", out.display());
     }
     Ok(())

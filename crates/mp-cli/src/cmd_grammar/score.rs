@@ -56,7 +56,7 @@ pub fn score_cmd(a: &ScoreArgs) -> anyhow::Result<()> {
             "parse_text": s.parse_text(&m.grammar),
             "score": s,
         });
-        mp_geom::io::write_atomic(out, serde_json::to_string_pretty(&v)?.as_bytes())
+        mp_geom::write_atomic(out, serde_json::to_string_pretty(&v)?.as_bytes())
             .with_context(|| format!("writing {}", out.display()))?;
         eprintln!("wrote {}", out.display());
     }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context};
 use clap::Args;
-use mp_geom::io::write_track;
+use mp_geom::write_track;
 use mp_grammar::GrammarModel;
 use mp_grammar::{symbol_name, DeriveParams, Fsm, FsmWeighting, RuleWeighting, Stitcher};
 use mp_grammar::{StitchParams, Synthesis};

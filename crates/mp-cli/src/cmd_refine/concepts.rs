@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_refine::Linkage;
 use mp_refine::{canonical_anchor_samples, msr_anchor_samples, msr_training_clips};
 use mp_refine::{learn_concepts, ClusterMethod, ConceptParams, SegmentParams};
@@ -98,7 +98,7 @@ fn is_track_file(p: &Path) -> bool {
     p.extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
-        .is_some_and(|e| mp_geom::io::TRACK_EXTENSIONS.contains(&e.as_str()))
+        .is_some_and(|e| mp_geom::TRACK_EXTENSIONS.contains(&e.as_str()))
 }
 
 /// `mp concepts`.
@@ -178,7 +178,7 @@ pub fn concepts_cmd(a: &ConceptsArgs) -> anyhow::Result<()> {
             ac.score_threshold
         );
     }
-    mp_geom::io::write_atomic(&a.output, concepts.to_json()?.as_bytes())
+    mp_geom::write_atomic(&a.output, concepts.to_json()?.as_bytes())
         .with_context(|| format!("writing {}", a.output.display()))?;
     Ok(())
 }

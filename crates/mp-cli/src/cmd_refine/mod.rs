@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use clap::Args;
-use mp_geom::io::write_track;
+use mp_geom::write_track;
 use mp_geom::Track;
 use mp_refine::read_input;
 use mp_refine::MappedRefinement;
@@ -231,7 +231,7 @@ fn finish(a: &RefineArgs, r: &MappedRefinement, track: &Track) -> anyhow::Result
     println!("mean joint change: {:.1} mm", change * 1e3);
     write_track(&a.output, &r.track).with_context(|| format!("writing {}", a.output.display()))?;
     if let Some(p) = &a.report {
-        mp_geom::io::write_atomic(p, serde_json::to_string_pretty(&r.msr.report)?.as_bytes())
+        mp_geom::write_atomic(p, serde_json::to_string_pretty(&r.msr.report)?.as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;
     }
     Ok(())

@@ -2,7 +2,7 @@
 //! squared stationary and line errors, the Bullock/Kåsa circle and its
 //! algebraic residual, and lower bounds of every kind's error.
 
-use mp_geom::fit::FitParams;
+use mp_geom::FitParams;
 
 use super::moments::Acc2;
 use super::{Rules, LB_SAFETY};
@@ -323,8 +323,8 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
     use super::*;
     use crate::search::testutil::{acc_of, moved, steps_of, track};
-    use mp_geom::checked::Validate;
-    use mp_geom::fit::{fit_best_checked, fit_kind};
+    use mp_geom::Validate;
+    use mp_geom::{fit_best_checked, fit_kind};
     use mp_geom::{Primitive, PrimitiveKind};
     use ndarray::Array2;
     use rand::{Rng, SeedableRng};

@@ -303,7 +303,7 @@ mod tests {
     use crate::search::circle::{circle2, CircleScratch, Span};
     use crate::search::exact::cheap2;
     use crate::search::testutil::{acc_of, steps_of, track};
-    use mp_geom::fit::FitParams;
+    use mp_geom::FitParams;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

@@ -1,5 +1,5 @@
 //! The exact circle of one 2D joint on a candidate segment, where it can
-//! still win: the fit of [`mp_geom::fit::fit_circle`] (Bullock's centre, the
+//! still win: the fit of [`mp_geom::fit_circle`] (Bullock's centre, the
 //! angles about it unwrapped point to point, the least-squares line of the
 //! angle against time) with its error and radius penalty.
 //!
@@ -7,17 +7,17 @@
 //! segment's valid frames gathered into reused buffers, in passes without
 //! branches that become vector instructions (AVX2 where the CPU has it,
 //! checked at run time): the mean, Bullock's sums, the angles
-//! ([`mp_geom::fit::atan`]), the unwrapping (the one sequential step), the
+//! ([`mp_geom::atan2_lanes`]), the unwrapping (the one sequential step), the
 //! angle line's sums, and the residuals, with the fitted angle rotated by
 //! four frames' turn in four interleaved chains. Every sum runs in four lanes
 //! of fixed assignment (frame index mod 4), so the result is the same on
 //! every CPU; it is that of `fit_circle` up to rounding.
 
-use mp_geom::fit::atan::atan2_lanes;
-use mp_geom::fit::{bullock_from_sums, bullock_terms, unwrap_degrees, FitParams};
+use mp_geom::atan2_lanes;
 #[cfg(target_arch = "x86_64")]
-use mp_geom::lanes::Avx2;
-use mp_geom::lanes::{has_avx2, Arith, F64x4, Portable};
+use mp_geom::Avx2;
+use mp_geom::{bullock_from_sums, bullock_terms, unwrap_degrees, FitParams};
+use mp_geom::{has_avx2, Arith, F64x4, Portable};
 
 use super::Rules;
 
@@ -73,7 +73,7 @@ pub(super) struct Span<'a> {
     pub(super) last: usize,
 }
 
-/// The circle of [`mp_geom::fit::fit_circle`] (2D, linear angle) on the
+/// The circle of [`mp_geom::fit_circle`] (2D, linear angle) on the
 /// valid frames of the span, with its error and radius penalty. `None` when
 /// the points are collinear (the circle takes no part, as in `fit_best`).
 pub(super) fn circle2(
@@ -293,7 +293,7 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
     use super::*;
     use crate::search::testutil::track;
-    use mp_geom::fit::fit_circle;
+    use mp_geom::fit_circle;
     use mp_geom::Primitive;
     use ndarray::Array2;
     use rand::SeedableRng;

@@ -267,8 +267,8 @@ mod tests {
     use crate::search::bounds::quick;
     use crate::search::exact::cheap2;
     use crate::search::testutil::{acc_of, moved, steps_of, track};
-    use mp_geom::checked::Validate;
-    use mp_geom::fit::{fit_best_checked, FitParams};
+    use mp_geom::Validate;
+    use mp_geom::{fit_best_checked, FitParams};
     use ndarray::Array2;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;

@@ -28,7 +28,7 @@
 //!   `Σ w |dᵢ − r| ≥ K / (A·(d_max + r))` with `A ≥ max |dᵢ² − r²|`.
 //!
 //! A joint's cost is the error of the kind chosen by the selection rules of
-//! [`mp_geom::fit`], which is at least the smallest error over the kinds
+//! [`mp_geom::fit_best`], which is at least the smallest error over the kinds
 //! considered; so `E[k] + λ + Σ_j lb_j > E[n]` proves that `k` cannot improve
 //! `E[n]`. Candidates that survive get their stationary and line errors
 //! (one pass over the segment, square roots only) and a second bound
@@ -49,7 +49,7 @@
 //! lower bound (with the exact circle where one was fitted); only a
 //! candidate that survives every joint's single-precision bound gets the
 //! exact double-precision pass of each joint, and its exact cost. The costs are those of
-//! [`mp_geom::fit::fit_best`] (same fits, same rules) up to rounding, so the
+//! [`mp_geom::fit_best`] (same fits, same rules) up to rounding, so the
 //! optimum is the optimum of the exhaustive DP ([`crate::synth::segment_exhaustive`]).
 //!
 //! What the one pass measures (its single-precision lower bounds, then the
@@ -73,9 +73,9 @@
 //! Memory: `O(T·J·D)` for the points, `O(T)` for the DP and `O(W·J)` for
 //! what is carried; no `T × W` table.
 
-use mp_geom::checked::Checked;
-use mp_geom::fit::{fit_best_checked, ErrorNorm, FitParams};
+use mp_geom::Checked;
 use mp_geom::PrimitiveKind;
+use mp_geom::{fit_best_checked, ErrorNorm, FitParams};
 use ndarray::{s, Array2};
 
 use crate::dp::{backtrack, Segmentation};

@@ -1,7 +1,7 @@
 //! The refit under the Euclidean norm: iteratively reweighted least squares
 //! from the least-squares solve (see the parent module's docs).
 
-use mp_geom::fit::FitParams;
+use mp_geom::FitParams;
 use mp_geom::Primitive;
 
 use super::elems::{primitives_of, Elem};

@@ -70,7 +70,7 @@
 //! primitives back from them), `solve` (the banded normal equations),
 //! `irls` (the reweighted solves); the refit loop is here.
 
-use mp_geom::fit::FitParams;
+use mp_geom::FitParams;
 use mp_geom::Primitive;
 use ndarray::ArrayView2;
 use serde::{Deserialize, Serialize};

@@ -3,7 +3,7 @@
 //! by [`segment`] — an exact branch and bound over the DP of [`crate::dp`]
 //! with segment moments updated in O(1) per candidate and lower bounds of the
 //! fit errors ([`crate::search`], module docs there) — and the chosen
-//! segments are fitted once more with [`mp_geom::fit::fit_best`] (in parallel)
+//! segments are fitted once more with [`mp_geom::fit_best`] (in parallel)
 //! to get their primitives. The costs are those of `fit_best` on every
 //! candidate segment `k..n` of at most `W` frames; [`segment_exhaustive`]
 //! still computes them all into a [`CostTable`] and is the reference the
@@ -12,8 +12,8 @@
 //! The parameters (scale, λ, [`SynthParams`]) and their units are described in
 //! [`params`].
 
-use mp_geom::checked::{Checked, Validate};
-use mp_geom::fit::{fit_best_checked, FitParams};
+use mp_geom::{fit_best_checked, FitParams};
+use mp_geom::{Checked, Validate};
 use mp_geom::{Primitive, Track};
 use ndarray::{s, Array2};
 use rayon::prelude::*;
@@ -252,7 +252,7 @@ fn search_prepared(
 }
 
 /// The reference segmentation: every candidate segment refitted with
-/// [`mp_geom::fit::fit_best`] into the full cost table ([`segment_costs`],
+/// [`mp_geom::fit_best`] into the full cost table ([`segment_costs`],
 /// `O(T·W)` memory, `O(T·W²·J)` time), then the exhaustive DP over it.
 /// [`synthesize`] finds the same optimum much faster (same costs up to
 /// rounding); this is kept for tests and benchmarks.

@@ -41,8 +41,8 @@
 //!   about a dozen syntheses. A budget below the smallest program's size is an
 //!   error naming both.
 
-use mp_geom::fit::{ErrorNorm, FitParams};
 use mp_geom::Track;
+use mp_geom::{ErrorNorm, FitParams};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{ConcreteError, Result};

@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::Context;
 use indicatif::ProgressBar;
 use mp_concrete::{program_stats, Continuity, ProgramStats};
-use mp_geom::io::datasets::PennAction;
+use mp_geom::PennAction;
 use rayon::prelude::*;
 use serde_json::{json, Value};
 
@@ -150,7 +150,7 @@ pub(super) fn compare_continuity(
         "wall_seconds": wall,
         "threads": rayon::current_num_threads(),
     });
-    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())
+    mp_geom::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())
         .with_context(|| format!("writing {}", a.out.display()))?;
     println!("{md}");
     if let Some(m) = &a.markdown {

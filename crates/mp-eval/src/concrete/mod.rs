@@ -42,7 +42,7 @@ use mp_concrete::{
     interpolation_experiment, program_stats, Continuity, InterpParams, Program, RefitNorm,
     Transition,
 };
-use mp_geom::io::datasets::PennAction;
+use mp_geom::PennAction;
 use rayon::prelude::*;
 use serde_json::{json, Value};
 
@@ -341,7 +341,7 @@ fn markdown(report: &Value, steps: &[usize]) -> String {
 pub fn run(a: &EvalConcreteArgs) -> anyhow::Result<()> {
     let path = match &a.data {
         Some(p) => p.clone(),
-        None => mp_geom::paths::data_file(PennAction::TRAIN_FILE)
+        None => mp_geom::data_file(PennAction::TRAIN_FILE)
             .context("Penn Action not found: pass --data or set MP_DATA_DIR")?,
     };
     let pa = PennAction::open(&path).with_context(|| format!("opening {}", path.display()))?;

@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::Context;
 use indicatif::ProgressBar;
 use mp_concrete::{program_stats, Lambda};
-use mp_geom::io::datasets::PennAction;
+use mp_geom::PennAction;
 use rayon::prelude::*;
 use serde_json::json;
 
@@ -261,14 +261,14 @@ pub(super) fn sweep(
         "wall_seconds": wall,
         "threads": rayon::current_num_threads(),
     });
-    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())
+    mp_geom::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())
         .with_context(|| format!("writing {}", a.out.display()))?;
     if let Some(dir) = a.svg.parent() {
         if !dir.as_os_str().is_empty() {
             std::fs::create_dir_all(dir)?;
         }
     }
-    mp_geom::io::write_atomic(&a.svg, frontier_svg(&curves, &marks).as_bytes())
+    mp_geom::write_atomic(&a.svg, frontier_svg(&curves, &marks).as_bytes())
         .with_context(|| format!("writing {}", a.svg.display()))?;
     for (act, pts) in &curves {
         let row: Vec<String> = pts

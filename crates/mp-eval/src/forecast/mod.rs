@@ -216,7 +216,7 @@ fn per_action_md(reports: &[MethodReport], metric: &str, h: usize) -> String {
 pub fn run(a: &EvalForecastArgs) -> Result<()> {
     let data = match &a.data {
         Some(p) => p.clone(),
-        None => mp_geom::paths::data_file("penn_action/penn_action_train.npz")
+        None => mp_geom::data_file("penn_action/penn_action_train.npz")
             .context("no --data and the shared Penn Action train split was not found")?,
     };
     let ds = ForecastDataset::open(&data).with_context(|| format!("reading {}", data.display()))?;

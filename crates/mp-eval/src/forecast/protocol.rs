@@ -10,13 +10,13 @@
 //! * **Without DTW**, the score at horizon `h` is the metric of predicted frame
 //!   `h` against true frame `h` (NaN when `h > L`).
 //! * **With DTW**, the prediction's first `L` frames are aligned to the `L` true
-//!   frames by [`mp_geom::metrics::dtw_align`] (steps (1,0), (0,1), (1,1), each
+//!   frames by [`mp_geom::dtw_align`] (steps (1,0), (0,1), (1,1), each
 //!   frame matched at least once, monotone; local cost = the **mean Euclidean
 //!   distance** over the joints valid in both frames, summed along the path, no
 //!   square root: [`DtwCost::Euclidean`]); the score at `h` is the metric of the
 //!   aligned frame `h`.
 //!
-//! Metrics: 2D — PCK@0.05 ([`mp_geom::metrics::pck_per_frame_sized`]: the size
+//! Metrics: 2D — PCK@0.05 ([`mp_geom::pck_per_frame_sized`]: the size
 //! is the larger side of the clip's annotated person box where the data set has
 //! one ([`Clip::box_sizes`], Penn Action), else of the bounding box of the
 //! visible true joints; after the optimal scale + translation of the
@@ -28,7 +28,7 @@
 
 use std::collections::BTreeMap;
 
-use mp_geom::metrics::{
+use mp_geom::{
     dtw_align, mpjpe_per_frame, nanmean, pa_mpjpe_per_frame, pck_per_frame_sized, DtwCost,
     PckParams, Poses,
 };

@@ -205,7 +205,7 @@ fn f(v: &Value, path: &[&str]) -> f64 {
 /// `cargo xtask eval inbetween`.
 pub fn run(a: &EvalInBetweenArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let data = mp_geom::paths::data_dir()
+    let data = mp_geom::data_dir()
         .context("the shared data folder was not found: set MP_DATA_DIR to it")?;
     for &k in &a.factors {
         if k < 2 {

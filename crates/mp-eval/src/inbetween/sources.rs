@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use anyhow::{bail, Context};
-use mp_geom::io::datasets::{AistPlusPlus, MediaPipeReference, MsrAction3D, PennAction};
-use mp_geom::skeleton_map::SkeletonMap;
+use mp_geom::SkeletonMap;
+use mp_geom::{AistPlusPlus, MediaPipeReference, MsrAction3D, PennAction};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 

@@ -12,7 +12,7 @@
 
 use std::collections::BTreeMap;
 
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use ndarray::{Array2, Array3};
 use serde::{Deserialize, Serialize};
 

@@ -2,8 +2,8 @@
 //! MSR Action3D clips with injected flaws: MPJPE to the clean clip before
 //! and after.
 
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::metrics::nanmean;
+use mp_geom::nanmean;
+use mp_geom::MsrAction3D;
 use mp_geom::Track;
 use serde::{Deserialize, Serialize};
 

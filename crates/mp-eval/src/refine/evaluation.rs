@@ -1,11 +1,11 @@
-//! Evaluation of the learned refinement ([`mp_refine::learned`]).
+//! Evaluation of the learned refinement ([`mp_refine::NetRefiner`]).
 //!
 //! * **Injected flaws** ([`evaluate_injected_nets`]): clips of the held-out
 //!   subjects of MSR Action3D (subject 9 by default; any subjects the
 //!   networks never saw with [`crate::refine::split`]; parameters are chosen
 //!   on the selection subjects, 7 by default, with [`selection_grid`]) get
 //!   one known flaw each
-//!   ([`mp_refine::flaws`]); MPJPE (absolute, no alignment) to the clean clip
+//!   ([`mp_refine::inject`]); MPJPE (absolute, no alignment) to the clean clip
 //!   before and after refinement, per flaw and overall, next to the
 //!   non-learned baseline ([`mp_refine::refine`]); and the MPJPE
 //!   between each clean clip and its refinement (how much refinement
@@ -21,9 +21,9 @@
 //!   does not depend on the clustering) vs the distance to the nearest
 //!   concept with concepts from k-means or DBSCAN.
 
-use mp_geom::metrics::nanmean;
+use mp_geom::nanmean;
 
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_geom::Track;
 use ndarray::{Array2, Axis};
 use serde::{Deserialize, Serialize};
@@ -479,7 +479,7 @@ pub fn evaluate(
         })
         .map(|(r, _)| r)
         .collect();
-    let rest = |c: &mp_geom::io::datasets::MsrClip| match &params.concept_subjects {
+    let rest = |c: &mp_geom::MsrClip| match &params.concept_subjects {
         Some(s) => s.contains(&c.subject),
         None => !params.val_subjects.contains(&c.subject),
     };

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use ndarray::{Array2, Array3, Axis};
 use serde::{Deserialize, Serialize};
 

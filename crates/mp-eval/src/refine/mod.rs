@@ -34,7 +34,7 @@ use crate::refine::evaluation::{
 use crate::refine::split::{split_for, split_params, subjects_of, TrainingSubjects};
 use anyhow::{Context, Result};
 use clap::Args;
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_pose::SessionParams;
 use mp_refine::Concepts;
 use mp_refine::{find_model_dir, RefineNets};
@@ -449,7 +449,7 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
             (
                 act.to_string(),
                 json!({
-                    "name": mp_geom::io::datasets::msr_action_name(*act),
+                    "name": mp_geom::msr_action_name(*act),
                     "fid_before": before,
                     "fid_after": g.after.per_action_fid.get(act),
                     "fid_real": g.real.as_ref().and_then(|r| r.per_action_fid.get(act)),

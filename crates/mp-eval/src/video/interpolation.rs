@@ -456,11 +456,11 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
                 let pose = pose?;
                 if let Some(d) = &a.tracks_dir {
                     std::fs::create_dir_all(d)?;
-                    mp_geom::io::write_track(
+                    mp_geom::write_track(
                         d.join(format!("{name}_x{k}_{}.npz", method.as_str())),
                         &pose,
                     )?;
-                    mp_geom::io::write_track(d.join(format!("{name}_truth.npz")), &truth)?;
+                    mp_geom::write_track(d.join(format!("{name}_truth.npz")), &truth)?;
                 }
                 let (kd_arms, n_arms) = kd(&pose, &truth, &dropped, Some(&ARM_JOINTS));
                 let (kd_all, _) = kd(&pose, &truth, &dropped, None);
@@ -595,7 +595,7 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
         "per_video": per_video,
         "seconds": num(t_all.elapsed().as_secs_f64()),
     });
-    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    mp_geom::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     eprintln!("written to {}", a.out.display());
     Ok(())
 }

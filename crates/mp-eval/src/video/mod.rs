@@ -50,11 +50,11 @@ const MIN_CONF: f64 = mp_video::motion::MIN_CONFIDENCE;
 fn shared_videos(with_golf: bool) -> anyhow::Result<Vec<PathBuf>> {
     let mut v = Vec::new();
     if with_golf {
-        if let Some(g) = mp_geom::paths::data_file("golfdb/golf_swing.mp4") {
+        if let Some(g) = mp_geom::data_file("golfdb/golf_swing.mp4") {
             v.push(g);
         }
     }
-    if let Some(dir) = mp_geom::paths::data_file("quva_repetition/videos") {
+    if let Some(dir) = mp_geom::data_file("quva_repetition/videos") {
         let mut q: Vec<PathBuf> = std::fs::read_dir(&dir)
             .with_context(|| format!("listing {}", dir.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))

@@ -176,7 +176,7 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
         "per_video": per_video,
         "seconds": num(t_all.elapsed().as_secs_f64()),
     });
-    mp_geom::io::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    mp_geom::write_atomic(&a.out, serde_json::to_string_pretty(&report)?.as_bytes())?;
     eprintln!("written to {}", a.out.display());
     Ok(())
 }

@@ -97,24 +97,10 @@ fn bullock_solve(m: &[f64; 7], w_sum: f64) -> Result<Circle2> {
 }
 
 /// Bullock's circle from the sums of [`bullock_terms`] over centred points
-/// with weights summing to `w_sum`, as [`bullock_circle`] (for callers that
-/// sum the terms their own way).
+/// with weights summing to `w_sum` (for callers that sum the terms their own
+/// way, as `mp-concrete`'s branch-and-bound segmentation does).
 pub fn bullock_from_sums(sums: &[f64; 7], w_sum: f64) -> Result<(f64, f64, f64)> {
     bullock_solve(sums, w_sum).map(|c| (c.uc, c.vc, c.r))
-}
-
-/// Bullock's algebraic circle of points given in centred local coordinates
-/// `coord(i)`, `i < n`, with weights (`None`: all 1) summing to `w_sum`: the
-/// centre `(u_c, v_c)` in those coordinates and the radius, or an error when
-/// the points are collinear or coincident. The circle fit uses it, and so does
-/// `mp-concrete`'s branch-and-bound segmentation (no allocation).
-pub fn bullock_circle(
-    n: usize,
-    weights: Option<&[f64]>,
-    w_sum: f64,
-    coord: impl Fn(usize) -> (f64, f64),
-) -> Result<(f64, f64, f64)> {
-    bullock(n, weights, w_sum, coord).map(|c| (c.uc, c.vc, c.r))
 }
 
 /// Calls `f(i, wᵢ, θᵢ)` for every point `i < n` of non-zero weight (`None`:
@@ -157,7 +143,7 @@ pub fn unwrapped_angles(
 /// Turns angles in radians into degrees unwrapped point to point, in
 /// place: each differs from its predecessor (`prev` before the first) by at
 /// most 180°. Returns the last angle (`prev` for no angles).
-/// [`unwrapped_angles`] uses it, and so does `mp-concrete`'s search.
+/// `unwrapped_angles` uses it, and so does `mp-concrete`'s search.
 ///
 /// The whole turns between consecutive raw angles are independent of each
 /// other; only their running count is carried from point to point (an

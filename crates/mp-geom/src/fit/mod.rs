@@ -61,9 +61,7 @@ mod circle;
 mod input;
 pub mod prefix;
 
-pub use circle::{
-    bullock_circle, bullock_from_sums, bullock_terms, unwrap_degrees, unwrapped_angles,
-};
+pub use circle::{bullock_from_sums, bullock_terms, unwrap_degrees};
 
 use crate::checked::{Checked, Validate};
 use crate::error::{GeomError, Result};
@@ -532,10 +530,25 @@ fn bbox_diag(points: ArrayView2<'_, f64>, weights: Option<&[f64]>) -> f64 {
         .sqrt()
 }
 
-/// Fits every kind in `params.kinds` and returns the best by the selection
-/// rules of docs/ALGORITHMS.md (lowest error with penalties; stationary wins under its thresholds).
+/// Fits every kind in `params.kinds` and returns the best by these selection
+/// rules (lowest error with penalties; stationary wins under its thresholds).
 ///
-/// The exact rules are listed in the [module documentation](self).
+/// With `s = unit_scale`, over the kinds listed in [`FitParams::kinds`]:
+///
+/// 1. If stationary is allowed, it wins outright when the diagonal of the
+///    bounding box of the valid points is `< stationary_bbox_px·s`, or when
+///    its weighted mean Euclidean residual `Σ wᵢ‖x̄ − xᵢ‖ / Σ wᵢ` is
+///    `< stationary_mean_residual_px·s` (whatever the norm).
+/// 2. Line and circle are rejected when the distance between the first and
+///    the last valid point of the segment is `< min_span_px·s`, unless every
+///    allowed kind is a line or a circle (then nothing is rejected).
+/// 3. A circle's error gets, once per segment (not per point), the penalty
+///    `radius_penalty·max(r − max_radius_px·s, 0)` plus `radius_penalty·r`
+///    when `r < min_radius_px·s`, in the data's units whatever the norm. A
+///    circle that cannot be fitted (collinear points) is skipped.
+/// 4. The remaining candidate with the lowest error wins; ties go to the
+///    simpler kind (order of [`PrimitiveKind::ALL`]). The returned error
+///    includes the penalty.
 pub fn fit_best(
     points: ArrayView2<'_, f64>,
     weights: Option<&[f64]>,

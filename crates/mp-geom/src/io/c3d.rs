@@ -206,11 +206,6 @@ fn rate_of(r: f32) -> f64 {
     format!("{r}").parse().unwrap_or(r as f64)
 }
 
-/// Reads the 3D points of a C3D file (see the module docs).
-pub fn read_c3d(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
-    read_c3d_rated(path.as_ref(), opts).map(|(t, _)| t)
-}
-
 /// [`read_c3d`], and whether the file states its frame rate.
 pub(crate) fn read_c3d_rated(path: &Path, opts: &ReadOptions) -> Result<(Track, bool)> {
     let bytes = std::fs::read(path).map_err(|e| GeomError::io(path, e))?;

@@ -29,7 +29,7 @@
 //! [`super::DEFAULT_FPS`]. The writer adds `time` after `frame`.
 //!
 //! The skeleton is the one in [`ReadOptions::skeleton`], else chosen from the
-//! joint names ([`super::skeleton_from_names`]).
+//! joint names (`super::skeleton_from_names`).
 
 use std::collections::HashMap;
 use std::fmt::Write as _;

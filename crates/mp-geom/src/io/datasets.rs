@@ -357,7 +357,7 @@ pub struct MsrClip {
     pub index: usize,
     /// Action number 1–20.
     pub action: u32,
-    /// Action name (from [`MSR_ACTION_NAMES`]; `unknown` outside 1–20).
+    /// Action name (from `MSR_ACTION_NAMES`; `unknown` outside 1–20).
     pub action_name: &'static str,
     /// Subject number.
     pub subject: u32,

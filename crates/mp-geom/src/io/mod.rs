@@ -53,8 +53,7 @@ pub mod people;
 pub mod pose;
 
 pub use atomic::{abandon_partial_writes, write_atomic, PartialFile};
-pub use native::{track_from_bincode, track_to_bincode};
-pub use people::{people_to_npz_bytes, people_to_npz_bytes_framed};
+pub use people::people_to_npz_bytes_framed;
 
 use std::path::Path;
 
@@ -200,7 +199,7 @@ fn extension(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// Reads a track with default [`ReadOptions`]. See [`read_track_with`].
+/// Reads a track with default [`ReadOptions`]. See `read_track_with`.
 pub fn read_track(path: impl AsRef<Path>) -> Result<Track> {
     read_track_with(path, &ReadOptions::default())
 }
@@ -247,7 +246,7 @@ pub struct TrackRead {
     pub frame_size: Option<(usize, usize)>,
 }
 
-/// [`read_track_with`], with where the rate came from and the frame size the
+/// `read_track_with`, with where the rate came from and the frame size the
 /// file states, in one read.
 pub fn read_track_rated(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<TrackRead> {
     let path = path.as_ref();
@@ -463,7 +462,7 @@ struct Stated {
     frame_size: Option<(usize, usize)>,
 }
 
-/// Reads people with default [`ReadOptions`]. See [`read_people_with`].
+/// Reads people with default [`ReadOptions`]. See `read_people_with`.
 pub fn read_people(path: impl AsRef<Path>) -> Result<People> {
     read_people_with(path, &ReadOptions::default())
 }
@@ -519,7 +518,7 @@ pub fn write_people_framed(
 
 /// Writes a track in the format chosen by extension: `.npz` (compressed),
 /// `.json`, `.csv` (wide), `.mpt` (binary), `.bvh` and `.c3d` (3D tracks in
-/// metres; see [`bvh_export`] and [`c3d`]), `.parquet` or `.pose`. A track
+/// metres; see `bvh_export` and `c3d`), `.parquet` or `.pose`. A track
 /// a format cannot hold is an error naming the file. Atomic (temporary
 /// file + rename).
 pub fn write_track(path: impl AsRef<Path>, track: &Track) -> Result<()> {

@@ -514,15 +514,6 @@ fn sorted_keys(cols: &HashMap<String, Column>) -> String {
     }
 }
 
-/// Reads a Parquet track (a people table gives its main person's track).
-pub fn read_parquet(path: impl AsRef<Path>, opts: &ReadOptions) -> Result<Track> {
-    let path = path.as_ref();
-    match read_parquet_any(path, opts)?.content {
-        Content::Track(t) => Ok(*t),
-        Content::People(p) => super::people::main_track_of(&p, path),
-    }
-}
-
 /// The columns to write: (person, frame, joint index) per row.
 struct Rows {
     person: Vec<i64>,

@@ -5,7 +5,7 @@ use super::poses::{check_pair, nanmean_or_err};
 use super::Poses;
 use crate::error::{GeomError, Result};
 
-/// Parameters of [`pck_with`] / [`pck_per_frame`].
+/// Parameters of `pck_with` / `pck_per_frame`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PckParams {
     /// Threshold as a fraction of the bounding-box size. Default 0.05.
@@ -57,12 +57,12 @@ pub fn pck_per_frame<'a, 'b>(
     pck_per_frame_sized(pred, gt, None, params)
 }
 
-/// [`pck_per_frame`] with the reference size of every ground-truth frame
+/// `pck_per_frame` with the reference size of every ground-truth frame
 /// given (e.g. the larger side of a data set's annotated person box) instead
 /// of the extent of the visible joints. `sizes` must hold one entry per
 /// ground-truth frame; a frame whose size is not finite and > 0 (a missing
 /// annotation) falls back to the extent of its visible joints. `None` is
-/// [`pck_per_frame`].
+/// `pck_per_frame`.
 pub fn pck_per_frame_sized<'a, 'b>(
     pred: impl Into<Poses<'a>>,
     gt: impl Into<Poses<'b>>,
@@ -166,7 +166,7 @@ pub fn pck_with<'a, 'b>(
     nanmean_or_err(&pck_per_frame(pred, gt, params)?, "pck")
 }
 
-/// PCK@α in percent (`min_visible` = 6): see [`pck_per_frame`].
+/// PCK@α in percent (`min_visible` = 6): see `pck_per_frame`.
 pub fn pck<'a, 'b>(
     pred: impl Into<Poses<'a>>,
     gt: impl Into<Poses<'b>>,

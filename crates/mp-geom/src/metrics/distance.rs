@@ -9,6 +9,7 @@ use crate::error::{GeomError, Result};
 
 /// Keypoint difference per frame: mean Euclidean distance over the joints
 /// valid in both sequences; NaN for frames without such a joint.
+#[cfg(test)]
 pub fn kd_per_frame<'a, 'b>(a: impl Into<Poses<'a>>, b: impl Into<Poses<'b>>) -> Result<Vec<f64>> {
     let (a, b) = (a.into(), b.into());
     check_pair(&a, &b, "kd", true)?;

@@ -77,7 +77,7 @@ pub fn procrustes(x: ArrayView2<'_, f64>, y: ArrayView2<'_, f64>) -> Result<Simi
 }
 
 /// PA-MPJPE per frame: MPJPE after the best similarity transform
-/// ([`procrustes`], with the reflection fix) of the prediction onto the
+/// (`procrustes`, with the reflection fix) of the prediction onto the
 /// ground truth, over the joints valid in both; NaN for frames with fewer
 /// than 2 such joints.
 pub fn pa_mpjpe_per_frame<'a, 'b>(

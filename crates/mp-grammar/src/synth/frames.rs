@@ -5,7 +5,7 @@
 
 use std::ops::Range;
 
-use mp_geom::io::bvh::Bvh;
+use mp_geom::Bvh;
 use mp_geom::{Track, Units};
 use ndarray::{Array2, ArrayView1};
 

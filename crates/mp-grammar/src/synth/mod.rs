@@ -63,7 +63,7 @@
 
 use std::ops::Range;
 
-use mp_geom::io::bvh::Bvh;
+use mp_geom::Bvh;
 use mp_geom::{Track, Units};
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
@@ -232,8 +232,8 @@ enum Output {
 }
 
 /// The most output cells (frames × joints) one synthesis may produce (the
-/// bound of concrete-program execution, `mp_geom::track::MAX_FRAME_JOINTS`).
-pub use mp_geom::track::MAX_FRAME_JOINTS;
+/// bound of concrete-program execution, `mp_geom::MAX_FRAME_JOINTS`).
+pub use mp_geom::MAX_FRAME_JOINTS;
 
 /// The most segments a synthesis may request (`segments` of
 /// [`Stitcher::synthesize`] and [`Stitcher::synthesize_fsm`]), whatever

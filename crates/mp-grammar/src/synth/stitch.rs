@@ -2,8 +2,8 @@
 //! cross-faded into it, the result built as a track (and BVH), and
 //! synthesis from a grammar or a finite-state machine.
 
-use mp_geom::io::bvh::{Bvh, BvhTrackParams};
 use mp_geom::Track;
+use mp_geom::{Bvh, BvhTrackParams};
 use ndarray::{s, Array2, Array3};
 
 use super::{Output, Piece, Stitcher, Synthesis, MAX_FRAME_JOINTS, MAX_SEGMENTS};

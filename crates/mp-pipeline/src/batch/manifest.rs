@@ -184,7 +184,7 @@ impl Manifest {
             text.push_str(&l.to_json_line());
             text.push('\n');
         }
-        mp_geom::io::write_atomic(path, text.as_bytes())
+        mp_geom::write_atomic(path, text.as_bytes())
             .map_err(|e| BatchError::io("write the manifest", path, std::io::Error::other(e)))?;
         if let Some(dir) = path.parent() {
             // Makes the rename durable where folders can be synced.

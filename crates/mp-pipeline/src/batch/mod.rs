@@ -63,7 +63,7 @@ use manifest::Manifest;
 
 /// Extensions of the keypoint track files that [`batch_items`] lists from a
 /// folder (besides the videos of [`crate::VIDEO_EXTENSIONS`]).
-pub const TRACK_EXTENSIONS: [&str; 9] = mp_geom::io::TRACK_EXTENSIONS;
+pub const TRACK_EXTENSIONS: [&str; 9] = mp_geom::TRACK_EXTENSIONS;
 
 /// File name of the manifest inside the output folder.
 pub const MANIFEST: &str = "manifest.jsonl";

@@ -8,8 +8,8 @@ fn movenet_model() -> Option<std::path::PathBuf> {
     match crate::model_path(crate::ModelFile::MoveNetLightning) {
         Ok(p) => Some(p),
         Err(_) => {
-            mp_geom::paths::skip_test(
-                &mp_geom::paths::current_test_name(),
+            mp_geom::test_support::skip_test(
+                &mp_geom::test_support::current_test_name(),
                 "models/movenet_singlepose_lightning_int8.onnx (`cargo xtask models --movenet-tflite FILE`)",
             );
             None

@@ -7,9 +7,9 @@ use ndarray::{Array1, Array2, Array3};
 use ndarray_npy::NpzReader;
 
 /// A file under the shared data folder, or `None` when absent (the running
-/// test's skip is recorded: `mp_geom::paths::data_file_or_skip`).
+/// test's skip is recorded: `mp_geom::test_support::data_file_or_skip`).
 pub fn data(rel: &str) -> Option<PathBuf> {
-    mp_geom::paths::data_file_or_skip(rel, &mp_geom::paths::current_test_name())
+    mp_geom::test_support::data_file_or_skip(rel, &mp_geom::test_support::current_test_name())
 }
 
 /// MediaPipe reference keypoints of one video.
@@ -41,8 +41,8 @@ pub fn movenet_model() -> Option<PathBuf> {
     match model_path(ModelFile::MoveNetLightning) {
         Ok(p) => Some(p),
         Err(_) => {
-            mp_geom::paths::skip_test(
-                &mp_geom::paths::current_test_name(),
+            mp_geom::test_support::skip_test(
+                &mp_geom::test_support::current_test_name(),
                 "models/movenet_singlepose_lightning_int8.onnx (`cargo xtask models --movenet-tflite FILE`)",
             );
             None

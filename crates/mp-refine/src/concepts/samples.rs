@@ -1,7 +1,7 @@
 //! The anchor samples that concepts are learned from: the anchors of the
 //! spline segmentation of each clip, put in the canonical frame.
 
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Axis;
 

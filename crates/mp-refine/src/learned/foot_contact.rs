@@ -27,7 +27,7 @@
 //! * [`foot_slide`]: the slide of a track — horizontal travel of the foot
 //!   joints per second over the frames where they are in contact.
 
-use mp_geom::stats::median;
+use mp_geom::median;
 use ndarray::{Array2, Array3, ArrayView3};
 use serde::{Deserialize, Serialize};
 

@@ -9,7 +9,7 @@ use crate::learned::{foot_legs, RepairedRun};
 use crate::mpjpe_abs;
 use crate::{foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner};
 use crate::{foot_joints, inject, Flaw, FootSlide};
-use mp_geom::io::datasets::MsrAction3D;
+use mp_geom::MsrAction3D;
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
 use rand::SeedableRng;

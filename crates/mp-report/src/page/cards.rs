@@ -111,7 +111,7 @@ fn program_cards(track: &Track, pv: &ProgramView<'_>) -> Vec<Card> {
     prim.extra_html = bar;
     cards.push(prim);
     let unit = track.units().as_str();
-    if let Ok(kd) = mp_geom::metrics::kd(track, pv.executed) {
+    if let Ok(kd) = mp_geom::kd(track, pv.executed) {
         cards.push(Card::new(
             "fit error (KD)",
             format!("{kd:.2} {unit}"),

@@ -10,9 +10,9 @@
 
 use std::path::{Path, PathBuf};
 
-use mp_geom::io::bvh::Bvh;
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::io::npz::NpzOut;
+use mp_geom::Bvh;
+use mp_geom::MsrAction3D;
+use mp_geom::NpzOut;
 use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{s, Array1, Array2, Array3};
 use serde::{Deserialize, Serialize};

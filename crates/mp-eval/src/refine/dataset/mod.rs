@@ -2,7 +2,7 @@
 //!
 //! [`build_training_set`] turns MSR Action3D clips (and, optionally, CMU BVH
 //! takes cut into windows) into canonical 60-frame clips
-//! ([`mp_refine::motion`]) with, per frame, the anchor flag of the spline DP
+//! ([`mp_refine::to_features`]) with, per frame, the anchor flag of the spline DP
 //! segmentation of the canonical clip and the global concept id of each
 //! anchor. Concepts are learned ([`learn_concepts`]) on the anchors of the
 //! training subjects only, so the held-out subjects never shape them.
@@ -31,9 +31,9 @@ mod flaw_set;
 
 use std::path::{Path, PathBuf};
 
-use mp_geom::io::bvh::Bvh;
-use mp_geom::io::datasets::MsrAction3D;
-use mp_geom::io::npz::NpzOut;
+use mp_geom::Bvh;
+use mp_geom::MsrAction3D;
+use mp_geom::NpzOut;
 use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{s, Array1, Array2, Array3, ArrayView3};
 use serde::{Deserialize, Serialize};
@@ -59,7 +59,7 @@ fn write_npz_file(path: &Path, z: NpzOut) -> Result<()> {
             std::fs::create_dir_all(dir).map_err(|e| GeomError::io(dir, e))?;
         }
     }
-    mp_geom::io::write_atomic(path, &bytes)?;
+    mp_geom::write_atomic(path, &bytes)?;
     Ok(())
 }
 
@@ -391,7 +391,7 @@ impl TrainingSet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mp_geom::io::npz::Npz;
+    use mp_geom::Npz;
     use mp_refine::ClusterMethod;
 
     fn small_params(seed: u64) -> DatasetParams {

@@ -6,11 +6,11 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use mp_geom::io::csv::{track_from_csv_str, track_to_csv_string, CsvLayout};
-use mp_geom::io::native::track_from_npy_bytes;
-use mp_geom::io::npz::NpyArray;
-use mp_geom::io::ReadOptions;
-use mp_geom::GeomError;
+use crate::io::csv::{track_from_csv_str, track_to_csv_string, CsvLayout};
+use crate::io::native::track_from_npy_bytes;
+use crate::io::npz::NpyArray;
+use crate::io::ReadOptions;
+use crate::GeomError;
 
 /// Shape `(8, 99999999999, 0)`: no data, yet a generic skeleton of 10^11
 /// joints was built for it (allocation failure).
@@ -123,7 +123,7 @@ fn people_file_of_too_many_frames_is_an_error() {
     for frames in ["18446744073709551615", "1000000000000"] {
         let text = text.replace("18446744073709551615", frames);
         let start = Instant::now();
-        let err = mp_geom::io::people::people_from_json_str(&text, Path::new("p.json"))
+        let err = crate::io::people::people_from_json_str(&text, Path::new("p.json"))
             .unwrap_err()
             .to_string();
         assert!(err.contains("whole-video track may hold"), "{err}");

@@ -3,13 +3,14 @@
 //! view, corrupt and truncated input).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::npz::Npz;
-use mp_geom::io::people::{
+use crate::io::npz::Npz;
+use crate::io::people::people_to_npz_bytes;
+use crate::io::people::{
     people_from_bincode, people_from_json_str, people_from_npz, people_to_bincode,
     people_to_json_string, BINARY_MAGIC, BINARY_VERSION,
 };
-use mp_geom::io::{people_to_npz_bytes, read_people, read_track, write_people, write_track};
-use mp_geom::{GeomError, People, Person, PersonId, Skeleton, Track, Units};
+use crate::io::{read_people, read_track, write_people, write_track};
+use crate::{GeomError, People, Person, PersonId, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -502,7 +503,7 @@ fn single_track_files_read_as_one_person() {
 
 #[test]
 fn inconsistent_npz_arrays_are_errors() {
-    use mp_geom::io::npz::NpzOut;
+    use crate::io::npz::NpzOut;
     let p = crowd();
     let good = Npz::from_bytes(people_to_npz_bytes(&p).unwrap(), "mem.npz").unwrap();
     // Rebuild the archive with one array replaced.
@@ -595,13 +596,11 @@ fn every_binary_truncation_is_an_error() {
             .contains("1 bytes after the end"));
     }
     // A track file is not a people file, nor the other way round.
-    let tr = mp_geom::io::track_to_bincode(&figure(2, 0.0, 0.0, 1.0, &[])).unwrap();
+    let tr = crate::track_to_bincode(&figure(2, 0.0, 0.0, 1.0, &[])).unwrap();
     let e = people_from_bincode(&tr).unwrap_err().to_string();
     assert!(e.contains("not an mp-people binary"), "{e}");
     let pb = people_to_bincode(&crowd()).unwrap();
-    let e = mp_geom::io::track_from_bincode(&pb)
-        .unwrap_err()
-        .to_string();
+    let e = crate::track_from_bincode(&pb).unwrap_err().to_string();
     assert!(e.contains("not an mp-track binary"), "{e}");
     let mut newer = pb.clone();
     let at = BINARY_MAGIC.len();

@@ -2,18 +2,18 @@
 //! JSON, and the `read_track` / `write_track` dispatch.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::csv::{read_csv, write_csv, CsvLayout};
-use mp_geom::io::datasets::PennAction;
-use mp_geom::io::native::{read_track_json, read_track_npz, write_track_npy};
-use mp_geom::io::openpose::{body25_skeleton, coco18_skeleton, read_alphapose, read_openpose_dir};
-use mp_geom::io::{read_track, read_track_with, write_track, ReadOptions};
-use mp_geom::{GeomError, Skeleton, Track, Units};
+use crate::io::csv::{read_csv, write_csv, CsvLayout};
+use crate::io::datasets::PennAction;
+use crate::io::native::{read_track_json, read_track_npz, write_track_npy};
+use crate::io::openpose::{body25_skeleton, coco18_skeleton, read_alphapose, read_openpose_dir};
+use crate::io::{read_track, read_track_with, write_track, ReadOptions};
+use crate::{GeomError, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 use proptest::prelude::*;
 
 /// A Penn Action clip, or `None` (skip recorded) without the shared data.
 fn penn_clip(test: &str) -> Option<Track> {
-    mp_geom::paths::data_file_or_skip(PennAction::TRAIN_FILE, test)?;
+    crate::test_support::data_file_or_skip(PennAction::TRAIN_FILE, test)?;
     Some(
         PennAction::open_default()
             .expect("Penn Action npz")
@@ -301,21 +301,21 @@ fn alphapose_results() {
 #[test]
 fn read_track_dispatch_and_errors() {
     // Data-set files that hold one track are read directly.
-    let golf = mp_geom::data_or_return!("reference_keypoints/golf_swing.npz");
+    let golf = crate::data_or_return!("reference_keypoints/golf_swing.npz");
     let t = read_track(&golf).unwrap();
     assert_eq!(
         (t.n_frames(), t.skeleton().name.as_str()),
         (264, "blazepose33")
     );
-    let cmu = mp_geom::data_or_return!("cmu_mocap6_exercise/13_30_features10fps.npz");
+    let cmu = crate::data_or_return!("cmu_mocap6_exercise/13_30_features10fps.npz");
     assert_eq!(read_track(&cmu).unwrap().n_frames(), 205);
     // Multi-track files point to their reader.
-    let penn = mp_geom::data_or_return!("penn_action/penn_action_train.npz");
+    let penn = crate::data_or_return!("penn_action/penn_action_train.npz");
     assert!(read_track(&penn)
         .unwrap_err()
         .to_string()
         .contains("PennAction"));
-    let aist = mp_geom::data_or_return!("aistpp_keypoints2d/gBR_sBM_cAll_d04_mBR0_ch02.npz");
+    let aist = crate::data_or_return!("aistpp_keypoints2d/gBR_sBM_cAll_d04_mBR0_ch02.npz");
     assert!(read_track(&aist)
         .unwrap_err()
         .to_string()
@@ -336,7 +336,7 @@ fn read_track_dispatch_and_errors() {
     std::fs::write(&bad, "{\"hello\": 1}").unwrap();
     assert!(matches!(read_track(&bad), Err(GeomError::Format { .. })));
     // A JSON track with a ragged frame.
-    let mut text = mp_geom::io::native::track_to_json_string(&msr_like(3)).unwrap();
+    let mut text = crate::io::native::track_to_json_string(&msr_like(3)).unwrap();
     text = text.replacen("[[[", "[[[9,", 1);
     std::fs::write(&bad, text).unwrap();
     let e = read_track_json(&bad).unwrap_err();

@@ -1,12 +1,12 @@
 //! Metrics: hand-computed values, invariances and bad input.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::metrics::{
+use crate::metrics::{
     dtw, dtw_align, kd, kd_per_frame, max_adjacent_jump, mpjpe, mpjpe_per_frame, nanmean, pa_mpjpe,
     pa_mpjpe_per_frame, pck, pck_per_frame, pck_per_frame_sized, pck_with, procrustes, DtwCost,
     PckParams, Poses,
 };
-use mp_geom::{GeomError, Skeleton, Track, Units};
+use crate::{GeomError, Skeleton, Track, Units};
 use ndarray::{array, s, Array2, Array3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -2,14 +2,14 @@
 //! the rarer layouts, and typed errors for broken input.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::npz::{read_npy, DType, NpyArray, Npz, NpzOut};
-use mp_geom::GeomError;
+use crate::io::npz::{read_npy, DType, NpyArray, Npz, NpzOut};
+use crate::GeomError;
 use ndarray::{arr0, array, Array2};
 
 /// The shared data file `rel`, or the test records its skip and returns.
 macro_rules! data {
     ($rel:expr) => {
-        mp_geom::data_or_return!($rel)
+        crate::data_or_return!($rel)
     };
 }
 

@@ -1,13 +1,13 @@
 //! The test protocol of the public `circle-fit` package (Python), applied to
-//! [`mp_geom::fit::fit_circle`] (Bullock's method): 1000 random circles with
+//! [`crate::fit::fit_circle`] (Bullock's method): 1000 random circles with
 //! centre ~ U(−100, 100)², radius 10^U(0, 2), 100 points around the full
 //! circle; the centre and radius errors must stay below 1e-4·r without noise
 //! and below 0.1·r with Gaussian noise of σ = 0.1·r, with fewer than 10
 //! failures out of 1000.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::fit::{fit_circle, FitParams};
-use mp_geom::Primitive;
+use crate::fit::{fit_circle, FitParams};
+use crate::Primitive;
 use ndarray::Array2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -1,8 +1,8 @@
 //! Bad input to the fits gives typed errors, never a panic or NaN.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::fit::{fit_best, fit_circle, fit_kind, prefix::PrefixFits, FitParams};
-use mp_geom::{GeomError, PrimitiveKind};
+use crate::fit::{fit_best, fit_circle, fit_kind, prefix::PrefixFits, FitParams};
+use crate::{GeomError, PrimitiveKind};
 use ndarray::{array, Array2};
 
 #[test]

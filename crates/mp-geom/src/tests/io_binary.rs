@@ -2,9 +2,10 @@
 //! truncated or random bytes rejected with an error, never a panic.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::native::{BINARY_MAGIC, BINARY_VERSION};
-use mp_geom::io::{read_track, track_from_bincode, track_to_bincode, write_track};
-use mp_geom::{GeomError, Skeleton, Track, Units};
+use crate::io::native::{BINARY_MAGIC, BINARY_VERSION};
+use crate::io::{read_track, write_track};
+use crate::{track_from_bincode, track_to_bincode};
+use crate::{GeomError, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -78,7 +79,7 @@ fn binary_is_compact() {
     let numbers = 9 * 20 * 3 + 9 * 20;
     assert!(bytes.len() >= numbers * 8);
     assert!(bytes.len() < numbers * 8 + 600, "{} bytes", bytes.len());
-    let json = mp_geom::io::native::track_to_json_string(&tr).unwrap();
+    let json = crate::io::native::track_to_json_string(&tr).unwrap();
     assert!(bytes.len() < json.len());
 }
 
@@ -270,7 +271,7 @@ proptest! {
         fps in 0.5f64..500.0,
     ) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let specials = [0.0, -0.0, f64::MIN_POSITIVE, 5e-324, mp_geom::track::MAX_COORDINATE, -1e100];
+        let specials = [0.0, -0.0, f64::MIN_POSITIVE, 5e-324, crate::track::MAX_COORDINATE, -1e100];
         let pos = Array3::from_shape_fn((t, j, d), |_| {
             if rng.random_bool(0.2) {
                 specials[rng.random_range(0..specials.len())]

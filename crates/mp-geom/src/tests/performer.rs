@@ -1,10 +1,10 @@
 //! The procedural performer: determinism, rigid bones, ground truth.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::performer::{perform, Move, PerformerParams, Projection, RIGID_BONES};
-use mp_geom::{GeomError, Units};
+use crate::performer::{perform, Move, PerformerParams, Projection, RIGID_BONES};
+use crate::{GeomError, Units};
 
-fn bone_len(t: &mp_geom::Track, f: usize, a: usize, b: usize) -> f64 {
+fn bone_len(t: &crate::Track, f: usize, a: usize, b: usize) -> f64 {
     (0..t.dims())
         .map(|k| (t.point(f, a)[k] - t.point(f, b)[k]).powi(2))
         .sum::<f64>()

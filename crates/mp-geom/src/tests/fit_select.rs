@@ -1,8 +1,8 @@
 //! The selection rules of `fit_best` (docs/ALGORITHMS.md, concrete programs).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::fit::{fit_best, fit_circle, fit_line, fit_stationary, ErrorNorm, FitParams};
-use mp_geom::{Primitive, PrimitiveKind};
+use crate::fit::{fit_best, fit_circle, fit_line, fit_stationary, ErrorNorm, FitParams};
+use crate::{Primitive, PrimitiveKind};
 use ndarray::Array2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

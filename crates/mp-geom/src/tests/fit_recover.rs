@@ -2,11 +2,11 @@
 //! in 2D and 3D, for every kind.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::fit::{
+use crate::fit::{
     fit_best, fit_circle, fit_kind, fit_line, fit_spline, fit_stationary, residual_error,
     ErrorNorm, FitParams,
 };
-use mp_geom::{Primitive, PrimitiveKind};
+use crate::{Primitive, PrimitiveKind};
 use ndarray::Array2;
 use proptest::prelude::*;
 

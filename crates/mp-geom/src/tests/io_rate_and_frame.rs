@@ -4,13 +4,13 @@
 //! frame an npz's pixels are in.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::native::write_track_npy;
-use mp_geom::io::{
+use crate::io::native::write_track_npy;
+use crate::io::{
     read_people_with, read_track_rated, write_people_framed, write_track, write_track_framed,
     RateSource, ReadOptions, DEFAULT_FPS,
 };
-use mp_geom::People;
-use mp_geom::{Skeleton, Track, Units};
+use crate::People;
+use crate::{Skeleton, Track, Units};
 use ndarray::Array3;
 
 fn track(fps: f64) -> Track {

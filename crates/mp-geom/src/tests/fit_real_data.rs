@@ -1,16 +1,16 @@
 //! Fitting and metrics on real Penn Action clips (hand-labelled 2D joints).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::fit::{fit_best, FitParams};
-use mp_geom::io::datasets::PennAction;
-use mp_geom::metrics::{kd, max_adjacent_jump, pck, Poses};
-use mp_geom::{GeomError, PrimitiveKind};
+use crate::fit::{fit_best, FitParams};
+use crate::io::datasets::PennAction;
+use crate::metrics::{kd, max_adjacent_jump, pck, Poses};
+use crate::{GeomError, PrimitiveKind};
 use ndarray::{s, Array2, Array3};
 
 /// Encodes every joint of a clip with the best primitive on fixed windows
 /// and returns the executed positions and the kinds chosen.
 fn encode(
-    track: &mp_geom::Track,
+    track: &crate::Track,
     window: usize,
     params: &FitParams,
 ) -> (Array3<f64>, Vec<PrimitiveKind>) {
@@ -46,7 +46,7 @@ fn encode(
 
 #[test]
 fn penn_action_windows() {
-    mp_geom::data_or_return!(PennAction::TRAIN_FILE);
+    crate::data_or_return!(PennAction::TRAIN_FILE);
     let penn = PennAction::open_default()
         .expect("Penn Action npz in the shared data (MP_DATA_DIR or ../shared/data)");
     let mut kds = Vec::new();

@@ -2,10 +2,10 @@
 //! a hand-checked toy hierarchy and on the real CMU salsa files.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::bvh::{Bvh, BvhTrackParams, Channel};
-use mp_geom::io::read_track;
-use mp_geom::paths::data_file_or_skip;
-use mp_geom::{GeomError, Units};
+use crate::io::bvh::{Bvh, BvhTrackParams, Channel};
+use crate::io::read_track;
+use crate::test_support::data_file_or_skip;
+use crate::{GeomError, Units};
 
 const TOY: &str = "HIERARCHY
 ROOT hips

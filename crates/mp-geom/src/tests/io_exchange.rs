@@ -6,18 +6,18 @@
 
 use std::path::PathBuf;
 
-use mp_geom::io::datasets::{AistPlusPlus, MsrAction3D};
-use mp_geom::io::{
+use crate::io::datasets::{AistPlusPlus, MsrAction3D};
+use crate::io::{
     read_people, read_track, read_track_rated, write_people, write_track, write_track_framed,
     RateSource,
 };
-use mp_geom::{GeomError, People, Person, Skeleton, Track, Units};
+use crate::{GeomError, People, Person, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 
 /// The shared data file `rel`, or the test records its skip and returns.
 macro_rules! data {
     ($rel:expr) => {
-        mp_geom::data_or_return!($rel)
+        crate::data_or_return!($rel)
     };
 }
 
@@ -263,7 +263,10 @@ fn bvh_export_refuses_2d_tracks_and_names_the_file() {
 // ------------------------------------------------------------------ C3D
 
 fn aist_view(test_rel: &str) -> Option<Track> {
-    let p = mp_geom::paths::data_file_or_skip(test_rel, &mp_geom::paths::current_test_name())?;
+    let p = crate::test_support::data_file_or_skip(
+        test_rel,
+        &crate::test_support::current_test_name(),
+    )?;
     Some(AistPlusPlus::open(p).unwrap().views[3].clone())
 }
 
@@ -506,7 +509,7 @@ fn pose_round_trip_of_blazepose_keypoints() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("golf.pose");
     write_track_framed(&out, &t, Some((1280, 720))).unwrap();
-    let f = mp_geom::io::pose::PoseFile::parse(&std::fs::read(&out).unwrap(), &out).unwrap();
+    let f = crate::io::pose::PoseFile::parse(&std::fs::read(&out).unwrap(), &out).unwrap();
     assert_eq!(f.components[0].name, "POSE_LANDMARKS");
     assert_eq!(f.components[0].points[31], "LEFT_FOOT_INDEX");
     let back = read_track_rated(&out, &Default::default()).unwrap();
@@ -608,12 +611,12 @@ fn writers_name_the_file_they_refuse() {
 /// bending; read back as COCO-17.
 #[test]
 fn bvh_export_of_the_performer_splits_branching_joints() {
-    let p = mp_geom::performer::perform(&Default::default()).unwrap();
+    let p = crate::performer::perform(&Default::default()).unwrap();
     let t = &p.track_3d;
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("performer.bvh");
     write_track(&out, t).unwrap();
-    let raw = mp_geom::io::bvh::Bvh::read(&out).unwrap();
+    let raw = crate::io::bvh::Bvh::read(&out).unwrap();
     assert!(
         raw.joints().len() > 17,
         "zero-length joints between branches"

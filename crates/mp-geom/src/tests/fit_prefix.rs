@@ -1,8 +1,8 @@
 //! `fit::prefix` agrees with the direct fits (squared norm).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::fit::{fit_line, fit_stationary, prefix::PrefixFits, ErrorNorm, FitParams};
-use mp_geom::Primitive;
+use crate::fit::{fit_line, fit_stationary, prefix::PrefixFits, ErrorNorm, FitParams};
+use crate::Primitive;
 use ndarray::{s, Array2};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};

@@ -2,15 +2,15 @@
 //! with numpy from the same files.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_geom::io::datasets::{
+use crate::io::datasets::{
     fps_from_timestamps_us, AistPlusPlus, CmuFeatures, MediaPipeReference, MsrAction3D, PennAction,
 };
-use mp_geom::{GeomError, Units};
+use crate::{GeomError, Units};
 
 /// The shared data file `rel`, or the test records its skip and returns.
 macro_rules! data {
     ($rel:expr) => {
-        mp_geom::data_or_return!($rel)
+        crate::data_or_return!($rel)
     };
 }
 
