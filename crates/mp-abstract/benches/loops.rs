@@ -3,8 +3,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code: failing loudly is the point
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use mp_abstract::loops::{detect_loops, LoopParams};
-use mp_abstract::model::DetPrim;
+use mp_abstract::DetPrim;
+use mp_abstract::{detect_loops, LoopParams};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

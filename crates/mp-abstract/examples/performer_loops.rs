@@ -43,8 +43,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .map(|i| {
                         format!(
                             "{:.0}",
-                            mp_abstract::loops::window_score(&a.prims, i, i + w, k, a.unit_scale)
-                                .unwrap()
+                            mp_abstract::window_score(&a.prims, i, i + w, k, a.unit_scale).unwrap()
                         )
                     })
                     .collect();

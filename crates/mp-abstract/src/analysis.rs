@@ -17,7 +17,7 @@ use crate::model::{AbstractProgram, DetPrim, Stmt};
 use crate::repetition::{
     estimate_period, intervals, PeriodEstimate, PeriodParams, RepetitiveInterval,
 };
-pub use crate::selfmatch::{SelfMatch, SelfMatchFallback, SelfMatchKind};
+pub use crate::selfmatch::{SelfMatch, SelfMatchFallback};
 use crate::synth::{synthesize, translate};
 
 /// Parameters of the whole track → abstract-program analysis.
@@ -217,7 +217,7 @@ pub struct PredictParams {
     /// The offset between the last observed pose and the unrolled loop decays
     /// to zero over this many periods (at least one frame). Finite and ≥ 0. Default 1.
     pub offset_decay_periods: f64,
-    /// What an unrolled iteration executes. Default [`UnrollSource::LastIteration`].
+    /// What an unrolled iteration executes. Default `UnrollSource::LastIteration`.
     pub source: UnrollSource,
     /// Where no usable loop is found: unroll the last period of the observed
     /// motion measured by autocorrelation ([`PeriodFallback`]); `None` holds

@@ -13,7 +13,7 @@ pub const MAX_ITERATIONS: usize = 1_000_000;
 
 /// Sets the iteration count of loop `n` (0-based, program order). Recorded
 /// iterations beyond the new count are dropped; new iterations execute the
-/// body's distributions. Counts above [`MAX_ITERATIONS`], or whose execution
+/// body's distributions. Counts above `MAX_ITERATIONS`, or whose execution
 /// (at the longest body durations) would exceed
 /// [`mp_concrete::exec::MAX_FRAME_JOINTS`], are an error naming `iterations`;
 /// the program is then unchanged.

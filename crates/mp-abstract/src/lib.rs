@@ -1,16 +1,16 @@
 //! # mp-abstract — abstract motion programs (level 3)
 //!
 //! Concrete primitives become deterministic `{start, mid, end, duration}`
-//! primitives ([`synth::translate`]); repeated patterns are found by
+//! primitives (`synth::translate`); repeated patterns are found by
 //! [`loops::detect_loops`] and rolled up into `for` loops of probabilistic
-//! primitives ([`model`]); programs print and parse in the paper's notation
-//! ([`dsl`]), execute deterministically or stochastically with a seed
-//! ([`exec`]), can be edited ([`edit`]), report repetitive intervals and
-//! counts ([`repetition`]: from loops, from the dominant period of the joint
+//! primitives (`model`); programs print and parse in the paper's notation
+//! (`dsl`), execute deterministically or stochastically with a seed
+//! (`exec`), can be edited (`edit`), report repetitive intervals and
+//! counts (`repetition`: from loops, from the dominant period of the joint
 //! velocities, or from the local-periodicity segmenter
 //! [`repetition::segment_repetitions`]) and predict the future by unrolling
-//! loops, or, with a single observed cycle, by self-match unrolling ([`selfmatch`]).
-//! [`count`] turns these into the repetition counts a user gets (intervals,
+//! loops, or, with a single observed cycle, by self-match unrolling (`selfmatch`).
+//! `count` turns these into the repetition counts a user gets (intervals,
 //! count per interval, total, the signal and method that decided, a
 //! confidence), from keypoints and, for video, from frame thumbnails.
 //!
@@ -29,17 +29,17 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod analysis;
-pub mod count;
-pub mod dsl;
-pub mod edit;
+mod analysis;
+mod count;
+mod dsl;
+mod edit;
 mod error;
-pub mod exec;
-pub mod loops;
-pub mod model;
-pub mod repetition;
-pub mod selfmatch;
-pub mod synth;
+mod exec;
+mod loops;
+mod model;
+mod repetition;
+mod selfmatch;
+mod synth;
 
 pub use analysis::{
     analyse, read_program, unroll, write_program, AbstractParams, Analysis, PredictMethod,
@@ -60,3 +60,27 @@ pub use repetition::{
     PeriodicSegment, RepetitiveInterval,
 };
 pub use selfmatch::{SelfMatch, SelfMatchFallback, SelfMatchKind};
+
+pub use analysis::{
+    analyse_synthesis, from_concrete, predict_constant, program_from_str, PeriodFallback,
+};
+pub use count::found_fraction;
+pub use dsl::{parse, print, print_with, PrintOptions};
+pub use edit::set_iterations;
+pub use exec::{execute, sample, ExecParams, LoopReplay};
+pub use repetition::{intervals, iom, iou, PeriodEstimate};
+
+pub use edit::{drop_iteration, repeat_iteration};
+pub use loops::window_score;
+
+#[cfg(test)]
+use {
+    edit::MAX_ITERATIONS,
+    exec::{flatten_sampled, output_frames_bound},
+    loops::{window_score_with, MAX_BODY, MAX_WINDOW},
+    repetition::selected_joints,
+    synth::{fit_loop, synthesize},
+};
+
+#[cfg(test)]
+mod tests;

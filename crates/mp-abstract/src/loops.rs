@@ -328,6 +328,7 @@ pub fn window_score(
 
 /// Score of primitives `start..end` with body size `k` in the mode `params`
 /// selects (absolute or relative), with the threshold it is compared against.
+#[cfg(test)]
 pub fn window_score_with(
     prims: &[DetPrim],
     start: usize,

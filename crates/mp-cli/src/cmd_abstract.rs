@@ -3,9 +3,9 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use mp_abstract::dsl::{print_with, PrintOptions};
-use mp_abstract::edit::set_iterations;
-use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};
+use mp_abstract::set_iterations;
+use mp_abstract::{execute, sample, ExecParams, LoopReplay};
+use mp_abstract::{print_with, PrintOptions};
 use mp_abstract::{read_program, write_program, AbstractParams};
 use mp_forecast::{ForecastMethod, PredictOptions};
 use mp_geom::write_track;

@@ -171,7 +171,7 @@ pub fn demo_cmd(a: &DemoArgs) -> anyhow::Result<()> {
 fn truth(perf: &mp_geom::Performance, a: usize, b: usize) -> String {
     perf.segments
         .iter()
-        .find(|s| mp_abstract::repetition::iom((a, b), (s.frames.start, s.frames.end)) > 0.5)
+        .find(|s| mp_abstract::iom((a, b), (s.frames.start, s.frames.end)) > 0.5)
         .map(|s| format!("{} × {}", s.reps.len(), s.kind.name()))
         .unwrap_or_else(|| "no labelled move".into())
 }

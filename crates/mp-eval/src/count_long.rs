@@ -281,7 +281,7 @@ pub fn run(a: &LongArgs) -> anyhow::Result<()> {
         "thumbnail_region": region,
         "count_param_overrides": a.overrides,
         "clips": clips.iter().map(|c| json!({"name": c.name, "frames": c.track.n_frames(),
-            "found": mp_abstract::count::found_fraction(&c.track),
+            "found": mp_abstract::found_fraction(&c.track),
             "truth": c.truth.map(|t| json!({"start_frame": t.0, "end_frame": t.1, "count": t.2}))})).collect::<Vec<_>>(),
         "prepare_s": prep_s,
         "runtime_s": t0.elapsed().as_secs_f64(),

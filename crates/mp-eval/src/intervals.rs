@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use mp_abstract::repetition::{iom, iou, segment_repetitions, IntervalParams};
+use mp_abstract::{iom, iou, segment_repetitions, IntervalParams};
 use mp_geom::CmuFeatures;
 use mp_pipeline::Params;
 use serde_json::{json, Map, Value};
@@ -242,7 +242,7 @@ pub fn eval_cmu(files: &[PathBuf]) -> anyhow::Result<Value> {
             "folds": folds,
             "left_out": loro.json(),
         }));
-        m.insert("segmenter".into(), json!({"method": "mp_abstract::repetition::segment_repetitions with IntervalParams::default()", "figures": seg.json()}));
+        m.insert("segmenter".into(), json!({"method": "mp_abstract::segment_repetitions with IntervalParams::default()", "figures": seg.json()}));
         m.insert(
             "loops".into(),
             json!({"method": "loops of the abstract program", "figures": loops.json()}),

@@ -18,11 +18,11 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use mp_abstract::analysis::predict_constant;
-use mp_abstract::repetition::{
+use mp_abstract::predict_constant;
+use mp_abstract::{analyse, unroll, AbstractParams, PredictParams, RepetitiveInterval};
+use mp_abstract::{
     estimate_period, segment_repetitions, IntervalParams, PeriodParams, PeriodicSegment,
 };
-use mp_abstract::{analyse, unroll, AbstractParams, PredictParams, RepetitiveInterval};
 use mp_concrete::Scale;
 use mp_geom::Npz;
 use mp_geom::Track;

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::sync::Arc;
 
-use mp_abstract::repetition::PeriodEstimate;
+use mp_abstract::PeriodEstimate;
 use mp_abstract::{PredictParams, RepetitiveInterval, SelfMatch, SelfMatchKind};
 use mp_geom::PennAction;
 use mp_geom::Track;

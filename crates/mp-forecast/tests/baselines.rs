@@ -163,7 +163,7 @@ fn period_fallback_unrolls_the_last_cycle_of_a_periodic_track() {
     let t = periodic(120, 20.0);
     let past = t.slice_frames(0, 80).unwrap();
     let truth = t.slice_frames(80, 110).unwrap();
-    let fb = mp_abstract::analysis::PeriodFallback::default();
+    let fb = mp_abstract::PeriodFallback::default();
     let (u, est) = fb
         .unroll(&past, 30)
         .unwrap()
@@ -179,7 +179,7 @@ fn period_fallback_unrolls_the_last_cycle_of_a_periodic_track() {
     // a still track is not periodic: no unrolling
     assert!(fb.unroll(&still(80), 30).unwrap().is_none());
     // an invalid strength threshold is a typed error
-    let bad = mp_abstract::analysis::PeriodFallback {
+    let bad = mp_abstract::PeriodFallback {
         min_strength: 2.0,
         ..Default::default()
     };

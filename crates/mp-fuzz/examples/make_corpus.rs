@@ -142,12 +142,12 @@ fn main() -> Res<()> {
 
     // Abstract programs from the concrete ones (loops found by the analyser).
     for (i, p) in programs.iter().enumerate() {
-        let (a, _, _) = mp_abstract::analysis::from_concrete(p, &LoopParams::default())?;
+        let (a, _, _) = mp_abstract::from_concrete(p, &LoopParams::default())?;
         put(
             &dir,
             "abstract_dsl",
             &format!("abstract{i}.mpa"),
-            mp_abstract::dsl::print(&a),
+            mp_abstract::print(&a),
         )?;
         put(
             &dir,

@@ -16,9 +16,9 @@
 //! | target | reader |
 //! |---|---|
 //! | `concrete_dsl` | [`mp_concrete::dsl::parse`] |
-//! | `abstract_dsl` | [`mp_abstract::analysis::program_from_str`] (text form) |
+//! | `abstract_dsl` | [`mp_abstract::program_from_str`] (text form) |
 //! | `program_json` | [`mp_concrete::Program::from_json`] |
-//! | `abstract_json` | [`mp_abstract::analysis::program_from_str`] (JSON) |
+//! | `abstract_json` | [`mp_abstract::program_from_str`] (JSON) |
 //! | `grammar_json` | [`mp_grammar::GrammarModel::from_json`] |
 //! | `grammar_text` | [`mp_grammar::Grammar::from_text`], [`mp_grammar::Corpus::from_lines`], [`mp_grammar::fuzzing`] |
 //! | `npz` | [`mp_geom::fuzzing::npz::Npz::from_bytes`], [`mp_geom::fuzzing::native::track_from_npz`] |
@@ -34,7 +34,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mp_abstract::analysis::program_from_str;
+use mp_abstract::program_from_str;
 use mp_concrete::Program;
 use mp_geom::fuzzing::bvh::{Bvh, BvhTrackParams};
 use mp_geom::fuzzing::csv::{track_from_csv_str, track_to_csv_string, CsvLayout};
@@ -158,7 +158,7 @@ pub fn mpb(data: &[u8]) {
 }
 
 fn check_abstract(p: &mp_abstract::AbstractProgram) {
-    let printed = mp_abstract::dsl::print(p);
+    let printed = mp_abstract::print(p);
     match program_from_str(&printed, Path::new("fuzz.mpa")) {
         Ok(q) => assert_eq!(
             &q, p,
@@ -175,11 +175,11 @@ fn check_abstract(p: &mp_abstract::AbstractProgram) {
         },
         Err(e) => panic_msg(&format!("abstract program does not serialise: {e}")),
     }
-    let _ = mp_abstract::dsl::print_with(p, &mp_abstract::dsl::PrintOptions::summary());
+    let _ = mp_abstract::print_with(p, &mp_abstract::PrintOptions::summary());
     let _ = (p.loop_indices(), p.expected_frames());
 }
 
-/// Abstract-program text form ([`mp_abstract::dsl::parse`] through
+/// Abstract-program text form ([`mp_abstract::parse`] through
 /// [`program_from_str`]).
 pub fn abstract_dsl(data: &[u8]) {
     let Some(src) = text(data) else { return };

@@ -13,7 +13,7 @@
 //! frame signal. The regions' cells are copied from the whole-frame
 //! thumbnails: no extra decoding, and at most a quarter of their memory.
 
-use mp_abstract::repetition::estimate_period;
+use mp_abstract::estimate_period;
 use mp_geom::Track;
 use mp_pose::{moving_regions, region_track, CellRegion, MotionEnergy};
 

@@ -159,7 +159,7 @@ impl Keypoints {
         frame_px: Option<f64>,
     ) -> Self {
         Keypoints {
-            found_fraction: mp_abstract::count::found_fraction(&track),
+            found_fraction: mp_abstract::found_fraction(&track),
             track,
             thumbnails: None,
             frame_choice: None,
@@ -406,7 +406,7 @@ fn from_video(
                 Some(id) => people.full_track(id)?,
                 None => coco(posed.track)?,
             };
-            let found = mp_abstract::count::found_fraction(&track);
+            let found = mp_abstract::found_fraction(&track);
             let mut analysed: Vec<PersonId> = top.into_iter().collect();
             analysed.extend(&rest);
             let (thumbnails, others) = if !analysed.is_empty() {

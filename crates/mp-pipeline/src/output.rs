@@ -143,7 +143,7 @@ pub(crate) fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<S
         )?;
         put(
             &format!("{dir}abstract.txt"),
-            mp_abstract::dsl::print(&an.program).as_bytes(),
+            mp_abstract::print(&an.program).as_bytes(),
         )?;
         put(
             &format!("{dir}abstract.json"),

@@ -217,7 +217,7 @@ fn cmu_exercise_blocks_are_counted_one_by_one() {
             .collect::<Vec<_>>()
     );
     for (iv, b) in counts.intervals.iter().zip(&blocks) {
-        let m = mp_abstract::repetition::iom((iv.start_frame, iv.end_frame), *b);
+        let m = mp_abstract::iom((iv.start_frame, iv.end_frame), *b);
         assert!(m > 0.5, "interval {iv:?} vs block {b:?}: IoM {m:.2}");
         assert!(iv.count >= 1);
     }

@@ -215,7 +215,7 @@ impl PyAbstract {
     /// The abstract program in its text form.
     #[getter]
     fn text(&self) -> String {
-        mp_abstract::dsl::print(&self.inner.program)
+        mp_abstract::print(&self.inner.program)
     }
 
     /// The abstract program as JSON.

@@ -31,9 +31,8 @@ fn person(frames: usize, shift: usize) -> Person {
     let executed = program.execute().unwrap();
     let track = track(&executed);
     let (abstract_program, loops, prims) =
-        mp_abstract::analysis::from_concrete(&program, &mp_abstract::LoopParams::default())
-            .unwrap();
-    let loops = mp_abstract::repetition::intervals(&prims, &loops, 0);
+        mp_abstract::from_concrete(&program, &mp_abstract::LoopParams::default()).unwrap();
+    let loops = mp_abstract::intervals(&prims, &loops, 0);
     Person {
         program,
         executed,

@@ -63,7 +63,7 @@ impl PeriodParams {
         }
     }
 
-    /// The settings for frame thumbnails ([`crate::count`]'s frame signal):
+    /// The settings for frame thumbnails (`crate::count`'s frame signal):
     /// channels weighted by their motion instead of standardised, and
     /// positions smoothed over the shortest period considered (0.25 s), so
     /// that pixel noise and flicker faster than any repetition are gone

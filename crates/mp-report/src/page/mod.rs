@@ -331,8 +331,7 @@ mod tests {
         let (track, program) = crate::plots::tests::tiny();
         let exec = program.execute().unwrap();
         let (abs, _, _) =
-            mp_abstract::analysis::from_concrete(&program, &mp_abstract::LoopParams::default())
-                .unwrap();
+            mp_abstract::from_concrete(&program, &mp_abstract::LoopParams::default()).unwrap();
         let reps = vec![CountedInterval {
             start_frame: 2,
             end_frame: 12,

@@ -2,9 +2,9 @@
 //! tracks that must not be replayed, and bad parameters.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_abstract::analysis::predict_constant;
-use mp_abstract::{unroll, AbstractError, PredictMethod, PredictParams};
-use mp_abstract::{SelfMatchFallback, SelfMatchKind};
+use crate::predict_constant;
+use crate::{unroll, AbstractError, PredictMethod, PredictParams};
+use crate::{SelfMatchFallback, SelfMatchKind};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
 

@@ -2,8 +2,8 @@
 //! public entry point with the parameter error naming the field.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_abstract::exec::{execute, sample, ExecParams};
-use mp_abstract::{analyse, unroll, AbstractError, AbstractParams, AbstractProgram, PredictParams};
+use crate::{analyse, unroll, AbstractError, AbstractParams, AbstractProgram, PredictParams};
+use crate::{execute, sample, ExecParams};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
 

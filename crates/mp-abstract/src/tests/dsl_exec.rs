@@ -1,11 +1,11 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
-use mp_abstract::dsl::{parse, print, print_with, PrintOptions};
-use mp_abstract::edit::{drop_iteration, repeat_iteration, set_iterations};
-use mp_abstract::exec::{execute, sample, ExecParams, LoopReplay};
-use mp_abstract::loops::LoopParams;
-use mp_abstract::model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-use mp_abstract::synth::synthesize;
-use mp_abstract::AbstractError;
+use crate::synthesize;
+use crate::AbstractError;
+use crate::LoopParams;
+use crate::{drop_iteration, repeat_iteration, set_iterations};
+use crate::{execute, sample, ExecParams, LoopReplay};
+use crate::{parse, print, print_with, PrintOptions};
+use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -203,7 +203,7 @@ fn stochastic_execution_is_seeded_and_within_support() {
     assert_ne!(a.positions(), c.positions());
     // Every sampled start point lies within 6 standard deviations of its Gaussian.
     let Stmt::Loop(l) = &p.stmts[0] else { panic!() };
-    let flat = mp_abstract::exec::flatten_sampled(&p, 42, 1e-9).unwrap();
+    let flat = crate::flatten_sampled(&p, 42, 1e-9).unwrap();
     for (i, d) in flat.iter().enumerate() {
         let b = &l.body[i % l.body.len()];
         assert!(b.duration.counts.contains_key(&d.duration));

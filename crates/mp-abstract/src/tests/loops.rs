@@ -1,8 +1,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
-use mp_abstract::loops::{detect_loops, window_score, LoopParams};
-use mp_abstract::model::DetPrim;
-use mp_abstract::synth::{fit_loop, synthesize};
-use mp_abstract::AbstractError;
+use crate::AbstractError;
+use crate::DetPrim;
+use crate::{detect_loops, window_score, LoopParams};
+use crate::{fit_loop, synthesize};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -170,7 +170,7 @@ fn bad_input_is_typed() {
         detect_loops(&prims, &p),
         Err(AbstractError::InvalidParam { .. })
     ));
-    let one = mp_abstract::DetectedLoop {
+    let one = crate::DetectedLoop {
         start: 0,
         end: 1,
         body: 1,
@@ -228,10 +228,8 @@ fn relative_score_is_scale_free() {
             (lead, 3, 8)
         );
     }
-    let (a, _) =
-        mp_abstract::loops::window_score_with(&prims, lead, lead + 12, 3, &params).unwrap();
-    let (b, _) =
-        mp_abstract::loops::window_score_with(&scaled, lead, lead + 12, 3, &params).unwrap();
+    let (a, _) = crate::window_score_with(&prims, lead, lead + 12, 3, &params).unwrap();
+    let (b, _) = crate::window_score_with(&scaled, lead, lead + 12, 3, &params).unwrap();
     assert!((a - b).abs() < 1e-9 && a < 0.3, "{a} {b}");
     assert!(detect_loops(
         &prims,

@@ -1,8 +1,8 @@
 //! End-to-end on the procedural performer: track → concrete → abstract, loops, prediction.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_abstract::analysis::predict_constant;
-use mp_abstract::{analyse, unroll, AbstractParams, PredictParams};
+use crate::predict_constant;
+use crate::{analyse, unroll, AbstractParams, PredictParams};
 use mp_geom::{perform, Move, PerformerParams};
 
 fn kd(a: &mp_geom::Track, b: &mp_geom::Track) -> f64 {
@@ -30,7 +30,7 @@ fn finds_jumping_jacks_and_squats_with_their_counts() {
             .intervals
             .iter()
             .find(|i| {
-                mp_abstract::repetition::iom(
+                crate::iom(
                     (i.start_frame, i.end_frame),
                     (gt.frames.start, gt.frames.end),
                 ) > 0.5
@@ -40,10 +40,10 @@ fn finds_jumping_jacks_and_squats_with_their_counts() {
         assert_eq!(hit.boundaries.len(), reps + 1);
     }
     // The abstract program executes back to the same number of frames when loops replay as observed.
-    let t = mp_abstract::exec::execute(
+    let t = crate::execute(
         &a.program,
-        &mp_abstract::exec::ExecParams {
-            replay: mp_abstract::exec::LoopReplay::Observed,
+        &crate::ExecParams {
+            replay: crate::LoopReplay::Observed,
             ..Default::default()
         },
     )
@@ -81,7 +81,7 @@ fn prediction_rejects_bad_arguments() {
 
 #[test]
 fn period_counter_counts_performer_repetitions() {
-    use mp_abstract::repetition::{estimate_period, PeriodParams};
+    use crate::{estimate_period, PeriodParams};
     for (mv, reps) in [(Move::JumpingJack, 8), (Move::Squat, 6)] {
         let params = PerformerParams {
             moves: vec![(mv, reps)],

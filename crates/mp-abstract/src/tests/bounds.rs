@@ -2,11 +2,11 @@
 //! naming the parameter, never an allocation failure.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_abstract::edit::{set_iterations, MAX_ITERATIONS};
-use mp_abstract::exec::{execute, output_frames_bound, sample, ExecParams, LoopReplay};
-use mp_abstract::loops::{LoopParams, MAX_BODY, MAX_WINDOW};
-use mp_abstract::model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-use mp_abstract::AbstractError;
+use crate::AbstractError;
+use crate::{execute, output_frames_bound, sample, ExecParams, LoopReplay};
+use crate::{set_iterations, MAX_ITERATIONS};
+use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
+use crate::{LoopParams, MAX_BODY, MAX_WINDOW};
 use mp_concrete::exec::max_output_frames;
 use mp_concrete::ConcreteError;
 

@@ -5,8 +5,8 @@
 
 use std::path::PathBuf;
 
-use mp_abstract::analysis::read_program;
-use mp_abstract::AbstractError;
+use crate::read_program;
+use crate::AbstractError;
 use serde_json::{json, Value};
 
 /// A valid 2-D program with one joint: a primitive and a one-body loop.
@@ -120,8 +120,8 @@ fn non_finite_and_negative_values_are_refused() {
         );
     }
     // A non-finite value given in memory is named as such.
-    let mut prog: mp_abstract::model::AbstractProgram = serde_json::from_value(program()).unwrap();
-    if let mp_abstract::model::Stmt::Loop(l) = &mut prog.stmts[1] {
+    let mut prog: crate::AbstractProgram = serde_json::from_value(program()).unwrap();
+    if let crate::Stmt::Loop(l) = &mut prog.stmts[1] {
         l.body[0].joints[0].mean[3] = f64::NAN;
     }
     let e = prog.validate().unwrap_err();

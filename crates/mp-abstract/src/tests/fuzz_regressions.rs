@@ -6,8 +6,8 @@
 
 use std::path::Path;
 
-use mp_abstract::analysis::program_from_str;
-use mp_abstract::{dsl, AbstractError, AbstractProgram};
+use crate::program_from_str;
+use crate::{dsl, AbstractError, AbstractProgram};
 
 /// A joint called `right\x7fwrist` (DEL inside the name).
 const CONTROL_CHAR_IN_JOINT: &[u8] = b"{
@@ -212,11 +212,11 @@ const HUGE_DURATION: &[u8] = b"{
   ]
 }";
 
-fn json(bytes: &[u8]) -> mp_abstract::Result<AbstractProgram> {
+fn json(bytes: &[u8]) -> crate::Result<AbstractProgram> {
     program_from_str(&String::from_utf8_lossy(bytes), Path::new("fuzz.json"))
 }
 
-fn text(src: &str) -> mp_abstract::Result<AbstractProgram> {
+fn text(src: &str) -> crate::Result<AbstractProgram> {
     program_from_str(src, Path::new("fuzz.mpa"))
 }
 

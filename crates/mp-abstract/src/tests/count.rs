@@ -2,7 +2,7 @@
 //! between keypoints and frames, and bad input.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_abstract::{
+use crate::{
     count_repetitions, count_signals, CountMethod, CountParams, CountSignal, PeriodParams,
 };
 use mp_geom::{Skeleton, Track, Units};
@@ -293,7 +293,7 @@ fn frame_signal_counts_the_same_in_either_layout() {
     assert_eq!(a.total, b.total);
     assert_eq!(a.method, b.method);
     assert!((a.confidence - b.confidence).abs() < 1e-9);
-    let spans = |c: &mp_abstract::Counts| {
+    let spans = |c: &crate::Counts| {
         c.intervals
             .iter()
             .map(|i| (i.start_frame, i.end_frame, i.period_frames))

@@ -2,10 +2,10 @@
 //! known counts and intervals, bad input, and real data.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_abstract::repetition::{
+use crate::AbstractError;
+use crate::{
     estimate_period, iou, segment_repetitions, IntervalParams, JointSelection, PeriodParams,
 };
-use mp_abstract::AbstractError;
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 use rand::SeedableRng;
@@ -246,13 +246,10 @@ fn tracks_without_valid_joints_have_no_repetition() {
 #[test]
 fn limb_selection_picks_the_coco_limbs() {
     let b = Skeleton::blazepose33();
-    let limbs = mp_abstract::repetition::selected_joints(&b, JointSelection::Limbs);
+    let limbs = crate::selected_joints(&b, JointSelection::Limbs);
     assert_eq!(limbs, vec![11, 12, 13, 14, 15, 16, 23, 24, 25, 26, 27, 28]);
     let g = Skeleton::generic(5);
-    assert_eq!(
-        mp_abstract::repetition::selected_joints(&g, JointSelection::Limbs).len(),
-        5
-    );
+    assert_eq!(crate::selected_joints(&g, JointSelection::Limbs).len(), 5);
 }
 
 #[test]
@@ -294,7 +291,7 @@ fn cmu_exercise_blocks_are_segmented() {
     for x in &d {
         let best = blocks
             .iter()
-            .map(|b| mp_abstract::repetition::iom(*x, *b))
+            .map(|b| crate::iom(*x, *b))
             .fold(0.0, f64::max);
         assert!(best >= 0.9, "{x:?} straddles blocks {blocks:?}");
     }
