@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use mp_concrete::synthetic::synthetic_track;
+use mp_concrete::synthetic_track;
 use mp_concrete::{segment_exhaustive, synthesize, Scale, SynthParams};
 use mp_eval::table::{Align::Left, Align::Right, Table};
 
@@ -181,7 +181,7 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
         "## Synthesis timing harness\n\nFull `mp_concrete::synthesize` (default parameters: fixed λ = 1600, W = 60, \
          stationary/line/circle, Euclidean error; exact branch-and-bound segmentation, sequential, then the chosen \
          segments fitted on the rayon pool) of a seeded synthetic 13-joint 2D track \
-         (`mp_concrete::synthetic::synthetic_track(T, 7)`), release build, {} rayon threads. \
+         (`mp_concrete::synthetic_track(T, 7)`), release build, {} rayon threads. \
          CPU = user + system seconds of the process (other jobs sharing the machine inflate wall time, not CPU time).\n",
         rayon::current_num_threads()
     )?;

@@ -25,7 +25,7 @@
 
 use std::fmt::Write;
 
-use mp_concrete::dsl::lex::{self as shared, LexRules};
+use mp_concrete::lex::{self as shared, LexRules};
 
 use crate::error::{AbstractError, Result};
 use crate::model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
@@ -197,7 +197,7 @@ struct Lexer {
 }
 
 /// The tokens of `src` by the workspace's one lexer
-/// ([`mp_concrete::dsl::lex`], [`LexRules::ABSTRACT`]), numbers read as `f64`.
+/// ([`mp_concrete::lex`], [`LexRules::ABSTRACT`]), numbers read as `f64`.
 fn lex(src: &str) -> Result<Lexer> {
     let located = |line, column, message: String| AbstractError::Parse {
         line,

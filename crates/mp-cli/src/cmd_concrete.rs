@@ -4,7 +4,10 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use mp_concrete::{dsl, program_stats, Continuity, ExecParams, Program, RefitNorm, Transition};
+use mp_concrete::{
+    pretty_decimals, print_pretty, program_stats, Continuity, ExecParams, Program, RefitNorm,
+    Transition,
+};
 use mp_geom::PrimitiveKind;
 use mp_pipeline::Params;
 
@@ -121,8 +124,8 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
         .with_context(|| format!("fitting {}", a.track.display()))?;
     let p = &syn.program;
     if a.print {
-        let decimals = a.precision.unwrap_or(dsl::pretty_decimals(p.units));
-        print!("{}", dsl::print_pretty(p, decimals));
+        let decimals = a.precision.unwrap_or(pretty_decimals(p.units));
+        print!("{}", print_pretty(p, decimals));
     }
     p.write(&a.output)?;
     if a.quiet {

@@ -11,7 +11,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // bench code
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
-use mp_concrete::synthetic::synthetic_track;
+use mp_concrete::synthetic_track;
 use mp_concrete::{segment, segment_exhaustive, synthesize, Scale, SynthParams};
 use mp_geom::Track;
 use mp_geom::{perform, PerformerParams};

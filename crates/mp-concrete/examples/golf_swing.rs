@@ -6,7 +6,9 @@
 //! ```
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
-use mp_concrete::{dsl, program_stats, synthesize, Scale, SynthParams, UnobservedJoints};
+use mp_concrete::{
+    joint_block, program_stats, synthesize, NumberFormat, Scale, SynthParams, UnobservedJoints,
+};
 use mp_geom::PennAction;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -32,10 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "clip {} ({} frames, {}×{} px)",
         info.clip_id, info.n_frames, info.width_px, info.height_px
     );
-    print!(
-        "{}",
-        dsl::joint_block(&program, wrist, dsl::NumberFormat::Fixed(2))
-    );
+    print!("{}", joint_block(&program, wrist, NumberFormat::Fixed(2)));
     let st = program_stats(&program, &track)?;
     println!(
         "{} segments, {} parameters (raw {}), KD {:.2} px ({:.2} px at 512 px)",

@@ -9,7 +9,7 @@
 
 use std::time::Instant;
 
-use mp_concrete::synthetic::synthetic_track;
+use mp_concrete::synthetic_track;
 use mp_concrete::{
     segment, segment_exhaustive, segment_with_stats, synthesize, Continuity, Scale, SynthParams,
 };

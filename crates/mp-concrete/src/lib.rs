@@ -7,7 +7,7 @@
 //! * [`Program`], [`Segment`]: the data type, with JSON via serde and the
 //!   text DSL ([`dsl::print`], [`dsl::parse`]; `docs/DSL.md`).
 //! * [`synthesize`]: the program of a track by dynamic-programming
-//!   segmentation ([`dp`]) over primitive fits from [`mp_geom::fit_best`].
+//!   segmentation (`dp`) over primitive fits from [`mp_geom::fit_best`].
 //! * [`Program::execute`] and friends: rendering at any time resolution.
 //! * [`program_stats`], [`interpolation_experiment`]: the measurements of
 //!   the paper's §4.1 and §4.2.
@@ -31,18 +31,18 @@
 //! assert_eq!(mp_concrete::Program::from_dsl(&text).unwrap(), program);
 //! ```
 
-pub mod dp;
-pub mod dsl;
+mod dp;
+mod dsl;
 mod error;
-pub mod exec;
+mod exec;
 mod inbetween;
-pub mod interp;
-pub mod program;
-pub mod search;
-pub mod smooth;
+mod interp;
+mod program;
+mod search;
+mod smooth;
 mod stats;
 mod synth;
-pub mod synthetic;
+mod synthetic;
 
 pub use dp::{segment_brute_force, segment_dp, CostTable, Segmentation};
 pub use error::{ConcreteError, ParseError, Result};
@@ -58,3 +58,15 @@ pub use synth::{
     synthesize_detailed, Lambda, Scale, SynthParams, Synthesis, UnobservedJoints,
     REFERENCE_EXTENT_PX, REFERENCE_FRAME_PX,
 };
+
+pub use synthetic::synthetic_track;
+
+#[cfg(test)]
+mod tests;
+
+pub use dsl::lex;
+pub use dsl::{
+    axis_name, header, joint_block, parse, pretty_decimals, print, print_pretty, statement,
+    NumberFormat, PRETTY_DECIMALS,
+};
+pub use exec::{check_output_frames, max_output_frames, MAX_FRAME_JOINTS};

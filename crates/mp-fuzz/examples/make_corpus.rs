@@ -125,7 +125,7 @@ fn main() -> Res<()> {
         &dir,
         "concrete_dsl",
         "pretty.mp",
-        mp_concrete::dsl::print_pretty(&programs[0], 2),
+        mp_concrete::print_pretty(&programs[0], 2),
     )?;
     put(
         &dir,

@@ -24,7 +24,7 @@
 //! `max_gap_s`) without overlap; each keeps the primitives the segmentation
 //! of its buffer gave it.
 
-use mp_concrete::{dsl, Program, Segment};
+use mp_concrete::{statement, NumberFormat, Program, Segment, PRETTY_DECIMALS};
 use mp_geom::{Primitive, Skeleton, Track};
 
 use crate::poses::Poses;
@@ -77,7 +77,7 @@ impl ProgramSegment {
     /// The segment in the DSL of `mp fit` (two decimals): one line per joint,
     /// `name: statement`.
     pub fn dsl(&self, joints: &[String]) -> String {
-        let nf = dsl::NumberFormat::Fixed(dsl::PRETTY_DECIMALS);
+        let nf = NumberFormat::Fixed(PRETTY_DECIMALS);
         let lines: Vec<String> = self
             .segment
             .primitives
@@ -85,10 +85,7 @@ impl ProgramSegment {
             .enumerate()
             .map(|(j, p)| {
                 let name = joints.get(j).map(String::as_str).unwrap_or("?");
-                format!(
-                    "{name}: {}",
-                    dsl::statement(p, self.segment.duration_frames, nf)
-                )
+                format!("{name}: {}", statement(p, self.segment.duration_frames, nf))
             })
             .collect();
         lines.join("\n")

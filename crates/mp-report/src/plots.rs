@@ -82,7 +82,7 @@ pub(crate) fn check_agree(track: &Track, program: &Program) -> Result<()> {
 
 /// Axis label of coordinate `k` (of `d`) in `units`; image y is drawn upside down.
 pub(crate) fn axis_label(k: usize, d: usize, units: Units) -> String {
-    let name = mp_concrete::dsl::axis_name(k, d);
+    let name = mp_concrete::axis_name(k, d);
     let u = match units {
         Units::Pixels => "px",
         Units::Metres => "m",

@@ -7,7 +7,7 @@ use crate::{execute, output_frames_bound, sample, ExecParams, LoopReplay};
 use crate::{set_iterations, MAX_ITERATIONS};
 use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
 use crate::{LoopParams, MAX_BODY, MAX_WINDOW};
-use mp_concrete::exec::max_output_frames;
+use mp_concrete::max_output_frames;
 use mp_concrete::ConcreteError;
 
 const JOINTS: usize = 4;

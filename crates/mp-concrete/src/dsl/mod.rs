@@ -18,8 +18,10 @@ pub mod lex;
 mod parse;
 mod print;
 
-pub use parse::{parse, parse_statement};
+pub use parse::parse;
+#[cfg(test)]
+pub(crate) use parse::parse_statement;
 pub use print::{
-    axis_name, fmt_number, header, joint_block, pretty_decimals, print, print_pretty, print_with,
-    statement, NumberFormat, PRETTY_DECIMALS,
+    axis_name, header, joint_block, pretty_decimals, print, print_pretty, statement, NumberFormat,
+    PRETTY_DECIMALS,
 };

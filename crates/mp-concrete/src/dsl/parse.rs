@@ -585,6 +585,7 @@ pub fn parse(text: &str) -> Result<Program> {
 }
 
 /// Parses one statement (e.g. `stationary(x=1, y=2, duration=3)`) for a program of `dims` dimensions.
+#[cfg(test)]
 pub fn parse_statement(text: &str, dims: usize) -> Result<(Primitive, usize)> {
     let toks = lex(text, &LexRules::CONCRETE)?;
     let mut p = Parser { toks, pos: 0 };

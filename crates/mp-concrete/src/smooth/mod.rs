@@ -81,10 +81,79 @@ mod solve;
 
 use elems::{elem_of, initial_knots, primitives_of, Elem};
 use irls::reweighted;
-pub use irls::{IRLS_FLOOR_PX, IRLS_STEPS};
 use solve::solve;
 
 /// Whether consecutive segments of a program share their boundary pose.
+///
+/// With [`Continuity::C0`] the segmentation is the one the DP chose for
+/// independently fitted segments; then, per joint, all of that joint's
+/// primitives are refitted **jointly** so that every segment ends where the
+/// next begins: segment `i` evaluated at `t = duration_i` (the first frame of
+/// segment `i + 1`) equals segment `i + 1` at `t = 0`. Executing such a
+/// program gives a continuous trajectory; the step between the last frame of
+/// a segment and the first frame of the next is the primitive's own last step.
+///
+/// # The refit
+///
+/// The unknowns of a joint are its **knots** `v_0 … v_S` (the pose at each
+/// boundary, `D` values each; `v_S` is the end of the last segment extended by
+/// one frame) and, for splines, two interior coefficients per axis. With
+/// `s = t / n` (`n` the segment's duration) each kind keeps its shape:
+///
+/// * **line**: `p(t) = (1 − s)·v_i + s·v_{i+1}` (start `v_i`, velocity `(v_{i+1} − v_i) / n`);
+/// * **spline**: the line plus `s(1 − s)·(a + b·s)` per axis (still a cubic);
+/// * **circle (2D)**: the fitted arc moved by the similarity (rotation and
+///   scale, as complex numbers) that maps its chord `p(n) − p(0)` onto
+///   `v_{i+1} − v_i`: `p(t) = v_i + (v_{i+1} − v_i)·w(t)` with the fixed complex
+///   `w(t) = (p(t) − p(0)) / (p(n) − p(0))`. The result is a circle with the same
+///   angular velocity and acceleration, a scaled radius and a turned start angle.
+///   An arc whose `|w(t)|` exceeds `MAX_SIMILARITY_GAIN` (more than about
+///   240°, or a vanishing chord), and every circle in 3D, is **rigid** instead:
+///   translated as a whole, `v_{i+1} = v_i + p(n) − p(0)`;
+/// * **stationary**: rigid with a zero chord, `v_{i+1} = v_i` (the held pose
+///   is the shared knot).
+///
+/// Every position is linear in the unknowns, so the refit is one weighted
+/// least-squares problem per joint: squared residuals over the observed
+/// frames (weight 1), plus the gap-filled positions (linear between
+/// observations) of the frames where the joint is not observed with weight
+/// `GAP_WEIGHT`, so that a segment cannot swing far from the track where
+/// nothing pins it (a segment where the joint is never observed uses the
+/// gap-filled positions with weight 1, as the independent fit does). Rigid segments tie their two
+/// knots, which removes one knot; the normal equations are banded (each
+/// segment couples its two knots and its interior coefficients) and are
+/// solved by a banded Cholesky factorisation in `O(S·D³)` per joint. A ridge
+/// of weight `RIDGE` towards the independent fits' boundary poses keeps the
+/// system positive definite where a joint has no data at all.
+///
+/// A rigid segment can be forced far from its data by its neighbours (a held
+/// joint between two different positions). After the solve, a stationary
+/// segment whose mean residual grew by more than `stationary_mean_residual_px`
+/// (the threshold of the stationary rule, 3 px at the 512-px reference) over
+/// its independent fit becomes a line, a rigid circle a cubic spline, and the
+/// joint is solved again (until nothing changes). These are the only changes
+/// of kind.
+///
+/// With [`RefitNorm::Euclidean`] each solve above is followed by
+/// iteratively reweighted least squares: every observed frame's weight is
+/// multiplied by `c·f / max(‖rᵢ‖, f)` (its residual in the previous solve, `f` =
+/// `IRLS_FLOOR_PX` reference pixels, `c` fixed so that the observed frames
+/// weigh 1 on average in the first reweighted solve, as in the least-squares
+/// one); gap-filled frames keep their weight (they are not data, and without
+/// `c` the interpolated positions would outweigh the data).
+/// Each step lowers the Euclidean error of the observed frames (Huber's loss
+/// with its corner at `f`, the Euclidean error above it) plus the
+/// least-squares terms of the gap-filled frames: a majorise–minimise step,
+/// as in Weiszfeld's algorithm. It stops when a step gains less than 0.1 %
+/// or after `IRLS_STEPS` solves and keeps the best solution. The default
+/// is [`RefitNorm::Squared`].
+///
+/// The segmentation's cost ([`crate::Synthesis::segmentation`]) stays that of
+/// the independent fits the DP minimised.
+///
+/// Steps, one file each: `elems` (how each kind depends on the knots, and the
+/// primitives back from them), `solve` (the banded normal equations),
+/// `irls` (the reweighted solves); the refit loop is here.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 #[non_exhaustive]
@@ -94,7 +163,7 @@ pub enum Continuity {
     #[default]
     None,
     /// Segment `i` at `t = duration_i` equals segment `i + 1` at `t = 0`, for
-    /// every joint (see the [module docs](self)).
+    /// every joint (see above).
     C0,
 }
 
@@ -141,7 +210,7 @@ pub enum RefitNorm {
     Squared,
     /// `Σ w‖rᵢ‖` (the Euclidean error the segmentation minimises under the
     /// default norm): iteratively reweighted least squares, starting from
-    /// the least-squares solution (see the [module docs](self)).
+    /// the least-squares solution (see [`Continuity`]).
     Euclidean,
 }
 

@@ -225,11 +225,11 @@ pub struct SynthParams {
     /// to its stored positions ([`UnobservedJoints::Ignore`]); paper: an error.
     pub unobserved_joints: UnobservedJoints,
     /// Whether consecutive segments share their boundary pose (the chosen
-    /// segmentation refitted per joint, [`crate::smooth`]). Default: C0.
+    /// segmentation refitted per joint, `crate::smooth`). Default: C0.
     /// Parameters serialised before the field existed read as C0.
     #[serde(default = "default_continuity")]
     pub continuity: Continuity,
-    /// What the C0 refit minimises ([`crate::smooth`]). Default: Euclidean
+    /// What the C0 refit minimises (`crate::smooth`). Default: Euclidean
     /// residuals; paper, and parameters serialised before the field existed:
     /// squared residuals.
     #[serde(default)]

@@ -7,8 +7,8 @@ use std::fmt::Write as _;
 
 use mp_abstract::CountedInterval;
 use mp_abstract::{print_with, PrintOptions};
-use mp_concrete::dsl::{statement, NumberFormat};
 use mp_concrete::Program;
+use mp_concrete::{statement, NumberFormat};
 use mp_geom::frames_label;
 
 use crate::page::ProgramView;

@@ -3,9 +3,9 @@
 //! random bytes rejected with an error, never a panic.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::program::{BINARY_MAGIC, BINARY_VERSION};
-use mp_concrete::synthetic::synthetic_track;
-use mp_concrete::{synthesize, ConcreteError, Program, Segment, SynthParams};
+use crate::program::{BINARY_MAGIC, BINARY_VERSION};
+use crate::synthetic::synthetic_track;
+use crate::{synthesize, ConcreteError, Program, Segment, SynthParams};
 use mp_geom::{GeomError, Primitive, Units};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -17,7 +17,7 @@ fn all_kinds_3d() -> Program {
         dims: 3,
         skeleton: "bvh".into(),
         joints: vec!["hip".into(), "lHand".into()],
-        continuity: mp_concrete::Continuity::C0,
+        continuity: crate::Continuity::C0,
         segments: vec![
             Segment {
                 duration_frames: 12,

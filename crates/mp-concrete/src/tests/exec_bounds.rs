@@ -1,12 +1,12 @@
 //! Absurd output sizes of program execution are a typed error, never an allocation failure.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::exec::{max_output_frames, MAX_FRAME_JOINTS};
-use mp_concrete::{synthesize, ConcreteError, ExecParams, SynthParams};
+use crate::exec::{max_output_frames, MAX_FRAME_JOINTS};
+use crate::{synthesize, ConcreteError, ExecParams, SynthParams};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
 
-fn program() -> mp_concrete::Program {
+fn program() -> crate::Program {
     let mut pos = Array3::zeros((20, 2, 2));
     for t in 0..20 {
         pos[[t, 0, 0]] = 100.0 + 8.0 * (t.min(9) as f64);

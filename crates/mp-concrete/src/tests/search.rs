@@ -2,9 +2,9 @@
 //! exhaustive DP over the full cost table (`segment_exhaustive`).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::dp::Segmentation;
-use mp_concrete::synthetic::synthetic_track;
-use mp_concrete::{
+use crate::dp::Segmentation;
+use crate::synthetic::synthetic_track;
+use crate::{
     segment, segment_costs, segment_exhaustive, segment_with_stats, Lambda, Scale, SynthParams,
 };
 use mp_geom::ErrorNorm;
@@ -198,7 +198,7 @@ fn search_stats_account_for_every_candidate() {
 /// norms), the same optimum as the exhaustive DP.
 #[test]
 fn penn_action_same_optimum() {
-    use mp_concrete::UnobservedJoints;
+    use crate::UnobservedJoints;
     use mp_geom::PennAction;
     let path = mp_geom::data_or_return!(PennAction::TRAIN_FILE);
     let pa = PennAction::open(&path).unwrap();

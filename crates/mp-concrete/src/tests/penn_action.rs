@@ -1,9 +1,7 @@
 //! Real data: programs of Penn Action golf swings (paper §4.1 analysis).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::{
-    program_stats, synthesize, Continuity, Program, Scale, SynthParams, UnobservedJoints,
-};
+use crate::{program_stats, synthesize, Continuity, Program, Scale, SynthParams, UnobservedJoints};
 use mp_geom::PennAction;
 
 /// Penn Action, or `None` (the running test's skip is recorded).

@@ -1,8 +1,8 @@
 //! Smooth (C0) programs: consecutive segments share their boundary pose.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::synthetic::synthetic_track;
-use mp_concrete::{
+use crate::synthetic::synthetic_track;
+use crate::{
     max_boundary_gap, program_stats, synthesize, Continuity, Lambda, Program, RefitNorm, Scale,
     SynthParams, UnobservedJoints,
 };

@@ -1,7 +1,7 @@
 //! Synthesis: recovering known programs, invariances, execution, and bad input.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::{
+use crate::{
     interpolation_experiment, program_stats, synthesize, synthesize_detailed, ConcreteError,
     ExecParams, InterpParams, Lambda, Program, Scale, Segment, SynthParams, Transition,
     UnobservedJoints,
@@ -38,7 +38,7 @@ fn known_program() -> Program {
         dims: 2,
         skeleton: "generic".into(),
         joints: vec!["j0".into(), "j1".into(), "j2".into()],
-        continuity: mp_concrete::Continuity::None,
+        continuity: crate::Continuity::None,
         segments: vec![
             Segment {
                 duration_frames: 15,
@@ -76,7 +76,7 @@ fn params_px() -> SynthParams {
     SynthParams {
         scale: Scale::UnitScale { unit_scale: 1.0 },
         lambda: Lambda::fixed(300.0),
-        continuity: mp_concrete::Continuity::None,
+        continuity: crate::Continuity::None,
         ..SynthParams::paper()
     }
 }
@@ -250,10 +250,10 @@ fn spread_lambda_is_the_local_spread_held_for_a_time() {
 
 #[test]
 fn a_parameter_budget_gives_the_finest_program_within_it() {
-    let track = mp_concrete::synthetic::synthetic_track(400, 7).unwrap();
+    let track = crate::synthetic::synthetic_track(400, 7).unwrap();
     let raw = (track.n_frames() * track.n_joints() * track.dims()) as f64;
     let base = SynthParams {
-        continuity: mp_concrete::Continuity::C0,
+        continuity: crate::Continuity::C0,
         ..params_px()
     };
     let ratio_of = |p: &Program| p.n_params() as f64 / raw;
@@ -281,7 +281,7 @@ fn a_parameter_budget_gives_the_finest_program_within_it() {
         .unwrap();
         assert_eq!(fixed, syn.program);
         // `segment` with the budget gives the same segmentation.
-        let seg = mp_concrete::segment(
+        let seg = crate::segment(
             &track,
             &SynthParams {
                 lambda: Lambda::budget(budget),
@@ -392,7 +392,7 @@ fn interpolation_beats_linear_on_circles() {
         dims: 2,
         skeleton: "generic".into(),
         joints: vec!["a".into()],
-        continuity: mp_concrete::Continuity::None,
+        continuity: crate::Continuity::None,
         segments: vec![Segment {
             duration_frames: 41,
             primitives: vec![arc(200.0, 200.0, 80.0, 0.0, 4.0)],

@@ -1,7 +1,7 @@
 //! Inputs found by fuzzing (`crates/mp-fuzz`) that made a reader of
 //! concrete programs panic or stall; each must now be a quick, typed error.
 
-use mp_concrete::{ConcreteError, Program};
+use crate::{ConcreteError, Program};
 
 /// `dims=2222222222222222222`: every statement listed that many axis names
 /// (capacity overflow).
@@ -24,7 +24,7 @@ circular_motion(center=(220.56, 175.67), radius=108.23, angle=3.17*t + 777777777
 }
 ";
 
-fn dsl(bytes: &[u8]) -> mp_concrete::Result<Program> {
+fn dsl(bytes: &[u8]) -> crate::Result<Program> {
     Program::from_dsl(&String::from_utf8_lossy(bytes))
 }
 

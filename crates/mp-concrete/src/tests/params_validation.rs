@@ -2,8 +2,8 @@
 //! parameter error naming the field; the fit parameters are checked once.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::synthetic::*;
-use mp_concrete::{synthesize, ConcreteError, ExecParams, Program, SynthParams};
+use crate::synthetic::*;
+use crate::{synthesize, ConcreteError, ExecParams, Program, SynthParams};
 
 fn param_name(e: ConcreteError) -> String {
     match e {
@@ -49,7 +49,7 @@ fn bad_fit_params_are_rejected_once_at_synthesis() {
     let mut p = SynthParams::paper();
     p.fit.radius_penalty = -1.0;
     assert_eq!(
-        param_name(mp_concrete::synthesize_detailed(&track, &p).unwrap_err()),
+        param_name(crate::synthesize_detailed(&track, &p).unwrap_err()),
         "radius_penalty"
     );
 }

@@ -1,8 +1,8 @@
 //! The DP segmentation equals exhaustive search.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::dp::{segment_brute_force, segment_dp, segment_table, CostTable};
-use mp_concrete::ConcreteError;
+use crate::dp::{segment_brute_force, segment_dp, segment_table, CostTable};
+use crate::ConcreteError;
 use proptest::prelude::*;
 
 /// Random segment costs for T ≤ 10 frames, with a penalty λ.
@@ -100,8 +100,8 @@ fn bad_inputs_are_typed_errors() {
 }
 
 mod on_real_costs {
-    use mp_concrete::dp::segment_brute_force;
-    use mp_concrete::{segment_costs, synthesize_detailed, Lambda, Scale, SynthParams};
+    use crate::dp::segment_brute_force;
+    use crate::{segment_costs, synthesize_detailed, Lambda, Scale, SynthParams};
     use mp_geom::{Skeleton, Track, Units};
     use ndarray::Array3;
     use proptest::prelude::*;

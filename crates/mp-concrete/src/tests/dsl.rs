@@ -2,8 +2,8 @@
 //! and errors with positions.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::dsl::{self, parse, print, print_pretty};
-use mp_concrete::{ConcreteError, Program, Segment};
+use crate::dsl::{self, parse, print, print_pretty};
+use crate::{ConcreteError, Program, Segment};
 use mp_geom::{Primitive, Units};
 use proptest::prelude::*;
 
@@ -94,9 +94,9 @@ fn program() -> impl Strategy<Value = Program> {
                 .collect(),
             // Both values print and parse (C0 is a header field).
             continuity: if fps > 30.0 {
-                mp_concrete::Continuity::C0
+                crate::Continuity::C0
             } else {
-                mp_concrete::Continuity::None
+                crate::Continuity::None
             },
             segments,
         })
@@ -144,7 +144,7 @@ fn paper_program() -> Program {
         dims: 2,
         skeleton: "penn13".into(),
         joints: vec!["right_wrist".into()],
-        continuity: mp_concrete::Continuity::None,
+        continuity: crate::Continuity::None,
         segments: vec![
             Segment {
                 duration_frames: 7,
