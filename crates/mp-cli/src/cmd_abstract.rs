@@ -193,7 +193,7 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
     )?;
     let c = &out.counts;
     if a.json {
-        let v = mp_pipeline::output::loops_file(&out);
+        let v = mp_pipeline::loops_file(&out);
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }

@@ -10,7 +10,7 @@ use std::time::Duration;
 use anyhow::{bail, Result};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use mp_pipeline::batch::{BatchObserver, BatchSummary, ItemReport, ItemStatus};
+use mp_pipeline::{BatchObserver, BatchSummary, ItemReport, ItemStatus};
 use mp_pipeline::{BatchParams, Params, Stage};
 
 use crate::progress::ctrl_c_token;

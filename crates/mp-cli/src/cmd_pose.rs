@@ -104,7 +104,7 @@ fn extract_params(a: &ExtractArgs) -> Result<(mp_pipeline::Params, ExtractParams
 pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     crate::track_arg::refuse_track_for_extract(&a.video)?;
     let (params, what) = extract_params(a)?;
-    mp_pipeline::extract::check_output(&a.output, what)?;
+    mp_pipeline::check_output(&a.output, what)?;
     let bars = crate::progress::Bars::new(a.quiet);
     let ex = mp_pipeline::extract(&a.video, &params, what, &bars, &CancelToken::new())
         .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;

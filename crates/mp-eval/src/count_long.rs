@@ -211,7 +211,7 @@ pub fn run(a: &LongArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let clips = load_clips(a)?;
     let boxes: Vec<([f64; 4], usize)> = clips.iter().filter_map(|c| c.person_box).collect();
-    let region = weighted_box(&boxes, mp_pipeline::keypoints::BOX_MARGIN);
+    let region = weighted_box(&boxes, mp_pipeline::BOX_MARGIN);
     let size = a.params.pose.thumbnail_size;
     let mut thumbs = Vec::new();
     for c in &clips {

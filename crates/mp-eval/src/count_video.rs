@@ -20,7 +20,7 @@ pub const CACHE_DIR: &str = "mp-out/video_cases";
 
 /// Which frame signal was read (the usual thumbnails or a moving region,
 /// as rows and columns of the 32 × 32 grid) and the candidates' periodicity.
-pub fn frame_signal_json(choice: Option<&mp_pipeline::frame_signal::FrameChoice>) -> Value {
+pub fn frame_signal_json(choice: Option<&mp_pipeline::FrameChoice>) -> Value {
     let Some(ch) = choice else {
         return Value::Null;
     };

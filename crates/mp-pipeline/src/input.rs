@@ -55,7 +55,7 @@ pub enum Input {
         skeleton: mp_geom::Skeleton,
         /// Per frame, whether the pose model saw it; the frames it did not
         /// see (dropped, or skipped by the pose rate) are filled from the
-        /// motion as [`crate::pose_rate::fill_people`] does.
+        /// motion as `crate::pose_rate::fill_people` does.
         posed: Vec<bool>,
         /// Title of the report.
         title: String,

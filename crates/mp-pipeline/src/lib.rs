@@ -35,16 +35,16 @@
 //! ```
 
 mod analysis;
-pub mod batch;
+mod batch;
 mod error;
-pub mod extract;
+mod extract;
 mod fit_options;
-pub mod frame_signal;
+mod frame_signal;
 mod input;
-pub mod keypoints;
-pub mod output;
-pub mod params;
-pub mod pose_rate;
+mod keypoints;
+mod output;
+mod params;
+mod pose_rate;
 mod progress;
 mod report_people;
 
@@ -61,7 +61,7 @@ pub use extract::{extract, ExtractParams, Extracted, Poses};
 pub use fit_options::FitOptions;
 pub use input::{is_video, Input, VIDEO_EXTENSIONS};
 pub use keypoints::{keypoints, Keep, Keypoints, ModelSlot};
-pub use mp_abstract::{Analysis, CountMethod, CountSignal, CountedInterval, Counts};
+use mp_abstract::{Analysis, Counts};
 pub use mp_geom::CancelToken;
 pub use params::{OutputParams, Params, PersonChoice, PersonParams, PoseParams};
 pub use pose_rate::PoseRate;
@@ -616,3 +616,10 @@ fn pictures_and_page(
     let page = mp_report::write_report(out, &input).map_err(PipelineError::from_report)?;
     Ok((pic_files, pic_time, page, t_rep.elapsed()))
 }
+
+pub use batch::{read_manifest, MANIFEST};
+pub use extract::check_output;
+pub use frame_signal::FrameChoice;
+pub use keypoints::BOX_MARGIN;
+pub use output::{loops_file, loops_json};
+pub use params::ModelChoice;

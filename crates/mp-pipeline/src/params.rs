@@ -37,7 +37,7 @@ pub struct PoseParams {
     /// The person tracker (`max_people`, detection rates, confirmation).
     pub tracker: mp_pose::PeopleParams,
     /// How often the pose model runs; the frames between are filled from
-    /// the motion ([`crate::pose_rate`]). Default every frame.
+    /// the motion (`crate::pose_rate`). Default every frame.
     #[serde(with = "as_text::rate")]
     pub rate: crate::pose_rate::PoseRate,
     /// Where the pose model runs (`mp_pose::Device`): the GPU

@@ -37,7 +37,7 @@ pub enum PoseRate {
     /// At least this many times a second: every `⌊fps / N⌋`-th frame (every
     /// frame when the video has no more than `N` frames a second).
     Fps(f64),
-    /// [`AUTO_POSE_FPS`].
+    /// `AUTO_POSE_FPS`.
     Auto,
 }
 

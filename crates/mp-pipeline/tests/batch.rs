@@ -10,11 +10,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use mp_geom::{perform, Move, PerformerParams};
-use mp_pipeline::batch::{read_manifest, MANIFEST};
 use mp_pipeline::{
     analyse_input, batch, batch_items, run, BatchObserver, BatchParams, CancelToken, Input,
     ItemReport, ItemStatus, OutputParams, Params, Silent, Stage,
 };
+use mp_pipeline::{read_manifest, MANIFEST};
 
 /// A short routine of the procedural performer (2D, pixels).
 fn write_performer(path: &Path, seed: u64, squats: usize) {

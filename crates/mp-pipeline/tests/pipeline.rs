@@ -7,8 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use mp_pipeline::{
-    analyse_input, run, CancelToken, CountSignal, Input, Observer, Params, PipelineError, Silent,
-    Stage,
+    analyse_input, run, CancelToken, Input, Observer, Params, PipelineError, Silent, Stage,
 };
 
 /// A shared data file, or `None` (the running test's skip is recorded).
@@ -59,7 +58,7 @@ fn a_bar_lift_in_the_dark_counts_from_the_frames() {
     };
     let out = count_video(&video);
     let c = &out.counts;
-    assert_eq!(c.signal, CountSignal::Frames, "{c:?}");
+    assert_eq!(c.signal, mp_abstract::CountSignal::Frames, "{c:?}");
     assert!(
         (c.total as i64 - truth as i64).abs() <= 1,
         "counted {}, labelled {truth}",
@@ -205,7 +204,7 @@ fn cmu_exercise_blocks_are_counted_one_by_one() {
         }
     }
     let counts = mp_pipeline::count(&c.track, None, &Params::default()).unwrap();
-    assert_eq!(counts.method, mp_pipeline::CountMethod::Intervals);
+    assert_eq!(counts.method, mp_abstract::CountMethod::Intervals);
     assert_eq!(
         counts.intervals.len(),
         blocks.len(),

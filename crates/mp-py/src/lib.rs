@@ -126,9 +126,8 @@ pub(crate) fn device_arg(params: &mut Params, device: Option<&str>) -> PyResult<
     Ok(())
 }
 
-fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::params::ModelChoice> {
-    mp_pipeline::params::ModelChoice::parse(name)
-        .map_err(|e| errors::ParamError::new_err(e.to_string()))
+fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::ModelChoice> {
+    mp_pipeline::ModelChoice::parse(name).map_err(|e| errors::ParamError::new_err(e.to_string()))
 }
 
 /// Reads a keypoint track: the project's `.npz`/`.json`/`.mpt`, CSV, `.npy`,

@@ -29,7 +29,7 @@ fn is_track_file(path: &Path) -> bool {
 
 /// The inputs of a batch:
 ///
-/// * a folder: its videos and track files ([`is_batch_input`]), sorted by
+/// * a folder: its videos and track files (`is_batch_input`), sorted by
 ///   path; hidden files and subfolders (the output folder among them) are
 ///   not read;
 /// * a video or track file: that one input;

@@ -55,7 +55,7 @@ use crate::progress::{Observer, Silent, Stage, StageTime};
 mod items;
 mod manifest;
 
-pub use items::{batch_items, is_batch_input, output_names};
+pub use items::{batch_items, output_names};
 pub use manifest::{read_manifest, ItemReport, ItemStatus};
 
 use items::work_estimate;
