@@ -3,13 +3,13 @@
 //! tracker of `mp run`, and each person's repetitions are counted online, in
 //! memory bounded whatever the stream's length.
 //!
-//! - [`source`]: the frames, decoded by FFmpeg on a thread of their own; when
+//! - `source`: the frames, decoded by FFmpeg on a thread of their own; when
 //!   the pose model falls behind a live source, only the newest frame waits
 //!   and the others are dropped (and counted).
 //! - `counter`: the online repetition counter of one person: a sliding
 //!   window of their recent keypoints, counted again every half second with
 //!   the offline counting, turned into a running total that only grows.
-//! - [`program`]: the online concrete program of one person: a buffer of
+//! - `program`: the online concrete program of one person: a buffer of
 //!   their frames not yet committed, segmented again every second with the
 //!   offline synthesis, whose leading segments are committed once stable.
 //! - [`run()`]: the loop over the frames, reporting [`Event`]s.
@@ -36,10 +36,10 @@
 
 mod counter;
 mod poses;
-pub mod program;
+mod program;
 mod record;
-pub mod run;
-pub mod source;
+mod run;
+mod source;
 
 use std::collections::BTreeMap;
 
@@ -237,7 +237,7 @@ pub enum Event {
         t: f64,
     },
     /// A segment of a person's concrete program, once committed
-    /// ([`crate::program`]); with `LiveParams::program` only.
+    /// (`crate::program`); with `LiveParams::program` only.
     Segment {
         /// The person.
         person: u32,
@@ -373,3 +373,4 @@ pub struct PersonTotal {
     /// Repetitions reported.
     pub total_repetitions: usize,
 }
+pub use program::concatenate;

@@ -546,7 +546,7 @@ impl Slot {
     }
 
     /// Asks the decoding thread to stop, and waits until it has ended (its
-    /// FFmpeg process stopped) or [`STOP_WAIT`] has passed: it may be waiting
+    /// FFmpeg process stopped) or `STOP_WAIT` has passed: it may be waiting
     /// for bytes of a stalled stream, and then ends with the stream.
     pub fn stop(&self) {
         let mut s = self.lock();

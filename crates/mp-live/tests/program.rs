@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use mp_concrete::{program_stats, Program};
 use mp_geom::{Skeleton, Track};
-use mp_live::program::concatenate;
+use mp_live::concatenate;
 use mp_live::{LiveParams, OnlineProgram, ProgramSegment};
 
 /// A COCO-17 pose: wrists and elbows swing with period `period` frames, and
