@@ -3,7 +3,7 @@
 //! Everything the model-running crates (`mp-pose`, `mp-forecast`,
 //! `mp-refine`) share about ONNX Runtime:
 //!
-//! * [`library`]: finding the ONNX Runtime shared library (`ORT_DYLIB_PATH`,
+//! * `library`: finding the ONNX Runtime shared library (`ORT_DYLIB_PATH`,
 //!   `.cache/onnxruntime/lib` as installed by `cargo xtask setup`, next to
 //!   the executable) and loading it once per process ([`environment`]).
 //!   Nothing in `ort` is touched before the library has been found, so a
@@ -27,15 +27,13 @@
 //! ```
 
 mod error;
-pub mod library;
+mod library;
 mod lookup;
 mod network;
 mod session;
 
-pub use error::{format_shape, OnnxError, Result};
-pub use library::{
-    environment, find_library, library_candidates, LIBRARY_DIR_IN_WORKSPACE, LIBRARY_FILE,
-};
+pub use error::{OnnxError, Result};
+pub use library::{environment, find_library};
 pub use lookup::ModelDirs;
 pub use network::{Input, Network, Output};
 pub use session::{

@@ -88,7 +88,7 @@ static ENVIRONMENT: Mutex<Option<ort::environment::Environment>> = Mutex::new(No
 /// Loads ONNX Runtime (once per process) and returns its environment.
 ///
 /// Errors: [`OnnxError::RuntimeMissing`] when no candidate of
-/// [`library_candidates`] exists, [`OnnxError::RuntimeLoad`] when the file
+/// `library_candidates` exists, [`OnnxError::RuntimeLoad`] when the file
 /// exists but cannot be loaded.
 pub fn environment() -> Result<ort::environment::Environment> {
     let mut guard = ENVIRONMENT.lock().unwrap_or_else(|e| e.into_inner());
