@@ -7,14 +7,13 @@
 //!   the repetition closest to the interval's mean is repeated or removed, seams are
 //!   placed where pose and pixels match best within a few frames and
 //!   cross-faded.
-//! * [`predict`]: the video continued by unrolling its last repetition on pixels
+//! * `predict`: the video continued by unrolling its last repetition on pixels
 //!   (`mp predict VIDEO --seconds S`), with the constant (frozen last frame)
 //!   and nearest-neighbour frame baselines.
-//! * [`interpolate`]: in-between frames from the program fitted on the
+//! * `interpolate`: in-between frames from the program fitted on the
 //!   frames' keypoints (`mp interpolate`): both neighbouring frames are
 //!   warped towards the program's pose and blended; linear blending and
 //!   FFmpeg's `minterpolate` as baselines.
-//! * `metrics`: PSNR and SSIM, on the whole frame or a box.
 //!
 //! Frames stream through FFmpeg pipes (`mp_pose::video`): an output is a
 //! [`plan::Plan`] of source frames (copied or blended) rendered with a
@@ -41,18 +40,22 @@
 
 mod edit;
 mod error;
-pub mod interpolate;
-mod metrics;
-pub mod motion;
-pub mod plan;
-pub mod predict;
+mod interpolate;
+
+mod motion;
+mod plan;
+mod predict;
 
 pub use edit::{edit_video, plan_edit, EditChange, EditParams, EditReport};
 pub use error::{Result, VideoError};
 pub use interpolate::{interpolate_video, InterpMethod, InterpParams, InterpReport, Warp, FACTORS};
-pub use metrics::{psnr, ssim, PixelBox};
+
 pub use motion::{analyse_video, VideoMotion};
 pub use plan::{AtomicVideo, Plan, PlanFrame};
 pub use predict::{
     plan_prediction, predict_video, PredictReport, VideoPredictMethod, VideoPredictParams,
 };
+
+pub use interpolate::{check_factor, interpolate_frames, keep_every, Guide};
+pub use motion::MIN_CONFIDENCE;
+pub use plan::render;

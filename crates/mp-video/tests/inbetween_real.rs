@@ -10,7 +10,7 @@
 use mp_concrete::InBetween;
 use mp_geom::Track;
 use mp_geom::{AistPlusPlus, PennAction};
-use mp_video::interpolate::Guide;
+use mp_video::Guide;
 use mp_video::InterpParams;
 
 /// Sums of distances (default rule, linear) and entries over the dropped frames.

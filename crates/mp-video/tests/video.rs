@@ -8,11 +8,11 @@ use std::path::{Path, PathBuf};
 
 use mp_pipeline::Params;
 use mp_pose::VideoReader;
-use mp_video::interpolate::{interpolate_frames, keep_every};
 use mp_video::{
     analyse_video, edit_video, interpolate_video, predict_video, EditChange, EditParams,
     InterpMethod, InterpParams, VideoError, VideoPredictMethod, VideoPredictParams,
 };
+use mp_video::{interpolate_frames, keep_every};
 
 /// The first `seconds` of `video`, re-encoded losslessly into `dir`.
 fn clip(video: &Path, seconds: f64, dir: &Path) -> PathBuf {

@@ -6,7 +6,7 @@
 //! Action3D projected into an image; see `sources`) and every factor k:
 //! keep every k-th frame, build the guide of the kept keypoints exactly as
 //! `mp interpolate` does after its pose model
-//! (`mp_video::interpolate::Guide::from_track`: the program of
+//! (`mp_video::Guide::from_track`: the program of
 //! `mp_pipeline::concrete_program` with `mp_pipeline::Params::default()`,
 //! the in-between rule of `mp_video::InterpParams::default()`), and score
 //! its target pose (`Guide::target_pose`, the pose the in-between frames are
@@ -30,7 +30,7 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use clap::Args;
 use mp_concrete::InBetween;
-use mp_video::interpolate::Guide;
+use mp_video::Guide;
 use mp_video::InterpParams;
 use rayon::prelude::*;
 use serde_json::{json, Value};

@@ -5,14 +5,15 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use super::metrics::PixelBox;
 use anyhow::bail;
 use clap::Args;
 use mp_geom::Track;
 use mp_pipeline::Params;
 use mp_pose::SessionParams;
 use mp_pose::{Frame, VideoReader};
-use mp_video::interpolate::{interpolate_frames, keep_every, Guide};
-use mp_video::{InterpMethod, InterpParams, PixelBox};
+use mp_video::{interpolate_frames, keep_every, Guide};
+use mp_video::{InterpMethod, InterpParams};
 use serde_json::{json, Map, Value};
 
 use super::{common_kd, kd, mean, num, shared_videos, stem, PoseStream, Scores, MIN_CONF};
@@ -328,7 +329,7 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
         .map(|m| parse_interp(m))
         .collect::<anyhow::Result<_>>()?;
     for &k in &a.factors {
-        mp_video::interpolate::check_factor(k)?;
+        mp_video::check_factor(k)?;
     }
     let params = Params::default();
     let iparams = interp_params(&a.set)?;

@@ -26,6 +26,7 @@
 //! model, KD, and the PSNR/SSIM scores.
 
 mod interpolation;
+pub mod metrics;
 mod predict;
 
 pub use interpolation::{run_interpolation, EvalInterpolationArgs};
@@ -37,15 +38,15 @@ use std::sync::mpsc::{sync_channel, SyncSender};
 use std::thread::JoinHandle;
 
 use anyhow::{bail, Context};
+use metrics::PixelBox;
 use mp_geom::Track;
 use mp_pipeline::Params;
 use mp_pose::{extract, open_estimator, ExtractOptions, SessionParams};
 use mp_pose::{Frame, FrameSource};
-use mp_video::PixelBox;
 use serde_json::{json, Value};
 
 /// Confidence above which a joint is scored.
-const MIN_CONF: f64 = mp_video::motion::MIN_CONFIDENCE;
+const MIN_CONF: f64 = mp_video::MIN_CONFIDENCE;
 
 fn shared_videos(with_golf: bool) -> anyhow::Result<Vec<PathBuf>> {
     let mut v = Vec::new();
@@ -251,11 +252,11 @@ impl Scores {
         pbox: Option<PixelBox>,
     ) -> anyhow::Result<()> {
         let full = PixelBox::full(w, h);
-        self.psnr.push(mp_video::psnr(out, truth, w, h, &full)?);
-        self.ssim.push(mp_video::ssim(out, truth, w, h, &full)?);
+        self.psnr.push(metrics::psnr(out, truth, w, h, &full)?);
+        self.ssim.push(metrics::ssim(out, truth, w, h, &full)?);
         if let Some(b) = pbox {
-            self.psnr_box.push(mp_video::psnr(out, truth, w, h, &b)?);
-            self.ssim_box.push(mp_video::ssim(out, truth, w, h, &b)?);
+            self.psnr_box.push(metrics::psnr(out, truth, w, h, &b)?);
+            self.ssim_box.push(metrics::ssim(out, truth, w, h, &b)?);
         }
         Ok(())
     }

@@ -5,12 +5,13 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use super::metrics::PixelBox;
 use clap::Args;
 use mp_pipeline::Params;
 use mp_pose::VideoReader;
-use mp_video::plan::render;
-use mp_video::predict::plan_prediction;
-use mp_video::{analyse_video, PixelBox, VideoPredictMethod, VideoPredictParams};
+use mp_video::plan_prediction;
+use mp_video::render;
+use mp_video::{analyse_video, VideoPredictMethod, VideoPredictParams};
 use serde_json::{json, Map, Value};
 
 use super::{common_kd, kd, mean, num, shared_videos, stem, PoseStream, Scores, MIN_CONF};

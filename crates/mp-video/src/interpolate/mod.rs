@@ -134,7 +134,7 @@ pub struct InterpParams {
     /// (KD in the truth's crops 53.1 against 49.3 px) at 0.05 dB less PSNR.
     pub recover_s: f64,
     /// Check each joint's detected motion against the pixels
-    /// ([`motion_supported`]): where the patch around the joint matches the
+    /// (`motion_supported`): where the patch around the joint matches the
     /// other frame in place better than at the joint's new position, the
     /// pixels did not move as the keypoints say (a pose-model jump, not
     /// motion) and that joint's pixels are left where they are. Default off:
@@ -149,7 +149,7 @@ pub struct InterpParams {
     /// Check each pair of frames as a whole: at the middle time, the two
     /// frames warped to the target pose must agree with each other, on the
     /// person, at least as well as the two frames do unwarped
-    /// ([`warps_agree`]). Where they do not, the warp moves pixels the way
+    /// (`warps_agree`). Where they do not, the warp moves pixels the way
     /// the pixels do not move (keypoints on something other than the
     /// person, or jumping between frames) and the pair is blended linearly.
     pub warp_check: bool,

@@ -8,7 +8,7 @@
 
 use mp_geom::Track;
 
-use crate::error::{Result, VideoError};
+use mp_video::{Result, VideoError};
 
 /// PSNR reported for identical frames (no error at all).
 pub const PSNR_CAP_DB: f64 = 100.0;
