@@ -13,7 +13,7 @@ use crate::dsl;
 use crate::error::{AbstractError, Result};
 use crate::exec::{render, unroll_loop, LoopReplay};
 use crate::loops::{DetectedLoop, LoopParams};
-use crate::model::{AbstractProgram, DetPrim, Stmt};
+use crate::model::{AbstractProgram, DetPrim, Loop, Stmt};
 use crate::repetition::{
     estimate_period, intervals, PeriodEstimate, PeriodParams, RepetitiveInterval,
 };
@@ -486,40 +486,72 @@ pub fn unroll(
         ));
     }
     let obs = track.slice_frames(0, observe)?;
-    let constant = || -> Result<Prediction> {
-        if let Some(fb) = &params.period_fallback {
-            if let Some((track, est)) = fb.unroll(&obs, horizon)? {
-                return Ok(Prediction {
-                    track,
-                    used: None,
-                    period: Some(est),
-                    self_match: None,
-                });
-            }
-        }
-        if let Some(sm) = &params.self_match {
-            if let Some((track, m)) = sm.unroll(&obs, horizon)? {
-                return Ok(Prediction {
-                    track,
-                    used: None,
-                    period: None,
-                    self_match: Some(m),
-                });
-            }
-        }
-        Ok(Prediction {
-            track: predict_constant(&obs, horizon)?,
-            used: None,
-            period: None,
-            self_match: None,
-        })
-    };
     let analysis = match analyse_valid(&obs, &(&params.analysis).check()?) {
         Ok(a) => a,
-        Err(AbstractError::Empty(_)) => return constant(),
+        Err(AbstractError::Empty(_)) => return fallback_prediction(&obs, horizon, params),
         Err(e) => return Err(e),
     };
-    let Some((li, interval)) = analysis
+    let Some((l, interval)) = last_loop(&analysis) else {
+        return fallback_prediction(&obs, horizon, params);
+    };
+    let period =
+        (interval.end_frame - interval.start_frame) as f64 / interval.iterations.max(1) as f64;
+    let tail = observe.saturating_sub(interval.end_frame) as f64;
+    if period <= 0.0 || tail > params.max_tail_periods * period {
+        return fallback_prediction(&obs, horizon, params);
+    }
+    // Unroll enough iterations from the loop's end to cover the tail and the horizon.
+    let needed = tail + horizon as f64;
+    let iters = ((needed / period).ceil() as usize + 1).max(1);
+    let future = unrolled_motion(&analysis, l, interval, iters, params)?;
+    let start = best_phase(&obs, &future, period, horizon);
+    if future.n_frames() < start + horizon {
+        return fallback_prediction(&obs, horizon, params);
+    }
+    let track = join_offset(&obs, &future, start, horizon, period, params)?;
+    Ok(Prediction {
+        track,
+        used: Some(interval.clone()),
+        period: None,
+        self_match: None,
+    })
+}
+
+/// The prediction without a usable loop: the last observed period repeated
+/// ([`PeriodFallback`]), else the observed motion replayed from where its
+/// recent frames match ([`SelfMatchFallback`]), else the last pose held.
+fn fallback_prediction(obs: &Track, horizon: usize, params: &PredictParams) -> Result<Prediction> {
+    if let Some(fb) = &params.period_fallback {
+        if let Some((track, est)) = fb.unroll(obs, horizon)? {
+            return Ok(Prediction {
+                track,
+                used: None,
+                period: Some(est),
+                self_match: None,
+            });
+        }
+    }
+    if let Some(sm) = &params.self_match {
+        if let Some((track, m)) = sm.unroll(obs, horizon)? {
+            return Ok(Prediction {
+                track,
+                used: None,
+                period: None,
+                self_match: Some(m),
+            });
+        }
+    }
+    Ok(Prediction {
+        track: predict_constant(obs, horizon)?,
+        used: None,
+        period: None,
+        self_match: None,
+    })
+}
+
+/// The program's last loop and its repetitive interval.
+fn last_loop(analysis: &Analysis) -> Option<(&Loop, &RepetitiveInterval)> {
+    let (li, interval) = analysis
         .program
         .stmts
         .iter()
@@ -527,23 +559,24 @@ pub fn unroll(
         .filter(|(_, s)| matches!(s, Stmt::Loop(_)))
         .map(|(i, _)| i)
         .zip(analysis.intervals.iter())
-        .last()
-    else {
-        return constant();
-    };
-    let Stmt::Loop(l) = &analysis.program.stmts[li] else {
-        return constant();
-    };
-    let period =
-        (interval.end_frame - interval.start_frame) as f64 / interval.iterations.max(1) as f64;
-    let tail = observe.saturating_sub(interval.end_frame) as f64;
-    if period <= 0.0 || tail > params.max_tail_periods * period {
-        return constant();
+        .last()?;
+    match &analysis.program.stmts[li] {
+        Stmt::Loop(l) => Some((l, interval)),
+        _ => None,
     }
-    // Unroll enough iterations from the loop's end to cover the tail and the horizon.
-    let needed = tail + horizon as f64;
-    let iters = ((needed / period).ceil() as usize + 1).max(1);
-    let future = match params.source {
+}
+
+/// `iters` iterations of the loop from its end: the body at its means
+/// ([`UnrollSource::Mean`]) or the latest typical observed iteration
+/// repeated ([`UnrollSource::LastIteration`]).
+fn unrolled_motion(
+    analysis: &Analysis,
+    l: &Loop,
+    interval: &RepetitiveInterval,
+    iters: usize,
+    params: &PredictParams,
+) -> Result<Track> {
+    match params.source {
         UnrollSource::Mean => {
             let mut unrolled = l.clone();
             unrolled.iterations = iters;
@@ -553,7 +586,7 @@ pub fn unroll(
                 unit_scale: analysis.unit_scale,
                 ..params.analysis.synth.fit.clone()
             };
-            render(&prims, &analysis.program, &fit)?
+            render(&prims, &analysis.program, &fit)
         }
         UnrollSource::LastIteration => {
             let k = interval.body_size;
@@ -565,35 +598,43 @@ pub fn unroll(
                         && prims_start_frame(&analysis.prims, d.start) == interval.start_frame
                 })
                 .ok_or_else(|| AbstractError::NotFound("the unrolled loop's primitives".into()))?;
-            // The latest iteration whose length is typical (within 15 % of the median
-            // of the complete ones). The last iteration often absorbs the frames
-            // observed after the loop, so with three or more it is not a candidate.
-            let lens: Vec<usize> = interval
-                .boundaries
-                .windows(2)
-                .map(|w| w[1] - w[0])
-                .collect();
-            let candidates = if lens.len() >= 3 {
-                lens.len() - 1
-            } else {
-                lens.len()
-            };
-            let mut sorted = lens[..candidates].to_vec();
-            sorted.sort_unstable();
-            let median = sorted[(sorted.len() - 1) / 2] as f64;
-            let it = (0..candidates)
-                .rev()
-                .find(|&i| (lens[i] as f64 - median).abs() <= 0.15 * median)
-                .unwrap_or(candidates - 1);
-            let seg0 = det.start + it * k;
+            let seg0 = det.start + typical_iteration(interval) * k;
             let one = &analysis.concrete.segments[seg0..seg0 + k];
             let mut prog = analysis.concrete.clone();
             prog.segments = (0..iters + 2).flat_map(|_| one.iter().cloned()).collect();
-            prog.execute()?
+            Ok(prog.execute()?)
         }
+    }
+}
+
+/// The latest iteration whose length is typical (within 15 % of the median
+/// of the complete ones). The last iteration often absorbs the frames
+/// observed after the loop, so with three or more it is not a candidate.
+fn typical_iteration(interval: &RepetitiveInterval) -> usize {
+    let lens: Vec<usize> = interval
+        .boundaries
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .collect();
+    let candidates = if lens.len() >= 3 {
+        lens.len() - 1
+    } else {
+        lens.len()
     };
-    // Phase: the offset into the unrolled motion whose recent frames best match
-    // the last observed frames (mean joint distance over a window of a third of a period).
+    let mut sorted = lens[..candidates].to_vec();
+    sorted.sort_unstable();
+    let median = sorted[(sorted.len() - 1) / 2] as f64;
+    (0..candidates)
+        .rev()
+        .find(|&i| (lens[i] as f64 - median).abs() <= 0.15 * median)
+        .unwrap_or(candidates - 1)
+}
+
+/// Phase: the offset into the unrolled motion whose recent frames best match
+/// the last observed frames (mean joint distance over a window of a third of
+/// a period).
+fn best_phase(obs: &Track, future: &Track, period: f64, horizon: usize) -> usize {
+    let observe = obs.n_frames();
     let period_frames = (period.round() as usize).max(1);
     let m = (period_frames / 3).clamp(1, observe);
     let (_, j, d) = obs.positions().dim();
@@ -624,12 +665,22 @@ pub fn unroll(
             best = (cost, s0);
         }
     }
-    let start = best.1;
-    if future.n_frames() < start + horizon {
-        return constant();
-    }
+    best.1
+}
+
+/// The `horizon` frames of `future` from `start`, plus the offset between the
+/// last observed pose and the unrolled motion at that frame, fading out over
+/// `offset_decay_periods` periods.
+fn join_offset(
+    obs: &Track,
+    future: &Track,
+    start: usize,
+    horizon: usize,
+    period: f64,
+    params: &PredictParams,
+) -> Result<Track> {
+    let (observe, j, d) = obs.positions().dim();
     let mut pos = Array3::zeros((horizon, j, d));
-    // Offset between the last observed pose and the unrolled motion at that frame.
     let last = observe - 1;
     let anchor = start - 1;
     let decay = (params.offset_decay_periods * period).max(1.0);
@@ -650,10 +701,5 @@ pub fn unroll(
     let units = obs.units();
     let track = Track::new(pos, None, obs.fps(), units, obs.skeleton().clone())?;
     debug_assert!(units != Units::Unitless || d >= 1);
-    Ok(Prediction {
-        track,
-        used: Some(interval.clone()),
-        period: None,
-        self_match: None,
-    })
+    Ok(track)
 }
