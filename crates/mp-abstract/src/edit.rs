@@ -3,7 +3,7 @@
 
 use crate::error::{AbstractError, Result};
 use crate::exec::{check_output_frames, output_frames_bound, LoopReplay};
-use crate::model::AbstractProgram;
+use crate::model::{AbstractProgram, Loop};
 
 /// The largest iteration count [`set_iterations`] accepts, whatever the body:
 /// one million. The program's output must also fit
@@ -37,8 +37,8 @@ pub fn set_iterations(prog: &mut AbstractProgram, n: usize, iterations: usize) -
     Ok(())
 }
 
-/// Removes recorded iteration `i` of loop `n` (the loop runs one iteration fewer).
-pub fn drop_iteration(prog: &mut AbstractProgram, n: usize, i: usize) -> Result<()> {
+/// Loop `n`, when it has an iteration `i`.
+fn iteration_of(prog: &mut AbstractProgram, n: usize, i: usize) -> Result<&mut Loop> {
     let l = prog.loop_mut(n)?;
     if i >= l.iterations {
         return Err(AbstractError::NotFound(format!(
@@ -46,6 +46,12 @@ pub fn drop_iteration(prog: &mut AbstractProgram, n: usize, i: usize) -> Result<
             l.iterations
         )));
     }
+    Ok(l)
+}
+
+/// Removes recorded iteration `i` of loop `n` (the loop runs one iteration fewer).
+pub fn drop_iteration(prog: &mut AbstractProgram, n: usize, i: usize) -> Result<()> {
+    let l = iteration_of(prog, n, i)?;
     if i < l.observed.len() {
         l.observed.remove(i);
     }
@@ -55,13 +61,7 @@ pub fn drop_iteration(prog: &mut AbstractProgram, n: usize, i: usize) -> Result<
 
 /// Repeats recorded iteration `i` of loop `n` right after itself (one iteration more).
 pub fn repeat_iteration(prog: &mut AbstractProgram, n: usize, i: usize) -> Result<()> {
-    let l = prog.loop_mut(n)?;
-    if i >= l.iterations {
-        return Err(AbstractError::NotFound(format!(
-            "iteration {i} of loop {n} ({} iterations)",
-            l.iterations
-        )));
-    }
+    let l = iteration_of(prog, n, i)?;
     if i < l.observed.len() {
         let it = l.observed[i].clone();
         l.observed.insert(i + 1, it);

@@ -303,15 +303,8 @@ fn check_prims(prims: &[DetPrim]) -> Result<(usize, usize)> {
     Ok((joints, dim))
 }
 
-/// Score of primitives `start..end` with body size `k` (unit-free; infinite
-/// when a group has fewer than two members).
-pub fn window_score(
-    prims: &[DetPrim],
-    start: usize,
-    end: usize,
-    k: usize,
-    unit_scale: f64,
-) -> Result<f64> {
+/// The window of body size `k` over primitives `start..end`.
+fn filled_window(prims: &[DetPrim], start: usize, end: usize, k: usize) -> Result<Window> {
     let (joints, dim) = check_prims(prims)?;
     if k == 0 || start >= end || end > prims.len() {
         return Err(AbstractError::param(
@@ -323,7 +316,19 @@ pub fn window_score(
     for p in &prims[start..end] {
         w.push(p);
     }
-    Ok(w.score(unit_scale))
+    Ok(w)
+}
+
+/// Score of primitives `start..end` with body size `k` (unit-free; infinite
+/// when a group has fewer than two members).
+pub fn window_score(
+    prims: &[DetPrim],
+    start: usize,
+    end: usize,
+    k: usize,
+    unit_scale: f64,
+) -> Result<f64> {
+    Ok(filled_window(prims, start, end, k)?.score(unit_scale))
 }
 
 /// Score of primitives `start..end` with body size `k` in the mode `params`
@@ -336,18 +341,7 @@ pub fn window_score_with(
     k: usize,
     params: &LoopParams,
 ) -> Result<(f64, f64)> {
-    let (joints, dim) = check_prims(prims)?;
-    if k == 0 || start >= end || end > prims.len() {
-        return Err(AbstractError::param(
-            "window",
-            format!("{start}..{end} with body {k} is invalid"),
-        ));
-    }
-    let mut w = Window::new(k, joints, dim);
-    for p in &prims[start..end] {
-        w.push(p);
-    }
-    Ok(w.score_mode(params))
+    Ok(filled_window(prims, start, end, k)?.score_mode(params))
 }
 
 /// Path length of the mean loop body of the most moving joint, in track units.
