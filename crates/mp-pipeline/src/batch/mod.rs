@@ -31,13 +31,13 @@
 //! order in which items finish; [`BatchSummary::items`] is in input order.
 //!
 //! ```no_run
-//! use mp_pipeline::batch::{batch, batch_items, BatchParams};
+//! use mp_pipeline::{batch, batch_items, BatchParams};
 //! use mp_pipeline::{CancelToken, Silent};
 //! let items = batch_items("videos/")?;
 //! let params = BatchParams { jobs: 2, ..BatchParams::default() };
 //! let summary = batch(&items, "out/".as_ref(), &params, &Silent, &CancelToken::new())?;
 //! println!("{} ok, {} failed", summary.ok(), summary.failed());
-//! # Ok::<(), mp_pipeline::batch::BatchError>(())
+//! # Ok::<(), mp_pipeline::BatchError>(())
 //! ```
 
 use std::path::{Path, PathBuf};
