@@ -67,8 +67,13 @@ impl LiveView {
             out.push("nobody in view yet".into());
         }
         for (id, (reps, here)) in &self.people {
+            let who = if *id == mp_live::SCENE {
+                "the scene (nobody tracked)".to_string()
+            } else {
+                format!("person {id}")
+            };
             out.push(format!(
-                "person {id}: {reps} repetition{}{}",
+                "{who}: {reps} repetition{}{}",
                 if *reps == 1 { "" } else { "s" },
                 if *here { "" } else { " (left)" }
             ));

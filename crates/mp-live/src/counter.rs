@@ -26,6 +26,7 @@
 //!   offline count of the same frames whenever the earlier countings agreed
 //!   with the last one.
 
+use mp_abstract::Counts;
 use mp_geom::Skeleton;
 
 use crate::poses::Poses;
@@ -42,17 +43,84 @@ pub struct Repetition {
     pub end_frame: usize,
 }
 
+/// The repetitions of a window's countings turned into a running total (see
+/// the module docs): the part of the stream counted so far, the cycles seen
+/// and the repetitions reported.
+pub(crate) struct Tally {
+    confirm_periods: f64,
+    min_confidence: f64,
+    reported_until: usize,
+    cycles: f64,
+    total: usize,
+}
+
+impl Tally {
+    pub(crate) fn new(params: &LiveParams) -> Self {
+        Tally {
+            confirm_periods: params.confirm_periods,
+            min_confidence: params.min_confidence,
+            reported_until: 0,
+            cycles: 0.0,
+            total: 0,
+        }
+    }
+
+    /// Repetitions reported so far.
+    pub(crate) fn total(&self) -> usize {
+        self.total
+    }
+
+    /// The repetitions newly confirmed by `counts`, the counting of the
+    /// window of stream frames `first..=back` (every new one when `last`).
+    pub(crate) fn take(
+        &mut self,
+        counts: &Counts,
+        first: usize,
+        back: usize,
+        last: bool,
+    ) -> Vec<Repetition> {
+        let mut out = Vec::new();
+        // An unsure counting (the window holds too few cycles, or the
+        // period found is a harmonic) waits for a surer one.
+        if !last && counts.confidence < self.min_confidence {
+            return out;
+        }
+        for iv in &counts.intervals {
+            let margin = (self.confirm_periods * iv.period_frames as f64).ceil() as usize;
+            for w in iv.boundaries.windows(2) {
+                let (s, e) = (first + w[0], first + w[1]);
+                if e <= s || e <= self.reported_until {
+                    continue;
+                }
+                // `e` is one past the repetition's last frame.
+                if !last && e + margin > back + 1 {
+                    break;
+                }
+                let new = (e - s.max(self.reported_until)) as f64 / iv.period_frames.max(1) as f64;
+                self.reported_until = e;
+                self.cycles += new;
+                if self.cycles < self.total as f64 + 0.5 {
+                    continue;
+                }
+                self.total += 1;
+                out.push(Repetition {
+                    count: self.total,
+                    start_frame: s,
+                    end_frame: e,
+                });
+            }
+        }
+        out
+    }
+}
+
 /// See the module docs.
 pub struct OnlineCounter {
     max_frames: usize,
     every: usize,
-    confirm_periods: f64,
-    min_confidence: f64,
     rows: Poses,
     last_counted: Option<usize>,
-    reported_until: usize,
-    cycles: f64,
-    total: usize,
+    tally: Tally,
     longest: usize,
 }
 
@@ -64,20 +132,16 @@ impl OnlineCounter {
         OnlineCounter {
             max_frames: frames(params.window_s).max(4),
             every: frames(params.count_every_s),
-            confirm_periods: params.confirm_periods,
-            min_confidence: params.min_confidence,
             rows: Poses::new(fps, skeleton, params),
             last_counted: None,
-            reported_until: 0,
-            cycles: 0.0,
-            total: 0,
+            tally: Tally::new(params),
             longest: 0,
         }
     }
 
     /// Repetitions reported so far.
     pub fn total(&self) -> usize {
-        self.total
+        self.tally.total()
     }
 
     /// Stream frames in the window now.
@@ -147,38 +211,7 @@ impl OnlineCounter {
             return Ok(Vec::new());
         };
         let counts = mp_pipeline::count(&track, None, &params.analysis)?;
-        let mut out = Vec::new();
-        // An unsure counting (the window holds too few cycles, or the
-        // period found is a harmonic) waits for a surer one.
-        if !last && counts.confidence < self.min_confidence {
-            return Ok(out);
-        }
-        for iv in &counts.intervals {
-            let margin = (self.confirm_periods * iv.period_frames as f64).ceil() as usize;
-            for w in iv.boundaries.windows(2) {
-                let (s, e) = (first + w[0], first + w[1]);
-                if e <= s || e <= self.reported_until {
-                    continue;
-                }
-                // `e` is one past the repetition's last frame.
-                if !last && e + margin > back + 1 {
-                    break;
-                }
-                let new = (e - s.max(self.reported_until)) as f64 / iv.period_frames.max(1) as f64;
-                self.reported_until = e;
-                self.cycles += new;
-                if self.cycles < self.total as f64 + 0.5 {
-                    continue;
-                }
-                self.total += 1;
-                out.push(Repetition {
-                    count: self.total,
-                    start_frame: s,
-                    end_frame: e,
-                });
-            }
-        }
-        Ok(out)
+        Ok(self.tally.take(&counts, first, back, last))
     }
 }
 

@@ -39,6 +39,7 @@ mod poses;
 mod program;
 mod record;
 mod run;
+mod scene;
 mod source;
 
 use std::collections::BTreeMap;
@@ -48,7 +49,7 @@ use serde::Serialize;
 
 pub use counter::{OnlineCounter, Repetition};
 pub use program::{OnlineProgram, ProgramSegment};
-pub use run::run;
+pub use run::{run, SCENE};
 pub use source::{LiveSource, Reconnect, Slot};
 
 /// Why a live run stopped early.

@@ -13,10 +13,15 @@ use mp_pose::{BlazePoseParams, MultiPose, MultiPoseParams, VideoInfo};
 use crate::counter::{OnlineCounter, Repetition};
 use crate::program::{OnlineProgram, ProgramSegment};
 use crate::record::Recorder;
+use crate::scene::SceneCounter;
 use crate::source::{self, LiveSource, Taken};
 use crate::{
     Event, LiveError, LiveFrame, LiveParams, PersonPose, PersonTotal, Result, Sink, Summary,
 };
+
+/// The person id of the scene's repetitions (the people tracker numbers
+/// people from 1).
+pub const SCENE: u32 = 0;
 
 /// One track of the tracker: its person id once confirmed, its counter,
 /// its program (and its segments committed before it was confirmed).
@@ -71,6 +76,8 @@ struct State {
     stream: Option<((usize, usize), mp_geom::Skeleton, String)>,
     /// The output folder, once written.
     out: Option<String>,
+    /// The scene's counter, while nobody has been tracked.
+    scene: Option<SceneCounter>,
 }
 
 impl State {
@@ -152,6 +159,7 @@ pub fn run(
         recorder: None,
         stream: None,
         out: None,
+        scene: None,
     };
     let result = run_inner(source, params, cancel, &mut state, sink);
     if let Err(e) = &result {
@@ -256,6 +264,7 @@ fn analyse(
     let stride = params.analysis.pose.rate.stride(info.fps);
     let mut next_pose = 0usize;
     let mut shown: Vec<PersonPose> = Vec::new();
+    state.scene = Some(SceneCounter::new(info.fps, params));
     loop {
         if cancel.is_cancelled() {
             break;
@@ -290,6 +299,13 @@ fn analyse(
         let start = *started.get_or_insert((Instant::now(), frame.timestamp_s));
         state.t = frame.timestamp_s;
         state.frames += 1;
+        if let Some(scene) = &mut state.scene {
+            let whole = [0.0, 0.0, frame.width as f64, frame.height as f64];
+            let thumb = mp_pose::grey_thumbnail_region(&frame, scene.thumbnail_size(), whole)?;
+            scene.push(frame.index, thumb);
+            let reps = scene.update(params)?;
+            state.report(SCENE, reps, sink);
+        }
         if frame.index < next_pose {
             // Skipped by the pose rate: the people's poses on it are filled
             // from the frames around it; the page shows the last ones.
@@ -341,6 +357,8 @@ fn analyse(
                         .or_insert_with(|| Tracked::new(info, &skeleton, params));
                     tr.id = Some(id);
                     state.totals.entry(id).or_insert(0);
+                    // Someone is tracked: the scene's count stops where it is.
+                    state.scene = None;
                     sink.event(&Event::Enter {
                         person: id,
                         t: state.t,
@@ -416,7 +434,12 @@ fn analyse(
             last_status = (state.t, state.frames, now);
         }
     }
-    // The end: every person still in view is counted once more.
+    // The end: the scene, while nobody was tracked, and every person still
+    // in view are counted once more.
+    if let Some(mut scene) = state.scene.take() {
+        let reps = scene.finish(params)?;
+        state.report(SCENE, reps, sink);
+    }
     let mut rest = Vec::new();
     for (key, tr) in state.tracks.iter_mut() {
         if let Some(id) = tr.id {

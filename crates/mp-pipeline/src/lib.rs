@@ -51,7 +51,7 @@ mod report_people;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-pub use analysis::{analyse_track, concrete_program, count};
+pub use analysis::{analyse_track, concrete_program, count, count_frames};
 pub use batch::{
     batch, batch_items, BatchError, BatchObserver, BatchParams, BatchSummary, ItemReport,
     ItemStatus,

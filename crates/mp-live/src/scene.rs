@@ -1,0 +1,211 @@
+//! The scene's online repetition counter: the repetitions of the picture
+//! itself while nobody is tracked (a person the pose model does not find, a
+//! hula hoop whose dancer's head is out of the frame), as `mp run` counts a
+//! video where nobody is found.
+//!
+//! The grey thumbnails of the whole frame (`mp run`'s, 32 × 32 cells) sit
+//! in a sliding window of at most `window_s` seconds of stream frames, one
+//! per stream frame (a dropped frame repeats the one before), so memory is
+//! bounded whatever the stream's length. Every `count_every_s` seconds the
+//! window is counted from the frames alone ([`mp_pipeline::count_frames`]:
+//! `mp run`'s choice of the frame signal, then its counting) and its
+//! repetitions become a running total exactly as a person's do (see
+//! `counter`). The run reports them as person 0.
+
+use std::collections::VecDeque;
+
+use mp_geom::Track;
+use mp_pose::{thumbnail_track, DEFAULT_THUMBNAIL_SIZE};
+
+use crate::counter::{Repetition, Tally};
+use crate::{LiveParams, Result};
+
+/// See the module docs.
+pub(crate) struct SceneCounter {
+    fps: f64,
+    size: usize,
+    max_frames: usize,
+    every: usize,
+    /// The stream frame of the window's first thumbnail.
+    first: usize,
+    thumbs: VecDeque<Vec<f32>>,
+    last_counted: Option<usize>,
+    tally: Tally,
+}
+
+impl SceneCounter {
+    /// A counter of a stream at `fps` frames per second.
+    pub(crate) fn new(fps: f64, params: &LiveParams) -> Self {
+        let frames = |s: f64| (s * fps).round().max(1.0) as usize;
+        SceneCounter {
+            fps,
+            size: DEFAULT_THUMBNAIL_SIZE,
+            max_frames: frames(params.window_s).max(4),
+            every: frames(params.count_every_s),
+            first: 0,
+            thumbs: VecDeque::new(),
+            last_counted: None,
+            tally: Tally::new(params),
+        }
+    }
+
+    /// The side of the thumbnails it keeps.
+    pub(crate) fn thumbnail_size(&self) -> usize {
+        self.size
+    }
+
+    /// Repetitions reported so far.
+    pub(crate) fn total(&self) -> usize {
+        self.tally.total()
+    }
+
+    /// Stream frames in the window now.
+    pub(crate) fn window_len(&self) -> usize {
+        self.thumbs.len()
+    }
+
+    /// The most stream frames the window may hold.
+    pub(crate) fn max_window(&self) -> usize {
+        self.max_frames
+    }
+
+    /// Adds the thumbnail of stream frame `frame`; the frames dropped since
+    /// the previous one repeat it. A frame not after the last is ignored.
+    pub(crate) fn push(&mut self, frame: usize, thumb: Vec<f32>) {
+        if self.thumbs.is_empty() {
+            self.first = frame;
+        } else {
+            let next = self.first + self.thumbs.len();
+            if frame < next {
+                return;
+            }
+            if let Some(prev) = self.thumbs.back().cloned() {
+                // At most a window's worth of repeats: older ones are forgotten anyway.
+                for _ in next..frame.min(next + self.max_frames) {
+                    self.thumbs.push_back(prev.clone());
+                }
+                // After a gap longer than the window, the repeats end just before `frame`.
+                self.first = frame - self.thumbs.len();
+            }
+        }
+        self.thumbs.push_back(thumb);
+        while self.thumbs.len() > self.max_frames {
+            self.thumbs.pop_front();
+            self.first += 1;
+        }
+    }
+
+    /// The last stream frame in the window.
+    fn back(&self) -> Option<usize> {
+        (!self.thumbs.is_empty()).then(|| self.first + self.thumbs.len() - 1)
+    }
+
+    /// Counts the window when due and returns the repetitions newly confirmed.
+    pub(crate) fn update(&mut self, params: &LiveParams) -> Result<Vec<Repetition>> {
+        let due = match (self.back(), self.last_counted) {
+            (None, _) => false,
+            (Some(_), None) => true,
+            (Some(b), Some(c)) => b >= c + self.every,
+        };
+        if !due {
+            return Ok(Vec::new());
+        }
+        self.count_window(params, false)
+    }
+
+    /// Counts the window once more and reports every new repetition in it
+    /// (the end of the stream).
+    pub(crate) fn finish(&mut self, params: &LiveParams) -> Result<Vec<Repetition>> {
+        self.count_window(params, true)
+    }
+
+    fn count_window(&mut self, params: &LiveParams, last: bool) -> Result<Vec<Repetition>> {
+        let Some(back) = self.back() else {
+            return Ok(Vec::new());
+        };
+        self.last_counted = Some(back);
+        if self.thumbs.len() < 4 {
+            return Ok(Vec::new());
+        }
+        let counts = mp_pipeline::count_frames(self.track()?, &params.analysis)?;
+        Ok(self.tally.take(&counts, self.first, back, last))
+    }
+
+    /// The window as the unitless track of thumbnails `mp run` counts.
+    fn track(&self) -> Result<Track> {
+        let thumbs: Vec<Vec<f32>> = self.thumbs.iter().cloned().collect();
+        Ok(thumbnail_track(thumbs, self.size, self.fps)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 32 × 32 grey picture with a bright 6 × 6 square that swings left
+    /// and right with period `period` frames.
+    fn thumb(f: usize, period: f64) -> Vec<f32> {
+        let x0 = 13.0 + 10.0 * (2.0 * std::f64::consts::PI * f as f64 / period).sin();
+        let x0 = x0.round() as usize;
+        (0..32 * 32)
+            .map(|c| {
+                let (y, x) = (c / 32, c % 32);
+                if (13..19).contains(&y) && (x0..x0 + 6).contains(&x) {
+                    220.0
+                } else {
+                    40.0
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn counts_the_picture_as_mp_run_counts_its_frames() {
+        let (fps, period, frames) = (30.0, 30.0, 300);
+        let params = LiveParams::default();
+        let mut s = SceneCounter::new(fps, &params);
+        let mut reps = Vec::new();
+        for f in 0..frames {
+            s.push(f, thumb(f, period));
+            reps.extend(s.update(&params).unwrap());
+            assert!(s.window_len() <= s.max_window());
+        }
+        reps.extend(s.finish(&params).unwrap());
+        let all: Vec<Vec<f32>> = (0..frames).map(|f| thumb(f, period)).collect();
+        let whole = thumbnail_track(all, DEFAULT_THUMBNAIL_SIZE, fps).unwrap();
+        let offline = mp_pipeline::count_frames(whole, &params.analysis)
+            .unwrap()
+            .total;
+        assert_eq!(offline, 10);
+        assert!(
+            reps.len().abs_diff(offline) <= 1,
+            "{} for {offline}: {reps:?}",
+            reps.len()
+        );
+        for (k, r) in reps.iter().enumerate() {
+            assert_eq!(r.count, k + 1);
+            assert!(r.end_frame > r.start_frame);
+        }
+        assert_eq!(s.total(), reps.len());
+    }
+
+    #[test]
+    fn dropped_frames_repeat_the_last_picture_and_the_window_stays_bounded() {
+        let params = LiveParams {
+            window_s: 2.0,
+            ..LiveParams::default()
+        };
+        let mut s = SceneCounter::new(30.0, &params);
+        s.push(0, thumb(0, 30.0));
+        s.push(5, thumb(5, 30.0));
+        assert_eq!(s.window_len(), 6);
+        assert_eq!(s.back(), Some(5));
+        // A frame not after the last is ignored.
+        s.push(3, thumb(3, 30.0));
+        assert_eq!(s.window_len(), 6);
+        // A gap longer than the window: the window ends at the new frame.
+        s.push(1000, thumb(1000, 30.0));
+        assert_eq!(s.window_len(), s.max_window());
+        assert_eq!(s.back(), Some(1000));
+    }
+}
