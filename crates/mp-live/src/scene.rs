@@ -55,16 +55,19 @@ impl SceneCounter {
     }
 
     /// Repetitions reported so far.
+    #[cfg(test)]
     pub(crate) fn total(&self) -> usize {
         self.tally.total()
     }
 
     /// Stream frames in the window now.
+    #[cfg(test)]
     pub(crate) fn window_len(&self) -> usize {
         self.thumbs.len()
     }
 
     /// The most stream frames the window may hold.
+    #[cfg(test)]
     pub(crate) fn max_window(&self) -> usize {
         self.max_frames
     }
