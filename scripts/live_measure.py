@@ -61,7 +61,12 @@ def main():
         ff.wait()
         summary = events[-1][1]
         totals = {p["id"]: p["total_repetitions"] for p in summary["people"]}
-        main_id = max(totals, key=totals.get) if totals else None
+        # The stream's count: the person counted most; the scene (person 0)
+        # when no person's repetitions were counted.
+        people = {k: v for k, v in totals.items() if k != 0}
+        main_id = max(people, key=people.get) if people else None
+        if main_id is None or people[main_id] == 0:
+            main_id = 0 if totals.get(0) else main_id
         reps = [w for w, e in events if e["type"] == "rep" and e["person"] == main_id]
         delays = sorted(w - end / fps for w, end in zip(reps, labels))
         med = delays[len(delays) // 2] if delays else float("nan")

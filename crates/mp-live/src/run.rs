@@ -76,7 +76,7 @@ struct State {
     stream: Option<((usize, usize), mp_geom::Skeleton, String)>,
     /// The output folder, once written.
     out: Option<String>,
-    /// The scene's counter, while nobody has been tracked.
+    /// The scene's counter, until a person's first repetition.
     scene: Option<SceneCounter>,
 }
 
@@ -122,6 +122,10 @@ impl State {
     }
 
     fn report(&mut self, id: u32, reps: Vec<Repetition>, sink: &mut dyn Sink) {
+        if id != SCENE && !reps.is_empty() {
+            // A person's repetitions are counted: the scene's count stops where it is.
+            self.scene = None;
+        }
         for r in reps {
             self.totals.insert(id, r.count);
             sink.event(&Event::Rep {
@@ -357,8 +361,6 @@ fn analyse(
                         .or_insert_with(|| Tracked::new(info, &skeleton, params));
                     tr.id = Some(id);
                     state.totals.entry(id).or_insert(0);
-                    // Someone is tracked: the scene's count stops where it is.
-                    state.scene = None;
                     sink.event(&Event::Enter {
                         person: id,
                         t: state.t,
