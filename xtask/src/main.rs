@@ -9,7 +9,7 @@ mod models;
 mod setup;
 
 use mp_eval::{
-    concrete, count, forecast, grammar, inbetween, loops, people, pose, pose_rate, refine,
+    concrete, count, forecast, grammar, inbetween, live, loops, people, pose, pose_rate, refine,
     train_forecast, train_refine, video,
 };
 
@@ -45,6 +45,8 @@ enum Eval {
     Count(count::EvalCountArgs),
     /// Repetition detection, counting and prediction by unrolling (CMU mocap6, AIST++, Penn Action, QUVA).
     Loops(loops::EvalLoopsArgs),
+    /// The online counter of `mp live` on the synthetic repetitions: final count and delay per setting.
+    Live(live::EvalLiveArgs),
     /// Several people in one video: composites of one-person videos side by side and crossing.
     People(people::EvalPeopleArgs),
     /// Motion grammars: symbols (purity, NMI), grammars (rules, DL), synthesis vs the FSM baseline.
@@ -74,6 +76,7 @@ fn main() {
             Eval::Concrete(a) => concrete::run(&a),
             Eval::Count(a) => count::run(&a),
             Eval::Loops(a) => loops::run(&a),
+            Eval::Live(a) => live::run(&a),
             Eval::People(a) => people::run(&a),
             Eval::Grammar(a) => grammar::run(&a),
             Eval::Pose(a) => pose::run(&a),

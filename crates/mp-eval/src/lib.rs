@@ -39,6 +39,7 @@ pub mod forecast;
 pub mod grammar;
 pub mod inbetween;
 pub mod intervals;
+pub mod live;
 pub mod loops;
 pub mod people;
 pub mod pose;
