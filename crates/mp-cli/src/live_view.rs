@@ -193,4 +193,17 @@ mod tests {
             "\x1b[2F\x1b[2K    1.50 s\n\x1b[2Kperson 2: 0 repetitions\n\x1b[2Kperson 4: 0 repetitions\n"
         );
     }
+
+    #[test]
+    fn the_scene_is_named_as_such() {
+        let mut v = LiveView::default();
+        v.update(&Event::Rep {
+            person: mp_live::SCENE,
+            count: 2,
+            start: 1.0,
+            end: 2.0,
+            t: 2.5,
+        });
+        assert_eq!(v.lines()[1], "the scene (nobody tracked): 2 repetitions");
+    }
 }

@@ -192,3 +192,43 @@ pub fn run(a: &EvalLiveArgs) -> anyhow::Result<()> {
     eprintln!("written to {}", a.out.display());
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn figures_pool_the_delays_of_the_repeating_cases() {
+        let fed = [
+            Fed {
+                truth: 3,
+                total: 3,
+                delays: vec![0.5, 1.0, 2.0],
+                at_end: 1,
+            },
+            Fed {
+                truth: 4,
+                total: 2,
+                delays: vec![0.25, -0.5],
+                at_end: 0,
+            },
+            Fed {
+                truth: 0,
+                total: 0,
+                delays: vec![],
+                at_end: 0,
+            },
+        ];
+        let f = figures(&fed);
+        assert_eq!(f["cases"], 2);
+        assert!((f["mae"].as_f64().unwrap() - 0.25).abs() < 1e-12);
+        assert!((f["obo"].as_f64().unwrap() - 0.5).abs() < 1e-12);
+        // Delays sorted: −0.5, 0.25, 0.5, 1.0, 2.0.
+        assert_eq!(f["delay_median_s"], 0.5);
+        assert_eq!(f["delay_p90_s"], 2.0);
+        assert_eq!(f["repetitions_reached"], 5);
+        assert!((f["reported_at_end_share"].as_f64().unwrap() - 0.2).abs() < 1e-12);
+        assert_eq!(f["truth_0_counted_0"], 1);
+        assert!(quantile(&[], 0.5).is_nan());
+    }
+}
