@@ -74,13 +74,4 @@ pub use edit::{drop_iteration, repeat_iteration};
 pub use loops::window_score;
 
 #[cfg(test)]
-use {
-    edit::MAX_ITERATIONS,
-    exec::{flatten_sampled, output_frames_bound},
-    loops::{window_score_with, MAX_BODY, MAX_WINDOW},
-    repetition::selected_joints,
-    synth::{fit_loop, synthesize},
-};
-
-#[cfg(test)]
 mod tests;

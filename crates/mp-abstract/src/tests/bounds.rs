@@ -2,11 +2,14 @@
 //! naming the parameter, never an allocation failure.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
+use crate::edit::MAX_ITERATIONS;
+use crate::exec::output_frames_bound;
+use crate::loops::{MAX_BODY, MAX_WINDOW};
+use crate::set_iterations;
 use crate::AbstractError;
-use crate::{execute, output_frames_bound, sample, ExecParams, LoopReplay};
-use crate::{set_iterations, MAX_ITERATIONS};
+use crate::LoopParams;
+use crate::{execute, sample, ExecParams, LoopReplay};
 use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-use crate::{LoopParams, MAX_BODY, MAX_WINDOW};
 use mp_concrete::max_output_frames;
 use mp_concrete::ConcreteError;
 

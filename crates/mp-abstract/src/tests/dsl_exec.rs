@@ -1,5 +1,5 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
-use crate::synthesize;
+use crate::synth::synthesize;
 use crate::AbstractError;
 use crate::LoopParams;
 use crate::{drop_iteration, repeat_iteration, set_iterations};
@@ -203,7 +203,7 @@ fn stochastic_execution_is_seeded_and_within_support() {
     assert_ne!(a.positions(), c.positions());
     // Every sampled start point lies within 6 standard deviations of its Gaussian.
     let Stmt::Loop(l) = &p.stmts[0] else { panic!() };
-    let flat = crate::flatten_sampled(&p, 42, 1e-9).unwrap();
+    let flat = crate::exec::flatten_sampled(&p, 42, 1e-9).unwrap();
     for (i, d) in flat.iter().enumerate() {
         let b = &l.body[i % l.body.len()];
         assert!(b.duration.counts.contains_key(&d.duration));

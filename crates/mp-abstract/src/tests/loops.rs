@@ -1,8 +1,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
+use crate::synth::{fit_loop, synthesize};
 use crate::AbstractError;
 use crate::DetPrim;
 use crate::{detect_loops, window_score, LoopParams};
-use crate::{fit_loop, synthesize};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -228,8 +228,8 @@ fn relative_score_is_scale_free() {
             (lead, 3, 8)
         );
     }
-    let (a, _) = crate::window_score_with(&prims, lead, lead + 12, 3, &params).unwrap();
-    let (b, _) = crate::window_score_with(&scaled, lead, lead + 12, 3, &params).unwrap();
+    let (a, _) = crate::loops::window_score_with(&prims, lead, lead + 12, 3, &params).unwrap();
+    let (b, _) = crate::loops::window_score_with(&scaled, lead, lead + 12, 3, &params).unwrap();
     assert!((a - b).abs() < 1e-9 && a < 0.3, "{a} {b}");
     assert!(detect_loops(
         &prims,

@@ -246,10 +246,13 @@ fn tracks_without_valid_joints_have_no_repetition() {
 #[test]
 fn limb_selection_picks_the_coco_limbs() {
     let b = Skeleton::blazepose33();
-    let limbs = crate::selected_joints(&b, JointSelection::Limbs);
+    let limbs = crate::repetition::selected_joints(&b, JointSelection::Limbs);
     assert_eq!(limbs, vec![11, 12, 13, 14, 15, 16, 23, 24, 25, 26, 27, 28]);
     let g = Skeleton::generic(5);
-    assert_eq!(crate::selected_joints(&g, JointSelection::Limbs).len(), 5);
+    assert_eq!(
+        crate::repetition::selected_joints(&g, JointSelection::Limbs).len(),
+        5
+    );
 }
 
 #[test]
