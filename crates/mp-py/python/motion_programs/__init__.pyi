@@ -334,7 +334,8 @@ def live(
 ) -> Live:
     """Live analysis of a video file, or of a stream on standard input ("-"), as `mp live SOURCE
     --json`: yields its events as dicts with the keys and values of the JSON lines (`type`: "enter",
-    "rep", "leave", "status", "error", "summary"; the summary always last). Options as `mp live`'s:
+    "rep", "leave", "status", "error", "summary"; the summary always last; person 0 is the scene,
+    counted from the picture until a person's first repetition). Options as `mp live`'s:
     `realtime` reads a file at its own speed; `duration` stops after that many seconds of stream
     time; `window` (default 20) the seconds of each person's recent motion counted; `stall_timeout`
     (default 10) the seconds the stream may go without a frame (None: the defaults of `mp live`);
