@@ -50,7 +50,7 @@ use serde::Serialize;
 pub use counter::{OnlineCounter, Repetition};
 pub use program::{OnlineProgram, ProgramSegment};
 pub use run::{run, SCENE};
-pub use source::{LiveSource, Reconnect, Slot};
+pub use source::{LiveSource, Reconnect};
 
 /// Why a live run stopped early.
 #[derive(Debug, thiserror::Error)]

@@ -19,7 +19,7 @@
 //! [`plan::Plan`] of source frames (copied or blended) rendered with a
 //! bounded cache of the frames still to be used, and every video is written
 //! to a temporary file in the output's folder, then renamed
-//! ([`plan::AtomicVideo`]).
+//! (`AtomicVideo` in `plan.rs`).
 //!
 //! ```no_run
 //! use mp_video::{predict_video, VideoPredictMethod, VideoPredictParams};
@@ -46,12 +46,12 @@ mod motion;
 mod plan;
 mod predict;
 
-pub use edit::{edit_video, plan_edit, EditChange, EditParams, EditReport};
+pub use edit::{edit_video, EditChange, EditParams, EditReport};
 pub use error::{Result, VideoError};
-pub use interpolate::{interpolate_video, InterpMethod, InterpParams, InterpReport, Warp, FACTORS};
+pub use interpolate::{interpolate_video, InterpMethod, InterpParams, InterpReport, Warp};
 
 pub use motion::{analyse_video, VideoMotion};
-pub use plan::{AtomicVideo, Plan, PlanFrame};
+pub use plan::{Plan, PlanFrame};
 pub use predict::{
     plan_prediction, predict_video, PredictReport, VideoPredictMethod, VideoPredictParams,
 };

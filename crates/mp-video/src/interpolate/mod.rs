@@ -246,7 +246,7 @@ pub struct InterpReport {
     pub output: Option<PathBuf>,
 }
 
-/// Errors unless `factor` is one of [`FACTORS`].
+/// Errors unless `factor` is 2, 4 or 8.
 pub fn check_factor(factor: usize) -> Result<()> {
     if FACTORS.contains(&factor) {
         Ok(())
