@@ -9,8 +9,8 @@
 //! * [`synthesize`]: the program of a track by dynamic-programming
 //!   segmentation (`dp`) over primitive fits from [`mp_geom::fit_best`].
 //! * [`Program::execute`] and friends: rendering at any time resolution.
-//! * [`program_stats`], [`interpolation_experiment`]: the measurements of
-//!   the paper's §4.1 and §4.2.
+//! * [`program_stats`]: the measurements of the paper's §4.1 (the
+//!   interpolation experiment of §4.2 is in the evaluations, `mp-eval`).
 //! * [`InBetweenPoses`]: the pose between two frames of a track, guided by
 //!   its program (what `mp interpolate` warps in-between frames to).
 //!
@@ -36,7 +36,6 @@ mod dsl;
 mod error;
 mod exec;
 mod inbetween;
-mod interp;
 mod program;
 mod search;
 mod smooth;
@@ -48,7 +47,6 @@ pub use dp::{segment_brute_force, segment_dp, CostTable, Segmentation};
 pub use error::{ConcreteError, ParseError, Result};
 pub use exec::{ExecParams, Transition};
 pub use inbetween::{InBetween, InBetweenPoses, Tangents};
-pub use interp::{interpolation_experiment, InterpParams, InterpolationResult};
 pub use program::{Program, Segment};
 pub use search::SearchStats;
 pub use smooth::{max_boundary_gap, Continuity, RefitNorm};

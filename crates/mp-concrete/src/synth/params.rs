@@ -141,11 +141,9 @@ impl Lambda {
     }
 
     /// The same rule with its window and clamp mapped by `f` (other rules
-    /// unchanged).
-    pub(crate) fn map_window_clamp(
-        self,
-        f: impl FnOnce(usize, f64, f64) -> (usize, f64, f64),
-    ) -> Self {
+    /// unchanged): e.g. the rule for a track subsampled ×k, whose window is
+    /// k times fewer frames.
+    pub fn map_window_clamp(self, f: impl FnOnce(usize, f64, f64) -> (usize, f64, f64)) -> Self {
         match self {
             Lambda::Adaptive {
                 window_frames,

@@ -2,9 +2,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use crate::{
-    interpolation_experiment, program_stats, synthesize, synthesize_detailed, ConcreteError,
-    ExecParams, InterpParams, Lambda, Program, Scale, Segment, SynthParams, Transition,
-    UnobservedJoints,
+    program_stats, synthesize, synthesize_detailed, ConcreteError, ExecParams, Lambda, Program,
+    Scale, Segment, SynthParams, Transition, UnobservedJoints,
 };
 use mp_geom::{Primitive, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
@@ -381,40 +380,6 @@ fn execution_at_other_rates() {
         s.slice(ndarray::s![0, .., ..]),
         native.positions().slice(ndarray::s![15, .., ..])
     );
-}
-
-#[test]
-fn interpolation_beats_linear_on_circles() {
-    // A joint going round a circle: the program interpolates along the arc.
-    let p = Program {
-        fps: 30.0,
-        units: Units::Pixels,
-        dims: 2,
-        skeleton: "generic".into(),
-        joints: vec!["a".into()],
-        continuity: crate::Continuity::None,
-        segments: vec![Segment {
-            duration_frames: 41,
-            primitives: vec![arc(200.0, 200.0, 80.0, 0.0, 4.0)],
-        }],
-    };
-    let track = p.execute().unwrap();
-    for step in [2, 4, 8] {
-        let ip = InterpParams {
-            synth: params_px(),
-            ..InterpParams::new(step)
-        };
-        let r = interpolation_experiment(&track, &ip).unwrap();
-        assert_eq!(r.n_scored, 40 - 40 / step);
-        assert!(r.kd_program < 1e-6, "×{step}: {r:?}");
-        assert!(r.kd_linear > 0.01, "×{step}: {r:?}");
-        // The in-between poses (a spline through the kept poses) follow the
-        // arc too, except over the first and last kept intervals, where a
-        // neighbour is missing and the velocity is the chord's.
-        assert!(r.kd_inbetween < 0.6 * r.kd_linear, "×{step}: {r:?}");
-    }
-    assert!(interpolation_experiment(&track, &InterpParams::new(1)).is_err());
-    assert!(interpolation_experiment(&track, &InterpParams::new(41)).is_err());
 }
 
 fn track_of(t: usize, j: usize) -> Track {

@@ -27,6 +27,7 @@
 //! modes share (the product's parameters, the fit, means).
 
 mod continuity;
+pub mod interpolation;
 mod sweep;
 
 use crate::stats::mean;
@@ -38,10 +39,8 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use mp_concrete::{
-    interpolation_experiment, program_stats, Continuity, InterpParams, Program, RefitNorm,
-    Transition,
-};
+use interpolation::{interpolation_experiment, InterpParams};
+use mp_concrete::{program_stats, Continuity, Program, RefitNorm, Transition};
 use mp_geom::PennAction;
 use rayon::prelude::*;
 use serde_json::{json, Value};
