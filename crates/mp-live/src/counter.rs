@@ -43,10 +43,15 @@ pub struct Repetition {
     pub end_frame: usize,
 }
 
-/// The repetitions of a window's countings turned into a running total (see
-/// the module docs): the part of the stream counted so far, the cycles seen
-/// and the repetitions reported.
+/// A window's countings and their repetitions turned into a running total
+/// (see the module docs): the window's size and when it is next counted, the
+/// part of the stream counted so far, the cycles seen and the repetitions
+/// reported.
 pub(crate) struct Tally {
+    /// The most stream frames the window may hold.
+    pub(crate) max_frames: usize,
+    every: usize,
+    last_counted: Option<usize>,
     confirm_periods: f64,
     min_confidence: f64,
     reported_until: usize,
@@ -55,8 +60,13 @@ pub(crate) struct Tally {
 }
 
 impl Tally {
-    pub(crate) fn new(params: &LiveParams) -> Self {
+    /// The tally of a window of a stream at `fps` frames per second.
+    pub(crate) fn new(fps: f64, params: &LiveParams) -> Self {
+        let frames = |s: f64| (s * fps).round().max(1.0) as usize;
         Tally {
+            max_frames: frames(params.window_s).max(4),
+            every: frames(params.count_every_s),
+            last_counted: None,
             confirm_periods: params.confirm_periods,
             min_confidence: params.min_confidence,
             reported_until: 0,
@@ -68,6 +78,20 @@ impl Tally {
     /// Repetitions reported so far.
     pub(crate) fn total(&self) -> usize {
         self.total
+    }
+
+    /// Whether a window ending at stream frame `back` is due to be counted.
+    pub(crate) fn due(&self, back: Option<usize>) -> bool {
+        match (back, self.last_counted) {
+            (None, _) => false,
+            (Some(_), None) => true,
+            (Some(b), Some(c)) => b >= c + self.every,
+        }
+    }
+
+    /// Records that the window ending at stream frame `back` is being counted.
+    pub(crate) fn counting(&mut self, back: usize) {
+        self.last_counted = Some(back);
     }
 
     /// The repetitions newly confirmed by `counts`, the counting of the
@@ -116,10 +140,7 @@ impl Tally {
 
 /// See the module docs.
 pub struct OnlineCounter {
-    max_frames: usize,
-    every: usize,
     rows: Poses,
-    last_counted: Option<usize>,
     tally: Tally,
     longest: usize,
 }
@@ -128,13 +149,9 @@ impl OnlineCounter {
     /// A counter of poses in `skeleton` at `fps` frames per second; they are
     /// counted in COCO-17 unless `params.analysis.pose.all_joints` (as `mp run`).
     pub fn new(fps: f64, skeleton: Skeleton, params: &LiveParams) -> Self {
-        let frames = |s: f64| (s * fps).round().max(1.0) as usize;
         OnlineCounter {
-            max_frames: frames(params.window_s).max(4),
-            every: frames(params.count_every_s),
             rows: Poses::new(fps, skeleton, params),
-            last_counted: None,
-            tally: Tally::new(params),
+            tally: Tally::new(fps, params),
             longest: 0,
         }
     }
@@ -156,7 +173,7 @@ impl OnlineCounter {
 
     /// The most stream frames the window may hold.
     pub fn max_window(&self) -> usize {
-        self.max_frames
+        self.tally.max_frames
     }
 
     /// Adds the pose of stream frame `frame` (after the previous one).
@@ -166,7 +183,7 @@ impl OnlineCounter {
         self.rows.push(frame, points, conf);
         if let Some(last) = self.rows.last_frame() {
             self.rows
-                .forget_before((last + 1).saturating_sub(self.max_frames));
+                .forget_before((last + 1).saturating_sub(self.tally.max_frames));
         }
         self.longest = self.longest.max(self.rows.len());
     }
@@ -178,11 +195,7 @@ impl OnlineCounter {
 
     /// Whether the window is due to be counted again.
     pub fn due(&self) -> bool {
-        match (self.rows.last_frame(), self.last_counted) {
-            (None, _) => false,
-            (Some(_), None) => true,
-            (Some(b), Some(c)) => b >= c + self.every,
-        }
+        self.tally.due(self.rows.last_frame())
     }
 
     /// Counts the window when due and returns the repetitions newly confirmed.
@@ -203,7 +216,7 @@ impl OnlineCounter {
         let Some((first, back)) = self.rows.span() else {
             return Ok(Vec::new());
         };
-        self.last_counted = Some(back);
+        self.tally.counting(back);
         if back - first + 1 < 4 {
             return Ok(Vec::new());
         }

@@ -3,7 +3,8 @@
 //! hula hoop whose dancer's head is out of the frame), as `mp run` counts a
 //! video where nobody is found.
 //!
-//! The grey thumbnails of the whole frame (`mp run`'s, 32 × 32 cells) sit
+//! The grey thumbnails of the whole frame (`mp run`'s: 32 × 32 cells by
+//! default, `PoseParams::thumbnail_size`) sit
 //! in a sliding window of at most `window_s` seconds of stream frames, one
 //! per stream frame (a dropped frame repeats the one before), so memory is
 //! bounded whatever the stream's length. Every `count_every_s` seconds the
@@ -15,7 +16,7 @@
 use std::collections::VecDeque;
 
 use mp_geom::Track;
-use mp_pose::{thumbnail_track, DEFAULT_THUMBNAIL_SIZE};
+use mp_pose::thumbnail_track;
 
 use crate::counter::{Repetition, Tally};
 use crate::{LiveParams, Result};
@@ -24,28 +25,21 @@ use crate::{LiveParams, Result};
 pub(crate) struct SceneCounter {
     fps: f64,
     size: usize,
-    max_frames: usize,
-    every: usize,
     /// The stream frame of the window's first thumbnail.
     first: usize,
     thumbs: VecDeque<Vec<f32>>,
-    last_counted: Option<usize>,
     tally: Tally,
 }
 
 impl SceneCounter {
     /// A counter of a stream at `fps` frames per second.
     pub(crate) fn new(fps: f64, params: &LiveParams) -> Self {
-        let frames = |s: f64| (s * fps).round().max(1.0) as usize;
         SceneCounter {
             fps,
-            size: DEFAULT_THUMBNAIL_SIZE,
-            max_frames: frames(params.window_s).max(4),
-            every: frames(params.count_every_s),
+            size: params.analysis.pose.thumbnail_size,
             first: 0,
             thumbs: VecDeque::new(),
-            last_counted: None,
-            tally: Tally::new(params),
+            tally: Tally::new(fps, params),
         }
     }
 
@@ -69,7 +63,7 @@ impl SceneCounter {
     /// The most stream frames the window may hold.
     #[cfg(test)]
     pub(crate) fn max_window(&self) -> usize {
-        self.max_frames
+        self.tally.max_frames
     }
 
     /// Adds the thumbnail of stream frame `frame`; the frames dropped since
@@ -84,7 +78,7 @@ impl SceneCounter {
             }
             if let Some(prev) = self.thumbs.back().cloned() {
                 // At most a window's worth of repeats: older ones are forgotten anyway.
-                for _ in next..frame.min(next + self.max_frames) {
+                for _ in next..frame.min(next + self.tally.max_frames) {
                     self.thumbs.push_back(prev.clone());
                 }
                 // After a gap longer than the window, the repeats end just before `frame`.
@@ -92,7 +86,7 @@ impl SceneCounter {
             }
         }
         self.thumbs.push_back(thumb);
-        while self.thumbs.len() > self.max_frames {
+        while self.thumbs.len() > self.tally.max_frames {
             self.thumbs.pop_front();
             self.first += 1;
         }
@@ -105,12 +99,7 @@ impl SceneCounter {
 
     /// Counts the window when due and returns the repetitions newly confirmed.
     pub(crate) fn update(&mut self, params: &LiveParams) -> Result<Vec<Repetition>> {
-        let due = match (self.back(), self.last_counted) {
-            (None, _) => false,
-            (Some(_), None) => true,
-            (Some(b), Some(c)) => b >= c + self.every,
-        };
-        if !due {
+        if !self.tally.due(self.back()) {
             return Ok(Vec::new());
         }
         self.count_window(params, false)
@@ -126,7 +115,7 @@ impl SceneCounter {
         let Some(back) = self.back() else {
             return Ok(Vec::new());
         };
-        self.last_counted = Some(back);
+        self.tally.counting(back);
         if self.thumbs.len() < 4 {
             return Ok(Vec::new());
         }
@@ -144,6 +133,7 @@ impl SceneCounter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mp_pose::DEFAULT_THUMBNAIL_SIZE;
 
     /// A 32 × 32 grey picture with a bright 6 × 6 square that swings left
     /// and right with period `period` frames.
