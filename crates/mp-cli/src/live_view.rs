@@ -68,7 +68,7 @@ impl LiveView {
         }
         for (id, (reps, here)) in &self.people {
             let who = if *id == mp_live::SCENE {
-                "the scene (nobody tracked)".to_string()
+                "the scene (no person counted)".to_string()
             } else {
                 format!("person {id}")
             };
@@ -204,6 +204,6 @@ mod tests {
             end: 2.0,
             t: 2.5,
         });
-        assert_eq!(v.lines()[1], "the scene (nobody tracked): 2 repetitions");
+        assert_eq!(v.lines()[1], "the scene (no person counted): 2 repetitions");
     }
 }

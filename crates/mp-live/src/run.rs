@@ -1,7 +1,8 @@
 //! The live loop: frames from the [`crate::source`], every person tracked
 //! with BlazePose and the people tracker (`mp run`'s), each confirmed
-//! person's repetitions counted online (`counter`) and, with
-//! `LiveParams::program`, their concrete program ([`crate::program`]).
+//! person's repetitions counted online (`counter`), the picture's
+//! (`scene`) until a person's are, and, with `LiveParams::program`, their
+//! concrete program ([`crate::program`]).
 
 use std::collections::{BTreeMap, HashMap};
 use std::time::{Duration, Instant};
@@ -436,12 +437,8 @@ fn analyse(
             last_status = (state.t, state.frames, now);
         }
     }
-    // The end: the scene, while nobody was tracked, and every person still
-    // in view are counted once more.
-    if let Some(mut scene) = state.scene.take() {
-        let reps = scene.finish(params)?;
-        state.report(SCENE, reps, sink);
-    }
+    // The end: every person still in view is counted once more, then the
+    // scene, when still no person's repetition was counted.
     let mut rest = Vec::new();
     for (key, tr) in state.tracks.iter_mut() {
         if let Some(id) = tr.id {
@@ -459,6 +456,10 @@ fn analyse(
         if let Some(tr) = state.tracks.get(&key) {
             state.report_segments(id, tr, segs, sink);
         }
+    }
+    if let Some(mut scene) = state.scene.take() {
+        let reps = scene.finish(params)?;
+        state.report(SCENE, reps, sink);
     }
     Ok(())
 }

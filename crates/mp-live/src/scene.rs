@@ -1,11 +1,10 @@
 //! The scene's online repetition counter: the repetitions of the picture
-//! itself while nobody is tracked (a person the pose model does not find, a
-//! hula hoop whose dancer's head is out of the frame), as `mp run` counts a
-//! video where nobody is found.
+//! itself until a person's first repetition is counted (a person the pose
+//! model does not find, a hula hoop whose dancer's head is out of the
+//! frame), as `mp run` counts a video where nobody is found.
 //!
 //! The grey thumbnails of the whole frame (`mp run`'s: 32 × 32 cells by
-//! default, `PoseParams::thumbnail_size`) sit
-//! in a sliding window of at most `window_s` seconds of stream frames, one
+//! default, `PoseParams::thumbnail_size`) sit in a sliding window of at most `window_s` seconds of stream frames, one
 //! per stream frame (a dropped frame repeats the one before), so memory is
 //! bounded whatever the stream's length. Every `count_every_s` seconds the
 //! window is counted from the frames alone ([`mp_pipeline::count_frames`]:

@@ -71,7 +71,7 @@ pub fn count(track: &Track, thumbnails: Option<&Track>, params: &Params) -> Resu
 /// The repetitions of a recording counted from its frames alone (nobody in
 /// it): the frame signal chosen from the whole-frame thumbnails `whole` as
 /// `mp run` chooses it (`choose_frame_signal`), counted as `mp run` counts
-/// frames. `mp live` counts the scene with it while nobody is tracked.
+/// frames. `mp live` counts the scene with it until a person's repetitions are.
 pub fn count_frames(whole: Track, params: &Params) -> Result<Counts> {
     params.validate()?;
     let (signal, _) = crate::frame_signal::choose_frame_signal(whole, None, params)?;
