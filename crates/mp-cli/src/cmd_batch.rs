@@ -11,7 +11,7 @@ use anyhow::{bail, Result};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mp_pipeline::{BatchObserver, BatchSummary, ItemReport, ItemStatus};
-use mp_pipeline::{BatchParams, Params, Stage};
+use mp_pipeline::{BatchParams, Stage};
 
 use crate::progress::ctrl_c_token;
 
@@ -29,21 +29,8 @@ pub struct BatchArgs {
     /// ONNX Runtime threads of each input's pose model; default: the cores divided by the jobs (at least 1).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Pose model for videos: full, lite (BlazePose) or movenet.
-    #[arg(long, default_value = Params::default().pose.model.as_str())]
-    pub model: String,
-    /// Only the first N frames of each video.
-    #[arg(long)]
-    pub max_frames: Option<usize>,
-    /// Keep all of the pose model's joints (BlazePose: 33) instead of the COCO-17 body joints.
-    #[arg(long)]
-    pub all_joints: bool,
-    /// How often the pose model runs: all (every frame), auto (12 poses a second: every second frame at 24–30 fps), or N poses a second; the frames between are filled from the motion.
-    #[arg(long, value_name = "N|auto|all", default_value_t = Params::default().pose.rate.label())]
-    pub pose_fps: String,
-    /// Where the pose models run: auto (the GPU where ONNX Runtime's CUDA build and a GPU are there, else the CPU), cpu, cuda or cuda:N.
-    #[arg(long, default_value_t = Params::default().pose.device.label())]
-    pub device: String,
+    #[command(flatten)]
+    pub pose: crate::cmd_run::PoseModelOpts,
     /// Largest side of the video frame in pixels, for track inputs (scale = frame / 512); default: from each motion's extent.
     #[arg(long)]
     pub frame_size: Option<f64>,
@@ -74,15 +61,7 @@ impl BatchArgs {
         };
         p.params = crate::cmd_run::params_file(self.params.as_deref())?;
         let only_given = self.params.is_some();
-        crate::cmd_run::set_pose(
-            &mut p.params,
-            only_given,
-            &self.model,
-            self.max_frames,
-            self.all_joints,
-            &self.pose_fps,
-            &self.device,
-        )?;
+        self.pose.apply(&mut p.params, only_given)?;
         if !only_given || crate::given("no_video") {
             p.params.output.overlay_video = !self.no_video;
         }

@@ -40,18 +40,25 @@ pub struct RunArgs {
 /// Options of keypoint extraction from video.
 #[derive(Args, Debug, Clone)]
 pub struct PoseOpts {
+    #[command(flatten)]
+    pub model: PoseModelOpts,
+    /// ONNX Runtime threads.
+    #[arg(long, default_value_t = Params::default().pose.threads)]
+    pub threads: usize,
+}
+
+/// The pose options that `mp run` and `mp batch` share.
+#[derive(Args, Debug, Clone)]
+pub struct PoseModelOpts {
     /// Pose model for videos: full, lite (BlazePose) or movenet.
     #[arg(long, default_value = Params::default().pose.model.as_str())]
     pub model: String,
-    /// Only the first N frames.
+    /// Only the first N frames of each video.
     #[arg(long)]
     pub max_frames: Option<usize>,
     /// Keep all of the pose model's joints (BlazePose: 33) instead of the COCO-17 body joints.
     #[arg(long)]
     pub all_joints: bool,
-    /// ONNX Runtime threads.
-    #[arg(long, default_value_t = Params::default().pose.threads)]
-    pub threads: usize,
     /// How often the pose model runs: all (every frame), auto (12 poses a second: every second frame at 24–30 fps), or N poses a second; the frames between are filled from the motion.
     #[arg(long, value_name = "N|auto|all", default_value_t = Params::default().pose.rate.label())]
     pub pose_fps: String,
@@ -64,15 +71,7 @@ impl PoseOpts {
     /// Sets the pose parameters of `p`; with `only_given` (a `--params`
     /// file is the base) only those given on the command line.
     pub fn apply(&self, p: &mut Params, only_given: bool) -> Result<()> {
-        set_pose(
-            p,
-            only_given,
-            &self.model,
-            self.max_frames,
-            self.all_joints,
-            &self.pose_fps,
-            &self.device,
-        )?;
+        self.model.apply(p, only_given)?;
         if !only_given || crate::given("threads") {
             p.pose.threads = self.threads;
         }
@@ -80,35 +79,29 @@ impl PoseOpts {
     }
 }
 
-/// Sets the pose options that `mp run` and `mp batch` share (model, first
-/// frames, all joints, pose rate, device); with `only_given` (a `--params`
-/// file is the base) only those given on the command line.
-pub fn set_pose(
-    p: &mut Params,
-    only_given: bool,
-    model: &str,
-    max_frames: Option<usize>,
-    all_joints: bool,
-    pose_fps: &str,
-    device: &str,
-) -> Result<()> {
-    let set = |id: &str| !only_given || crate::given(id);
-    if set("model") {
-        p.pose.model = mp_pose::ModelChoice::parse(model)?;
+impl PoseModelOpts {
+    /// Sets the pose model, first frames, joints, pose rate and device of
+    /// `p`; with `only_given` (a `--params` file is the base) only those given
+    /// on the command line.
+    pub fn apply(&self, p: &mut Params, only_given: bool) -> Result<()> {
+        let set = |id: &str| !only_given || crate::given(id);
+        if set("model") {
+            p.pose.model = mp_pose::ModelChoice::parse(&self.model)?;
+        }
+        if set("max_frames") {
+            p.pose.max_frames = self.max_frames;
+        }
+        if set("all_joints") {
+            p.pose.all_joints = self.all_joints;
+        }
+        if set("pose_fps") {
+            p.pose.rate = mp_pipeline::PoseRate::parse(&self.pose_fps)?;
+        }
+        if set("device") {
+            p.pose.device = mp_pose::Device::parse(&self.device)?;
+        }
+        Ok(())
     }
-    if set("max_frames") {
-        p.pose.max_frames = max_frames;
-    }
-    if set("all_joints") {
-        p.pose.all_joints = all_joints;
-    }
-    if set("pose_fps") {
-        p.pose.rate = mp_pipeline::PoseRate::parse(pose_fps)?;
-    }
-    if set("device") {
-        p.pose.device = mp_pose::Device::parse(device)?;
-    }
-    Ok(())
 }
 
 /// The parameters of a `--params` file (completed with the defaults and
