@@ -31,28 +31,5 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             i.start_frame, i.end_frame, i.body_size, i.iterations, i.score
         );
     }
-    if std::env::var("MP_DEBUG").is_ok() {
-        let mut t = 0;
-        for (i, p) in a.prims.iter().enumerate() {
-            println!("  prim {i:>3} frame {t:>4} dur {}", p.duration);
-            t += p.duration;
-        }
-        for k in 1..=4 {
-            for w in [2 * k, 3 * k] {
-                let s: Vec<String> = (0..a.prims.len().saturating_sub(w))
-                    .map(|i| {
-                        format!(
-                            "{:.0}",
-                            mp_abstract::window_score(&a.prims, i, i + w, k, a.unit_scale).unwrap()
-                        )
-                    })
-                    .collect();
-                println!("k={k} w={w}: {}", s.join(" "));
-            }
-        }
-    }
     Ok(())
 }
-
-#[allow(dead_code)]
-fn unused() {}

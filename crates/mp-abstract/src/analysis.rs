@@ -9,7 +9,6 @@ use mp_geom::{Track, Units};
 use ndarray::Array3;
 use serde::{Deserialize, Serialize};
 
-use crate::dsl;
 use crate::error::{AbstractError, Result};
 use crate::exec::{render, unroll_loop, LoopReplay};
 use crate::loops::{DetectedLoop, LoopParams};
@@ -80,25 +79,102 @@ pub struct Analysis {
     pub unit_scale: f64,
 }
 
-/// Abstract program from a concrete program (loop detection at the given `unit_scale`).
-pub fn from_concrete(
-    program: &Program,
-    loops: &LoopParams,
-) -> Result<(AbstractProgram, Vec<DetectedLoop>, Vec<DetPrim>)> {
-    let segs: Vec<(usize, Vec<mp_geom::Primitive>)> = program
-        .segments
-        .iter()
-        .map(|s| (s.duration_frames, s.primitives.clone()))
-        .collect();
-    let prims = translate(&segs)?;
-    let (prog, found) = synthesize(
-        &prims,
-        loops,
-        program.fps,
-        program.units.as_str(),
-        program.joints.clone(),
-    )?;
-    Ok((prog, found, prims))
+impl AbstractProgram {
+    /// The abstract program of a concrete program (loop detection at the
+    /// given `unit_scale`), with the loops found and the deterministic
+    /// primitives (one per segment) they were found in.
+    pub fn from_concrete(
+        program: &Program,
+        loops: &LoopParams,
+    ) -> Result<(AbstractProgram, Vec<DetectedLoop>, Vec<DetPrim>)> {
+        let segs: Vec<(usize, Vec<mp_geom::Primitive>)> = program
+            .segments
+            .iter()
+            .map(|s| (s.duration_frames, s.primitives.clone()))
+            .collect();
+        let prims = translate(&segs)?;
+        let (prog, found) = synthesize(
+            &prims,
+            loops,
+            program.fps,
+            program.units.as_str(),
+            program.joints.clone(),
+        )?;
+        Ok((prog, found, prims))
+    }
+
+    /// Reads an abstract program from `.json` or the text form (any other extension).
+    pub fn read(path: impl AsRef<Path>) -> Result<AbstractProgram> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| AbstractError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        AbstractProgram::read_str(&text, path)
+    }
+
+    /// Parses and validates an abstract program as [`AbstractProgram::read`]
+    /// does: JSON when `path` ends in `.json`, the text form otherwise;
+    /// `path` names the source in errors.
+    pub fn read_str(text: &str, path: &Path) -> Result<AbstractProgram> {
+        let prog: AbstractProgram = if path.extension().is_some_and(|e| e == "json") {
+            serde_json::from_str(text).map_err(|source| AbstractError::Json {
+                path: path.to_path_buf(),
+                source,
+            })?
+        } else {
+            AbstractProgram::parse(text).map_err(|e| match e {
+                AbstractError::Parse {
+                    line,
+                    column,
+                    message,
+                } => AbstractError::Parse {
+                    line,
+                    column,
+                    message: format!("{}: {message}", path.display()),
+                },
+                other => other,
+            })?
+        };
+        prog.validate().map_err(|e| {
+            let at = |m: String| format!("{}: {m}", path.display());
+            match e {
+                AbstractError::Shape(m) => AbstractError::Shape(at(m)),
+                AbstractError::NonFinite(m) => AbstractError::NonFinite(at(m)),
+                AbstractError::InvalidLoop(m) => AbstractError::InvalidLoop(at(m)),
+                AbstractError::InvalidParam { name, reason } => AbstractError::InvalidParam {
+                    name,
+                    reason: at(reason),
+                },
+                other => other,
+            }
+        })?;
+        Ok(prog)
+    }
+
+    /// Writes the program as `.json` or the text form, through a temporary
+    /// file and a rename.
+    pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
+        let path = path.as_ref();
+        let text = if path.extension().is_some_and(|e| e == "json") {
+            serde_json::to_string_pretty(self).map_err(|source| AbstractError::Json {
+                path: path.to_path_buf(),
+                source,
+            })?
+        } else {
+            self.print()
+        };
+        let tmp = path.with_extension(format!(
+            "{}.tmp",
+            path.extension().and_then(|e| e.to_str()).unwrap_or("out")
+        ));
+        let io = |source| AbstractError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        std::fs::write(&tmp, text).map_err(io)?;
+        std::fs::rename(&tmp, path).map_err(io)
+    }
 }
 
 /// Track → concrete program → abstract program, loops and repetition intervals.
@@ -111,98 +187,28 @@ pub fn analyse(track: &Track, params: &AbstractParams) -> Result<Analysis> {
 /// [`analyse`] with its parameters checked.
 fn analyse_valid(track: &Track, params: &Checked<&AbstractParams>) -> Result<Analysis> {
     let syn = synthesize_detailed(track, &params.synth)?;
-    analyse_synthesis(syn, &params.loops)
+    Analysis::from_synthesis(syn, &params.loops)
 }
 
-/// A concrete synthesis → abstract program, loops and repetition intervals;
-/// the loop thresholds use the synthesis' `unit_scale`.
-pub fn analyse_synthesis(syn: mp_concrete::Synthesis, loops: &LoopParams) -> Result<Analysis> {
-    let loops = LoopParams {
-        unit_scale: syn.unit_scale,
-        ..loops.clone()
-    };
-    let (program, found, prims) = from_concrete(&syn.program, &loops)?;
-    let intervals = intervals(&prims, &found, 0);
-    Ok(Analysis {
-        concrete: syn.program,
-        prims,
-        program,
-        loops: found,
-        intervals,
-        unit_scale: syn.unit_scale,
-    })
-}
-
-/// Reads an abstract program from `.json` or the text form (any other extension).
-pub fn read_program(path: impl AsRef<Path>) -> Result<AbstractProgram> {
-    let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| AbstractError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    program_from_str(&text, path)
-}
-
-/// Parses and validates an abstract program as [`read_program`] does: JSON
-/// when `path` ends in `.json`, the text form otherwise; `path` names the
-/// source in errors.
-pub fn program_from_str(text: &str, path: &Path) -> Result<AbstractProgram> {
-    let prog: AbstractProgram = if path.extension().is_some_and(|e| e == "json") {
-        serde_json::from_str(text).map_err(|source| AbstractError::Json {
-            path: path.to_path_buf(),
-            source,
-        })?
-    } else {
-        dsl::parse(text).map_err(|e| match e {
-            AbstractError::Parse {
-                line,
-                column,
-                message,
-            } => AbstractError::Parse {
-                line,
-                column,
-                message: format!("{}: {message}", path.display()),
-            },
-            other => other,
-        })?
-    };
-    prog.validate().map_err(|e| {
-        let at = |m: String| format!("{}: {m}", path.display());
-        match e {
-            AbstractError::Shape(m) => AbstractError::Shape(at(m)),
-            AbstractError::NonFinite(m) => AbstractError::NonFinite(at(m)),
-            AbstractError::InvalidLoop(m) => AbstractError::InvalidLoop(at(m)),
-            AbstractError::InvalidParam { name, reason } => AbstractError::InvalidParam {
-                name,
-                reason: at(reason),
-            },
-            other => other,
-        }
-    })?;
-    Ok(prog)
-}
-
-/// Writes an abstract program as `.json` or the text form, through a temporary file and a rename.
-pub fn write_program(prog: &AbstractProgram, path: impl AsRef<Path>) -> Result<()> {
-    let path = path.as_ref();
-    let text = if path.extension().is_some_and(|e| e == "json") {
-        serde_json::to_string_pretty(prog).map_err(|source| AbstractError::Json {
-            path: path.to_path_buf(),
-            source,
-        })?
-    } else {
-        dsl::print(prog)
-    };
-    let tmp = path.with_extension(format!(
-        "{}.tmp",
-        path.extension().and_then(|e| e.to_str()).unwrap_or("out")
-    ));
-    let io = |source| AbstractError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    std::fs::write(&tmp, text).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
+impl Analysis {
+    /// A concrete synthesis → abstract program, loops and repetition
+    /// intervals; the loop thresholds use the synthesis' `unit_scale`.
+    pub fn from_synthesis(syn: mp_concrete::Synthesis, loops: &LoopParams) -> Result<Analysis> {
+        let loops = LoopParams {
+            unit_scale: syn.unit_scale,
+            ..loops.clone()
+        };
+        let (program, found, prims) = AbstractProgram::from_concrete(&syn.program, &loops)?;
+        let intervals = intervals(&prims, &found, 0);
+        Ok(Analysis {
+            concrete: syn.program,
+            prims,
+            program,
+            loops: found,
+            intervals,
+            unit_scale: syn.unit_scale,
+        })
+    }
 }
 
 /// Parameters of prediction by unrolling loops.

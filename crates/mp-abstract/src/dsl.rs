@@ -21,7 +21,7 @@
 //! ```
 //!
 //! Numbers are printed with the shortest representation that reads back to
-//! the same `f64`, so `parse(print(p)) == p`. `#` starts a comment.
+//! the same `f64`, so `AbstractProgram::parse(&p.print()) == p`. `#` starts a comment.
 
 use std::fmt::Write;
 
@@ -140,47 +140,49 @@ fn write_prob(
     let _ = writeln!(out, "{indent}}}");
 }
 
-/// Prints a program with the given options.
-pub fn print_with(p: &AbstractProgram, o: &PrintOptions) -> String {
-    let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "abstract_program(fps={}, units={}, dims={}, unit_scale={})",
-        num(p.fps, &PrintOptions::default()),
-        p.units,
-        p.dims,
-        num(p.unit_scale, &PrintOptions::default())
-    );
-    let _ = writeln!(out, "joints({})", p.joints.join(", "));
-    for s in &p.stmts {
-        match s {
-            Stmt::Prim(d) => write_det(&mut out, d, &p.joints, p.dims, "", o),
-            Stmt::Loop(l) => {
-                let _ = writeln!(out, "for i in range({}) {{", l.iterations);
-                for b in &l.body {
-                    write_prob(&mut out, b, &p.joints, p.dims, "  ", o);
-                }
-                if o.observed && !l.observed.is_empty() {
-                    let _ = writeln!(out, "  observed {{");
-                    for it in &l.observed {
-                        let _ = writeln!(out, "    iteration {{");
-                        for d in it {
-                            write_det(&mut out, d, &p.joints, p.dims, "      ", o);
-                        }
-                        let _ = writeln!(out, "    }}");
+impl AbstractProgram {
+    /// Prints a program with the given options.
+    pub fn print_with(&self, o: &PrintOptions) -> String {
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "abstract_program(fps={}, units={}, dims={}, unit_scale={})",
+            num(self.fps, &PrintOptions::default()),
+            self.units,
+            self.dims,
+            num(self.unit_scale, &PrintOptions::default())
+        );
+        let _ = writeln!(out, "joints({})", self.joints.join(", "));
+        for s in &self.stmts {
+            match s {
+                Stmt::Prim(d) => write_det(&mut out, d, &self.joints, self.dims, "", o),
+                Stmt::Loop(l) => {
+                    let _ = writeln!(out, "for i in range({}) {{", l.iterations);
+                    for b in &l.body {
+                        write_prob(&mut out, b, &self.joints, self.dims, "  ", o);
                     }
-                    let _ = writeln!(out, "  }}");
+                    if o.observed && !l.observed.is_empty() {
+                        let _ = writeln!(out, "  observed {{");
+                        for it in &l.observed {
+                            let _ = writeln!(out, "    iteration {{");
+                            for d in it {
+                                write_det(&mut out, d, &self.joints, self.dims, "      ", o);
+                            }
+                            let _ = writeln!(out, "    }}");
+                        }
+                        let _ = writeln!(out, "  }}");
+                    }
+                    let _ = writeln!(out, "}}");
                 }
-                let _ = writeln!(out, "}}");
             }
         }
+        out
     }
-    out
-}
 
-/// Prints a program losslessly.
-pub fn print(p: &AbstractProgram) -> String {
-    print_with(p, &PrintOptions::default())
+    /// Prints a program losslessly.
+    pub fn print(&self) -> String {
+        self.print_with(&PrintOptions::default())
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -490,113 +492,115 @@ pub fn is_name(s: &str) -> bool {
     }
 }
 
-/// Parses the text form back into a program (and validates it).
-pub fn parse(src: &str) -> Result<AbstractProgram> {
-    let mut lx = lex(src)?;
-    lx.keyword("abstract_program")?;
-    lx.punct('(')?;
-    let fps = lx.kv_number("fps")?;
-    lx.punct(',')?;
-    lx.keyword("units")?;
-    lx.punct('=')?;
-    let units = match lx.peek() {
-        Some(Tok::Num(v)) if *v == 1.0 => {
-            lx.pos += 1;
-            "1".to_string()
+impl AbstractProgram {
+    /// Parses the text form back into a program (and validates it).
+    pub fn parse(src: &str) -> Result<AbstractProgram> {
+        let mut lx = lex(src)?;
+        lx.keyword("abstract_program")?;
+        lx.punct('(')?;
+        let fps = lx.kv_number("fps")?;
+        lx.punct(',')?;
+        lx.keyword("units")?;
+        lx.punct('=')?;
+        let units = match lx.peek() {
+            Some(Tok::Num(v)) if *v == 1.0 => {
+                lx.pos += 1;
+                "1".to_string()
+            }
+            _ => lx.ident()?,
+        };
+        if !matches!(units.as_str(), "px" | "m" | "1") {
+            lx.pos -= 1;
+            return lx.err(format!("units must be px, m or 1, found `{units}`"));
         }
-        _ => lx.ident()?,
-    };
-    if !matches!(units.as_str(), "px" | "m" | "1") {
-        lx.pos -= 1;
-        return lx.err(format!("units must be px, m or 1, found `{units}`"));
-    }
-    lx.punct(',')?;
-    lx.keyword("dims")?;
-    lx.punct('=')?;
-    let dims = lx.integer("dims")?;
-    if dims == 0 || (dims > 3 && units != "1") {
-        lx.pos -= 1;
-        return lx.err(format!(
-            "dims must be 1, 2 or 3 (any ≥ 1 with units=1), found {dims}"
-        ));
-    }
-    let unit_scale = if lx.is_punct(',') {
-        lx.pos += 1;
-        lx.kv_number("unit_scale")?
-    } else {
-        1.0
-    };
-    lx.punct(')')?;
-    lx.keyword("joints")?;
-    lx.punct('(')?;
-    let mut joints = Vec::new();
-    while !lx.is_punct(')') {
-        joints.push(lx.ident()?);
-        if lx.is_punct(',') {
-            lx.pos += 1;
-        }
-    }
-    lx.punct(')')?;
-    if joints.is_empty() {
-        return lx.err("a program needs at least one joint");
-    }
-    let mut stmts = Vec::new();
-    while lx.peek().is_some() {
-        if lx.is_keyword("motion") {
-            stmts.push(Stmt::Prim(parse_det(&mut lx, &joints, dims)?));
-        } else if lx.is_keyword("for") {
-            lx.keyword("for")?;
-            lx.ident()?;
-            lx.keyword("in")?;
-            lx.keyword("range")?;
-            lx.punct('(')?;
-            let iterations = lx.integer("iterations")?;
-            lx.punct(')')?;
-            lx.punct('{')?;
-            let mut body = Vec::new();
-            while lx.is_keyword("motion") {
-                body.push(parse_prob(&mut lx, &joints, dims)?);
-            }
-            if body.is_empty() {
-                return lx.err("a loop body needs at least one motion");
-            }
-            let mut observed = Vec::new();
-            if lx.is_keyword("observed") {
-                lx.keyword("observed")?;
-                lx.punct('{')?;
-                while lx.is_keyword("iteration") {
-                    lx.keyword("iteration")?;
-                    lx.punct('{')?;
-                    let mut it = Vec::new();
-                    while lx.is_keyword("motion") {
-                        it.push(parse_det(&mut lx, &joints, dims)?);
-                    }
-                    lx.punct('}')?;
-                    observed.push(it);
-                }
-                lx.punct('}')?;
-            }
-            lx.punct('}')?;
-            stmts.push(Stmt::Loop(Loop {
-                iterations,
-                body,
-                observed,
-            }));
-        } else {
+        lx.punct(',')?;
+        lx.keyword("dims")?;
+        lx.punct('=')?;
+        let dims = lx.integer("dims")?;
+        if dims == 0 || (dims > 3 && units != "1") {
+            lx.pos -= 1;
             return lx.err(format!(
-                "expected `motion` or `for`, found {}",
-                lx.describe()
+                "dims must be 1, 2 or 3 (any ≥ 1 with units=1), found {dims}"
             ));
         }
+        let unit_scale = if lx.is_punct(',') {
+            lx.pos += 1;
+            lx.kv_number("unit_scale")?
+        } else {
+            1.0
+        };
+        lx.punct(')')?;
+        lx.keyword("joints")?;
+        lx.punct('(')?;
+        let mut joints = Vec::new();
+        while !lx.is_punct(')') {
+            joints.push(lx.ident()?);
+            if lx.is_punct(',') {
+                lx.pos += 1;
+            }
+        }
+        lx.punct(')')?;
+        if joints.is_empty() {
+            return lx.err("a program needs at least one joint");
+        }
+        let mut stmts = Vec::new();
+        while lx.peek().is_some() {
+            if lx.is_keyword("motion") {
+                stmts.push(Stmt::Prim(parse_det(&mut lx, &joints, dims)?));
+            } else if lx.is_keyword("for") {
+                lx.keyword("for")?;
+                lx.ident()?;
+                lx.keyword("in")?;
+                lx.keyword("range")?;
+                lx.punct('(')?;
+                let iterations = lx.integer("iterations")?;
+                lx.punct(')')?;
+                lx.punct('{')?;
+                let mut body = Vec::new();
+                while lx.is_keyword("motion") {
+                    body.push(parse_prob(&mut lx, &joints, dims)?);
+                }
+                if body.is_empty() {
+                    return lx.err("a loop body needs at least one motion");
+                }
+                let mut observed = Vec::new();
+                if lx.is_keyword("observed") {
+                    lx.keyword("observed")?;
+                    lx.punct('{')?;
+                    while lx.is_keyword("iteration") {
+                        lx.keyword("iteration")?;
+                        lx.punct('{')?;
+                        let mut it = Vec::new();
+                        while lx.is_keyword("motion") {
+                            it.push(parse_det(&mut lx, &joints, dims)?);
+                        }
+                        lx.punct('}')?;
+                        observed.push(it);
+                    }
+                    lx.punct('}')?;
+                }
+                lx.punct('}')?;
+                stmts.push(Stmt::Loop(Loop {
+                    iterations,
+                    body,
+                    observed,
+                }));
+            } else {
+                return lx.err(format!(
+                    "expected `motion` or `for`, found {}",
+                    lx.describe()
+                ));
+            }
+        }
+        let prog = AbstractProgram {
+            fps,
+            units,
+            dims,
+            unit_scale,
+            joints,
+            stmts,
+        };
+        prog.validate()?;
+        Ok(prog)
     }
-    let prog = AbstractProgram {
-        fps,
-        units,
-        dims,
-        unit_scale,
-        joints,
-        stmts,
-    };
-    prog.validate()?;
-    Ok(prog)
 }

@@ -327,21 +327,23 @@ pub fn check_output_frames(prog: &AbstractProgram, frames: f64) -> Result<usize>
     })
 }
 
-/// Deterministic execution (loop bodies at their means, or replayed as observed).
-pub fn execute(prog: &AbstractProgram, params: &ExecParams) -> Result<Track> {
-    params.validate()?;
-    prog.validate()?;
-    check_output_frames(prog, output_frames_bound(prog, params.replay, false))?;
-    let prims = flatten(prog, params.replay)?;
-    render(&prims, prog, &fit_for(prog, params))
-}
+impl AbstractProgram {
+    /// Deterministic execution (loop bodies at their means, or replayed as observed).
+    pub fn execute(&self, params: &ExecParams) -> Result<Track> {
+        params.validate()?;
+        self.validate()?;
+        check_output_frames(self, output_frames_bound(self, params.replay, false))?;
+        let prims = flatten(self, params.replay)?;
+        render(&prims, self, &fit_for(self, params))
+    }
 
-/// Stochastic execution with a seed: each loop iteration samples its
-/// start/mid/end points and duration. The same seed gives the same track.
-pub fn sample(prog: &AbstractProgram, seed: u64, params: &ExecParams) -> Result<Track> {
-    params.validate()?;
-    prog.validate()?;
-    check_output_frames(prog, output_frames_bound(prog, params.replay, true))?;
-    let prims = flatten_sampled(prog, seed, params.jitter)?;
-    render(&prims, prog, &fit_for(prog, params))
+    /// Stochastic execution with a seed: each loop iteration samples its
+    /// start/mid/end points and duration. The same seed gives the same track.
+    pub fn sample(&self, seed: u64, params: &ExecParams) -> Result<Track> {
+        params.validate()?;
+        self.validate()?;
+        check_output_frames(self, output_frames_bound(self, params.replay, true))?;
+        let prims = flatten_sampled(self, seed, params.jitter)?;
+        render(&prims, self, &fit_for(self, params))
+    }
 }

@@ -42,17 +42,15 @@ mod selfmatch;
 mod synth;
 
 pub use analysis::{
-    analyse, read_program, unroll, write_program, AbstractParams, Analysis, PredictMethod,
-    PredictParams, Prediction,
+    analyse, unroll, AbstractParams, Analysis, PredictMethod, PredictParams, Prediction,
 };
-pub use count::json::{
-    CountedIntervalJson, ProgramLoopJson, RepetitionsJson, LOOPS_SCHEMA, LOOPS_VERSION,
-};
+pub use count::json::{CountedIntervalJson, ProgramLoopJson, RepetitionsJson};
 pub use count::{
     count_repetitions, count_signals, ConfidenceModel, CountFeatures, CountMethod, CountParams,
     CountSignal, CountedInterval, Counts,
 };
-pub use error::{AbstractError, Result};
+pub use error::AbstractError;
+pub(crate) use error::Result;
 pub use loops::{detect_loops, DetectedLoop, LoopParams};
 pub use model::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
 pub use repetition::{
@@ -61,17 +59,11 @@ pub use repetition::{
 };
 pub use selfmatch::{SelfMatch, SelfMatchFallback, SelfMatchKind};
 
-pub use analysis::{
-    analyse_synthesis, from_concrete, predict_constant, program_from_str, PeriodFallback,
-};
+pub use analysis::{predict_constant, PeriodFallback};
 pub use count::found_fraction;
-pub use dsl::{parse, print, print_with, PrintOptions};
-pub use edit::set_iterations;
-pub use exec::{execute, sample, ExecParams, LoopReplay};
+pub use dsl::PrintOptions;
+pub use exec::{ExecParams, LoopReplay};
 pub use repetition::{intervals, iom, iou, PeriodEstimate};
-
-pub use edit::{drop_iteration, repeat_iteration};
-pub use loops::window_score;
 
 #[cfg(test)]
 mod tests;

@@ -304,6 +304,7 @@ fn check_prims(prims: &[DetPrim]) -> Result<(usize, usize)> {
 }
 
 /// The window of body size `k` over primitives `start..end`.
+#[cfg(test)]
 fn filled_window(prims: &[DetPrim], start: usize, end: usize, k: usize) -> Result<Window> {
     let (joints, dim) = check_prims(prims)?;
     if k == 0 || start >= end || end > prims.len() {
@@ -321,6 +322,7 @@ fn filled_window(prims: &[DetPrim], start: usize, end: usize, k: usize) -> Resul
 
 /// Score of primitives `start..end` with body size `k` (unit-free; infinite
 /// when a group has fewer than two members).
+#[cfg(test)]
 pub fn window_score(
     prims: &[DetPrim],
     start: usize,

@@ -3,10 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use mp_abstract::set_iterations;
-use mp_abstract::{execute, sample, ExecParams, LoopReplay};
-use mp_abstract::{print_with, PrintOptions};
-use mp_abstract::{read_program, write_program, AbstractParams};
+use mp_abstract::{AbstractParams, AbstractProgram, ExecParams, LoopReplay, PrintOptions};
 use mp_forecast::{ForecastMethod, PredictOptions};
 use mp_geom::write_track;
 use mp_pipeline::{analyse_track, Params};
@@ -163,9 +160,9 @@ pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
     let frame_px = crate::track_arg::frame_px(&read, a.opts.frame_size);
     let track = read.track;
     let an = analyse_track(&track, frame_px, &a.opts.pipeline_params())?;
-    write_program(&an.program, &a.output)?;
+    an.program.write(&a.output)?;
     if !a.quiet {
-        print!("{}", print_with(&an.program, &PrintOptions::summary()));
+        print!("{}", an.program.print_with(&PrintOptions::summary()));
     }
     eprintln!(
         "{} frames → {} primitives → {} statements, {} program loop{}; written to {}",
@@ -263,11 +260,11 @@ fn is_program_path(p: &std::path::Path) -> bool {
 /// `mp extend`: a loop's iteration count changed, then the program executed
 /// (loops replayed as observed) or written.
 pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
-    let mut prog = read_program(&a.program)?;
+    let mut prog = AbstractProgram::read(&a.program)?;
     let index = a.loop_number.checked_sub(1).ok_or_else(|| {
         anyhow::anyhow!("no loop 0: loops are numbered from 1 (--loop 1 is the first loop)")
     })?;
-    set_iterations(&mut prog, index, a.iters).map_err(|e| match e {
+    prog.set_iterations(index, a.iters).map_err(|e| match e {
         mp_abstract::AbstractError::NotFound(_) => anyhow::anyhow!(
             "no loop {}: the program has {} loop(s), numbered from 1",
             a.loop_number,
@@ -276,13 +273,13 @@ pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
         e => e.into(),
     })?;
     if is_program_path(&a.output) {
-        write_program(&prog, &a.output)?;
+        prog.write(&a.output)?;
     } else {
         let params = ExecParams {
             replay: LoopReplay::Observed,
             ..ExecParams::default()
         };
-        let t = execute(&prog, &params)?;
+        let t = prog.execute(&params)?;
         write_track(&a.output, &t)?;
         eprintln!("{} frames written to {}", t.n_frames(), a.output.display());
     }
@@ -291,8 +288,8 @@ pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
 
 /// `mp sample`: one seeded stochastic execution of an abstract program.
 pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
-    let prog = read_program(&a.program)?;
-    let t = sample(&prog, a.seed, &ExecParams::default())?;
+    let prog = AbstractProgram::read(&a.program)?;
+    let t = prog.sample(a.seed, &ExecParams::default())?;
     write_track(&a.output, &t)?;
     eprintln!(
         "{} frames (seed {}) written to {}",

@@ -139,8 +139,8 @@ fn check_outputs(
     assert_eq!(program.joints, track.skeleton().joints);
     let text = Program::read(dir.join("program.txt")).unwrap();
     assert_eq!(text, program, "program.txt and program.json differ");
-    let abs = mp_abstract::read_program(dir.join("abstract.json")).unwrap();
-    let abs_txt = mp_abstract::read_program(dir.join("abstract.txt")).unwrap();
+    let abs = mp_abstract::AbstractProgram::read(dir.join("abstract.json")).unwrap();
+    let abs_txt = mp_abstract::AbstractProgram::read(dir.join("abstract.txt")).unwrap();
     assert_eq!(abs.stmts.len(), abs_txt.stmts.len());
     let loops: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("loops.json")).unwrap()).unwrap();

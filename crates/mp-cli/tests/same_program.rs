@@ -38,8 +38,8 @@ fn fit_abstract_loops_and_run_agree() {
     assert_eq!(fit, run, "mp fit and mp run wrote different programs");
     assert!(fit.n_segments() > 10);
 
-    let a = mp_abstract::read_program(p("abstract.json")).unwrap();
-    let b = mp_abstract::read_program(tmp.path().join("run/abstract.json")).unwrap();
+    let a = mp_abstract::AbstractProgram::read(p("abstract.json")).unwrap();
+    let b = mp_abstract::AbstractProgram::read(tmp.path().join("run/abstract.json")).unwrap();
     assert_eq!(
         a, b,
         "mp abstract and mp run wrote different abstract programs"

@@ -142,13 +142,8 @@ fn main() -> Res<()> {
 
     // Abstract programs from the concrete ones (loops found by the analyser).
     for (i, p) in programs.iter().enumerate() {
-        let (a, _, _) = mp_abstract::from_concrete(p, &LoopParams::default())?;
-        put(
-            &dir,
-            "abstract_dsl",
-            &format!("abstract{i}.mpa"),
-            mp_abstract::print(&a),
-        )?;
+        let (a, _, _) = mp_abstract::AbstractProgram::from_concrete(p, &LoopParams::default())?;
+        put(&dir, "abstract_dsl", &format!("abstract{i}.mpa"), a.print())?;
         put(
             &dir,
             "abstract_json",

@@ -16,9 +16,9 @@
 //! | target | reader |
 //! |---|---|
 //! | `concrete_dsl` | [`mp_concrete::parse`] |
-//! | `abstract_dsl` | [`mp_abstract::program_from_str`] (text form) |
+//! | `abstract_dsl` | [`mp_abstract::AbstractProgram::read_str`] (text form) |
 //! | `program_json` | [`mp_concrete::Program::from_json`] |
-//! | `abstract_json` | [`mp_abstract::program_from_str`] (JSON) |
+//! | `abstract_json` | [`mp_abstract::AbstractProgram::read_str`] (JSON) |
 //! | `grammar_json` | [`mp_grammar::GrammarModel::from_json`] |
 //! | `grammar_text` | [`mp_grammar::Grammar::from_text`], [`mp_grammar::Corpus::from_lines`], [`mp_grammar::fuzzing`] |
 //! | `npz` | [`mp_geom::fuzzing::npz::Npz::from_bytes`], [`mp_geom::fuzzing::native::track_from_npz`] |
@@ -32,9 +32,7 @@
 //! | `concepts_json` | [`mp_refine::Concepts::from_json`] |
 //! | `people` | [`mp_geom::fuzzing::people::people_from_npz`], [`mp_geom::fuzzing::people::people_from_json_str`], [`mp_geom::fuzzing::people::people_from_bincode`] |
 
-use std::path::{Path, PathBuf};
-
-use mp_abstract::program_from_str;
+use mp_abstract::AbstractProgram;
 use mp_concrete::Program;
 use mp_geom::fuzzing::bvh::{Bvh, BvhTrackParams};
 use mp_geom::fuzzing::csv::{track_from_csv_str, track_to_csv_string, CsvLayout};
@@ -52,6 +50,7 @@ use mp_geom::ReadOptions;
 use mp_geom::{People, Track};
 use mp_grammar::{fuzzing as strings, Corpus, Grammar, GrammarModel};
 use mp_refine::Concepts;
+use std::path::{Path, PathBuf};
 
 /// A fuzz target: takes any bytes, never panics.
 pub type Target = fn(&[u8]);
@@ -157,9 +156,9 @@ pub fn mpb(data: &[u8]) {
     }
 }
 
-fn check_abstract(p: &mp_abstract::AbstractProgram) {
-    let printed = mp_abstract::print(p);
-    match program_from_str(&printed, Path::new("fuzz.mpa")) {
+fn check_abstract(p: &AbstractProgram) {
+    let printed = p.print();
+    match AbstractProgram::read_str(&printed, Path::new("fuzz.mpa")) {
         Ok(q) => assert_eq!(
             &q, p,
             "text round trip changed the abstract program:\n{printed}"
@@ -169,29 +168,29 @@ fn check_abstract(p: &mp_abstract::AbstractProgram) {
         )),
     }
     match serde_json::to_string(p) {
-        Ok(json) => match program_from_str(&json, Path::new("fuzz.json")) {
+        Ok(json) => match AbstractProgram::read_str(&json, Path::new("fuzz.json")) {
             Ok(q) => assert_eq!(&q, p, "JSON round trip changed the abstract program"),
             Err(e) => panic_msg(&format!("written JSON does not read back: {e}\n{json}")),
         },
         Err(e) => panic_msg(&format!("abstract program does not serialise: {e}")),
     }
-    let _ = mp_abstract::print_with(p, &mp_abstract::PrintOptions::summary());
+    let _ = p.print_with(&mp_abstract::PrintOptions::summary());
     let _ = (p.loop_indices(), p.expected_frames());
 }
 
-/// Abstract-program text form ([`mp_abstract::parse`] through
-/// [`program_from_str`]).
+/// Abstract-program text form ([`AbstractProgram::parse`] through
+/// [`AbstractProgram::read_str`]).
 pub fn abstract_dsl(data: &[u8]) {
     let Some(src) = text(data) else { return };
-    if let Ok(p) = program_from_str(src, Path::new("fuzz.mpa")) {
+    if let Ok(p) = AbstractProgram::read_str(src, Path::new("fuzz.mpa")) {
         check_abstract(&p);
     }
 }
 
-/// Abstract-program JSON ([`program_from_str`] with a `.json` name).
+/// Abstract-program JSON ([`AbstractProgram::read_str`] with a `.json` name).
 pub fn abstract_json(data: &[u8]) {
     let Some(src) = text(data) else { return };
-    if let Ok(p) = program_from_str(src, Path::new("fuzz.json")) {
+    if let Ok(p) = AbstractProgram::read_str(src, Path::new("fuzz.json")) {
         check_abstract(&p);
     }
 }

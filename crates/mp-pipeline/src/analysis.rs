@@ -54,7 +54,7 @@ pub(crate) fn analyse(
     check(cancel)?;
     obs.started(Stage::Abstract, None);
     let t1 = Instant::now();
-    let an = mp_abstract::analyse_synthesis(syn, &params.analysis.loops)
+    let an = mp_abstract::Analysis::from_synthesis(syn, &params.analysis.loops)
         .map_err(|e| PipelineError::stage("finding loops (abstract program)", e))?;
     timings.push(Stage::Abstract, t1.elapsed(), track.n_frames());
     check(cancel)?;

@@ -20,14 +20,14 @@ use crate::Outcome;
 /// preset, and smaller files on this kind of footage).
 pub(crate) const OVERLAY_PRESET: &str = "veryfast";
 
-/// The content of `loops.json` (layout [`mp_abstract::LOOPS_VERSION`],
+/// The content of `loops.json` (layout [`mp_abstract::RepetitionsJson::LOOPS_VERSION`],
 /// documented in `docs/LOOPS_JSON.md`). Every frame range is inclusive
 /// (`first_frame`–`last_frame`), in frames of the video.
 #[derive(Debug, Clone, Serialize)]
 pub struct LoopsFile {
     /// `mp-loops`.
     pub schema: &'static str,
-    /// [`mp_abstract::LOOPS_VERSION`].
+    /// [`mp_abstract::RepetitionsJson::LOOPS_VERSION`].
     pub version: u32,
     /// Frame rate.
     pub fps: f64,
@@ -71,8 +71,8 @@ pub struct PersonEntry {
 pub fn loops_file(outcome: &Outcome) -> LoopsFile {
     let track = &outcome.keypoints.track;
     LoopsFile {
-        schema: mp_abstract::LOOPS_SCHEMA,
-        version: mp_abstract::LOOPS_VERSION,
+        schema: mp_abstract::RepetitionsJson::LOOPS_SCHEMA,
+        version: mp_abstract::RepetitionsJson::LOOPS_VERSION,
         fps: track.fps(),
         frames: track.n_frames(),
         person: outcome.keypoints.person,
@@ -141,10 +141,7 @@ pub(crate) fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<S
             &format!("{dir}program.json"),
             an.concrete.to_json()?.as_bytes(),
         )?;
-        put(
-            &format!("{dir}abstract.txt"),
-            mp_abstract::print(&an.program).as_bytes(),
-        )?;
+        put(&format!("{dir}abstract.txt"), an.program.print().as_bytes())?;
         put(
             &format!("{dir}abstract.json"),
             serde_json::to_string_pretty(&an.program)?.as_bytes(),

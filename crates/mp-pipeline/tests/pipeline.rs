@@ -124,7 +124,10 @@ fn run_writes_the_folder_and_a_cancelled_run_leaves_nothing() {
     }
     let loops: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("loops.json")).unwrap()).unwrap();
-    assert_eq!(loops["version"], mp_abstract::LOOPS_VERSION);
+    assert_eq!(
+        loops["version"],
+        mp_abstract::RepetitionsJson::LOOPS_VERSION
+    );
     assert_eq!(loops["repetitions"]["total"], s.outcome.counts.total);
     assert_eq!(loops["repetitions"]["signal"], "keypoints");
     let stages: Vec<&str> = s.outcome.stages.iter().map(|t| t.stage.name()).collect();

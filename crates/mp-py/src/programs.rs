@@ -1,9 +1,7 @@
 //! Programs and counts: `Program` (concrete), `AbstractProgram`, `Counts`,
 //! `Summary` of a run.
 
-use mp_abstract::{
-    Analysis, Counts, ProgramLoopJson, RepetitionsJson, LOOPS_SCHEMA, LOOPS_VERSION,
-};
+use mp_abstract::{Analysis, Counts, ProgramLoopJson, RepetitionsJson};
 use mp_concrete::{ExecParams, Program};
 use mp_geom::PersonId;
 use mp_pipeline::Outcome;
@@ -215,7 +213,7 @@ impl PyAbstract {
     /// The abstract program in its text form.
     #[getter]
     fn text(&self) -> String {
-        mp_abstract::print(&self.inner.program)
+        self.inner.program.print()
     }
 
     /// The abstract program as JSON.
@@ -338,8 +336,8 @@ impl PyCounts {
     /// `frames`, `person`, `repetitions`, `people`; no program loops).
     fn to_json(&self) -> PyResult<String> {
         let v = serde_json::json!({
-            "schema": LOOPS_SCHEMA,
-            "version": LOOPS_VERSION,
+            "schema": RepetitionsJson::LOOPS_SCHEMA,
+            "version": RepetitionsJson::LOOPS_VERSION,
             "fps": self.inner.fps,
             "frames": self.inner.frames,
             "person": self.person,
@@ -358,10 +356,11 @@ impl PyCounts {
         };
         let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
         match v.get("version").and_then(serde_json::Value::as_u64) {
-            Some(x) if x == u64::from(LOOPS_VERSION) => {}
+            Some(x) if x == u64::from(RepetitionsJson::LOOPS_VERSION) => {}
             Some(x) => {
                 return Err(bad(format!(
-                    "version {x}, this version of mp reads version {LOOPS_VERSION}"
+                    "version {x}, this version of mp reads version {}",
+                    RepetitionsJson::LOOPS_VERSION
                 )))
             }
             None => return Err(bad("no `version` key".into())),

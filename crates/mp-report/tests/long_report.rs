@@ -31,7 +31,8 @@ fn person(frames: usize, shift: usize) -> Person {
     let executed = program.execute().unwrap();
     let track = track(&executed);
     let (abstract_program, loops, prims) =
-        mp_abstract::from_concrete(&program, &mp_abstract::LoopParams::default()).unwrap();
+        mp_abstract::AbstractProgram::from_concrete(&program, &mp_abstract::LoopParams::default())
+            .unwrap();
     let loops = mp_abstract::intervals(&prims, &loops, 0);
     Person {
         program,

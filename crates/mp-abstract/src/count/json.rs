@@ -1,5 +1,5 @@
 //! The one JSON form of repetition counts and program loops (`loops.json`,
-//! `mp loops --json`, Python `Counts.to_json`), version [`LOOPS_VERSION`].
+//! `mp loops --json`, Python `Counts.to_json`), version [`RepetitionsJson::LOOPS_VERSION`].
 //!
 //! Two words, never mixed:
 //! * **repetitions**: what was counted — the total, and for each counted
@@ -17,14 +17,6 @@ use serde::{Deserialize, Serialize};
 use super::{CountFeatures, CountMethod, CountSignal, CountedInterval, Counts};
 use crate::error::{AbstractError, Result};
 use crate::repetition::RepetitiveInterval;
-
-/// Version of the `loops.json` layout ([`RepetitionsJson`],
-/// [`ProgramLoopJson`] and the document around them). 2: repetitions and
-/// program loops in their own sections, inclusive frame ranges.
-pub const LOOPS_VERSION: u32 = 2;
-
-/// The name `loops.json` states in its `schema` key.
-pub const LOOPS_SCHEMA: &str = "mp-loops";
 
 /// The repetitions of a recording (or of one person), as JSON.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -133,6 +125,14 @@ impl CountedIntervalJson {
 }
 
 impl RepetitionsJson {
+    /// Version of the `loops.json` layout ([`RepetitionsJson`],
+    /// [`ProgramLoopJson`] and the document around them). 2: repetitions and
+    /// program loops in their own sections, inclusive frame ranges.
+    pub const LOOPS_VERSION: u32 = 2;
+
+    /// The name `loops.json` states in its `schema` key.
+    pub const LOOPS_SCHEMA: &str = "mp-loops";
+
     /// The JSON form of counts.
     pub fn new(c: &Counts) -> Self {
         RepetitionsJson {

@@ -5,11 +5,10 @@
 use crate::edit::MAX_ITERATIONS;
 use crate::exec::output_frames_bound;
 use crate::loops::{MAX_BODY, MAX_WINDOW};
-use crate::set_iterations;
 use crate::AbstractError;
 use crate::LoopParams;
-use crate::{execute, sample, ExecParams, LoopReplay};
 use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
+use crate::{ExecParams, LoopReplay};
 use mp_concrete::max_output_frames;
 use mp_concrete::ConcreteError;
 
@@ -72,12 +71,9 @@ fn frames_bound_without_unrolling() {
 #[test]
 fn absurd_iterations_in_a_program_are_an_error() {
     let p = program(1_000_000_000_000);
+    assert_too_large(p.execute(&ExecParams::default()).unwrap_err(), "iterations");
     assert_too_large(
-        execute(&p, &ExecParams::default()).unwrap_err(),
-        "iterations",
-    );
-    assert_too_large(
-        sample(&p, 1, &ExecParams::default()).unwrap_err(),
+        p.sample(1, &ExecParams::default()).unwrap_err(),
         "iterations",
     );
 }
@@ -85,7 +81,7 @@ fn absurd_iterations_in_a_program_are_an_error() {
 #[test]
 fn set_iterations_is_bounded() {
     let mut p = program(3);
-    let e = set_iterations(&mut p, 0, 1_000_000_000_000).unwrap_err();
+    let e = p.set_iterations(0, 1_000_000_000_000).unwrap_err();
     assert_too_large(e, "iterations");
     assert!(e_msg_has_limit(
         &mut p,
@@ -95,19 +91,19 @@ fn set_iterations_is_bounded() {
     // Below MAX_ITERATIONS but above the frame budget (30 frames × 4 joints per iteration).
     let over = max_output_frames(JOINTS) / 30 + 1;
     assert!(over < MAX_ITERATIONS);
-    assert_too_large(set_iterations(&mut p, 0, over).unwrap_err(), "iterations");
+    assert_too_large(p.set_iterations(0, over).unwrap_err(), "iterations");
     let Stmt::Loop(l) = &p.stmts[1] else { panic!() };
     assert_eq!(
         l.iterations, 3,
         "a refused count leaves the program unchanged"
     );
-    set_iterations(&mut p, 0, over - 1).unwrap();
-    set_iterations(&mut p, 0, 5).unwrap();
-    assert_eq!(execute(&p, &ExecParams::default()).unwrap().n_frames(), 110);
+    p.set_iterations(0, over - 1).unwrap();
+    p.set_iterations(0, 5).unwrap();
+    assert_eq!(p.execute(&ExecParams::default()).unwrap().n_frames(), 110);
 }
 
 fn e_msg_has_limit(p: &mut AbstractProgram, it: usize, limit: &str) -> bool {
-    set_iterations(p, 0, it)
+    p.set_iterations(0, it)
         .unwrap_err()
         .to_string()
         .contains(limit)

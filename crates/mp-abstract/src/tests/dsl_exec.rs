@@ -2,10 +2,9 @@
 use crate::synth::synthesize;
 use crate::AbstractError;
 use crate::LoopParams;
-use crate::{drop_iteration, repeat_iteration, set_iterations};
-use crate::{execute, sample, ExecParams, LoopReplay};
-use crate::{parse, print, print_with, PrintOptions};
+use crate::PrintOptions;
 use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
+use crate::{ExecParams, LoopReplay};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -65,8 +64,8 @@ proptest! {
     #[test]
     fn print_parse_round_trip(seed in 0u64..10_000, three in any::<bool>()) {
         let p = random_program(seed, if three { 3 } else { 2 });
-        let text = print(&p);
-        let q = parse(&text).unwrap();
+        let text = p.print();
+        let q = AbstractProgram::parse(&text).unwrap();
         prop_assert_eq!(&p, &q);
         let json = serde_json::to_string(&p).unwrap();
         let r: AbstractProgram = serde_json::from_str(&json).unwrap();
@@ -77,14 +76,14 @@ proptest! {
 #[test]
 fn summary_mentions_loops() {
     let p = random_program(3, 2);
-    let s = print_with(&p, &PrintOptions::summary());
+    let s = p.print_with(&PrintOptions::summary());
     assert!(s.starts_with("abstract_program(fps=29.97, units=px, dims=2, unit_scale="));
 }
 
 #[test]
 fn malformed_text_is_located() {
     let bad = "abstract_program(fps=30, units=px, dims=2)\njoints(a)\nmotion(duration=3) {\n  a: start=(1, 2), mid=(3), end=(5, 6)\n}\n";
-    match parse(bad) {
+    match AbstractProgram::parse(bad) {
         Err(AbstractError::Parse {
             line,
             column,
@@ -97,11 +96,13 @@ fn malformed_text_is_located() {
         other => panic!("{other:?}"),
     }
     assert!(matches!(
-        parse(""),
+        AbstractProgram::parse(""),
         Err(AbstractError::Parse { line: 1, .. })
     ));
     assert!(matches!(
-        parse("abstract_program(fps=30, units=px, dims=2)\njoints(a)\nfor i in range(3) {\n}\n"),
+        AbstractProgram::parse(
+            "abstract_program(fps=30, units=px, dims=2)\njoints(a)\nfor i in range(3) {\n}\n"
+        ),
         Err(AbstractError::Parse { line: 4, .. })
     ));
     // NaN covariance is rejected by validation.
@@ -168,7 +169,7 @@ fn program(reps: usize) -> AbstractProgram {
 #[test]
 fn deterministic_execution_length_and_shape() {
     let p = program(6);
-    let t = execute(&p, &ExecParams::default()).unwrap();
+    let t = p.execute(&ExecParams::default()).unwrap();
     assert_eq!(t.n_frames(), p.expected_frames());
     assert_eq!(t.n_joints(), 3);
     // The first frame of the loop is the mean start of the body's first primitive.
@@ -181,14 +182,12 @@ fn deterministic_execution_length_and_shape() {
         m[1]
     );
     // Replaying the observed iterations reproduces their total length.
-    let obs = execute(
-        &p,
-        &ExecParams {
+    let obs = p
+        .execute(&ExecParams {
             replay: LoopReplay::Observed,
             ..ExecParams::default()
-        },
-    )
-    .unwrap();
+        })
+        .unwrap();
     let observed_frames: usize = l.observed.iter().flatten().map(|d| d.duration).sum();
     assert_eq!(obs.n_frames(), observed_frames);
 }
@@ -196,9 +195,9 @@ fn deterministic_execution_length_and_shape() {
 #[test]
 fn stochastic_execution_is_seeded_and_within_support() {
     let p = program(8);
-    let a = sample(&p, 42, &ExecParams::default()).unwrap();
-    let b = sample(&p, 42, &ExecParams::default()).unwrap();
-    let c = sample(&p, 43, &ExecParams::default()).unwrap();
+    let a = p.sample(42, &ExecParams::default()).unwrap();
+    let b = p.sample(42, &ExecParams::default()).unwrap();
+    let c = p.sample(43, &ExecParams::default()).unwrap();
     assert_eq!(a, b);
     assert_ne!(a.positions(), c.positions());
     // Every sampled start point lies within 6 standard deviations of its Gaussian.
@@ -229,27 +228,27 @@ fn editing_changes_length_as_expected() {
         .iter()
         .map(|b| b.duration.mean_rounded().unwrap())
         .sum();
-    let base = execute(&p, &ExecParams::default()).unwrap().n_frames();
-    set_iterations(&mut p, 0, 10).unwrap();
-    let t = execute(&p, &ExecParams::default()).unwrap();
+    let base = p.execute(&ExecParams::default()).unwrap().n_frames();
+    p.set_iterations(0, 10).unwrap();
+    let t = p.execute(&ExecParams::default()).unwrap();
     assert_eq!(t.n_frames(), base + 4 * per_iter);
-    set_iterations(&mut p, 0, 3).unwrap();
+    p.set_iterations(0, 3).unwrap();
     assert_eq!(
-        execute(&p, &ExecParams::default()).unwrap().n_frames(),
+        p.execute(&ExecParams::default()).unwrap().n_frames(),
         base - 3 * per_iter
     );
-    drop_iteration(&mut p, 0, 1).unwrap();
-    repeat_iteration(&mut p, 0, 0).unwrap();
-    repeat_iteration(&mut p, 0, 0).unwrap();
+    p.drop_iteration(0, 1).unwrap();
+    p.repeat_iteration(0, 0).unwrap();
+    p.repeat_iteration(0, 0).unwrap();
     let Stmt::Loop(l) = &p.stmts[0] else { panic!() };
     assert_eq!(l.iterations, 4);
     assert_eq!(l.observed.len(), 4);
     assert!(matches!(
-        set_iterations(&mut p, 3, 2),
+        p.set_iterations(3, 2),
         Err(AbstractError::NotFound(_))
     ));
     assert!(matches!(
-        drop_iteration(&mut p, 0, 9),
+        p.drop_iteration(0, 9),
         Err(AbstractError::NotFound(_))
     ));
 }

@@ -4,10 +4,8 @@
 //! cannot hold), and duration counts whose total overflowed. Each is now
 //! rejected with a typed error, or reads back unchanged.
 
-use std::path::Path;
-
-use crate::program_from_str;
 use crate::{dsl, AbstractError, AbstractProgram};
+use std::path::Path;
 
 /// A joint called `right\x7fwrist` (DEL inside the name).
 const CONTROL_CHAR_IN_JOINT: &[u8] = b"{
@@ -213,11 +211,11 @@ const HUGE_DURATION: &[u8] = b"{
 }";
 
 fn json(bytes: &[u8]) -> crate::Result<AbstractProgram> {
-    program_from_str(&String::from_utf8_lossy(bytes), Path::new("fuzz.json"))
+    AbstractProgram::read_str(&String::from_utf8_lossy(bytes), Path::new("fuzz.json"))
 }
 
 fn text(src: &str) -> crate::Result<AbstractProgram> {
-    program_from_str(src, Path::new("fuzz.mpa"))
+    AbstractProgram::read_str(src, Path::new("fuzz.mpa"))
 }
 
 #[test]
@@ -277,7 +275,7 @@ fn unitless_programs_of_more_than_three_dimensions_round_trip() {
     );
     let p = text(&src).unwrap();
     assert_eq!(p.dims, 4);
-    assert_eq!(text(&dsl::print(&p)).unwrap(), p);
+    assert_eq!(text(&p.print()).unwrap(), p);
     let e = text(&src.replace("units=1", "units=px"))
         .unwrap_err()
         .to_string();

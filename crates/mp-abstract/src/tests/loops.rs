@@ -1,8 +1,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
+use crate::loops::window_score;
 use crate::synth::{fit_loop, synthesize};
 use crate::AbstractError;
 use crate::DetPrim;
-use crate::{detect_loops, window_score, LoopParams};
+use crate::{detect_loops, LoopParams};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

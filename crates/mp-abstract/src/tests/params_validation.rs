@@ -2,8 +2,8 @@
 //! public entry point with the parameter error naming the field.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
+use crate::ExecParams;
 use crate::{analyse, unroll, AbstractError, AbstractParams, AbstractProgram, PredictParams};
-use crate::{execute, sample, ExecParams};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
 
@@ -92,12 +92,12 @@ fn exec_params_reject_bad_fields() {
         jitter: f64::NAN,
         ..ExecParams::default()
     };
-    assert_eq!(names(execute(&prog, &p).unwrap_err()), "jitter");
-    assert_eq!(names(sample(&prog, 1, &p).unwrap_err()), "jitter");
+    assert_eq!(names(prog.execute(&p).unwrap_err()), "jitter");
+    assert_eq!(names(prog.sample(1, &p).unwrap_err()), "jitter");
     let mut p = ExecParams::default();
     p.fit.min_span_px = -1.0;
-    assert_eq!(names(execute(&prog, &p).unwrap_err()), "min_span_px");
-    assert_eq!(names(sample(&prog, 1, &p).unwrap_err()), "min_span_px");
+    assert_eq!(names(prog.execute(&p).unwrap_err()), "min_span_px");
+    assert_eq!(names(prog.sample(1, &p).unwrap_err()), "min_span_px");
     // The fit's unit_scale is the program's: not checked.
     let mut p = ExecParams::default();
     p.fit.unit_scale = f64::NAN;

@@ -40,14 +40,13 @@ fn finds_jumping_jacks_and_squats_with_their_counts() {
         assert_eq!(hit.boundaries.len(), reps + 1);
     }
     // The abstract program executes back to the same number of frames when loops replay as observed.
-    let t = crate::execute(
-        &a.program,
-        &crate::ExecParams {
+    let t = a
+        .program
+        .execute(&crate::ExecParams {
             replay: crate::LoopReplay::Observed,
             ..Default::default()
-        },
-    )
-    .unwrap();
+        })
+        .unwrap();
     assert_eq!(t.n_frames(), perf.track_2d.n_frames());
 }
 

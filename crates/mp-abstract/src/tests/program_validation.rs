@@ -3,11 +3,9 @@
 //! file and the field.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use std::path::PathBuf;
-
-use crate::read_program;
-use crate::AbstractError;
+use crate::{AbstractError, AbstractProgram};
 use serde_json::{json, Value};
+use std::path::PathBuf;
 
 /// A valid 2-D program with one joint: a primitive and a one-body loop.
 fn program() -> Value {
@@ -37,7 +35,7 @@ fn read(v: &Value, name: &str) -> (PathBuf, Result<(), AbstractError>) {
     std::fs::create_dir_all(&dir).unwrap();
     let p = dir.join("program.json");
     std::fs::write(&p, v.to_string()).unwrap();
-    let r = read_program(&p).map(|_| ());
+    let r = AbstractProgram::read(&p).map(|_| ());
     let _ = std::fs::remove_dir_all(&dir);
     (p, r)
 }

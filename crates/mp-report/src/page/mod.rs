@@ -330,8 +330,11 @@ mod tests {
     fn the_page_loads_its_data_from_the_folder() {
         let (track, program) = crate::plots::tests::tiny();
         let exec = program.execute().unwrap();
-        let (abs, _, _) =
-            mp_abstract::from_concrete(&program, &mp_abstract::LoopParams::default()).unwrap();
+        let (abs, _, _) = mp_abstract::AbstractProgram::from_concrete(
+            &program,
+            &mp_abstract::LoopParams::default(),
+        )
+        .unwrap();
         let reps = vec![CountedInterval {
             start_frame: 2,
             end_frame: 12,

@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 
 use mp_abstract::CountedInterval;
-use mp_abstract::{print_with, PrintOptions};
+use mp_abstract::PrintOptions;
 use mp_concrete::Program;
 use mp_concrete::{statement, NumberFormat};
 use mp_geom::frames_label;
@@ -133,7 +133,7 @@ pub(crate) fn abstract_panel(pv: &ProgramView<'_>, fps: f64, offset: usize) -> S
         }
         s.push_str("</tbody></table>");
     }
-    let text = print_with(pv.abstract_program, &PrintOptions::summary());
+    let text = pv.abstract_program.print_with(&PrintOptions::summary());
     let lines: Vec<&str> = text.lines().collect();
     let shown = lines.len().min(ABSTRACT_PAGE_LINES);
     let mut code = lines[..shown].join("\n");
