@@ -287,6 +287,15 @@ impl Lexer {
             _ => self.err(format!("expected a name, found {}", self.describe())),
         }
     }
+    /// The joint `name` followed by `:` (joints come in the header's order).
+    fn joint(&mut self, name: &str) -> Result<()> {
+        let got = self.ident()?;
+        if got != name {
+            self.pos -= 1;
+            return self.err(format!("expected joint `{name}`, found `{got}`"));
+        }
+        self.punct(':')
+    }
     fn keyword(&mut self, k: &str) -> Result<()> {
         match self.peek() {
             Some(Tok::Ident(s)) if s == k => {
@@ -361,12 +370,7 @@ fn parse_det(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<DetPrim> 
     lx.punct('{')?;
     let mut points = Vec::with_capacity(joints.len());
     for name in joints {
-        let got = lx.ident()?;
-        if &got != name {
-            lx.pos -= 1;
-            return lx.err(format!("expected joint `{name}`, found `{got}`"));
-        }
-        lx.punct(':')?;
+        lx.joint(name)?;
         let mut v = Vec::new();
         for (i, key) in ["start", "mid", "end"].iter().enumerate() {
             if i > 0 {
@@ -418,12 +422,7 @@ fn parse_prob(lx: &mut Lexer, joints: &[String], dims: usize) -> Result<ProbPrim
     let n2 = n.saturating_mul(n);
     let mut gs = Vec::with_capacity(joints.len());
     for name in joints {
-        let got = lx.ident()?;
-        if &got != name {
-            lx.pos -= 1;
-            return lx.err(format!("expected joint `{name}`, found `{got}`"));
-        }
-        lx.punct(':')?;
+        lx.joint(name)?;
         lx.keyword("Gaussian")?;
         lx.punct('(')?;
         lx.keyword("mean")?;

@@ -389,13 +389,7 @@ impl VideoReader {
             });
         }
         let stdout = child.stdout.take();
-        let stderr = child.stderr.take().map(|mut s| {
-            std::thread::spawn(move || {
-                let mut buf = String::new();
-                let _ = s.read_to_string(&mut buf);
-                buf
-            })
-        });
+        let stderr = child.stderr.take().map(collect_stderr);
         Ok(VideoReader {
             info,
             child: Some(child),
@@ -666,13 +660,7 @@ impl VideoWriter {
             .stderr(Stdio::piped())
             .spawn()
             .map_err(|e| spawn_error("ffmpeg", &path, e))?;
-        let stderr = child.stderr.take().map(|mut s| {
-            std::thread::spawn(move || {
-                let mut buf = String::new();
-                let _ = s.read_to_string(&mut buf);
-                buf
-            })
-        });
+        let stderr = child.stderr.take().map(collect_stderr);
         Ok(VideoWriter {
             path,
             width,
@@ -753,6 +741,16 @@ impl Drop for VideoWriter {
     fn drop(&mut self) {
         let _ = self.close_inner();
     }
+}
+
+/// Reads a child's standard error to its end on a thread of its own (so the
+/// child never blocks on a full pipe); the text is its message on failure.
+fn collect_stderr(mut s: std::process::ChildStderr) -> std::thread::JoinHandle<String> {
+    std::thread::spawn(move || {
+        let mut buf = String::new();
+        let _ = s.read_to_string(&mut buf);
+        buf
+    })
 }
 
 #[cfg(test)]

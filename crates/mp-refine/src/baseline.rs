@@ -150,18 +150,9 @@ fn detect_parts(track: &Track, params: &RefineParams) -> Result<(Vec<bool>, Vec<
     for f in held_frames(p, params.frozen_speed_m) {
         frozen[f] = true;
     }
-    let mut f = 0;
-    while f < t {
-        if !frozen[f] {
-            f += 1;
-            continue;
-        }
-        let a = f;
-        while f < t && frozen[f] {
-            f += 1;
-        }
-        if f - a >= params.min_frozen_run_frames {
-            flag[a..f].iter_mut().for_each(|x| *x = true);
+    for run in true_runs(&frozen) {
+        if run.len() >= params.min_frozen_run_frames {
+            flag[run].iter_mut().for_each(|x| *x = true);
         }
     }
     if t >= 3 {
@@ -247,18 +238,9 @@ pub fn refine(
         }
     }
     // Drop runs too long to be a local flaw.
-    let mut f = 0;
-    while f < t {
-        if !flagged[f] {
-            f += 1;
-            continue;
-        }
-        let a = f;
-        while f < t && flagged[f] {
-            f += 1;
-        }
-        if f - a > params.max_run_frames {
-            flagged[a..f].iter_mut().for_each(|x| *x = false);
+    for run in true_runs(&flagged) {
+        if run.len() > params.max_run_frames {
+            flagged[run].iter_mut().for_each(|x| *x = false);
         }
     }
     let repaired = repair(track, &flagged, params.context_frames)?;
@@ -386,4 +368,22 @@ pub fn full_confidence(track: &Track) -> Result<Track> {
         track.units(),
         track.skeleton().clone(),
     )?)
+}
+
+/// The maximal runs of `true` in `mask`, in order.
+fn true_runs(mask: &[bool]) -> Vec<std::ops::Range<usize>> {
+    let mut runs = Vec::new();
+    let mut f = 0;
+    while f < mask.len() {
+        if !mask[f] {
+            f += 1;
+            continue;
+        }
+        let a = f;
+        while f < mask.len() && mask[f] {
+            f += 1;
+        }
+        runs.push(a..f);
+    }
+    runs
 }

@@ -360,26 +360,23 @@ fn kinds_row(
     }
 }
 
-/// The counted repetitions: intervals, boundaries, numbers and counts.
-fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterval]) {
-    // Counted repetitions.
+/// A row's label and its background band, `h` high from `top`.
+fn band(svg: &mut Svg, lay: &Layout, top: f64, h: f64, label: &str) {
     svg.text(
         lay.label_w,
-        lay.loops_top + lay.loop_h / 2.0 + 4.0,
-        "repetitions",
+        top + h / 2.0 + 4.0,
+        label,
         11.0,
         style::INK,
         Anchor::End,
         "",
     );
-    svg.rect(
-        lay.x0,
-        lay.loops_top,
-        lay.x1 - lay.x0,
-        lay.loop_h,
-        "#f1f5f9",
-        r#"rx="3""#,
-    );
+    svg.rect(lay.x0, top, lay.x1 - lay.x0, h, "#f1f5f9", r#"rx="3""#);
+}
+
+/// The counted repetitions: intervals, boundaries, numbers and counts.
+fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterval]) {
+    band(svg, lay, lay.loops_top, lay.loop_h, "repetitions");
     for (li, iv) in repetitions.iter().enumerate() {
         let (a, b) = (lay.fx(iv.start_frame as f64), lay.fx(iv.end_frame as f64));
         svg.rect(
@@ -477,24 +474,7 @@ fn repetitions_row(svg: &mut Svg, lay: &Layout, repetitions: &[RepetitiveInterva
 
 /// The abstract program's `for` statements.
 fn program_loops_row(svg: &mut Svg, lay: &Layout, program_loops: &[RepetitiveInterval]) {
-    // Program loops: the abstract program's `for` statements.
-    svg.text(
-        lay.label_w,
-        lay.plo_top + lay.plo_h / 2.0 + 4.0,
-        "program loops",
-        11.0,
-        style::INK,
-        Anchor::End,
-        "",
-    );
-    svg.rect(
-        lay.x0,
-        lay.plo_top,
-        lay.x1 - lay.x0,
-        lay.plo_h,
-        "#f1f5f9",
-        r#"rx="3""#,
-    );
+    band(svg, lay, lay.plo_top, lay.plo_h, "program loops");
     for (li, lp) in program_loops.iter().enumerate() {
         let (a, b) = (lay.fx(lp.start_frame as f64), lay.fx(lp.end_frame as f64));
         svg.rect(
