@@ -59,7 +59,7 @@ fn shared_videos(with_golf: bool) -> anyhow::Result<Vec<PathBuf>> {
         let mut q: Vec<PathBuf> = std::fs::read_dir(&dir)
             .with_context(|| format!("listing {}", dir.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| mp_pipeline::is_video(p))
+            .filter(|p| mp_pipeline::Input::is_video(p))
             .collect();
         q.sort();
         v.extend(q);
