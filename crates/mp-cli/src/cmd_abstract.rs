@@ -190,7 +190,7 @@ pub fn loops_cmd(a: &LoopsArgs) -> anyhow::Result<()> {
     )?;
     let c = &out.counts;
     if a.json {
-        let v = mp_pipeline::loops_file(&out);
+        let v = out.loops_file();
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
@@ -303,7 +303,7 @@ pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
 /// `mp predict`: the frames after the observed ones, by the chosen method
 /// (`mp_forecast::forecast`), with their KD to the actual frames when the track has them.
 pub fn predict_cmd(a: &PredictArgs) -> anyhow::Result<()> {
-    if mp_pipeline::is_video(&a.track) {
+    if mp_pipeline::Input::is_video(&a.track) {
         return crate::cmd_video::predict_video_cmd(
             &a.track,
             a.video.seconds,

@@ -5,8 +5,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
+use mp_geom::CancelToken;
 use mp_geom::Units;
-use mp_pipeline::{CancelToken, ExtractParams, Poses};
+use mp_pipeline::{ExtractParams, Poses};
 use mp_pose::ModelChoice;
 use mp_pose::SessionParams;
 use mp_pose::{open_source, VideoWriter};
@@ -104,7 +105,7 @@ fn extract_params(a: &ExtractArgs) -> Result<(mp_pipeline::Params, ExtractParams
 pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
     crate::track_arg::refuse_track_for_extract(&a.video)?;
     let (params, what) = extract_params(a)?;
-    mp_pipeline::check_output(&a.output, what)?;
+    what.check_output(&a.output)?;
     let bars = crate::progress::Bars::new(a.quiet);
     let ex = mp_pipeline::extract(&a.video, &params, what, &bars, &CancelToken::new())
         .with_context(|| format!("extracting keypoints from {}", a.video.display()))?;

@@ -67,7 +67,7 @@ impl LiveView {
             out.push("nobody in view yet".into());
         }
         for (id, (reps, here)) in &self.people {
-            let who = if *id == mp_live::SCENE {
+            let who = if *id == Event::SCENE {
                 "the scene (no person counted)".to_string()
             } else {
                 format!("person {id}")
@@ -198,7 +198,7 @@ mod tests {
     fn the_scene_is_named_as_such() {
         let mut v = LiveView::default();
         v.update(&Event::Rep {
-            person: mp_live::SCENE,
+            person: Event::SCENE,
             count: 2,
             start: 1.0,
             end: 2.0,

@@ -6,7 +6,8 @@ use std::sync::{Mutex, Once, OnceLock};
 use std::time::Duration;
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use mp_pipeline::{CancelToken, Observer, Stage, StageTime};
+use mp_geom::CancelToken;
+use mp_pipeline::{Observer, Stage, StageTime};
 
 /// One progress bar per running stage (hidden when quiet).
 pub struct Bars {

@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use mp_geom::Track;
 use mp_geom::{read_track_rated, RateSource, ReadOptions, TrackRead, DEFAULT_FPS};
-use mp_pipeline::{is_video, Input};
+use mp_pipeline::Input;
 
 /// The frame-rate option of every command that reads a track.
 #[derive(Args, Debug, Clone, Default)]
@@ -53,7 +53,7 @@ pub fn warn_assumed(path: &Path) {
 /// the commands that take it.
 fn refuse_pictures(path: &Path) -> Result<()> {
     let p = path.display();
-    if is_video(path) {
+    if Input::is_video(path) {
         bail!(
             "{p} is a video, not a keypoint track: `mp extract {p} -o track.npz` writes its \
              keypoints, `mp run {p} --out DIR` analyses it whole"
@@ -145,7 +145,7 @@ pub fn check_out_dir(out: &Path) -> Result<()> {
 /// Refuses a keypoint track given to `mp extract`, which reads videos and
 /// images.
 pub fn refuse_track_for_extract(path: &Path) -> Result<()> {
-    if is_track_file(path) && !is_video(path) {
+    if is_track_file(path) && !Input::is_video(path) {
         let p = path.display();
         bail!(
             "{p} is already a keypoint track: give it to `mp run {p} --out DIR` or `mp fit {p} -o \

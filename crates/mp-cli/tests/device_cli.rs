@@ -25,7 +25,7 @@ fn devices_are_checked_and_the_cpu_build_says_why_not_cuda() {
     assert!(err.contains("device") && err.contains("tpu"), "{err}");
     let err = refused(&["run", &video, "--out", out, "--device", "cuda:x"]);
     assert!(err.contains("device"), "{err}");
-    let cuda = mp_pose::cuda_available().expect("ONNX Runtime loads");
+    let cuda = mp_pose::Device::cuda_available().expect("ONNX Runtime loads");
     if !cuda {
         let err = refused(&[
             "extract",

@@ -10,7 +10,8 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use clap::Args;
-use mp_pipeline::{analyse_input, is_video, CancelToken, Input, Params, Silent, Stage};
+use mp_geom::CancelToken;
+use mp_pipeline::{analyse_input, Input, Params, Silent, Stage};
 use serde_json::{json, Map, Value};
 
 /// Arguments of `cargo xtask eval count`.
@@ -140,7 +141,7 @@ pub(crate) fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(Path
         let mut v: Vec<PathBuf> = std::fs::read_dir(videos)
             .with_context(|| format!("listing {}", videos.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| is_video(p))
+            .filter(|p| Input::is_video(p))
             .collect();
         v.sort();
         v

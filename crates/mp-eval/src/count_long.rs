@@ -23,10 +23,11 @@ use std::process::Command;
 use std::time::Instant;
 
 use anyhow::{bail, Context};
+use mp_geom::CancelToken;
 use mp_geom::Track;
 #[cfg(test)]
 use mp_geom::{Skeleton, Units};
-use mp_pipeline::{CancelToken, Input, Keep, Params, Silent};
+use mp_pipeline::{Input, Keep, Params, PoseParams, Silent};
 use mp_pose::VideoReader;
 use mp_pose::{grey_thumbnail_region, thumbnail_track};
 use serde_json::{json, Value};
@@ -211,7 +212,7 @@ pub fn run(a: &LongArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let clips = load_clips(a)?;
     let boxes: Vec<([f64; 4], usize)> = clips.iter().filter_map(|c| c.person_box).collect();
-    let region = weighted_box(&boxes, mp_pipeline::BOX_MARGIN);
+    let region = weighted_box(&boxes, PoseParams::BOX_MARGIN);
     let size = a.params.pose.thumbnail_size;
     let mut thumbs = Vec::new();
     for c in &clips {

@@ -10,7 +10,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context;
-use mp_pipeline::{Analyser, CancelToken, Input, Params, Silent, Stage};
+use mp_geom::CancelToken;
+use mp_pipeline::{Analyser, Input, Params, Silent, Stage};
 use serde_json::{json, Map, Value};
 
 use crate::synth_video::{make_case, sources, COUNTS, VARIANTS};

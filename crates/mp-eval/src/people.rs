@@ -33,8 +33,9 @@ use std::time::Instant;
 
 use anyhow::{bail, Context};
 use clap::Args;
+use mp_geom::CancelToken;
 use mp_geom::{People, Person, PersonId};
-use mp_pipeline::{analyse_input, is_video, CancelToken, Input, Outcome, Params, Silent};
+use mp_pipeline::{analyse_input, Input, Outcome, Params, Silent};
 use serde_json::{json, Value};
 
 /// Arguments of `cargo xtask eval people`.
@@ -165,7 +166,7 @@ fn labelled(videos: &Path, labels: &Path) -> anyhow::Result<Vec<(String, PathBuf
     let mut v: Vec<PathBuf> = std::fs::read_dir(videos)
         .with_context(|| format!("listing {}", videos.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| is_video(p))
+        .filter(|p| Input::is_video(p))
         .collect();
     v.sort();
     let mut out = Vec::new();

@@ -49,8 +49,8 @@ use serde::Serialize;
 
 pub use counter::{OnlineCounter, Repetition};
 pub use program::{OnlineProgram, ProgramSegment};
-pub use run::{run, SCENE};
-pub use source::{LiveSource, Reconnect};
+pub use run::run;
+pub use source::LiveSource;
 
 /// Why a live run stopped early.
 #[derive(Debug, thiserror::Error)]
@@ -85,7 +85,7 @@ pub enum LiveError {
 }
 
 /// The result of this crate's fallible functions.
-pub type Result<T> = std::result::Result<T, LiveError>;
+pub(crate) type Result<T> = std::result::Result<T, LiveError>;
 
 /// Parameters of a live run. The pose model, the tracker and the counting
 /// are `mp run`'s ([`mp_pipeline::Params`]).
@@ -308,6 +308,12 @@ pub enum Event {
     Summary(Summary),
 }
 
+impl Event {
+    /// The person id of the scene's repetitions (the people tracker numbers
+    /// people from 1).
+    pub const SCENE: u32 = 0;
+}
+
 /// Where a live run reports what it finds: every [`Event`], and every
 /// analysed frame with the poses on it (for drawing or keeping them; the
 /// default ignores frames). A closure `|e: &Event| …` is a sink of events.
@@ -374,4 +380,3 @@ pub struct PersonTotal {
     /// Repetitions reported.
     pub total_repetitions: usize,
 }
-pub use program::concatenate;

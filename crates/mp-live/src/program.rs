@@ -90,6 +90,26 @@ impl ProgramSegment {
             .collect();
         lines.join("\n")
     }
+
+    /// The program made of `segments` (consecutive, in order) with the header
+    /// of `like` (frame rate, units, joints, continuity).
+    pub fn concatenate(like: &Program, segments: &[ProgramSegment]) -> Result<Program> {
+        for w in segments.windows(2) {
+            if w[1].start_frame != w[0].end_frame {
+                return Err(LiveError::Param {
+                    name: "segments",
+                    reason: format!(
+                        "segment {} starts at frame {}, not where segment {} ends ({})",
+                        w[1].index, w[1].start_frame, w[0].index, w[0].end_frame
+                    ),
+                });
+            }
+        }
+        Ok(Program {
+            segments: segments.iter().map(|s| s.segment.clone()).collect(),
+            ..like.clone()
+        })
+    }
 }
 
 /// See the module docs.
@@ -291,24 +311,4 @@ fn stationary(track: &Track) -> Segment {
             })
             .collect(),
     }
-}
-
-/// The program made of `segments` (consecutive, in order) with the header
-/// of `like` (frame rate, units, joints, continuity).
-pub fn concatenate(like: &Program, segments: &[ProgramSegment]) -> Result<Program> {
-    for w in segments.windows(2) {
-        if w[1].start_frame != w[0].end_frame {
-            return Err(LiveError::Param {
-                name: "segments",
-                reason: format!(
-                    "segment {} starts at frame {}, not where segment {} ends ({})",
-                    w[1].index, w[1].start_frame, w[0].index, w[0].end_frame
-                ),
-            });
-        }
-    }
-    Ok(Program {
-        segments: segments.iter().map(|s| s.segment.clone()).collect(),
-        ..like.clone()
-    })
 }

@@ -20,10 +20,6 @@ use crate::{
     Event, LiveError, LiveFrame, LiveParams, PersonPose, PersonTotal, Result, Sink, Summary,
 };
 
-/// The person id of the scene's repetitions (the people tracker numbers
-/// people from 1).
-pub const SCENE: u32 = 0;
-
 /// One track of the tracker: its person id once confirmed, its counter,
 /// its program (and its segments committed before it was confirmed).
 struct Tracked {
@@ -123,7 +119,7 @@ impl State {
     }
 
     fn report(&mut self, id: u32, reps: Vec<Repetition>, sink: &mut dyn Sink) {
-        if id != SCENE && !reps.is_empty() {
+        if id != Event::SCENE && !reps.is_empty() {
             // A person's repetitions are counted: the scene's count stops where it is.
             self.scene = None;
         }
@@ -309,7 +305,7 @@ fn analyse(
             let thumb = mp_pose::grey_thumbnail_region(&frame, scene.thumbnail_size(), whole)?;
             scene.push(frame.index, thumb);
             let reps = scene.update(params)?;
-            state.report(SCENE, reps, sink);
+            state.report(Event::SCENE, reps, sink);
         }
         if frame.index < next_pose {
             // Skipped by the pose rate: the people's poses on it are filled
@@ -459,7 +455,7 @@ fn analyse(
     }
     if let Some(mut scene) = state.scene.take() {
         let reps = scene.finish(params)?;
-        state.report(SCENE, reps, sink);
+        state.report(Event::SCENE, reps, sink);
     }
     Ok(())
 }

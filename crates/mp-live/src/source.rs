@@ -473,7 +473,7 @@ struct SlotState {
 
 /// A new try at a network source that could not be reached or broke off.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Reconnect {
+pub(crate) struct Reconnect {
     /// 1 for the first new try.
     pub attempt: u32,
     /// Why the source is tried again.

@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use mp_concrete::{program_stats, Program};
 use mp_geom::{Skeleton, Track};
-use mp_live::concatenate;
 use mp_live::{LiveParams, OnlineProgram, ProgramSegment};
 
 /// A COCO-17 pose: wrists and elbows swing with period `period` frames, and
@@ -162,7 +161,7 @@ fn compare(track: &Track, frame_px: Option<f64>, params: &LiveParams) -> Compare
     segs.extend(p.finish(params).unwrap());
     let ms_per_frame = t0.elapsed().as_secs_f64() * 1e3 / track.n_frames() as f64;
     check_tiling(&segs, 0, track.n_frames());
-    let online: Program = concatenate(&offline, &segs).unwrap();
+    let online: Program = ProgramSegment::concatenate(&offline, &segs).unwrap();
     let (so, sf) = (
         program_stats(&online, &coco).unwrap(),
         program_stats(&offline, &coco).unwrap(),

@@ -179,7 +179,7 @@ pub fn format_shape(shape: &[i64]) -> String {
 }
 
 /// Result alias for `mp-onnx`.
-pub type Result<T, E = OnnxError> = std::result::Result<T, E>;
+pub(crate) type Result<T, E = OnnxError> = std::result::Result<T, E>;
 
 #[cfg(test)]
 mod tests {

@@ -32,11 +32,8 @@ mod lookup;
 mod network;
 mod session;
 
-pub use error::{OnnxError, Result};
+pub use error::OnnxError;
 pub use library::{environment, find_library};
 pub use lookup::ModelDirs;
 pub use network::{Input, Network, Output};
-pub use session::{
-    check_tensor, cuda_available, inputs_of, open_session, outputs_of, Device, SessionParams,
-    TensorInfo,
-};
+pub use session::{open_session, Device, SessionParams, TensorInfo};

@@ -14,7 +14,7 @@ use ort::session::{Session, SessionInputValue};
 use ort::value::TensorRef;
 
 use crate::error::{OnnxError, Result};
-use crate::session::{check_tensor, inputs_of, names_of, open_session, outputs_of};
+use crate::session::{names_of, open_session};
 use crate::session::{SessionParams, TensorInfo};
 
 /// Element type name of the tensors [`Network::run`] passes and reads.
@@ -98,8 +98,8 @@ impl Network {
         Ok(Network {
             name: path.display().to_string(),
             path: path.to_path_buf(),
-            inputs: inputs_of(&session),
-            outputs: outputs_of(&session),
+            inputs: TensorInfo::inputs_of(&session),
+            outputs: TensorInfo::outputs_of(&session),
             session: Mutex::new(session),
         })
     }
@@ -135,15 +135,15 @@ impl Network {
     }
 
     /// Checks that the graph has an input of this name, element type and
-    /// shape (see [`check_tensor`]); [`OnnxError::Contract`] otherwise.
+    /// shape (see [`TensorInfo::check`]); [`OnnxError::Contract`] otherwise.
     pub fn expect_input(&self, name: &str, dtype: &str, shape: &[i64]) -> Result<&TensorInfo> {
-        check_tensor(&self.name, &self.inputs, name, dtype, shape)
+        TensorInfo::check(&self.name, &self.inputs, name, dtype, shape)
     }
 
     /// Checks that the graph has an output of this name, element type and
-    /// shape (see [`check_tensor`]); [`OnnxError::Contract`] otherwise.
+    /// shape (see [`TensorInfo::check`]); [`OnnxError::Contract`] otherwise.
     pub fn expect_output(&self, name: &str, dtype: &str, shape: &[i64]) -> Result<&TensorInfo> {
-        check_tensor(&self.name, &self.outputs, name, dtype, shape)
+        TensorInfo::check(&self.name, &self.outputs, name, dtype, shape)
     }
 
     /// Checks a run's inputs against the graph without running it: every

@@ -51,18 +51,18 @@ impl Device {
             Device::Cuda(n) => format!("cuda:{n}"),
         }
     }
-}
 
-/// Whether the ONNX Runtime library loaded has its CUDA execution provider
-/// (the GPU build; a GPU is still needed for a session to use it). Loads
-/// the library first when needed.
-pub fn cuda_available() -> Result<bool> {
-    use ort::ep::ExecutionProvider;
-    environment()?;
-    ort::ep::CUDA::is_available().map_err(|e| OnnxError::Device {
-        device: "cuda".into(),
-        reason: e.to_string(),
-    })
+    /// Whether the ONNX Runtime library loaded has its CUDA execution provider
+    /// (the GPU build; a GPU is still needed for a session to use it). Loads
+    /// the library first when needed.
+    pub fn cuda_available() -> Result<bool> {
+        use ort::ep::ExecutionProvider;
+        environment()?;
+        ort::ep::CUDA::is_available().map_err(|e| OnnxError::Device {
+            device: "cuda".into(),
+            reason: e.to_string(),
+        })
+    }
 }
 
 /// Settings of an inference session.
@@ -113,7 +113,7 @@ pub fn open_session(path: &Path, params: &SessionParams) -> Result<Session> {
     match params.device {
         Device::Cpu => open_on(path, params, None),
         Device::Cuda(n) => {
-            if !cuda_available()? {
+            if !Device::cuda_available()? {
                 return Err(OnnxError::Device {
                     device: format!("cuda:{n}"),
                     reason: "the ONNX Runtime library loaded is the CPU build, without CUDA \
@@ -124,7 +124,7 @@ pub fn open_session(path: &Path, params: &SessionParams) -> Result<Session> {
             open_on(path, params, Some(n))
         }
         Device::Auto => {
-            if cuda_available().unwrap_or(false) {
+            if Device::cuda_available().unwrap_or(false) {
                 if let Ok(s) = open_on(path, params, Some(0)) {
                     return Ok(s);
                 }
@@ -200,6 +200,55 @@ impl TensorInfo {
                 .zip(shape)
                 .all(|(&g, &s)| g < 0 || g as usize == s)
     }
+
+    /// Inputs of a session, in graph order.
+    pub fn inputs_of(session: &Session) -> Vec<TensorInfo> {
+        session.inputs().iter().map(outlet_info).collect()
+    }
+
+    /// Outputs of a session, in graph order.
+    pub fn outputs_of(session: &Session) -> Vec<TensorInfo> {
+        session.outputs().iter().map(outlet_info).collect()
+    }
+
+    /// Checks that `infos` (the inputs or outputs of `model`) have a tensor of
+    /// this name, element type and shape; a dimension the graph leaves open
+    /// matches any expected size, and an expected size below 0 matches any graph
+    /// size. Returns the tensor's description.
+    ///
+    /// Errors: [`OnnxError::Contract`], naming the model, the tensor and both shapes.
+    pub fn check<'a>(
+        model: &str,
+        infos: &'a [TensorInfo],
+        name: &str,
+        dtype: &str,
+        shape: &[i64],
+    ) -> Result<&'a TensorInfo> {
+        let Some(info) = infos.iter().find(|i| i.name == name) else {
+            return Err(OnnxError::contract(
+                model,
+                format!("no tensor named `{name}` (has: {})", names_of(infos)),
+            ));
+        };
+        let shape_ok = info.shape.len() == shape.len()
+            && info
+                .shape
+                .iter()
+                .zip(shape)
+                .all(|(&a, &b)| a < 0 || b < 0 || a == b);
+        if !shape_ok || info.dtype != dtype {
+            return Err(OnnxError::contract(
+                model,
+                format!(
+                    "`{name}` is {} {}, expected {dtype} {}",
+                    info.dtype,
+                    format_shape(&info.shape),
+                    format_shape(shape)
+                ),
+            ));
+        }
+        Ok(info)
+    }
 }
 
 fn outlet_info(o: &ort::value::Outlet) -> TensorInfo {
@@ -220,16 +269,6 @@ fn outlet_info(o: &ort::value::Outlet) -> TensorInfo {
     }
 }
 
-/// Inputs of a session, in graph order.
-pub fn inputs_of(session: &Session) -> Vec<TensorInfo> {
-    session.inputs().iter().map(outlet_info).collect()
-}
-
-/// Outputs of a session, in graph order.
-pub fn outputs_of(session: &Session) -> Vec<TensorInfo> {
-    session.outputs().iter().map(outlet_info).collect()
-}
-
 /// Names of tensors, comma-separated, for messages.
 pub(crate) fn names_of(infos: &[TensorInfo]) -> String {
     infos
@@ -237,45 +276,6 @@ pub(crate) fn names_of(infos: &[TensorInfo]) -> String {
         .map(|i| i.name.as_str())
         .collect::<Vec<_>>()
         .join(", ")
-}
-
-/// Checks that `infos` (the inputs or outputs of `model`) have a tensor of
-/// this name, element type and shape; a dimension the graph leaves open
-/// matches any expected size, and an expected size below 0 matches any graph
-/// size. Returns the tensor's description.
-///
-/// Errors: [`OnnxError::Contract`], naming the model, the tensor and both shapes.
-pub fn check_tensor<'a>(
-    model: &str,
-    infos: &'a [TensorInfo],
-    name: &str,
-    dtype: &str,
-    shape: &[i64],
-) -> Result<&'a TensorInfo> {
-    let Some(info) = infos.iter().find(|i| i.name == name) else {
-        return Err(OnnxError::contract(
-            model,
-            format!("no tensor named `{name}` (has: {})", names_of(infos)),
-        ));
-    };
-    let shape_ok = info.shape.len() == shape.len()
-        && info
-            .shape
-            .iter()
-            .zip(shape)
-            .all(|(&a, &b)| a < 0 || b < 0 || a == b);
-    if !shape_ok || info.dtype != dtype {
-        return Err(OnnxError::contract(
-            model,
-            format!(
-                "`{name}` is {} {}, expected {dtype} {}",
-                info.dtype,
-                format_shape(&info.shape),
-                format_shape(shape)
-            ),
-        ));
-    }
-    Ok(info)
 }
 
 #[cfg(test)]
@@ -330,11 +330,11 @@ mod tests {
     #[test]
     fn contract_check_names_model_and_tensor() {
         let infos = [info("motion", "f32", &[-1, 60, 60])];
-        assert!(check_tensor("m.onnx", &infos, "motion", "f32", &[1, 60, 60]).is_ok());
-        assert!(check_tensor("m.onnx", &infos, "motion", "f32", &[-1, 60, -1]).is_ok());
-        let e = check_tensor("m.onnx", &infos, "motion", "u8", &[1, 60, 60]).unwrap_err();
+        assert!(TensorInfo::check("m.onnx", &infos, "motion", "f32", &[1, 60, 60]).is_ok());
+        assert!(TensorInfo::check("m.onnx", &infos, "motion", "f32", &[-1, 60, -1]).is_ok());
+        let e = TensorInfo::check("m.onnx", &infos, "motion", "u8", &[1, 60, 60]).unwrap_err();
         assert!(matches!(e, OnnxError::Contract { .. }), "{e}");
-        let msg = check_tensor("m.onnx", &infos, "z", "f32", &[1])
+        let msg = TensorInfo::check("m.onnx", &infos, "z", "f32", &[1])
             .unwrap_err()
             .to_string();
         assert!(

@@ -90,4 +90,4 @@ impl PipelineError {
 }
 
 /// Result alias of `mp-pipeline`.
-pub type Result<T> = std::result::Result<T, PipelineError>;
+pub(crate) type Result<T> = std::result::Result<T, PipelineError>;

@@ -16,7 +16,7 @@ use mp_pose::open_source;
 use mp_pose::{open_estimator_with, ExtractOptions, SmoothingParams};
 
 use crate::error::{PipelineError, Result};
-use crate::input::is_video;
+use crate::input::Input;
 use crate::params::Params;
 use crate::pose_rate::{fill_people, fill_track};
 use crate::progress::{check, Observer, Stage, StageTime};
@@ -48,6 +48,24 @@ impl ExtractParams {
             smooth,
             world: true,
         }
+    }
+
+    /// Whether the track file `path` can hold what these parameters
+    /// extract: a 3D format (`.c3d`, `.bvh`) needs world coordinates. Check
+    /// it before [`extract`] to fail before the pose model runs.
+    pub fn check_output(&self, path: &Path) -> Result<()> {
+        if !self.world && mp_geom::needs_3d(path) {
+            return Err(PipelineError::param(
+                "output",
+                format!(
+                    "{} holds 3D motion and keypoints are 2D pixels: extract BlazePose's world \
+                     coordinates (metres) for it (`mp extract --world`, `extract(world=True)`), \
+                     or write .npz, .csv, .parquet or .pose",
+                    path.display()
+                ),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -97,13 +115,11 @@ impl Extracted {
     /// gets everyone, another the main person. Pixels keep the frame they
     /// are in. Refuses a 3D format for pixel keypoints.
     pub fn write(&self, path: &Path) -> Result<()> {
-        check_output(
-            path,
-            ExtractParams {
-                world: self.frame.is_none(),
-                ..ExtractParams::default()
-            },
-        )?;
+        ExtractParams {
+            world: self.frame.is_none(),
+            ..ExtractParams::default()
+        }
+        .check_output(path)?;
         match &self.poses {
             Poses::People(p) if mp_geom::holds_people(path) => {
                 mp_geom::write_people_framed(path, p, self.frame)?
@@ -113,24 +129,6 @@ impl Extracted {
         }
         Ok(())
     }
-}
-
-/// Whether the track file `path` can hold what `what` extracts: a 3D
-/// format (`.c3d`, `.bvh`) needs world coordinates. Check it before
-/// [`extract`] to fail before the pose model runs.
-pub fn check_output(path: &Path, what: ExtractParams) -> Result<()> {
-    if !what.world && mp_geom::needs_3d(path) {
-        return Err(PipelineError::param(
-            "output",
-            format!(
-                "{} holds 3D motion and keypoints are 2D pixels: extract BlazePose's world \
-                 coordinates (metres) for it (`mp extract --world`, `extract(world=True)`), \
-                 or write .npz, .csv, .parquet or .pose",
-                path.display()
-            ),
-        ));
-    }
-    Ok(())
 }
 
 /// Keypoints of the video or still image at `path` with the pose settings
@@ -178,7 +176,7 @@ pub fn extract(
             frames,
         })
     };
-    let several = pose.people && !what.world && is_video(path);
+    let several = pose.people && !what.world && Input::is_video(path);
     if let (true, Some(lm)) = (several, pose.model.landmark_model()) {
         let mut est = mp_pose::MultiPose::new(mp_pose::MultiPoseParams {
             pose: mp_pose::BlazePoseParams {
@@ -246,10 +244,16 @@ mod tests {
 
     #[test]
     fn pixels_are_refused_for_a_3d_format_before_anything_runs() {
-        let e = check_output(Path::new("out.bvh"), ExtractParams::pixels(false)).unwrap_err();
+        let e = ExtractParams::pixels(false)
+            .check_output(Path::new("out.bvh"))
+            .unwrap_err();
         assert!(e.to_string().contains("2D pixels"), "{e}");
-        check_output(Path::new("out.bvh"), ExtractParams::world(false)).unwrap();
-        check_output(Path::new("out.npz"), ExtractParams::pixels(true)).unwrap();
+        ExtractParams::world(false)
+            .check_output(Path::new("out.bvh"))
+            .unwrap();
+        ExtractParams::pixels(true)
+            .check_output(Path::new("out.npz"))
+            .unwrap();
     }
 
     #[test]

@@ -6,19 +6,6 @@ use mp_geom::Track;
 
 use crate::error::{PipelineError, Result};
 
-/// File extensions read as videos; anything else is read as a keypoint track.
-pub const VIDEO_EXTENSIONS: [&str; 10] = [
-    "mp4", "mov", "avi", "webm", "mkv", "m4v", "mpg", "mpeg", "wmv", "flv",
-];
-
-/// Whether a path names a video by its extension.
-pub fn is_video(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .is_some_and(|e| VIDEO_EXTENSIONS.contains(&e.as_str()))
-}
-
 /// The input of a run.
 #[derive(Debug, Clone)]
 #[allow(clippy::large_enum_variant)]
@@ -69,8 +56,21 @@ pub enum Input {
 }
 
 impl Input {
+    /// File extensions read as videos; anything else is read as a keypoint track.
+    pub const VIDEO_EXTENSIONS: [&str; 10] = [
+        "mp4", "mov", "avi", "webm", "mkv", "m4v", "mpg", "mpeg", "wmv", "flv",
+    ];
+
+    /// Whether a path names a video by its extension.
+    pub fn is_video(path: &Path) -> bool {
+        path.extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .is_some_and(|e| Self::VIDEO_EXTENSIONS.contains(&e.as_str()))
+    }
+
     /// A video or a track file, told apart by the extension
-    /// ([`VIDEO_EXTENSIONS`]); `frame_px` is the frame size to use as the scale
+    /// ([`Input::VIDEO_EXTENSIONS`]); `frame_px` is the frame size to use as the scale
     /// of a track (ignored for videos, whose frame size is known; default for
     /// a track: the frame size its npz states, else the motion's extent).
     pub fn open(path: impl AsRef<Path>, frame_px: Option<f64>) -> Result<Self> {
@@ -91,7 +91,7 @@ impl Input {
         if !path.exists() {
             return Err(PipelineError::MissingInput(path.to_path_buf()));
         }
-        if is_video(path) {
+        if Self::is_video(path) {
             return Ok(Input::Video {
                 path: path.to_path_buf(),
             });
@@ -103,7 +103,7 @@ impl Input {
         let read =
             mp_geom::read_track_rated(path, &opts).map_err(|source| PipelineError::Track {
                 path: path.to_path_buf(),
-                extensions: VIDEO_EXTENSIONS.join(", "),
+                extensions: Self::VIDEO_EXTENSIONS.join(", "),
                 source,
             })?;
         let name = path

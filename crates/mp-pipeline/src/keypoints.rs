@@ -32,7 +32,7 @@ use mp_report::{FrameStore, FrameStoreParams};
 use crate::error::{PipelineError, Result};
 use crate::frame_signal::{choose_frame_signal, FrameChoice};
 use crate::input::Input;
-use crate::params::{Params, PersonChoice};
+use crate::params::{Params, PersonChoice, PoseParams};
 use crate::progress::{check, Observer, Stage, StageTime, Timings};
 
 /// Full-size frames kept in memory during the pose pass for the overlay
@@ -56,7 +56,7 @@ pub struct OverlayFrames {
 /// next ones with the same model and thread count reuse it (its tracking
 /// state is reset for each video).
 #[derive(Default)]
-pub struct ModelSlot {
+pub(crate) struct ModelSlot {
     loaded: Option<(
         ModelChoice,
         SessionParams,
@@ -602,10 +602,6 @@ pub(crate) fn chosen_people(
     }
 }
 
-/// Share of a person's mean box added on every side for their thumbnails
-/// (arms and legs reach past the mean box during a repetition).
-pub const BOX_MARGIN: f64 = 0.25;
-
 /// Grey thumbnails of each person's own (mean) box over the whole video, from
 /// a second decoding pass.
 fn box_thumbnails(
@@ -621,7 +617,8 @@ fn box_thumbnails(
         .iter()
         .filter_map(|id| {
             let b = people.get(*id)?.mean_box()?;
-            let (mx, my) = (BOX_MARGIN * (b[2] - b[0]), BOX_MARGIN * (b[3] - b[1]));
+            let margin = PoseParams::BOX_MARGIN;
+            let (mx, my) = (margin * (b[2] - b[0]), margin * (b[3] - b[1]));
             Some((*id, [b[0] - mx, b[1] - my, b[2] + mx, b[3] + my]))
         })
         .collect();

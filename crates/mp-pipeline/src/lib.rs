@@ -27,7 +27,8 @@
 //! complete files in its output folder).
 //!
 //! ```no_run
-//! use mp_pipeline::{analyse_input, CancelToken, Input, Params, Silent};
+//! use mp_geom::CancelToken;
+//! use mp_pipeline::{analyse_input, Input, Params, Silent};
 //! let input = Input::open("squats.mp4", None)?;
 //! let out = analyse_input(input, &Params::default(), &Silent, &CancelToken::new())?;
 //! println!("{} repetitions ({})", out.counts.total, out.counts.method.as_str());
@@ -56,13 +57,16 @@ pub use batch::{
     batch, batch_items, BatchError, BatchObserver, BatchParams, BatchSummary, ItemReport,
     ItemStatus,
 };
-pub use error::{PipelineError, Result};
+pub use error::PipelineError;
+use error::Result;
 pub use extract::{extract, ExtractParams, Extracted, Poses};
 pub use fit_options::FitOptions;
-pub use input::{is_video, Input, VIDEO_EXTENSIONS};
-pub use keypoints::{keypoints, Keep, Keypoints, ModelSlot};
+pub use frame_signal::FrameChoice;
+pub use input::Input;
+use keypoints::ModelSlot;
+pub use keypoints::{keypoints, Keep, Keypoints};
 use mp_abstract::{Analysis, Counts};
-pub use mp_geom::CancelToken;
+use mp_geom::CancelToken;
 pub use params::{OutputParams, Params, PersonChoice, PersonParams, PoseParams};
 pub use pose_rate::PoseRate;
 pub use progress::{Observer, Silent, Stage, StageTime};
@@ -616,10 +620,3 @@ fn pictures_and_page(
     let page = mp_report::write_report(out, &input).map_err(PipelineError::from_report)?;
     Ok((pic_files, pic_time, page, t_rep.elapsed()))
 }
-
-pub use batch::{read_manifest, MANIFEST};
-pub use extract::check_output;
-pub use frame_signal::FrameChoice;
-pub use keypoints::BOX_MARGIN;
-pub use output::{loops_file, loops_json};
-pub use params::ModelChoice;

@@ -67,41 +67,43 @@ pub struct PersonEntry {
     pub repetitions: Option<RepetitionsJson>,
 }
 
-/// `loops.json` of an outcome.
-pub fn loops_file(outcome: &Outcome) -> LoopsFile {
-    let track = &outcome.keypoints.track;
-    LoopsFile {
-        schema: mp_abstract::RepetitionsJson::LOOPS_SCHEMA,
-        version: mp_abstract::RepetitionsJson::LOOPS_VERSION,
-        fps: track.fps(),
-        frames: track.n_frames(),
-        person: outcome.keypoints.person,
-        repetitions: RepetitionsJson::new(&outcome.counts),
-        program_loops: outcome
-            .analysis
-            .as_ref()
-            .map(|a| a.intervals.iter().map(ProgramLoopJson::new).collect())
-            .unwrap_or_default(),
-        people: outcome
-            .people
-            .iter()
-            .map(|p| PersonEntry {
-                id: p.id,
-                main: p.main,
-                first_frame: p.first_frame,
-                last_frame: p.last_frame,
-                frames_found: p.frames_found,
-                mean_box: p.mean_box,
-                analysed: p.counts.is_some(),
-                repetitions: p.counts.as_ref().map(RepetitionsJson::new),
-            })
-            .collect(),
+impl Outcome {
+    /// `loops.json` of the outcome.
+    pub fn loops_file(&self) -> LoopsFile {
+        let track = &self.keypoints.track;
+        LoopsFile {
+            schema: mp_abstract::RepetitionsJson::LOOPS_SCHEMA,
+            version: mp_abstract::RepetitionsJson::LOOPS_VERSION,
+            fps: track.fps(),
+            frames: track.n_frames(),
+            person: self.keypoints.person,
+            repetitions: RepetitionsJson::new(&self.counts),
+            program_loops: self
+                .analysis
+                .as_ref()
+                .map(|a| a.intervals.iter().map(ProgramLoopJson::new).collect())
+                .unwrap_or_default(),
+            people: self
+                .people
+                .iter()
+                .map(|p| PersonEntry {
+                    id: p.id,
+                    main: p.main,
+                    first_frame: p.first_frame,
+                    last_frame: p.last_frame,
+                    frames_found: p.frames_found,
+                    mean_box: p.mean_box,
+                    analysed: p.counts.is_some(),
+                    repetitions: p.counts.as_ref().map(RepetitionsJson::new),
+                })
+                .collect(),
+        }
     }
-}
 
-/// [`loops_file`] as a JSON value.
-pub fn loops_json(outcome: &Outcome) -> serde_json::Value {
-    serde_json::to_value(loops_file(outcome)).unwrap_or(serde_json::Value::Null)
+    /// [`Outcome::loops_file`] as a JSON value.
+    pub fn loops_json(&self) -> serde_json::Value {
+        serde_json::to_value(self.loops_file()).unwrap_or(serde_json::Value::Null)
+    }
 }
 
 /// Writes `track.npz` (with every tracked person along a person axis when
@@ -157,7 +159,7 @@ pub(crate) fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<S
     }
     put(
         "loops.json",
-        serde_json::to_string_pretty(&loops_file(outcome))?.as_bytes(),
+        serde_json::to_string_pretty(&outcome.loops_file())?.as_bytes(),
     )?;
     Ok(files)
 }

@@ -3,7 +3,7 @@
 use mp_abstract::{AbstractParams, CountParams};
 use mp_concrete::{Scale, SynthParams};
 use mp_geom::PersonId;
-pub use mp_pose::ModelChoice;
+use mp_pose::ModelChoice;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PipelineError, Result};
@@ -48,6 +48,10 @@ pub struct PoseParams {
 }
 
 impl PoseParams {
+    /// Share of a person's mean box added on every side for their thumbnails
+    /// (arms and legs reach past the mean box during a repetition).
+    pub const BOX_MARGIN: f64 = 0.25;
+
     /// The ONNX Runtime session settings of the pose models.
     pub fn session(&self) -> mp_pose::SessionParams {
         mp_pose::SessionParams {

@@ -9,12 +9,11 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use mp_geom::{perform, Move, PerformerParams};
+use mp_geom::{perform, CancelToken, Move, PerformerParams};
 use mp_pipeline::{
-    analyse_input, batch, batch_items, run, BatchObserver, BatchParams, CancelToken, Input,
-    ItemReport, ItemStatus, OutputParams, Params, Silent, Stage,
+    analyse_input, batch, batch_items, run, BatchObserver, BatchParams, Input, ItemReport,
+    ItemStatus, OutputParams, Params, Silent, Stage,
 };
-use mp_pipeline::{read_manifest, MANIFEST};
 
 /// A short routine of the procedural performer (2D, pixels).
 fn write_performer(path: &Path, seed: u64, squats: usize) {
@@ -174,7 +173,7 @@ fn a_folder_runs_fails_alone_and_resumes() {
     }
 
     // The manifest: one parsable line per item, as the summary says.
-    let text = std::fs::read_to_string(out.join(MANIFEST)).unwrap();
+    let text = std::fs::read_to_string(out.join(ItemReport::MANIFEST)).unwrap();
     let lines: Vec<ItemReport> = text
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
@@ -236,12 +235,17 @@ fn a_folder_runs_fails_alone_and_resumes() {
         );
     }
     assert_eq!(again.frames(), 0, "nothing was run");
-    assert_eq!(read_manifest(&out.join(MANIFEST)).unwrap().len(), 3);
+    assert_eq!(
+        ItemReport::read_manifest(&out.join(ItemReport::MANIFEST))
+            .unwrap()
+            .len(),
+        3
+    );
 
     // A line cut short by a crash, and one folder deleted: only that one runs again.
     let mut f = std::fs::OpenOptions::new()
         .append(true)
-        .open(out.join(MANIFEST))
+        .open(out.join(ItemReport::MANIFEST))
         .unwrap();
     std::io::Write::write_all(&mut f, b"{\"input\": \"tracks/a.n").unwrap();
     drop(f);
@@ -261,9 +265,9 @@ fn a_folder_runs_fails_alone_and_resumes() {
         by_name(&third.items, "a.npz").total_repetitions,
         by_name(&s.items, "a.npz").total_repetitions
     );
-    let manifest = read_manifest(&out.join(MANIFEST)).unwrap();
+    let manifest = ItemReport::read_manifest(&out.join(ItemReport::MANIFEST)).unwrap();
     assert_eq!(manifest.len(), 3);
-    assert!(std::fs::read_to_string(out.join(MANIFEST))
+    assert!(std::fs::read_to_string(out.join(ItemReport::MANIFEST))
         .unwrap()
         .lines()
         .all(|l| serde_json::from_str::<serde_json::Value>(l).is_ok()));
@@ -436,7 +440,7 @@ fn two_jobs_give_the_same_results_as_one() {
             a.input.display()
         );
     }
-    assert_eq!(read_manifest(&two.manifest).unwrap().len(), 5);
+    assert_eq!(ItemReport::read_manifest(&two.manifest).unwrap().len(), 5);
 }
 
 #[test]
@@ -450,7 +454,9 @@ fn a_cancelled_batch_starts_nothing_and_writes_no_lines() {
     let s = batch(&items, &out, &quick_params(), &Silent, &cancel).unwrap();
     assert!(s.cancelled);
     assert_eq!(s.cancelled_items(), 3);
-    assert!(read_manifest(&out.join(MANIFEST)).unwrap().is_empty());
+    assert!(ItemReport::read_manifest(&out.join(ItemReport::MANIFEST))
+        .unwrap()
+        .is_empty());
     assert!(!out.join("a").exists());
     // Then the batch runs in full.
     let s = batch(&items, &out, &quick_params(), &Silent, &CancelToken::new()).unwrap();

@@ -6,7 +6,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use mp_pipeline::{analyse_input, run, CancelToken, Input, Params, PersonChoice, Silent};
+use mp_geom::CancelToken;
+use mp_pipeline::{analyse_input, run, Input, Params, PersonChoice, Silent};
 
 fn data(rel: &str) -> Option<PathBuf> {
     mp_geom::test_support::data_file_or_skip(rel, &mp_geom::test_support::current_test_name())

@@ -6,9 +6,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use mp_pipeline::{
-    analyse_input, run, CancelToken, Input, Observer, Params, PipelineError, Silent, Stage,
-};
+use mp_geom::CancelToken;
+use mp_pipeline::{analyse_input, run, Input, Observer, Params, PipelineError, Silent, Stage};
 
 /// A shared data file, or `None` (the running test's skip is recorded).
 fn data(rel: &str) -> Option<PathBuf> {

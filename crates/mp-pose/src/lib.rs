@@ -64,7 +64,7 @@ pub use extract::is_posed_frame;
 pub use imageops::{resize_rgb, RgbView};
 pub use motion::{moving_regions, region_track, CellRegion, MotionEnergy};
 pub use people::{PeopleCollector, TrackEvent, TrackedPose};
-pub use runtime::{cuda_available, model_path, Device};
+pub use runtime::{model_path, Device};
 pub use thumbs::{grey_thumbnail_region, thumbnail_track, DEFAULT_THUMBNAIL_SIZE};
 pub use video::{probe_bytes, ReadOptions, VideoWriter, X264_PRESETS};
 

@@ -89,10 +89,10 @@ impl MoveNet {
         params.validate()?;
         let session = runtime::open_session(path, &params.session)?;
         let name = path.display().to_string();
-        let ins = runtime::inputs_of(&session);
-        let outs = runtime::outputs_of(&session);
-        runtime::check_tensor(&name, &ins, INPUT_NAME, "u8", &[1, 192, 192, 3])?;
-        runtime::check_tensor(&name, &outs, OUTPUT_NAME, "f32", &[1, 1, 17, 3])?;
+        let ins = runtime::TensorInfo::inputs_of(&session);
+        let outs = runtime::TensorInfo::outputs_of(&session);
+        runtime::TensorInfo::check(&name, &ins, INPUT_NAME, "u8", &[1, 192, 192, 3])?;
+        runtime::TensorInfo::check(&name, &outs, OUTPUT_NAME, "f32", &[1, 1, 17, 3])?;
         Ok(MoveNet {
             session,
             name,

@@ -11,10 +11,7 @@
 
 use std::path::PathBuf;
 
-pub use mp_onnx::{
-    check_tensor, cuda_available, inputs_of, open_session, outputs_of, Device, ModelDirs,
-    SessionParams,
-};
+pub use mp_onnx::{open_session, Device, ModelDirs, SessionParams, TensorInfo};
 
 use crate::error::{PoseError, Result};
 

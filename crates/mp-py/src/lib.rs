@@ -16,7 +16,8 @@ mod track;
 
 use std::path::PathBuf;
 
-use mp_pipeline::{CancelToken, Input, Params, Silent};
+use mp_geom::CancelToken;
+use mp_pipeline::{Input, Params, Silent};
 use pyo3::prelude::*;
 
 use people::PyPeople;
@@ -126,8 +127,8 @@ pub(crate) fn device_arg(params: &mut Params, device: Option<&str>) -> PyResult<
     Ok(())
 }
 
-fn mp_pose_model(name: &str) -> PyResult<mp_pipeline::ModelChoice> {
-    mp_pipeline::ModelChoice::parse(name).map_err(|e| errors::ParamError::new_err(e.to_string()))
+fn mp_pose_model(name: &str) -> PyResult<mp_pose::ModelChoice> {
+    mp_pose::ModelChoice::parse(name).map_err(|e| errors::ParamError::new_err(e.to_string()))
 }
 
 /// Reads a keypoint track: the project's `.npz`/`.json`/`.mpt`, CSV, `.npy`,

@@ -276,7 +276,7 @@ pub struct PyCounts {
 /// Every tracked person's entry, as `loops.json`'s `people` list (the same
 /// function writes it; `repetitions` is None for people not analysed).
 pub(crate) fn people_entries(outcome: &Outcome) -> Vec<serde_json::Value> {
-    let mut v = mp_pipeline::loops_json(outcome);
+    let mut v = outcome.loops_json();
     match v.get_mut("people").map(serde_json::Value::take) {
         Some(serde_json::Value::Array(list)) => list,
         _ => Vec::new(),

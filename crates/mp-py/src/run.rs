@@ -5,11 +5,12 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use mp_abstract::{Analysis, Counts};
+use mp_geom::CancelToken;
 use mp_geom::{People, PersonId, Track};
 use mp_grammar::find_symbols;
 use mp_grammar::Motion;
 use mp_grammar::{PoseDistanceParams, SymbolParams};
-use mp_pipeline::{Analyser, CancelToken, Input, Outcome, Params, RunSummary, Silent};
+use mp_pipeline::{Analyser, Input, Outcome, Params, RunSummary, Silent};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use serde::{Deserialize, Serialize};

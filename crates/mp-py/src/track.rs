@@ -304,7 +304,7 @@ pub(crate) fn track_arg_framed(
         return Ok((t.get().inner.clone(), None));
     }
     if let Ok(path) = obj.extract::<std::path::PathBuf>() {
-        if mp_pipeline::is_video(&path) {
+        if mp_pipeline::Input::is_video(&path) {
             return Err(errors::ParamError::new_err(format!(
                 "{func}() takes a track; {} is a video: extract(video) reads its keypoints",
                 path.display()

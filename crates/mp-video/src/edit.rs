@@ -17,7 +17,7 @@ use mp_pipeline::Params;
 use serde::Serialize;
 
 use crate::error::{Result, VideoError};
-use crate::motion::{analyse_video, VideoMotion};
+use crate::motion::VideoMotion;
 use crate::plan::{render_to_file, Plan, PlanFrame, RenderParams};
 
 /// What to do with the interval's repetitions.
@@ -360,7 +360,7 @@ pub fn edit_video(
     output: &Path,
 ) -> Result<EditReport> {
     params.validate()?;
-    let m = analyse_video(input, analysis, None)?;
+    let m = VideoMotion::analyse(input, analysis, None)?;
     let mut report = plan_edit(&m, interval_number, change, params)?;
     let written = render_to_file(input, &report.plan, output, m.fps(), &params.render)?;
     report.frames_out = written;

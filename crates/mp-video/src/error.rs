@@ -102,4 +102,4 @@ fn no_interval_message(number: usize, available: usize) -> String {
 }
 
 /// Result with [`VideoError`].
-pub type Result<T> = std::result::Result<T, VideoError>;
+pub(crate) type Result<T> = std::result::Result<T, VideoError>;

@@ -47,15 +47,11 @@ mod plan;
 mod predict;
 
 pub use edit::{edit_video, EditChange, EditParams, EditReport};
-pub use error::{Result, VideoError};
-pub use interpolate::{interpolate_video, InterpMethod, InterpParams, InterpReport, Warp};
-
-pub use motion::{analyse_video, VideoMotion};
-pub use plan::{Plan, PlanFrame};
-pub use predict::{
-    plan_prediction, predict_video, PredictReport, VideoPredictMethod, VideoPredictParams,
+pub use error::VideoError;
+pub use interpolate::{
+    interpolate_frames, interpolate_video, keep_every, Guide, InterpMethod, InterpParams,
+    InterpReport, Warp,
 };
-
-pub use interpolate::{check_factor, interpolate_frames, keep_every, Guide};
-pub use motion::MIN_CONFIDENCE;
-pub use plan::render;
+pub use motion::VideoMotion;
+pub use plan::{Plan, PlanFrame};
+pub use predict::{predict_video, PredictReport, VideoPredictMethod, VideoPredictParams};

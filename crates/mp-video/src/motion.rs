@@ -14,9 +14,6 @@ use ndarray::Axis;
 
 use crate::error::{Result, VideoError};
 
-/// Confidence above which a joint counts as seen.
-pub const MIN_CONFIDENCE: f64 = 0.3;
-
 /// A video's keypoints, thumbnails and counts.
 #[derive(Debug, Clone)]
 pub struct VideoMotion {
@@ -34,38 +31,31 @@ pub struct VideoMotion {
     thumb_scale: f64,
 }
 
-/// Keypoints, thumbnails and counts of the first `max_frames` frames of a
-/// video (all frames when `None`), with `params` (`mp run` uses
-/// `Params::default()`).
-pub fn analyse_video(
-    path: &Path,
-    params: &Params,
-    max_frames: Option<usize>,
-) -> Result<VideoMotion> {
-    let mut params = params.clone();
-    if max_frames.is_some() {
-        params.pose.max_frames = max_frames;
-    }
-    let info = mp_pose::probe(path)?;
-    let input = Input::open(path, None)?;
-    let (kp, _) = mp_pipeline::keypoints(
-        input,
-        &params,
-        Keep::default(),
-        &Silent,
-        &CancelToken::new(),
-    )?;
-    let counts = mp_pipeline::count(&kp.track, kp.thumbnails.as_ref(), &params)?;
-    Ok(VideoMotion::new(
-        path,
-        info,
-        kp.track,
-        kp.thumbnails,
-        counts,
-    ))
-}
-
 impl VideoMotion {
+    /// Confidence above which a joint counts as seen.
+    pub const MIN_CONFIDENCE: f64 = 0.3;
+
+    /// Keypoints, thumbnails and counts of the first `max_frames` frames of a
+    /// video (all frames when `None`), with `params` (`mp run` uses
+    /// `Params::default()`).
+    pub fn analyse(path: &Path, params: &Params, max_frames: Option<usize>) -> Result<VideoMotion> {
+        let mut params = params.clone();
+        if max_frames.is_some() {
+            params.pose.max_frames = max_frames;
+        }
+        let info = mp_pose::probe(path)?;
+        let input = Input::open(path, None)?;
+        let (kp, _) = mp_pipeline::keypoints(
+            input,
+            &params,
+            Keep::default(),
+            &Silent,
+            &CancelToken::new(),
+        )?;
+        let counts = mp_pipeline::count(&kp.track, kp.thumbnails.as_ref(), &params)?;
+        Ok(Self::new(path, info, kp.track, kp.thumbnails, counts))
+    }
+
     /// Wraps an analysis (the distance scales are measured here).
     pub fn new(
         path: &Path,
@@ -110,8 +100,9 @@ impl VideoMotion {
 
     /// Whether a person is seen in some frame.
     pub fn has_person(&self) -> bool {
-        (0..self.track.n_frames())
-            .any(|t| (0..self.track.n_joints()).any(|j| self.track.is_valid(t, j, MIN_CONFIDENCE)))
+        (0..self.track.n_frames()).any(|t| {
+            (0..self.track.n_joints()).any(|j| self.track.is_valid(t, j, Self::MIN_CONFIDENCE))
+        })
     }
 
     /// Errors with [`VideoError::NoPerson`] when no person is seen.
@@ -126,8 +117,8 @@ impl VideoMotion {
     fn pose_raw(&self, a: usize, b: usize) -> Option<f64> {
         let (mut s, mut n) = (0.0, 0usize);
         for j in 0..self.track.n_joints() {
-            if self.track.is_valid(a, j, MIN_CONFIDENCE)
-                && self.track.is_valid(b, j, MIN_CONFIDENCE)
+            if self.track.is_valid(a, j, Self::MIN_CONFIDENCE)
+                && self.track.is_valid(b, j, Self::MIN_CONFIDENCE)
             {
                 let (p, q) = (self.track.point(a, j), self.track.point(b, j));
                 s += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
@@ -170,7 +161,7 @@ impl VideoMotion {
     pub(crate) fn feature(&self, t: usize) -> Vec<f64> {
         let mut f = Vec::new();
         for j in 0..self.track.n_joints() {
-            let ok = self.track.is_valid(t, j, MIN_CONFIDENCE);
+            let ok = self.track.is_valid(t, j, Self::MIN_CONFIDENCE);
             let p = self.track.point(t, j);
             for d in 0..2 {
                 f.push(if ok { p[d] / self.pose_scale } else { f64::NAN });

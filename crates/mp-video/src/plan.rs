@@ -2,7 +2,7 @@
 //! source streams, and written atomically.
 //!
 //! A [`Plan`] lists the output frames, each a source frame or a blend of
-//! two. [`render`] decodes the source once, front to back, and keeps only
+//! two. [`Plan::render`] decodes the source once, front to back, and keeps only
 //! the frames that a later output frame still needs (a repeated iteration,
 //! a cross-fade), so memory is bounded by what the plan reuses, not by the
 //! video's length; a plan that would hold more than
@@ -115,6 +115,64 @@ impl Plan {
         peak.max(0) as usize
     }
 
+    /// Renders the plan from the video at `path`, handing each output frame
+    /// (RGB bytes) to `sink` in order. Returns the number of frames produced.
+    pub fn render(
+        &self,
+        path: &Path,
+        params: &RenderParams,
+        mut sink: impl FnMut(&[u8]) -> Result<()>,
+    ) -> Result<usize> {
+        let mut reader = VideoReader::open(path)?;
+        let info = reader.info().clone();
+        let frame_bytes = info.width * info.height * 3;
+        let peak = self.peak_frames();
+        if peak.saturating_mul(frame_bytes) > params.memory_budget_bytes {
+            return Err(VideoError::Memory {
+                frames: peak,
+                mb: peak.saturating_mul(frame_bytes) >> 20,
+                budget_mb: params.memory_budget_bytes >> 20,
+            });
+        }
+        let last = self.last_uses();
+        let mut cache: HashMap<usize, Vec<u8>> = HashMap::new();
+        let mut next_read = 0usize;
+        for (i, f) in self.frames.iter().enumerate() {
+            let (a, b) = f.sources();
+            let need = b.map_or(a, |b| a.max(b));
+            while next_read <= need {
+                let frame = reader.next().ok_or_else(|| {
+                    VideoError::Edit(format!(
+                        "{} has {next_read} frames, the output needs frame {need}",
+                        path.display()
+                    ))
+                })??;
+                if last.contains_key(&next_read) {
+                    cache.insert(next_read, frame.rgb);
+                }
+                next_read += 1;
+            }
+            let fa = cache
+                .get(&a)
+                .ok_or_else(|| VideoError::Edit(format!("frame {a} is not held")))?;
+            match b {
+                None => sink(fa)?,
+                Some(b) => {
+                    let fb = cache
+                        .get(&b)
+                        .ok_or_else(|| VideoError::Edit(format!("frame {b} is not held")))?;
+                    sink(&blend(fa, fb, f.w))?
+                }
+            }
+            for s in [Some(a), b].into_iter().flatten() {
+                if last.get(&s) == Some(&i) {
+                    cache.remove(&s);
+                }
+            }
+        }
+        Ok(self.len())
+    }
+
     fn last_uses(&self) -> HashMap<usize, usize> {
         let mut last = HashMap::new();
         for (i, f) in self.frames.iter().enumerate() {
@@ -128,7 +186,7 @@ impl Plan {
     }
 }
 
-/// Parameters of [`render`].
+/// Parameters of [`Plan::render`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderParams {
     /// Most bytes of source frames held at once. Default 1 GiB.
@@ -155,64 +213,6 @@ pub fn blend(a: &[u8], b: &[u8], w: f32) -> Vec<u8> {
         .collect()
 }
 
-/// Renders `plan` from the video at `path`, handing each output frame
-/// (RGB bytes) to `sink` in order. Returns the number of frames produced.
-pub fn render(
-    path: &Path,
-    plan: &Plan,
-    params: &RenderParams,
-    mut sink: impl FnMut(&[u8]) -> Result<()>,
-) -> Result<usize> {
-    let mut reader = VideoReader::open(path)?;
-    let info = reader.info().clone();
-    let frame_bytes = info.width * info.height * 3;
-    let peak = plan.peak_frames();
-    if peak.saturating_mul(frame_bytes) > params.memory_budget_bytes {
-        return Err(VideoError::Memory {
-            frames: peak,
-            mb: peak.saturating_mul(frame_bytes) >> 20,
-            budget_mb: params.memory_budget_bytes >> 20,
-        });
-    }
-    let last = plan.last_uses();
-    let mut cache: HashMap<usize, Vec<u8>> = HashMap::new();
-    let mut next_read = 0usize;
-    for (i, f) in plan.frames.iter().enumerate() {
-        let (a, b) = f.sources();
-        let need = b.map_or(a, |b| a.max(b));
-        while next_read <= need {
-            let frame = reader.next().ok_or_else(|| {
-                VideoError::Edit(format!(
-                    "{} has {next_read} frames, the output needs frame {need}",
-                    path.display()
-                ))
-            })??;
-            if last.contains_key(&next_read) {
-                cache.insert(next_read, frame.rgb);
-            }
-            next_read += 1;
-        }
-        let fa = cache
-            .get(&a)
-            .ok_or_else(|| VideoError::Edit(format!("frame {a} is not held")))?;
-        match b {
-            None => sink(fa)?,
-            Some(b) => {
-                let fb = cache
-                    .get(&b)
-                    .ok_or_else(|| VideoError::Edit(format!("frame {b} is not held")))?;
-                sink(&blend(fa, fb, f.w))?
-            }
-        }
-        for s in [Some(a), b].into_iter().flatten() {
-            if last.get(&s) == Some(&i) {
-                cache.remove(&s);
-            }
-        }
-    }
-    Ok(plan.len())
-}
-
 /// Renders `plan` from `input` into the video file `output` at `fps`
 /// (written atomically). Returns the number of frames written.
 pub(crate) fn render_to_file(
@@ -224,7 +224,7 @@ pub(crate) fn render_to_file(
 ) -> Result<usize> {
     let info = mp_pose::probe(input)?;
     let mut out = AtomicVideo::create(output, info.width, info.height, fps, params.preset)?;
-    render(input, plan, params, |rgb| out.write(rgb))?;
+    plan.render(input, params, |rgb| out.write(rgb))?;
     out.finish()
 }
 

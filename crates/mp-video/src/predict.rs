@@ -24,7 +24,7 @@ use mp_pipeline::Params;
 use serde::Serialize;
 
 use crate::error::{Result, VideoError};
-use crate::motion::{analyse_video, VideoMotion};
+use crate::motion::VideoMotion;
 use crate::plan::{render_to_file, Plan, PlanFrame, RenderParams};
 
 /// Longest prediction, seconds.
@@ -158,89 +158,91 @@ fn loop_period(m: &VideoMotion) -> Result<Option<(usize, &'static str)>> {
     Ok(None)
 }
 
-/// The predicted frames (only those after the observed ones) of `m` for
-/// `horizon` frames.
-pub fn plan_prediction(
-    m: &VideoMotion,
-    horizon: usize,
-    method: VideoPredictMethod,
-    params: &VideoPredictParams,
-) -> Result<PredictReport> {
-    let n = m.n_frames();
-    if n < 2 {
-        return Err(VideoError::Edit(format!(
-            "{} has {n} frame(s), too few to continue",
-            m.path.display()
-        )));
-    }
-    let min_lag = ((params.min_lag_s * m.fps()).round() as usize).max(2);
-    let mut used = method;
-    let mut fade = 0;
-    let mut source = match method {
-        VideoPredictMethod::Loop => "counted repetitions",
-        VideoPredictMethod::Constant => "last frame",
-        VideoPredictMethod::Nearest => "nearest frame",
-    };
-    let cycle = match method {
-        VideoPredictMethod::Constant => (n - 1, n),
-        VideoPredictMethod::Nearest => nearest_cycle(m, min_lag).unwrap_or((n - 1, n)),
-        VideoPredictMethod::Loop => {
-            m.require_person()?;
-            match loop_period(m)? {
-                Some((p, src)) if p >= 2 => {
-                    fade = params.crossfade;
-                    source = src;
-                    let p = p.min(n - 1);
-                    // The cycle ends at the video's end; its start is where
-                    // the frame before it looks most like the last frame.
-                    let s0 = n - p;
-                    let r = params.seam_search.min(p / 2);
-                    let mut best = (s0, f64::INFINITY);
-                    for s in s0.saturating_sub(r).max(1)..=(s0 + r).min(n - 2) {
-                        let d = m.distance(s - 1, n - 1);
-                        if d < best.1 {
-                            best = (s, d);
+impl VideoMotion {
+    /// The predicted frames (only those after the observed ones) of this video
+    /// for `horizon` frames.
+    pub fn plan_prediction(
+        &self,
+        horizon: usize,
+        method: VideoPredictMethod,
+        params: &VideoPredictParams,
+    ) -> Result<PredictReport> {
+        let n = self.n_frames();
+        if n < 2 {
+            return Err(VideoError::Edit(format!(
+                "{} has {n} frame(s), too few to continue",
+                self.path.display()
+            )));
+        }
+        let min_lag = ((params.min_lag_s * self.fps()).round() as usize).max(2);
+        let mut used = method;
+        let mut fade = 0;
+        let mut source = match method {
+            VideoPredictMethod::Loop => "counted repetitions",
+            VideoPredictMethod::Constant => "last frame",
+            VideoPredictMethod::Nearest => "nearest frame",
+        };
+        let cycle = match method {
+            VideoPredictMethod::Constant => (n - 1, n),
+            VideoPredictMethod::Nearest => nearest_cycle(self, min_lag).unwrap_or((n - 1, n)),
+            VideoPredictMethod::Loop => {
+                self.require_person()?;
+                match loop_period(self)? {
+                    Some((p, src)) if p >= 2 => {
+                        fade = params.crossfade;
+                        source = src;
+                        let p = p.min(n - 1);
+                        // The cycle ends at the video's end; its start is where
+                        // the frame before it looks most like the last frame.
+                        let s0 = n - p;
+                        let r = params.seam_search.min(p / 2);
+                        let mut best = (s0, f64::INFINITY);
+                        for s in s0.saturating_sub(r).max(1)..=(s0 + r).min(n - 2) {
+                            let d = self.distance(s - 1, n - 1);
+                            if d < best.1 {
+                                best = (s, d);
+                            }
                         }
+                        (best.0, n)
                     }
-                    (best.0, n)
-                }
-                _ => {
-                    used = VideoPredictMethod::Nearest;
-                    nearest_cycle(m, min_lag).unwrap_or((n - 1, n))
+                    _ => {
+                        used = VideoPredictMethod::Nearest;
+                        nearest_cycle(self, min_lag).unwrap_or((n - 1, n))
+                    }
                 }
             }
+        };
+        let (s, e) = cycle;
+        let len = (e - s).max(1);
+        let fade = fade.min(len / 2).min(s);
+        let mut plan = Plan::default();
+        for i in 0..horizon {
+            let j = i % len;
+            let f = s + j;
+            // Before each seam, fade into the frames one cycle earlier.
+            let to_seam = len - j;
+            if fade > 0 && to_seam <= fade && i + to_seam < horizon {
+                let w = (fade + 1 - to_seam) as f32 / (fade + 1) as f32;
+                plan.frames.push(PlanFrame::blend(f, f - len.min(f), w));
+            } else {
+                plan.frames.push(PlanFrame::copy(f.min(n - 1)));
+            }
         }
-    };
-    let (s, e) = cycle;
-    let len = (e - s).max(1);
-    let fade = fade.min(len / 2).min(s);
-    let mut plan = Plan::default();
-    for i in 0..horizon {
-        let j = i % len;
-        let f = s + j;
-        // Before each seam, fade into the frames one cycle earlier.
-        let to_seam = len - j;
-        if fade > 0 && to_seam <= fade && i + to_seam < horizon {
-            let w = (fade + 1 - to_seam) as f32 / (fade + 1) as f32;
-            plan.frames.push(PlanFrame::blend(f, f - len.min(f), w));
-        } else {
-            plan.frames.push(PlanFrame::copy(f.min(n - 1)));
+        if used == VideoPredictMethod::Nearest {
+            source = "nearest frame";
         }
+        Ok(PredictReport {
+            method,
+            used,
+            source,
+            cycle,
+            observed: n,
+            predicted: horizon,
+            fps: self.fps(),
+            output: None,
+            plan,
+        })
     }
-    if used == VideoPredictMethod::Nearest {
-        source = "nearest frame";
-    }
-    Ok(PredictReport {
-        method,
-        used,
-        source,
-        cycle,
-        observed: n,
-        predicted: horizon,
-        fps: m.fps(),
-        output: None,
-        plan,
-    })
 }
 
 /// Analyses `input` as `mp run` does (with `analysis`) and writes it to
@@ -255,8 +257,8 @@ pub fn predict_video(
 ) -> Result<PredictReport> {
     let info = mp_pose::probe(input)?;
     let horizon = horizon_frames(seconds, info.fps)?;
-    let m = analyse_video(input, analysis, None)?;
-    let mut report = plan_prediction(&m, horizon, method, params)?;
+    let m = VideoMotion::analyse(input, analysis, None)?;
+    let mut report = m.plan_prediction(horizon, method, params)?;
     let mut whole = Plan::default();
     whole.push_range(0..m.n_frames());
     whole.frames.extend(report.plan.frames.iter().copied());

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use mp_pipeline::Params;
 use mp_pose::VideoReader;
 use mp_video::{
-    analyse_video, edit_video, interpolate_video, predict_video, EditChange, EditParams,
-    InterpMethod, InterpParams, VideoError, VideoPredictMethod, VideoPredictParams,
+    edit_video, interpolate_video, predict_video, EditChange, EditParams, InterpMethod,
+    InterpParams, VideoError, VideoMotion, VideoPredictMethod, VideoPredictParams,
 };
 use mp_video::{interpolate_frames, keep_every};
 
@@ -37,7 +37,7 @@ fn edit_adds_and_removes_one_repetition() {
     let video = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
     let dir = tempfile::tempdir().unwrap();
     let params = Params::default();
-    let before = analyse_video(&video, &params, None).unwrap();
+    let before = VideoMotion::analyse(&video, &params, None).unwrap();
     let iv = before.counts.intervals[0].clone();
     for (change, k) in [(EditChange::Add(1), 1i64), (EditChange::Remove(1), -1)] {
         let out = dir.path().join(format!("edit{k}.mp4"));
@@ -54,7 +54,7 @@ fn edit_adds_and_removes_one_repetition() {
             "segment {seg}, iteration {iter}"
         );
         // The pipeline counts K more (or fewer) in that interval.
-        let after = analyse_video(&out, &params, None).unwrap();
+        let after = VideoMotion::analyse(&out, &params, None).unwrap();
         let c = &after.counts.intervals[0];
         assert_eq!(
             c.count as i64,
@@ -111,7 +111,7 @@ fn interpolation_beats_linear_blending_in_kd() {
     let n_out = (m - 1) * k + 1;
     let params = Params::default();
     // The pose of the true frames.
-    let truth = analyse_video(&truth_clip, &params, Some(n_out))
+    let truth = VideoMotion::analyse(&truth_clip, &params, Some(n_out))
         .unwrap()
         .track;
     let info = mp_pose::probe(&truth_clip).unwrap();
@@ -141,7 +141,7 @@ fn interpolation_beats_linear_blending_in_kd() {
             .status()
             .unwrap();
         assert!(st.success());
-        let rebuilt = analyse_video(&out, &params, None).unwrap().track;
+        let rebuilt = VideoMotion::analyse(&out, &params, None).unwrap().track;
         let (mut s, mut c) = (0.0, 0usize);
         for t in (0..n_out).filter(|t| !t.is_multiple_of(k)) {
             for j in [7, 8, 9, 10] {

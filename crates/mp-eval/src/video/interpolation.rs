@@ -329,7 +329,7 @@ pub fn run_interpolation(a: &EvalInterpolationArgs) -> anyhow::Result<()> {
         .map(|m| parse_interp(m))
         .collect::<anyhow::Result<_>>()?;
     for &k in &a.factors {
-        mp_video::check_factor(k)?;
+        mp_video::InterpParams::check_factor(k)?;
     }
     let params = Params::default();
     let iparams = interp_params(&a.set)?;

@@ -8,7 +8,7 @@
 
 use mp_geom::Track;
 
-use mp_video::{Result, VideoError};
+use mp_video::VideoError;
 
 /// PSNR reported for identical frames (no error at all).
 pub const PSNR_CAP_DB: f64 = 100.0;
@@ -84,7 +84,7 @@ impl PixelBox {
     }
 }
 
-fn check(a: &[u8], b: &[u8], width: usize, height: usize, r: &PixelBox) -> Result<()> {
+fn check(a: &[u8], b: &[u8], width: usize, height: usize, r: &PixelBox) -> Result<(), VideoError> {
     if a.len() != width * height * 3 || b.len() != a.len() {
         return Err(VideoError::param(
             "frame",
@@ -106,7 +106,13 @@ fn check(a: &[u8], b: &[u8], width: usize, height: usize, r: &PixelBox) -> Resul
 }
 
 /// PSNR (dB) of `a` against `b` (RGB, `width × height`) inside `r`.
-pub fn psnr(a: &[u8], b: &[u8], width: usize, height: usize, r: &PixelBox) -> Result<f64> {
+pub fn psnr(
+    a: &[u8],
+    b: &[u8],
+    width: usize,
+    height: usize,
+    r: &PixelBox,
+) -> Result<f64, VideoError> {
     check(a, b, width, height, r)?;
     let mut se = 0.0f64;
     for y in r.y0..r.y1 {
@@ -175,7 +181,13 @@ fn blur(src: &[f32], w: usize, h: usize, k: &[f32]) -> Vec<f32> {
 }
 
 /// SSIM of `a` against `b` (RGB, `width × height`) inside `r`, on luma.
-pub fn ssim(a: &[u8], b: &[u8], width: usize, height: usize, r: &PixelBox) -> Result<f64> {
+pub fn ssim(
+    a: &[u8],
+    b: &[u8],
+    width: usize,
+    height: usize,
+    r: &PixelBox,
+) -> Result<f64, VideoError> {
     check(a, b, width, height, r)?;
     let (w, h) = (r.width(), r.height());
     let x = luma(a, width, r);

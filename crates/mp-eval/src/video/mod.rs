@@ -13,8 +13,8 @@
 //!   and PSNR and SSIM on the whole frame and on the person's box (the true
 //!   keypoints' box grown by 10 %).
 //! * video-predict (§4.4 on pixels): the first half of each video is
-//!   observed (`mp_video::analyse_video` on those frames only), the second
-//!   half predicted (`mp_video::plan_prediction`) and scored: KD of the
+//!   observed (`mp_video::VideoMotion::analyse` on those frames only), the second
+//!   half predicted (`mp_video::VideoMotion::plan_prediction`) and scored: KD of the
 //!   predicted poses (the pose model on the predicted frames) against the
 //!   poses of the real second half, PSNR and SSIM against its frames.
 //!
@@ -46,7 +46,7 @@ use mp_pose::{Frame, FrameSource};
 use serde_json::{json, Value};
 
 /// Confidence above which a joint is scored.
-const MIN_CONF: f64 = mp_video::MIN_CONFIDENCE;
+const MIN_CONF: f64 = mp_video::VideoMotion::MIN_CONFIDENCE;
 
 fn shared_videos(with_golf: bool) -> anyhow::Result<Vec<PathBuf>> {
     let mut v = Vec::new();
@@ -59,7 +59,7 @@ fn shared_videos(with_golf: bool) -> anyhow::Result<Vec<PathBuf>> {
         let mut q: Vec<PathBuf> = std::fs::read_dir(&dir)
             .with_context(|| format!("listing {}", dir.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| mp_pipeline::is_video(p))
+            .filter(|p| mp_pipeline::Input::is_video(p))
             .collect();
         q.sort();
         v.extend(q);

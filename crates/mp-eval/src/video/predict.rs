@@ -9,9 +9,7 @@ use super::metrics::PixelBox;
 use clap::Args;
 use mp_pipeline::Params;
 use mp_pose::VideoReader;
-use mp_video::plan_prediction;
-use mp_video::render;
-use mp_video::{analyse_video, VideoPredictMethod, VideoPredictParams};
+use mp_video::{VideoMotion, VideoPredictMethod, VideoPredictParams};
 use serde_json::{json, Map, Value};
 
 use super::{common_kd, kd, mean, num, shared_videos, stem, PoseStream, Scores, MIN_CONF};
@@ -58,7 +56,7 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
         }
         let horizon = n - half;
         eprint!("{name}: observing {half} frames … ");
-        let m = analyse_video(video, &params, Some(half))?;
+        let m = VideoMotion::analyse(video, &params, Some(half))?;
         // The poses of the real second half, from the pose model run on those frames alone.
         let info = mp_pose::probe(video)?;
         let (w, h) = (info.width, info.height);
@@ -71,7 +69,7 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
         let mut vres = Map::new();
         for method in methods {
             let t0 = Instant::now();
-            let plan = match plan_prediction(&m, horizon, method, &pparams) {
+            let plan = match m.plan_prediction(horizon, method, &pparams) {
                 Ok(p) => p,
                 Err(e) => {
                     vres.insert(method.as_str().into(), json!({"error": e.to_string()}));
@@ -82,7 +80,7 @@ pub fn run_video_predict(a: &EvalVideoPredictArgs) -> anyhow::Result<()> {
             let mut ps = PoseStream::start(w, h, info.fps)?;
             let mut scores = Scores::default();
             let mut t = 0usize;
-            render(video, &plan.plan, &pparams.render, |rgb| {
+            plan.plan.render(video, &pparams.render, |rgb| {
                 let tf = truth_frames
                     .next()
                     .ok_or_else(|| mp_video::VideoError::Edit("the truth ended early".into()))??;

@@ -6,18 +6,18 @@
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
-use super::{BatchError, Result, MANIFEST, TRACK_EXTENSIONS};
-use crate::input::is_video;
+use super::{BatchError, ItemReport, Result, TRACK_EXTENSIONS};
+use crate::input::Input;
 
 /// Whether [`batch_items`] lists a file of a folder: a video by its
-/// extension ([`crate::VIDEO_EXTENSIONS`]) or a track file
+/// extension ([`crate::Input::VIDEO_EXTENSIONS`]) or a track file
 /// ([`TRACK_EXTENSIONS`]), not hidden.
 pub fn is_batch_input(path: &Path) -> bool {
     let hidden = path
         .file_name()
         .map(|n| n.to_string_lossy().starts_with('.'))
         .unwrap_or(true);
-    !hidden && (is_video(path) || is_track_file(path))
+    !hidden && (Input::is_video(path) || is_track_file(path))
 }
 
 fn is_track_file(path: &Path) -> bool {
@@ -63,7 +63,7 @@ pub fn batch_items(path: impl AsRef<Path>) -> Result<Vec<PathBuf>> {
             path: path.to_path_buf(),
         });
     }
-    if is_video(path) || is_track_file(path) {
+    if Input::is_video(path) || is_track_file(path) {
         return Ok(vec![path.to_path_buf()]);
     }
     let text = std::fs::read_to_string(path)
@@ -112,7 +112,7 @@ pub fn output_names(items: &[PathBuf]) -> Vec<String> {
         *seen.entry(s.to_lowercase()).or_default() += 1;
     }
     let mut used: HashSet<String> = HashSet::new();
-    used.insert(MANIFEST.to_lowercase());
+    used.insert(ItemReport::MANIFEST.to_lowercase());
     let mut names = Vec::with_capacity(items.len());
     for (p, s) in items.iter().zip(&stems) {
         let mut name = s.clone();
@@ -136,7 +136,7 @@ pub fn output_names(items: &[PathBuf]) -> Vec<String> {
 /// How long an item will take, for ordering: videos (frames, from the
 /// container) before track files (bytes), which need no pose model.
 pub(super) fn work_estimate(path: &Path, max_frames: Option<usize>) -> (bool, u64) {
-    if is_video(path) {
+    if Input::is_video(path) {
         let frames = mp_pose::probe(path)
             .ok()
             .and_then(|info| {

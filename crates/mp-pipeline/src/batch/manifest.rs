@@ -1,6 +1,6 @@
 //! The manifest: one [`ItemReport`] per finished item, a JSON line each,
 //! written to disk before the next ([`Manifest`]), read back by
-//! [`read_manifest`] to find the items an earlier batch completed
+//! [`ItemReport::read_manifest`] to find the items an earlier batch completed
 //! ([`resume`]).
 
 use std::fs::{File, OpenOptions};
@@ -82,6 +82,23 @@ fn lossy_path<S: serde::Serializer>(p: &Path, s: S) -> std::result::Result<S::Ok
 }
 
 impl ItemReport {
+    /// File name of the manifest inside a batch's output folder.
+    pub const MANIFEST: &str = "manifest.jsonl";
+
+    /// Reads a manifest; lines that do not parse (a line cut short by a crash)
+    /// are ignored. A missing manifest is empty.
+    pub fn read_manifest(path: &Path) -> Result<Vec<ItemReport>> {
+        let bytes = match std::fs::read(path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+            Err(e) => return Err(BatchError::io("read the manifest", path, e)),
+        };
+        Ok(bytes
+            .split(|&b| b == b'\n')
+            .filter_map(|line| serde_json::from_slice::<ItemReport>(line).ok())
+            .collect())
+    }
+
     pub(super) fn empty(input: &Path, output: &Path, status: ItemStatus) -> Self {
         ItemReport {
             input: input.to_path_buf(),
@@ -106,20 +123,6 @@ impl ItemReport {
                 .to_string()
         })
     }
-}
-
-/// Reads a manifest; lines that do not parse (a line cut short by a crash)
-/// are ignored. A missing manifest is empty.
-pub fn read_manifest(path: &Path) -> Result<Vec<ItemReport>> {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(BatchError::io("read the manifest", path, e)),
-    };
-    Ok(bytes
-        .split(|&b| b == b'\n')
-        .filter_map(|line| serde_json::from_slice::<ItemReport>(line).ok())
-        .collect())
 }
 
 /// Same file when both can be resolved, else the same path.
@@ -215,13 +218,12 @@ impl Manifest {
 
 #[cfg(test)]
 mod tests {
-    use super::super::MANIFEST;
     use super::*;
 
     #[test]
     fn a_cut_line_in_the_manifest_is_ignored() {
         let tmp = tempfile::tempdir().unwrap();
-        let path = tmp.path().join(MANIFEST);
+        let path = tmp.path().join(ItemReport::MANIFEST);
         let ok = ItemReport {
             frames: Some(10),
             total_repetitions: Some(3),
@@ -230,7 +232,7 @@ mod tests {
         };
         let line = ok.to_json_line();
         std::fs::write(&path, format!("{line}\n{}", &line[..line.len() / 2])).unwrap();
-        let read = read_manifest(&path).unwrap();
+        let read = ItemReport::read_manifest(&path).unwrap();
         assert_eq!(read, vec![ok]);
     }
 }

@@ -31,8 +31,8 @@
 //! order in which items finish; [`BatchSummary::items`] is in input order.
 //!
 //! ```no_run
-//! use mp_pipeline::{batch, batch_items, BatchParams};
-//! use mp_pipeline::{CancelToken, Silent};
+//! use mp_geom::CancelToken;
+//! use mp_pipeline::{batch, batch_items, BatchParams, Silent};
 //! let items = batch_items("videos/")?;
 //! let params = BatchParams { jobs: 2, ..BatchParams::default() };
 //! let summary = batch(&items, "out/".as_ref(), &params, &Silent, &CancelToken::new())?;
@@ -56,17 +56,14 @@ mod items;
 mod manifest;
 
 pub use items::{batch_items, output_names};
-pub use manifest::{read_manifest, ItemReport, ItemStatus};
+pub use manifest::{ItemReport, ItemStatus};
 
 use items::work_estimate;
 use manifest::Manifest;
 
 /// Extensions of the keypoint track files that [`batch_items`] lists from a
-/// folder (besides the videos of [`crate::VIDEO_EXTENSIONS`]).
+/// folder (besides the videos of [`crate::Input::VIDEO_EXTENSIONS`]).
 pub const TRACK_EXTENSIONS: [&str; 9] = mp_geom::TRACK_EXTENSIONS;
-
-/// File name of the manifest inside the output folder.
-pub const MANIFEST: &str = "manifest.jsonl";
 
 /// The file whose presence marks an item's output folder as complete
 /// (together with an `ok` manifest line).
@@ -106,7 +103,7 @@ pub enum BatchError {
     #[error(
         "{} holds no videos ({}) or keypoint tracks ({}); hidden files and subfolders are not read",
         path.display(),
-        crate::VIDEO_EXTENSIONS.join(", "),
+        crate::Input::VIDEO_EXTENSIONS.join(", "),
         TRACK_EXTENSIONS.join(", ")
     )]
     NoItems {
@@ -414,8 +411,8 @@ pub fn batch(
     let start = Instant::now();
     std::fs::create_dir_all(out_dir)
         .map_err(|e| BatchError::io("create the output folder", out_dir, e))?;
-    let manifest_path = out_dir.join(MANIFEST);
-    let earlier = read_manifest(&manifest_path)?;
+    let manifest_path = out_dir.join(ItemReport::MANIFEST);
+    let earlier = ItemReport::read_manifest(&manifest_path)?;
     let outputs: Vec<PathBuf> = output_names(items)
         .into_iter()
         .map(|n| out_dir.join(n))

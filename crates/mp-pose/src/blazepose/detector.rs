@@ -262,17 +262,17 @@ impl PoseDetector {
         params.validate()?;
         let session = runtime::open_session(path, session)?;
         let name = path.display().to_string();
-        let ins = runtime::inputs_of(&session);
-        let outs = runtime::outputs_of(&session);
-        runtime::check_tensor(&name, &ins, INPUT_NAME, "f32", &[1, 224, 224, 3])?;
-        runtime::check_tensor(
+        let ins = runtime::TensorInfo::inputs_of(&session);
+        let outs = runtime::TensorInfo::outputs_of(&session);
+        runtime::TensorInfo::check(&name, &ins, INPUT_NAME, "f32", &[1, 224, 224, 3])?;
+        runtime::TensorInfo::check(
             &name,
             &outs,
             BOXES_NAME,
             "f32",
             &[1, NUM_ANCHORS as i64, 12],
         )?;
-        runtime::check_tensor(
+        runtime::TensorInfo::check(
             &name,
             &outs,
             SCORES_NAME,

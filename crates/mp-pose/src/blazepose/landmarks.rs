@@ -228,14 +228,14 @@ impl LandmarkModel {
         refine.validate()?;
         let session = runtime::open_session(path, session)?;
         let name = path.display().to_string();
-        let ins = runtime::inputs_of(&session);
-        let outs = runtime::outputs_of(&session);
-        let input = runtime::check_tensor(&name, &ins, INPUT_NAME, "f32", &[1, 256, 256, 3])?;
+        let ins = runtime::TensorInfo::inputs_of(&session);
+        let outs = runtime::TensorInfo::outputs_of(&session);
+        let input = runtime::TensorInfo::check(&name, &ins, INPUT_NAME, "f32", &[1, 256, 256, 3])?;
         let batch_open = input.shape.first().is_some_and(|&b| b < 0);
-        runtime::check_tensor(&name, &outs, LANDMARKS_NAME, "f32", &[1, 195])?;
-        runtime::check_tensor(&name, &outs, PRESENCE_NAME, "f32", &[1, 1])?;
-        runtime::check_tensor(&name, &outs, HEATMAP_NAME, "f32", &[1, 64, 64, 39])?;
-        runtime::check_tensor(&name, &outs, WORLD_NAME, "f32", &[1, 117])?;
+        runtime::TensorInfo::check(&name, &outs, LANDMARKS_NAME, "f32", &[1, 195])?;
+        runtime::TensorInfo::check(&name, &outs, PRESENCE_NAME, "f32", &[1, 1])?;
+        runtime::TensorInfo::check(&name, &outs, HEATMAP_NAME, "f32", &[1, 64, 64, 39])?;
+        runtime::TensorInfo::check(&name, &outs, WORLD_NAME, "f32", &[1, 117])?;
         let run_options = RunOptions::new()
             .map_err(|e| PoseError::model(&name, e))?
             .with_outputs(

@@ -66,8 +66,8 @@ fn session(file: ModelFile) -> ort::session::Session {
 #[test]
 fn detector_contract_and_fixed_output() {
     let s = session(ModelFile::PoseDetection);
-    let ins = runtime::inputs_of(&s);
-    let outs = runtime::outputs_of(&s);
+    let ins = runtime::TensorInfo::inputs_of(&s);
+    let outs = runtime::TensorInfo::outputs_of(&s);
     assert_eq!(ins.len(), 1);
     assert_eq!(info(&ins, "input_1").shape, vec![1, 224, 224, 3]);
     assert_eq!(info(&ins, "input_1").dtype, "f32");
@@ -143,8 +143,8 @@ fn detector_raw_outputs_match_python() {
 
 fn check_landmark(kind: LandmarkModelKind, file: ModelFile, key: &str) {
     let s = session(file);
-    let ins = runtime::inputs_of(&s);
-    let outs = runtime::outputs_of(&s);
+    let ins = runtime::TensorInfo::inputs_of(&s);
+    let outs = runtime::TensorInfo::outputs_of(&s);
     assert_eq!(info(&ins, "input_1").shape, vec![1, 256, 256, 3]);
     for (name, shape) in [
         ("Identity", vec![1, 195]),
@@ -231,7 +231,7 @@ fn check_without_mask(kind: LandmarkModelKind, file: ModelFile) {
         cut.display()
     );
     let s = runtime::open_session(&cut, &SessionParams::default()).unwrap();
-    let outs = runtime::outputs_of(&s);
+    let outs = runtime::TensorInfo::outputs_of(&s);
     assert!(outs.iter().all(|o| o.name != "Identity_2"), "{outs:?}");
     assert_eq!(outs.len(), 4, "{outs:?}");
     drop(s);
@@ -345,8 +345,8 @@ fn movenet_contract_and_fixed_output() {
         return;
     }
     let s = session(ModelFile::MoveNetLightning);
-    let ins = runtime::inputs_of(&s);
-    let outs = runtime::outputs_of(&s);
+    let ins = runtime::TensorInfo::inputs_of(&s);
+    let outs = runtime::TensorInfo::outputs_of(&s);
     assert_eq!(
         info(&ins, "serving_default_input:0").shape,
         vec![1, 192, 192, 3]

@@ -35,7 +35,7 @@ use mp_pose::VideoReader;
 use serde::Serialize;
 
 use crate::error::{Result, VideoError};
-use crate::motion::MIN_CONFIDENCE;
+use crate::motion::VideoMotion;
 use crate::plan::{AtomicVideo, RenderParams};
 
 mod check;
@@ -172,7 +172,7 @@ impl Default for InterpParams {
             inbetween: InBetween::default(),
             recover_s: 0.0,
             pixel_check: false,
-            min_confidence: MIN_CONFIDENCE,
+            min_confidence: VideoMotion::MIN_CONFIDENCE,
             warp_check: false,
             render: RenderParams::default(),
         }
@@ -180,6 +180,15 @@ impl Default for InterpParams {
 }
 
 impl InterpParams {
+    /// Errors unless the interpolation factor `factor` is 2, 4 or 8.
+    pub fn check_factor(factor: usize) -> Result<()> {
+        if FACTORS.contains(&factor) {
+            Ok(())
+        } else {
+            Err(VideoError::Factor(factor))
+        }
+    }
+
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
         if !(self.sigma_frac.is_finite() && self.sigma_frac > 0.0 && self.sigma_frac <= 1.0) {
@@ -246,15 +255,6 @@ pub struct InterpReport {
     pub output: Option<PathBuf>,
 }
 
-/// Errors unless `factor` is 2, 4 or 8.
-pub fn check_factor(factor: usize) -> Result<()> {
-    if FACTORS.contains(&factor) {
-        Ok(())
-    } else {
-        Err(VideoError::Factor(factor))
-    }
-}
-
 /// Two neighbouring frames (RGB, `size` = width × height).
 pub struct Frames<'a> {
     /// Frame `i`.
@@ -277,7 +277,7 @@ pub fn interpolate_frames(
     analysis: &Params,
     mut sink: impl FnMut(&[u8]) -> Result<()>,
 ) -> Result<InterpReport> {
-    check_factor(factor)?;
+    InterpParams::check_factor(factor)?;
     params.validate()?;
     let info = mp_pose::probe(input)?;
     let (width, height) = (info.width, info.height);
@@ -375,7 +375,7 @@ pub fn interpolate_video(
     analysis: &Params,
     output: &Path,
 ) -> Result<InterpReport> {
-    check_factor(factor)?;
+    InterpParams::check_factor(factor)?;
     let info = mp_pose::probe(input)?;
     let mut out = AtomicVideo::create(
         output,
