@@ -118,6 +118,13 @@ pub struct LiveParams {
     /// them for live sources (standard input, `realtime`) and analyses every
     /// frame of a file read as fast as possible.
     pub drop_late: Option<bool>,
+    /// Seconds of decoded frames that may wait for the pose model, so that a
+    /// frame that costs more than the rest (a search of the detector, the
+    /// counting of a window) delays the next ones instead of losing them.
+    /// When the queue is full, a new frame of a live source pushes out the
+    /// oldest one waiting (dropped). At least one frame, at most 256 MiB.
+    /// Default 0.5.
+    pub queue_s: f64,
     /// Each confirmed person's concrete program, reported segment by segment
     /// ([`Event::Segment`]). Default false (segmentation costs CPU).
     pub program: bool,
@@ -154,6 +161,7 @@ impl Default for LiveParams {
             duration_s: None,
             realtime: false,
             drop_late: None,
+            queue_s: 0.5,
             program: false,
             program_every_s: 1.0,
             program_lag_s: 2.0,
@@ -205,6 +213,12 @@ impl LiveParams {
             return Err(LiveError::Param {
                 name: "min_confidence",
                 reason: format!("must be in 0..1, got {}", self.min_confidence),
+            });
+        }
+        if !(self.queue_s.is_finite() && self.queue_s >= 0.0) {
+            return Err(LiveError::Param {
+                name: "queue_s",
+                reason: format!("must be ≥ 0 seconds, got {}", self.queue_s),
             });
         }
         if !(self.max_gap_s.is_finite() && self.max_gap_s >= 0.0) {

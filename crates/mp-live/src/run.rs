@@ -222,13 +222,20 @@ fn run_inner(
     let drop_late = params
         .drop_late
         .unwrap_or_else(|| source.is_live(params.realtime));
-    let (slot, info) = source::start(source, params.realtime, stall, drop_late, &mut |r| {
-        sink.event(&Event::Reconnect {
-            attempt: r.attempt,
-            reason: r.reason,
-            t: 0.0,
-        })
-    })?;
+    let (slot, info) = source::start(
+        source,
+        params.realtime,
+        stall,
+        drop_late,
+        params.queue_s,
+        &mut |r| {
+            sink.event(&Event::Reconnect {
+                attempt: r.attempt,
+                reason: r.reason,
+                t: 0.0,
+            })
+        },
+    )?;
     let result = analyse(
         &slot, &info, &mut multi, params, cancel, stall, drop_late, state, sink,
     );

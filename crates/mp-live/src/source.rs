@@ -15,11 +15,17 @@
 //! gap. A stream whose frame size changes is scaled by FFmpeg to its first
 //! size.
 //!
-//! The decoded frames wait in a [`Slot`] of one frame: for a live source
-//! the newest frame replaces one not yet taken (which counts as dropped), so
-//! nothing queues up when the pose model is slower than the source; a file
-//! read as fast as possible waits for the pose model instead.
+//! The decoded frames wait in a [`Slot`], a queue of at most
+//! `LiveParams::queue_s` seconds of frames (at least one frame, at most
+//! [`MAX_QUEUE_BYTES`]): a frame that costs the pose model more than the
+//! rest (a search of the detector, the counting of a window) delays the next
+//! ones instead of losing them. For a live source, a new frame that finds
+//! the queue full pushes out the oldest one waiting (which counts as
+//! dropped), so nothing queues up without bound when the pose model is
+//! slower than the source; a file read as fast as possible waits for the
+//! pose model instead.
 
+use std::collections::VecDeque;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -460,7 +466,7 @@ fn probe_stream(
 /// What the slot holds.
 #[derive(Default)]
 struct SlotState {
-    frame: Option<Frame>,
+    frames: VecDeque<Frame>,
     dropped: usize,
     newest_s: f64,
     ended: Option<std::result::Result<(), String>>,
@@ -486,6 +492,8 @@ pub(crate) struct Reconnect {
 pub struct Slot {
     inner: Arc<(Mutex<SlotState>, Condvar)>,
     drop_late: bool,
+    /// Frames that may wait at once (at least one).
+    capacity: usize,
 }
 
 /// What [`Slot::take`] gives.
@@ -500,10 +508,11 @@ pub enum Taken {
 }
 
 impl Slot {
-    fn new(drop_late: bool) -> Self {
+    fn new(drop_late: bool, capacity: usize) -> Self {
         Slot {
             inner: Arc::new((Mutex::new(SlotState::default()), Condvar::new())),
             drop_late,
+            capacity: capacity.max(1),
         }
     }
 
@@ -570,7 +579,7 @@ impl Slot {
     /// Puts a decoded frame; false when the decoding should stop.
     fn put(&self, frame: Frame) -> bool {
         let mut s = self.lock();
-        while !self.drop_late && s.frame.is_some() && !s.stop {
+        while !self.drop_late && s.frames.len() >= self.capacity && !s.stop {
             s = self.inner.1.wait(s).unwrap_or_else(|p| p.into_inner());
         }
         if s.stop {
@@ -578,9 +587,11 @@ impl Slot {
         }
         s.newest_s = frame.timestamp_s;
         s.reconnecting = false;
-        if s.frame.replace(frame).is_some() {
+        while s.frames.len() >= self.capacity {
+            s.frames.pop_front();
             s.dropped += 1;
         }
+        s.frames.push_back(frame);
         self.inner.1.notify_all();
         true
     }
@@ -595,7 +606,7 @@ impl Slot {
         let deadline = Instant::now() + timeout;
         let mut s = self.lock();
         loop {
-            if let Some(f) = s.frame.take() {
+            if let Some(f) = s.frames.pop_front() {
                 self.inner.1.notify_all();
                 return Taken::Frame(f);
             }
@@ -616,8 +627,26 @@ impl Slot {
     }
 }
 
-/// Opens `source` and starts decoding it into a [`Slot`] on a thread of its
-/// own; returns the slot and the video's properties. A network source is
+/// The most bytes of frames a [`Slot`] holds: 256 MiB (a second of 1080p
+/// RGB frames at 30 fps is about 187 MB).
+pub const MAX_QUEUE_BYTES: usize = 256 << 20;
+
+/// How many frames of `info`'s size `queue_s` seconds hold, within
+/// [`MAX_QUEUE_BYTES`] and at least one.
+fn queue_frames(info: &VideoInfo, queue_s: f64) -> usize {
+    let frame_bytes = (info.width as usize * info.height as usize * 3).max(1);
+    let by_time = (queue_s * info.fps).floor();
+    let by_time = if by_time.is_finite() && by_time > 0.0 {
+        by_time as usize
+    } else {
+        1
+    };
+    by_time.min(MAX_QUEUE_BYTES / frame_bytes).max(1)
+}
+
+/// Opens `source` and starts decoding it into a [`Slot`] of `queue_s`
+/// seconds of frames on a thread of its own; returns the slot and the
+/// video's properties. A network source is
 /// tried again (each new try at opening it reported to `on_retry`, later ones
 /// by [`Slot::take_reconnects`]) when it cannot be reached or breaks off with an error (see
 /// the module docs); its frames go on with the stream time that passed.
@@ -626,10 +655,9 @@ pub fn start(
     realtime: bool,
     stall: Duration,
     drop_late: bool,
+    queue_s: f64,
     on_retry: &mut dyn FnMut(Reconnect),
 ) -> Result<(Slot, VideoInfo)> {
-    let slot = Slot::new(drop_late);
-    let s = slot.clone();
     let first = open_retrying(source, realtime, stall, &mut |attempt, reason| {
         on_retry(Reconnect {
             attempt,
@@ -637,6 +665,8 @@ pub fn start(
         })
     })?;
     let info = first.reader.info().clone();
+    let slot = Slot::new(drop_late, queue_frames(&info, queue_s));
+    let s = slot.clone();
     let source = source.clone();
     std::thread::Builder::new()
         .name("live-decode".into())
@@ -715,5 +745,98 @@ fn decode(first: Opened, source: &LiveSource, realtime: bool, stall: Duration, s
                 return;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
+
+    use super::*;
+
+    fn frame(index: usize) -> Frame {
+        Frame::new(index, index as f64 / 30.0, 2, 2, vec![0; 12]).unwrap()
+    }
+
+    fn info(width: usize, height: usize, fps: f64) -> VideoInfo {
+        VideoInfo {
+            path: PathBuf::from("-"),
+            width,
+            height,
+            fps,
+            frame_count: None,
+            duration_s: None,
+            codec: "h264".into(),
+        }
+    }
+
+    fn taken(slot: &Slot) -> Option<usize> {
+        match slot.take(Duration::from_millis(1)) {
+            Taken::Frame(f) => Some(f.index),
+            _ => None,
+        }
+    }
+
+    #[test]
+    fn a_full_queue_of_a_live_source_drops_its_oldest_frames() {
+        let slot = Slot::new(true, 3);
+        for i in 0..5 {
+            assert!(slot.put(frame(i)));
+        }
+        assert_eq!(slot.dropped(), 2);
+        let order: Vec<_> = std::iter::from_fn(|| taken(&slot)).collect();
+        assert_eq!(order, vec![2, 3, 4], "the newest frames wait, in order");
+        assert_eq!(slot.newest_s(), 4.0 / 30.0);
+    }
+
+    #[test]
+    fn frames_within_the_queue_are_not_dropped() {
+        let slot = Slot::new(true, 4);
+        for i in 0..6 {
+            assert!(slot.put(frame(i)));
+            if i % 2 == 1 {
+                // The analysis takes a frame every second frame: the queue
+                // absorbs what it is behind by.
+                assert!(taken(&slot).is_some());
+            }
+        }
+        assert_eq!(slot.dropped(), 0);
+        let rest: Vec<_> = std::iter::from_fn(|| taken(&slot)).collect();
+        assert_eq!(rest, vec![3, 4, 5]);
+    }
+
+    #[test]
+    fn a_file_read_as_fast_as_possible_waits_instead_of_dropping() {
+        let slot = Slot::new(false, 2);
+        let s = slot.clone();
+        let writer = std::thread::spawn(move || {
+            for i in 0..10 {
+                assert!(s.put(frame(i)));
+            }
+            s.end(Ok(()));
+        });
+        let mut got = Vec::new();
+        loop {
+            match slot.take(Duration::from_secs(10)) {
+                Taken::Frame(f) => got.push(f.index),
+                Taken::Ended(r) => {
+                    r.unwrap();
+                    break;
+                }
+                Taken::Stalled => panic!("stalled"),
+            }
+        }
+        writer.join().unwrap();
+        assert_eq!(got, (0..10).collect::<Vec<_>>());
+        assert_eq!(slot.dropped(), 0);
+    }
+
+    #[test]
+    fn the_queue_holds_seconds_of_frames_within_its_byte_bound() {
+        assert_eq!(queue_frames(&info(640, 360, 30.0), 0.5), 15);
+        assert_eq!(queue_frames(&info(640, 360, 30.0), 0.0), 1);
+        assert_eq!(queue_frames(&info(640, 360, 25.0), f64::NAN), 1);
+        // 4K RGB frames: 24.9 MB each, so at most 10 within 256 MiB.
+        assert_eq!(queue_frames(&info(3840, 2160, 60.0), 2.0), 10);
     }
 }
