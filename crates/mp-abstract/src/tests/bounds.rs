@@ -10,7 +10,6 @@ use crate::AbstractError;
 use crate::LoopParams;
 use crate::{execute, sample, ExecParams, LoopReplay};
 use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-use mp_concrete::max_output_frames;
 use mp_concrete::ConcreteError;
 
 const JOINTS: usize = 4;
@@ -93,7 +92,7 @@ fn set_iterations_is_bounded() {
         &MAX_ITERATIONS.to_string()
     ));
     // Below MAX_ITERATIONS but above the frame budget (30 frames × 4 joints per iteration).
-    let over = max_output_frames(JOINTS) / 30 + 1;
+    let over = mp_concrete::ExecParams::max_output_frames(JOINTS) / 30 + 1;
     assert!(over < MAX_ITERATIONS);
     assert_too_large(set_iterations(&mut p, 0, over).unwrap_err(), "iterations");
     let Stmt::Loop(l) = &p.stmts[1] else { panic!() };
