@@ -10,7 +10,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use mp_concrete::synthetic_track;
-use mp_concrete::{segment_exhaustive, synthesize, Scale, SynthParams};
+use mp_concrete::{Program, Scale, Segmentation, SynthParams};
 use mp_eval::table::{Align::Left, Align::Right, Table};
 
 /// Arguments of `cargo xtask bench`.
@@ -76,7 +76,7 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
     ];
     writeln!(
         md,
-        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D) repeated to T frames, with `SynthParams::paper()` (fixed λ = 1600) and with the analysis default that `mp fit` and `mp run` use (`mp_pipeline::Params::default()`: λ from the local spread held for one second, the Euclidean C0 refit); `search` is `mp_concrete::synthesize` (exact branch and bound), `exhaustive` the reference `mp_concrete::segment_exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
+        "\nThe procedural performer (`mp_geom::performer`, COCO-17, 2D) repeated to T frames, with `SynthParams::paper()` (fixed λ = 1600) and with the analysis default that `mp fit` and `mp run` use (`mp_pipeline::Params::default()`: λ from the local spread held for one second, the Euclidean C0 refit); `search` is `mp_concrete::Program::synthesize` (exact branch and bound), `exhaustive` the reference `mp_concrete::Segmentation::exhaustive` (every candidate fitted into the `T × W` cost table), one run each:\n"
     )?;
     let mut table = Table::new([
         "track",
@@ -92,7 +92,7 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
         let track = repeated_performer(*reps)?;
         let c0 = cpu_seconds();
         let t0 = Instant::now();
-        let syn = mp_concrete::synthesize_detailed(&track, params)?;
+        let syn = Program::synthesize_detailed(&track, params)?;
         let (wall, cpu) = (
             t0.elapsed().as_secs_f64(),
             cpu_seconds().zip(c0).map(|(a, b)| a - b),
@@ -111,7 +111,7 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
         if *exhaustive {
             let c0 = cpu_seconds();
             let t0 = Instant::now();
-            let s = segment_exhaustive(&track, params)?;
+            let s = Segmentation::exhaustive(&track, params)?;
             let (wall, cpu) = (
                 t0.elapsed().as_secs_f64(),
                 cpu_seconds().zip(c0).map(|(a, b)| a - b),
@@ -132,7 +132,7 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
     md.push_str(&table.markdown());
     writeln!(
         md,
-        "\nThe search's work on the same tracks (`mp_concrete::segment_with_stats`; counts, the same on every machine): candidates (start, end) visited, dropped on `E[k] + λ`, dropped by the O(1) bounds, survivors, survivors dropped on the single-precision pass and the frames it read, exact joint evaluations per survivor and the frames they read, exact circle fits and their frames:\n"
+        "\nThe search's work on the same tracks (`mp_concrete::Segmentation::search_with_stats`; counts, the same on every machine): candidates (start, end) visited, dropped on `E[k] + λ`, dropped by the O(1) bounds, survivors, survivors dropped on the single-precision pass and the frames it read, exact joint evaluations per survivor and the frames they read, exact circle fits and their frames:\n"
     )?;
     let mut table = Table::new([
         "track",
@@ -151,7 +151,7 @@ fn harness_performer(md: &mut String) -> anyhow::Result<()> {
     .align([Left, Left].into_iter().chain([Right; 10]));
     for (reps, params, label, _) in &runs {
         let track = repeated_performer(*reps)?;
-        let (_, st) = mp_concrete::segment_with_stats(&track, params)?;
+        let (_, st) = Segmentation::search_with_stats(&track, params)?;
         table.row([
             format!("performer ×{reps} ({} frames)", track.n_frames()),
             label.to_string(),
@@ -178,7 +178,7 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
     };
     writeln!(
         md,
-        "## Synthesis timing harness\n\nFull `mp_concrete::synthesize` (default parameters: fixed λ = 1600, W = 60, \
+        "## Synthesis timing harness\n\nFull `mp_concrete::Program::synthesize` (default parameters: fixed λ = 1600, W = 60, \
          stationary/line/circle, Euclidean error; exact branch-and-bound segmentation, sequential, then the chosen \
          segments fitted on the rayon pool) of a seeded synthetic 13-joint 2D track \
          (`mp_concrete::synthetic_track(T, 7)`), release build, {} rayon threads. \
@@ -205,7 +205,7 @@ fn harness(a: &BenchArgs, md: &mut String) -> anyhow::Result<()> {
         for _ in 0..runs {
             let c0 = cpu_seconds();
             let t0 = Instant::now();
-            let p = synthesize(&track, &params)?;
+            let p = Program::synthesize(&track, &params)?;
             ts.push(t0.elapsed().as_secs_f64());
             if let (Some(a), Some(b)) = (cpu_seconds(), c0) {
                 cs.push(a - b);

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use mp_concrete::{synthesize_detailed, Program, SynthParams};
+use mp_concrete::{Program, SynthParams};
 use mp_geom::{Checked, Validate};
 use mp_geom::{Track, Units};
 use ndarray::Array3;
@@ -186,7 +186,7 @@ pub fn analyse(track: &Track, params: &AbstractParams) -> Result<Analysis> {
 
 /// [`analyse`] with its parameters checked.
 fn analyse_valid(track: &Track, params: &Checked<&AbstractParams>) -> Result<Analysis> {
-    let syn = synthesize_detailed(track, &params.synth)?;
+    let syn = Program::synthesize_detailed(track, &params.synth)?;
     Analysis::from_synthesis(syn, &params.loops)
 }
 

@@ -199,14 +199,14 @@ struct Lexer {
 }
 
 /// The tokens of `src` by the workspace's one lexer
-/// ([`mp_concrete::lex`], [`LexRules::ABSTRACT`]), numbers read as `f64`.
+/// ([`LexRules::lex`] with [`LexRules::ABSTRACT`]), numbers read as `f64`.
 fn lex(src: &str) -> Result<Lexer> {
     let located = |line, column, message: String| AbstractError::Parse {
         line,
         column,
         message,
     };
-    let tokens = shared::lex(src, &LexRules::ABSTRACT).map_err(|e| {
+    let tokens = LexRules::ABSTRACT.lex(src).map_err(|e| {
         located(
             e.line,
             e.column,
@@ -477,7 +477,7 @@ fn dist_total_fits(counts: &std::collections::BTreeMap<usize, usize>, c: usize) 
 /// Whether `s` reads back as one name in the text form (a joint name):
 /// letters, digits, `_`, `-`, `.` and `|`, not starting like a number.
 pub fn is_name(s: &str) -> bool {
-    match shared::lex(s, &LexRules::ABSTRACT).as_deref() {
+    match LexRules::ABSTRACT.lex(s).as_deref() {
         Ok(
             [shared::Token {
                 tok: shared::Tok::Ident(name),

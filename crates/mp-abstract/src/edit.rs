@@ -7,7 +7,7 @@ use crate::model::{AbstractProgram, Loop};
 
 /// The largest iteration count [`AbstractProgram::set_iterations`] accepts, whatever the body:
 /// one million. The program's output must also fit
-/// [`mp_concrete::MAX_FRAME_JOINTS`] (frames × joints) when sampled,
+/// [`mp_geom::MAX_FRAME_JOINTS`] (frames × joints) when sampled,
 /// which is usually the tighter bound.
 pub const MAX_ITERATIONS: usize = 1_000_000;
 
@@ -16,7 +16,7 @@ impl AbstractProgram {
     /// iterations beyond the new count are dropped; new iterations execute the
     /// body's distributions. Counts above `MAX_ITERATIONS`, or whose execution
     /// (at the longest body durations) would exceed
-    /// [`mp_concrete::MAX_FRAME_JOINTS`], are an error naming `iterations`;
+    /// [`mp_geom::MAX_FRAME_JOINTS`], are an error naming `iterations`;
     /// the program is then unchanged.
     pub fn set_iterations(&mut self, n: usize, iterations: usize) -> Result<()> {
         if iterations > MAX_ITERATIONS {

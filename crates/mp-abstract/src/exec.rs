@@ -308,7 +308,7 @@ pub fn output_frames_bound(prog: &AbstractProgram, replay: LoopReplay, sampled: 
 }
 
 /// Checks that `frames` output frames fit
-/// [`mp_concrete::MAX_FRAME_JOINTS`] for the program's joints. The error
+/// [`mp_concrete::ExecParams::max_output_frames`] for the program's joints. The error
 /// names `iterations` (the largest iteration count) when the program has
 /// loops, else `frames`.
 pub fn check_output_frames(prog: &AbstractProgram, frames: f64) -> Result<usize> {
@@ -322,8 +322,8 @@ pub fn check_output_frames(prog: &AbstractProgram, frames: f64) -> Result<usize>
         .max();
     let j = prog.joints.len();
     Ok(match most_iterations {
-        Some(it) => mp_concrete::check_output_frames("iterations", it, frames, j)?,
-        None => mp_concrete::check_output_frames("frames", frames, frames, j)?,
+        Some(it) => mp_concrete::ExecParams::check_output_frames("iterations", it, frames, j)?,
+        None => mp_concrete::ExecParams::check_output_frames("frames", frames, frames, j)?,
     })
 }
 

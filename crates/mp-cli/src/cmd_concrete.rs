@@ -4,10 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use mp_concrete::{
-    pretty_decimals, print_pretty, program_stats, Continuity, ExecParams, Program, RefitNorm,
-    Transition,
-};
+use mp_concrete::{Continuity, ExecParams, NumberFormat, Program, RefitNorm, Transition};
 use mp_geom::PrimitiveKind;
 use mp_pipeline::Params;
 
@@ -124,8 +121,10 @@ pub fn fit(a: &FitArgs) -> anyhow::Result<()> {
         .with_context(|| format!("fitting {}", a.track.display()))?;
     let p = &syn.program;
     if a.print {
-        let decimals = a.precision.unwrap_or(pretty_decimals(p.units));
-        print!("{}", print_pretty(p, decimals));
+        let decimals = a
+            .precision
+            .unwrap_or(NumberFormat::pretty_decimals(p.units));
+        print!("{}", p.to_dsl_pretty(decimals));
     }
     p.write(&a.output)?;
     if a.quiet {
@@ -171,7 +170,7 @@ pub fn execute(a: &ExecuteArgs) -> anyhow::Result<()> {
 pub fn stats(a: &StatsArgs) -> anyhow::Result<()> {
     let track = crate::track_arg::read_track(&a.track, &a.rate)?;
     let p = Program::read(&a.program)?;
-    let s = program_stats(&p, &track)?;
+    let s = p.stats(&track)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&s)?);
         return Ok(());

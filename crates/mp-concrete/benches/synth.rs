@@ -12,7 +12,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
 use mp_concrete::synthetic_track;
-use mp_concrete::{segment, segment_exhaustive, synthesize, Scale, SynthParams};
+use mp_concrete::{Program, Scale, Segmentation, SynthParams};
 use mp_geom::Track;
 use mp_geom::{perform, PerformerParams};
 use ndarray::{concatenate, Axis};
@@ -50,7 +50,7 @@ fn bench(c: &mut Criterion) {
         let track = synthetic_track(n, 7).expect("synthetic track");
         g.measurement_time(Duration::from_secs(if n >= 10_000 { 30 } else { 10 }));
         g.bench_with_input(BenchmarkId::from_parameter(n), &track, |b, tr| {
-            b.iter(|| synthesize(tr, &params).expect("synthesis"))
+            b.iter(|| Program::synthesize(tr, &params).expect("synthesis"))
         });
     }
     g.finish();
@@ -65,18 +65,18 @@ fn bench(c: &mut Criterion) {
     g.bench_with_input(
         BenchmarkId::new("search", long.n_frames()),
         &long,
-        |b, tr| b.iter(|| segment(tr, &defaults).expect("segment")),
+        |b, tr| b.iter(|| Segmentation::search(tr, &defaults).expect("segment")),
     );
     let short = repeated_performer(2);
     g.bench_with_input(
         BenchmarkId::new("search", short.n_frames()),
         &short,
-        |b, tr| b.iter(|| segment(tr, &defaults).expect("segment")),
+        |b, tr| b.iter(|| Segmentation::search(tr, &defaults).expect("segment")),
     );
     g.bench_with_input(
         BenchmarkId::new("exhaustive", short.n_frames()),
         &short,
-        |b, tr| b.iter(|| segment_exhaustive(tr, &defaults).expect("segment")),
+        |b, tr| b.iter(|| Segmentation::exhaustive(tr, &defaults).expect("segment")),
     );
     g.finish();
 }

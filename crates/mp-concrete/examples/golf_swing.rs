@@ -6,9 +6,7 @@
 //! ```
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // example code: failing loudly is the point
 
-use mp_concrete::{
-    joint_block, program_stats, synthesize, NumberFormat, Scale, SynthParams, UnobservedJoints,
-};
+use mp_concrete::{NumberFormat, Program, Scale, SynthParams, UnobservedJoints};
 use mp_geom::PennAction;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -28,14 +26,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         unobserved_joints: UnobservedJoints::Ignore,
         ..SynthParams::paper()
     };
-    let program = synthesize(&track, &params)?;
+    let program = Program::synthesize(&track, &params)?;
     let wrist = program.joint_index("right_wrist").ok_or("no right wrist")?;
     println!(
         "clip {} ({} frames, {}×{} px)",
         info.clip_id, info.n_frames, info.width_px, info.height_px
     );
-    print!("{}", joint_block(&program, wrist, NumberFormat::Fixed(2)));
-    let st = program_stats(&program, &track)?;
+    print!("{}", program.dsl_joint_block(wrist, NumberFormat::Fixed(2)));
+    let st = program.stats(&track)?;
     println!(
         "{} segments, {} parameters (raw {}), KD {:.2} px ({:.2} px at 512 px)",
         st.n_segments,

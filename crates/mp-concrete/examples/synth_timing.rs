@@ -10,9 +10,7 @@
 use std::time::Instant;
 
 use mp_concrete::synthetic_track;
-use mp_concrete::{
-    segment, segment_exhaustive, segment_with_stats, synthesize, Continuity, Scale, SynthParams,
-};
+use mp_concrete::{Continuity, Program, Scale, Segmentation, SynthParams};
 use mp_geom::Track;
 use mp_geom::{perform, PerformerParams};
 use ndarray::{concatenate, Axis};
@@ -67,7 +65,7 @@ fn main() -> Res<()> {
         params.refit_norm = mp_concrete::RefitNorm::Euclidean;
     }
     let t0 = Instant::now();
-    let prog = synthesize(&track, &params)?;
+    let prog = Program::synthesize(&track, &params)?;
     println!(
         "performer ×{reps}: T = {}, J = {}: synthesize {:.3} s ({}), {} segments",
         track.n_frames(),
@@ -77,7 +75,7 @@ fn main() -> Res<()> {
         prog.n_segments()
     );
     // The search's work (the same on every machine).
-    let (_, st) = segment_with_stats(&track, &params)?;
+    let (_, st) = Segmentation::search_with_stats(&track, &params)?;
     println!(
         "  search: {} candidates, {} dropped on λ, {} by the O(1) bounds, {} survivors \
          ({} dropped in single precision, {} joints, {} frames; {} dropped exactly; \
@@ -100,7 +98,7 @@ fn main() -> Res<()> {
         ..params.clone()
     };
     let t0 = Instant::now();
-    let prog = synthesize(&track, &independent)?;
+    let prog = Program::synthesize(&track, &independent)?;
     println!(
         "  with continuity none: {:.3} s, {} segments",
         t0.elapsed().as_secs_f64(),
@@ -108,8 +106,8 @@ fn main() -> Res<()> {
     );
     if reference {
         let t0 = Instant::now();
-        let s = segment_exhaustive(&track, &params)?;
-        let fast = segment(&track, &params)?;
+        let s = Segmentation::exhaustive(&track, &params)?;
+        let fast = Segmentation::search(&track, &params)?;
         println!(
             "  reference {:.3} s, cost {} vs fast {} (same boundaries: {})",
             t0.elapsed().as_secs_f64(),
@@ -125,7 +123,7 @@ fn main() -> Res<()> {
     for n in sizes {
         let tr = synthetic_track(n, 7)?;
         let t0 = Instant::now();
-        let prog = synthesize(&tr, &px)?;
+        let prog = Program::synthesize(&tr, &px)?;
         println!(
             "synthetic T = {n}: synthesize {:.3} s, {} segments",
             t0.elapsed().as_secs_f64(),

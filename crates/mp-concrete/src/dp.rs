@@ -28,6 +28,39 @@ impl Segmentation {
     pub fn n_segments(&self) -> usize {
         self.boundaries.len().saturating_sub(1)
     }
+
+    /// Minimum-cost segmentation of `0..n_frames` into segments of at most
+    /// `window` frames by dynamic programming, `cost(k, n)` the cost of
+    /// segment `k..n` (see the module docs), `O(T·W)`. Ties go to the
+    /// earliest split point `k` (the longest last segment). Costs may be `+∞`
+    /// (forbidden segments); NaN costs are an error.
+    pub fn dp(
+        n_frames: usize,
+        window: usize,
+        cost: impl Fn(usize, usize) -> f64,
+    ) -> Result<Segmentation> {
+        check(n_frames, window)?;
+        let mut best = vec![f64::INFINITY; n_frames + 1];
+        let mut arg = vec![0usize; n_frames + 1];
+        best[0] = 0.0;
+        for n in 1..=n_frames {
+            let lo = n.saturating_sub(window);
+            for k in lo..n {
+                let c = cost(k, n);
+                if c.is_nan() {
+                    return Err(ConcreteError::Track(format!(
+                        "segment cost of frames {k}..{n} is NaN"
+                    )));
+                }
+                let e = best[k] + c;
+                if e < best[n] {
+                    best[n] = e;
+                    arg[n] = k;
+                }
+            }
+        }
+        backtrack(&best, &arg, window)
+    }
 }
 
 /// Segment costs `cost(k, n)` for all `n − W ≤ k < n`, stored densely
@@ -120,38 +153,6 @@ fn check(n_frames: usize, window: usize) -> Result<()> {
     Ok(())
 }
 
-/// Minimum-cost segmentation of `0..n_frames` into segments of at most
-/// `window` frames, `O(T·W)`. Ties go to the earliest split point `k` (the
-/// longest last segment). Costs may be `+∞` (forbidden segments); NaN costs
-/// are an error.
-pub fn segment_dp(
-    n_frames: usize,
-    window: usize,
-    cost: impl Fn(usize, usize) -> f64,
-) -> Result<Segmentation> {
-    check(n_frames, window)?;
-    let mut best = vec![f64::INFINITY; n_frames + 1];
-    let mut arg = vec![0usize; n_frames + 1];
-    best[0] = 0.0;
-    for n in 1..=n_frames {
-        let lo = n.saturating_sub(window);
-        for k in lo..n {
-            let c = cost(k, n);
-            if c.is_nan() {
-                return Err(ConcreteError::Track(format!(
-                    "segment cost of frames {k}..{n} is NaN"
-                )));
-            }
-            let e = best[k] + c;
-            if e < best[n] {
-                best[n] = e;
-                arg[n] = k;
-            }
-        }
-    }
-    backtrack(&best, &arg, window)
-}
-
 /// The segmentation from a DP's optimal costs `best[n]` of frames `0..n`
 /// (`best[0] = 0`) and the start `arg[n]` of the last segment of each optimum;
 /// an error when the whole track has no finite-cost segmentation.
@@ -176,14 +177,15 @@ pub(crate) fn backtrack(best: &[f64], arg: &[usize], window: usize) -> Result<Se
     })
 }
 
-/// [`segment_dp`] over a precomputed table.
-pub fn segment_table(table: &CostTable) -> Result<Segmentation> {
-    segment_dp(table.n_frames(), table.window(), |k, n| table.get(k, n))
+/// [`Segmentation::dp`] over a precomputed table.
+pub(crate) fn segment_table(table: &CostTable) -> Result<Segmentation> {
+    Segmentation::dp(table.n_frames(), table.window(), |k, n| table.get(k, n))
 }
 
 /// Exhaustive search over all `2^(T−1)` segmentations (segments of at most
 /// `window` frames), for testing the DP. Refuses `T > 20`.
-pub fn segment_brute_force(
+#[cfg(test)]
+pub(crate) fn segment_brute_force(
     n_frames: usize,
     window: usize,
     cost: impl Fn(usize, usize) -> f64,

@@ -48,7 +48,7 @@ pub enum ConcreteError {
         reason: String,
     },
     /// A size the user controls (output frame rate, frame count) that implies
-    /// more output than the documented limit ([`crate::exec::MAX_FRAME_JOINTS`]).
+    /// more output than the documented limit ([`crate::ExecParams::max_output_frames`]).
     #[error("`{name}` = {value} is too large: {limit}")]
     TooLarge {
         /// Name of the parameter (field of a `Params` struct or CLI option).
@@ -115,4 +115,4 @@ impl From<ParseError> for ConcreteError {
 }
 
 /// Result alias for `mp-concrete`.
-pub type Result<T, E = ConcreteError> = std::result::Result<T, E>;
+pub(crate) type Result<T, E = ConcreteError> = std::result::Result<T, E>;

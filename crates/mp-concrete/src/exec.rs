@@ -8,46 +8,12 @@
 //! linear blend of the two primitives' end and start (default), or the first
 //! primitive extrapolated. At integer frames both give the primitive values.
 
-use mp_geom::{Track, Units};
+use mp_geom::{Track, Units, MAX_FRAME_JOINTS};
 use ndarray::Array3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{ConcreteError, Result};
 use crate::program::Program;
-
-/// The most output cells (frames × joints) one execution may produce
-/// (`mp_geom::MAX_FRAME_JOINTS`): larger requests (an absurd
-/// `fps_out`, a program of absurd durations) are a
-/// [`ConcreteError::TooLarge`] instead of an allocation failure.
-pub use mp_geom::MAX_FRAME_JOINTS;
-
-/// The most output frames for `joints` joints: `MAX_FRAME_JOINTS / joints` (at least 1).
-pub fn max_output_frames(joints: usize) -> usize {
-    (MAX_FRAME_JOINTS / joints.max(1)).max(1)
-}
-
-/// Checks that `frames` output frames of `joints` joints (as `f64`, so that
-/// absurd values cannot overflow) fit [`MAX_FRAME_JOINTS`]; the error names
-/// the parameter `name` and its `value`. Returns the frame count.
-pub fn check_output_frames(
-    name: &'static str,
-    value: impl std::fmt::Display,
-    frames: f64,
-    joints: usize,
-) -> Result<usize> {
-    let limit = max_output_frames(joints);
-    if frames.is_finite() && frames >= 0.0 && frames <= limit as f64 {
-        return Ok(frames as usize);
-    }
-    Err(ConcreteError::TooLarge {
-        name,
-        value: value.to_string(),
-        limit: format!(
-            "it implies {frames:.0} output frames of {joints} joints, \
-             at most {limit} frames ({MAX_FRAME_JOINTS} frame·joints)"
-        ),
-    })
-}
 
 /// What happens between the last frame of a segment and the first frame of the next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -72,6 +38,38 @@ pub struct ExecParams {
 }
 
 impl ExecParams {
+    /// The most output frames one execution may produce for `joints`
+    /// joints: [`mp_geom::MAX_FRAME_JOINTS`] output cells (frames × joints)
+    /// divided by `joints` (at least 1). Larger requests (an absurd
+    /// `fps_out`, a program of absurd durations) are a
+    /// [`ConcreteError::TooLarge`] instead of an allocation failure.
+    pub fn max_output_frames(joints: usize) -> usize {
+        (MAX_FRAME_JOINTS / joints.max(1)).max(1)
+    }
+
+    /// Checks that `frames` output frames of `joints` joints (as `f64`, so that
+    /// absurd values cannot overflow) fit [`ExecParams::max_output_frames`];
+    /// the error names the parameter `name` and its `value`. Returns the frame count.
+    pub fn check_output_frames(
+        name: &'static str,
+        value: impl std::fmt::Display,
+        frames: f64,
+        joints: usize,
+    ) -> Result<usize> {
+        let limit = Self::max_output_frames(joints);
+        if frames.is_finite() && frames >= 0.0 && frames <= limit as f64 {
+            return Ok(frames as usize);
+        }
+        Err(ConcreteError::TooLarge {
+            name,
+            value: value.to_string(),
+            limit: format!(
+                "it implies {frames:.0} output frames of {joints} joints, \
+                 at most {limit} frames ({MAX_FRAME_JOINTS} frame·joints)"
+            ),
+        })
+    }
+
     /// Checks every field: `fps_out`, when given, finite and > 0.
     pub fn validate(&self) -> Result<()> {
         if let Some(f) = self.fps_out {
@@ -139,7 +137,12 @@ impl Program {
     /// each in `[0, T − 1]`).
     pub fn sample_frames(&self, frames: &[f64], transition: Transition) -> Result<Array3<f64>> {
         self.validate()?;
-        check_output_frames("frames", frames.len(), frames.len() as f64, self.n_joints())?;
+        ExecParams::check_output_frames(
+            "frames",
+            frames.len(),
+            frames.len() as f64,
+            self.n_joints(),
+        )?;
         let (j, d) = (self.n_joints(), self.dims);
         let b = self.boundaries();
         let mut out = Array3::zeros((frames.len(), j, d));
@@ -177,8 +180,13 @@ impl Program {
         let ratio = self.fps / fps_out;
         let n_out_f = (last / ratio + 1e-9).floor() + 1.0;
         let n_out = match params.fps_out {
-            Some(f) => check_output_frames("fps_out", f, n_out_f, self.n_joints())?,
-            None => check_output_frames("frames", self.n_frames(), n_out_f, self.n_joints())?,
+            Some(f) => ExecParams::check_output_frames("fps_out", f, n_out_f, self.n_joints())?,
+            None => ExecParams::check_output_frames(
+                "frames",
+                self.n_frames(),
+                n_out_f,
+                self.n_joints(),
+            )?,
         };
         let frames: Vec<f64> = (0..n_out).map(|k| (k as f64 * ratio).min(last)).collect();
         let pos = self.sample_frames(&frames, params.transition)?;

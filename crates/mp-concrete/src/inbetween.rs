@@ -621,7 +621,7 @@ mod tests {
     fn bulge_and_program_tangents_read_the_program() {
         let f = |t: f64| [5.0 * t, 2.0 * t];
         let tr = track(10, f, &[]);
-        let program = crate::synthesize(&tr, &Default::default()).unwrap();
+        let program = crate::Program::synthesize(&tr, &Default::default()).unwrap();
         for rule in [
             InBetween::Bulge { max_bulge: 0.5 },
             InBetween::parse("hermite:program:1").unwrap(),
@@ -644,7 +644,7 @@ mod tests {
         pos.slice_mut(ndarray::s![.., 0, ..])
             .assign(&other.positions().slice(ndarray::s![.., 0, ..]));
         let two = Track::new(pos, None, 30.0, Units::Pixels, Skeleton::generic(2)).unwrap();
-        let p2 = crate::synthesize(&two, &Default::default()).unwrap();
+        let p2 = crate::Program::synthesize(&two, &Default::default()).unwrap();
         assert!(InBetweenPoses::new(&tr, Some(&p2), InBetween::default(), 0.3).is_err());
     }
 

@@ -5,17 +5,18 @@
 //! parametric primitive (stationary, linear, circular or cubic spline motion).
 //!
 //! * [`Program`], [`Segment`]: the data type, with JSON via serde and the
-//!   text DSL ([`dsl::print`], [`dsl::parse`]; `docs/DSL.md`).
-//! * [`synthesize`]: the program of a track by dynamic-programming
-//!   segmentation (`dp`) over primitive fits from [`mp_geom::fit_best`].
+//!   text DSL ([`Program::to_dsl`], [`Program::from_dsl`]; `docs/DSL.md`).
+//! * [`Program::synthesize`]: the program of a track by dynamic-programming
+//!   segmentation ([`Segmentation`]) over primitive fits from
+//!   [`mp_geom::fit_best`].
 //! * [`Program::execute`] and friends: rendering at any time resolution.
-//! * [`program_stats`]: the measurements of the paper's §4.1 (the
+//! * [`Program::stats`]: the measurements of the paper's §4.1 (the
 //!   interpolation experiment of §4.2 is in the evaluations, `mp-eval`).
 //! * [`InBetweenPoses`]: the pose between two frames of a track, guided by
 //!   its program (what `mp interpolate` warps in-between frames to).
 //!
 //! ```
-//! use mp_concrete::{synthesize, SynthParams};
+//! use mp_concrete::{Program, SynthParams};
 //! use mp_geom::{Skeleton, Track, Units};
 //! use ndarray::Array3;
 //!
@@ -26,9 +27,9 @@
 //!     pos[[t, 0, 1]] = 50.0;
 //! }
 //! let track = Track::new(pos, None, 30.0, Units::Pixels, Skeleton::generic(1)).unwrap();
-//! let program = synthesize(&track, &SynthParams::default()).unwrap();
+//! let program = Program::synthesize(&track, &SynthParams::default()).unwrap();
 //! let text = program.to_dsl();
-//! assert_eq!(mp_concrete::Program::from_dsl(&text).unwrap(), program);
+//! assert_eq!(Program::from_dsl(&text).unwrap(), program);
 //! ```
 
 mod dp;
@@ -43,28 +44,18 @@ mod stats;
 mod synth;
 mod synthetic;
 
-pub use dp::{segment_brute_force, segment_dp, CostTable, Segmentation};
-pub use error::{ConcreteError, ParseError, Result};
+pub use dp::{CostTable, Segmentation};
+pub use dsl::lex;
+pub use dsl::{axis_name, NumberFormat};
+pub use error::{ConcreteError, ParseError};
 pub use exec::{ExecParams, Transition};
 pub use inbetween::{InBetween, InBetweenPoses, Tangents};
 pub use program::{Program, Segment};
 pub use search::SearchStats;
-pub use smooth::{max_boundary_gap, Continuity, RefitNorm};
-pub use stats::{program_stats, ProgramStats};
-pub use synth::{
-    segment, segment_costs, segment_exhaustive, segment_with_stats, synthesize,
-    synthesize_detailed, Lambda, Scale, SynthParams, Synthesis, UnobservedJoints,
-    REFERENCE_EXTENT_PX, REFERENCE_FRAME_PX,
-};
-
+pub use smooth::{Continuity, RefitNorm};
+pub use stats::ProgramStats;
+pub use synth::{Lambda, Scale, SynthParams, Synthesis, UnobservedJoints};
 pub use synthetic::synthetic_track;
 
 #[cfg(test)]
 mod tests;
-
-pub use dsl::lex;
-pub use dsl::{
-    axis_name, header, joint_block, parse, pretty_decimals, print, print_pretty, statement,
-    NumberFormat, PRETTY_DECIMALS,
-};
-pub use exec::{check_output_frames, max_output_frames, MAX_FRAME_JOINTS};

@@ -45,7 +45,7 @@ pub struct Program {
     /// `i + 1` at `t = 0`, as synthesis with [`crate::SynthParams::continuity`]
     /// writes it) or were fitted independently. A statement about how the
     /// program was made, not checked by [`Program::validate`]
-    /// ([`crate::max_boundary_gap`] measures it). Absent in files written
+    /// ([`Program::max_boundary_gap`] measures it). Absent in files written
     /// before the field existed: [`Continuity::None`].
     #[serde(default)]
     pub continuity: Continuity,
@@ -268,9 +268,18 @@ impl Program {
         Ok(p)
     }
 
-    /// The lossless DSL text (see `docs/DSL.md`).
+    /// The lossless DSL text (see `docs/DSL.md`): every number in its
+    /// shortest round-trip form, so `Program::from_dsl(&p.to_dsl()) == p`
+    /// for every valid program.
     pub fn to_dsl(&self) -> String {
         crate::dsl::print(self)
+    }
+
+    /// Human-friendly DSL text with `decimals` digits after the point (the
+    /// paper uses 2; [`NumberFormat::pretty_decimals`](crate::NumberFormat::pretty_decimals)
+    /// suits the units). Not lossless.
+    pub fn to_dsl_pretty(&self, decimals: usize) -> String {
+        crate::dsl::print_pretty(self, decimals)
     }
 
     /// Parses DSL text (see `docs/DSL.md`) and validates the program.

@@ -61,42 +61,44 @@ fn check_compatible(program: &Program, track: &Track) -> Result<()> {
     Ok(())
 }
 
-/// Statistics of `program` against `track` (same frames, joints and dimensions).
-pub fn program_stats(program: &Program, track: &Track) -> Result<ProgramStats> {
-    program.validate()?;
-    check_compatible(program, track)?;
-    let exec = program.execute_with(&ExecParams::default())?;
-    let kd = mp_geom::kd(&exec, track).map_err(|e| match e {
-        GeomError::NoData(_) => ConcreteError::Track("no observed keypoint to compare".into()),
-        e => e.into(),
-    })?;
-    // Largest adjacent-frame jump: of the observed joints of the track, of
-    // every joint of the program (0 for a single frame).
-    let jump = |p: Poses<'_>| -> Result<f64> {
-        if track.n_frames() < 2 {
-            return Ok(0.0);
-        }
-        match mp_geom::max_adjacent_jump(p) {
-            Err(GeomError::NoData(_)) => Ok(0.0),
-            r => Ok(r?),
-        }
-    };
-    let kinds = program
-        .kind_counts()
-        .into_iter()
-        .map(|(k, n)| (k.as_str().to_string(), n))
-        .collect();
-    Ok(ProgramStats {
-        n_frames: track.n_frames(),
-        n_joints: track.n_joints(),
-        dims: track.dims(),
-        n_segments: program.n_segments(),
-        kinds,
-        params_program: program.n_params(),
-        numbers_program: program.n_numbers(),
-        params_raw: track.n_frames() * track.n_joints() * track.dims(),
-        kd,
-        max_jump_raw: jump(track.into())?,
-        max_jump_program: jump(exec.positions().into())?,
-    })
+impl Program {
+    /// Statistics of the program against `track` (same frames, joints and dimensions).
+    pub fn stats(&self, track: &Track) -> Result<ProgramStats> {
+        self.validate()?;
+        check_compatible(self, track)?;
+        let exec = self.execute_with(&ExecParams::default())?;
+        let kd = mp_geom::kd(&exec, track).map_err(|e| match e {
+            GeomError::NoData(_) => ConcreteError::Track("no observed keypoint to compare".into()),
+            e => e.into(),
+        })?;
+        // Largest adjacent-frame jump: of the observed joints of the track, of
+        // every joint of the program (0 for a single frame).
+        let jump = |p: Poses<'_>| -> Result<f64> {
+            if track.n_frames() < 2 {
+                return Ok(0.0);
+            }
+            match mp_geom::max_adjacent_jump(p) {
+                Err(GeomError::NoData(_)) => Ok(0.0),
+                r => Ok(r?),
+            }
+        };
+        let kinds = self
+            .kind_counts()
+            .into_iter()
+            .map(|(k, n)| (k.as_str().to_string(), n))
+            .collect();
+        Ok(ProgramStats {
+            n_frames: track.n_frames(),
+            n_joints: track.n_joints(),
+            dims: track.dims(),
+            n_segments: self.n_segments(),
+            kinds,
+            params_program: self.n_params(),
+            numbers_program: self.n_numbers(),
+            params_raw: track.n_frames() * track.n_joints() * track.dims(),
+            kd,
+            max_jump_raw: jump(track.into())?,
+            max_jump_program: jump(exec.positions().into())?,
+        })
+    }
 }

@@ -125,7 +125,7 @@ fn main() -> Res<()> {
         &dir,
         "concrete_dsl",
         "pretty.mp",
-        mp_concrete::print_pretty(&programs[0], 2),
+        programs[0].to_dsl_pretty(2),
     )?;
     put(
         &dir,

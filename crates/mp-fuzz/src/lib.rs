@@ -15,7 +15,7 @@
 //!
 //! | target | reader |
 //! |---|---|
-//! | `concrete_dsl` | [`mp_concrete::parse`] |
+//! | `concrete_dsl` | [`mp_concrete::Program::from_dsl`] |
 //! | `abstract_dsl` | [`mp_abstract::AbstractProgram::read_str`] (text form) |
 //! | `program_json` | [`mp_concrete::Program::from_json`] |
 //! | `abstract_json` | [`mp_abstract::AbstractProgram::read_str`] (JSON) |
@@ -132,12 +132,12 @@ fn panic_msg(msg: &str) {
     panic!("{msg}");
 }
 
-/// Concrete-program DSL text ([`mp_concrete::parse`]).
+/// Concrete-program DSL text ([`Program::from_dsl`]).
 pub fn concrete_dsl(data: &[u8]) {
     let Some(src) = text(data) else { return };
-    if let Ok(p) = mp_concrete::parse(src) {
+    if let Ok(p) = Program::from_dsl(src) {
         check_program(&p);
-        let _ = mp_concrete::print_pretty(&p, 2);
+        let _ = p.to_dsl_pretty(2);
     }
 }
 

@@ -24,7 +24,7 @@
 //! `max_gap_s`) without overlap; each keeps the primitives the segmentation
 //! of its buffer gave it.
 
-use mp_concrete::{statement, NumberFormat, Program, Segment, PRETTY_DECIMALS};
+use mp_concrete::{NumberFormat, Program, Segment};
 use mp_geom::{Primitive, Skeleton, Track};
 
 use crate::poses::Poses;
@@ -77,15 +77,12 @@ impl ProgramSegment {
     /// The segment in the DSL of `mp fit` (two decimals): one line per joint,
     /// `name: statement`.
     pub fn dsl(&self, joints: &[String]) -> String {
-        let nf = NumberFormat::Fixed(PRETTY_DECIMALS);
-        let lines: Vec<String> = self
-            .segment
-            .primitives
-            .iter()
-            .enumerate()
-            .map(|(j, p)| {
+        let nf = NumberFormat::Fixed(NumberFormat::PRETTY_DECIMALS);
+        let lines: Vec<String> = (0..self.segment.primitives.len())
+            .filter_map(|j| {
                 let name = joints.get(j).map(String::as_str).unwrap_or("?");
-                format!("{name}: {}", statement(p, self.segment.duration_frames, nf))
+                let statement = self.segment.dsl_statement(j, nf)?;
+                Some(format!("{name}: {statement}"))
             })
             .collect();
         lines.join("\n")

@@ -634,7 +634,7 @@ pub const MAX_QUEUE_BYTES: usize = 256 << 20;
 /// How many frames of `info`'s size `queue_s` seconds hold, within
 /// [`MAX_QUEUE_BYTES`] and at least one.
 fn queue_frames(info: &VideoInfo, queue_s: f64) -> usize {
-    let frame_bytes = (info.width as usize * info.height as usize * 3).max(1);
+    let frame_bytes = (info.width * info.height * 3).max(1);
     let by_time = (queue_s * info.fps).floor();
     let by_time = if by_time.is_finite() && by_time > 0.0 {
         by_time as usize

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use mp_concrete::{program_stats, Program};
+use mp_concrete::Program;
 use mp_geom::{Skeleton, Track};
 use mp_live::{LiveParams, OnlineProgram, ProgramSegment};
 
@@ -162,10 +162,7 @@ fn compare(track: &Track, frame_px: Option<f64>, params: &LiveParams) -> Compare
     let ms_per_frame = t0.elapsed().as_secs_f64() * 1e3 / track.n_frames() as f64;
     check_tiling(&segs, 0, track.n_frames());
     let online: Program = ProgramSegment::concatenate(&offline, &segs).unwrap();
-    let (so, sf) = (
-        program_stats(&online, &coco).unwrap(),
-        program_stats(&offline, &coco).unwrap(),
-    );
+    let (so, sf) = (online.stats(&coco).unwrap(), offline.stats(&coco).unwrap());
     let (eo, ef) = (online.execute().unwrap(), offline.execute().unwrap());
     let (a, b) = (eo.positions(), ef.positions());
     let mut max_diff = 0.0f64;

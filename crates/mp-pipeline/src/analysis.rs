@@ -6,7 +6,7 @@
 use std::time::Instant;
 
 use mp_abstract::{count_signals, Analysis, Counts};
-use mp_concrete::{synthesize_detailed, Synthesis};
+use mp_concrete::{Program, Synthesis};
 use mp_geom::{CancelToken, Track};
 
 use crate::error::{PipelineError, Result};
@@ -21,7 +21,7 @@ pub fn concrete_program(
     params: &Params,
 ) -> Result<Synthesis> {
     params.validate()?;
-    synthesize_detailed(track, &params.synth_for(frame_px))
+    Program::synthesize_detailed(track, &params.synth_for(frame_px))
         .map_err(|e| PipelineError::stage("fitting the concrete program", e))
 }
 

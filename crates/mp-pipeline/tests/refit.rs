@@ -2,7 +2,7 @@
 //! Euclidean norm, on real keypoints with long gaps.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use mp_concrete::{program_stats, RefitNorm};
+use mp_concrete::RefitNorm;
 use mp_pipeline::Params;
 
 /// The hoola-hoop video's reference keypoints: the person is lost for long
@@ -31,8 +31,8 @@ fn euclidean_refit_keeps_unobserved_segments_in_place() {
     let sq = mp_pipeline::concrete_program(&track, None, &params).unwrap();
     assert_eq!(sq.program.boundaries(), eu.program.boundaries());
     let (s, e) = (
-        program_stats(&sq.program, &track).unwrap(),
-        program_stats(&eu.program, &track).unwrap(),
+        sq.program.stats(&track).unwrap(),
+        eu.program.stats(&track).unwrap(),
     );
     eprintln!(
         "max jump raw {:.1}, squared {:.1}, euclidean {:.1}; KD {:.2} → {:.2}; params {} → {}",

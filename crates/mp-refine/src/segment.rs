@@ -9,7 +9,7 @@
 //!
 //! `E[n] = min_{k<n} E[k] + fit(P[k..=n]) + λ`
 //!
-//! which is [`mp_concrete::segment_dp`] run over the `T − 1` frame
+//! which is [`mp_concrete::Segmentation::dp`] run over the `T − 1` frame
 //! *intervals*: a DP segment of intervals `k..n` is the transition of frames
 //! `k..=n`, so the DP boundaries are exactly the anchors, first and last frame
 //! included.
@@ -26,7 +26,7 @@
 //! of 20 joints in one frame. The paper does not state its unit convention;
 //! the λ ablation in `tests/` shows how the number of anchors responds.
 
-use mp_concrete::{segment_dp, CostTable, Segmentation};
+use mp_concrete::{CostTable, Segmentation};
 use mp_geom::{fit_spline, ErrorNorm, FitParams};
 use mp_geom::{Primitive, Track};
 use ndarray::{s, Array2, Array3, ArrayView2};
@@ -357,7 +357,8 @@ pub(crate) fn transition_costs(track: &Track, params: &SegmentParams) -> Result<
 /// count other than [`SegmentParams::n_joints`]; non-finite fits.
 pub fn segment_track(track: &Track, params: &SegmentParams) -> Result<Segmentation3d> {
     let table = transition_costs(track, params)?;
-    let seg: Segmentation = segment_dp(table.n_frames(), table.window(), |k, n| table.get(k, n))?;
+    let seg: Segmentation =
+        Segmentation::dp(table.n_frames(), table.window(), |k, n| table.get(k, n))?;
     from_anchors(track, &seg.boundaries, params, seg.cost)
 }
 

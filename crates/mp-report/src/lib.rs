@@ -21,13 +21,13 @@
 //! rasterised to PNG from the same SVG, so both always agree.
 //!
 //! ```
-//! use mp_concrete::{synthesize, SynthParams};
+//! use mp_concrete::{Program, SynthParams};
 //! use mp_geom::{perform, PerformerParams};
 //! use mp_report::{timeline_svg, TimelineParams};
 //!
 //! // The timeline picture of the performer's program (the product's synthesis).
 //! let track = perform(&PerformerParams::default())?.track_2d;
-//! let program = synthesize(&track, &SynthParams::default())?;
+//! let program = Program::synthesize(&track, &SynthParams::default())?;
 //! let (svg, axis) = timeline_svg(&program, &[], &[], &TimelineParams::default())?;
 //! assert!(svg.starts_with("<svg") && axis.frames == track.n_frames());
 //! # Ok::<(), Box<dyn std::error::Error>>(())

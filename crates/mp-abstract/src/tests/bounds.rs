@@ -6,10 +6,8 @@ use crate::edit::MAX_ITERATIONS;
 use crate::exec::output_frames_bound;
 use crate::loops::{MAX_BODY, MAX_WINDOW};
 use crate::AbstractError;
-use crate::LoopParams;
 use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-use crate::{ExecParams, LoopReplay};
-use mp_concrete::max_output_frames;
+use crate::{ExecParams, LoopParams, LoopReplay};
 use mp_concrete::ConcreteError;
 
 const JOINTS: usize = 4;
@@ -89,7 +87,7 @@ fn set_iterations_is_bounded() {
         &MAX_ITERATIONS.to_string()
     ));
     // Below MAX_ITERATIONS but above the frame budget (30 frames × 4 joints per iteration).
-    let over = max_output_frames(JOINTS) / 30 + 1;
+    let over = mp_concrete::ExecParams::max_output_frames(JOINTS) / 30 + 1;
     assert!(over < MAX_ITERATIONS);
     assert_too_large(p.set_iterations(0, over).unwrap_err(), "iterations");
     let Stmt::Loop(l) = &p.stmts[1] else { panic!() };

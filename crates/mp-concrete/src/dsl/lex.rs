@@ -126,165 +126,167 @@ pub struct Token {
     pub column: usize,
 }
 
-/// Splits `text` into tokens by `rules`, ending with [`Tok::Eof`].
-pub fn lex(text: &str, rules: &LexRules) -> Result<Vec<Token>, ParseError> {
-    let chars: Vec<char> = text.chars().collect();
-    let mut out = Vec::new();
-    let (mut i, mut line, mut col) = (0usize, 1usize, 1usize);
-    let err = |line, column, expected: &str, found: String| ParseError {
-        line,
-        column,
-        expected: expected.into(),
-        found,
-    };
-    let found_at = |i: usize| {
-        chars
-            .get(i)
-            .map_or("end of input".to_string(), |c| format!("`{c}`"))
-    };
-    while i < chars.len() {
-        let c = chars[i];
-        let (tl, tc) = (line, col);
-        let mut push = |tok| {
-            out.push(Token {
-                tok,
-                line: tl,
-                column: tc,
-            })
+impl LexRules {
+    /// Splits `text` into tokens by these rules, ending with [`Tok::Eof`].
+    pub fn lex(&self, text: &str) -> Result<Vec<Token>, ParseError> {
+        let chars: Vec<char> = text.chars().collect();
+        let mut out = Vec::new();
+        let (mut i, mut line, mut col) = (0usize, 1usize, 1usize);
+        let err = |line, column, expected: &str, found: String| ParseError {
+            line,
+            column,
+            expected: expected.into(),
+            found,
         };
-        if c == '\n' {
-            i += 1;
-            line += 1;
-            col = 1;
-            continue;
-        }
-        if c.is_whitespace() {
-            i += 1;
-            col += 1;
-            continue;
-        }
-        if c == '#' {
-            while i < chars.len() && chars[i] != '\n' {
+        let found_at = |i: usize| {
+            chars
+                .get(i)
+                .map_or("end of input".to_string(), |c| format!("`{c}`"))
+        };
+        while i < chars.len() {
+            let c = chars[i];
+            let (tl, tc) = (line, col);
+            let mut push = |tok| {
+                out.push(Token {
+                    tok,
+                    line: tl,
+                    column: tc,
+                })
+            };
+            if c == '\n' {
+                i += 1;
+                line += 1;
+                col = 1;
+                continue;
+            }
+            if c.is_whitespace() {
                 i += 1;
                 col += 1;
+                continue;
             }
-            continue;
-        }
-        if rules.number_start(&chars, i) {
-            let start = i;
-            let digits = |i: &mut usize| {
-                let s = *i;
-                while *i < chars.len() && chars[*i].is_ascii_digit() {
-                    *i += 1;
+            if c == '#' {
+                while i < chars.len() && chars[i] != '\n' {
+                    i += 1;
+                    col += 1;
                 }
-                *i > s
-            };
-            if chars[i] == '-' || chars[i] == '+' {
-                i += 1;
+                continue;
             }
-            digits(&mut i);
-            if i < chars.len() && chars[i] == '.' {
-                i += 1;
-                if !digits(&mut i) {
-                    return Err(err(
-                        line,
-                        col + (i - start),
-                        "a digit after `.`",
-                        found_at(i),
-                    ));
-                }
-            }
-            if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
-                i += 1;
-                if i < chars.len() && (chars[i] == '+' || chars[i] == '-') {
+            if self.number_start(&chars, i) {
+                let start = i;
+                let digits = |i: &mut usize| {
+                    let s = *i;
+                    while *i < chars.len() && chars[*i].is_ascii_digit() {
+                        *i += 1;
+                    }
+                    *i > s
+                };
+                if chars[i] == '-' || chars[i] == '+' {
                     i += 1;
                 }
-                if !digits(&mut i) {
-                    return Err(err(
-                        line,
-                        col + (i - start),
-                        "a digit in the exponent",
-                        found_at(i),
-                    ));
-                }
-            }
-            col += i - start;
-            push(Tok::Number(chars[start..i].iter().collect()));
-            continue;
-        }
-        if rules.punctuation.contains(c) {
-            push(Tok::Punct(c));
-            i += 1;
-            col += 1;
-            continue;
-        }
-        if rules.name_start(c) {
-            let start = i;
-            while i < chars.len() && rules.name_char(chars[i]) {
-                i += 1;
-            }
-            col += i - start;
-            push(Tok::Ident(chars[start..i].iter().collect()));
-            continue;
-        }
-        if c == '"' && rules.strings {
-            i += 1;
-            col += 1;
-            let mut s = String::new();
-            loop {
-                match chars.get(i) {
-                    None | Some('\n') => {
+                digits(&mut i);
+                if i < chars.len() && chars[i] == '.' {
+                    i += 1;
+                    if !digits(&mut i) {
                         return Err(err(
                             line,
-                            col,
-                            "`\"` closing the string",
-                            "end of line".into(),
-                        ))
-                    }
-                    Some('"') => {
-                        i += 1;
-                        col += 1;
-                        break;
-                    }
-                    Some('\\') => {
-                        let e = match chars.get(i + 1) {
-                            Some('"') => '"',
-                            Some('\\') => '\\',
-                            Some('n') => '\n',
-                            Some('t') => '\t',
-                            other => {
-                                let found = other
-                                    .map_or("end of input".to_string(), |c| format!("`\\{c}`"));
-                                return Err(err(
-                                    line,
-                                    col,
-                                    "an escape `\\\"`, `\\\\`, `\\n` or `\\t`",
-                                    found,
-                                ));
-                            }
-                        };
-                        s.push(e);
-                        i += 2;
-                        col += 2;
-                    }
-                    Some(&ch) => {
-                        s.push(ch);
-                        i += 1;
-                        col += 1;
+                            col + (i - start),
+                            "a digit after `.`",
+                            found_at(i),
+                        ));
                     }
                 }
+                if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+                    i += 1;
+                    if i < chars.len() && (chars[i] == '+' || chars[i] == '-') {
+                        i += 1;
+                    }
+                    if !digits(&mut i) {
+                        return Err(err(
+                            line,
+                            col + (i - start),
+                            "a digit in the exponent",
+                            found_at(i),
+                        ));
+                    }
+                }
+                col += i - start;
+                push(Tok::Number(chars[start..i].iter().collect()));
+                continue;
             }
-            push(Tok::Str(s));
-            continue;
+            if self.punctuation.contains(c) {
+                push(Tok::Punct(c));
+                i += 1;
+                col += 1;
+                continue;
+            }
+            if self.name_start(c) {
+                let start = i;
+                while i < chars.len() && self.name_char(chars[i]) {
+                    i += 1;
+                }
+                col += i - start;
+                push(Tok::Ident(chars[start..i].iter().collect()));
+                continue;
+            }
+            if c == '"' && self.strings {
+                i += 1;
+                col += 1;
+                let mut s = String::new();
+                loop {
+                    match chars.get(i) {
+                        None | Some('\n') => {
+                            return Err(err(
+                                line,
+                                col,
+                                "`\"` closing the string",
+                                "end of line".into(),
+                            ))
+                        }
+                        Some('"') => {
+                            i += 1;
+                            col += 1;
+                            break;
+                        }
+                        Some('\\') => {
+                            let e = match chars.get(i + 1) {
+                                Some('"') => '"',
+                                Some('\\') => '\\',
+                                Some('n') => '\n',
+                                Some('t') => '\t',
+                                other => {
+                                    let found = other
+                                        .map_or("end of input".to_string(), |c| format!("`\\{c}`"));
+                                    return Err(err(
+                                        line,
+                                        col,
+                                        "an escape `\\\"`, `\\\\`, `\\n` or `\\t`",
+                                        found,
+                                    ));
+                                }
+                            };
+                            s.push(e);
+                            i += 2;
+                            col += 2;
+                        }
+                        Some(&ch) => {
+                            s.push(ch);
+                            i += 1;
+                            col += 1;
+                        }
+                    }
+                }
+                push(Tok::Str(s));
+                continue;
+            }
+            return Err(err(tl, tc, self.expected(), format!("`{c}`")));
         }
-        return Err(err(tl, tc, rules.expected(), format!("`{c}`")));
+        out.push(Token {
+            tok: Tok::Eof,
+            line,
+            column: col,
+        });
+        Ok(out)
     }
-    out.push(Token {
-        tok: Tok::Eof,
-        line,
-        column: col,
-    });
-    Ok(out)
 }
 
 #[cfg(test)]
@@ -292,7 +294,8 @@ mod tests {
     use super::*;
 
     fn toks(text: &str, rules: &LexRules) -> Vec<Tok> {
-        lex(text, rules)
+        rules
+            .lex(text)
             .unwrap()
             .into_iter()
             .map(|t| t.tok)
@@ -330,19 +333,19 @@ mod tests {
 
     #[test]
     fn positions_and_errors_are_located() {
-        let t = lex("a\n  \"s\\\"\" 7", &LexRules::CONCRETE).unwrap();
+        let t = LexRules::CONCRETE.lex("a\n  \"s\\\"\" 7").unwrap();
         assert_eq!((t[1].line, t[1].column), (2, 3));
         assert_eq!(t[1].tok, Tok::Str("s\"".into()));
         assert_eq!((t[2].line, t[2].column), (2, 9));
-        let e = lex("x = 1.", &LexRules::CONCRETE).unwrap_err();
+        let e = LexRules::CONCRETE.lex("x = 1.").unwrap_err();
         assert_eq!(
             (e.line, e.column, e.expected.as_str()),
             (1, 7, "a digit after `.`")
         );
-        let e = lex("\"no strings\"", &LexRules::ABSTRACT).unwrap_err();
+        let e = LexRules::ABSTRACT.lex("\"no strings\"").unwrap_err();
         assert_eq!(e.expected, "a name, number or punctuation");
-        let e = lex("joint ü", &LexRules::CONCRETE).unwrap_err();
+        let e = LexRules::CONCRETE.lex("joint ü").unwrap_err();
         assert_eq!((e.column, e.found.as_str()), (7, "`ü`"));
-        assert!(lex("joint ü", &LexRules::ABSTRACT).is_ok());
+        assert!(LexRules::ABSTRACT.lex("joint ü").is_ok());
     }
 }

@@ -10,18 +10,19 @@
 //! }
 //! ```
 //!
-//! [`print`](fn@print) writes every number in its shortest round-trip form, so
-//! `parse(&print(&p)) == p` exactly; [`print_pretty`] rounds to a fixed
-//! number of decimals, like the paper's figures.
+//! [`Program::to_dsl`](crate::Program::to_dsl) writes every number in its
+//! shortest round-trip form, so `Program::from_dsl(&p.to_dsl()) == p`
+//! exactly; [`Program::to_dsl_pretty`](crate::Program::to_dsl_pretty) rounds
+//! to a fixed number of decimals, like the paper's figures.
 
 pub mod lex;
 mod parse;
 mod print;
 
-pub use parse::parse;
+pub(crate) use parse::parse;
 #[cfg(test)]
 pub(crate) use parse::parse_statement;
-pub use print::{
-    axis_name, header, joint_block, pretty_decimals, print, print_pretty, statement, NumberFormat,
-    PRETTY_DECIMALS,
-};
+#[cfg(test)]
+pub(crate) use print::statement;
+pub use print::{axis_name, NumberFormat};
+pub(crate) use print::{print, print_pretty};

@@ -2,7 +2,7 @@
 
 use mp_geom::{Primitive, Units};
 
-use super::lex::{lex, LexRules, Tok, Token};
+use super::lex::{LexRules, Tok, Token};
 use super::print::axis_name;
 use crate::error::{ConcreteError, ParseError, Result};
 use crate::program::{Program, Segment};
@@ -58,7 +58,7 @@ type PResult<T> = std::result::Result<T, ParseError>;
 
 impl Parser {
     fn peek(&self) -> &Token {
-        // `lex` always ends with `Eof`, and `bump` never moves past it.
+        // `LexRules::lex` always ends with `Eof`, and `bump` never moves past it.
         &self.toks[self.pos.min(self.toks.len() - 1)]
     }
     fn at(&self) -> (usize, usize) {
@@ -576,8 +576,8 @@ fn is_axis(key: &str, dims: usize) -> bool {
 }
 
 /// Parses the text of a whole program (see `docs/DSL.md`) and validates it.
-pub fn parse(text: &str) -> Result<Program> {
-    let toks = lex(text, &LexRules::CONCRETE)?;
+pub(crate) fn parse(text: &str) -> Result<Program> {
+    let toks = LexRules::CONCRETE.lex(text)?;
     let mut p = Parser { toks, pos: 0 };
     let prog = p.program().map_err(ConcreteError::from)?;
     prog.validate()?;
@@ -587,7 +587,7 @@ pub fn parse(text: &str) -> Result<Program> {
 /// Parses one statement (e.g. `stationary(x=1, y=2, duration=3)`) for a program of `dims` dimensions.
 #[cfg(test)]
 pub fn parse_statement(text: &str, dims: usize) -> Result<(Primitive, usize)> {
-    let toks = lex(text, &LexRules::CONCRETE)?;
+    let toks = LexRules::CONCRETE.lex(text)?;
     let mut p = Parser { toks, pos: 0 };
     let (prim, dur, _) = p.statement(dims)?;
     if p.peek().tok != Tok::Eof {

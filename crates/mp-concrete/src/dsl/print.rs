@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 
 use mp_geom::Primitive;
 
-use crate::program::Program;
+use crate::program::{Program, Segment};
 use crate::smooth::Continuity;
 
 /// How numbers are printed.
@@ -16,6 +16,22 @@ pub enum NumberFormat {
     Exact,
     /// A fixed number of decimals, like the paper's figures (lossy).
     Fixed(usize),
+}
+
+impl NumberFormat {
+    /// Decimals of [`Program::to_dsl_pretty`] when none are chosen: 2, as the paper's figures.
+    pub const PRETTY_DECIMALS: usize = 2;
+
+    /// Decimals that show a program's numbers to about the same precision in
+    /// every unit: 2 for pixels (the paper's), 4 for metres (0.1 mm), 3 for
+    /// unitless features.
+    pub fn pretty_decimals(units: mp_geom::Units) -> usize {
+        match units {
+            mp_geom::Units::Pixels => Self::PRETTY_DECIMALS,
+            mp_geom::Units::Metres => 4,
+            mp_geom::Units::Unitless => 3,
+        }
+    }
 }
 
 /// Formats one number.
@@ -87,7 +103,7 @@ fn tuple(v: &[f64], nf: NumberFormat) -> String {
 }
 
 /// One statement, e.g. `linear_motion(x=1.2*t + 30, y=-0.5*t + 12, duration=8)`.
-pub fn statement(p: &Primitive, duration_frames: usize, nf: NumberFormat) -> String {
+pub(crate) fn statement(p: &Primitive, duration_frames: usize, nf: NumberFormat) -> String {
     let d = p.dims();
     let mut args: Vec<String> = Vec::new();
     let name = match p {
@@ -156,70 +172,71 @@ fn quote(s: &str) -> String {
     out
 }
 
-/// The header line, e.g. `program(fps=30, units=px, dims=2, skeleton="penn13", continuity=c0)`
-/// (`continuity` only when it is not `none`).
-pub fn header(p: &Program, nf: NumberFormat) -> String {
-    let units = match p.units {
-        mp_geom::Units::Pixels => "px",
-        mp_geom::Units::Metres => "m",
-        mp_geom::Units::Unitless => "unitless",
-    };
-    let continuity = match p.continuity {
-        Continuity::None => String::new(),
-        c => format!(", continuity={c}"),
-    };
-    format!(
-        "program(fps={}, units={units}, dims={}, skeleton={}{continuity})",
-        fmt_number(p.fps, nf),
-        p.dims,
-        quote(&p.skeleton)
-    )
+impl Program {
+    /// The DSL header line, e.g. `program(fps=30, units=px, dims=2, skeleton="penn13", continuity=c0)`
+    /// (`continuity` only when it is not `none`), numbers formatted by `nf`.
+    pub fn dsl_header(&self, nf: NumberFormat) -> String {
+        let units = match self.units {
+            mp_geom::Units::Pixels => "px",
+            mp_geom::Units::Metres => "m",
+            mp_geom::Units::Unitless => "unitless",
+        };
+        let continuity = match self.continuity {
+            Continuity::None => String::new(),
+            c => format!(", continuity={c}"),
+        };
+        format!(
+            "program(fps={}, units={units}, dims={}, skeleton={}{continuity})",
+            fmt_number(self.fps, nf),
+            self.dims,
+            quote(&self.skeleton)
+        )
+    }
+
+    /// The DSL block of joint `joint`: `joint "name" {`, its statements
+    /// with numbers formatted by `nf`, `}`.
+    pub fn dsl_joint_block(&self, joint: usize, nf: NumberFormat) -> String {
+        let mut s = String::new();
+        let name = self.joints.get(joint).map(String::as_str).unwrap_or("?");
+        let _ = writeln!(s, "joint {} {{", quote(name));
+        for (prim, dur) in self.joint_statements(joint) {
+            let _ = writeln!(s, "    {}", statement(prim, dur, nf));
+        }
+        s.push_str("}\n");
+        s
+    }
 }
 
-/// The block of one joint: `joint "name" {` … `}`.
-pub fn joint_block(p: &Program, joint: usize, nf: NumberFormat) -> String {
-    let mut s = String::new();
-    let name = p.joints.get(joint).map(String::as_str).unwrap_or("?");
-    let _ = writeln!(s, "joint {} {{", quote(name));
-    for (prim, dur) in p.joint_statements(joint) {
-        let _ = writeln!(s, "    {}", statement(prim, dur, nf));
+impl Segment {
+    /// The DSL statement of joint `joint` (its index in the program's
+    /// joints) in this segment, numbers formatted by `nf`, e.g.
+    /// `linear_motion(x=1.2*t + 30, y=-0.5*t + 12, duration=8)`; `None` when
+    /// the segment has no primitive for that joint.
+    pub fn dsl_statement(&self, joint: usize, nf: NumberFormat) -> Option<String> {
+        self.primitives
+            .get(joint)
+            .map(|p| statement(p, self.duration_frames, nf))
     }
-    s.push_str("}\n");
-    s
 }
 
 /// The whole program with numbers formatted by `nf`.
-pub fn print_with(p: &Program, nf: NumberFormat) -> String {
-    let mut s = header(p, nf);
+fn print_with(p: &Program, nf: NumberFormat) -> String {
+    let mut s = p.dsl_header(nf);
     s.push('\n');
     for j in 0..p.joints.len() {
         s.push('\n');
-        s.push_str(&joint_block(p, j, nf));
+        s.push_str(&p.dsl_joint_block(j, nf));
     }
     s
 }
 
 /// Lossless text: `parse(&print(p)) == p` for every valid program.
-pub fn print(p: &Program) -> String {
+pub(crate) fn print(p: &Program) -> String {
     print_with(p, NumberFormat::Exact)
-}
-
-/// Decimals of [`print_pretty`] when none are chosen: 2, as the paper's figures.
-pub const PRETTY_DECIMALS: usize = 2;
-
-/// Decimals that show a program's numbers to about the same precision in
-/// every unit: 2 for pixels (the paper's), 4 for metres (0.1 mm), 3 for
-/// unitless features.
-pub fn pretty_decimals(units: mp_geom::Units) -> usize {
-    match units {
-        mp_geom::Units::Pixels => PRETTY_DECIMALS,
-        mp_geom::Units::Metres => 4,
-        mp_geom::Units::Unitless => 3,
-    }
 }
 
 /// Human-friendly text with `decimals` digits after the point (the paper uses 2).
 /// Not lossless.
-pub fn print_pretty(p: &Program, decimals: usize) -> String {
+pub(crate) fn print_pretty(p: &Program, decimals: usize) -> String {
     print_with(p, NumberFormat::Fixed(decimals))
 }

@@ -50,7 +50,7 @@
 //! candidate that survives every joint's single-precision bound gets the
 //! exact double-precision pass of each joint, and its exact cost. The costs are those of
 //! [`mp_geom::fit_best`] (same fits, same rules) up to rounding, so the
-//! optimum is the optimum of the exhaustive DP ([`crate::synth::segment_exhaustive`]).
+//! optimum is the optimum of the exhaustive DP ([`Segmentation::exhaustive`](crate::Segmentation::exhaustive)).
 //!
 //! What the one pass measures (its single-precision lower bounds, then the
 //! exact errors where they follow) is kept for the next candidates (per joint,

@@ -75,6 +75,8 @@ use mp_geom::Primitive;
 use ndarray::ArrayView2;
 use serde::{Deserialize, Serialize};
 
+use crate::program::Program;
+
 mod elems;
 mod irls;
 mod solve;
@@ -368,23 +370,25 @@ pub(crate) fn refit_joint(
     }
 }
 
-/// The largest distance, over joints and boundaries, between the end of a
-/// segment (its primitive at `t = duration`) and the start of the next.
-pub fn max_boundary_gap(program: &crate::Program) -> f64 {
-    let mut worst: f64 = 0.0;
-    for pair in program.segments.windows(2) {
-        let n = pair[0].duration_frames as f64;
-        for (p, q) in pair[0].primitives.iter().zip(&pair[1].primitives) {
-            let a = p.eval(n);
-            let b = q.eval(0.0);
-            let dist = a
-                .iter()
-                .zip(&b)
-                .map(|(x, y)| (x - y) * (x - y))
-                .sum::<f64>()
-                .sqrt();
-            worst = worst.max(dist);
+impl Program {
+    /// The largest distance, over joints and boundaries, between the end of a
+    /// segment (its primitive at `t = duration`) and the start of the next.
+    pub fn max_boundary_gap(&self) -> f64 {
+        let mut worst: f64 = 0.0;
+        for pair in self.segments.windows(2) {
+            let n = pair[0].duration_frames as f64;
+            for (p, q) in pair[0].primitives.iter().zip(&pair[1].primitives) {
+                let a = p.eval(n);
+                let b = q.eval(0.0);
+                let dist = a
+                    .iter()
+                    .zip(&b)
+                    .map(|(x, y)| (x - y) * (x - y))
+                    .sum::<f64>()
+                    .sqrt();
+                worst = worst.max(dist);
+            }
         }
+        worst
     }
-    worst
 }

@@ -1,13 +1,14 @@
 //! Synthesis of a concrete program from a track (paper §3.1): the shared
 //! segmentation minimising Σ segments (Σ joints best-fit error + λ) is found
-//! by [`segment`] — an exact branch and bound over the DP of [`crate::dp`]
-//! with segment moments updated in O(1) per candidate and lower bounds of the
-//! fit errors ([`crate::search`], module docs there) — and the chosen
-//! segments are fitted once more with [`mp_geom::fit_best`] (in parallel)
-//! to get their primitives. The costs are those of `fit_best` on every
-//! candidate segment `k..n` of at most `W` frames; [`segment_exhaustive`]
-//! still computes them all into a [`CostTable`] and is the reference the
-//! tests compare with (same optimum; `O(T·W)` memory and `O(T·W²·J)` time).
+//! by [`Segmentation::search`] — an exact branch and bound over the DP of
+//! [`crate::dp`] with segment moments updated in O(1) per candidate and lower
+//! bounds of the fit errors ([`crate::search`], module docs there) — and the
+//! chosen segments are fitted once more with [`mp_geom::fit_best`] (in
+//! parallel) to get their primitives. The costs are those of `fit_best` on
+//! every candidate segment `k..n` of at most `W` frames;
+//! [`Segmentation::exhaustive`] still computes them all into a [`CostTable`]
+//! and is the reference the tests compare with (same optimum; `O(T·W)`
+//! memory and `O(T·W²·J)` time).
 //!
 //! The parameters (scale, λ, [`SynthParams`]) and their units are described in
 //! [`params`].
@@ -28,10 +29,10 @@ pub mod params;
 
 pub use params::{
     lambda_per_frame, Lambda, Scale, SynthParams, UnobservedJoints, BUDGET_LAMBDA_RANGE,
-    BUDGET_LAMBDA_STEP, REFERENCE_EXTENT_PX, REFERENCE_FRAME_PX,
+    BUDGET_LAMBDA_STEP,
 };
 
-/// The result of [`synthesize_detailed`].
+/// The result of [`Program::synthesize_detailed`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Synthesis {
     /// The program.
@@ -192,9 +193,9 @@ fn scaled_fit(params: &SynthParams, unit_scale: f64) -> Result<Checked<FitParams
 
 /// The DP's cost table for a track: `cost(k, n)` = Σ over joints of the best
 /// fit error on frames `k..n` + λ of frame `n − 1` (track units), for every
-/// segment of at most `max_segment_frames` frames. [`synthesize`] segments
-/// with exactly this table.
-pub fn segment_costs(track: &Track, params: &SynthParams) -> Result<CostTable> {
+/// segment of at most `max_segment_frames` frames. [`Program::synthesize`]
+/// segments with exactly these costs.
+pub(crate) fn segment_costs(track: &Track, params: &SynthParams) -> Result<CostTable> {
     params.validate()?;
     let params = &resolve_budget(track, params)?;
     let su = setup(track, params)?;
@@ -251,36 +252,39 @@ fn search_prepared(
     segment_search(&joints, &track.skeleton().joints, fit, lambda, window)
 }
 
-/// The reference segmentation: every candidate segment refitted with
-/// [`mp_geom::fit_best`] into the full cost table ([`segment_costs`],
-/// `O(T·W)` memory, `O(T·W²·J)` time), then the exhaustive DP over it.
-/// [`synthesize`] finds the same optimum much faster (same costs up to
-/// rounding); this is kept for tests and benchmarks.
-pub fn segment_exhaustive(track: &Track, params: &SynthParams) -> Result<Segmentation> {
-    segment_table(&segment_costs(track, params)?)
-}
-
-/// The segmentation that [`synthesize`] uses (branch and bound, no cost table).
-pub fn segment(track: &Track, params: &SynthParams) -> Result<Segmentation> {
-    if let Lambda::Budget { ratio } = params.lambda {
-        params.validate()?;
-        // The bisection has segmented at the λ it chose already.
-        return synthesize_budget(track, params, ratio).map(|(s, _)| s.segmentation);
+impl Segmentation {
+    /// The segmentation that [`Program::synthesize`] uses (branch and bound,
+    /// no cost table).
+    pub fn search(track: &Track, params: &SynthParams) -> Result<Segmentation> {
+        if let Lambda::Budget { ratio } = params.lambda {
+            params.validate()?;
+            // The bisection has segmented at the λ it chose already.
+            return synthesize_budget(track, params, ratio).map(|(s, _)| s.segmentation);
+        }
+        // (Validates the parameters.)
+        Segmentation::search_with_stats(track, params).map(|(s, _)| s)
     }
-    // (Validates the parameters.)
-    segment_with_stats(track, params).map(|(s, _)| s)
-}
 
-/// [`segment`] and the work its search did ([`SearchStats`]). With a
-/// [`Lambda::Budget`], the search at the fixed λ the budget chose (the
-/// bisection's other searches are not counted).
-pub fn segment_with_stats(
-    track: &Track,
-    params: &SynthParams,
-) -> Result<(Segmentation, SearchStats)> {
-    params.validate()?;
-    let params = &resolve_budget(track, params)?;
-    search_prepared(&setup(track, params)?, track, params.max_segment_frames)
+    /// [`Segmentation::search`] and the work its search did ([`SearchStats`]).
+    /// With a [`Lambda::Budget`], the search at the fixed λ the budget chose
+    /// (the bisection's other searches are not counted).
+    pub fn search_with_stats(
+        track: &Track,
+        params: &SynthParams,
+    ) -> Result<(Segmentation, SearchStats)> {
+        params.validate()?;
+        let params = &resolve_budget(track, params)?;
+        search_prepared(&setup(track, params)?, track, params.max_segment_frames)
+    }
+
+    /// The reference segmentation: every candidate segment refitted with
+    /// [`mp_geom::fit_best`] into the full `T × W` cost table (`O(T·W)`
+    /// memory, `O(T·W²·J)` time), then the exhaustive DP over it.
+    /// [`Segmentation::search`] finds the same optimum much faster (same
+    /// costs up to rounding); this is kept for tests and benchmarks.
+    pub fn exhaustive(track: &Track, params: &SynthParams) -> Result<Segmentation> {
+        segment_table(&segment_costs(track, params)?)
+    }
 }
 
 /// Refits every joint's primitives of the chosen segmentation so that
@@ -317,60 +321,6 @@ fn smooth_segments(
     Ok(segments)
 }
 
-/// Synthesises a concrete program with all details (segmentation cost, scale, λ).
-pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthesis> {
-    params.validate()?;
-    if let Lambda::Budget { ratio } = params.lambda {
-        return synthesize_budget(track, params, ratio).map(|(s, _)| s);
-    }
-    let su = setup(track, params)?;
-    let (segmentation, _) = search_prepared(&su, track, params.max_segment_frames)?;
-    let Setup {
-        prep,
-        fit,
-        unit_scale,
-        lambda,
-    } = su;
-    let segments = segmentation
-        .boundaries
-        .windows(2)
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .map(|w| {
-            Ok(Segment {
-                duration_frames: w[1] - w[0],
-                primitives: fit_segment(&prep, &fit, track, w[0], w[1])?,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let segments = match params.continuity {
-        Continuity::None => segments,
-        Continuity::C0 => smooth_segments(
-            &prep,
-            &fit,
-            params.refit_norm,
-            track,
-            &segmentation.boundaries,
-            segments,
-        )?,
-    };
-    let program = Program {
-        continuity: params.continuity,
-        fps: track.fps(),
-        units: track.units(),
-        dims: track.dims(),
-        skeleton: track.skeleton().name.clone(),
-        joints: track.skeleton().joints.clone(),
-        segments,
-    };
-    Ok(Synthesis {
-        program,
-        segmentation,
-        unit_scale,
-        lambda,
-    })
-}
-
 /// `params` with a [`Lambda::Budget`] replaced by the fixed λ it resolves to.
 fn resolve_budget(track: &Track, params: &SynthParams) -> Result<SynthParams> {
     Ok(match params.lambda {
@@ -391,7 +341,7 @@ fn synthesize_budget(track: &Track, params: &SynthParams, ratio: f64) -> Result<
             lambda: Lambda::fixed(lambda_ref),
             ..params.clone()
         };
-        synthesize_detailed(track, &p).map(|s| {
+        Program::synthesize_detailed(track, &p).map(|s| {
             let r = s.program.n_params() as f64 / raw;
             (s, r)
         })
@@ -424,11 +374,68 @@ fn synthesize_budget(track: &Track, params: &SynthParams, ratio: f64) -> Result<
     Ok((best, hi))
 }
 
-/// Synthesises a concrete program from a track.
-///
-/// Errors: invalid parameters; a track with fewer than 2 frames or no
-/// joints; nothing observed at all; a joint missing in every frame (named in
-/// the message) unless [`SynthParams::unobserved_joints`] says to ignore it.
-pub fn synthesize(track: &Track, params: &SynthParams) -> Result<Program> {
-    synthesize_detailed(track, params).map(|s| s.program)
+impl Program {
+    /// Synthesises a concrete program from a track.
+    ///
+    /// Errors: invalid parameters; a track with fewer than 2 frames or no
+    /// joints; nothing observed at all; a joint missing in every frame (named in
+    /// the message) unless [`SynthParams::unobserved_joints`] says to ignore it.
+    pub fn synthesize(track: &Track, params: &SynthParams) -> Result<Program> {
+        Program::synthesize_detailed(track, params).map(|s| s.program)
+    }
+
+    /// Synthesises a concrete program with all details ([`Synthesis`]:
+    /// segmentation cost, scale, λ).
+    pub fn synthesize_detailed(track: &Track, params: &SynthParams) -> Result<Synthesis> {
+        params.validate()?;
+        if let Lambda::Budget { ratio } = params.lambda {
+            return synthesize_budget(track, params, ratio).map(|(s, _)| s);
+        }
+        let su = setup(track, params)?;
+        let (segmentation, _) = search_prepared(&su, track, params.max_segment_frames)?;
+        let Setup {
+            prep,
+            fit,
+            unit_scale,
+            lambda,
+        } = su;
+        let segments = segmentation
+            .boundaries
+            .windows(2)
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|w| {
+                Ok(Segment {
+                    duration_frames: w[1] - w[0],
+                    primitives: fit_segment(&prep, &fit, track, w[0], w[1])?,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let segments = match params.continuity {
+            Continuity::None => segments,
+            Continuity::C0 => smooth_segments(
+                &prep,
+                &fit,
+                params.refit_norm,
+                track,
+                &segmentation.boundaries,
+                segments,
+            )?,
+        };
+        let program = Program {
+            continuity: params.continuity,
+            fps: track.fps(),
+            units: track.units(),
+            dims: track.dims(),
+            skeleton: track.skeleton().name.clone(),
+            joints: track.skeleton().joints.clone(),
+            segments,
+        };
+        Ok(Synthesis {
+            program,
+            segmentation,
+            unit_scale,
+            lambda,
+        })
+    }
 }

@@ -9,9 +9,9 @@
 //! * [`Scale::FrameSize`]: `unit_scale = max(H, W) / 512` (pixels, frame size known);
 //! * [`Scale::Auto`] (default): `unit_scale = track.scale() / REFERENCE_EXTENT_PX`,
 //!   where `track.scale()` is the diagonal of the bounding box of all valid
-//!   positions and [`REFERENCE_EXTENT_PX`] = 256 is that diagonal for a typical
-//!   clip at 512 px (the median over the Penn Action training clips, rescaled
-//!   to a 512-px frame, is 257 px). Works for metres as well as pixels;
+//!   positions and [`Scale::REFERENCE_EXTENT_PX`] = 256 is that diagonal for a
+//!   typical clip at 512 px (the median over the Penn Action training clips,
+//!   rescaled to a 512-px frame, is 257 px). Works for metres as well as pixels;
 //! * [`Scale::UnitScale`]: given explicitly.
 //!
 //! With the Euclidean norm (error in units·frames) λ scales by `unit_scale`;
@@ -47,11 +47,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{ConcreteError, Result};
 use crate::smooth::{Continuity, RefitNorm};
-
-/// Reference pixels of a 512-px frame.
-pub const REFERENCE_FRAME_PX: f64 = 512.0;
-/// Bounding-box diagonal of a typical clip's valid keypoints at the 512-px reference scale.
-pub const REFERENCE_EXTENT_PX: f64 = 256.0;
 
 /// How the segment penalty λ is chosen (values at the 512-px reference scale).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -200,6 +195,13 @@ pub enum Scale {
         /// Track units per reference pixel.
         unit_scale: f64,
     },
+}
+
+impl Scale {
+    /// Reference pixels of a 512-px frame.
+    pub const REFERENCE_FRAME_PX: f64 = 512.0;
+    /// Bounding-box diagonal of a typical clip's valid keypoints at the 512-px reference scale.
+    pub const REFERENCE_EXTENT_PX: f64 = 256.0;
 }
 
 /// Parameters of synthesis. `default()` is the product's, [`SynthParams::paper`]
@@ -387,12 +389,12 @@ impl SynthParams {
             Scale::Auto => {
                 let e = track.scale();
                 if e.is_finite() && e > 0.0 {
-                    e / REFERENCE_EXTENT_PX
+                    e / Scale::REFERENCE_EXTENT_PX
                 } else {
                     1.0
                 }
             }
-            Scale::FrameSize { frame_px } => frame_px / REFERENCE_FRAME_PX,
+            Scale::FrameSize { frame_px } => frame_px / Scale::REFERENCE_FRAME_PX,
             Scale::UnitScale { unit_scale } => unit_scale,
         }
     }

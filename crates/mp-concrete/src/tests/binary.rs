@@ -5,7 +5,7 @@
 
 use crate::program::{BINARY_MAGIC, BINARY_VERSION};
 use crate::synthetic::synthetic_track;
-use crate::{synthesize, ConcreteError, Program, Segment, SynthParams};
+use crate::{ConcreteError, Program, Segment, SynthParams};
 use mp_geom::{GeomError, Primitive, Units};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -53,7 +53,7 @@ fn all_kinds_3d() -> Program {
 
 fn synthesised() -> Program {
     let track = synthetic_track(90, 3).unwrap();
-    synthesize(&track, &SynthParams::paper()).unwrap()
+    Program::synthesize(&track, &SynthParams::paper()).unwrap()
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! The DP segmentation equals exhaustive search.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use crate::dp::{segment_brute_force, segment_dp, segment_table, CostTable};
+use crate::dp::{segment_brute_force, segment_table, CostTable, Segmentation};
 use crate::ConcreteError;
 use proptest::prelude::*;
 
@@ -23,7 +23,7 @@ proptest! {
     #[test]
     fn dp_equals_brute_force((t, w, lambda, c) in costs()) {
         let cost = |k: usize, n: usize| c[k * t + (n - 1)] + lambda;
-        let dp = segment_dp(t, w, cost).unwrap();
+        let dp = Segmentation::dp(t, w, cost).unwrap();
         let bf = segment_brute_force(t, w, cost).unwrap();
         prop_assert!((dp.cost - bf.cost).abs() <= 1e-9 * (1.0 + bf.cost.abs()), "dp {} bf {}", dp.cost, bf.cost);
         // The DP's segmentation really has the cost it claims, and respects W.
@@ -65,35 +65,35 @@ fn lambda_controls_granularity() {
     // Cost of a segment = its squared length deviation from 3 frames: λ = 0
     // gives single frames when single frames are free.
     let free = |k: usize, n: usize| if n - k == 1 { 0.0 } else { 1.0 };
-    let s = segment_dp(6, 6, free).unwrap();
+    let s = Segmentation::dp(6, 6, free).unwrap();
     assert_eq!(s.n_segments(), 6);
     // A large λ gives one segment when a segment costs the same at any length.
-    let s = segment_dp(6, 6, |_, _| 1000.0).unwrap();
+    let s = Segmentation::dp(6, 6, |_, _| 1000.0).unwrap();
     assert_eq!(s.boundaries, vec![0, 6]);
     // …unless the window forbids it.
-    let s = segment_dp(6, 4, |_, _| 1000.0).unwrap();
+    let s = Segmentation::dp(6, 4, |_, _| 1000.0).unwrap();
     assert_eq!(s.n_segments(), 2);
 }
 
 #[test]
 fn bad_inputs_are_typed_errors() {
     assert!(matches!(
-        segment_dp(0, 5, |_, _| 0.0),
+        Segmentation::dp(0, 5, |_, _| 0.0),
         Err(ConcreteError::Track(_))
     ));
     assert!(matches!(
-        segment_dp(5, 0, |_, _| 0.0),
+        Segmentation::dp(5, 0, |_, _| 0.0),
         Err(ConcreteError::InvalidParam {
             name: "max_segment_frames",
             ..
         })
     ));
     assert!(matches!(
-        segment_dp(3, 3, |_, _| f64::NAN),
+        Segmentation::dp(3, 3, |_, _| f64::NAN),
         Err(ConcreteError::Track(_))
     ));
     assert!(matches!(
-        segment_dp(3, 3, |_, _| f64::INFINITY),
+        Segmentation::dp(3, 3, |_, _| f64::INFINITY),
         Err(ConcreteError::Track(_))
     ));
     assert!(segment_brute_force(21, 3, |_, _| 0.0).is_err());
@@ -101,7 +101,8 @@ fn bad_inputs_are_typed_errors() {
 
 mod on_real_costs {
     use crate::dp::segment_brute_force;
-    use crate::{segment_costs, synthesize_detailed, Lambda, Scale, SynthParams};
+    use crate::synth::segment_costs;
+    use crate::{Lambda, Program, Scale, SynthParams};
     use mp_geom::{Skeleton, Track, Units};
     use ndarray::Array3;
     use proptest::prelude::*;
@@ -135,7 +136,7 @@ mod on_real_costs {
             };
             let table = segment_costs(&track, &params).unwrap();
             let bf = segment_brute_force(t, w, |k, n| table.get(k, n)).unwrap();
-            let syn = synthesize_detailed(&track, &params).unwrap();
+            let syn = Program::synthesize_detailed(&track, &params).unwrap();
             prop_assert!((syn.segmentation.cost - bf.cost).abs() <= 1e-9 * (1.0 + bf.cost));
             prop_assert_eq!(syn.program.boundaries(), syn.segmentation.boundaries.clone());
         }

@@ -1,9 +1,8 @@
 //! Absurd output sizes of program execution are a typed error, never an allocation failure.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use crate::exec::{max_output_frames, MAX_FRAME_JOINTS};
-use crate::{synthesize, ConcreteError, ExecParams, SynthParams};
-use mp_geom::{Skeleton, Track, Units};
+use crate::{ConcreteError, ExecParams, Program, SynthParams};
+use mp_geom::{Skeleton, Track, Units, MAX_FRAME_JOINTS};
 use ndarray::Array3;
 
 fn program() -> crate::Program {
@@ -13,7 +12,7 @@ fn program() -> crate::Program {
         pos[[t, 1, 1]] = 50.0 + t as f64;
     }
     let track = Track::new(pos, None, 30.0, Units::Pixels, Skeleton::generic(2)).unwrap();
-    synthesize(&track, &SynthParams::paper()).unwrap()
+    Program::synthesize(&track, &SynthParams::paper()).unwrap()
 }
 
 #[test]
@@ -29,7 +28,10 @@ fn absurd_fps_out_is_too_large() {
         ConcreteError::TooLarge { name, value, limit } => {
             assert_eq!(*name, "fps_out");
             assert_eq!(value, "1000000000000000");
-            assert!(limit.contains(&max_output_frames(2).to_string()), "{limit}");
+            assert!(
+                limit.contains(&ExecParams::max_output_frames(2).to_string()),
+                "{limit}"
+            );
         }
         e => panic!("expected TooLarge, got {e:?}"),
     }
@@ -44,7 +46,7 @@ fn absurd_fps_out_is_too_large() {
 fn fps_out_at_the_limit_edge() {
     let p = program();
     // 19 s of program frames at 30 fps → (19/30)·fps_out + 1 frames.
-    assert_eq!(max_output_frames(2), MAX_FRAME_JOINTS / 2);
+    assert_eq!(ExecParams::max_output_frames(2), MAX_FRAME_JOINTS / 2);
     let ok = p
         .execute_with(&ExecParams {
             fps_out: Some(3000.0),
@@ -52,7 +54,7 @@ fn fps_out_at_the_limit_edge() {
         })
         .unwrap();
     assert_eq!(ok.n_frames(), 1901);
-    let over = (max_output_frames(2) as f64) * 30.0 / 19.0 * 1.01;
+    let over = (ExecParams::max_output_frames(2) as f64) * 30.0 / 19.0 * 1.01;
     assert!(matches!(
         p.execute_with(&ExecParams {
             fps_out: Some(over),

@@ -24,7 +24,7 @@ circular_motion(center=(220.56, 175.67), radius=108.23, angle=3.17*t + 777777777
 }
 ";
 
-fn dsl(bytes: &[u8]) -> crate::Result<Program> {
+fn dsl(bytes: &[u8]) -> crate::error::Result<Program> {
     Program::from_dsl(&String::from_utf8_lossy(bytes))
 }
 

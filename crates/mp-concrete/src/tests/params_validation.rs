@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use crate::synthetic::*;
-use crate::{synthesize, ConcreteError, ExecParams, Program, SynthParams};
+use crate::{ConcreteError, ExecParams, Program, SynthParams};
 
 fn param_name(e: ConcreteError) -> String {
     match e {
@@ -15,7 +15,7 @@ fn param_name(e: ConcreteError) -> String {
 
 fn program() -> Program {
     let track = synthetic_track(60, 3).unwrap();
-    synthesize(&track, &SynthParams::paper()).unwrap()
+    Program::synthesize(&track, &SynthParams::paper()).unwrap()
 }
 
 #[test]
@@ -43,13 +43,13 @@ fn bad_fit_params_are_rejected_once_at_synthesis() {
     let mut p = SynthParams::paper();
     p.fit.min_span_px = f64::NAN;
     assert_eq!(
-        param_name(synthesize(&track, &p).unwrap_err()),
+        param_name(Program::synthesize(&track, &p).unwrap_err()),
         "min_span_px"
     );
     let mut p = SynthParams::paper();
     p.fit.radius_penalty = -1.0;
     assert_eq!(
-        param_name(crate::synthesize_detailed(&track, &p).unwrap_err()),
+        param_name(crate::Program::synthesize_detailed(&track, &p).unwrap_err()),
         "radius_penalty"
     );
 }

@@ -1,7 +1,7 @@
 //! Real data: programs of Penn Action golf swings (paper §4.1 analysis).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use crate::{program_stats, synthesize, Continuity, Program, Scale, SynthParams, UnobservedJoints};
+use crate::{Continuity, Program, Scale, SynthParams, UnobservedJoints};
 use mp_geom::PennAction;
 
 /// Penn Action, or `None` (the running test's skip is recorded).
@@ -38,11 +38,11 @@ fn golf_swings_are_compact_and_accurate() {
             continuity: Continuity::None,
             ..SynthParams::paper()
         };
-        let p = synthesize(&track, &params).unwrap();
+        let p = Program::synthesize(&track, &params).unwrap();
         // The real program survives the text and JSON round trips.
         assert_eq!(Program::from_dsl(&p.to_dsl()).unwrap(), p);
         assert_eq!(Program::from_json(&p.to_json().unwrap()).unwrap(), p);
-        let st = program_stats(&p, &track).unwrap();
+        let st = p.stats(&track).unwrap();
         let kd_512 = st.kd * 512.0 / frame_px;
         eprintln!(
             "clip {} ({} frames): {} segments, params {}/{}, KD {:.2} px@512",

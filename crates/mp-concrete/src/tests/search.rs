@@ -1,12 +1,12 @@
-//! The branch-and-bound segmentation of `synthesize` finds the optimum of the
-//! exhaustive DP over the full cost table (`segment_exhaustive`).
+//! The branch-and-bound segmentation of `Program::synthesize` finds the
+//! optimum of the exhaustive DP over the full cost table
+//! (`Segmentation::exhaustive`).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use crate::dp::Segmentation;
+use crate::synth::segment_costs;
 use crate::synthetic::synthetic_track;
-use crate::{
-    segment, segment_costs, segment_exhaustive, segment_with_stats, Lambda, Scale, SynthParams,
-};
+use crate::{Lambda, Scale, SynthParams};
 use mp_geom::ErrorNorm;
 use mp_geom::{PrimitiveKind, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
@@ -16,8 +16,8 @@ use proptest::prelude::*;
 /// segmentation costs exactly that under the reference table (ties may pick
 /// another segmentation of the same cost).
 fn same_optimum(track: &Track, params: &SynthParams) -> (Segmentation, Segmentation) {
-    let fast = segment(track, params).unwrap();
-    let reference = segment_exhaustive(track, params).unwrap();
+    let fast = Segmentation::search(track, params).unwrap();
+    let reference = Segmentation::exhaustive(track, params).unwrap();
     let tol = 1e-9 * (1.0 + reference.cost.abs());
     assert!(
         (fast.cost - reference.cost).abs() <= tol,
@@ -167,8 +167,8 @@ fn synthetic_track_same_optimum() {
 fn search_stats_account_for_every_candidate() {
     let track = synthetic_track(600, 7).unwrap();
     let params = px_params(1600.0, 60);
-    let (seg, st) = segment_with_stats(&track, &params).unwrap();
-    assert_eq!(seg, segment(&track, &params).unwrap());
+    let (seg, st) = Segmentation::search_with_stats(&track, &params).unwrap();
+    assert_eq!(seg, Segmentation::search(&track, &params).unwrap());
     let t = track.n_frames() as u64;
     // n − 1 … n − W for every end frame n (fewer at the start).
     let expected: u64 = (1..=t).map(|n| n.min(60)).sum();
@@ -191,7 +191,10 @@ fn search_stats_account_for_every_candidate() {
     assert!(st.dropped_coarse > st.dropped_exact, "{st:?}");
     assert!(st.circle_frames >= 3 * st.circle_fits && st.circle_frames <= 60 * st.circle_fits);
     assert!(st.joints_per_survivor() >= 1.0 && st.joints_per_survivor() <= j as f64);
-    assert_eq!(segment_with_stats(&track, &params).unwrap().1, st);
+    assert_eq!(
+        Segmentation::search_with_stats(&track, &params).unwrap().1,
+        st
+    );
 }
 
 /// Real tracks: Penn Action clips of several actions (occluded joints, both

@@ -2,10 +2,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use crate::synthetic::synthetic_track;
-use crate::{
-    max_boundary_gap, program_stats, synthesize, Continuity, Lambda, Program, RefitNorm, Scale,
-    SynthParams, UnobservedJoints,
-};
+use crate::{Continuity, Lambda, Program, RefitNorm, Scale, SynthParams, UnobservedJoints};
 use mp_geom::PennAction;
 use mp_geom::{Primitive, PrimitiveKind, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
@@ -21,7 +18,7 @@ fn with(continuity: Continuity, base: &SynthParams) -> SynthParams {
 /// coordinates are up to `scale`, so this is about 1e-12 relative).
 fn assert_c0(p: &Program, scale: f64) {
     assert_eq!(p.continuity, Continuity::C0);
-    let gap = max_boundary_gap(p);
+    let gap = p.max_boundary_gap();
     assert!(
         gap <= 1e-9,
         "boundary gap {gap} (coordinates up to {scale})"
@@ -32,17 +29,14 @@ fn assert_c0(p: &Program, scale: f64) {
 fn default_is_c0_and_none_is_independent() {
     assert_eq!(SynthParams::paper().continuity, Continuity::C0);
     let track = synthetic_track(400, 3).unwrap();
-    let smooth = synthesize(&track, &SynthParams::paper()).unwrap();
+    let smooth = Program::synthesize(&track, &SynthParams::paper()).unwrap();
     assert_c0(&smooth, 1000.0);
-    let free = synthesize(&track, &with(Continuity::None, &SynthParams::paper())).unwrap();
+    let free = Program::synthesize(&track, &with(Continuity::None, &SynthParams::paper())).unwrap();
     assert_eq!(free.continuity, Continuity::None);
     // Same segmentation, independent fits jump at boundaries.
     assert_eq!(free.boundaries(), smooth.boundaries());
-    assert!(max_boundary_gap(&free) > 1e-3);
-    let (sf, ss) = (
-        program_stats(&free, &track).unwrap(),
-        program_stats(&smooth, &track).unwrap(),
-    );
+    assert!(free.max_boundary_gap() > 1e-3);
+    let (sf, ss) = (free.stats(&track).unwrap(), smooth.stats(&track).unwrap());
     eprintln!(
         "synthetic: KD {:.3} → {:.3}, jump raw {:.2} free {:.2} C0 {:.2}, params {} → {}",
         sf.kd,
@@ -101,10 +95,10 @@ fn c0_with_all_kinds_missing_frames_and_3d() {
             },
             ..SynthParams::paper()
         };
-        let p = synthesize(&track, &params).unwrap();
+        let p = Program::synthesize(&track, &params).unwrap();
         assert!(p.n_segments() > 3, "{} segments", p.n_segments());
         assert_c0(&p, 1000.0);
-        let st = program_stats(&p, &track).unwrap();
+        let st = p.stats(&track).unwrap();
         eprintln!(
             "{d}D: {} segments, KD {:.3}, jump raw {:.2} program {:.2}",
             p.n_segments(),
@@ -126,12 +120,12 @@ fn c0_with_all_kinds_missing_frames_and_3d() {
 #[test]
 fn c0_start_poses_are_not_free_parameters() {
     let track = synthetic_track(400, 3).unwrap();
-    let c0 = synthesize(&track, &SynthParams::paper()).unwrap();
+    let c0 = Program::synthesize(&track, &SynthParams::paper()).unwrap();
     let (s, j, d) = (c0.n_segments(), c0.n_joints(), c0.dims);
     assert!(s > 3);
     assert_eq!(c0.n_shared_params(), d * j * (s - 1));
     assert_eq!(c0.n_params() + d * j * (s - 1), c0.n_numbers());
-    let free = synthesize(&track, &with(Continuity::None, &SynthParams::paper())).unwrap();
+    let free = Program::synthesize(&track, &with(Continuity::None, &SynthParams::paper())).unwrap();
     assert_eq!(free.n_shared_params(), 0);
     assert_eq!(free.n_params(), free.n_numbers());
     // The same primitives labelled independent: every number counts.
@@ -148,7 +142,7 @@ fn c0_start_poses_are_not_free_parameters() {
     let mut invalid = c0.clone();
     invalid.segments[1].duration_frames = 0;
     assert_eq!(invalid.n_params(), invalid.n_numbers());
-    let st = program_stats(&c0, &track).unwrap();
+    let st = c0.stats(&track).unwrap();
     assert_eq!(st.params_program, c0.n_params());
     assert_eq!(st.numbers_program, c0.n_numbers());
 }
@@ -156,7 +150,7 @@ fn c0_start_poses_are_not_free_parameters() {
 #[test]
 fn continuity_survives_json_dsl_and_binary_and_old_files_load() {
     let track = synthetic_track(200, 5).unwrap();
-    let p = synthesize(&track, &SynthParams::paper()).unwrap();
+    let p = Program::synthesize(&track, &SynthParams::paper()).unwrap();
     assert_eq!(p.continuity, Continuity::C0);
     assert_eq!(Program::from_json(&p.to_json().unwrap()).unwrap(), p);
     assert!(p.to_dsl().starts_with("program(") && p.to_dsl().contains("continuity=c0"));
@@ -268,13 +262,10 @@ fn penn_action_golf_swings_c0() {
             scale: Scale::FrameSize { frame_px },
             ..base.clone()
         };
-        let free = synthesize(&track, &with(Continuity::None, &params)).unwrap();
-        let c0 = synthesize(&track, &params).unwrap();
+        let free = Program::synthesize(&track, &with(Continuity::None, &params)).unwrap();
+        let c0 = Program::synthesize(&track, &params).unwrap();
         assert_c0(&c0, frame_px);
-        let (sf, sc) = (
-            program_stats(&free, &track).unwrap(),
-            program_stats(&c0, &track).unwrap(),
-        );
+        let (sf, sc) = (free.stats(&track).unwrap(), c0.stats(&track).unwrap());
         eprintln!(
             "clip {}: KD {:.2} → {:.2} px@512, jump raw {:.1} free {:.1} C0 {:.1}, params {} → {} / {}",
             info.clip_id,
@@ -369,11 +360,11 @@ mod random_tracks {
             if all_kinds {
                 params.fit.kinds = PrimitiveKind::ALL.to_vec();
             }
-            let c0 = synthesize(&track, &params).unwrap();
-            let free = synthesize(&track, &with(Continuity::None, &params)).unwrap();
+            let c0 = Program::synthesize(&track, &params).unwrap();
+            let free = Program::synthesize(&track, &with(Continuity::None, &params)).unwrap();
             c0.validate().unwrap();
             prop_assert_eq!(c0.boundaries(), free.boundaries());
-            let gap = max_boundary_gap(&c0);
+            let gap = c0.max_boundary_gap();
             prop_assert!(gap <= 1e-9, "boundary gap {}", gap);
         }
     }

@@ -2,8 +2,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
 use crate::{
-    program_stats, synthesize, synthesize_detailed, ConcreteError, ExecParams, Lambda, Program,
-    Scale, Segment, SynthParams, Transition, UnobservedJoints,
+    ConcreteError, ExecParams, Lambda, Program, Scale, Segment, SynthParams, Transition,
+    UnobservedJoints,
 };
 use mp_geom::{Primitive, Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
@@ -84,7 +84,7 @@ fn params_px() -> SynthParams {
 fn recovers_boundaries_of_a_known_program() {
     let truth = known_program();
     let track = truth.execute().unwrap();
-    let syn = synthesize_detailed(&track, &params_px()).unwrap();
+    let syn = Program::synthesize_detailed(&track, &params_px()).unwrap();
     assert_eq!(syn.program.boundaries(), vec![0, 15, 27, 47]);
     assert_eq!(syn.unit_scale, 1.0);
     // The kinds are recovered too, and the program reproduces the track.
@@ -93,7 +93,7 @@ fn recovers_boundaries_of_a_known_program() {
         let want: Vec<_> = t.primitives.iter().map(Primitive::kind).collect();
         assert_eq!(got, want);
     }
-    let st = program_stats(&syn.program, &track).unwrap();
+    let st = syn.program.stats(&track).unwrap();
     assert!(st.kd < 1e-6, "kd {}", st.kd);
     assert_eq!(st.n_segments, 3);
     assert_eq!(st.params_raw, 47 * 3 * 2);
@@ -121,9 +121,9 @@ fn recovers_boundaries_with_noise_and_gaps() {
         pos[[t, j, 0]] = 9999.0; // garbage where missing: must be ignored
     }
     let track = Track::new(pos, Some(conf), fps, units, skel).unwrap();
-    let p = synthesize(&track, &params_px()).unwrap();
+    let p = Program::synthesize(&track, &params_px()).unwrap();
     assert_eq!(p.boundaries(), vec![0, 15, 27, 47]);
-    let st = program_stats(&p, &track).unwrap();
+    let st = p.stats(&track).unwrap();
     assert!(st.kd < 1.5, "kd {}", st.kd);
 }
 
@@ -132,17 +132,17 @@ fn scaling_the_track_scales_nothing_else() {
     // With Scale::Auto thresholds and λ follow the track's size: a track
     // scaled by 3 gets the same segmentation.
     let track = known_program().execute().unwrap();
-    let p1 = synthesize(&track, &SynthParams::paper()).unwrap();
+    let p1 = Program::synthesize(&track, &SynthParams::paper()).unwrap();
     let (pos, conf, fps, units, skel) = track.clone().into_parts();
     let big = Track::new(pos.mapv(|v| v * 3.0), Some(conf), fps, units, skel).unwrap();
-    let p3 = synthesize(&big, &SynthParams::paper()).unwrap();
+    let p3 = Program::synthesize(&big, &SynthParams::paper()).unwrap();
     assert_eq!(p1.boundaries(), p3.boundaries());
 }
 
 #[test]
 fn lambda_controls_the_number_of_segments() {
     let track = known_program().execute().unwrap();
-    let few = synthesize(
+    let few = Program::synthesize(
         &track,
         &SynthParams {
             lambda: Lambda::fixed(1e7),
@@ -152,7 +152,7 @@ fn lambda_controls_the_number_of_segments() {
     )
     .unwrap();
     assert_eq!(few.n_segments(), 1);
-    let many = synthesize(
+    let many = Program::synthesize(
         &track,
         &SynthParams {
             lambda: Lambda::fixed(0.0),
@@ -162,7 +162,7 @@ fn lambda_controls_the_number_of_segments() {
     .unwrap();
     assert!(many.n_segments() >= 3);
     // The window caps segment length.
-    let capped = synthesize(
+    let capped = Program::synthesize(
         &track,
         &SynthParams {
             max_segment_frames: 10,
@@ -176,7 +176,7 @@ fn lambda_controls_the_number_of_segments() {
 #[test]
 fn adaptive_lambda_is_clamped_and_works() {
     let track = known_program().execute().unwrap();
-    let syn = synthesize_detailed(
+    let syn = Program::synthesize_detailed(
         &track,
         &SynthParams {
             lambda: Lambda::Adaptive {
@@ -210,8 +210,11 @@ fn spread_lambda_is_the_local_spread_held_for_a_time() {
         min_ref: 0.0,
         max_ref: 1e12,
     };
-    let lambda_of =
-        |track: &Track, lambda| synthesize_detailed(track, &open(lambda)).unwrap().lambda;
+    let lambda_of = |track: &Track, lambda| {
+        Program::synthesize_detailed(track, &open(lambda))
+            .unwrap()
+            .lambda
+    };
     let adaptive = lambda_of(
         &track,
         Lambda::Adaptive {
@@ -235,7 +238,7 @@ fn spread_lambda_is_the_local_spread_held_for_a_time() {
     }
     // The default clamp, and the number of segments falling as the hold grows.
     let segments = |seconds: f64| {
-        let syn = synthesize_detailed(&track, &open(Lambda::spread(seconds))).unwrap();
+        let syn = Program::synthesize_detailed(&track, &open(Lambda::spread(seconds))).unwrap();
         assert!(syn.lambda.iter().all(|&l| (100.0..=1600.0).contains(&l)));
         syn.program.n_segments()
     };
@@ -257,7 +260,7 @@ fn a_parameter_budget_gives_the_finest_program_within_it() {
     };
     let ratio_of = |p: &Program| p.n_params() as f64 / raw;
     for budget in [0.05, 0.1, 0.2] {
-        let syn = synthesize_detailed(
+        let syn = Program::synthesize_detailed(
             &track,
             &SynthParams {
                 lambda: Lambda::budget(budget),
@@ -270,7 +273,7 @@ fn a_parameter_budget_gives_the_finest_program_within_it() {
         // It is the program of the fixed λ it reports (unit scale 1: λ as is).
         let lambda = syn.lambda[0];
         assert!(syn.lambda.iter().all(|&l| l == lambda));
-        let fixed = synthesize(
+        let fixed = Program::synthesize(
             &track,
             &SynthParams {
                 lambda: Lambda::fixed(lambda),
@@ -280,7 +283,7 @@ fn a_parameter_budget_gives_the_finest_program_within_it() {
         .unwrap();
         assert_eq!(fixed, syn.program);
         // `segment` with the budget gives the same segmentation.
-        let seg = crate::segment(
+        let seg = crate::Segmentation::search(
             &track,
             &SynthParams {
                 lambda: Lambda::budget(budget),
@@ -290,7 +293,7 @@ fn a_parameter_budget_gives_the_finest_program_within_it() {
         .unwrap();
         assert_eq!(seg.boundaries, syn.segmentation.boundaries);
         // A 5 % smaller λ (past the bisection's 2 % bracket) no longer fits.
-        let finer = synthesize(
+        let finer = Program::synthesize(
             &track,
             &SynthParams {
                 lambda: Lambda::fixed(lambda / 1.05),
@@ -307,7 +310,7 @@ fn a_parameter_budget_gives_the_finest_program_within_it() {
     // A budget that the finest program of the range (λ = 1) meets gives that
     // program: the noiseless known program, recovered exactly.
     let exact = known_program().execute().unwrap();
-    let all = synthesize_detailed(
+    let all = Program::synthesize_detailed(
         &exact,
         &SynthParams {
             lambda: Lambda::budget(0.5),
@@ -319,7 +322,7 @@ fn a_parameter_budget_gives_the_finest_program_within_it() {
     assert_eq!(all.program.boundaries(), vec![0, 15, 27, 47]);
     // A budget below the most compact program, and budgets out of range.
     for bad in [1e-6, 0.0, -0.1, 1.5, f64::NAN] {
-        let e = synthesize(
+        let e = Program::synthesize(
             &track,
             &SynthParams {
                 lambda: Lambda::budget(bad),
@@ -398,20 +401,25 @@ fn bad_input_is_a_typed_error() {
     let ok = SynthParams::paper();
     // Empty track and a single frame.
     assert!(matches!(
-        synthesize(&track_of(0, 2), &ok),
+        Program::synthesize(&track_of(0, 2), &ok),
         Err(ConcreteError::Track(_))
     ));
     assert!(matches!(
-        synthesize(&track_of(1, 2), &ok),
+        Program::synthesize(&track_of(1, 2), &ok),
         Err(ConcreteError::Track(_))
     ));
     // Two frames are enough.
-    assert_eq!(synthesize(&track_of(2, 2), &ok).unwrap().n_frames(), 2);
+    assert_eq!(
+        Program::synthesize(&track_of(2, 2), &ok)
+            .unwrap()
+            .n_frames(),
+        2
+    );
     // An all-NaN joint is named.
     let (mut pos, _, fps, units, skel) = track_of(10, 3).into_parts();
     pos.slice_mut(ndarray::s![.., 1, ..]).fill(f64::NAN);
     let nan = Track::new(pos, None, fps, units, skel).unwrap();
-    match synthesize(&nan, &ok) {
+    match Program::synthesize(&nan, &ok) {
         Err(ConcreteError::Track(m)) => assert!(m.contains("j1"), "{m}"),
         other => panic!("{other:?}"),
     }
@@ -420,17 +428,17 @@ fn bad_input_is_a_typed_error() {
         unobserved_joints: UnobservedJoints::Ignore,
         ..SynthParams::paper()
     };
-    assert_eq!(synthesize(&nan, &ign).unwrap().n_joints(), 3);
+    assert_eq!(Program::synthesize(&nan, &ign).unwrap().n_joints(), 3);
     // Zero confidence everywhere.
     let (pos, _, fps, units, skel) = track_of(10, 3).into_parts();
     let zero = Track::new(pos, Some(Array2::zeros((10, 3))), fps, units, skel).unwrap();
-    match synthesize(&zero, &ign) {
+    match Program::synthesize(&zero, &ign) {
         Err(ConcreteError::Track(m)) => assert!(m.contains("every joint of every frame"), "{m}"),
         other => panic!("{other:?}"),
     }
     // Parameters.
     let tr = track_of(10, 2);
-    let bad = |p: SynthParams, name: &str| match synthesize(&tr, &p) {
+    let bad = |p: SynthParams, name: &str| match Program::synthesize(&tr, &p) {
         Err(ConcreteError::InvalidParam { name: n, .. }) => assert_eq!(n, name),
         other => panic!("{name}: {other:?}"),
     };
@@ -510,8 +518,5 @@ fn bad_input_is_a_typed_error() {
 fn stats_require_matching_shapes() {
     let p = known_program();
     let tr = track_of(10, 3);
-    assert!(matches!(
-        program_stats(&p, &tr),
-        Err(ConcreteError::Program(_))
-    ));
+    assert!(matches!(p.stats(&tr), Err(ConcreteError::Program(_))));
 }

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use indicatif::ProgressBar;
-use mp_concrete::{program_stats, Continuity, ProgramStats};
+use mp_concrete::{Continuity, ProgramStats};
 use mp_geom::PennAction;
 use rayon::prelude::*;
 use serde_json::{json, Value};
@@ -29,7 +29,7 @@ fn continuity_clip(
     let program = fit(&track, frame_px, params)?;
     Ok((
         info.action.clone(),
-        program_stats(&program, &track)?,
+        program.stats(&track)?,
         512.0 / frame_px,
     ))
 }

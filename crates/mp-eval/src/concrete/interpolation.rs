@@ -17,7 +17,7 @@
 use mp_geom::Track;
 use serde::{Deserialize, Serialize};
 
-use mp_concrete::{synthesize, InBetween, InBetweenPoses, Lambda, SynthParams, Transition};
+use mp_concrete::{InBetween, InBetweenPoses, Lambda, Program, SynthParams, Transition};
 
 /// Parameters of [`interpolation_experiment`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -100,7 +100,7 @@ pub fn interpolation_experiment(
             rule => rule.map_window_clamp(|w, lo, hi| (w.div_ceil(step).max(1), lo / k, hi / k)),
         };
     }
-    let program = synthesize(&kept, &params)?;
+    let program = Program::synthesize(&kept, &params)?;
     let last = (n_kept - 1) * step;
     let dropped: Vec<usize> = (0..=last).filter(|f| f % step != 0).collect();
     let frames: Vec<f64> = dropped.iter().map(|&f| f as f64 / step as f64).collect();

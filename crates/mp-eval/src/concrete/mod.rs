@@ -40,7 +40,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use interpolation::{interpolation_experiment, InterpParams};
-use mp_concrete::{program_stats, Continuity, Program, RefitNorm, Transition};
+use mp_concrete::{Continuity, Program, RefitNorm, Transition};
 use mp_geom::PennAction;
 use rayon::prelude::*;
 use serde_json::{json, Value};
@@ -202,7 +202,7 @@ fn run_clip(
     let t0 = Instant::now();
     let program = fit(&track, frame_px, base)?;
     let seconds = t0.elapsed().as_secs_f64();
-    let st = program_stats(&program, &track)?;
+    let st = program.stats(&track)?;
     let mut interp = BTreeMap::new();
     for &s in &a.steps {
         let ip = InterpParams {

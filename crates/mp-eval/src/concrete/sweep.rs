@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use indicatif::ProgressBar;
-use mp_concrete::{program_stats, Lambda};
+use mp_concrete::Lambda;
 use mp_geom::PennAction;
 use rayon::prelude::*;
 use serde_json::json;
@@ -26,7 +26,7 @@ fn sweep_clip(pa: &PennAction, i: usize, base: &mp_pipeline::Params) -> anyhow::
     let track = pa.clip(i)?;
     let frame_px = info.height_px.max(info.width_px) as f64;
     let program = fit(&track, frame_px, base)?;
-    let st = program_stats(&program, &track)?;
+    let st = program.stats(&track)?;
     Ok((st.params_program, st.params_raw, st.kd * 512.0 / frame_px))
 }
 

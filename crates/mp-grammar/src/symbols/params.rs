@@ -100,7 +100,7 @@ pub const MAX_ITERATIONS: usize = 1_000_000;
 /// The longest segment window (`candidate_step_frames`, `min_segment_frames`,
 /// `max_segment_frames`) [`SymbolParams::validate`] accepts: 10 million
 /// frames, the most frames a track of one joint may have
-/// (`mp_concrete::MAX_FRAME_JOINTS`).
+/// (`mp_geom::MAX_FRAME_JOINTS`).
 pub const MAX_SEGMENT_FRAMES: usize = 10_000_000;
 
 /// Parameters of symbol identification.

@@ -263,10 +263,7 @@ fn person_content(title: &str, p: &PersonPage<'_>) -> Result<serde_json::Value> 
         obj.insert("defaultJoint".into(), json!(most_moving_joint(p.track)));
         obj.insert(
             "header".into(),
-            json!(mp_concrete::header(
-                program,
-                mp_concrete::NumberFormat::Fixed(2)
-            )),
+            json!(program.dsl_header(mp_concrete::NumberFormat::Fixed(2))),
         );
         obj.insert("timeline".into(), json!(timeline));
         obj.insert(

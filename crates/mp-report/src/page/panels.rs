@@ -7,8 +7,8 @@ use std::fmt::Write as _;
 
 use mp_abstract::CountedInterval;
 use mp_abstract::PrintOptions;
+use mp_concrete::NumberFormat;
 use mp_concrete::Program;
-use mp_concrete::{statement, NumberFormat};
 use mp_geom::frames_label;
 
 use crate::page::ProgramView;
@@ -22,9 +22,9 @@ pub const ABSTRACT_PAGE_LINES: usize = 600;
 /// page adds their frames from the segment boundaries).
 pub fn joint_statements(program: &Program, ji: usize) -> Vec<String> {
     program
-        .joint_statements(ji)
-        .into_iter()
-        .map(|(p, dur)| statement(p, dur, NumberFormat::Fixed(2)))
+        .segments
+        .iter()
+        .filter_map(|s| s.dsl_statement(ji, NumberFormat::Fixed(2)))
         .collect()
 }
 

@@ -210,7 +210,7 @@ mod tests {
             }
         }
         let track = Track::new(pos, None, 30.0, Units::Pixels, Skeleton::coco17()).unwrap();
-        let program = mp_concrete::synthesize(&track, &Default::default()).unwrap();
+        let program = mp_concrete::Program::synthesize(&track, &Default::default()).unwrap();
         Guide {
             track,
             program,
