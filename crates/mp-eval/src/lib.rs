@@ -72,6 +72,9 @@ pub fn workspace_root() -> PathBuf {
 
 /// Writes a report or model file through a temporary file renamed into
 /// place, so an interrupted task leaves the old file or the new one.
-pub fn write_file(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> mp_geom::Result<()> {
+pub fn write_file(
+    path: impl AsRef<Path>,
+    bytes: impl AsRef<[u8]>,
+) -> std::result::Result<(), mp_geom::GeomError> {
     mp_geom::write_atomic(path, bytes.as_ref())
 }

@@ -100,7 +100,7 @@ pub fn run_cv(
                     .collect();
                 pool(&reps)
             })
-            .collect::<mp_refine::Result<Vec<_>>>()?;
+            .collect::<std::result::Result<Vec<_>, mp_refine::RefineError>>()?;
         let (i, ok) = choose_setting(&pooled)?;
         Ok((i, ok, pooled))
     };

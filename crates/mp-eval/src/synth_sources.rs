@@ -108,7 +108,7 @@ pub fn clips_of(name: &str, track: &Track) -> Vec<Clip> {
 
 /// Every k-th frame of a track recorded at k × 30 fps (AIST++ 60 fps, CMU
 /// BVH 120 fps), so that cases run at 30 fps like the videos people film.
-pub(crate) fn to_30fps(t: &Track) -> mp_geom::Result<Track> {
+pub(crate) fn to_30fps(t: &Track) -> std::result::Result<Track, mp_geom::GeomError> {
     t.subsample(((t.fps() / 30.0).round() as usize).max(1))
 }
 

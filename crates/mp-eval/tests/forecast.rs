@@ -108,7 +108,11 @@ fn time_stretched_copy_aligns_perfectly_with_dtw() {
         fn context_frames(&self) -> Option<usize> {
             None
         }
-        fn predict(&self, _: &Track, h: usize) -> mp_forecast::Result<Track> {
+        fn predict(
+            &self,
+            _: &Track,
+            h: usize,
+        ) -> std::result::Result<Track, mp_forecast::ForecastError> {
             Ok(self.0.slice_frames(0, h)?)
         }
     }

@@ -49,7 +49,7 @@ mod normalize;
 mod predict;
 mod statue;
 
-pub use error::{ForecastError, Result};
+pub use error::ForecastError;
 pub use forecaster::{Constant, ForecastMethod, Forecaster, LoopUnroll};
 pub use model::{ArForecaster, ArParams, ArSpace, ForecastModels};
 pub use nn::{NearestNeighbour, NnParams};

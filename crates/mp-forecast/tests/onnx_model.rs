@@ -251,7 +251,11 @@ fn statue_frame_is_where_the_error_drops_most() {
         fn context_frames(&self) -> Option<usize> {
             None
         }
-        fn predict(&self, past: &Track, h: usize) -> mp_forecast::Result<Track> {
+        fn predict(
+            &self,
+            past: &Track,
+            h: usize,
+        ) -> std::result::Result<Track, mp_forecast::ForecastError> {
             // past = 15 frames ending at frame e; find e by matching the last frame
             let last = past.n_frames() - 1;
             let e = (0..self.0.n_frames())

@@ -52,7 +52,7 @@ pub mod test_support;
 mod track;
 
 pub use cancel::CancelToken;
-pub use error::{GeomError, Result};
+pub use error::GeomError;
 pub use people::{People, Person, PersonId};
 pub use primitive::{Primitive, PrimitiveKind};
 pub use skeleton::Skeleton;

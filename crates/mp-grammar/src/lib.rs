@@ -58,7 +58,7 @@ pub use derive::{
     derive, derive_at_least, regenerate, Derivation, DeriveParams, Fsm, FsmWeighting, RuleWeighting,
 };
 pub use distance::{FrameSpan, PoseDistanceParams, PoseFeatures, RootMode};
-pub use error::{GrammarError, Result};
+pub use error::GrammarError;
 pub use grammar::{DescriptionLength, Grammar, Rule, Sym, Tree};
 pub use model::{
     find_symbols, learn_grammar, learn_model, GrammarModel, PipelineParams, SourceInfo, SourceKind,

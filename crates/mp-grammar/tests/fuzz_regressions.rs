@@ -61,7 +61,7 @@ const HUGE_K: &[u8] =
 "scale_normalise":true,"joints":null},"seconds_symbols":0.020424106,
 "seconds_grammar":0.000210321}"#;
 
-fn read(bytes: &[u8]) -> mp_grammar::Result<GrammarModel> {
+fn read(bytes: &[u8]) -> std::result::Result<GrammarModel, mp_grammar::GrammarError> {
     GrammarModel::from_json(&String::from_utf8_lossy(bytes), Path::new("fuzz.json"))
 }
 

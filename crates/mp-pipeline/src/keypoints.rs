@@ -300,7 +300,7 @@ fn from_people(
 
 /// `track` in COCO-17 where its skeleton maps to it, unless every joint
 /// was asked for.
-fn coco17_unless_all(t: Track, params: &Params) -> mp_geom::Result<Track> {
+fn coco17_unless_all(t: Track, params: &Params) -> std::result::Result<Track, mp_geom::GeomError> {
     if !params.pose.all_joints && t.skeleton().name != "coco17" && t.skeleton().maps_to_coco17() {
         t.to_coco17()
     } else {

@@ -42,7 +42,7 @@ mod thumbs;
 mod video;
 
 pub use blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
-pub use error::{PoseError, Result};
+pub use error::PoseError;
 pub use extract::{
     extract, extract_file, open_estimator, open_estimator_with, ExtractOptions, Extraction,
     ModelChoice, PoseSmoother, SmoothingParams,

@@ -61,7 +61,7 @@ mod segment;
 pub use api::{refine_default, RefineOptions};
 pub use baseline::{refine, RefineParams, Refinement};
 pub use concepts::{learn_concepts, ActionConcepts, ClusterMethod, ConceptParams, Concepts, Gmm};
-pub use error::{RefineError, Result};
+pub use error::RefineError;
 pub use flaws::{inject, Flaw, Injected};
 pub use refiner::{BaselineRefiner, Refined, Refiner};
 pub use segment::{

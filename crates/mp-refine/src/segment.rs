@@ -262,7 +262,7 @@ pub(crate) fn fit_joint(
     pts: ArrayView2<'_, f64>,
     w: &[f64],
     fit: &FitParams,
-) -> mp_geom::Result<mp_geom::Fit> {
+) -> std::result::Result<mp_geom::Fit, mp_geom::GeomError> {
     if w.iter().any(|&x| x > 0.0) {
         fit_spline(pts, Some(w), fit)
     } else {

@@ -46,7 +46,7 @@ mod style;
 mod svg;
 mod timeline;
 
-pub use error::{ReportError, Result};
+pub use error::ReportError;
 pub use frames::{FrameStore, FrameStoreParams};
 pub use outdir::OutputDir;
 pub use page::{

@@ -37,8 +37,11 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use mp_forecast::Clip;
+use mp_forecast::ForecastError;
 use mp_forecast::Forecaster;
-use mp_forecast::{ForecastError, Result};
+
+/// The result of the forecasting protocol (its errors are mp-forecast's).
+type Result<T, E = ForecastError> = std::result::Result<T, E>;
 
 /// Parameters of [`evaluate`].
 #[derive(Debug, Clone, PartialEq)]

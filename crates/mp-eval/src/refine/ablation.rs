@@ -21,8 +21,8 @@ use crate::refine::evaluation::{
 };
 use crate::refine::quality::{accuracy, fid};
 use crate::refine::split::subjects_of;
+use crate::refine::RefineResult as Result;
 use mp_refine::RefineNets;
-use mp_refine::Result;
 use mp_refine::HIP_CENTRE;
 use mp_refine::{learn_concepts, msr_anchor_samples, ConceptParams, Concepts};
 use mp_refine::{

@@ -7,10 +7,11 @@ use mp_geom::MsrAction3D;
 use mp_geom::Track;
 use serde::{Deserialize, Serialize};
 
+use crate::refine::RefineResult as Result;
+use mp_refine::RefineError;
 use mp_refine::{full_confidence, refine, RefineParams};
 use mp_refine::{inject, AnchorSource, Flaw, FootSlide, Injected};
 use mp_refine::{per_frame_error, segment_track};
-use mp_refine::{RefineError, Result};
 
 /// A flaw to inject in [`evaluate_injected`].
 #[allow(clippy::large_enum_variant)]

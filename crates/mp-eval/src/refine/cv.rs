@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::refine::evaluation::InjectedReport;
-use mp_refine::{RefineError, Result};
+use crate::refine::RefineResult as Result;
+use mp_refine::RefineError;
 
 /// One cross-validation fold.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

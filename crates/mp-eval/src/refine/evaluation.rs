@@ -31,13 +31,14 @@ use serde::{Deserialize, Serialize};
 use crate::refine::baseline::EvalFlaw;
 use crate::refine::quality::QualityParams;
 use crate::refine::split::subjects_of;
+use crate::refine::RefineResult as Result;
 use mp_refine::full_confidence;
+use mp_refine::RefineError;
 use mp_refine::{foot_contacts, foot_slide, FootContactParams, NetRefineParams, NetRefiner};
 use mp_refine::{foot_joints, AnchorSource, Flaw, FootSlide};
 use mp_refine::{generate_clips, RefineNets};
 use mp_refine::{mpjpe_abs, SegmentParams};
 use mp_refine::{ClusterMethod, Concepts};
-use mp_refine::{RefineError, Result};
 
 /// Parameters of the evaluation.
 #[derive(Debug, Clone, PartialEq)]

@@ -13,9 +13,10 @@ use serde::{Deserialize, Serialize};
 use crate::refine::quality::{
     accuracy, diversity, fid, multimodality, per_action_fid, QualityParams,
 };
+use crate::refine::RefineResult as Result;
 use mp_refine::NetRefiner;
+use mp_refine::RefineError;
 use mp_refine::{canonicalize, to_features, FRAME_FEATURES, NET_FRAMES};
-use mp_refine::{RefineError, Result};
 use mp_refine::{RefineNets, N_ACTIONS};
 
 /// Evaluator features and logits of canonical clips (`N × 60 × 60` features), in batches.

@@ -16,6 +16,9 @@
 //! manifest does not name), [`cv`] (cross-validation folds) and
 //! [`dataset`] (the training sets the networks learn from).
 
+/// The result of the refinement evaluations (their errors are mp-refine's).
+pub(crate) type RefineResult<T, E = mp_refine::RefineError> = std::result::Result<T, E>;
+
 pub mod ablation;
 pub mod baseline;
 pub mod cv;

@@ -24,7 +24,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use mp_refine::{RefineError, Result};
+use crate::refine::RefineResult as Result;
+use mp_refine::RefineError;
 
 /// Parameters of the random-pair metrics.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

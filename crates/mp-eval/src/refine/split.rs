@@ -20,8 +20,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::refine::evaluation::RefineEvalParams;
+use crate::refine::RefineResult as Result;
 use mp_refine::read_manifest;
-use mp_refine::{RefineError, Result};
+use mp_refine::RefineError;
 
 /// The subjects recorded in a training manifest (ascending, no repeats).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

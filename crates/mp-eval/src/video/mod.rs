@@ -78,7 +78,7 @@ fn stem(p: &Path) -> String {
 
 /// The pose model on its own thread, fed frame by frame.
 struct PoseStream {
-    tx: Option<SyncSender<mp_pose::Result<Frame>>>,
+    tx: Option<SyncSender<std::result::Result<Frame, mp_pose::PoseError>>>,
     handle: JoinHandle<anyhow::Result<Track>>,
     next: usize,
     fps: f64,
@@ -96,7 +96,7 @@ impl PoseStream {
                 ..Default::default()
             },
         )?;
-        let (tx, rx) = sync_channel::<mp_pose::Result<Frame>>(4);
+        let (tx, rx) = sync_channel::<std::result::Result<Frame, mp_pose::PoseError>>(4);
         let handle = std::thread::spawn(move || -> anyhow::Result<Track> {
             let source = FrameSource {
                 width,

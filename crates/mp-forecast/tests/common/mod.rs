@@ -1,7 +1,7 @@
 //! Synthetic tracks and test forecasters.
 #![allow(dead_code)]
 
-use mp_forecast::{Forecaster, Result};
+use mp_forecast::{ForecastError, Forecaster};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::{Array2, Array3};
 
@@ -74,7 +74,7 @@ impl<F: Fn(&Track) -> Track + Send + Sync> Forecaster for Oracle<F> {
     fn context_frames(&self) -> Option<usize> {
         None
     }
-    fn predict(&self, past: &Track, horizon: usize) -> Result<Track> {
+    fn predict(&self, past: &Track, horizon: usize) -> Result<Track, ForecastError> {
         let s = past.n_frames();
         let e = (s + horizon).min(self.clip.n_frames());
         let mut fut = self.clip.slice_frames(s, e)?;

@@ -18,11 +18,12 @@ use ndarray::{s, Array1, Array2, Array3};
 use serde::{Deserialize, Serialize};
 
 use super::write_npz_file;
+use crate::refine::RefineResult as Result;
+use mp_refine::RefineError;
 use mp_refine::{
     bvh_to_msr20, canonical_mask, canonicalize, changed_joints, to_features,
     DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, MSR_JOINTS, NET_FRAMES,
 };
-use mp_refine::{RefineError, Result};
 
 /// Parameters of [`build_flaw_set`], the training set of the flaw detector.
 ///

@@ -38,7 +38,9 @@ use mp_geom::{GeomError, Skeleton, Track, Units};
 use ndarray::{s, Array1, Array2, Array3, ArrayView3};
 use serde::{Deserialize, Serialize};
 
+use crate::refine::RefineResult as Result;
 use mp_refine::Concepts;
+use mp_refine::RefineError;
 use mp_refine::{
     anchor_feature, learn_concepts, AnchorSample, ConceptParams, HELD_OUT_SUBJECTS, MIN_CLIP_FRAMES,
 };
@@ -47,7 +49,6 @@ use mp_refine::{
     MSR_JOINTS, NET_FRAMES,
 };
 use mp_refine::{segment_track, SegmentParams};
-use mp_refine::{RefineError, Result};
 
 pub use flaw_set::{build_flaw_set, FlawSet, FlawSetParams};
 
