@@ -123,7 +123,7 @@ impl AbstractProgram {
                 source,
             })?
         } else {
-            AbstractProgram::parse(text).map_err(|e| match e {
+            AbstractProgram::from_dsl(text).map_err(|e| match e {
                 AbstractError::Parse {
                     line,
                     column,
@@ -162,7 +162,7 @@ impl AbstractProgram {
                 source,
             })?
         } else {
-            self.print()
+            self.to_dsl()
         };
         let tmp = path.with_extension(format!(
             "{}.tmp",

@@ -21,7 +21,7 @@
 //! ```
 //!
 //! Numbers are printed with the shortest representation that reads back to
-//! the same `f64`, so `AbstractProgram::parse(&p.print()) == p`. `#` starts a comment.
+//! the same `f64`, so `AbstractProgram::from_dsl(&p.to_dsl()) == p`. `#` starts a comment.
 
 use std::fmt::Write;
 
@@ -142,7 +142,7 @@ fn write_prob(
 
 impl AbstractProgram {
     /// Prints a program with the given options.
-    pub fn print_with(&self, o: &PrintOptions) -> String {
+    pub fn to_dsl_with(&self, o: &PrintOptions) -> String {
         let mut out = String::new();
         let _ = writeln!(
             out,
@@ -180,8 +180,8 @@ impl AbstractProgram {
     }
 
     /// Prints a program losslessly.
-    pub fn print(&self) -> String {
-        self.print_with(&PrintOptions::default())
+    pub fn to_dsl(&self) -> String {
+        self.to_dsl_with(&PrintOptions::default())
     }
 }
 
@@ -493,7 +493,7 @@ pub fn is_name(s: &str) -> bool {
 
 impl AbstractProgram {
     /// Parses the text form back into a program (and validates it).
-    pub fn parse(src: &str) -> Result<AbstractProgram> {
+    pub fn from_dsl(src: &str) -> Result<AbstractProgram> {
         let mut lx = lex(src)?;
         lx.keyword("abstract_program")?;
         lx.punct('(')?;

@@ -162,7 +162,7 @@ pub fn abstract_cmd(a: &AbstractArgs) -> anyhow::Result<()> {
     let an = analyse_track(&track, frame_px, &a.opts.pipeline_params())?;
     an.program.write(&a.output)?;
     if !a.quiet {
-        print!("{}", an.program.print_with(&PrintOptions::summary()));
+        print!("{}", an.program.to_dsl_with(&PrintOptions::summary()));
     }
     eprintln!(
         "{} frames → {} primitives → {} statements, {} program loop{}; written to {}",

@@ -143,7 +143,12 @@ fn main() -> Res<()> {
     // Abstract programs from the concrete ones (loops found by the analyser).
     for (i, p) in programs.iter().enumerate() {
         let (a, _, _) = mp_abstract::AbstractProgram::from_concrete(p, &LoopParams::default())?;
-        put(&dir, "abstract_dsl", &format!("abstract{i}.mpa"), a.print())?;
+        put(
+            &dir,
+            "abstract_dsl",
+            &format!("abstract{i}.mpa"),
+            a.to_dsl(),
+        )?;
         put(
             &dir,
             "abstract_json",

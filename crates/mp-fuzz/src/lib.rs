@@ -157,7 +157,7 @@ pub fn mpb(data: &[u8]) {
 }
 
 fn check_abstract(p: &AbstractProgram) {
-    let printed = p.print();
+    let printed = p.to_dsl();
     match AbstractProgram::read_str(&printed, Path::new("fuzz.mpa")) {
         Ok(q) => assert_eq!(
             &q, p,
@@ -174,11 +174,11 @@ fn check_abstract(p: &AbstractProgram) {
         },
         Err(e) => panic_msg(&format!("abstract program does not serialise: {e}")),
     }
-    let _ = p.print_with(&mp_abstract::PrintOptions::summary());
+    let _ = p.to_dsl_with(&mp_abstract::PrintOptions::summary());
     let _ = (p.loop_indices(), p.expected_frames());
 }
 
-/// Abstract-program text form ([`AbstractProgram::parse`] through
+/// Abstract-program text form ([`AbstractProgram::from_dsl`] through
 /// [`AbstractProgram::read_str`]).
 pub fn abstract_dsl(data: &[u8]) {
     let Some(src) = text(data) else { return };

@@ -587,7 +587,8 @@ impl Slot {
         }
         s.newest_s = frame.timestamp_s;
         s.reconnecting = false;
-        while s.frames.len() >= self.capacity {
+        // Only a live source's queue can be full here (a file's waited).
+        if s.frames.len() >= self.capacity {
             s.frames.pop_front();
             s.dropped += 1;
         }

@@ -143,7 +143,10 @@ pub(crate) fn write_analysis(out: &OutputDir, outcome: &Outcome) -> Result<Vec<S
             &format!("{dir}program.json"),
             an.concrete.to_json()?.as_bytes(),
         )?;
-        put(&format!("{dir}abstract.txt"), an.program.print().as_bytes())?;
+        put(
+            &format!("{dir}abstract.txt"),
+            an.program.to_dsl().as_bytes(),
+        )?;
         put(
             &format!("{dir}abstract.json"),
             serde_json::to_string_pretty(&an.program)?.as_bytes(),

@@ -213,7 +213,7 @@ impl PyAbstract {
     /// The abstract program in its text form.
     #[getter]
     fn text(&self) -> String {
-        self.inner.program.print()
+        self.inner.program.to_dsl()
     }
 
     /// The abstract program as JSON.

@@ -64,8 +64,8 @@ proptest! {
     #[test]
     fn print_parse_round_trip(seed in 0u64..10_000, three in any::<bool>()) {
         let p = random_program(seed, if three { 3 } else { 2 });
-        let text = p.print();
-        let q = AbstractProgram::parse(&text).unwrap();
+        let text = p.to_dsl();
+        let q = AbstractProgram::from_dsl(&text).unwrap();
         prop_assert_eq!(&p, &q);
         let json = serde_json::to_string(&p).unwrap();
         let r: AbstractProgram = serde_json::from_str(&json).unwrap();
@@ -76,14 +76,14 @@ proptest! {
 #[test]
 fn summary_mentions_loops() {
     let p = random_program(3, 2);
-    let s = p.print_with(&PrintOptions::summary());
+    let s = p.to_dsl_with(&PrintOptions::summary());
     assert!(s.starts_with("abstract_program(fps=29.97, units=px, dims=2, unit_scale="));
 }
 
 #[test]
 fn malformed_text_is_located() {
     let bad = "abstract_program(fps=30, units=px, dims=2)\njoints(a)\nmotion(duration=3) {\n  a: start=(1, 2), mid=(3), end=(5, 6)\n}\n";
-    match AbstractProgram::parse(bad) {
+    match AbstractProgram::from_dsl(bad) {
         Err(AbstractError::Parse {
             line,
             column,
@@ -96,11 +96,11 @@ fn malformed_text_is_located() {
         other => panic!("{other:?}"),
     }
     assert!(matches!(
-        AbstractProgram::parse(""),
+        AbstractProgram::from_dsl(""),
         Err(AbstractError::Parse { line: 1, .. })
     ));
     assert!(matches!(
-        AbstractProgram::parse(
+        AbstractProgram::from_dsl(
             "abstract_program(fps=30, units=px, dims=2)\njoints(a)\nfor i in range(3) {\n}\n"
         ),
         Err(AbstractError::Parse { line: 4, .. })

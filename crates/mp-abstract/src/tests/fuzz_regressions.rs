@@ -275,7 +275,7 @@ fn unitless_programs_of_more_than_three_dimensions_round_trip() {
     );
     let p = text(&src).unwrap();
     assert_eq!(p.dims, 4);
-    assert_eq!(text(&p.print()).unwrap(), p);
+    assert_eq!(text(&p.to_dsl()).unwrap(), p);
     let e = text(&src.replace("units=1", "units=px"))
         .unwrap_err()
         .to_string();

@@ -133,7 +133,7 @@ pub(crate) fn abstract_panel(pv: &ProgramView<'_>, fps: f64, offset: usize) -> S
         }
         s.push_str("</tbody></table>");
     }
-    let text = pv.abstract_program.print_with(&PrintOptions::summary());
+    let text = pv.abstract_program.to_dsl_with(&PrintOptions::summary());
     let lines: Vec<&str> = text.lines().collect();
     let shown = lines.len().min(ABSTRACT_PAGE_LINES);
     let mut code = lines[..shown].join("\n");
