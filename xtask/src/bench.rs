@@ -291,7 +291,7 @@ fn criterion(a: &BenchArgs, md: &mut String) -> anyhow::Result<bool> {
     let mut all_ok = true;
     for p in &a.packages {
         let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-        cmd.current_dir(crate::setup::workspace_root())
+        cmd.current_dir(crate::setup::workspace_dir()?)
             .args(["bench", "-p", p]);
         eprintln!("running {cmd:?}");
         let out = cmd.output().context("running cargo bench")?;
@@ -328,7 +328,7 @@ pub fn run(a: &BenchArgs) -> anyhow::Result<()> {
     let out = if a.out.is_absolute() {
         a.out.clone()
     } else {
-        crate::setup::workspace_root().join(&a.out)
+        crate::setup::workspace_dir()?.join(&a.out)
     };
     crate::write_file(&out, &md).with_context(|| format!("writing {}", out.display()))?;
     println!("{md}");

@@ -27,7 +27,7 @@ use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 
-use crate::setup::{extract_zip_member, workspace_root};
+use crate::setup::{extract_zip_member, workspace_dir};
 
 const MEDIAPIPE_WHEEL_SPEC: &str = "mediapipe==0.10.21";
 const MEDIAPIPE_NPM_SPEC: &str = "@mediapipe/pose@0.5.1675469404";
@@ -123,7 +123,7 @@ fn link_or_copy(src: &Path, dst: &Path) -> Result<()> {
 }
 
 pub fn run(args: &ModelsArgs) -> Result<()> {
-    let root = workspace_root();
+    let root = workspace_dir()?;
     let out = args
         .out
         .clone()

@@ -26,10 +26,10 @@ pub struct SetupArgs {
     pub gpu: bool,
 }
 
-pub use mp_eval::workspace_root;
+pub use mp_eval::workspace_dir;
 
 pub fn run(args: &SetupArgs) -> Result<()> {
-    let root = workspace_root();
+    let root = workspace_dir()?;
     let lib = install_onnxruntime(&root, args.force)?;
     check_runtime(&lib)?;
     if !args.no_models {

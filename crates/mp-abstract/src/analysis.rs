@@ -372,7 +372,7 @@ pub(crate) fn future_track(obs: &Track, pos: Array3<f64>) -> Result<Track> {
 
 /// The result of [`unroll`].
 #[derive(Debug, Clone, PartialEq)]
-pub struct Prediction {
+pub struct Unrolled {
     /// The predicted frames (`horizon` frames after the observed ones).
     pub track: Track,
     /// The loop that was unrolled, or `None` when no usable loop was found.
@@ -412,7 +412,7 @@ impl PredictMethod {
     }
 }
 
-impl Prediction {
+impl Unrolled {
     /// The path that produced this prediction.
     pub fn method(&self) -> PredictMethod {
         if self.used.is_some() {
@@ -470,14 +470,14 @@ pub fn predict_constant(observed: &Track, horizon: usize) -> Result<Track> {
 /// period is repeated when the motion holds three clear cycles
 /// ([`PeriodFallback`]), else the observed motion is replayed with the lag at
 /// which its recent frames match an earlier part ([`SelfMatchFallback`], from
-/// about one cycle), else the last pose is held. [`Prediction::method`] says
+/// about one cycle), else the last pose is held. [`Unrolled::method`] says
 /// which path was taken.
 pub fn unroll(
     track: &Track,
     observe: usize,
     horizon: usize,
     params: &PredictParams,
-) -> Result<Prediction> {
+) -> Result<Unrolled> {
     params.validate()?;
     if horizon == 0 {
         return Err(AbstractError::param("horizon", "must be ≥ 1"));
@@ -515,7 +515,7 @@ pub fn unroll(
         return fallback_prediction(&obs, horizon, params);
     }
     let track = join_offset(&obs, &future, start, horizon, period, params)?;
-    Ok(Prediction {
+    Ok(Unrolled {
         track,
         used: Some(interval.clone()),
         period: None,
@@ -526,10 +526,10 @@ pub fn unroll(
 /// The prediction without a usable loop: the last observed period repeated
 /// ([`PeriodFallback`]), else the observed motion replayed from where its
 /// recent frames match ([`SelfMatchFallback`]), else the last pose held.
-fn fallback_prediction(obs: &Track, horizon: usize, params: &PredictParams) -> Result<Prediction> {
+fn fallback_prediction(obs: &Track, horizon: usize, params: &PredictParams) -> Result<Unrolled> {
     if let Some(fb) = &params.period_fallback {
         if let Some((track, est)) = fb.unroll(obs, horizon)? {
-            return Ok(Prediction {
+            return Ok(Unrolled {
                 track,
                 used: None,
                 period: Some(est),
@@ -539,7 +539,7 @@ fn fallback_prediction(obs: &Track, horizon: usize, params: &PredictParams) -> R
     }
     if let Some(sm) = &params.self_match {
         if let Some((track, m)) = sm.unroll(obs, horizon)? {
-            return Ok(Prediction {
+            return Ok(Unrolled {
                 track,
                 used: None,
                 period: None,
@@ -547,7 +547,7 @@ fn fallback_prediction(obs: &Track, horizon: usize, params: &PredictParams) -> R
             });
         }
     }
-    Ok(Prediction {
+    Ok(Unrolled {
         track: predict_constant(obs, horizon)?,
         used: None,
         period: None,

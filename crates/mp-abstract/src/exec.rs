@@ -35,7 +35,7 @@ pub enum LoopReplay {
 
 /// Parameters of execution.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ExecParams {
+pub struct AbstractExecParams {
     /// Fitting parameters for choosing the concrete primitive (their `unit_scale` should match the track's).
     pub fit: FitParams,
     /// Loop replay mode for deterministic execution.
@@ -45,9 +45,9 @@ pub struct ExecParams {
     pub jitter: f64,
 }
 
-impl Default for ExecParams {
+impl Default for AbstractExecParams {
     fn default() -> Self {
-        ExecParams {
+        AbstractExecParams {
             fit: FitParams::default(),
             replay: LoopReplay::Mean,
             jitter: 1e-9,
@@ -55,7 +55,7 @@ impl Default for ExecParams {
     }
 }
 
-impl ExecParams {
+impl AbstractExecParams {
     /// Checks every field: the fit parameters ([`FitParams::validate`]; their
     /// `unit_scale` is not checked since execution uses the program's) and
     /// `jitter` finite and ≥ 0.
@@ -260,7 +260,7 @@ pub fn render(prims: &[DetPrim], prog: &AbstractProgram, fit: &FitParams) -> Res
 }
 
 /// The fit parameters of `params` at the program's scale.
-pub(crate) fn fit_for(prog: &AbstractProgram, params: &ExecParams) -> FitParams {
+pub(crate) fn fit_for(prog: &AbstractProgram, params: &AbstractExecParams) -> FitParams {
     FitParams {
         unit_scale: prog.unit_scale,
         ..params.fit.clone()
@@ -329,7 +329,7 @@ pub fn check_output_frames(prog: &AbstractProgram, frames: f64) -> Result<usize>
 
 impl AbstractProgram {
     /// Deterministic execution (loop bodies at their means, or replayed as observed).
-    pub fn execute(&self, params: &ExecParams) -> Result<Track> {
+    pub fn execute(&self, params: &AbstractExecParams) -> Result<Track> {
         params.validate()?;
         self.validate()?;
         check_output_frames(self, output_frames_bound(self, params.replay, false))?;
@@ -339,7 +339,7 @@ impl AbstractProgram {
 
     /// Stochastic execution with a seed: each loop iteration samples its
     /// start/mid/end points and duration. The same seed gives the same track.
-    pub fn sample(&self, seed: u64, params: &ExecParams) -> Result<Track> {
+    pub fn sample(&self, seed: u64, params: &AbstractExecParams) -> Result<Track> {
         params.validate()?;
         self.validate()?;
         check_output_frames(self, output_frames_bound(self, params.replay, true))?;

@@ -42,7 +42,7 @@ mod selfmatch;
 mod synth;
 
 pub use analysis::{
-    analyse, unroll, AbstractParams, Analysis, PredictMethod, PredictParams, Prediction,
+    analyse, unroll, AbstractParams, Analysis, PredictMethod, PredictParams, Unrolled,
 };
 pub use count::json::{CountedIntervalJson, ProgramLoopJson, RepetitionsJson};
 pub use count::{
@@ -62,7 +62,7 @@ pub use selfmatch::{SelfMatch, SelfMatchFallback, SelfMatchKind};
 pub use analysis::{predict_constant, PeriodFallback};
 pub use count::found_fraction;
 pub use dsl::PrintOptions;
-pub use exec::{ExecParams, LoopReplay};
+pub use exec::{AbstractExecParams, LoopReplay};
 pub use repetition::{intervals, iom, iou, PeriodEstimate};
 
 #[cfg(test)]

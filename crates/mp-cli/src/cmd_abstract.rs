@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use mp_abstract::{AbstractParams, AbstractProgram, ExecParams, LoopReplay, PrintOptions};
+use mp_abstract::{AbstractExecParams, AbstractParams, AbstractProgram, LoopReplay, PrintOptions};
 use mp_forecast::{ForecastMethod, PredictOptions};
 use mp_geom::write_track;
 use mp_pipeline::{analyse_track, Params};
@@ -275,9 +275,9 @@ pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
     if is_program_path(&a.output) {
         prog.write(&a.output)?;
     } else {
-        let params = ExecParams {
+        let params = AbstractExecParams {
             replay: LoopReplay::Observed,
-            ..ExecParams::default()
+            ..AbstractExecParams::default()
         };
         let t = prog.execute(&params)?;
         write_track(&a.output, &t)?;
@@ -289,7 +289,7 @@ pub fn extend_cmd(a: &ExtendArgs) -> anyhow::Result<()> {
 /// `mp sample`: one seeded stochastic execution of an abstract program.
 pub fn sample_cmd(a: &SampleArgs) -> anyhow::Result<()> {
     let prog = AbstractProgram::read(&a.program)?;
-    let t = prog.sample(a.seed, &ExecParams::default())?;
+    let t = prog.sample(a.seed, &AbstractExecParams::default())?;
     write_track(&a.output, &t)?;
     eprintln!(
         "{} frames (seed {}) written to {}",

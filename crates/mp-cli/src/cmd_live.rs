@@ -111,8 +111,8 @@ pub fn live_cmd(a: &LiveArgs) -> anyhow::Result<()> {
         None => None,
     };
     let result = match &page {
-        Some(page) => mp_live::run(&source, &params, &cancel, &mut page.sink(&mut print)),
-        None => mp_live::run(&source, &params, &cancel, &mut print),
+        Some(page) => mp_live::watch(&source, &params, &cancel, &mut page.sink(&mut print)),
+        None => mp_live::watch(&source, &params, &cancel, &mut print),
     };
     result.map_err(|e| anyhow::anyhow!("live analysis of {}: {e}", source.name()))?;
     if let Some(page) = page {

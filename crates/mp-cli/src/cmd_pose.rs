@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 
 use mp_geom::CancelToken;
 use mp_geom::Units;
-use mp_pipeline::{ExtractParams, Poses};
+use mp_pipeline::{ExtractParams, ExtractedPoses};
 use mp_pose::ModelChoice;
 use mp_pose::SessionParams;
 use mp_pose::{open_source, VideoWriter};
@@ -119,7 +119,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
         return Ok(());
     }
     match &ex.poses {
-        Poses::One(track) => println!(
+        ExtractedPoses::One(track) => println!(
             "{}: {} frames at {:.3} fps{}, pose in {:.1}% ({} joints, {}), {:.1} frames/s → {}",
             a.video.display(),
             track.n_frames(),
@@ -131,7 +131,7 @@ pub fn extract_cmd(a: &ExtractArgs) -> Result<()> {
             ex.model_fps,
             a.output.display()
         ),
-        Poses::People(people) => {
+        ExtractedPoses::People(people) => {
             println!(
                 "{}: {} frames at {:.3} fps{}, {} {} tracked (someone in {:.1}% of frames), {:.1} frames/s → {}",
                 a.video.display(),

@@ -93,10 +93,10 @@ fn refine_generated_moves_flawed_anchors_to_concepts() {
     use mp_refine::from_features;
     use mp_refine::generate_clips;
     use mp_refine::Concepts;
-    use mp_refine::{find_model_dir, RefineNets};
+    use mp_refine::RefineNets;
     use mp_refine::{NetRefineParams, NetRefiner};
 
-    let dir = find_model_dir().expect("models/refine");
+    let dir = RefineNets::find_dir().expect("models/refine");
     let nets = RefineNets::load(&dir, &SessionParams::default()).unwrap();
     let concepts =
         Concepts::from_json(&std::fs::read_to_string(dir.join("concepts.json")).unwrap()).unwrap();

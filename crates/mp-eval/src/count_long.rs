@@ -288,11 +288,11 @@ pub fn run(a: &LongArgs) -> anyhow::Result<()> {
         "runtime_s": t0.elapsed().as_secs_f64(),
         "results": variants,
     });
-    write_report(a.out, &report)
+    write_long_report(a.out, &report)
 }
 
 /// Writes the report and prints it without the per-interval detail.
-pub fn write_report(out: &Path, report: &Value) -> anyhow::Result<()> {
+pub fn write_long_report(out: &Path, report: &Value) -> anyhow::Result<()> {
     if let Some(dir) = out.parent() {
         if !dir.as_os_str().is_empty() {
             std::fs::create_dir_all(dir)?;

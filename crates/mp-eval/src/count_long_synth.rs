@@ -25,7 +25,7 @@ use mp_pipeline::Params;
 use rayon::prelude::*;
 use serde_json::{json, Value};
 
-use crate::count_long::{interval_figures, join, write_report};
+use crate::count_long::{interval_figures, join, write_long_report};
 use crate::synth_reps::{make_case, Case, Rng, Source, SynthOpts};
 use crate::synth_sources::{files, load_sources, stem, to_30fps};
 
@@ -327,23 +327,23 @@ pub fn run(
         "threads": rayon::current_num_threads(),
         "cases_detail": scored.iter().chain(&real).map(|s| s.json.clone()).collect::<Vec<_>>(),
     });
-    write_report(out, &report)
+    write_long_report(out, &report)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth_reps::Clip;
+    use crate::synth_reps::SourceClip;
     use mp_geom::{Skeleton, Units};
     use ndarray::{Array2, Array3};
 
     /// A clip of a two-joint figure moving in a sine of `period` frames.
-    fn sine_clip(name: &str, period: f64, frames: usize) -> Clip {
+    fn sine_clip(name: &str, period: f64, frames: usize) -> SourceClip {
         let pos = Array3::from_shape_fn((frames, 2, 2), |(t, j, k)| {
             let ph = 2.0 * std::f64::consts::PI * t as f64 / period;
             j as f64 + if k == 0 { ph.sin() } else { 0.5 * ph.cos() }
         });
-        Clip {
+        SourceClip {
             name: name.into(),
             pos,
             conf: Array2::ones((frames, 2)),

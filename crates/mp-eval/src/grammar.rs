@@ -48,7 +48,7 @@ use mp_grammar::score_partition;
 use mp_grammar::{bvh_files, read_motions, Motion};
 use mp_grammar::{find_symbols, learn_grammar, GrammarModel};
 use mp_grammar::{symbol_name, DeriveParams, Fsm, FsmWeighting, PoseDistanceParams, SymbolParams};
-use mp_grammar::{StitchParams, Synthesis};
+use mp_grammar::{StitchParams, SynthesizedMotion};
 use serde_json::{json, Value};
 
 #[path = "grammar_heldout.rs"]
@@ -263,7 +263,7 @@ struct Acc {
 impl Acc {
     fn add(
         &mut self,
-        s: &Synthesis,
+        s: &SynthesizedMotion,
         seams: Vec<f64>,
         gaps: Vec<f64>,
         train: &[usize],

@@ -58,16 +58,13 @@ pub mod train_refine;
 pub mod train_refine_cv;
 pub mod video;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// The workspace's root folder (two levels above this crate).
-pub fn workspace_root() -> PathBuf {
-    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    manifest
-        .parent()
-        .and_then(Path::parent)
-        .map(Path::to_path_buf)
-        .unwrap_or(manifest)
+/// The workspace's root folder ([`mp_geom::workspace_root`]), or an error
+/// naming why it is unknown.
+pub fn workspace_dir() -> anyhow::Result<std::path::PathBuf> {
+    use anyhow::Context;
+    mp_geom::workspace_root().context("the workspace root is unknown: build inside the workspace")
 }
 
 /// Writes a report or model file through a temporary file renamed into

@@ -18,7 +18,7 @@ use ndarray_npy::NpzReader;
 use serde_json::{json, Value};
 
 use mp_geom::BLAZEPOSE_TO_COCO17;
-use mp_pose::{extract, ExtractOptions, ModelChoice, SmoothingParams};
+use mp_pose::{extract_track, ExtractOptions, ModelChoice, SmoothingParams};
 use mp_pose::{open_source, read_image};
 use mp_pose::{BlazePose, BlazePoseParams, MoveNet, MoveNetParams, PoseEstimator, SessionParams};
 
@@ -219,7 +219,7 @@ pub fn run(args: &EvalPoseArgs) -> Result<()> {
             fixed_frame_interval_s: Some(1.0 / 30.0),
             ..ExtractOptions::default()
         };
-        let ex = extract(source, estimator.as_mut(), &opts, |_, _| {})
+        let ex = extract_track(source, estimator.as_mut(), &opts, |_, _| {})
             .map_err(|e| anyhow::anyhow!("{e}"))?;
         let t = ex.track.n_frames();
         if r.found.len() < t {

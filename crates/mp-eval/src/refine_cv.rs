@@ -45,7 +45,7 @@ pub fn run_cv(
     ship: u32,
 ) -> Result<Value> {
     let plan = folds(subjects)?;
-    let cv = crate::train_refine_cv::cv_base(&crate::workspace_root());
+    let cv = crate::train_refine_cv::cv_base(&crate::workspace_dir()?);
     let grid: Vec<NetRefineParams> = THRESHOLDS
         .iter()
         .map(|&p| NetRefineParams {

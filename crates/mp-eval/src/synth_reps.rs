@@ -48,7 +48,7 @@ impl Rng {
 
 /// A stretch of real motion where a person is found (gaps filled).
 #[derive(Debug, Clone)]
-pub struct Clip {
+pub struct SourceClip {
     pub name: String,
     /// `T × J × D`, finite.
     pub pos: Array3<f64>,
@@ -66,7 +66,7 @@ pub struct Source {
     pub name: String,
     pub units: Units,
     pub skeleton: Skeleton,
-    pub clips: Vec<Clip>,
+    pub clips: Vec<SourceClip>,
 }
 
 /// Settings of the recipe.
@@ -149,7 +149,7 @@ fn blend_frames(fps: f64, opts: &SynthOpts) -> usize {
 /// to the first (`n + 1` frames): the last `w` frames fade into the frames
 /// before `a` (which lead into the pose at `a`) when the clip has them, else
 /// into an offset ramp that ends at the pose at `a`.
-fn cycle_buffer(c: &Clip, cy: &Cycle, w: usize) -> (Array3<f64>, Array2<f64>) {
+fn cycle_buffer(c: &SourceClip, cy: &Cycle, w: usize) -> (Array3<f64>, Array2<f64>) {
     let n = cy.b - cy.a;
     let w = w.min(n / 3).max(1);
     let mut pos = c.pos.slice(s![cy.a..cy.b + 1, .., ..]).to_owned();

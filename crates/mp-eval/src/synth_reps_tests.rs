@@ -9,7 +9,7 @@ const FPS: f64 = 30.0;
 
 /// `t` frames of 6 joints (2D, px) moving with period `period` frames
 /// (`None`: a slow non-repeating drift and bend).
-fn motion(t: usize, period: Option<f64>) -> Clip {
+fn motion(t: usize, period: Option<f64>) -> SourceClip {
     let j = 6;
     let mut pos = Array3::zeros((t, j, 2));
     for ti in 0..t {

@@ -4,7 +4,7 @@
 
 use ndarray::{s, Array2, Array3, ArrayView2};
 
-use crate::synth_reps::{Clip, Rng, Source};
+use crate::synth_reps::{Rng, Source, SourceClip};
 
 /// Mean distance between the joints `joints` of two poses (`J × D`), over `scale`.
 pub fn pose_dist(a: ArrayView2<f64>, b: ArrayView2<f64>, joints: &[usize], scale: f64) -> f64 {
@@ -25,7 +25,7 @@ pub fn pose_dist(a: ArrayView2<f64>, b: ArrayView2<f64>, joints: &[usize], scale
 }
 
 /// Distance between frames `i` and `j` of a clip.
-pub fn frame_dist(c: &Clip, i: usize, j: usize) -> f64 {
+pub fn frame_dist(c: &SourceClip, i: usize, j: usize) -> f64 {
     pose_dist(
         c.pos.slice(s![i, .., ..]),
         c.pos.slice(s![j, .., ..]),
@@ -56,7 +56,7 @@ pub const MIN_AMP: f64 = 0.05;
 /// smallest circular mean distance between the cycle and itself shifted by a
 /// quarter to three quarters of its length, over the largest at any lag.
 /// One cycle of a sine scores 0.71, two cycles 0.
-pub fn sub_period_ratio(c: &Clip, a: usize, b: usize) -> f64 {
+pub fn sub_period_ratio(c: &SourceClip, a: usize, b: usize) -> f64 {
     let n = b - a;
     if n < 8 {
         return 1.0;
@@ -88,7 +88,7 @@ pub const MAX_SUB_PERIOD: f64 = 0.5;
 /// The near-loops of clip `k` of length `lmin..=lmax` frames: for each start
 /// `a` (every `step` frames), the first local minimum `b` of the distance to
 /// the pose at `a` whose seam is at most `ratio` of the motion so far.
-fn near_loops(c: &Clip, k: usize, lmin: usize, lmax: usize, ratio: f64) -> Vec<Cycle> {
+fn near_loops(c: &SourceClip, k: usize, lmin: usize, lmax: usize, ratio: f64) -> Vec<Cycle> {
     let n = c.pos.dim().0;
     let step = ((c.fps / 15.0).round() as usize).max(1);
     let mut out = Vec::new();
@@ -197,7 +197,12 @@ pub fn periodicity(pos: &Array3<f64>, joints: &[usize], scale: f64, fps: f64) ->
 
 /// Frames `start .. start + n_src` of clip `c` resampled in time from the
 /// clip's rate to `fps` (linear interpolation): `(positions, confidence)`.
-pub fn resample(c: &Clip, start: usize, n_src: usize, fps: f64) -> (Array3<f64>, Array2<f64>) {
+pub fn resample_cycle(
+    c: &SourceClip,
+    start: usize,
+    n_src: usize,
+    fps: f64,
+) -> (Array3<f64>, Array2<f64>) {
     let (_, j, d) = c.pos.dim();
     let n_out = (((n_src.max(1) - 1) as f64 * fps / c.fps).floor() as usize + 1).max(1);
     let mut pos = Array3::zeros((n_out, j, d));
@@ -273,7 +278,7 @@ pub fn find_padding(
         }
         let take = want.min(hi - lo);
         let start = lo + rng.below(hi - lo - take + 1);
-        let (mut pos, conf) = resample(c, start, take, fps);
+        let (mut pos, conf) = resample_cycle(c, start, take, fps);
         if k != home {
             align(&mut pos, c.scale, hc, cycle);
         }
@@ -300,7 +305,7 @@ pub fn find_padding(
 
 /// Moves and scales poses of another clip (body scale `scale`) onto the
 /// place (mean over the cycle, or the whole clip) and body size of `home`.
-fn align(pos: &mut Array3<f64>, scale: f64, home: &Clip, cycle: Option<&Cycle>) {
+fn align(pos: &mut Array3<f64>, scale: f64, home: &SourceClip, cycle: Option<&Cycle>) {
     let (a, b) = cycle.map_or((0, home.pos.dim().0), |c| (c.a, c.b));
     let d = pos.dim().2;
     let centre = |p: ArrayView2Frames| -> Vec<f64> {
@@ -321,7 +326,7 @@ type ArrayView2Frames<'a> = ndarray::ArrayView3<'a, f64>;
 /// How closely a stretch runs through the cycle's poses, 0..1: 1 − (mean over
 /// its frames of the distance to the nearest cycle pose) / (half the cycle's
 /// motion), floored at 0.
-fn resemblance(pos: &Array3<f64>, c: &Clip, cy: &Cycle) -> f64 {
+fn resemblance(pos: &Array3<f64>, c: &SourceClip, cy: &Cycle) -> f64 {
     let t = pos.dim().0;
     let mean = (0..t)
         .map(|i| {

@@ -11,7 +11,7 @@ use mp_geom::{AistPlusPlus, MediaPipeReference, MsrAction3D, PennAction};
 use mp_geom::{Skeleton, Units};
 use ndarray::{Array2, Array3};
 
-use crate::synth_reps::{Clip, Source};
+use crate::synth_reps::{Source, SourceClip};
 
 /// Clips shorter than this (seconds) are dropped: no 0.5 s cycle with
 /// frames around it fits.
@@ -20,7 +20,7 @@ const MIN_CLIP_S: f64 = 0.8;
 /// A clip from positions and confidence: the joints seen (confidence > 0) in
 /// at least half of the frames, and the median diagonal of their bounding
 /// box as body scale. `None` when nothing is seen.
-pub fn make_clip(name: &str, pos: Array3<f64>, conf: Array2<f64>, fps: f64) -> Option<Clip> {
+pub fn make_clip(name: &str, pos: Array3<f64>, conf: Array2<f64>, fps: f64) -> Option<SourceClip> {
     let (t, j, d) = pos.dim();
     let joints: Vec<usize> = (0..j)
         .filter(|&jj| (0..t).filter(|&ti| conf[[ti, jj]] > 0.0).count() * 2 >= t)
@@ -51,7 +51,7 @@ pub fn make_clip(name: &str, pos: Array3<f64>, conf: Array2<f64>, fps: f64) -> O
     }
     diags.sort_by(f64::total_cmp);
     let scale = diags[diags.len() / 2];
-    (scale > 0.0).then(|| Clip {
+    (scale > 0.0).then(|| SourceClip {
         name: name.to_string(),
         pos,
         conf,
@@ -64,7 +64,7 @@ pub fn make_clip(name: &str, pos: Array3<f64>, conf: Array2<f64>, fps: f64) -> O
 /// The runs of frames of a track where at least half of the joints are seen,
 /// each at least `MIN_CLIP_S` long, gaps filled, as clips named
 /// `name` (`name@start` for a run that does not start at frame 0).
-pub fn clips_of(name: &str, track: &Track) -> Vec<Clip> {
+pub fn clips_of(name: &str, track: &Track) -> Vec<SourceClip> {
     let (t, j) = (track.n_frames(), track.n_joints());
     let conf = track.confidence();
     let ok: Vec<bool> = (0..t)
@@ -239,7 +239,7 @@ pub fn load_sources(data: &Path) -> anyhow::Result<Vec<Source>> {
 
 /// A source of clips made of given arrays (tests).
 #[cfg(test)]
-pub fn source_of(name: &str, clips: Vec<Clip>, units: Units, skeleton: Skeleton) -> Source {
+pub fn source_of(name: &str, clips: Vec<SourceClip>, units: Units, skeleton: Skeleton) -> Source {
     Source {
         name: name.into(),
         units,

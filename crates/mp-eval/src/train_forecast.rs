@@ -35,7 +35,7 @@ pub struct TrainForecastArgs {
 }
 
 pub fn run(a: &TrainForecastArgs) -> Result<()> {
-    let root = crate::workspace_root();
+    let root = crate::workspace_dir()?;
     let data = match &a.data {
         Some(p) => p.clone(),
         None => mp_geom::data_file("penn_action/penn_action_train.npz").context(

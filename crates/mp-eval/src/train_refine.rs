@@ -106,7 +106,7 @@ fn bvh_files(a: &TrainRefineArgs) -> Result<Vec<PathBuf>> {
 }
 
 pub fn run(a: &TrainRefineArgs) -> Result<()> {
-    let root = crate::workspace_root();
+    let root = crate::workspace_dir()?;
     let msr_path = msr_file(&a.data)?;
     let bvh = bvh_files(a)?;
     let out = if a.out.is_absolute() {

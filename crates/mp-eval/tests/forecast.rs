@@ -11,8 +11,8 @@ use std::sync::Arc;
 
 use mp_eval::forecast::protocol::{evaluate, evaluate_clip, EvalParams, MethodReport};
 use mp_forecast::Clip;
-use mp_forecast::{find_model_dir, ArSpace, ForecastModels};
 use mp_forecast::{ArForecaster, ArParams, Constant};
+use mp_forecast::{ArSpace, ForecastModels};
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use ndarray::Array3;
@@ -306,7 +306,7 @@ fn later_horizons(r: &MethodReport, metric: &str) -> f64 {
 
 /// The committed models of `dataset` (models/forecast/DATASET).
 fn models_of(dataset: &str) -> Arc<ForecastModels> {
-    let dir = find_model_dir(dataset)
+    let dir = ForecastModels::find_dir(dataset)
         .unwrap_or_else(|e| panic!("models/forecast/{dataset} is part of the repository: {e}"));
     Arc::new(
         ForecastModels::load(dir, &SessionParams::default())

@@ -18,13 +18,13 @@ use mp_geom::MsrAction3D;
 use mp_geom::NpzOut;
 use mp_refine::Concepts;
 use mp_refine::Flaw;
-use mp_refine::{find_model_dir, generate_clips, RefineNets};
+use mp_refine::{generate_clips, RefineNets};
 use mp_refine::{NetRefineParams, NetRefiner};
 use ndarray::{concatenate, Array1, Axis};
 
 /// The networks and anchor concepts of `models/refine`.
 pub fn shipped() -> (RefineNets, Concepts) {
-    let dir = find_model_dir().expect("models/refine is part of the repository");
+    let dir = RefineNets::find_dir().expect("models/refine is part of the repository");
     let nets = RefineNets::load_default()
         .unwrap_or_else(|e| panic!("loading {}: {e} (run `cargo xtask setup`)", dir.display()));
     let concepts =
@@ -108,7 +108,8 @@ fn assert_finite(r: &RefineEvalReport) {
 fn files_without_subject_9_are_scored_on_the_subjects_the_networks_never_saw() {
     let path = mp_geom::data_or_return!(MsrAction3D::FILE);
     let shared = MsrAction3D::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let dir = find_model_dir().expect("models/refine/manifest.json is part of the repository");
+    let dir =
+        RefineNets::find_dir().expect("models/refine/manifest.json is part of the repository");
     let (nets, concepts) = shipped();
     let trained = TrainingSubjects::read(&dir).unwrap();
     assert_eq!(trained.seen(), vec![1, 3, 5, 7]);

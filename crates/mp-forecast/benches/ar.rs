@@ -5,8 +5,8 @@
 use std::sync::Arc;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use mp_forecast::{find_model_dir, ArSpace, ForecastModels};
 use mp_forecast::{ArForecaster, ArParams, Forecaster};
+use mp_forecast::{ArSpace, ForecastModels};
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use ndarray::Array3;
@@ -24,7 +24,7 @@ fn track(n: usize, phase: f64) -> Track {
 }
 
 fn bench(c: &mut Criterion) {
-    let dir = match find_model_dir("penn_action") {
+    let dir = match ForecastModels::find_dir("penn_action") {
         Ok(d) => d,
         Err(e) => {
             eprintln!("skipping the AR bench: {e}");

@@ -60,4 +60,3 @@ pub use predict::{
 pub use statue::{find_statue, Statue, StatueParams};
 
 pub use data::{Clip, ForecastDataset};
-pub use model::find_model_dir;

@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use mp_geom::Track;
-use mp_onnx::{Input, ModelDirs, Network, SessionParams};
+use mp_onnx::{ModelDirs, Network, SessionParams, TensorInput};
 use ndarray::{Array2, Array3};
 use serde::Deserialize;
 
@@ -143,14 +143,16 @@ fn model_search(dataset: &str) -> ModelDirs {
         .with_workspace(Path::new(MODEL_DIR_IN_WORKSPACE).join(dataset))
 }
 
-/// The first candidate folder with a `manifest.json` for `dataset`.
-pub fn find_model_dir(dataset: &str) -> Result<PathBuf> {
-    let dirs = model_search(dataset);
-    dirs.find_dir_with("manifest.json")
-        .ok_or_else(|| ForecastError::ModelMissing {
-            file: format!("{dataset}/manifest.json"),
-            searched: dirs.describe(4),
-        })
+impl ForecastModels {
+    /// The first candidate folder with a `manifest.json` for `dataset`.
+    pub fn find_dir(dataset: &str) -> Result<PathBuf> {
+        let dirs = model_search(dataset);
+        dirs.find_dir_with("manifest.json")
+            .ok_or_else(|| ForecastError::ModelMissing {
+                file: format!("{dataset}/manifest.json"),
+                searched: dirs.describe(4),
+            })
+    }
 }
 
 /// One network of a model folder.
@@ -180,7 +182,9 @@ impl Net {
         data: &[f32],
         outputs: &[&str],
     ) -> Result<Vec<Vec<f32>>> {
-        let out = self.net.run(&[Input::new(input, &shape, data)], outputs)?;
+        let out = self
+            .net
+            .run(&[TensorInput::new(input, &shape, data)], outputs)?;
         Ok(out.into_iter().map(|o| o.data).collect())
     }
 }
@@ -217,10 +221,10 @@ impl ForecastModels {
         })
     }
 
-    /// Loads the models of a data set from [`find_model_dir`] with default session settings
+    /// Loads the models of a data set from [`Self::find_dir`] with default session settings
     /// (2 intra-op threads, no spinning).
     pub fn load_default(dataset: &str) -> Result<Self> {
-        Self::load(find_model_dir(dataset)?, &SessionParams::default())
+        Self::load(Self::find_dir(dataset)?, &SessionParams::default())
     }
 
     /// The manifest.

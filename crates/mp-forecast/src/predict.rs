@@ -7,7 +7,7 @@
 //! of the nearest-neighbour baseline (default: the shared Penn Action train
 //! split), the model folder of the learned forecasters (default: the one
 //! [`model_dataset`] names for the track's skeleton, found by
-//! [`find_model_dir`]) and the map onto the model's joints for the product's
+//! [`ForecastModels::find_dir`]) and the map onto the model's joints for the product's
 //! skeletons ([`crate::mapped`]). The result says which path was taken
 //! ([`PredictPath`], [`Prediction::explanation`]).
 
@@ -25,7 +25,7 @@ use crate::data::ForecastDataset;
 use crate::error::{ForecastError, Result};
 use crate::forecaster::{Constant, ForecastMethod, Forecaster, LoopUnroll};
 use crate::mapped::{map_to_model, model_dataset, MappedForecaster};
-use crate::model::{find_model_dir, ArForecaster, ArParams, ArSpace, ForecastModels};
+use crate::model::{ArForecaster, ArParams, ArSpace, ForecastModels};
 use crate::nn::{NearestNeighbour, NnParams};
 use crate::statue::{find_statue, Statue, StatueParams};
 
@@ -430,7 +430,7 @@ pub(crate) fn model_dir_for(track: &Track, models: Option<&Path>) -> Result<Path
                     dims: track.dims(),
                 }
             })?;
-            find_model_dir(ds)
+            ForecastModels::find_dir(ds)
         }
     }
 }

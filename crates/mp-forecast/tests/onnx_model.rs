@@ -8,17 +8,17 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use common::*;
-use mp_forecast::{find_model_dir, ArSpace, ForecastModels};
 use mp_forecast::{
     find_statue, ArForecaster, ArParams, Constant, ForecastError, Forecaster, StatueParams,
 };
+use mp_forecast::{ArSpace, ForecastModels};
 use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use ndarray::{Array2, Array3};
 use serde_json::Value;
 
 fn models_of(dataset: &str) -> Arc<ForecastModels> {
-    let dir = find_model_dir(dataset)
+    let dir = ForecastModels::find_dir(dataset)
         .unwrap_or_else(|e| panic!("models/forecast/{dataset} is part of the repository: {e}"));
     Arc::new(
         ForecastModels::load(dir, &SessionParams::default())

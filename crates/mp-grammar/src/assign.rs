@@ -28,7 +28,7 @@ use crate::distance::{FrameSpan, PoseFeatures};
 use crate::error::{GrammarError, Result};
 use crate::model::{GrammarModel, SourceInfo, SymbolsFile, MODEL_FORMAT, SYMBOLS_FORMAT};
 use crate::objective::ClusterQuality;
-use crate::symbols::{SearchStats, SymbolParams, SymbolSegment, SymbolString};
+use crate::symbols::{SymbolParams, SymbolSearchStats, SymbolSegment, SymbolString};
 
 /// Largest number of grid segments (positions × widths) the segmentation
 /// considers.
@@ -171,7 +171,7 @@ pub fn assign_symbols(
         medoids: Vec::new(),
         quality: ClusterQuality::from_terms(0.0, e_prime, params.omega),
         d_max: learned.d_max,
-        stats: SearchStats::default(),
+        stats: SymbolSearchStats::default(),
     })
 }
 
@@ -302,7 +302,7 @@ mod tests {
             medoids: vec![0, 1],
             quality: ClusterQuality::from_terms(1.0, 0.0, 0.5),
             d_max: 5.0,
-            stats: SearchStats::default(),
+            stats: SymbolSearchStats::default(),
         };
         let new = feats(&[(10, 5.0), (20, 0.0), (10, 4.0)]);
         let s = assign_symbols(&train, &learned, &params(), &new).unwrap();
@@ -353,7 +353,7 @@ mod tests {
             medoids: vec![0, 3],
             quality: ClusterQuality::from_terms(1.0, 0.0, 0.5),
             d_max: 5.0,
-            stats: SearchStats::default(),
+            stats: SymbolSearchStats::default(),
         };
         let new = feats(&[(30, 0.0)]);
         assert!(assign_symbols(&train, &learned, &params(), &new).is_err());

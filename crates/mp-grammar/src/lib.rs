@@ -68,10 +68,10 @@ pub use objective::ClusterQuality;
 pub use score::{load_symbol_string, ScoreParams};
 pub use sentences::{score_partition, search_partition, PartitionParams};
 pub use symbols::{
-    identify_symbols, symbol_name, GaParams, SaParams, SearchStats, SymbolParams, SymbolSegment,
-    SymbolString,
+    identify_symbols, symbol_name, GaParams, SaParams, SymbolParams, SymbolSearchStats,
+    SymbolSegment, SymbolString,
 };
-pub use synth::{RootAlignment, StitchParams, Stitcher, Synthesis};
+pub use synth::{RootAlignment, StitchParams, Stitcher, SynthesizedMotion};
 
 /// Not part of the API: the string algorithms the fuzz targets call directly.
 #[doc(hidden)]

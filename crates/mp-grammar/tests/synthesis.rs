@@ -11,7 +11,7 @@ use mp_grammar::{
     StitchParams, Stitcher,
 };
 use mp_grammar::{read_motions, subsample_bvh};
-use mp_grammar::{SearchStats, SymbolSegment, SymbolString};
+use mp_grammar::{SymbolSearchStats, SymbolSegment, SymbolString};
 
 const SEG: usize = 15;
 
@@ -51,7 +51,7 @@ fn round_robin(n_frames: usize, k: usize) -> SymbolString {
         segments,
         quality: ClusterQuality::from_terms(0.5, 0.5, 0.5),
         d_max: 1.0,
-        stats: SearchStats::default(),
+        stats: SymbolSearchStats::default(),
     }
 }
 

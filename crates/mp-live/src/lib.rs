@@ -12,12 +12,12 @@
 //! - `program`: the online concrete program of one person: a buffer of
 //!   their frames not yet committed, segmented again every second with the
 //!   offline synthesis, whose leading segments are committed once stable.
-//! - [`run()`]: the loop over the frames, reporting [`Event`]s.
+//! - [`watch`]: the loop over the frames, reporting [`Event`]s.
 //! - `record`: with [`LiveParams::out`], every pose kept in a spool file
 //!   and, when the stream ends, `mp run`'s files written from them.
 //!
 //! ```no_run
-//! use mp_live::{run, Event, LiveParams, LiveSource};
+//! use mp_live::{watch, Event, LiveParams, LiveSource};
 //! use mp_geom::CancelToken;
 //!
 //! // A file read at its own speed (`mp live squats.mp4 --realtime`), each
@@ -29,7 +29,7 @@
 //!     }
 //! };
 //! let source = LiveSource::File("squats.mp4".into());
-//! let summary = run(&source, &params, &CancelToken::new(), &mut print)?;
+//! let summary = watch(&source, &params, &CancelToken::new(), &mut print)?;
 //! println!("{} frames", summary.frames);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -49,7 +49,7 @@ use serde::Serialize;
 
 pub use counter::{OnlineCounter, Repetition};
 pub use program::{OnlineProgram, ProgramSegment};
-pub use run::run;
+pub use run::watch;
 pub use source::LiveSource;
 
 /// Why a live run stopped early.

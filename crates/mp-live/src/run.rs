@@ -143,7 +143,7 @@ impl State {
 /// event is always the [`Event::Summary`] (after an [`Event::Error`] when
 /// the run stopped on an error). Returns the summary, or the error that
 /// stopped the run.
-pub fn run(
+pub fn watch(
     source: &LiveSource,
     params: &LiveParams,
     cancel: &CancelToken,
@@ -236,7 +236,7 @@ fn run_inner(
             })
         },
     )?;
-    let result = analyse(
+    let result = analyse_frames(
         &slot, &info, &mut multi, params, cancel, stall, drop_late, state, sink,
     );
     slot.stop();
@@ -245,7 +245,7 @@ fn run_inner(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn analyse(
+fn analyse_frames(
     slot: &source::Slot,
     info: &VideoInfo,
     multi: &mut MultiPose,

@@ -33,7 +33,7 @@ use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
-use mp_pose::{probe_bytes, Frame, ReadOptions, VideoInfo, VideoReader};
+use mp_pose::{probe_bytes, Frame, VideoInfo, VideoReadOptions, VideoReader};
 
 use crate::{LiveError, Result};
 
@@ -317,7 +317,7 @@ pub fn open(source: &LiveSource, realtime: bool, stall: Duration) -> Result<Open
         feed.buf = prefix;
         let reader = VideoReader::open_with(
             info,
-            ReadOptions {
+            VideoReadOptions {
                 realtime: false,
                 feed: Some(Box::new(feed)),
             },
@@ -330,7 +330,7 @@ pub fn open(source: &LiveSource, realtime: bool, stall: Duration) -> Result<Open
             let info = mp_pose::probe(p).map_err(err)?;
             let reader = VideoReader::open_with(
                 info,
-                ReadOptions {
+                VideoReadOptions {
                     realtime,
                     feed: None,
                 },

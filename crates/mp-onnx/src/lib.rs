@@ -18,10 +18,10 @@
 //!   ancestors).
 //!
 //! ```no_run
-//! use mp_onnx::{Input, Network, SessionParams};
+//! use mp_onnx::{Network, SessionParams, TensorInput};
 //! let net = Network::open("models/refine/evaluator.onnx", &SessionParams::default())?;
 //! let motion = vec![0f32; 60 * 60];
-//! let out = net.run(&[Input::new("motion", &[1, 60, 60], &motion)], &["logits"])?;
+//! let out = net.run(&[TensorInput::new("motion", &[1, 60, 60], &motion)], &["logits"])?;
 //! println!("logits of shape {:?}", out[0].shape);
 //! # Ok::<(), mp_onnx::OnnxError>(())
 //! ```
@@ -35,5 +35,5 @@ mod session;
 pub use error::OnnxError;
 pub use library::{environment, find_library};
 pub use lookup::ModelDirs;
-pub use network::{Input, Network, Output};
+pub use network::{Network, TensorInput, TensorOutput};
 pub use session::{open_session, Device, SessionParams, TensorInfo};

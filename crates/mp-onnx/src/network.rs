@@ -22,7 +22,7 @@ const F32: &str = "f32";
 
 /// One `f32` input of a run: tensor name, shape and row-major data.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Input<'a> {
+pub struct TensorInput<'a> {
     /// Input name in the graph.
     pub name: &'a str,
     /// Shape of the tensor.
@@ -31,16 +31,16 @@ pub struct Input<'a> {
     pub data: &'a [f32],
 }
 
-impl<'a> Input<'a> {
+impl<'a> TensorInput<'a> {
     /// An input named `name` of the given shape and data.
     pub fn new(name: &'a str, shape: &'a [usize], data: &'a [f32]) -> Self {
-        Input { name, shape, data }
+        TensorInput { name, shape, data }
     }
 }
 
 /// One `f32` output of a run: tensor name, shape and row-major data.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Output {
+pub struct TensorOutput {
     /// Output name in the graph.
     pub name: String,
     /// Shape of the tensor as produced.
@@ -154,7 +154,7 @@ impl Network {
     /// [`OnnxError::InputShape`], [`OnnxError::InputLength`], and
     /// [`OnnxError::Contract`] for a graph input that is not `f32` or a name
     /// given twice.
-    pub fn check_inputs(&self, inputs: &[Input<'_>]) -> Result<()> {
+    pub fn check_inputs(&self, inputs: &[TensorInput<'_>]) -> Result<()> {
         for (k, input) in inputs.iter().enumerate() {
             let Some(info) = self.input(input.name) else {
                 return Err(OnnxError::UnknownInput {
@@ -218,7 +218,7 @@ impl Network {
     /// [`OnnxError::MissingOutput`] for an output the graph does not have;
     /// [`OnnxError::Model`] when ONNX Runtime fails to run or an output is
     /// not `f32`.
-    pub fn run(&self, inputs: &[Input<'_>], outputs: &[&str]) -> Result<Vec<Output>> {
+    pub fn run(&self, inputs: &[TensorInput<'_>], outputs: &[&str]) -> Result<Vec<TensorOutput>> {
         self.check_inputs(inputs)?;
         let missing_output = |name: &str| OnnxError::MissingOutput {
             model: self.name.clone(),
@@ -246,7 +246,7 @@ impl Network {
                 let (shape, data) = value
                     .try_extract_tensor::<f32>()
                     .map_err(|e| OnnxError::model(&self.name, format!("output `{name}`: {e}")))?;
-                Ok(Output {
+                Ok(TensorOutput {
                     name: name.to_string(),
                     shape: shape.iter().map(|&d| d.max(0) as usize).collect(),
                     data: data.to_vec(),

@@ -7,7 +7,7 @@
 
 use std::sync::OnceLock;
 
-use mp_onnx::{Input, ModelDirs, Network, OnnxError, SessionParams};
+use mp_onnx::{ModelDirs, Network, OnnxError, SessionParams, TensorInput};
 
 const FRAMES: usize = 60;
 const FEATURES: usize = 60;
@@ -58,7 +58,7 @@ fn the_right_shape_runs_and_gives_finite_outputs() {
         let shape = [batch, FRAMES, FEATURES];
         let out = net
             .run(
-                &[Input::new("motion", &shape, &data)],
+                &[TensorInput::new("motion", &shape, &data)],
                 &["logits", "features"],
             )
             .unwrap();
@@ -88,7 +88,11 @@ fn a_wrong_shape_is_a_typed_error_naming_the_input() {
     let bad = [1usize, FRAMES - 1, FEATURES];
     let e = net
         .run(
-            &[Input::new("motion", &bad, &data[..(FRAMES - 1) * FEATURES])],
+            &[TensorInput::new(
+                "motion",
+                &bad,
+                &data[..(FRAMES - 1) * FEATURES],
+            )],
             &["logits"],
         )
         .unwrap_err();
@@ -116,7 +120,7 @@ fn a_wrong_shape_is_a_typed_error_naming_the_input() {
     // A missing batch dimension.
     let e = net
         .run(
-            &[Input::new("motion", &[FRAMES, FEATURES], &data)],
+            &[TensorInput::new("motion", &[FRAMES, FEATURES], &data)],
             &["logits"],
         )
         .unwrap_err();
@@ -125,7 +129,11 @@ fn a_wrong_shape_is_a_typed_error_naming_the_input() {
     // The right shape with too few values.
     let e = net
         .run(
-            &[Input::new("motion", &[1, FRAMES, FEATURES], &data[1..])],
+            &[TensorInput::new(
+                "motion",
+                &[1, FRAMES, FEATURES],
+                &data[1..],
+            )],
             &["logits"],
         )
         .unwrap_err();
@@ -141,7 +149,7 @@ fn wrong_names_are_typed_errors() {
     let data = motion(1);
     let shape = [1, FRAMES, FEATURES];
     let e = net
-        .run(&[Input::new("frames", &shape, &data)], &["logits"])
+        .run(&[TensorInput::new("frames", &shape, &data)], &["logits"])
         .unwrap_err();
     assert!(
         matches!(&e, OnnxError::UnknownInput { input, known, .. } if input == "frames" && known.contains("motion")),
@@ -153,15 +161,15 @@ fn wrong_names_are_typed_errors() {
         "{e}"
     );
     let e = net
-        .run(&[Input::new("motion", &shape, &data)], &["scores"])
+        .run(&[TensorInput::new("motion", &shape, &data)], &["scores"])
         .unwrap_err();
     assert!(
         matches!(&e, OnnxError::MissingOutput { output, .. } if output == "scores"),
         "{e}"
     );
     let twice = [
-        Input::new("motion", &shape, &data),
-        Input::new("motion", &shape, &data),
+        TensorInput::new("motion", &shape, &data),
+        TensorInput::new("motion", &shape, &data),
     ];
     let e = net.run(&twice, &["logits"]).unwrap_err();
     assert!(matches!(e, OnnxError::Contract { .. }), "{e}");

@@ -73,7 +73,7 @@ impl ExtractParams {
 #[derive(Debug, Clone)]
 #[non_exhaustive]
 #[allow(clippy::large_enum_variant)] // one per extraction, moved once
-pub enum Poses {
+pub enum ExtractedPoses {
     /// One person: a still image, MoveNet, the single-person pipeline or
     /// world coordinates.
     One(Track),
@@ -85,7 +85,7 @@ pub enum Poses {
 #[derive(Debug, Clone)]
 pub struct Extracted {
     /// The keypoints.
-    pub poses: Poses,
+    pub poses: ExtractedPoses,
     /// The frame (width, height) the pixel keypoints are in; `None` for
     /// world coordinates.
     pub frame: Option<(usize, usize)>,
@@ -105,8 +105,8 @@ impl Extracted {
     /// video with several. An error when nobody was found.
     pub fn main_track(&self) -> Result<Track> {
         match &self.poses {
-            Poses::One(t) => Ok(t.clone()),
-            Poses::People(p) => Ok(p.main_track()?),
+            ExtractedPoses::One(t) => Ok(t.clone()),
+            ExtractedPoses::People(p) => Ok(p.main_track()?),
         }
     }
 
@@ -121,11 +121,11 @@ impl Extracted {
         }
         .check_output(path)?;
         match &self.poses {
-            Poses::People(p) if mp_geom::holds_people(path) => {
+            ExtractedPoses::People(p) if mp_geom::holds_people(path) => {
                 mp_geom::write_people_framed(path, p, self.frame)?
             }
-            Poses::People(_) => mp_geom::write_track(path, &self.main_track()?)?,
-            Poses::One(t) => mp_geom::write_track_framed(path, t, self.frame)?,
+            ExtractedPoses::People(_) => mp_geom::write_track(path, &self.main_track()?)?,
+            ExtractedPoses::One(t) => mp_geom::write_track_framed(path, t, self.frame)?,
         }
         Ok(())
     }
@@ -200,7 +200,7 @@ pub fn extract(
             people.map_tracks(|t| t.to_coco17())?
         };
         return Ok(Extracted {
-            poses: Poses::People(people),
+            poses: ExtractedPoses::People(people),
             frame: Some((ex.width, ex.height)),
             found_fraction,
             model_fps,
@@ -209,7 +209,7 @@ pub fn extract(
         });
     }
     let mut est = open_estimator_with(pose.model, pose.session(), pose.recover_s)?;
-    let ex = mp_pose::extract(source, est.as_mut(), &options, |done, _| {
+    let ex = mp_pose::extract_track(source, est.as_mut(), &options, |done, _| {
         observer.progress(Stage::Pose, done)
     })?;
     finished(ex.posed.len());
@@ -226,7 +226,7 @@ pub fn extract(
         track = track.to_coco17()?;
     }
     Ok(Extracted {
-        poses: Poses::One(track),
+        poses: ExtractedPoses::One(track),
         // Pixels keep the frame they are in (the scale of their programs);
         // world coordinates are metres.
         frame: (!what.world).then_some((ex.width, ex.height)),

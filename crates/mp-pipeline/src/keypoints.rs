@@ -22,8 +22,8 @@ use mp_geom::{CancelToken, People, PersonId, Track};
 use mp_pose::FrameSource;
 use mp_pose::SessionParams;
 use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
-use mp_pose::{extract, open_estimator_with, ExtractOptions};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams};
+use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
 use mp_pose::{grey_thumbnail_region, thumbnail_track};
 use mp_pose::{ModelChoice, PoseEstimator};
 use mp_pose::{VideoInfo, VideoReader};
@@ -520,7 +520,7 @@ fn pose_single(
 ) -> Result<Posed> {
     let fps = source.fps;
     let est = slot.get(params)?;
-    let ex = extract(source, est, &extract_options(params, fps), |done, _| {
+    let ex = extract_track(source, est, &extract_options(params, fps), |done, _| {
         progress(done)
     })?;
     Ok(Posed {

@@ -59,7 +59,7 @@ pub use batch::{
 };
 pub use error::PipelineError;
 use error::Result;
-pub use extract::{extract, ExtractParams, Extracted, Poses};
+pub use extract::{extract, ExtractParams, Extracted, ExtractedPoses};
 pub use fit_options::FitOptions;
 pub use frame_signal::FrameChoice;
 pub use input::Input;

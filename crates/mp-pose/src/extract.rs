@@ -204,7 +204,7 @@ impl PoseSmoother {
     }
 }
 
-/// Options of [`extract`].
+/// Options of [`extract_track`].
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ExtractOptions {
     /// Output smoothing; `None` (default) = off.
@@ -300,7 +300,7 @@ pub(crate) fn median_fps(ms: &[f64]) -> f64 {
 /// Runs `estimator` over the frames of `source` (every frame, or those
 /// [`ExtractOptions::pose_every`] names). `progress(done, total)` is called
 /// after each frame.
-pub fn extract(
+pub fn extract_track(
     mut source: FrameSource,
     estimator: &mut dyn PoseEstimator,
     options: &ExtractOptions,
@@ -454,5 +454,5 @@ pub fn extract_file(
 ) -> Result<Extraction> {
     let source = open_source(path.as_ref())?;
     let mut est = open_estimator(model, SessionParams::default())?;
-    extract(source, est.as_mut(), options, progress)
+    extract_track(source, est.as_mut(), options, progress)
 }

@@ -10,7 +10,7 @@
 //!   frame, one landmark crop per person, a tracker that keeps each
 //!   person's id and drops crops the detector does not confirm.
 //! * [`pose::PoseEstimator`]: the trait both implement.
-//! * [`extract()`]: a whole video to an `mp_geom::Track` (pixels, and metres for
+//! * [`extract_track`]: a whole video to an `mp_geom::Track` (pixels, and metres for
 //!   BlazePose), frames without a person marked with confidence 0.
 //! * `decode`: decoding on its own thread ahead of the pose model, and
 //!   reduced JPEG copies of the frames from a second FFmpeg process.
@@ -44,7 +44,7 @@ mod video;
 pub use blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
 pub use error::PoseError;
 pub use extract::{
-    extract, extract_file, open_estimator, open_estimator_with, ExtractOptions, Extraction,
+    extract_file, extract_track, open_estimator, open_estimator_with, ExtractOptions, Extraction,
     ModelChoice, PoseSmoother, SmoothingParams,
 };
 pub use imageops::Roi;
@@ -66,7 +66,7 @@ pub use motion::{moving_regions, region_track, CellRegion, MotionEnergy};
 pub use people::{PeopleCollector, TrackEvent, TrackedPose};
 pub use runtime::{model_path, Device};
 pub use thumbs::{grey_thumbnail_region, thumbnail_track, DEFAULT_THUMBNAIL_SIZE};
-pub use video::{probe_bytes, ReadOptions, VideoWriter, X264_PRESETS};
+pub use video::{probe_bytes, VideoReadOptions, VideoWriter, X264_PRESETS};
 
 #[cfg(test)]
 mod tests;

@@ -294,7 +294,7 @@ pub fn probe_bytes(name: &Path, bytes: &[u8]) -> Result<VideoInfo> {
 
 /// How [`VideoReader::open_with`] reads its input.
 #[derive(Default)]
-pub struct ReadOptions {
+pub struct VideoReadOptions {
     /// Read at the video's own frame rate (FFmpeg's `-re`), as a camera would deliver it.
     pub realtime: bool,
     /// The bytes of the video, fed to FFmpeg's standard input, instead of the file.
@@ -333,20 +333,24 @@ impl VideoReader {
         Self::spawn(info, Some(filter))
     }
 
-    /// Starts decoding with [`ReadOptions`]: at the video's own speed, or
+    /// Starts decoding with [`VideoReadOptions`]: at the video's own speed, or
     /// from a byte stream (a container such as MPEG-TS) fed to FFmpeg's
     /// standard input on a thread of its own; `info` (the frame size and
     /// rate) then comes from the caller, e.g. [`probe_bytes`] on the
     /// stream's first bytes.
-    pub fn open_with(info: VideoInfo, options: ReadOptions) -> Result<Self> {
+    pub fn open_with(info: VideoInfo, options: VideoReadOptions) -> Result<Self> {
         Self::spawn_with(info, None, options)
     }
 
     fn spawn(info: VideoInfo, filter: Option<&str>) -> Result<Self> {
-        Self::spawn_with(info, filter, ReadOptions::default())
+        Self::spawn_with(info, filter, VideoReadOptions::default())
     }
 
-    fn spawn_with(info: VideoInfo, filter: Option<&str>, options: ReadOptions) -> Result<Self> {
+    fn spawn_with(
+        info: VideoInfo,
+        filter: Option<&str>,
+        options: VideoReadOptions,
+    ) -> Result<Self> {
         let path = info.path.clone();
         let mut cmd = Command::new("ffmpeg");
         cmd.args(["-v", "error", "-nostdin"]);

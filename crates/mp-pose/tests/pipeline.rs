@@ -5,7 +5,7 @@
 
 mod common;
 
-use mp_pose::{extract, ExtractOptions};
+use mp_pose::{extract_track, ExtractOptions};
 use mp_pose::{open_source, read_image, Frame, VideoReader};
 use mp_pose::{BlazePose, BlazePoseParams};
 use mp_pose::{MoveNet, MoveNetParams, PoseEstimator};
@@ -78,7 +78,7 @@ fn tracking_follows_mediapipe_on_golf() {
     })
     .unwrap();
     let source = open_source(golf!()).unwrap();
-    let ex = extract(
+    let ex = extract_track(
         source,
         &mut bp,
         &ExtractOptions {
@@ -165,7 +165,7 @@ fn frames_without_a_person_are_marked_missing_in_the_track() {
         frames: Box::new(frames.into_iter()),
     };
     let mut bp = BlazePose::new(BlazePoseParams::default()).unwrap();
-    let ex = extract(source, &mut bp, &ExtractOptions::default(), |_, _| {}).unwrap();
+    let ex = extract_track(source, &mut bp, &ExtractOptions::default(), |_, _| {}).unwrap();
     assert_eq!(ex.found, vec![true, false, false, true]);
     let conf = ex.track.confidence();
     for t in [1, 2] {

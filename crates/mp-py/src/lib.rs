@@ -216,8 +216,10 @@ fn extract<'py>(
         .map_err(errors::pipeline)?;
     if people {
         let p = match ex.poses {
-            mp_pipeline::Poses::People(p) => p,
-            mp_pipeline::Poses::One(t) => mp_geom::People::from_track(t).map_err(errors::geom)?,
+            mp_pipeline::ExtractedPoses::People(p) => p,
+            mp_pipeline::ExtractedPoses::One(t) => {
+                mp_geom::People::from_track(t).map_err(errors::geom)?
+            }
             _ => return Err(errors::PoseError::new_err("no keypoints were extracted")),
         };
         return Ok(Bound::new(py, PyPeople::new(p))?.into_any());

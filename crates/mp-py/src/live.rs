@@ -1,6 +1,6 @@
 //! `live()`: the live analysis of `mp live` as a Python iterator of events.
 //!
-//! The run (`mp_live::run`) goes on a thread of its own and sends each event,
+//! The run (`mp_live::watch`) goes on a thread of its own and sends each event,
 //! as JSON (the lines of `mp live --json`), over a bounded channel; the
 //! iterator waits for the next one with the GIL released and turns it into a
 //! dict. Closing the iterator (or dropping it) cancels the run and joins its
@@ -222,7 +222,7 @@ pub fn live(
                     let _ = tx.send(line);
                 }
             };
-            mp_live::run(&source, &params, &token, &mut send)
+            mp_live::watch(&source, &params, &token, &mut send)
         })
         .map_err(|e| errors::MpError::new_err(format!("cannot start the live analysis: {e}")))?;
     Ok(PyLive {

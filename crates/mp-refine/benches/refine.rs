@@ -13,13 +13,13 @@ use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use mp_refine::full_confidence;
 use mp_refine::Concepts;
-use mp_refine::{find_model_dir, RefineNets};
+use mp_refine::RefineNets;
 use mp_refine::{inject, AnchorSource, Flaw};
 use mp_refine::{resample, NET_FRAMES};
 use mp_refine::{AnchorRepair, NetRefineParams, NetRefiner, RefineMode};
 
 fn bench(c: &mut Criterion) {
-    let dir = match find_model_dir() {
+    let dir = match RefineNets::find_dir() {
         Ok(d) => d,
         Err(e) => {
             eprintln!("skipping the refinement bench: {e}");

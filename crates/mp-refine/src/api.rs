@@ -18,7 +18,7 @@ use crate::error::{RefineError, Result};
 use crate::learned::{NetRefineParams, NetRefiner, RefineMode};
 use crate::mapped::{msr20_map, refine_any, MappedRefinement};
 use crate::motion::bvh_to_msr20;
-use crate::nets::{find_model_dir, RefineNets};
+use crate::nets::RefineNets;
 
 /// File name of the anchor concepts in a model folder.
 pub const CONCEPTS_FILE: &str = "concepts.json";
@@ -28,7 +28,7 @@ pub const CONCEPTS_FILE: &str = "concepts.json";
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RefineOptions {
     /// Model folder. Default `None`: `MP_REFINE_MODELS` or `models/refine`
-    /// ([`find_model_dir`]).
+    /// ([`RefineNets::find_dir`]).
     pub models: Option<PathBuf>,
     /// Anchor concepts JSON. Default `None`: `CONCEPTS_FILE` in the model folder.
     pub concepts: Option<PathBuf>,
@@ -95,7 +95,7 @@ impl RefineOptions {
     pub fn model_dir(&self) -> Result<PathBuf> {
         match &self.models {
             Some(d) => Ok(d.clone()),
-            None => find_model_dir(),
+            None => RefineNets::find_dir(),
         }
     }
 

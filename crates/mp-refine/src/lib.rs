@@ -86,7 +86,7 @@ pub use motion::{
     bvh_to_msr20, canonical_mask, canonicalize, changed_joints, from_features, to_features,
     DEFAULT_BVH_LENGTH_SCALE, FRAME_FEATURES, HIP_CENTRE, MSR_JOINTS, NET_FRAMES,
 };
-pub use nets::{find_model_dir, generate_clips, read_manifest, RefineNets, N_ACTIONS};
+pub use nets::{generate_clips, read_manifest, RefineNets, N_ACTIONS};
 pub use segment::per_frame_error;
 
 pub use mapped::refine_any;

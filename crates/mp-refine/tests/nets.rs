@@ -15,9 +15,9 @@ use mp_geom::{Skeleton, Track, Units};
 use mp_onnx::SessionParams;
 use mp_refine::full_confidence;
 use mp_refine::{canonical_mask, changed_joints};
-use mp_refine::{find_model_dir, NetKind, RefineNets};
 use mp_refine::{inject, AnchorSource, Flaw};
 use mp_refine::{mpjpe_abs, Concepts, RefineError};
+use mp_refine::{NetKind, RefineNets};
 use mp_refine::{NetRefineParams, NetRefiner, RefineMode};
 use ndarray::Array3;
 
@@ -35,7 +35,8 @@ struct Models {
 }
 
 fn load_models() -> Models {
-    let dir = find_model_dir().expect("refinement models missing (models/refine/manifest.json)");
+    let dir =
+        RefineNets::find_dir().expect("refinement models missing (models/refine/manifest.json)");
     let nets = RefineNets::load(&dir, &SessionParams::default()).unwrap_or_else(|e| {
         panic!(
             "loading the refinement networks from {}: {e}",

@@ -6,7 +6,7 @@
 
 use mp_geom::MsrAction3D;
 use mp_refine::full_confidence;
-use mp_refine::{find_model_dir, RefineNets};
+use mp_refine::RefineNets;
 use mp_refine::{inject, Flaw};
 use mp_refine::{mpjpe_abs, refine_default, Concepts, RefineError, RefineOptions};
 use mp_refine::{NetRefineParams, NetRefiner, RefineMode};
@@ -47,7 +47,7 @@ fn refine_default_repairs_an_injected_jump_as_the_hand_built_refiner_does() {
     assert!(after < 0.8 * before);
 
     // the same networks, concepts and parameters assembled by hand
-    let dir = find_model_dir().unwrap();
+    let dir = RefineNets::find_dir().unwrap();
     let nets = RefineNets::load(&dir, &Default::default()).unwrap();
     let concepts =
         Concepts::from_json(&std::fs::read_to_string(dir.join("concepts.json")).unwrap()).unwrap();

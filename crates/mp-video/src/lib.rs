@@ -15,7 +15,7 @@
 //!   warped towards the program's pose and blended; linear blending and
 //!   FFmpeg's `minterpolate` as baselines.
 //!
-//! Frames stream through FFmpeg pipes (`mp_pose::video`): an output is a
+//! Frames stream through FFmpeg pipes ([`mp_pose::VideoReader`], [`mp_pose::VideoWriter`]): an output is a
 //! [`plan::Plan`] of source frames (copied or blended) rendered with a
 //! bounded cache of the frames still to be used, and every video is written
 //! to a temporary file in the output's folder, then renamed

@@ -6,8 +6,8 @@ use crate::edit::MAX_ITERATIONS;
 use crate::exec::output_frames_bound;
 use crate::loops::{MAX_BODY, MAX_WINDOW};
 use crate::AbstractError;
+use crate::{AbstractExecParams, LoopParams, LoopReplay};
 use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-use crate::{ExecParams, LoopParams, LoopReplay};
 use mp_concrete::ConcreteError;
 
 const JOINTS: usize = 4;
@@ -69,9 +69,12 @@ fn frames_bound_without_unrolling() {
 #[test]
 fn absurd_iterations_in_a_program_are_an_error() {
     let p = program(1_000_000_000_000);
-    assert_too_large(p.execute(&ExecParams::default()).unwrap_err(), "iterations");
     assert_too_large(
-        p.sample(1, &ExecParams::default()).unwrap_err(),
+        p.execute(&AbstractExecParams::default()).unwrap_err(),
+        "iterations",
+    );
+    assert_too_large(
+        p.sample(1, &AbstractExecParams::default()).unwrap_err(),
         "iterations",
     );
 }
@@ -97,7 +100,12 @@ fn set_iterations_is_bounded() {
     );
     p.set_iterations(0, over - 1).unwrap();
     p.set_iterations(0, 5).unwrap();
-    assert_eq!(p.execute(&ExecParams::default()).unwrap().n_frames(), 110);
+    assert_eq!(
+        p.execute(&AbstractExecParams::default())
+            .unwrap()
+            .n_frames(),
+        110
+    );
 }
 
 fn e_msg_has_limit(p: &mut AbstractProgram, it: usize, limit: &str) -> bool {

@@ -3,8 +3,8 @@ use crate::synth::synthesize;
 use crate::AbstractError;
 use crate::LoopParams;
 use crate::PrintOptions;
+use crate::{AbstractExecParams, LoopReplay};
 use crate::{AbstractProgram, DetPrim, FreqDist, Gaussian, Loop, ProbPrim, Stmt};
-use crate::{ExecParams, LoopReplay};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -169,7 +169,7 @@ fn program(reps: usize) -> AbstractProgram {
 #[test]
 fn deterministic_execution_length_and_shape() {
     let p = program(6);
-    let t = p.execute(&ExecParams::default()).unwrap();
+    let t = p.execute(&AbstractExecParams::default()).unwrap();
     assert_eq!(t.n_frames(), p.expected_frames());
     assert_eq!(t.n_joints(), 3);
     // The first frame of the loop is the mean start of the body's first primitive.
@@ -183,9 +183,9 @@ fn deterministic_execution_length_and_shape() {
     );
     // Replaying the observed iterations reproduces their total length.
     let obs = p
-        .execute(&ExecParams {
+        .execute(&AbstractExecParams {
             replay: LoopReplay::Observed,
-            ..ExecParams::default()
+            ..AbstractExecParams::default()
         })
         .unwrap();
     let observed_frames: usize = l.observed.iter().flatten().map(|d| d.duration).sum();
@@ -195,9 +195,9 @@ fn deterministic_execution_length_and_shape() {
 #[test]
 fn stochastic_execution_is_seeded_and_within_support() {
     let p = program(8);
-    let a = p.sample(42, &ExecParams::default()).unwrap();
-    let b = p.sample(42, &ExecParams::default()).unwrap();
-    let c = p.sample(43, &ExecParams::default()).unwrap();
+    let a = p.sample(42, &AbstractExecParams::default()).unwrap();
+    let b = p.sample(42, &AbstractExecParams::default()).unwrap();
+    let c = p.sample(43, &AbstractExecParams::default()).unwrap();
     assert_eq!(a, b);
     assert_ne!(a.positions(), c.positions());
     // Every sampled start point lies within 6 standard deviations of its Gaussian.
@@ -228,13 +228,18 @@ fn editing_changes_length_as_expected() {
         .iter()
         .map(|b| b.duration.mean_rounded().unwrap())
         .sum();
-    let base = p.execute(&ExecParams::default()).unwrap().n_frames();
+    let base = p
+        .execute(&AbstractExecParams::default())
+        .unwrap()
+        .n_frames();
     p.set_iterations(0, 10).unwrap();
-    let t = p.execute(&ExecParams::default()).unwrap();
+    let t = p.execute(&AbstractExecParams::default()).unwrap();
     assert_eq!(t.n_frames(), base + 4 * per_iter);
     p.set_iterations(0, 3).unwrap();
     assert_eq!(
-        p.execute(&ExecParams::default()).unwrap().n_frames(),
+        p.execute(&AbstractExecParams::default())
+            .unwrap()
+            .n_frames(),
         base - 3 * per_iter
     );
     p.drop_iteration(0, 1).unwrap();

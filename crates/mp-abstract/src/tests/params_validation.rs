@@ -2,7 +2,7 @@
 //! public entry point with the parameter error naming the field.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: failing loudly is the point
 
-use crate::ExecParams;
+use crate::AbstractExecParams;
 use crate::{analyse, unroll, AbstractError, AbstractParams, AbstractProgram, PredictParams};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
@@ -86,20 +86,20 @@ fn predict_params_reject_bad_fields() {
 
 #[test]
 fn exec_params_reject_bad_fields() {
-    assert!(ExecParams::default().validate().is_ok());
+    assert!(AbstractExecParams::default().validate().is_ok());
     let prog = program();
-    let p = ExecParams {
+    let p = AbstractExecParams {
         jitter: f64::NAN,
-        ..ExecParams::default()
+        ..AbstractExecParams::default()
     };
     assert_eq!(names(prog.execute(&p).unwrap_err()), "jitter");
     assert_eq!(names(prog.sample(1, &p).unwrap_err()), "jitter");
-    let mut p = ExecParams::default();
+    let mut p = AbstractExecParams::default();
     p.fit.min_span_px = -1.0;
     assert_eq!(names(prog.execute(&p).unwrap_err()), "min_span_px");
     assert_eq!(names(prog.sample(1, &p).unwrap_err()), "min_span_px");
     // The fit's unit_scale is the program's: not checked.
-    let mut p = ExecParams::default();
+    let mut p = AbstractExecParams::default();
     p.fit.unit_scale = f64::NAN;
     assert!(p.validate().is_ok());
 }

@@ -42,7 +42,7 @@ fn finds_jumping_jacks_and_squats_with_their_counts() {
     // The abstract program executes back to the same number of frames when loops replay as observed.
     let t = a
         .program
-        .execute(&crate::ExecParams {
+        .execute(&crate::AbstractExecParams {
             replay: crate::LoopReplay::Observed,
             ..Default::default()
         })

@@ -9,7 +9,7 @@ use clap::Args;
 use mp_geom::write_track;
 use mp_grammar::GrammarModel;
 use mp_grammar::{symbol_name, DeriveParams, Fsm, FsmWeighting, RuleWeighting, Stitcher};
-use mp_grammar::{StitchParams, Synthesis};
+use mp_grammar::{StitchParams, SynthesizedMotion};
 
 /// Arguments of `mp grammar synth`.
 #[derive(Args, Debug)]
@@ -53,7 +53,7 @@ pub struct SynthArgs {
 
 /// Prints a synthesis's symbols (stdout) and its size and mean seam
 /// distance (stderr).
-fn print_synthesis(label: &str, s: &Synthesis, seams: &[f64]) {
+fn print_synthesis(label: &str, s: &SynthesizedMotion, seams: &[f64]) {
     let text: Vec<String> = s.symbols.iter().map(|&k| symbol_name(k)).collect();
     let mean = if seams.is_empty() {
         0.0

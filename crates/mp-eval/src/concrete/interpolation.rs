@@ -10,7 +10,7 @@
 //!
 //! The fit error of a segment is a sum over its frames, so on a track kept
 //! every `step` frames the same λ would buy `step` times longer segments.
-//! With [`InterpParams::lambda_per_time`] (default) λ (fixed, or the
+//! With [`InterpolationExperiment::lambda_per_time`] (default) λ (fixed, or the
 //! adaptive clamps) is divided by `step`, which keeps the trade-off between
 //! error and number of segments per second of motion.
 
@@ -21,7 +21,7 @@ use mp_concrete::{InBetween, InBetweenPoses, Lambda, Program, SynthParams, Trans
 
 /// Parameters of [`interpolation_experiment`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct InterpParams {
+pub struct InterpolationExperiment {
     /// Keep every `step`-th frame (≥ 2).
     pub step: usize,
     /// Synthesis on the kept frames.
@@ -32,10 +32,10 @@ pub struct InterpParams {
     pub lambda_per_time: bool,
 }
 
-impl InterpParams {
+impl InterpolationExperiment {
     /// Defaults for one factor: default synthesis, blend, λ per time.
     pub fn new(step: usize) -> Self {
-        InterpParams {
+        InterpolationExperiment {
             step,
             synth: SynthParams::paper(),
             transition: Transition::Blend,
@@ -70,7 +70,7 @@ pub struct InterpolationResult {
 /// Errors when fewer than 2 frames are kept or nothing can be scored.
 pub fn interpolation_experiment(
     track: &Track,
-    ip: &InterpParams,
+    ip: &InterpolationExperiment,
 ) -> anyhow::Result<InterpolationResult> {
     let step = ip.step;
     let transition = ip.transition;
@@ -215,9 +215,9 @@ mod tests {
         };
         let track = p.execute().unwrap();
         for step in [2, 4, 8] {
-            let ip = InterpParams {
+            let ip = InterpolationExperiment {
                 synth: params_px(),
-                ..InterpParams::new(step)
+                ..InterpolationExperiment::new(step)
             };
             let r = interpolation_experiment(&track, &ip).unwrap();
             assert_eq!(r.n_scored, 40 - 40 / step);
@@ -228,7 +228,7 @@ mod tests {
             // neighbour is missing and the velocity is the chord's.
             assert!(r.kd_inbetween < 0.6 * r.kd_linear, "×{step}: {r:?}");
         }
-        assert!(interpolation_experiment(&track, &InterpParams::new(1)).is_err());
-        assert!(interpolation_experiment(&track, &InterpParams::new(41)).is_err());
+        assert!(interpolation_experiment(&track, &InterpolationExperiment::new(1)).is_err());
+        assert!(interpolation_experiment(&track, &InterpolationExperiment::new(41)).is_err());
     }
 }

@@ -39,7 +39,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use interpolation::{interpolation_experiment, InterpParams};
+use interpolation::{interpolation_experiment, InterpolationExperiment};
 use mp_concrete::{Continuity, Program, RefitNorm, Transition};
 use mp_geom::PennAction;
 use rayon::prelude::*;
@@ -205,7 +205,7 @@ fn run_clip(
     let st = program.stats(&track)?;
     let mut interp = BTreeMap::new();
     for &s in &a.steps {
-        let ip = InterpParams {
+        let ip = InterpolationExperiment {
             step: s,
             synth: params.clone(),
             transition: if a.interp_extrapolate {

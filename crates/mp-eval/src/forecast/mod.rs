@@ -11,7 +11,6 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use mp_forecast::find_model_dir;
 use mp_forecast::Clip;
 use mp_forecast::ForecastDataset;
 use mp_forecast::{
@@ -238,7 +237,7 @@ pub fn run(a: &EvalForecastArgs) -> Result<()> {
     }
     let model_dir = match &a.models {
         Some(p) => p.clone(),
-        None => find_model_dir(ds.kind)
+        None => ForecastModels::find_dir(ds.kind)
             .unwrap_or_else(|_| PathBuf::from("models/forecast").join(ds.kind)),
     };
     let clips: Vec<Clip> = val.iter().map(|c| (*c).clone()).collect();

@@ -40,7 +40,7 @@ use clap::Args;
 use mp_geom::MsrAction3D;
 use mp_pose::SessionParams;
 use mp_refine::Concepts;
-use mp_refine::{find_model_dir, RefineNets};
+use mp_refine::RefineNets;
 use mp_refine::{AnchorDetection, AnchorRepair, FlawRepair, NetRefineParams, RefineMode};
 use serde_json::{json, Value};
 
@@ -280,7 +280,7 @@ pub fn run(a: &EvalRefineArgs) -> Result<()> {
     };
     let dir = match &a.models {
         Some(d) => d.clone(),
-        None => find_model_dir()?,
+        None => RefineNets::find_dir()?,
     };
     let cpath = a
         .concepts

@@ -41,7 +41,7 @@ use anyhow::{bail, Context};
 use metrics::PixelBox;
 use mp_geom::Track;
 use mp_pipeline::Params;
-use mp_pose::{extract, open_estimator, ExtractOptions, SessionParams};
+use mp_pose::{extract_track, open_estimator, ExtractOptions, SessionParams};
 use mp_pose::{Frame, FrameSource};
 use serde_json::{json, Value};
 
@@ -105,7 +105,7 @@ impl PoseStream {
                 frame_count: None,
                 frames: Box::new(rx.into_iter()),
             };
-            let ex = extract(source, est.as_mut(), &ExtractOptions::default(), |_, _| {})?;
+            let ex = extract_track(source, est.as_mut(), &ExtractOptions::default(), |_, _| {})?;
             let t = ex.track;
             Ok(
                 if t.skeleton().name != "coco17" && t.skeleton().maps_to_coco17() {

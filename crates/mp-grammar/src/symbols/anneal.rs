@@ -7,7 +7,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use super::cluster::FxBuild;
-use super::{SaParams, SearchStats, SymbolParams, SymbolSegment, SymbolString};
+use super::{SaParams, SymbolParams, SymbolSearchStats, SymbolSegment, SymbolString};
 use crate::distance::{FrameSpan, PoseFeatures};
 use crate::kmedoids::Clustering;
 use crate::objective::ClusterQuality;
@@ -283,7 +283,7 @@ impl<'a> Annealer<'a> {
         sa: &SaParams,
         step: usize,
         rng: &mut ChaCha8Rng,
-        stats: &mut SearchStats,
+        stats: &mut SymbolSearchStats,
     ) {
         let n = self.bounds.len() - 1;
         if n < 2 {
@@ -381,7 +381,7 @@ impl<'a> Annealer<'a> {
         feat: &PoseFeatures,
         p: &SymbolParams,
         d_max: f64,
-        stats: SearchStats,
+        stats: SymbolSearchStats,
     ) -> SymbolString {
         let n = self.bounds.len() - 1;
         // Number symbols by first occurrence.

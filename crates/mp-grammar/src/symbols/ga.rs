@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::cluster::{Grid, PairCache};
-use super::{SearchStats, SymbolParams};
+use super::{SymbolParams, SymbolSearchStats};
 use crate::derive::pick_weighted;
 use crate::distance::{FrameSpan, PoseFeatures};
 use crate::error::Result;
@@ -138,7 +138,7 @@ fn shuffle<T>(v: &mut [T], rng: &mut ChaCha8Rng) {
 pub(super) fn run_ga(
     problem: &Problem<'_>,
     rng: &mut ChaCha8Rng,
-    stats: &mut SearchStats,
+    stats: &mut SymbolSearchStats,
 ) -> Result<Scored> {
     let p = problem.params;
     let ga = &p.ga;
@@ -158,7 +158,7 @@ pub(super) fn run_ga(
 
     let evaluate_pop = |pop: &[Vec<bool>],
                         cache: &mut HashMap<Vec<bool>, f64>,
-                        stats: &mut SearchStats|
+                        stats: &mut SymbolSearchStats|
      -> Result<Vec<f64>> {
         let mut todo: Vec<&Vec<bool>> = pop.iter().filter(|g| !cache.contains_key(*g)).collect();
         todo.sort();

@@ -43,7 +43,7 @@
 //! * `params`: [`SymbolParams`] with [`GaParams`] and [`SaParams`], their
 //!   defaults, limits and validation.
 //! * `string`: the result, [`SymbolString`] of [`SymbolSegment`]s with
-//!   [`SearchStats`], and [`symbol_name`].
+//!   [`SymbolSearchStats`], and [`symbol_name`].
 //! * `cluster`: segment distances and the clustering of a segmentation —
 //!   the candidate grid, the shared segment-distance table, k-medoids from
 //!   the first `K` segments and `F`.
@@ -70,7 +70,7 @@ mod string;
 pub use params::{GaParams, SaParams, SymbolParams};
 #[cfg(test)]
 pub(crate) use params::{MAX_ITERATIONS, MAX_POPULATION, MAX_SEGMENT_FRAMES, MAX_SYMBOLS};
-pub use string::{symbol_name, SearchStats, SymbolSegment, SymbolString};
+pub use string::{symbol_name, SymbolSearchStats, SymbolSegment, SymbolString};
 
 use anneal::Annealer;
 use cluster::{cluster_bounds, Grid, PairCache};
@@ -107,7 +107,7 @@ pub fn identify_symbols(features: &PoseFeatures, params: &SymbolParams) -> Resul
             t,
         ));
     }
-    let mut stats = SearchStats::default();
+    let mut stats = SymbolSearchStats::default();
     let t0 = Instant::now();
     let d_max = features.max_pose_distance();
     stats.seconds_dmax = t0.elapsed().as_secs_f64();
@@ -120,7 +120,7 @@ pub fn identify_symbols(features: &PoseFeatures, params: &SymbolParams) -> Resul
     let edges: Vec<usize> = (0..=n_chunks)
         .map(|j| grid.points[j * intervals / n_chunks])
         .collect();
-    let chunk_results: Vec<Result<(Scored, SearchStats)>> = (0..n_chunks)
+    let chunk_results: Vec<Result<(Scored, SymbolSearchStats)>> = (0..n_chunks)
         .into_par_iter()
         .map(|ci| {
             let g = Grid::new(edges[ci], edges[ci + 1], p);
@@ -135,7 +135,7 @@ pub fn identify_symbols(features: &PoseFeatures, params: &SymbolParams) -> Resul
             };
             let mut rng = ChaCha8Rng::seed_from_u64(p.seed);
             rng.set_stream(ci as u64 + 1);
-            let mut st = SearchStats::default();
+            let mut st = SymbolSearchStats::default();
             let best = run_ga(&problem, &mut rng, &mut st)?;
             Ok((best, st))
         })

@@ -34,7 +34,7 @@ impl SymbolSegment {
 
 /// Counters and timings of a search.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct SearchStats {
+pub struct SymbolSearchStats {
     /// GA generations run.
     pub ga_generations: usize,
     /// Distinct genomes evaluated.
@@ -71,7 +71,7 @@ pub struct SymbolString {
     /// Largest pose distance `d_max` used in `E′`.
     pub d_max: f64,
     /// Search counters.
-    pub stats: SearchStats,
+    pub stats: SymbolSearchStats,
 }
 
 /// Name of symbol `i`: `a`–`z`, then `A`–`Z`, then `s52`, `s53`, ….

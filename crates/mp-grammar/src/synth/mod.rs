@@ -54,7 +54,7 @@
 //!   source motion, root alignment on the aligned axes, and the cross-fade
 //!   difference `Δ`.
 //! * `select`: segment selection (seam gaps, the greedy choice).
-//! * `stitch`: stitching selected segments into a [`Synthesis`], the
+//! * `stitch`: stitching selected segments into a [`SynthesizedMotion`], the
 //!   cross-fade ramp [`blend_weight`], and synthesis from a grammar or a
 //!   finite-state machine.
 //! * `regenerate`: [`Stitcher::regenerate`], re-deriving and re-stitching
@@ -170,7 +170,7 @@ pub struct Piece {
 
 /// A synthesised motion.
 #[derive(Debug, Clone)]
-pub struct Synthesis {
+pub struct SynthesizedMotion {
     /// Symbol of every piece.
     pub symbols: Vec<usize>,
     /// The pieces in order.
@@ -185,7 +185,7 @@ pub struct Synthesis {
     conf: Array2<f64>,
 }
 
-impl Synthesis {
+impl SynthesizedMotion {
     /// Number of frames.
     pub fn n_frames(&self) -> usize {
         self.rows.nrows()
@@ -205,7 +205,7 @@ impl Synthesis {
 #[derive(Debug, Clone)]
 pub struct Regenerated {
     /// The new motion.
-    pub synthesis: Synthesis,
+    pub synthesis: SynthesizedMotion,
     /// The derivation change.
     pub regeneration: Regeneration,
     /// Frames of the replaced region in the old motion.

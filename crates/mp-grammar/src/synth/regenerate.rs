@@ -6,7 +6,7 @@ use ndarray::{s, Array2};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::{blend_weight, Piece, Regenerated, Stitcher, Synthesis};
+use super::{blend_weight, Piece, Regenerated, Stitcher, SynthesizedMotion};
 use crate::derive::{regenerate, DeriveParams};
 use crate::error::{GrammarError, Result};
 use crate::grammar::Grammar;
@@ -22,7 +22,7 @@ impl Stitcher {
     pub fn regenerate(
         &self,
         grammar: &Grammar,
-        synth: &Synthesis,
+        synth: &SynthesizedMotion,
         terminal: usize,
         levels: usize,
         derive: &DeriveParams,

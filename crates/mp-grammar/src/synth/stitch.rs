@@ -6,7 +6,7 @@ use mp_geom::Track;
 use mp_geom::{Bvh, BvhTrackParams};
 use ndarray::{s, Array2, Array3};
 
-use super::{Output, Piece, Stitcher, Synthesis, MAX_FRAME_JOINTS, MAX_SEGMENTS};
+use super::{Output, Piece, Stitcher, SynthesizedMotion, MAX_FRAME_JOINTS, MAX_SEGMENTS};
 use crate::derive::{derive_at_least, Derivation, DeriveParams, Fsm};
 use crate::distance::PoseFeatures;
 use crate::error::{GrammarError, Result};
@@ -56,7 +56,7 @@ impl Stitcher {
         derivation: Option<Derivation>,
         rows: Array2<f64>,
         conf: Array2<f64>,
-    ) -> Result<Synthesis> {
+    ) -> Result<SynthesizedMotion> {
         let (track, bvh) = match &self.output {
             Output::Positions {
                 n_joints,
@@ -88,7 +88,7 @@ impl Stitcher {
                 (t, Some(b))
             }
         };
-        Ok(Synthesis {
+        Ok(SynthesizedMotion {
             symbols,
             pieces,
             derivation,
@@ -144,7 +144,7 @@ impl Stitcher {
     }
 
     /// Stitches the given source segments in order.
-    pub fn render(&self, segments: &[usize]) -> Result<Synthesis> {
+    pub fn render(&self, segments: &[usize]) -> Result<SynthesizedMotion> {
         if segments.is_empty() {
             return Err(GrammarError::Empty("no segment to stitch".into()));
         }
@@ -179,7 +179,7 @@ impl Stitcher {
     }
 
     /// Greedy selection and stitching of a symbol string.
-    pub fn stitch(&self, symbols: &[usize], seed: u64) -> Result<Synthesis> {
+    pub fn stitch(&self, symbols: &[usize], seed: u64) -> Result<SynthesizedMotion> {
         let segs = self.select(symbols, seed)?;
         self.render(&segs)
     }
@@ -192,7 +192,7 @@ impl Stitcher {
         derive: &DeriveParams,
         min_segments: usize,
         seed: u64,
-    ) -> Result<Synthesis> {
+    ) -> Result<SynthesizedMotion> {
         self.check_segments(min_segments)?;
         let map = self.terminal_symbols(grammar)?;
         let derivation = derive_at_least(grammar, derive, min_segments.max(1), seed)?;
@@ -207,7 +207,12 @@ impl Stitcher {
     }
 
     /// `n_segments` symbols from the finite-state machine, stitched (seeded).
-    pub fn synthesize_fsm(&self, fsm: &Fsm, n_segments: usize, seed: u64) -> Result<Synthesis> {
+    pub fn synthesize_fsm(
+        &self,
+        fsm: &Fsm,
+        n_segments: usize,
+        seed: u64,
+    ) -> Result<SynthesizedMotion> {
         self.check_segments(n_segments)?;
         if fsm.k() != self.k() {
             return Err(GrammarError::Invalid(format!(
@@ -227,7 +232,7 @@ impl Stitcher {
     /// Seam pose distances of a synthesis after blending (frames `s − 1`
     /// and `s` of every seam), in the source's distance units (the source
     /// body size normalises them).
-    pub fn seam_distances(&self, synth: &Synthesis) -> Result<Vec<f64>> {
+    pub fn seam_distances(&self, synth: &SynthesizedMotion) -> Result<Vec<f64>> {
         let f = PoseFeatures::from_track_with_scale(
             &synth.track,
             &self.params.distance,

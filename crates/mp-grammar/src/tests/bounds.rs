@@ -9,7 +9,7 @@ use crate::symbols::{MAX_ITERATIONS, MAX_POPULATION, MAX_SEGMENT_FRAMES, MAX_SYM
 use crate::synth::{MAX_FRAME_JOINTS, MAX_SEGMENTS};
 use crate::ClusterQuality;
 use crate::{DeriveParams, Fsm, FsmWeighting, Grammar, GrammarError, StitchParams, Stitcher};
-use crate::{GaParams, SaParams, SearchStats, SymbolParams, SymbolSegment, SymbolString};
+use crate::{GaParams, SaParams, SymbolParams, SymbolSearchStats, SymbolSegment, SymbolString};
 use mp_geom::{Skeleton, Track, Units};
 use ndarray::Array3;
 
@@ -42,7 +42,7 @@ fn stitcher() -> Stitcher {
             .collect(),
         quality: ClusterQuality::from_terms(0.5, 0.5, 0.5),
         d_max: 1.0,
-        stats: SearchStats::default(),
+        stats: SymbolSearchStats::default(),
     };
     Stitcher::new(&track, None, &symbols, &StitchParams::default()).unwrap()
 }

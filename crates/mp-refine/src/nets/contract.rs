@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use mp_onnx::{ModelDirs, TensorInfo};
 use serde_json::Value;
 
+use super::RefineNets;
 use crate::error::{RefineError, Result};
 use crate::motion::{FRAME_FEATURES, MSR_JOINTS, NET_FRAMES};
 
@@ -144,14 +145,16 @@ impl NetKind {
     }
 }
 
-/// The first candidate folder holding a `manifest.json`.
-pub fn find_model_dir() -> Result<PathBuf> {
-    let dirs = ModelDirs::standard(MODEL_DIR_ENV, MODEL_DIR_IN_WORKSPACE);
-    dirs.find_dir_with("manifest.json")
-        .ok_or_else(|| RefineError::ModelMissing {
-            file: "manifest.json".into(),
-            searched: dirs.describe(3),
-        })
+impl RefineNets {
+    /// The first candidate folder holding a `manifest.json`.
+    pub fn find_dir() -> Result<PathBuf> {
+        let dirs = ModelDirs::standard(MODEL_DIR_ENV, MODEL_DIR_IN_WORKSPACE);
+        dirs.find_dir_with("manifest.json")
+            .ok_or_else(|| RefineError::ModelMissing {
+                file: "manifest.json".into(),
+                searched: dirs.describe(3),
+            })
+    }
 }
 
 /// Open sizes of the networks.

@@ -26,7 +26,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mp_onnx::{Input, Network, SessionParams};
+use mp_onnx::{Network, SessionParams, TensorInput};
 
 use crate::error::{RefineError, Result};
 use crate::motion::{FRAME_FEATURES, MSR_JOINTS, NET_FRAMES};
@@ -73,9 +73,9 @@ impl Net {
     /// Runs the network; inputs whose shape or length does not fit the
     /// graph are [`RefineError::Shape`] errors naming the network and input.
     fn run(&self, inputs: &[NamedInput<'_>]) -> Result<Vec<NamedOutput>> {
-        let inputs: Vec<Input<'_>> = inputs
+        let inputs: Vec<TensorInput<'_>> = inputs
             .iter()
-            .map(|(name, shape, data)| Input::new(name, shape, data))
+            .map(|(name, shape, data)| TensorInput::new(name, shape, data))
             .collect();
         let names = self.kind.output_names();
         let out = self.net.run(&inputs, &names).map_err(|e| {
@@ -194,10 +194,10 @@ impl RefineNets {
         })
     }
 
-    /// Loads the folder found by [`find_model_dir`] with default session
+    /// Loads the folder found by [`RefineNets::find_dir`] with default session
     /// settings (2 intra-op threads, no spinning).
     pub fn load_default() -> Result<Self> {
-        Self::load(find_model_dir()?, &SessionParams::default())
+        Self::load(RefineNets::find_dir()?, &SessionParams::default())
     }
 
     /// The folder the networks came from.
