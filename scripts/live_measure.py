@@ -1,7 +1,10 @@
 #!/usr/bin/env python3
 """Streams QUVA videos at their own speed into `mp live - --json` and compares
 its final count with `mp loops`, and each labelled cycle end with the wall-clock
-time of the `rep` line that brings the count to it.
+time of the `rep` line that brings the count to it. The delay is split in two:
+how far the analysis was behind the stream when it wrote the line (wall-clock
+time since the sender started less the line's stream time `t`), and the
+counter's own wait (`t` less the labelled end).
 
     python3 scripts/live_measure.py [--mp target/release/mp] [--encode] NAME...
 
@@ -34,8 +37,9 @@ def main():
     ap.add_argument("names", nargs="+")
     a = ap.parse_args()
     data = os.environ.get("MP_DATA_DIR", "../shared/data") + "/quva_repetition"
-    print("| video | labelled | `mp loops` | `mp live` | analysed | dropped | median delay (s) | largest delay (s) |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| video | labelled | `mp loops` | `mp live` | analysed | dropped | median delay (s) | largest delay (s) "
+          "| behind the stream (s) | counter's wait (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for name in a.names:
         v = f"{data}/videos/{name}.mp4"
         labels = npy_ints(f"{data}/annotations/{name}.npy")
@@ -67,12 +71,15 @@ def main():
         main_id = max(people, key=people.get) if people else None
         if main_id is None or people[main_id] == 0:
             main_id = 0 if totals.get(0) else main_id
-        reps = [w for w, e in events if e["type"] == "rep" and e["person"] == main_id]
-        delays = sorted(w - end / fps for w, end in zip(reps, labels))
-        med = delays[len(delays) // 2] if delays else float("nan")
+        reps = [(w, e["t"]) for w, e in events if e["type"] == "rep" and e["person"] == main_id]
+        median = lambda v: sorted(v)[len(v) // 2] if v else float("nan")
+        delays = sorted(w - end / fps for (w, _), end in zip(reps, labels))
+        behind = [w - t for (w, t), _ in zip(reps, labels)]
+        wait = [t - end / fps for (_, t), end in zip(reps, labels)]
         top = delays[-1] if delays else float("nan")
         print(f"| {name} | {len(labels)} | {loops} | {totals.get(main_id, 0)} | {summary['frames']} "
-              f"| {summary['dropped']} | {med:.2f} | {top:.2f} |")
+              f"| {summary['dropped']} | {median(delays):.2f} | {top:.2f} | {median(behind):.2f} "
+              f"| {median(wait):.2f} |")
         sys.stdout.flush()
 
 

@@ -7,7 +7,9 @@ Both are timed without decoding: MediaPipe on frames decoded beforehand
 (PyAV), `mp` by its own per-frame estimator time (`mp extract` reports the
 frames per second of its median frame); MediaPipe's figure is the same
 statistic, 1000 / median ms. The keypoints are compared in pixels on the
-frames where both found a pose (all 33 landmarks).
+frames where both found a pose: all 33 landmarks, and the landmarks
+MediaPipe itself calls visible (visibility > 0.5, as `cargo xtask eval pose`
+counts them; an occluded landmark's place is a guess in both pipelines).
 
     python3 -m venv .cache/venv-mediapipe
     .cache/venv-mediapipe/bin/pip install mediapipe==0.10.21 av
@@ -44,7 +46,7 @@ def mediapipe_run(path):
         r = pose.process(f)
         ms.append(1000 * (time.perf_counter() - t))
         if r.pose_landmarks:
-            kps.append([[p.x * w, p.y * h] for p in r.pose_landmarks.landmark])
+            kps.append([[p.x * w, p.y * h, p.visibility] for p in r.pose_landmarks.landmark])
         else:
             kps.append(None)
     pose.close()
@@ -72,18 +74,22 @@ def main():
     ap.add_argument("videos", nargs="+")
     a = ap.parse_args()
     rows = []
-    all_d = []
+    all_d, all_v = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for v in a.videos:
             name = os.path.splitext(os.path.basename(v))[0]
             ms, kps, mediapipe_wall = mediapipe_run(v)
             fps, pos, conf, mp_wall = mp_run(a.mp, v, os.path.join(tmp, "kp.npz"))
-            d = []
+            d, dv = [], []
             for t, k in enumerate(kps):
                 if k is None or t >= len(pos) or not (conf[t] > 0).any():
                     continue
-                d.extend(np.linalg.norm(np.asarray(k) - pos[t], axis=1).tolist())
+                k = np.asarray(k)
+                e = np.linalg.norm(k[:, :2] - pos[t][:, :2], axis=1)
+                d.extend(e.tolist())
+                dv.extend(e[k[:, 2] > 0.5].tolist())
             all_d.extend(d)
+            all_v.extend(dv)
             mp_fps = 1000.0 / float(np.median(ms))
             row = {
                 "video": name,
@@ -92,13 +98,15 @@ def main():
                 "mediapipe_fps": mp_fps,
                 "ratio": fps / mp_fps,
                 "median_px": float(np.median(d)) if d else None,
+                "median_px_visible": float(np.median(dv)) if dv else None,
                 "mp_wall_s": mp_wall,
                 "mediapipe_wall_s": mediapipe_wall,
             }
             rows.append(row)
             print(
                 f"{name}: mp {fps:.1f} fps, MediaPipe {mp_fps:.1f} fps ({row['ratio']:.2f}x), "
-                f"median {row['median_px'] if d else float('nan'):.2f} px",
+                f"median {row['median_px'] if d else float('nan'):.2f} px "
+                f"(visible {row['median_px_visible'] if dv else float('nan'):.2f} px)",
                 flush=True,
             )
     mp_total = sum(r["frames"] / r["mp_fps"] for r in rows)
@@ -111,9 +119,10 @@ def main():
         "mediapipe_fps": frames / mediapipe_total,
         "ratio": mediapipe_total / mp_total,
         "median_px": float(np.median(all_d)) if all_d else None,
+        "median_px_visible": float(np.median(all_v)) if all_v else None,
         "mp_wall_s": sum(r["mp_wall_s"] for r in rows),
         "mediapipe_wall_s": sum(r["mediapipe_wall_s"] for r in rows),
-        "definition": "fps: from each video's median per-frame time (decoding excluded), pooled as frames / sum(frames / fps); wall: the whole `mp extract` command (start, model loading, decoding on its own thread, every frame) against PyAV decoding plus every process() call; px: 33 landmarks on frames where both found a pose",
+        "definition": "fps: from each video's median per-frame time (decoding excluded), pooled as frames / sum(frames / fps); wall: the whole `mp extract` command (start, model loading, decoding on its own thread, every frame) against PyAV decoding plus every process() call; px: 33 landmarks on frames where both found a pose; px visible: those MediaPipe calls visible (> 0.5)",
     }
     print(json.dumps(summary, indent=1))
     if a.out:
