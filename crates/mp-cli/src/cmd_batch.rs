@@ -11,7 +11,7 @@ use anyhow::{bail, Result};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mp_pipeline::{BatchObserver, BatchSummary, ItemReport, ItemStatus};
-use mp_pipeline::{BatchParams, Stage};
+use mp_pipeline::{BatchParams, SharedModel, Stage};
 
 use crate::progress::ctrl_c_token;
 
@@ -29,6 +29,9 @@ pub struct BatchArgs {
     /// ONNX Runtime threads of each input's pose model; default: the cores divided by the jobs (at least 1).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Whether the jobs share one landmark model that runs the crops of every job's frame together: auto (on a GPU), always or never.
+    #[arg(long, default_value = "auto", value_parser = SharedModel::parse)]
+    pub shared_model: SharedModel,
     #[command(flatten)]
     pub pose: crate::cmd_run::PoseModelOpts,
     /// Largest side of the video frame in pixels, for track inputs (scale = frame / 512); default: from each motion's extent.
@@ -57,6 +60,7 @@ impl BatchArgs {
             threads: self.threads,
             frame_px: self.frame_size,
             fps: self.rate.fps,
+            shared_model: self.shared_model,
             ..BatchParams::default()
         };
         p.params = crate::cmd_run::params_file(self.params.as_deref())?;
@@ -144,6 +148,14 @@ fn print_summary(s: &BatchSummary) {
         s.threads_per_item,
         if s.threads_per_item == 1 { "" } else { "s" }
     );
+    if let Some(m) = s.shared_model {
+        println!(
+            "shared landmark model: {} crops in {} runs ({:.1} crops/s)",
+            m.crops,
+            m.runs,
+            m.crops as f64 / wall.max(1e-9)
+        );
+    }
     println!("Manifest: {}", s.manifest.display());
 }
 

@@ -22,7 +22,7 @@ use mp_geom::{CancelToken, People, PersonId, Track};
 use mp_pose::FrameSource;
 use mp_pose::SessionParams;
 use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
-use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams};
+use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams, SharedLandmarks};
 use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
 use mp_pose::{grey_thumbnail_region, thumbnail_track};
 use mp_pose::{ModelChoice, PoseEstimator};
@@ -64,9 +64,26 @@ pub(crate) struct ModelSlot {
         Box<dyn PoseEstimator + Send>,
     )>,
     multi: Option<MultiPose>,
+    /// A landmark model shared with other slots (a batch's jobs on a GPU),
+    /// which the several-people estimator runs its crops through.
+    shared: Option<SharedLandmarks>,
 }
 
 impl ModelSlot {
+    /// A slot whose several-people estimator runs its landmark model
+    /// through `shared`.
+    pub(crate) fn with_shared(shared: Option<SharedLandmarks>) -> Self {
+        ModelSlot {
+            shared,
+            ..ModelSlot::default()
+        }
+    }
+
+    /// Forgets the loaded models (after a model panicked), keeping the shared one.
+    pub(crate) fn reset(&mut self) {
+        *self = ModelSlot::with_shared(self.shared.take());
+    }
+
     /// The multi-person estimator for `params`, opened when not loaded yet
     /// (or loaded with other settings).
     fn get_multi(&mut self, params: &Params) -> Result<&mut MultiPose> {
@@ -80,6 +97,7 @@ impl ModelSlot {
             pose: BlazePoseParams {
                 model: lm,
                 session: params.pose.session(),
+                shared: self.shared.clone(),
                 ..Default::default()
             },
             people: params.pose.tracker.clone(),

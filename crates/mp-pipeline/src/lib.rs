@@ -55,7 +55,7 @@ use std::time::{Duration, Instant};
 pub use analysis::{analyse_track, concrete_program, count, count_frames};
 pub use batch::{
     batch, batch_items, BatchError, BatchObserver, BatchParams, BatchSummary, ItemReport,
-    ItemStatus,
+    ItemStatus, SharedModel,
 };
 pub use error::PipelineError;
 use error::Result;

@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use mp_geom::{perform, CancelToken, Move, PerformerParams};
 use mp_pipeline::{
     analyse_input, batch, batch_items, run, BatchObserver, BatchParams, Input, ItemReport,
-    ItemStatus, OutputParams, Params, Silent, Stage,
+    ItemStatus, OutputParams, Params, SharedModel, Silent, Stage,
 };
 
 /// A short routine of the procedural performer (2D, pixels).
@@ -497,4 +497,57 @@ fn a_real_video_item() {
     assert!(v.output.join("loops.json").is_file());
     assert!(v.output.join("track.npz").is_file());
     assert!(!v.output.join("overlay.mp4").exists());
+}
+
+/// Two videos whose jobs share one landmark model give the keypoints of
+/// jobs with a model each, and the shared model reports the crops it ran.
+#[test]
+fn jobs_sharing_one_landmark_model_give_their_own_keypoints() {
+    let a = mp_geom::data_or_return!("quva_repetition/videos/023_fitness.mp4");
+    let b = mp_geom::data_or_return!("quva_repetition/videos/020_fitness.mp4");
+    let tmp = tempfile::tempdir().unwrap();
+    let items = vec![a, b];
+    let run_with = |shared: SharedModel, out: &str| {
+        let mut params = quick_params();
+        params.params.pose.max_frames = Some(45);
+        params.jobs = 2;
+        params.shared_model = shared;
+        let out = tmp.path().join(out);
+        let s = batch(&items, &out, &params, &Silent, &CancelToken::new()).unwrap();
+        assert_eq!(s.ok(), 2, "{:?}", s.items);
+        s
+    };
+    let own = run_with(SharedModel::Never, "own");
+    let shared = run_with(SharedModel::Always, "shared");
+    assert_eq!(own.shared_model, None);
+    let stats = shared.shared_model.expect("the jobs shared a model");
+    assert!(stats.crops >= 45, "{stats:?}");
+    assert!(
+        stats.runs <= stats.crops && stats.requests <= stats.crops,
+        "{stats:?}"
+    );
+    for (x, y) in own.items.iter().zip(&shared.items) {
+        let tx = mp_geom::read_track(x.output.join("track.npz")).unwrap();
+        let ty = mp_geom::read_track(y.output.join("track.npz")).unwrap();
+        assert_eq!(tx.n_frames(), ty.n_frames());
+        let (px, py) = (tx.positions(), ty.positions());
+        let (cx, cy) = (tx.confidence(), ty.confidence());
+        let mut compared = 0;
+        for ((f, j), &c) in cx.indexed_iter() {
+            if c > 0.0 && cy[[f, j]] > 0.0 {
+                let d = (px[[f, j, 0]] - py[[f, j, 0]]).hypot(px[[f, j, 1]] - py[[f, j, 1]]);
+                assert!(
+                    d < 0.01,
+                    "{}: frame {f} joint {j} {d} px apart",
+                    x.input.display()
+                );
+                compared += 1;
+            }
+        }
+        assert!(
+            compared > 100,
+            "{}: {compared} keypoints",
+            x.input.display()
+        );
+    }
 }

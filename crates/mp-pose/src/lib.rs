@@ -41,7 +41,7 @@ mod runtime;
 mod thumbs;
 mod video;
 
-pub use blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind};
+pub use blazepose::{BlazePose, BlazePoseParams, LandmarkModelKind, SharedLandmarks, SharedStats};
 pub use error::PoseError;
 pub use extract::{
     extract_file, extract_track, open_estimator, open_estimator_with, ExtractOptions, Extraction,

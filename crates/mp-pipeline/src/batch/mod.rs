@@ -46,6 +46,8 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use mp_geom::CancelToken;
+use mp_pose::{BlazePoseParams, Device, SharedLandmarks, SharedStats};
+use serde::{Deserialize, Serialize};
 
 use crate::error::PipelineError;
 use crate::input::Input;
@@ -164,6 +166,59 @@ pub struct BatchParams {
     pub fps: Option<f64>,
     /// The parameters of every item's [`run`](crate::run). Default [`Params::default()`].
     pub params: Params,
+    /// Whether the jobs share one landmark model, whose runs take the crops
+    /// of every job's current frame together. Default [`SharedModel::Auto`].
+    pub shared_model: SharedModel,
+}
+
+/// Whether a batch's jobs share one landmark model
+/// ([`BatchParams::shared_model`]; `mp batch --shared-model`).
+///
+/// One model run on the crops of several videos keeps a GPU busy where one
+/// run per crop and job would not; on a CPU the model's arithmetic, not the
+/// number of runs, is the cost, and the jobs' own models run side by side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[non_exhaustive]
+pub enum SharedModel {
+    /// Shared when several jobs run the several-people pipeline on a GPU
+    /// (`--device cuda`, or `auto` where ONNX Runtime has CUDA). Default.
+    #[default]
+    Auto,
+    /// Shared whenever several jobs run the several-people pipeline.
+    Always,
+    /// Each job opens its own.
+    Never,
+}
+
+impl SharedModel {
+    /// Parses `auto`, `always` or `never`.
+    pub fn parse(text: &str) -> Result<Self> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(SharedModel::Auto),
+            "always" => Ok(SharedModel::Always),
+            "never" => Ok(SharedModel::Never),
+            other => Err(BatchError::param(
+                "shared_model",
+                format!("must be auto, always or never, got {other:?}"),
+            )),
+        }
+    }
+
+    /// Whether `jobs` jobs running `params` share a landmark model.
+    fn applies(self, params: &Params, jobs: usize) -> bool {
+        let people = params.pose.people && params.pose.model.landmark_model().is_some();
+        let wanted = match self {
+            SharedModel::Never => false,
+            SharedModel::Always => true,
+            SharedModel::Auto => match params.pose.device {
+                Device::Cuda(_) => true,
+                Device::Auto => Device::cuda_available().unwrap_or(false),
+                _ => false,
+            },
+        };
+        wanted && people && jobs > 1
+    }
 }
 
 impl Default for BatchParams {
@@ -174,6 +229,7 @@ impl Default for BatchParams {
             frame_px: None,
             fps: None,
             params: Params::default(),
+            shared_model: SharedModel::Auto,
         }
     }
 }
@@ -226,6 +282,9 @@ pub struct BatchSummary {
     pub jobs: usize,
     /// ONNX Runtime threads of each item's pose model.
     pub threads_per_item: usize,
+    /// What the landmark model the jobs shared did, when they shared one
+    /// ([`BatchParams::shared_model`]).
+    pub shared_model: Option<SharedStats>,
     /// Whether the batch was cancelled (some items then say `cancelled`).
     pub cancelled: bool,
     /// The manifest file.
@@ -350,7 +409,7 @@ fn run_item(
     }));
     if result.is_err() {
         // A model that panicked mid-video is not reused.
-        *slot = crate::ModelSlot::default();
+        slot.reset();
     }
     let seconds = start.elapsed().as_secs_f64();
     match result {
@@ -390,6 +449,30 @@ fn run_item(
             }
         }
     }
+}
+
+/// The landmark model the jobs share ([`BatchParams::shared_model`]), with
+/// the pose settings of `run_params` and the threads of every job.
+fn open_shared(
+    params: &BatchParams,
+    run_params: &Params,
+    jobs: usize,
+) -> Result<Option<SharedLandmarks>> {
+    let Some(model) = run_params.pose.model.landmark_model() else {
+        return Ok(None);
+    };
+    if !params.shared_model.applies(run_params, jobs) {
+        return Ok(None);
+    }
+    let mut session = run_params.pose.session();
+    session.intra_threads = run_params.pose.threads * jobs;
+    let shared = SharedLandmarks::open(&BlazePoseParams {
+        model,
+        session,
+        ..Default::default()
+    })
+    .map_err(|e| BatchError::from(PipelineError::from(e)))?;
+    Ok(Some(shared))
 }
 
 /// Runs every item of `items` into its own folder under `out_dir` (see the
@@ -432,6 +515,7 @@ pub fn batch(
     let threads = params.threads_per_item(jobs);
     let mut run_params = params.params.clone();
     run_params.pose.threads = threads;
+    let shared = open_shared(params, &run_params, jobs)?;
 
     observer.batch_started(items.len(), pending.len());
     for (i, r) in reports.iter().enumerate() {
@@ -447,7 +531,7 @@ pub fn batch(
     std::thread::scope(|s| {
         for _ in 0..jobs {
             s.spawn(|| {
-                let mut slot = crate::ModelSlot::default();
+                let mut slot = crate::ModelSlot::with_shared(shared.clone());
                 loop {
                     if stopped() {
                         break;
@@ -510,6 +594,7 @@ pub fn batch(
         wall: start.elapsed(),
         jobs,
         threads_per_item: threads,
+        shared_model: shared.as_ref().map(SharedLandmarks::stats),
         cancelled: cancel.is_cancelled(),
         manifest: manifest_path,
     })

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use ort::session::{HasSelectedOutputs, OutputSelector, RunOptions, Session};
 
+use super::shared::SharedClient;
 use crate::error::{PoseError, Result};
 use crate::imageops::{crop_u8, extend_f32, Border, RgbView, Roi};
 use crate::runtime::{self, SessionParams};
@@ -200,13 +201,23 @@ pub(crate) fn refine_with_heatmap(
     }
 }
 
+/// Where a [`LandmarkModel`]'s runs happen.
+enum Backend {
+    /// Its own ONNX Runtime session.
+    Own {
+        session: Session,
+        /// Asks only for the outputs this crate reads (ONNX Runtime still
+        /// runs a mask head that is in the graph: the estimators therefore
+        /// open the model without it, [`crate::runtime::ModelFile::without_mask`]).
+        run_options: RunOptions<HasSelectedOutputs>,
+    },
+    /// The model of a [`super::SharedLandmarks`], on its own thread.
+    Shared(SharedClient),
+}
+
 /// The landmark model: an ONNX session plus pre- and post-processing.
 pub struct LandmarkModel {
-    session: Session,
-    /// Asks only for the outputs this crate reads (ONNX Runtime still runs
-    /// a mask head that is in the graph: the estimators therefore open the
-    /// model without it, [`crate::runtime::ModelFile::without_mask`]).
-    run_options: RunOptions<HasSelectedOutputs>,
+    backend: Backend,
     name: String,
     kind: LandmarkModelKind,
     refine: RefineParams,
@@ -246,8 +257,10 @@ impl LandmarkModel {
                     .with(WORLD_NAME),
             );
         Ok(LandmarkModel {
-            session,
-            run_options,
+            backend: Backend::Own {
+                session,
+                run_options,
+            },
             name,
             kind,
             refine,
@@ -260,6 +273,11 @@ impl LandmarkModel {
     /// Which model this is.
     pub fn kind(&self) -> LandmarkModelKind {
         self.kind
+    }
+
+    /// Its heatmap refinement.
+    pub(crate) fn refine_params(&self) -> RefineParams {
+        self.refine
     }
 
     /// Whether one run takes several crops ([`LandmarkModel::run_many`]
@@ -282,14 +300,45 @@ impl LandmarkModel {
         })
     }
 
+    /// A model whose runs go to `shared` (see [`SharedLandmarks`]).
+    pub(crate) fn client(
+        shared: SharedClient,
+        name: String,
+        kind: LandmarkModelKind,
+        refine: RefineParams,
+        batch_open: bool,
+    ) -> Self {
+        LandmarkModel {
+            backend: Backend::Shared(shared),
+            name,
+            kind,
+            refine,
+            batch_open,
+            crop: Vec::new(),
+            input: Vec::new(),
+        }
+    }
+
+    /// The file the model was read from.
+    pub(crate) fn name(&self) -> &str {
+        &self.name
+    }
+
     /// Runs the model once on `count` prepared crops laid end to end
-    /// (`[count, 256, 256, 3]`); the results in the same order.
-    fn run_batch(&mut self, input: &[f32], count: usize) -> Result<Vec<LandmarkOutput>> {
+    /// (`[count, 256, 256, 3]`); the results in the same order. A model
+    /// shared with other threads sends the crops to the thread that runs it.
+    pub(crate) fn run_batch(&mut self, input: &[f32], count: usize) -> Result<Vec<LandmarkOutput>> {
+        let (session, run_options) = match &mut self.backend {
+            Backend::Own {
+                session,
+                run_options,
+            } => (session, &*run_options),
+            Backend::Shared(shared) => return shared.run(input, count),
+        };
         let n = LANDMARK_INPUT;
         let tensor = runtime::image_batch_tensor(input, count, n, &self.name, "landmark")?;
-        let outputs = self
-            .session
-            .run_with_options(ort::inputs![INPUT_NAME => tensor], &self.run_options)
+        let outputs = session
+            .run_with_options(ort::inputs![INPUT_NAME => tensor], run_options)
             .map_err(|e| PoseError::model(&self.name, e))?;
         let heat_len = HEATMAP_SIZE * HEATMAP_SIZE * NUM_LANDMARKS_ALL;
         let raw = runtime::output_f32(&outputs, &self.name, LANDMARKS_NAME, 195 * count)?;

@@ -12,6 +12,7 @@
 
 pub mod detector;
 pub mod landmarks;
+mod shared;
 
 use std::path::PathBuf;
 
@@ -26,6 +27,7 @@ use crate::video::Frame;
 
 pub use detector::{DetectorParams, PoseDetector};
 pub use landmarks::{LandmarkModel, LandmarkModelKind, LandmarkOutput, RefineParams};
+pub use shared::{SharedLandmarks, SharedStats};
 
 /// Index of the first auxiliary landmark (crop centre for tracking).
 pub(crate) const AUX_CENTER: usize = 33;
@@ -68,6 +70,10 @@ pub struct BlazePoseParams {
     pub session: SessionParams,
     /// Folder of the ONNX files; `None` = the usual search (see `runtime::model_dirs`).
     pub model_dir: Option<PathBuf>,
+    /// A landmark model shared with estimators on other threads, run there
+    /// instead of one of this estimator's own (its `model` must be this
+    /// one's; its refinement and session are its own). Default `None`.
+    pub shared: Option<SharedLandmarks>,
 }
 
 impl Default for BlazePoseParams {
@@ -84,11 +90,25 @@ impl Default for BlazePoseParams {
             fixed_frame_interval_s: None,
             session: SessionParams::default(),
             model_dir: None,
+            shared: None,
         }
     }
 }
 
 impl BlazePoseParams {
+    /// The landmark model: the shared one's, else one of its own.
+    pub(crate) fn landmark_model(&self) -> Result<LandmarkModel> {
+        match &self.shared {
+            Some(shared) => shared.model(self.model),
+            None => LandmarkModel::open(
+                &self.model_path(self.model.file())?,
+                self.model,
+                self.refine,
+                &self.session,
+            ),
+        }
+    }
+
     /// Checks every value.
     pub fn validate(&self) -> Result<()> {
         self.detector.validate()?;
@@ -178,10 +198,8 @@ impl BlazePose {
     pub fn new(params: BlazePoseParams) -> Result<Self> {
         params.validate()?;
         let det_path = params.model_path(ModelFile::PoseDetection)?;
-        let lm_path = params.model_path(params.model.file())?;
         let detector = PoseDetector::open(&det_path, params.detector, &params.session)?;
-        let landmarks =
-            LandmarkModel::open(&lm_path, params.model, params.refine, &params.session)?;
+        let landmarks = params.landmark_model()?;
         Ok(BlazePose {
             name: format!("blazepose-{}", params.model.as_str()),
             aux_filter: PointsFilter::new(params.aux_filter),

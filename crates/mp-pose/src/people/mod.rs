@@ -75,14 +75,8 @@ impl MultiPose {
     pub fn new(params: MultiPoseParams) -> Result<Self> {
         params.validate()?;
         let det_path = params.pose.model_path(ModelFile::PoseDetection)?;
-        let lm_path = params.pose.model_path(params.pose.model.file())?;
         let detector = PoseDetector::open(&det_path, params.pose.detector, &params.pose.session)?;
-        let landmarks = LandmarkModel::open(
-            &lm_path,
-            params.pose.model,
-            params.pose.refine,
-            &params.pose.session,
-        )?;
+        let landmarks = params.pose.landmark_model()?;
         Ok(MultiPose {
             name: format!("blazepose-{}-people", params.pose.model.as_str()),
             params,

@@ -403,3 +403,87 @@ fn wrong_model_file_breaks_the_contract() {
         "{msg}"
     );
 }
+
+/// A landmark model shared by estimators on several threads gives each
+/// crop the values of a model of its own, runs crops that arrive together
+/// in one run, and refuses an estimator that asks for another model.
+#[test]
+fn shared_model_gives_each_thread_its_own_crops_values() {
+    use crate::blazepose::{BlazePose, BlazePoseParams, SharedLandmarks};
+    use std::time::Duration;
+
+    let (w, h) = (320usize, 240usize);
+    let data: Vec<u8> = (0..w * h * 3)
+        .map(|i| {
+            let (p, c) = (i / 3, i % 3);
+            let (x, y) = (p % w, p / w);
+            ((5 * x + 11 * y + 70 * c + (x * y) / 53) % 256) as u8
+        })
+        .collect();
+    let image = RgbView {
+        width: w,
+        height: h,
+        data: &data,
+    };
+    let roi = |k: usize| Roi {
+        center_x_px: 80.0 + 20.0 * k as f64,
+        center_y_px: 120.0,
+        width_px: 150.0,
+        height_px: 150.0,
+        rotation_rad: 0.3 * k as f64 - 0.5,
+    };
+    let cut = runtime::run_model_path(ModelFile::LandmarkFull).unwrap();
+    let open = || {
+        LandmarkModel::open(
+            &cut,
+            LandmarkModelKind::Full,
+            RefineParams::default(),
+            &SessionParams::default(),
+        )
+        .unwrap()
+    };
+    let mut own = open();
+    let expected: Vec<_> = (0..6).map(|k| own.run(image, &roi(k)).unwrap()).collect();
+    // A long wait, so that the threads' crops meet in one batch.
+    let shared = SharedLandmarks::start(open(), 8, Duration::from_millis(200)).unwrap();
+    let got: Vec<Vec<_>> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..3)
+            .map(|t| {
+                let mut m = shared.model(LandmarkModelKind::Full).unwrap();
+                s.spawn(move || m.run_many(image, &[roi(2 * t), roi(2 * t + 1)]).unwrap())
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for (t, outs) in got.iter().enumerate() {
+        assert_eq!(outs.len(), 2, "thread {t}");
+        for (j, x) in outs.iter().enumerate() {
+            let y = &expected[2 * t + j];
+            assert!(
+                (x.pose_presence - y.pose_presence).abs() < 1e-4,
+                "crop {t}/{j}"
+            );
+            for (p, q) in x.landmarks.iter().zip(&y.landmarks) {
+                assert!(
+                    ((p.x - q.x) * 256.0).abs() < 1e-2 && ((p.y - q.y) * 256.0).abs() < 1e-2,
+                    "crop {t}/{j}: {p:?} vs {q:?}"
+                );
+            }
+        }
+    }
+    let stats = shared.stats();
+    assert_eq!((stats.requests, stats.crops), (3, 6));
+    assert!(
+        stats.runs < 3,
+        "the three requests ran in {} runs",
+        stats.runs
+    );
+    // An estimator asking for another model is refused by name.
+    let lite = BlazePose::new(BlazePoseParams {
+        model: LandmarkModelKind::Lite,
+        shared: Some(shared.clone()),
+        ..Default::default()
+    });
+    let err = lite.err().expect("a lite estimator on a full shared model");
+    assert!(err.to_string().contains("full"), "{err}");
+}
