@@ -256,8 +256,8 @@ impl LandmarkModel {
                     .with(HEATMAP_NAME)
                     .with(WORLD_NAME),
             );
-        Ok(LandmarkModel {
-            backend: Backend::Own {
+        Ok(Self::with_backend(
+            Backend::Own {
                 session,
                 run_options,
             },
@@ -265,9 +265,7 @@ impl LandmarkModel {
             kind,
             refine,
             batch_open,
-            crop: Vec::new(),
-            input: Vec::new(),
-        })
+        ))
     }
 
     /// Which model this is.
@@ -308,8 +306,18 @@ impl LandmarkModel {
         refine: RefineParams,
         batch_open: bool,
     ) -> Self {
+        Self::with_backend(Backend::Shared(shared), name, kind, refine, batch_open)
+    }
+
+    fn with_backend(
+        backend: Backend,
+        name: String,
+        kind: LandmarkModelKind,
+        refine: RefineParams,
+        batch_open: bool,
+    ) -> Self {
         LandmarkModel {
-            backend: Backend::Shared(shared),
+            backend,
             name,
             kind,
             refine,

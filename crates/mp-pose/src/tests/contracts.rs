@@ -266,19 +266,25 @@ fn landmark_models_without_mask_give_the_same_values() {
     check_without_mask(LandmarkModelKind::Lite, ModelFile::LandmarkLite);
 }
 
+/// An RGB image of `w × h` whose value at (x, y, c) is
+/// `(a·x + b·y + k·c + x·y / d) mod 256`, for `[a, b, k, d]`: no two crops alike.
+fn busy_image(w: usize, h: usize, [a, b, k, d]: [usize; 4]) -> Vec<u8> {
+    (0..w * h * 3)
+        .map(|i| {
+            let (p, c) = (i / 3, i % 3);
+            let (x, y) = (p % w, p / w);
+            ((a * x + b * y + k * c + (x * y) / d) % 256) as u8
+        })
+        .collect()
+}
+
 /// Several crops in one run of the landmark model (the cut model's batch is
 /// open) give each crop's values from a run of its own, and a model whose
 /// batch is closed runs them one by one.
 #[test]
 fn several_crops_in_one_run_give_each_crops_values() {
     let (w, h) = (512usize, 384usize);
-    let data: Vec<u8> = (0..w * h * 3)
-        .map(|i| {
-            let (p, c) = (i / 3, i % 3);
-            let (x, y) = (p % w, p / w);
-            ((7 * x + 3 * y + 60 * c + (x * y) / 97) % 256) as u8
-        })
-        .collect();
+    let data = busy_image(w, h, [7, 3, 60, 97]);
     let image = RgbView {
         width: w,
         height: h,
@@ -413,13 +419,7 @@ fn shared_model_gives_each_thread_its_own_crops_values() {
     use std::time::Duration;
 
     let (w, h) = (320usize, 240usize);
-    let data: Vec<u8> = (0..w * h * 3)
-        .map(|i| {
-            let (p, c) = (i / 3, i % 3);
-            let (x, y) = (p % w, p / w);
-            ((5 * x + 11 * y + 70 * c + (x * y) / 53) % 256) as u8
-        })
-        .collect();
+    let data = busy_image(w, h, [5, 11, 70, 53]);
     let image = RgbView {
         width: w,
         height: h,
