@@ -138,3 +138,15 @@ pub fn pipeline(e: mp_pipeline::PipelineError) -> PyErr {
         _ => MpError::new_err(msg),
     }
 }
+
+/// A batch error: its parameters (`ParamError`), its run parameters (as
+/// [`pipeline`]), or an output folder or manifest it cannot write (`OutputError`).
+pub fn batch(e: mp_pipeline::BatchError) -> PyErr {
+    use mp_pipeline::BatchError as B;
+    let msg = e.to_string();
+    match e {
+        B::Param { .. } => ParamError::new_err(msg),
+        B::Pipeline(p) => pipeline(p),
+        _ => OutputError::new_err(msg),
+    }
+}

@@ -7,6 +7,7 @@
 //! per error family, all deriving from `MpError`). Build it with
 //! `maturin build` (see `crates/mp-py/pyproject.toml`).
 
+mod batch;
 mod errors;
 mod live;
 mod people;
@@ -438,6 +439,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(predict, m)?)?;
     m.add_function(wrap_pyfunction!(refine, m)?)?;
     m.add_function(wrap_pyfunction!(run::run, m)?)?;
+    m.add_function(wrap_pyfunction!(batch::batch, m)?)?;
     m.add_function(wrap_pyfunction!(live::live, m)?)?;
     m.add_function(wrap_pyfunction!(run::grammar_symbols, m)?)?;
     m.add_function(wrap_pyfunction!(run::grammar_learn, m)?)?;

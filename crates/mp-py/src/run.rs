@@ -370,7 +370,7 @@ pub fn run(
 }
 
 /// `overlay_video=` and `report=` where given.
-fn output_args(params: &mut Params, overlay_video: Option<bool>, report: Option<bool>) {
+pub(crate) fn output_args(params: &mut Params, overlay_video: Option<bool>, report: Option<bool>) {
     if let Some(v) = overlay_video {
         params.output.overlay_video = v;
     }

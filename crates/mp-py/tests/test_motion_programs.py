@@ -3,6 +3,7 @@ programs and counts, bad input as clear exceptions, the GIL released while
 Rust works."""
 
 import json
+import pathlib
 import pickle
 import subprocess
 import threading
@@ -155,6 +156,37 @@ def test_run_writes_what_mp_run_writes(performer, mp_bin, tmp_path):
     np.testing.assert_array_equal(s2.track.positions, s.track.positions)
     assert s.report is not None and s.program is not None
     assert [n for n, _, _ in s.stages][:2] == ["concrete", "abstract"]
+
+
+def test_batch_writes_what_mp_batch_writes_and_resumes(performer, mp_bin, tmp_path):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("a.npz", "b.npz"):
+        (folder / name).write_bytes(performer.read_bytes())
+    s = mp.batch(folder, tmp_path / "py", jobs=2, report=False)
+    assert (s["ok"], s["failed"], s["skipped"], s["jobs"]) == (2, 0, 0, 2)
+    assert s["shared_model"] is None  # tracks: no pose model to share
+    assert [pathlib.Path(i["input"]).name for i in s["items"]] == ["a.npz", "b.npz"]
+    run_cli(mp_bin, "batch", folder, "--out", tmp_path / "cli", "-j", 2, "--quiet")
+    for item in s["items"]:
+        stem = pathlib.Path(item["output"]).name
+        a = json.loads((tmp_path / "py" / stem / "loops.json").read_text())
+        b = json.loads((tmp_path / "cli" / stem / "loops.json").read_text())
+        assert a["repetitions"] == b["repetitions"], stem
+        assert item["total_repetitions"] == a["repetitions"]["total"] > 0
+    # Run again: everything is complete, so everything is skipped.
+    again = mp.batch(folder, tmp_path / "py", jobs=2, report=False)
+    assert (again["ok"], again["skipped"]) == (0, 2)
+    # A list of paths with a corrupt file: that one fails, the other runs.
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"not a zip archive")
+    mixed = mp.batch([folder / "a.npz", bad], tmp_path / "mixed", report=False)
+    assert (mixed["ok"], mixed["failed"]) == (1, 1)
+    assert mixed["items"][1]["status"] == "failed" and "bad.npz" in mixed["items"][1]["error"]
+    with pytest.raises(mp.ParamError, match="shared_model"):
+        mp.batch(folder, tmp_path / "x", shared_model="sometimes")
+    with pytest.raises(mp.ParamError, match="jobs"):
+        mp.batch(folder, tmp_path / "y", jobs=0)
 
 
 def test_extract_a_video(data, mp_bin, tmp_path):

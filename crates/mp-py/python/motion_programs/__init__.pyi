@@ -295,6 +295,26 @@ def run(
     device: Optional[str] = None,
     params: Optional[dict[str, Any]] = None,
 ) -> Summary: ...
+def batch(
+    inputs: Union[PathArg, list[PathArg]],
+    out_dir: PathArg,
+    jobs: int = 1,
+    threads: Optional[int] = None,
+    shared_model: str = "auto",
+    model: Optional[str] = None,
+    max_frames: Optional[int] = None,
+    all_joints: bool = False,
+    frame_size: Optional[float] = None,
+    fps: Optional[float] = None,
+    overlay_video: Optional[bool] = None,
+    report: Optional[bool] = None,
+    person: Optional[PersonArg] = None,
+    max_people: Optional[int] = None,
+    single_person: bool = False,
+    pose_fps: Union[float, str, None] = None,
+    device: Optional[str] = None,
+    params: Optional[dict[str, Any]] = None,
+) -> dict[str, Any]: ...
 def default_params() -> dict[str, Any]: ...
 def grammar_symbols(track: TrackLike, k: Optional[int] = None, seed: Optional[int] = None) -> dict[str, Any]: ...
 def grammar_learn(symbols: dict[str, Any], seed: Optional[int] = None) -> dict[str, Any]: ...
