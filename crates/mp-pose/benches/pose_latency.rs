@@ -3,7 +3,9 @@
 //! (crop from the previous frame's landmarks + landmark model + refinement),
 //! and the several-people estimator at 30 fps on one person and on two (the
 //! frame beside itself), its tile searches and detector checks included at
-//! their rates.
+//! their rates; and four threads' crops through one shared landmark model
+//! against a model each (`shared_landmarks`: one iteration is a frame of two
+//! crops on every thread, so crops per second = 8 / its time).
 //!
 //! Needs `cargo xtask setup`; uses frame 0 of the shared golf video (a grey
 //! frame when the shared data is absent).
@@ -16,7 +18,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use mp_pose::roi_from_points;
-use mp_pose::{BlazePose, BlazePoseParams, LandmarkModelKind};
+use mp_pose::{BlazePose, BlazePoseParams, LandmarkModel, LandmarkModelKind, SharedLandmarks};
 use mp_pose::{Frame, VideoReader};
 use mp_pose::{MoveNet, MoveNetParams, MultiPose, MultiPoseParams, PoseEstimator};
 
@@ -123,5 +125,68 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// Four threads, each running the landmark model on two crops of the frame
+/// per iteration, through `models` (one per thread).
+fn four_threads(
+    frame: &Frame,
+    rois: &[mp_pose::Roi; 2],
+    models: Vec<&mut LandmarkModel>,
+) -> Duration {
+    let start = std::time::Instant::now();
+    std::thread::scope(|s| {
+        for m in models {
+            s.spawn(|| black_box(m.run_many(frame.view(), rois).expect("landmarks")));
+        }
+    });
+    start.elapsed()
+}
+
+fn bench_shared(c: &mut Criterion) {
+    let frame = frame();
+    let (w, h) = (frame.width as f64, frame.height as f64);
+    let side = w.min(h) * 0.8;
+    let roi = |cx: f64| mp_pose::Roi {
+        center_x_px: cx,
+        center_y_px: h / 2.0,
+        width_px: side,
+        height_px: side,
+        rotation_rad: 0.0,
+    };
+    let rois = [roi(w * 0.4), roi(w * 0.6)];
+    let mut g = c.benchmark_group("shared_landmarks");
+    g.sample_size(20)
+        .measurement_time(Duration::from_secs(8))
+        .warm_up_time(Duration::from_secs(2));
+    let params = BlazePoseParams::default();
+    let shared =
+        SharedLandmarks::open(&params).expect("the landmark model (run `cargo xtask setup`)");
+    let mut clients: Vec<LandmarkModel> = (0..4).map(|_| shared.model()).collect();
+    g.bench_function("four_threads_one_model", |b| {
+        b.iter_custom(|iters| {
+            (0..iters)
+                .map(|_| four_threads(&frame, &rois, clients.iter_mut().collect()))
+                .sum()
+        })
+    });
+    drop(clients);
+    let mut own: Vec<BlazePose> = (0..4)
+        .map(|_| BlazePose::new(params.clone()).expect("BlazePose"))
+        .collect();
+    g.bench_function("four_threads_a_model_each", |b| {
+        b.iter_custom(|iters| {
+            (0..iters)
+                .map(|_| {
+                    four_threads(
+                        &frame,
+                        &rois,
+                        own.iter_mut().map(BlazePose::landmarks_mut).collect(),
+                    )
+                })
+                .sum()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_shared);
 criterion_main!(benches);

@@ -99,7 +99,7 @@ impl BlazePoseParams {
     /// The landmark model: the shared one's, else one of its own.
     pub(crate) fn landmark_model(&self) -> Result<LandmarkModel> {
         match &self.shared {
-            Some(shared) => shared.model(self.model),
+            Some(shared) => shared.model_for(self.model),
             None => LandmarkModel::open(
                 &self.model_path(self.model.file())?,
                 self.model,

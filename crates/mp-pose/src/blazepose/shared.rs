@@ -125,9 +125,26 @@ impl SharedLandmarks {
         }
     }
 
-    /// A landmark model whose runs go to this one, for an estimator that
-    /// asks for `kind` (an error names both when they differ).
-    pub(crate) fn model(&self, kind: LandmarkModelKind) -> Result<LandmarkModel> {
+    /// A landmark model whose runs go to this one (for a thread of its own:
+    /// its `run` and `run_many` wait for the shared run their crops join).
+    pub fn model(&self) -> LandmarkModel {
+        let client = SharedClient {
+            tx: self.tx.clone(),
+            shared: Arc::clone(&self.shared),
+        };
+        LandmarkModel::client(
+            client,
+            self.shared.name.clone(),
+            self.shared.kind,
+            self.shared.refine,
+            // The estimator sends every crop of a frame at once.
+            true,
+        )
+    }
+
+    /// [`SharedLandmarks::model`] for an estimator that asks for `kind` (an
+    /// error names both when they differ).
+    pub(crate) fn model_for(&self, kind: LandmarkModelKind) -> Result<LandmarkModel> {
         if kind != self.shared.kind {
             return Err(PoseError::param(
                 "shared",
@@ -138,18 +155,7 @@ impl SharedLandmarks {
                 ),
             ));
         }
-        let client = SharedClient {
-            tx: self.tx.clone(),
-            shared: Arc::clone(&self.shared),
-        };
-        Ok(LandmarkModel::client(
-            client,
-            self.shared.name.clone(),
-            self.shared.kind,
-            self.shared.refine,
-            // The estimator sends every crop of a frame at once.
-            true,
-        ))
+        Ok(self.model())
     }
 }
 

@@ -449,7 +449,7 @@ fn shared_model_gives_each_thread_its_own_crops_values() {
     let got: Vec<Vec<_>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..3)
             .map(|t| {
-                let mut m = shared.model(LandmarkModelKind::Full).unwrap();
+                let mut m = shared.model();
                 s.spawn(move || m.run_many(image, &[roi(2 * t), roi(2 * t + 1)]).unwrap())
             })
             .collect();
