@@ -80,6 +80,13 @@ impl Tally {
         self.total
     }
 
+    /// Counts `n` repetitions reported elsewhere as this tally's first ones
+    /// (the scene's, which a person takes over): the next one reported is `n` later.
+    pub(crate) fn add_earlier(&mut self, n: usize) {
+        self.total += n;
+        self.cycles += n as f64;
+    }
+
     /// Whether a window ending at stream frame `back` is due to be counted.
     pub(crate) fn due(&self, back: Option<usize>) -> bool {
         match (back, self.last_counted) {
@@ -159,6 +166,12 @@ impl OnlineCounter {
     /// Repetitions reported so far.
     pub fn total(&self) -> usize {
         self.tally.total()
+    }
+
+    /// Takes `n` repetitions counted before this counter's first as its own
+    /// first ones: its next repetition is reported `n` later.
+    pub fn add_earlier(&mut self, n: usize) {
+        self.tally.add_earlier(n);
     }
 
     /// Stream frames in the window now.
@@ -289,6 +302,34 @@ mod tests {
                 assert!(r.end_frame > reps[k - 1].end_frame, "{reps:?}");
             }
         }
+    }
+
+    #[test]
+    fn repetitions_taken_over_come_first_and_none_is_skipped() {
+        let (fps, period, frames) = (30.0, 30.0, 300);
+        let params = LiveParams::default();
+        let mut c = OnlineCounter::new(fps, Skeleton::coco17(), &params);
+        let mut reps = Vec::new();
+        for f in 0..frames {
+            let (p, v) = pose(f, period);
+            c.push(f, p, v);
+            let new = c.update(&params).unwrap();
+            if reps.is_empty() && !new.is_empty() {
+                // Two repetitions counted elsewhere before these.
+                c.add_earlier(2);
+                reps.extend(new.into_iter().map(|r| Repetition {
+                    count: r.count + 2,
+                    ..r
+                }));
+            } else {
+                reps.extend(new);
+            }
+        }
+        reps.extend(c.finish(&params).unwrap());
+        let offline = offline_total(frames, period, fps);
+        assert_eq!(c.total(), offline + 2);
+        let counts: Vec<usize> = reps.iter().map(|r| r.count).collect();
+        assert_eq!(counts, (3..=offline + 2).collect::<Vec<_>>());
     }
 
     #[test]
