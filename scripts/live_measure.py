@@ -82,7 +82,7 @@ def main():
         # The least delay of a counter that must see the motion repeat: the
         # first repetition reached at the end of the second, the others at their end.
         ends = [end / fps for end in labels]
-        bound.extend([ends[1] - ends[0]] + [0.0] * (len(ends) - 2) if len(ends) > 1 else [])
+        bound.extend([ends[1] - ends[0]] + [0.0] * (len(ends) - 1) if len(ends) > 1 else [])
         print(f"| {name} | {len(labels)} | {loops} | {totals.get(main_id, 0)} | {summary['frames']} "
               f"| {summary['dropped']} | {median(delays):.2f} | {top:.2f} | {median(behind):.2f} "
               f"| {median(wait):.2f} |")
