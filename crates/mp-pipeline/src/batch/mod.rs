@@ -182,7 +182,7 @@ pub struct BatchParams {
 #[non_exhaustive]
 pub enum SharedModel {
     /// Shared when several jobs run the several-people pipeline on a GPU
-    /// (`--device cuda`, or `auto` where ONNX Runtime has CUDA). Default.
+    /// (`--device cuda`, or `auto` where a GPU takes the model). Default.
     #[default]
     Auto,
     /// Shared whenever several jobs run the several-people pipeline.
@@ -203,21 +203,6 @@ impl SharedModel {
                 format!("must be auto, always or never, got {other:?}"),
             )),
         }
-    }
-
-    /// Whether `jobs` jobs running `params` share a landmark model.
-    fn applies(self, params: &Params, jobs: usize) -> bool {
-        let people = params.pose.people && params.pose.model.landmark_model().is_some();
-        let wanted = match self {
-            SharedModel::Never => false,
-            SharedModel::Always => true,
-            SharedModel::Auto => match params.pose.device {
-                Device::Cuda(_) => true,
-                Device::Auto => Device::cuda_available().unwrap_or(false),
-                _ => false,
-            },
-        };
-        wanted && people && jobs > 1
     }
 }
 
@@ -458,21 +443,35 @@ fn open_shared(
     run_params: &Params,
     jobs: usize,
 ) -> Result<Option<SharedLandmarks>> {
-    let Some(model) = run_params.pose.model.landmark_model() else {
+    let pose = &run_params.pose;
+    let Some(model) = pose.model.landmark_model() else {
         return Ok(None);
     };
-    if !params.shared_model.applies(run_params, jobs) {
+    if !pose.people || jobs < 2 {
         return Ok(None);
     }
-    let mut session = run_params.pose.session();
-    session.intra_threads = run_params.pose.threads * jobs;
-    let shared = SharedLandmarks::open(&BlazePoseParams {
-        model,
-        session,
-        ..Default::default()
-    })
-    .map_err(|e| BatchError::from(PipelineError::from(e)))?;
-    Ok(Some(shared))
+    let mut session = pose.session();
+    session.intra_threads = pose.threads * jobs;
+    let open = |session| {
+        SharedLandmarks::open(&BlazePoseParams {
+            model,
+            session,
+            ..Default::default()
+        })
+    };
+    let err = |e| BatchError::from(PipelineError::from(e));
+    match (params.shared_model, session.device) {
+        (SharedModel::Never, _) => Ok(None),
+        (SharedModel::Always, _) | (SharedModel::Auto, Device::Cuda(_)) => {
+            Ok(Some(open(session).map_err(err)?))
+        }
+        // On the GPU where one takes the model; else a model per job.
+        (SharedModel::Auto, Device::Auto) => {
+            session.device = Device::Cuda(0);
+            Ok(open(session).ok())
+        }
+        (SharedModel::Auto, _) => Ok(None),
+    }
 }
 
 /// Runs every item of `items` into its own folder under `out_dir` (see the
