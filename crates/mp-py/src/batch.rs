@@ -51,12 +51,14 @@ pub fn batch<'py>(
     device: Option<&str>,
     params: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let mut run_params =
-        crate::params_from(params, model, None, max_frames, all_joints, None, None)?;
-    crate::pose_rate_arg(&mut run_params, pose_fps)?;
-    crate::device_arg(&mut run_params, device)?;
-    crate::run::output_args(&mut run_params, overlay_video, report);
-    crate::people::apply(&mut run_params, person, max_people, single_person)?;
+    let run_params = crate::run::run_params(
+        params,
+        (model, None, max_frames, all_joints),
+        (overlay_video, report),
+        (person, max_people, single_person),
+        pose_fps,
+        device,
+    )?;
     let items = items_of(inputs)?;
     let bp = BatchParams {
         jobs,

@@ -355,12 +355,14 @@ pub fn run(
     device: Option<&str>,
     params: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PySummary> {
-    let mut params =
-        crate::params_from(params, model, threads, max_frames, all_joints, None, None)?;
-    crate::pose_rate_arg(&mut params, pose_fps)?;
-    crate::device_arg(&mut params, device)?;
-    output_args(&mut params, overlay_video, report);
-    crate::people::apply(&mut params, person, max_people, single_person)?;
+    let params = run_params(
+        params,
+        (model, threads, max_frames, all_joints),
+        (overlay_video, report),
+        (person, max_people, single_person),
+        pose_fps,
+        device,
+    )?;
     let input = input_of(source, frame_size)?;
     let dir = out_dir.clone();
     let s = py
@@ -369,8 +371,30 @@ pub fn run(
     Ok(PySummary::of_run(s, out_dir))
 }
 
+/// The parameters of `run`, `Analyser` and `batch`: `params` (the dict of
+/// `default_params()`, partial or whole) with the keywords given on top —
+/// the pose model `(model, threads, max_frames, all_joints)`, the outputs
+/// `(overlay_video, report)`, the people `(person, max_people,
+/// single_person)`, `pose_fps` and `device`.
+pub(crate) fn run_params(
+    params: Option<&Bound<'_, PyAny>>,
+    (model, threads, max_frames, all_joints): (Option<&str>, Option<usize>, Option<usize>, bool),
+    (overlay_video, report): (Option<bool>, Option<bool>),
+    (person, max_people, single_person): (Option<&Bound<'_, PyAny>>, Option<usize>, bool),
+    pose_fps: Option<&Bound<'_, PyAny>>,
+    device: Option<&str>,
+) -> PyResult<Params> {
+    let mut params =
+        crate::params_from(params, model, threads, max_frames, all_joints, None, None)?;
+    crate::pose_rate_arg(&mut params, pose_fps)?;
+    crate::device_arg(&mut params, device)?;
+    output_args(&mut params, overlay_video, report);
+    crate::people::apply(&mut params, person, max_people, single_person)?;
+    Ok(params)
+}
+
 /// `overlay_video=` and `report=` where given.
-pub(crate) fn output_args(params: &mut Params, overlay_video: Option<bool>, report: Option<bool>) {
+fn output_args(params: &mut Params, overlay_video: Option<bool>, report: Option<bool>) {
     if let Some(v) = overlay_video {
         params.output.overlay_video = v;
     }
@@ -423,12 +447,14 @@ impl PyAnalyser {
         device: Option<&str>,
         params: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let mut params =
-            crate::params_from(params, model, threads, max_frames, all_joints, None, None)?;
-        crate::pose_rate_arg(&mut params, pose_fps)?;
-        crate::device_arg(&mut params, device)?;
-        output_args(&mut params, overlay_video, report);
-        crate::people::apply(&mut params, person, max_people, single_person)?;
+        let params = run_params(
+            params,
+            (model, threads, max_frames, all_joints),
+            (overlay_video, report),
+            (person, max_people, single_person),
+            pose_fps,
+            device,
+        )?;
         Ok(PyAnalyser {
             inner: Mutex::new(Analyser::new(params).map_err(errors::pipeline)?),
         })
