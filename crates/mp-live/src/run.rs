@@ -75,8 +75,6 @@ struct State {
     out: Option<String>,
     /// The scene's counter, until a person's first repetition.
     scene: Option<SceneCounter>,
-    /// The repetitions the scene reported.
-    scene_reps: Vec<Repetition>,
 }
 
 impl State {
@@ -120,20 +118,23 @@ impl State {
         }
     }
 
-    /// The scene's repetitions that a person takes over with their first
-    /// ones, `reps` (see [`scene_before`]): only the first person whose
-    /// repetitions are counted while the scene is still counted does.
-    fn scene_for(&self, reps: &[Repetition]) -> Vec<Repetition> {
-        match reps.first() {
-            Some(r) if r.count == 1 && self.scene.is_some() => scene_before(&self.scene_reps, r),
+    /// Reports `reps`, the new repetitions of person `id` (track `key`).
+    /// The first person whose repetitions are counted while the scene still
+    /// is takes over the scene's that are theirs ([`SceneCounter::before`]):
+    /// those come first in their running total, and their counter (when
+    /// still tracked) goes on after them.
+    fn report_person(&mut self, id: u32, key: u64, reps: Vec<Repetition>, sink: &mut dyn Sink) {
+        let earlier = match (reps.first(), &self.scene) {
+            (Some(first), Some(scene)) if first.count == 1 => scene.before(first),
             _ => Vec::new(),
+        };
+        if let Some(tr) = self.tracks.get_mut(&key) {
+            tr.counter.add_earlier(earlier.len());
         }
+        self.report(id, with_earlier(earlier, reps), sink);
     }
 
     fn report(&mut self, id: u32, reps: Vec<Repetition>, sink: &mut dyn Sink) {
-        if id == Event::SCENE {
-            self.scene_reps.extend(reps.iter().copied());
-        }
         if id != Event::SCENE && !reps.is_empty() {
             // A person's repetitions are counted: the scene's count stops where it is.
             self.scene = None;
@@ -167,27 +168,6 @@ fn with_earlier(earlier: Vec<Repetition>, mut reps: Vec<Repetition>) -> Vec<Repe
     all
 }
 
-/// The scene's repetitions that are a person's own, whose first counted
-/// repetition is `first`: those that end before it starts (up to a quarter of
-/// its period after), at its period (within a quarter). The person was there
-/// doing the same thing before the tracker found them (upside down on the
-/// floor, in the dark), and the scene counted them.
-fn scene_before(scene: &[Repetition], first: &Repetition) -> Vec<Repetition> {
-    let period = first.end_frame.saturating_sub(first.start_frame) as f64;
-    if period <= 0.0 {
-        return Vec::new();
-    }
-    scene
-        .iter()
-        .filter(|r| {
-            let p = r.end_frame.saturating_sub(r.start_frame) as f64;
-            r.end_frame as f64 <= first.start_frame as f64 + 0.25 * period
-                && (p / period - 1.0).abs() <= 0.25
-        })
-        .copied()
-        .collect()
-}
-
 /// Runs the live analysis of `source` until it ends, `cancel` is set or
 /// `params.duration_s` of stream time have passed, reporting every
 /// [`Event`] to `sink` as it happens (a closure `|e: &Event| …` is a
@@ -213,7 +193,6 @@ pub fn watch(
         stream: None,
         out: None,
         scene: None,
-        scene_reps: Vec::new(),
     };
     let result = run_inner(source, params, cancel, &mut state, sink);
     if let Err(e) = &result {
@@ -435,9 +414,7 @@ fn analyse_frames(
                     if let Some(mut tr) = state.tracks.remove(&key) {
                         if let Some(id) = tr.id {
                             let reps = tr.counter.finish(params)?;
-                            let earlier = state.scene_for(&reps);
-                            tr.counter.add_earlier(earlier.len());
-                            state.report(id, with_earlier(earlier, reps), sink);
+                            state.report_person(id, key, reps, sink);
                             let segs = tr.segments(params, true)?;
                             state.report_segments(id, &tr, segs, sink);
                             sink.event(&Event::Leave {
@@ -461,11 +438,7 @@ fn analyse_frames(
         }
         due.sort_by_key(|d| d.0);
         for (id, key, reps, segs) in due {
-            let earlier = state.scene_for(&reps);
-            if let Some(tr) = state.tracks.get_mut(&key) {
-                tr.counter.add_earlier(earlier.len());
-            }
-            state.report(id, with_earlier(earlier, reps), sink);
+            state.report_person(id, key, reps, sink);
             if let Some(tr) = state.tracks.get(&key) {
                 state.report_segments(id, tr, segs, sink);
             }
@@ -514,11 +487,7 @@ fn analyse_frames(
     }
     rest.sort_by_key(|r| r.0);
     for (id, key, reps, segs) in rest {
-        let earlier = state.scene_for(&reps);
-        if let Some(tr) = state.tracks.get_mut(&key) {
-            tr.counter.add_earlier(earlier.len());
-        }
-        state.report(id, with_earlier(earlier, reps), sink);
+        state.report_person(id, key, reps, sink);
         if let Some(tr) = state.tracks.get(&key) {
             state.report_segments(id, tr, segs, sink);
         }
@@ -591,20 +560,15 @@ mod tests {
     }
 
     #[test]
-    fn a_person_takes_over_the_scenes_repetitions_before_their_own() {
-        // The scene counted 0–93, 93–186, 186–279 (93 frames a cycle); the
-        // person's first counted repetition is 118–204 (86 frames).
-        let scene = [rep(1, 0, 93), rep(2, 93, 186), rep(3, 186, 279)];
-        let first = rep(1, 118, 204);
-        let earlier = scene_before(&scene, &first);
-        assert_eq!(earlier, vec![rep(1, 0, 93)]);
-        let all = with_earlier(earlier, vec![first, rep(2, 204, 290)]);
+    fn repetitions_taken_over_come_first_in_the_running_total() {
+        let all = with_earlier(
+            vec![rep(1, 0, 93)],
+            vec![rep(1, 118, 204), rep(2, 204, 290)],
+        );
         assert_eq!(all, vec![rep(1, 0, 93), rep(2, 118, 204), rep(3, 204, 290)]);
-        // Another period (a hoop at twice the person's rate) is not theirs.
-        let fast = [rep(1, 0, 40), rep(2, 40, 80)];
-        assert!(scene_before(&fast, &first).is_empty());
-        // Nor is a repetition that ends well inside the person's first.
-        let late = [rep(1, 60, 150)];
-        assert!(scene_before(&late, &first).is_empty());
+        assert_eq!(
+            with_earlier(Vec::new(), vec![rep(1, 5, 9)]),
+            vec![rep(1, 5, 9)]
+        );
     }
 }

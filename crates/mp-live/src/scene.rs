@@ -28,6 +28,8 @@ pub(crate) struct SceneCounter {
     first: usize,
     thumbs: VecDeque<Vec<f32>>,
     tally: Tally,
+    /// The repetitions reported that end within a window of the last one.
+    reported: VecDeque<Repetition>,
 }
 
 impl SceneCounter {
@@ -39,6 +41,7 @@ impl SceneCounter {
             first: 0,
             thumbs: VecDeque::new(),
             tally: Tally::new(fps, params),
+            reported: VecDeque::new(),
         }
     }
 
@@ -119,7 +122,39 @@ impl SceneCounter {
             return Ok(Vec::new());
         }
         let counts = mp_pipeline::count_frames(self.track()?, &params.analysis)?;
-        Ok(self.tally.take(&counts, self.first, back, last))
+        let reps = self.tally.take(&counts, self.first, back, last);
+        self.reported.extend(reps.iter().copied());
+        let keep_from = back.saturating_sub(self.tally.max_frames);
+        while self
+            .reported
+            .front()
+            .is_some_and(|r| r.end_frame < keep_from)
+        {
+            self.reported.pop_front();
+        }
+        Ok(reps)
+    }
+
+    /// The repetitions this scene reported that are the person's whose first
+    /// counted repetition is `first`: those that end before it starts (up to a
+    /// quarter of its period after), at its period (within a quarter). The
+    /// person was there doing the same thing before the tracker found them
+    /// (upside down on the floor, in the dark), and the scene counted them.
+    /// Only those that ended within a window of the scene's last one are kept.
+    pub(crate) fn before(&self, first: &Repetition) -> Vec<Repetition> {
+        let period = first.end_frame.saturating_sub(first.start_frame) as f64;
+        if period <= 0.0 {
+            return Vec::new();
+        }
+        self.reported
+            .iter()
+            .filter(|r| {
+                let p = r.end_frame.saturating_sub(r.start_frame) as f64;
+                r.end_frame as f64 <= first.start_frame as f64 + 0.25 * period
+                    && (p / period - 1.0).abs() <= 0.25
+            })
+            .copied()
+            .collect()
     }
 
     /// The window as the unitless track of thumbnails `mp run` counts.
@@ -179,6 +214,35 @@ mod tests {
             assert!(r.end_frame > r.start_frame);
         }
         assert_eq!(s.total(), reps.len());
+    }
+
+    fn rep(count: usize, start_frame: usize, end_frame: usize) -> Repetition {
+        Repetition {
+            count,
+            start_frame,
+            end_frame,
+        }
+    }
+
+    #[test]
+    fn a_person_takes_over_the_scenes_repetitions_before_their_own() {
+        let params = LiveParams::default();
+        let scene_with = |reported: &[Repetition]| {
+            let mut s = SceneCounter::new(30.0, &params);
+            s.reported.extend(reported.iter().copied());
+            s
+        };
+        // The scene counted 0–93, 93–186, 186–279 (93 frames a cycle); the
+        // person's first counted repetition is 118–204 (86 frames).
+        let first = rep(1, 118, 204);
+        let s = scene_with(&[rep(1, 0, 93), rep(2, 93, 186), rep(3, 186, 279)]);
+        assert_eq!(s.before(&first), vec![rep(1, 0, 93)]);
+        // Another period (a hoop at twice the person's rate) is not theirs.
+        assert!(scene_with(&[rep(1, 0, 40), rep(2, 40, 80)])
+            .before(&first)
+            .is_empty());
+        // Nor is a repetition that ends well inside the person's first.
+        assert!(scene_with(&[rep(1, 60, 150)]).before(&first).is_empty());
     }
 
     #[test]

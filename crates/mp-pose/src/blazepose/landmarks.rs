@@ -6,7 +6,7 @@ use std::path::Path;
 
 use ort::session::{HasSelectedOutputs, OutputSelector, RunOptions, Session};
 
-use super::shared::SharedClient;
+use super::shared::SharedLandmarks;
 use crate::error::{PoseError, Result};
 use crate::imageops::{crop_u8, extend_f32, Border, RgbView, Roi};
 use crate::runtime::{self, SessionParams};
@@ -212,7 +212,7 @@ enum Backend {
         run_options: RunOptions<HasSelectedOutputs>,
     },
     /// The model of a [`super::SharedLandmarks`], on its own thread.
-    Shared(SharedClient),
+    Shared(SharedLandmarks),
 }
 
 /// The landmark model: an ONNX session plus pre- and post-processing.
@@ -300,7 +300,7 @@ impl LandmarkModel {
 
     /// A model whose runs go to `shared` (see [`SharedLandmarks`]).
     pub(crate) fn client(
-        shared: SharedClient,
+        shared: SharedLandmarks,
         name: String,
         kind: LandmarkModelKind,
         refine: RefineParams,

@@ -100,13 +100,18 @@ impl BlazePoseParams {
     pub(crate) fn landmark_model(&self) -> Result<LandmarkModel> {
         match &self.shared {
             Some(shared) => shared.model_for(self.model),
-            None => LandmarkModel::open(
-                &self.model_path(self.model.file())?,
-                self.model,
-                self.refine,
-                &self.session,
-            ),
+            None => self.own_landmark_model(),
         }
+    }
+
+    /// A landmark model of its own: its model, refinement and session.
+    pub(crate) fn own_landmark_model(&self) -> Result<LandmarkModel> {
+        LandmarkModel::open(
+            &self.model_path(self.model.file())?,
+            self.model,
+            self.refine,
+            &self.session,
+        )
     }
 
     /// Checks every value.

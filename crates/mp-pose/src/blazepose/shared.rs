@@ -66,12 +66,6 @@ pub struct SharedLandmarks {
     shared: Arc<Shared>,
 }
 
-/// An estimator's end of a [`SharedLandmarks`].
-pub(crate) struct SharedClient {
-    tx: Sender<Request>,
-    shared: Arc<Shared>,
-}
-
 impl SharedLandmarks {
     /// Largest batch by default: 32 crops.
     pub const DEFAULT_MAX_CROPS: usize = 32;
@@ -82,8 +76,7 @@ impl SharedLandmarks {
     /// session: the device and threads of the shared run) and starts its thread.
     pub fn open(params: &BlazePoseParams) -> Result<Self> {
         params.validate()?;
-        let path = params.model_path(params.model.file())?;
-        let model = LandmarkModel::open(&path, params.model, params.refine, &params.session)?;
+        let model = params.own_landmark_model()?;
         Self::start(model, Self::DEFAULT_MAX_CROPS, Self::DEFAULT_WAIT)
     }
 
@@ -128,12 +121,8 @@ impl SharedLandmarks {
     /// A landmark model whose runs go to this one (for a thread of its own:
     /// its `run` and `run_many` wait for the shared run their crops join).
     pub fn model(&self) -> LandmarkModel {
-        let client = SharedClient {
-            tx: self.tx.clone(),
-            shared: Arc::clone(&self.shared),
-        };
         LandmarkModel::client(
-            client,
+            self.clone(),
             self.shared.name.clone(),
             self.shared.kind,
             self.shared.refine,
@@ -175,7 +164,7 @@ impl PartialEq for SharedLandmarks {
     }
 }
 
-impl SharedClient {
+impl SharedLandmarks {
     /// Sends `count` crops laid end to end and waits for their results.
     pub(crate) fn run(&self, input: &[f32], count: usize) -> Result<Vec<LandmarkOutput>> {
         if input.len() != count * CROP_VALUES {
