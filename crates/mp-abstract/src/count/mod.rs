@@ -8,8 +8,11 @@
 //! 2. **Intervals** ([`segment_repetitions`]): where the motion repeats, and
 //!    with which period. Where two or more intervals of at least two cycles,
 //!    with a period inside the search range, have clearly different periods
-//!    (a change of exercise), each interval is counted on its own: its length
-//!    over its period.
+//!    (a change of exercise), the recording holds several activities:
+//!    neighbouring intervals of one period and one motion are joined into
+//!    one activity, each activity's extent is followed outward for as long
+//!    as the motion keeps repeating, and counted: its length over its period
+//!    (see `activities.rs`).
 //! 3. Otherwise the recording holds one repetitive activity: when its period
 //!    is strong enough ([`CountParams::min_strength`]) the count is the length
 //!    of the part that repeats over the period — rest at either end trimmed,
@@ -25,6 +28,7 @@
 
 use serde::{Deserialize, Serialize};
 
+mod activities;
 mod confidence;
 pub mod json;
 mod span;
@@ -363,9 +367,11 @@ fn count_checked(
         .cloned()
         .collect();
     if several_activities(&substantial, params.period_tolerance) {
-        let intervals: Vec<CountedInterval> = segs
+        let acts = activities::activities(signal, &segs, params);
+        let intervals: Vec<CountedInterval> = acts
             .iter()
-            .map(|s| CountedInterval::new(s.start_frame, s.end_frame, s.period_frames, s.score))
+            .zip(activities::stretches(&acts, n))
+            .map(|(a, s)| activities::count_activity(signal, a, s, params))
             .collect();
         let periodicity = strength.max(weighted_score(&segs).clamp(0.0, 1.0));
         let (cycle_mismatch, end_mismatch) = intervals_mismatch(signal, &intervals);

@@ -229,3 +229,72 @@ pub(crate) fn active_span(track: &Track, period: usize, fraction: f64) -> Result
         _ => Ok((0, n)),
     }
 }
+
+/// The repetitions of `start..end` followed outward, inside `lo..hi`, for
+/// as long as the motion keeps matching itself about a period away: each
+/// frame's distance to the nearest frame within [`PERIOD_SLACK`] of a period
+/// towards the repetitions, averaged over half a period, must stay within
+/// `fraction` of the typical distance between frames half a period apart
+/// or within [`MISMATCH_OVER_TYPICAL`] times the repetitions' own median
+/// mismatch (the limits of [`repeating_span`]). Grown from what is known to
+/// repeat, a chance match further out does not pull the span into other
+/// motion.
+pub(crate) fn extend_repeating(
+    track: &Track,
+    period: usize,
+    (start, end): (usize, usize),
+    (lo, hi): (usize, usize),
+    fraction: f64,
+) -> (usize, usize) {
+    let p = period.max(1);
+    if fraction <= 0.0 || end <= start || lo > start || hi < end || end - start < 2 * p {
+        return (start, end);
+    }
+    let Some((own, scale)) = mismatch_profile(track, p, start, end) else {
+        return (start, end);
+    };
+    let mut sorted: Vec<f64> = own.into_iter().filter(|m| m.is_finite()).collect();
+    if sorted.is_empty() {
+        return (start, end);
+    }
+    sorted.sort_by(f64::total_cmp);
+    let limit = (fraction * scale).max(MISMATCH_OVER_TYPICAL * sorted[sorted.len() / 2]);
+    let slack = ((p as f64 * PERIOD_SLACK).round() as usize).max(1);
+    let (lags_lo, lags_hi) = (p.saturating_sub(slack).max(1), p + slack);
+    // Distance of frame `t` to the nearest frame about a period towards
+    // the repetitions (later for `forward`, earlier otherwise).
+    let nearest = |t: usize, forward: bool| -> f64 {
+        (lags_lo..=lags_hi)
+            .filter_map(|lag| {
+                if forward {
+                    (t + lag < hi).then(|| frame_distance(track, t, t + lag))
+                } else {
+                    (t >= lo + lag).then(|| frame_distance(track, t - lag, t))
+                }
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let w = (p / 2).max(1);
+    // How far the repetitions reach along `m` (the frames' mismatches going
+    // outward): up to the first frame whose mean over the half period
+    // towards the repetitions is above the limit. A frame with no frame a
+    // period towards the repetitions inside `lo..hi` does not match.
+    let reach = |m: &[f64]| -> usize {
+        let mut sum = 0.0;
+        for (i, &v) in m.iter().enumerate() {
+            sum += if v.is_finite() { v } else { 4.0 * limit };
+            if i >= w {
+                let old = m[i - w];
+                sum -= if old.is_finite() { old } else { 4.0 * limit };
+            }
+            let mean = sum / (i + 1).min(w) as f64;
+            if mean.is_nan() || mean > limit {
+                return i;
+            }
+        }
+        m.len()
+    };
+    let left: Vec<f64> = (lo..start).rev().map(|t| nearest(t, true)).collect();
+    let right: Vec<f64> = (end..hi).map(|t| nearest(t, false)).collect();
+    (start - reach(&left), end + reach(&right))
+}
