@@ -450,16 +450,7 @@ pub fn count_signals(
     let params = &params.check()?;
     let mut best: Option<Counts> = None;
     let mut consider = |c: Counts| {
-        let better = match &best {
-            None => true,
-            Some(b) => {
-                // A count beats no count; between two counts (or two
-                // non-counts) the more periodic signal wins.
-                let (cr, br) = (c.method != CountMethod::None, b.method != CountMethod::None);
-                (cr && !br) || (cr == br && c.periodicity > b.periodicity)
-            }
-        };
-        if better {
+        if best.as_ref().is_none_or(|b| decides_over(&c, b)) {
             best = Some(c);
         }
     };
@@ -562,6 +553,30 @@ fn several_activities(segs: &[PeriodicSegment], tolerance: f64) -> bool {
     })
 }
 
+/// Whether count `c` of one signal decides over count `b` of another: a
+/// count beats no count; between two readings of several activities the
+/// one whose intervals explain more of the recording wins (the mean score of
+/// a few clean intervals says nothing of how much of the recording they
+/// cover); otherwise the more periodic signal.
+fn decides_over(c: &Counts, b: &Counts) -> bool {
+    let (cr, br) = (c.method != CountMethod::None, b.method != CountMethod::None);
+    if c.method == CountMethod::Intervals && b.method == CountMethod::Intervals {
+        explained(c) > explained(b)
+    } else {
+        (cr && !br) || (cr == br && c.periodicity > b.periodicity)
+    }
+}
+
+/// How much of the recording a count's intervals explain: their
+/// periodicity weighted by their share of the frames.
+fn explained(c: &Counts) -> f64 {
+    c.intervals
+        .iter()
+        .map(|i| i.periodicity * (i.end_frame - i.start_frame) as f64)
+        .sum::<f64>()
+        / c.frames.max(1) as f64
+}
+
 fn weighted_score(segs: &[PeriodicSegment]) -> f64 {
     let w: f64 = segs.iter().map(|s| s.len_frames() as f64).sum();
     if w <= 0.0 {
@@ -591,5 +606,51 @@ fn intervals_mismatch(signal: &Track, intervals: &[CountedInterval]) -> (f64, f6
         (sum / w, ends / w)
     } else {
         (1.0, 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn reading(method: CountMethod, periodicity: f64, intervals: &[(usize, usize, f64)]) -> Counts {
+        let intervals: Vec<CountedInterval> = intervals
+            .iter()
+            .map(|&(s, e, p)| CountedInterval::new(s, e, 30, p))
+            .collect();
+        Counts {
+            total: intervals.iter().map(|i| i.count).sum(),
+            intervals,
+            signal: CountSignal::Keypoints,
+            method,
+            confidence: 0.5,
+            periodicity,
+            features: CountFeatures::default(),
+            frames: 1000,
+            fps: 30.0,
+        }
+    }
+
+    #[test]
+    fn the_reading_that_explains_more_of_the_recording_decides() {
+        // Several activities: four intervals over 800 frames at 0.6 against
+        // one clean interval over 200 at 0.9 (the more periodic on average).
+        let wide = reading(
+            CountMethod::Intervals,
+            0.6,
+            &[
+                (0, 200, 0.6),
+                (200, 400, 0.6),
+                (450, 650, 0.6),
+                (700, 900, 0.6),
+            ],
+        );
+        let clean = reading(CountMethod::Intervals, 0.9, &[(0, 200, 0.9)]);
+        assert!(decides_over(&wide, &clean) && !decides_over(&clean, &wide));
+        // Otherwise the more periodic reading, and any count over none.
+        let one = reading(CountMethod::Period, 0.7, &[(0, 900, 0.7)]);
+        assert!(decides_over(&clean, &one) && !decides_over(&one, &clean));
+        let none = reading(CountMethod::None, 0.95, &[]);
+        assert!(decides_over(&one, &none) && !decides_over(&none, &one));
     }
 }
