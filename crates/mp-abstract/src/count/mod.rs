@@ -17,7 +17,9 @@
 //!    is strong enough ([`CountParams::min_strength`]) the count is the length
 //!    of the part that repeats over the period — rest at either end trimmed,
 //!    then motion at either end that does not match itself about a period
-//!    later or earlier ([`CountParams::mismatch_fraction`]); when not, nothing
+//!    later or earlier ([`CountParams::mismatch_fraction`]); when not, or when
+//!    the part counted is no nearer itself a period later than half a period
+//!    later (a cycle mismatch of 1 or more: jitter, a drift), nothing
 //!    repeats (a golf swing is one movement).
 //!
 //! The signal whose repetition is the most certain decides
@@ -410,6 +412,13 @@ fn count_checked(
             let (a, b) = repeating_span(signal, period_frames, a, b, params.mismatch_fraction);
             let iv = CountedInterval::new(a, b, period_frames, strength);
             let mismatch = cycle_mismatch(signal, period_frames, a, b).unwrap_or((1.0, 1.0));
+            // No nearer itself a period later than half a period later: the
+            // motion does not repeat at this period, whatever its
+            // autocorrelation (jitter, a drift); another signal may still
+            // count.
+            if mismatch.0 >= DOES_NOT_REPEAT {
+                return Ok(Counts::none(kind, n, fps, strength, &params.confidence));
+            }
             let features = CountFeatures {
                 periodicity: strength,
                 cycles: iv.cycles,
@@ -552,6 +561,12 @@ fn several_activities(segs: &[PeriodicSegment], tolerance: f64) -> bool {
             .any(|&b| (a - b).abs() > tolerance * a.min(b))
     })
 }
+
+/// A cycle mismatch (see [`CountFeatures::cycle_mismatch`]) at which the
+/// motion is no nearer itself a period later than half a period later: it
+/// does not repeat at that period, and a recording of one activity whose
+/// counted span reaches it is not counted.
+const DOES_NOT_REPEAT: f64 = 1.0;
 
 /// Whether count `c` of one signal decides over count `b` of another: a
 /// count beats no count; between two readings of several activities the

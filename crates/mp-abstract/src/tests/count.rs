@@ -335,3 +335,34 @@ fn bad_input_and_parameters() {
     let c = count_repetitions(&short, CountSignal::Keypoints, &CountParams::default()).unwrap();
     assert_eq!(c.total, 0);
 }
+
+#[test]
+fn a_tremor_on_motion_that_does_not_repeat_is_not_counted() {
+    // A body wandering slowly (no repetition) with a small fast tremor of a
+    // fixed period (9 frames): joint velocities correlate at the tremor's
+    // period, but the poses are no nearer themselves a period later than
+    // half a period later — the motion does not repeat at that period.
+    let mut counted = Vec::new();
+    for seed in 0..8u64 {
+        let n = 450;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let noise = Normal::new(0.0, 3.0).unwrap();
+        let mut p = Array3::zeros((n, 12, 2));
+        let mut walk = [[0.0f64; 2]; 12];
+        for t in 0..n {
+            let tremor = 1.5 * (std::f64::consts::TAU * t as f64 / 9.0).sin();
+            for (j, w) in walk.iter_mut().enumerate() {
+                for (k, v) in w.iter_mut().enumerate() {
+                    *v = 0.98 * *v + noise.sample(&mut rng);
+                    p[[t, j, k]] = 200.0 + 10.0 * j as f64 * (k as f64 + 1.0) + *v + tremor;
+                }
+            }
+        }
+        let t = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap();
+        let c = count_repetitions(&t, CountSignal::Keypoints, &CountParams::default()).unwrap();
+        if c.total > 0 {
+            counted.push((seed, c.total, c.features.cycle_mismatch));
+        }
+    }
+    assert!(counted.is_empty(), "counted: {counted:?}");
+}
