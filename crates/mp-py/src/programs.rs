@@ -257,7 +257,7 @@ impl PyAbstract {
 /// Repetition counts: `total`, `intervals` (dicts as in `loops.json`'s
 /// `repetitions.intervals`: `first_frame`, `last_frame` (inclusive),
 /// `count`, `period_frames`, `period_s`, `cycles`, `periodicity`,
-/// `repetitions` (`[first, last]` of each)), the `signal` (`keypoints` or
+/// `repetitions` (`[first, last]` of each), `signal`), the `signal` (`keypoints` or
 /// `frames`) and `method` (`period`, `intervals`, `none`) that decided, and
 /// a `confidence`; for a video with several people tracked, `person` (whose
 /// counts these are) and `people` (every tracked person's entry of
@@ -461,8 +461,8 @@ impl PyCounts {
 
     /// The counted intervals: dicts with `first_frame`, `last_frame`
     /// (inclusive), `count`, `period_frames`, `period_s`, `cycles`,
-    /// `periodicity` and `repetitions` (`[first, last]` of each), as in
-    /// `loops.json`.
+    /// `periodicity`, `repetitions` (`[first, last]` of each) and `signal`
+    /// (what the interval was counted from), as in `loops.json`.
     #[getter]
     fn intervals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(

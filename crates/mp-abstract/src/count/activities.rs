@@ -17,9 +17,15 @@
 //!    from its ends inward, as for a recording of one activity, counted
 //!    more of the real hour's clips but reached into the neighbours'
 //!    motion on the synthetic long recordings: docs/results/repetition.md.)
+//! 4. **Two signals** ([`merged`]): where the keypoints and the frames both
+//!    read several activities, their intervals are merged, those that
+//!    explain more of the recording (periodicity × frames) first, each cut
+//!    back to the frames no kept interval holds (dropped when that loses
+//!    more than a quarter of it), so each stretch is read from the signal
+//!    that reads it better.
 
 use super::span::{extend_repeating, frame_distance};
-use super::{CountParams, CountedInterval};
+use super::{CountParams, CountSignal, CountedInterval, Counts};
 use crate::repetition::PeriodicSegment;
 use mp_geom::Track;
 
@@ -167,6 +173,7 @@ pub(crate) fn stretches(acts: &[Activity], n: usize) -> Vec<(usize, usize)> {
 /// activity).
 pub(crate) fn count_activity(
     signal: &Track,
+    kind: CountSignal,
     act: &Activity,
     stretch: (usize, usize),
     params: &CountParams,
@@ -179,7 +186,68 @@ pub(crate) fn count_activity(
         stretch,
         params.mismatch_fraction,
     );
-    CountedInterval::new(a, b, p, act.score)
+    CountedInterval::new(a, b, p, act.score, kind)
+}
+
+/// Two readings of several activities made one: every interval of either,
+/// the ones that explain more first (periodicity × frames), each kept where
+/// it overlaps none kept before; the signal is the one whose kept intervals
+/// explain more.
+pub(crate) fn merged(a: Counts, b: Counts) -> Counts {
+    let (ea, eb) = (explained(&a), explained(&b));
+    let mut all: Vec<(f64, CountedInterval)> = a
+        .intervals
+        .iter()
+        .chain(b.intervals.iter())
+        .map(|i| {
+            (
+                i.periodicity * (i.end_frame - i.start_frame) as f64,
+                i.clone(),
+            )
+        })
+        .collect();
+    all.sort_by(|x, y| y.0.total_cmp(&x.0));
+    let mut kept: Vec<CountedInterval> = Vec::new();
+    for (_, iv) in all {
+        // Cut back to the frames no kept interval holds; dropped when that
+        // loses more than a quarter of it.
+        let (mut s0, mut e0) = (iv.start_frame, iv.end_frame);
+        for k in &kept {
+            if k.start_frame <= s0 && k.end_frame > s0 {
+                s0 = k.end_frame;
+            }
+            if k.start_frame < e0 && k.end_frame >= e0 {
+                e0 = k.start_frame;
+            }
+        }
+        let inside = kept
+            .iter()
+            .any(|k| k.start_frame >= s0 && k.end_frame <= e0 && k.start_frame < k.end_frame);
+        let len = iv.end_frame - iv.start_frame;
+        if e0 <= s0 || inside || 4 * (e0 - s0) < 3 * len {
+            continue;
+        }
+        kept.push(if (s0, e0) == (iv.start_frame, iv.end_frame) {
+            iv
+        } else {
+            CountedInterval::new(s0, e0, iv.period_frames, iv.periodicity, iv.signal)
+        });
+    }
+    kept.sort_by_key(|i| i.start_frame);
+    let mut out = if ea >= eb { a } else { b };
+    out.total = kept.iter().map(|i| i.count).sum();
+    out.intervals = kept;
+    out
+}
+
+/// How much of the recording a count's intervals explain: their
+/// periodicity weighted by their share of the frames.
+fn explained(c: &Counts) -> f64 {
+    c.intervals
+        .iter()
+        .map(|i| i.periodicity * (i.end_frame - i.start_frame) as f64)
+        .sum::<f64>()
+        / c.frames.max(1) as f64
 }
 
 #[cfg(test)]
@@ -280,14 +348,26 @@ mod tests {
             period: 30,
             score: 0.8,
         };
-        let iv = count_activity(&t, &act, (0, 480), &CountParams::default());
+        let iv = count_activity(
+            &t,
+            CountSignal::Keypoints,
+            &act,
+            (0, 480),
+            &CountParams::default(),
+        );
         assert!(
             (80..=100).contains(&iv.start_frame) && (380..=400).contains(&iv.end_frame),
             "{iv:?}"
         );
         assert_eq!(iv.count, 10, "{iv:?}");
         // Never less than the activity's own extent.
-        let inside = count_activity(&t, &act, (150, 330), &CountParams::default());
+        let inside = count_activity(
+            &t,
+            CountSignal::Keypoints,
+            &act,
+            (150, 330),
+            &CountParams::default(),
+        );
         assert_eq!((inside.start_frame, inside.end_frame), (150, 330));
     }
 }

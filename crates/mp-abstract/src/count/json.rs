@@ -57,6 +57,11 @@ pub struct CountedIntervalJson {
     pub periodicity: f64,
     /// `[first, last]` frames of each repetition (`count` of them).
     pub repetitions: Vec<[usize; 2]>,
+    /// The signal it was counted from, `keypoints` or `frames` (several
+    /// activities may be read from different signals); absent in older
+    /// files: the document's `signal`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signal: Option<CountSignal>,
 }
 
 /// One loop of the abstract program, as JSON.
@@ -98,11 +103,13 @@ impl CountedIntervalJson {
             cycles: iv.cycles,
             periodicity: iv.periodicity,
             repetitions: ranges(&iv.boundaries),
+            signal: Some(iv.signal),
         }
     }
 
-    /// Back to the counted interval.
-    pub fn to_interval(&self) -> Result<CountedInterval> {
+    /// Back to the counted interval (read from `signal` where the interval
+    /// does not state its own).
+    pub fn to_interval(&self, signal: CountSignal) -> Result<CountedInterval> {
         if self.last_frame < self.first_frame {
             return Err(AbstractError::Inconsistent(format!(
                 "last_frame {} is before first_frame {}",
@@ -120,6 +127,7 @@ impl CountedIntervalJson {
             count: self.count,
             boundaries,
             periodicity: self.periodicity,
+            signal: self.signal.unwrap_or(signal),
         })
     }
 }
@@ -155,7 +163,7 @@ impl RepetitionsJson {
         let intervals = self
             .intervals
             .iter()
-            .map(CountedIntervalJson::to_interval)
+            .map(|i| i.to_interval(self.signal))
             .collect::<Result<Vec<_>>>()?;
         let sum: usize = intervals.iter().map(|i| i.count).sum();
         if sum != self.total {
@@ -205,6 +213,7 @@ mod tests {
             count: 3,
             boundaries: vec![10, 30, 50, 70],
             periodicity: 0.9,
+            signal: CountSignal::Keypoints,
         };
         Counts {
             intervals: vec![iv],

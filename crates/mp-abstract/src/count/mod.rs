@@ -26,7 +26,10 @@
 //! ([`count_signals`]): keypoints are the primary signal, and frames take
 //! over where no person is found (a bar lift in the dark) or where the
 //! pixels repeat more clearly than the keypoints (a hula hoop that hides
-//! the hips).
+//! the hips). Where both signals read several activities, each stretch is
+//! counted from the signal that reads it better (the intervals that explain
+//! more of the recording first, each kept where the other signal's do not
+//! already count).
 
 use serde::{Deserialize, Serialize};
 
@@ -210,10 +213,17 @@ pub struct CountedInterval {
     /// period, 0..1).
     #[serde(alias = "confidence")]
     pub periodicity: f64,
+    /// The signal it was counted from (keypoints unless stated).
+    #[serde(default = "keypoints_signal")]
+    pub signal: CountSignal,
+}
+
+fn keypoints_signal() -> CountSignal {
+    CountSignal::Keypoints
 }
 
 impl CountedInterval {
-    fn new(start: usize, end: usize, period: usize, periodicity: f64) -> Self {
+    fn new(start: usize, end: usize, period: usize, periodicity: f64, signal: CountSignal) -> Self {
         let period = period.max(1);
         let cycles = (end - start) as f64 / period as f64;
         let count = cycles.round().max(0.0) as usize;
@@ -230,6 +240,7 @@ impl CountedInterval {
             count,
             boundaries,
             periodicity,
+            signal,
         }
     }
 
@@ -373,7 +384,7 @@ fn count_checked(
         let intervals: Vec<CountedInterval> = acts
             .iter()
             .zip(activities::stretches(&acts, n))
-            .map(|(a, s)| activities::count_activity(signal, a, s, params))
+            .map(|(a, s)| activities::count_activity(signal, kind, a, s, params))
             .collect();
         let periodicity = strength.max(weighted_score(&segs).clamp(0.0, 1.0));
         let (cycle_mismatch, end_mismatch) = intervals_mismatch(signal, &intervals);
@@ -410,7 +421,7 @@ fn count_checked(
         }) if strength >= params.min_strength => {
             let (a, b) = active_span(signal, period_frames, params.rest_fraction)?;
             let (a, b) = repeating_span(signal, period_frames, a, b, params.mismatch_fraction);
-            let iv = CountedInterval::new(a, b, period_frames, strength);
+            let iv = CountedInterval::new(a, b, period_frames, strength, kind);
             let mismatch = cycle_mismatch(signal, period_frames, a, b).unwrap_or((1.0, 1.0));
             // No nearer itself a period later than half a period later: the
             // motion does not repeat at this period, whatever its
@@ -447,7 +458,9 @@ fn count_checked(
 /// Counts from the keypoints (over the frames from the person's first to
 /// their last pose) and, when given, the frame thumbnails of the same
 /// recording (over all of it), and returns the count of the more certain
-/// signal, in the recording's frames.
+/// signal, in the recording's frames; where both read several activities,
+/// their intervals are merged, each stretch read from the signal that reads
+/// it better (each interval states its signal).
 /// Keypoints take part only when a person is found in at least
 /// [`CountParams::min_found_fraction`] of the frames; with neither signal
 /// usable the count is 0 with [`CountMethod::None`].
@@ -458,9 +471,9 @@ pub fn count_signals(
 ) -> Result<Counts> {
     let params = &params.check()?;
     let mut best: Option<Counts> = None;
-    let mut consider = |c: Counts| {
+    let consider = |best: &mut Option<Counts>, c: Counts| {
         if best.as_ref().is_none_or(|b| decides_over(&c, b)) {
-            best = Some(c);
+            *best = Some(c);
         }
     };
     if let Some(k) = keypoints {
@@ -476,15 +489,29 @@ pub fn count_signals(
             };
             own.fill_missing();
             let c = count_checked(&own, CountSignal::Keypoints, params)?;
-            consider(if own.n_frames() < n {
-                c.shifted(first, n)
-            } else {
-                c
-            });
+            consider(
+                &mut best,
+                if own.n_frames() < n {
+                    c.shifted(first, n)
+                } else {
+                    c
+                },
+            );
         }
     }
     if let Some(f) = frames {
-        consider(count_checked(f, CountSignal::Frames, params)?);
+        let c = count_checked(f, CountSignal::Frames, params)?;
+        // Two readings of several activities: each stretch is read from the
+        // signal that reads it better.
+        match best.take() {
+            Some(b) if b.method == CountMethod::Intervals && c.method == CountMethod::Intervals => {
+                best = Some(activities::merged(b, c));
+            }
+            b => {
+                best = b;
+                consider(&mut best, c);
+            }
+        }
     }
     match best {
         Some(b) => Ok(b),
@@ -569,27 +596,11 @@ fn several_activities(segs: &[PeriodicSegment], tolerance: f64) -> bool {
 const DOES_NOT_REPEAT: f64 = 1.0;
 
 /// Whether count `c` of one signal decides over count `b` of another: a
-/// count beats no count; between two readings of several activities the
-/// one whose intervals explain more of the recording wins (the mean score of
-/// a few clean intervals says nothing of how much of the recording they
-/// cover); otherwise the more periodic signal.
+/// count beats no count; between two counts (or two non-counts) the more
+/// periodic signal wins.
 fn decides_over(c: &Counts, b: &Counts) -> bool {
     let (cr, br) = (c.method != CountMethod::None, b.method != CountMethod::None);
-    if c.method == CountMethod::Intervals && b.method == CountMethod::Intervals {
-        explained(c) > explained(b)
-    } else {
-        (cr && !br) || (cr == br && c.periodicity > b.periodicity)
-    }
-}
-
-/// How much of the recording a count's intervals explain: their
-/// periodicity weighted by their share of the frames.
-fn explained(c: &Counts) -> f64 {
-    c.intervals
-        .iter()
-        .map(|i| i.periodicity * (i.end_frame - i.start_frame) as f64)
-        .sum::<f64>()
-        / c.frames.max(1) as f64
+    (cr && !br) || (cr == br && c.periodicity > b.periodicity)
 }
 
 fn weighted_score(segs: &[PeriodicSegment]) -> f64 {
@@ -631,7 +642,7 @@ mod tests {
     fn reading(method: CountMethod, periodicity: f64, intervals: &[(usize, usize, f64)]) -> Counts {
         let intervals: Vec<CountedInterval> = intervals
             .iter()
-            .map(|&(s, e, p)| CountedInterval::new(s, e, 30, p))
+            .map(|&(s, e, p)| CountedInterval::new(s, e, 30, p, CountSignal::Keypoints))
             .collect();
         Counts {
             total: intervals.iter().map(|i| i.count).sum(),
@@ -647,22 +658,43 @@ mod tests {
     }
 
     #[test]
-    fn the_reading_that_explains_more_of_the_recording_decides() {
-        // Several activities: four intervals over 800 frames at 0.6 against
-        // one clean interval over 200 at 0.9 (the more periodic on average).
-        let wide = reading(
+    fn two_readings_of_several_activities_keep_what_each_reads_best() {
+        let keypoints = reading(
             CountMethod::Intervals,
             0.6,
-            &[
-                (0, 200, 0.6),
-                (200, 400, 0.6),
-                (450, 650, 0.6),
-                (700, 900, 0.6),
-            ],
+            &[(0, 300, 0.6), (300, 400, 0.5)],
         );
+        let mut frames = reading(
+            CountMethod::Intervals,
+            0.8,
+            &[(280, 680, 0.8), (0, 100, 0.2)],
+        );
+        frames.signal = CountSignal::Frames;
+        for iv in &mut frames.intervals {
+            iv.signal = CountSignal::Frames;
+        }
+        let m = activities::merged(keypoints, frames);
+        let got: Vec<(usize, usize, usize, CountSignal)> = m
+            .intervals
+            .iter()
+            .map(|i| (i.start_frame, i.end_frame, i.count, i.signal))
+            .collect();
+        // The frames' long interval first; the keypoints' first one cut back
+        // to where it does not overlap it; what lies inside either is dropped.
+        assert_eq!(
+            got,
+            vec![
+                (0, 280, 9, CountSignal::Keypoints),
+                (280, 680, 13, CountSignal::Frames)
+            ]
+        );
+        assert_eq!(m.total, 22);
+        assert_eq!(m.signal, CountSignal::Frames, "the frames explain more");
+    }
+
+    #[test]
+    fn a_count_beats_none_and_the_more_periodic_reading_decides() {
         let clean = reading(CountMethod::Intervals, 0.9, &[(0, 200, 0.9)]);
-        assert!(decides_over(&wide, &clean) && !decides_over(&clean, &wide));
-        // Otherwise the more periodic reading, and any count over none.
         let one = reading(CountMethod::Period, 0.7, &[(0, 900, 0.7)]);
         assert!(decides_over(&clean, &one) && !decides_over(&one, &clean));
         let none = reading(CountMethod::None, 0.95, &[]);

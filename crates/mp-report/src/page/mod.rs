@@ -339,6 +339,7 @@ mod tests {
             cycles: 2.0,
             count: 2,
             boundaries: vec![2, 7, 12],
+            signal: mp_abstract::CountSignal::Keypoints,
             periodicity: 0.9,
         }];
         let c = counts(16, reps.clone());

@@ -160,6 +160,7 @@ mod tests {
             cycles: 2.0,
             count: 2,
             boundaries: vec![0, 15, 30],
+            signal: mp_abstract::CountSignal::Keypoints,
             periodicity: 0.9,
         }
     }

@@ -112,6 +112,7 @@ pub fn counts(frames: usize, first: usize) -> Counts {
             cycles: 10.0,
             count: 10,
             boundaries,
+            signal: mp_abstract::CountSignal::Keypoints,
             periodicity: 0.8,
         });
         a += 360;
