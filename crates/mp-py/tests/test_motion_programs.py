@@ -71,6 +71,8 @@ def test_fit_abstract_count_equal_the_cli(performer, mp_bin, tmp_path):
     assert [i["count"] for i in c.intervals] == [i["count"] for i in reps["intervals"]] == [4, 3, 3]
     assert c.intervals == reps["intervals"]
     assert c.method == reps["method"] and c.signal == "keypoints"
+    # Each interval states the signal it was counted from.
+    assert [i["signal"] for i in c.intervals] == ["keypoints"] * 3
     # The program loops are the abstract program's `for` statements, another thing.
     assert a.program_loops == cli["program_loops"]
     assert all(len(l["iteration_frames"]) == l["iterations"] for l in a.program_loops)
