@@ -123,7 +123,7 @@ fn same_motion(
             })
             .filter(|v| v.is_finite())
             .collect();
-        median(&mut d)
+        mp_geom::median(&mut d).unwrap_or(f64::NAN)
     };
     let half = p / 2;
     let mut far: Vec<f64> = [last, first]
@@ -132,18 +132,10 @@ fn same_motion(
         .map(|(t, u)| frame_distance(signal, t, u))
         .filter(|v| v.is_finite())
         .collect();
-    let scale = median(&mut far);
+    let scale = mp_geom::median(&mut far).unwrap_or(f64::NAN);
     let mismatch = nearest(first, last).max(nearest(last, first));
     // Still pieces (no scale to measure by) are one motion.
     scale.is_nan() || scale <= 0.0 || mismatch <= fraction * scale
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 /// The stretch each activity owns: from half way to the activity before to

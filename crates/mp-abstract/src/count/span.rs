@@ -40,6 +40,37 @@ const PERIOD_SLACK: f64 = 0.2;
 /// than this multiple of the median mismatch over the activity.
 const MISMATCH_OVER_TYPICAL: f64 = 1.5;
 
+/// Where [`nearest_a_period_away`] looks for the matching frame.
+#[derive(Clone, Copy, PartialEq)]
+enum Towards {
+    Later,
+    Earlier,
+    Either,
+}
+
+/// Distance of frame `t` to the nearest frame about `period` frames away
+/// (people do not keep an exact period: within ±[`PERIOD_SLACK`] of it) in
+/// the direction `towards`, inside `a..b`; infinite where there is none.
+fn nearest_a_period_away(
+    track: &Track,
+    t: usize,
+    period: usize,
+    (a, b): (usize, usize),
+    towards: Towards,
+) -> f64 {
+    let slack = ((period as f64 * PERIOD_SLACK).round() as usize).max(1);
+    let mut best = f64::INFINITY;
+    for lag in period.saturating_sub(slack).max(1)..=period + slack {
+        if towards != Towards::Earlier && t + lag < b {
+            best = best.min(frame_distance(track, t, t + lag));
+        }
+        if towards != Towards::Later && t >= a + lag {
+            best = best.min(frame_distance(track, t - lag, t));
+        }
+    }
+    best
+}
+
 /// Each frame's distance to the nearest frame about a period later or
 /// earlier (within [`PERIOD_SLACK`], inside `a..b`; infinite where there is
 /// none), and the scale it is measured against: the median distance between
@@ -48,23 +79,8 @@ const MISMATCH_OVER_TYPICAL: f64 = 1.5;
 /// pair half a period apart or the scale is 0 (no motion).
 fn mismatch_profile(track: &Track, p: usize, a: usize, b: usize) -> Option<(Vec<f64>, f64)> {
     let p = p.max(1);
-    // People do not keep an exact period: the frame "a period later" is
-    // looked for within ±PERIOD_SLACK of it.
-    let slack = ((p as f64 * PERIOD_SLACK).round() as usize).max(1);
-    let (lo, hi) = (p.saturating_sub(slack).max(1), p + slack);
     let mismatch: Vec<f64> = (a..b)
-        .map(|t| {
-            let mut best = f64::INFINITY;
-            for lag in lo..=hi {
-                if t + lag < b {
-                    best = best.min(frame_distance(track, t, t + lag));
-                }
-                if t >= a + lag {
-                    best = best.min(frame_distance(track, t - lag, t));
-                }
-            }
-            best
-        })
+        .map(|t| nearest_a_period_away(track, t, p, (a, b), Towards::Either))
         .collect();
     let half = (p / 2).max(1);
     let mut far: Vec<f64> = (a..b.saturating_sub(half))
@@ -253,39 +269,26 @@ pub(crate) fn extend_repeating(
     let Some((own, scale)) = mismatch_profile(track, p, start, end) else {
         return (start, end);
     };
-    let mut sorted: Vec<f64> = own.into_iter().filter(|m| m.is_finite()).collect();
-    if sorted.is_empty() {
+    let mut own: Vec<f64> = own.into_iter().filter(|m| m.is_finite()).collect();
+    let Some(typical) = mp_geom::median(&mut own) else {
         return (start, end);
-    }
-    sorted.sort_by(f64::total_cmp);
-    let limit = (fraction * scale).max(MISMATCH_OVER_TYPICAL * sorted[sorted.len() / 2]);
-    let slack = ((p as f64 * PERIOD_SLACK).round() as usize).max(1);
-    let (lags_lo, lags_hi) = (p.saturating_sub(slack).max(1), p + slack);
-    // Distance of frame `t` to the nearest frame about a period towards
-    // the repetitions (later for `forward`, earlier otherwise).
-    let nearest = |t: usize, forward: bool| -> f64 {
-        (lags_lo..=lags_hi)
-            .filter_map(|lag| {
-                if forward {
-                    (t + lag < hi).then(|| frame_distance(track, t, t + lag))
-                } else {
-                    (t >= lo + lag).then(|| frame_distance(track, t - lag, t))
-                }
-            })
-            .fold(f64::INFINITY, f64::min)
     };
+    let limit = (fraction * scale).max(MISMATCH_OVER_TYPICAL * typical);
     let w = (p / 2).max(1);
     // How far the repetitions reach along `m` (the frames' mismatches going
     // outward): up to the first frame whose mean over the half period
     // towards the repetitions is above the limit. A frame with no frame a
     // period towards the repetitions inside `lo..hi` does not match.
-    let reach = |m: &[f64]| -> usize {
+    let reach = |m: Vec<f64>| -> usize {
+        let m: Vec<f64> = m
+            .into_iter()
+            .map(|v| if v.is_finite() { v } else { 4.0 * limit })
+            .collect();
         let mut sum = 0.0;
         for (i, &v) in m.iter().enumerate() {
-            sum += if v.is_finite() { v } else { 4.0 * limit };
+            sum += v;
             if i >= w {
-                let old = m[i - w];
-                sum -= if old.is_finite() { old } else { 4.0 * limit };
+                sum -= m[i - w];
             }
             let mean = sum / (i + 1).min(w) as f64;
             if mean.is_nan() || mean > limit {
@@ -294,7 +297,11 @@ pub(crate) fn extend_repeating(
         }
         m.len()
     };
-    let left: Vec<f64> = (lo..start).rev().map(|t| nearest(t, true)).collect();
-    let right: Vec<f64> = (end..hi).map(|t| nearest(t, false)).collect();
-    (start - reach(&left), end + reach(&right))
+    let towards = |t, way| nearest_a_period_away(track, t, p, (lo, hi), way);
+    let left = (lo..start)
+        .rev()
+        .map(|t| towards(t, Towards::Later))
+        .collect();
+    let right = (end..hi).map(|t| towards(t, Towards::Earlier)).collect();
+    (start - reach(left), end + reach(right))
 }
