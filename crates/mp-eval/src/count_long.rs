@@ -127,9 +127,8 @@ pub fn truth_interval(ends: &[i64], label_fps: f64, fps: f64) -> Option<(usize, 
     Some((to(start), to(last + 1.0), ends.len()))
 }
 
-/// The mean of boxes weighted by frames, widened by `margin` of its size on
-/// every side.
-pub fn weighted_box(boxes: &[([f64; 4], usize)], margin: f64) -> Option<[f64; 4]> {
+/// The mean of boxes weighted by frames.
+pub fn weighted_box(boxes: &[([f64; 4], usize)]) -> Option<[f64; 4]> {
     let w: usize = boxes.iter().map(|b| b.1).sum();
     if w == 0 {
         return None;
@@ -140,8 +139,7 @@ pub fn weighted_box(boxes: &[([f64; 4], usize)], margin: f64) -> Option<[f64; 4]
             m[k] += b[k] * *n as f64 / w as f64;
         }
     }
-    let (mx, my) = (margin * (m[2] - m[0]), margin * (m[3] - m[1]));
-    Some([m[0] - mx, m[1] - my, m[2] + mx, m[3] + my])
+    Some(m)
 }
 
 /// Grey thumbnails of `region` (the whole frame when `None`) of every frame.
@@ -212,7 +210,7 @@ pub fn run(a: &LongArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let clips = load_clips(a)?;
     let boxes: Vec<([f64; 4], usize)> = clips.iter().filter_map(|c| c.person_box).collect();
-    let region = weighted_box(&boxes, PoseParams::BOX_MARGIN);
+    let region = weighted_box(&boxes).and_then(|b| PoseParams::own_box_region(b, WIDTH, HEIGHT));
     let size = a.params.pose.thumbnail_size;
     let mut thumbs = Vec::new();
     for c in &clips {
@@ -273,7 +271,7 @@ pub fn run(a: &LongArgs) -> anyhow::Result<()> {
     let labelled: usize = truth.iter().map(|t| t.2).sum();
     let report = json!({
         "kind": "repetition_count_long_recording",
-        "definition": "every labelled video and the golf swing, each scaled to 640×360 (aspect kept, padded) at 30 fps, played in order `repeats` times; keypoints: mp_pipeline::keypoints with Params::default() once per clip, joined in order; frame signal: grey thumbnails of the main person's mean box over the whole recording (frame-weighted mean of the clips' boxes, BOX_MARGIN added), as mp run reads them for the main person. `product`: mp_pipeline::count (keypoints and frames, as mp run after keypoints); `keypoints_only`/`frames_only`: one signal. Truth: one interval per labelled clip, from its first cycle's start (first end minus the second cycle's length, or the clip start) to its last cycle's end. Intervals matched one-to-one by IoM > 0.5 (greedy, as the CMU interval evaluation); count error over matched intervals.",
+        "definition": "every labelled video and the golf swing, each scaled to 640×360 (aspect kept, padded) at 30 fps, played in order `repeats` times; keypoints: mp_pipeline::keypoints with Params::default() once per clip, joined in order; frame signal: grey thumbnails of the main person's mean box over the whole recording (frame-weighted mean of the clips' boxes, widened as PoseParams::own_box_region widens it; the whole frame where that region lies mostly outside the picture), as mp run reads them for the main person. `product`: mp_pipeline::count (keypoints and frames, as mp run after keypoints); `keypoints_only`/`frames_only`: one signal. Truth: one interval per labelled clip, from its first cycle's start (first end minus the second cycle's length, or the clip start) to its last cycle's end. Intervals matched one-to-one by IoM > 0.5 (greedy, as the CMU interval evaluation); count error over matched intervals.",
         "repeats": a.repeats,
         "frames": track.n_frames(),
         "minutes": track.n_frames() as f64 / FPS / 60.0,
@@ -415,17 +413,14 @@ mod tests {
     }
 
     #[test]
-    fn box_is_weighted_by_frames_and_widened() {
-        let b = weighted_box(
-            &[([0.0, 0.0, 10.0, 10.0], 3), ([10.0, 10.0, 20.0, 20.0], 1)],
-            0.1,
-        )
-        .unwrap();
-        let want = [1.5, 1.5, 13.5, 13.5];
+    fn box_is_weighted_by_frames() {
+        let b =
+            weighted_box(&[([0.0, 0.0, 10.0, 10.0], 3), ([10.0, 10.0, 20.0, 20.0], 1)]).unwrap();
+        let want = [2.5, 2.5, 12.5, 12.5];
         for k in 0..4 {
             assert!((b[k] - want[k]).abs() < 1e-9, "{b:?}");
         }
-        assert_eq!(weighted_box(&[], 0.1), None);
+        assert_eq!(weighted_box(&[]), None);
     }
 
     #[test]

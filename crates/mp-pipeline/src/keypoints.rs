@@ -11,7 +11,8 @@
 //! the whole video. Each analysed person's frame signal is read from grey
 //! thumbnails of their own box (a second decoding pass), not of the whole
 //! frame, so that the people beside them stay out of it; the whole frame is
-//! read only when nobody is found. Where a region of the picture moves on
+//! read only when nobody is found or the main person's box lies mostly
+//! outside the picture (`crate::PoseParams::own_box_region`). Where a region of the picture moves on
 //! its own and repeats more clearly than those thumbnails, its cells are the
 //! frame signal instead ([`crate::frame_signal`]).
 
@@ -132,7 +133,7 @@ pub struct Keypoints {
     pub track: Track,
     /// The frame signal, grey thumbnails as a unitless feature track: of the
     /// tracked person's own box when people are tracked and someone was
-    /// found, else of the whole frames — or, when more periodic, of the
+    /// found with a box mostly inside the picture, else of the whole frames — or, when more periodic, of the
     /// region of the picture that moves on its own (`crate::frame_signal`).
     pub thumbnails: Option<Track>,
     /// How the frame signal was chosen (for video).
@@ -621,7 +622,8 @@ pub(crate) fn chosen_people(
 }
 
 /// Grey thumbnails of each person's own (mean) box over the whole video, from
-/// a second decoding pass.
+/// a second decoding pass; none for a person whose box lies mostly outside
+/// the picture ([`PoseParams::own_box_region`]).
 fn box_thumbnails(
     path: &Path,
     people: &People,
@@ -631,18 +633,16 @@ fn box_thumbnails(
     cancel: &CancelToken,
 ) -> Result<std::collections::HashMap<PersonId, Track>> {
     let size = params.pose.thumbnail_size;
+    let reader = VideoReader::open(path)?;
+    let (fps, width, height) = (reader.info().fps, reader.info().width, reader.info().height);
     let regions: Vec<(PersonId, [f64; 4])> = ids
         .iter()
         .filter_map(|id| {
             let b = people.get(*id)?.mean_box()?;
-            let margin = PoseParams::BOX_MARGIN;
-            let (mx, my) = (margin * (b[2] - b[0]), margin * (b[3] - b[1]));
-            Some((*id, [b[0] - mx, b[1] - my, b[2] + mx, b[3] + my]))
+            Some((*id, PoseParams::own_box_region(b, width, height)?))
         })
         .collect();
     let mut thumbs: Vec<Vec<Vec<f32>>> = vec![Vec::with_capacity(n); regions.len()];
-    let reader = VideoReader::open(path)?;
-    let fps = reader.info().fps;
     for frame in reader.take(n) {
         check(cancel)?;
         let frame = frame?;

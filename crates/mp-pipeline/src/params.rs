@@ -52,6 +52,34 @@ impl PoseParams {
     /// (arms and legs reach past the mean box during a repetition).
     pub const BOX_MARGIN: f64 = 0.25;
 
+    /// Share of the region (the mean box with [`Self::BOX_MARGIN`]) that must lie
+    /// inside the picture for the person's own thumbnails to be read: a
+    /// region mostly outside it holds too little of the picture to follow
+    /// the person (a person whose box the tracker placed above the frame), and
+    /// the whole frame is read instead.
+    pub const MIN_BOX_INSIDE: f64 = 0.5;
+
+    /// The region of the picture a person's own thumbnails are read from:
+    /// their mean box `[x0, y0, x1, y1]` (pixels) widened by
+    /// [`Self::BOX_MARGIN`] on every side; `None` where less than
+    /// [`Self::MIN_BOX_INSIDE`] of it lies inside a `width` × `height`
+    /// picture (or the box is empty or not finite).
+    pub fn own_box_region(mean_box: [f64; 4], width: usize, height: usize) -> Option<[f64; 4]> {
+        let b = mean_box;
+        if b.iter().any(|v| !v.is_finite()) || b[2] <= b[0] || b[3] <= b[1] {
+            return None;
+        }
+        let (mx, my) = (
+            Self::BOX_MARGIN * (b[2] - b[0]),
+            Self::BOX_MARGIN * (b[3] - b[1]),
+        );
+        let r = [b[0] - mx, b[1] - my, b[2] + mx, b[3] + my];
+        let inside = |a: f64, b: f64, n: usize| (b.min(n as f64) - a.max(0.0)).max(0.0);
+        let area = (r[2] - r[0]) * (r[3] - r[1]);
+        let seen = inside(r[0], r[2], width) * inside(r[1], r[3], height);
+        (seen >= Self::MIN_BOX_INSIDE * area).then_some(r)
+    }
+
     /// The ONNX Runtime session settings of the pose models.
     pub fn session(&self) -> mp_pose::SessionParams {
         mp_pose::SessionParams {
@@ -342,6 +370,28 @@ mod as_text {
 #[cfg(test)]
 mod json_tests {
     use super::*;
+
+    #[test]
+    fn a_box_mostly_outside_the_picture_is_not_read() {
+        // 100 × 200 box: widened by a quarter on every side to 150 × 300.
+        let r = PoseParams::own_box_region([100.0, 50.0, 200.0, 250.0], 640, 360).unwrap();
+        assert_eq!(r, [75.0, 0.0, 225.0, 300.0]);
+        // Mostly above the frame (half rate of a hidden dancer: y from -90 to 33).
+        assert_eq!(
+            PoseParams::own_box_region([172.6, -90.8, 498.8, 32.9], 640, 360),
+            None
+        );
+        // A box cut by the edge but mostly inside is still read.
+        assert!(PoseParams::own_box_region([237.2, -28.6, 395.7, 431.0], 640, 480).is_some());
+        assert_eq!(
+            PoseParams::own_box_region([1.0, 1.0, 1.0, 5.0], 640, 360),
+            None
+        );
+        assert_eq!(
+            PoseParams::own_box_region([f64::NAN, 1.0, 2.0, 5.0], 640, 360),
+            None
+        );
+    }
 
     #[test]
     fn the_defaults_go_through_json_unchanged() {
