@@ -6,7 +6,8 @@
 //! the whole-frame thumbnails, with the camera's global motion discounted
 //! (`mp_pose::motion`), locates where the picture moves on its own: for
 //! each region side in [`REGION_SIDES`], the square region where that energy
-//! gathers most. Of these regions' thumbnails and the usual ones, the most
+//! gathers most (for a tracked person, among the squares inside their own
+//! box: someone repeating beside them is not their repetition). Of these regions' thumbnails and the usual ones, the most
 //! periodic signal — the autocorrelation of its motion at its period
 //! (`mp_abstract::estimate_period` with the frame settings), the periodicity
 //! by which counting also chooses between keypoints and frames — is the
@@ -48,16 +49,31 @@ fn periodicity(track: &Track, params: &Params) -> Result<f64> {
         .unwrap_or(0.0))
 }
 
+/// A person's own thumbnails and where they lie in the picture.
+#[derive(Debug, Clone)]
+pub struct OwnBox {
+    /// Grey thumbnails of the person's own box.
+    pub thumbnails: Track,
+    /// The box `[x0, y0, x1, y1]` as fractions of the picture's width and
+    /// height (`crate::PoseParams::own_box_region` over the frame size).
+    pub place: [f64; 4],
+}
+
 /// The frame signal: the usual thumbnails (`own`, the person's own box, or
 /// else `whole`, the whole-frame thumbnails, square) or the thumbnails of
 /// the region of `whole` that moves on its own, whichever is the more
-/// periodic (the usual ones on ties) — see the module docs.
+/// periodic (the usual ones on ties) — see the module docs. With a person's
+/// own box, only regions inside it are considered: a person's repetitions
+/// are read where that person is, not from someone or something beside
+/// them.
 pub fn choose_frame_signal(
     whole: Track,
-    own: Option<Track>,
+    own: Option<OwnBox>,
     params: &Params,
 ) -> Result<(Track, FrameChoice)> {
     let size = whole.n_joints();
+    let place = own.as_ref().map(|o| o.place);
+    let own = own.map(|o| o.thumbnails);
     let base_periodicity = periodicity(own.as_ref().unwrap_or(&whole), params)?;
     let mut choice = FrameChoice {
         region: None,
@@ -75,7 +91,16 @@ pub fn choose_frame_signal(
     // One region's cells at a time (at most a quarter of the picture's: 2 KB
     // a frame for 32-cell thumbnails); the chosen one is copied again.
     let mut best: Option<(CellRegion, f64)> = None;
-    for (reg, ratio) in moving_regions(&energy, size, &sides) {
+    let inside = |r: &CellRegion| {
+        place.is_none_or(|b| {
+            let s = size as f64;
+            r.c0 as f64 >= b[0] * s - 1e-9
+                && r.c1 as f64 <= b[2] * s + 1e-9
+                && r.r0 as f64 >= b[1] * s - 1e-9
+                && r.r1 as f64 <= b[3] * s + 1e-9
+        })
+    };
+    for (reg, ratio) in moving_regions(&energy, size, &sides, inside) {
         let p = periodicity(&region_track(&whole, reg)?, params)?;
         choice.regions.push((reg, ratio, p));
         if p > best.map_or(base_periodicity, |b| b.1) {
@@ -150,6 +175,41 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!((est.period_frames as i64 - 20).abs() <= 1, "{est:?}");
+    }
+
+    #[test]
+    fn a_person_s_signal_is_not_read_from_a_repetition_beside_them() {
+        // The repeating patch is at the top right (columns 20..26); a person
+        // on the left half of the picture keeps their own thumbnails.
+        let whole = scene(200, true);
+        let left = region_track(
+            &whole,
+            CellRegion {
+                r0: 0,
+                c0: 0,
+                r1: 32,
+                c1: 16,
+            },
+        )
+        .unwrap();
+        let own = |place| OwnBox {
+            thumbnails: left.clone(),
+            place,
+        };
+        let params = Params::default();
+        let (tr, choice) =
+            choose_frame_signal(whole.clone(), Some(own([0.0, 0.0, 0.5, 1.0])), &params).unwrap();
+        assert_eq!(choice.region, None, "{choice:?}");
+        assert_eq!(tr.n_joints(), 32);
+        assert_eq!(tr.dims(), 16);
+        for (reg, _, _) in &choice.regions {
+            assert!(reg.c1 <= 16, "{reg:?} reaches out of the left half");
+        }
+        // A person whose box holds the patch has it read.
+        let (_, choice) =
+            choose_frame_signal(whole, Some(own([0.5, 0.0, 1.0, 0.5])), &params).unwrap();
+        let reg = choice.region.expect("the patch's region");
+        assert!(reg.c0 <= 20 && reg.c1 >= 26, "{reg:?}");
     }
 
     #[test]

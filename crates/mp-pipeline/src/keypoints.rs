@@ -12,9 +12,11 @@
 //! thumbnails of their own box (a second decoding pass), not of the whole
 //! frame, so that the people beside them stay out of it; the whole frame is
 //! read only when nobody is found or the main person's box lies mostly
-//! outside the picture (`crate::PoseParams::own_box_region`). Where a region of the picture moves on
-//! its own and repeats more clearly than those thumbnails, its cells are the
-//! frame signal instead ([`crate::frame_signal`]).
+//! outside the picture (`crate::PoseParams::own_box_region`). Where a region
+//! of the picture moves on its own and repeats more clearly than those
+//! thumbnails, its cells are the frame signal instead
+//! ([`crate::frame_signal`]); for a person, only a region inside their own
+//! box.
 
 use std::path::Path;
 use std::time::Instant;
@@ -31,7 +33,7 @@ use mp_pose::{VideoInfo, VideoReader};
 use mp_report::{FrameStore, FrameStoreParams};
 
 use crate::error::{PipelineError, Result};
-use crate::frame_signal::{choose_frame_signal, FrameChoice};
+use crate::frame_signal::{choose_frame_signal, FrameChoice, OwnBox};
 use crate::input::Input;
 use crate::params::{Params, PersonChoice, PoseParams};
 use crate::progress::{check, Observer, Stage, StageTime, Timings};
@@ -436,7 +438,7 @@ fn from_video(
                 let others = rest
                     .iter()
                     .map(|id| {
-                        let th = match (boxes.remove(id), people.get(*id)) {
+                        let th = match (boxes.remove(id).map(|o| o.thumbnails), people.get(*id)) {
                             (Some(th), Some(p)) => {
                                 Some(th.slice_frames(p.first_frame, p.last_frame() + 1)?)
                             }
@@ -461,7 +463,7 @@ fn from_video(
             timings.push(Stage::Motion, t1.elapsed(), n);
             (Some(signal), Some(choice))
         }
-        None => (thumbnails, None),
+        None => (thumbnails.map(|o| o.thumbnails), None),
     };
     let overlay = keep.overlay.then(|| OverlayFrames {
         info: info.clone(),
@@ -631,7 +633,7 @@ fn box_thumbnails(
     n: usize,
     params: &Params,
     cancel: &CancelToken,
-) -> Result<std::collections::HashMap<PersonId, Track>> {
+) -> Result<std::collections::HashMap<PersonId, OwnBox>> {
     let size = params.pose.thumbnail_size;
     let reader = VideoReader::open(path)?;
     let (fps, width, height) = (reader.info().fps, reader.info().width, reader.info().height);
@@ -651,9 +653,17 @@ fn box_thumbnails(
         }
     }
     let mut out = std::collections::HashMap::new();
-    for ((id, _), th) in regions.into_iter().zip(thumbs) {
+    let (w, h) = (width as f64, height as f64);
+    for ((id, r), th) in regions.into_iter().zip(thumbs) {
         if th.len() == n {
-            out.insert(id, thumbnail_track(th, size, fps)?);
+            let place = [
+                (r[0] / w).clamp(0.0, 1.0),
+                (r[1] / h).clamp(0.0, 1.0),
+                (r[2] / w).clamp(0.0, 1.0),
+                (r[3] / h).clamp(0.0, 1.0),
+            ];
+            let thumbnails = thumbnail_track(th, size, fps)?;
+            out.insert(id, OwnBox { thumbnails, place });
         }
     }
     Ok(out)

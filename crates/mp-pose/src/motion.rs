@@ -174,8 +174,14 @@ impl MotionEnergy {
 /// energy; positions every quarter side), with that mean over the mean of
 /// the whole grid (1: no more than anywhere else). Ties go to the first
 /// position in row-major order. Regions whose ratio is not above 1 are left
-/// out: nothing moves there more than in the rest of the picture.
-pub fn moving_regions(energy: &[f64], size: usize, sides: &[usize]) -> Vec<(CellRegion, f64)> {
+/// out: nothing moves there more than in the rest of the picture. Only the
+/// positions `allow` accepts are considered (`|_| true`: all of them).
+pub fn moving_regions(
+    energy: &[f64],
+    size: usize,
+    sides: &[usize],
+    allow: impl Fn(&CellRegion) -> bool,
+) -> Vec<(CellRegion, f64)> {
     if size == 0 || energy.len() != size * size {
         return Vec::new();
     }
@@ -208,17 +214,18 @@ pub fn moving_regions(energy: &[f64], size: usize, sides: &[usize]) -> Vec<(Cell
         let mut best: Option<(CellRegion, f64)> = None;
         for &r0 in &starts {
             for &c0 in &starts {
+                let reg = CellRegion {
+                    r0,
+                    c0,
+                    r1: r0 + side,
+                    c1: c0 + side,
+                };
+                if !allow(&reg) {
+                    continue;
+                }
                 let m = sum(r0, c0, r0 + side, c0 + side) / (side * side) as f64;
                 if best.is_none_or(|(_, b)| m > b) {
-                    best = Some((
-                        CellRegion {
-                            r0,
-                            c0,
-                            r1: r0 + side,
-                            c1: c0 + side,
-                        },
-                        m,
-                    ));
+                    best = Some((reg, m));
                 }
             }
         }
@@ -303,7 +310,7 @@ mod tests {
             acc.push(&f).unwrap();
         }
         let e = acc.energy();
-        let regs = moving_regions(&e, size, &[8, 16]);
+        let regs = moving_regions(&e, size, &[8, 16], |_| true);
         assert_eq!(regs.len(), 2);
         let (small, ratio) = regs[0];
         assert_eq!(small.r1 - small.r0, 8);
@@ -312,8 +319,13 @@ mod tests {
         assert!(ratio > 8.0, "{ratio}");
         assert_eq!(small.cells(), 64);
         // A picture where everything moves alike has no region of its own.
-        assert!(moving_regions(&vec![1.0; 64], 8, &[2, 4]).is_empty());
-        assert!(moving_regions(&[1.0; 3], 8, &[2]).is_empty());
+        assert!(moving_regions(&vec![1.0; 64], 8, &[2, 4], |_| true).is_empty());
+        assert!(moving_regions(&[1.0; 3], 8, &[2], |_| true).is_empty());
+        // Only the positions allowed are considered: in the right half, the
+        // patch's square is not among them.
+        for (reg, _) in moving_regions(&e, size, &[8], |r| r.c0 >= 16) {
+            assert!(reg.c0 >= 16, "{reg:?}");
+        }
         assert!(acc.push(&[0.0; 3]).is_err());
     }
 
