@@ -12,12 +12,17 @@
 //!    neighbouring intervals of one period and one motion are joined into
 //!    one activity, each activity's extent is followed outward for as long
 //!    as the motion keeps repeating, and counted: its length over its period
-//!    (see `activities.rs`).
+//!    (see `activities.rs`). So is a recording whose period over its whole
+//!    length is too weak (below [`CountParams::min_strength`]: a pace that
+//!    changes from cycle to cycle) where an interval holds the cycles that
+//!    establish a period (the period estimate's `min_cycles`, 3).
 //! 3. Otherwise the recording holds one repetitive activity: when its period
 //!    is strong enough ([`CountParams::min_strength`]) the count is the length
 //!    of the part that repeats over the period — rest at either end trimmed,
 //!    then motion at either end that does not match itself about a period
-//!    later or earlier ([`CountParams::mismatch_fraction`]); when not, or when
+//!    later or earlier ([`CountParams::mismatch_fraction`]), at the period or
+//!    at a longer one where the motion comes back to itself clearly better
+//!    (a figure of several similar steps; `whole_cycle`); when not, or when
 //!    the part counted is no nearer itself a period later than half a period
 //!    later (a cycle mismatch of 1 or more: jitter, a drift), nothing
 //!    repeats (a golf swing is one movement).
@@ -43,7 +48,7 @@ use span::{active_span, cycle_mismatch, repeating_span};
 
 use crate::error::{AbstractError, Result};
 use crate::repetition::{
-    estimate_period, segment_repetitions, IntervalParams, PeriodEstimate, PeriodParams,
+    estimate_period_and_longer, segment_repetitions, IntervalParams, PeriodEstimate, PeriodParams,
     PeriodicSegment, RepetitiveInterval,
 };
 use mp_geom::Track;
@@ -361,8 +366,8 @@ fn count_checked(
         CountSignal::Keypoints => &params.period,
         CountSignal::Frames => &params.frame_period,
     };
-    let whole = estimate_period(signal, 0, n, period_params)?;
-    let strength = whole.map(|e| e.strength.max(0.0)).unwrap_or(0.0);
+    let whole = estimate_period_and_longer(signal, 0, n, period_params)?;
+    let strength = whole.as_ref().map(|e| e.0.strength.max(0.0)).unwrap_or(0.0);
     let segs = match pooled(signal, params.max_segment_channels)? {
         Some(p) => segment_repetitions(&p, &params.segment)?,
         None => segment_repetitions(signal, &params.segment)?,
@@ -379,7 +384,16 @@ fn count_checked(
         .filter(|s| s.count >= 2.0 && s.period_frames + 1 < top_period)
         .cloned()
         .collect();
-    if several_activities(&substantial, params.period_tolerance) {
+    // A recording whose autocorrelation over its whole length is too weak
+    // for a period (the pace changing from cycle to cycle blurs it) may still
+    // repeat where the segmenter reads it locally: an interval holding the
+    // cycles that establish a period (`min_cycles` of the period estimate)
+    // is counted as the intervals of several activities are.
+    let weak = strength < params.min_strength;
+    let established = substantial
+        .iter()
+        .any(|s| s.count >= period_params.min_cycles);
+    if several_activities(&substantial, params.period_tolerance) || (weak && established) {
         let acts = activities::activities(signal, &segs, params);
         let intervals: Vec<CountedInterval> = acts
             .iter()
@@ -414,15 +428,21 @@ fn count_checked(
         });
     }
     match whole {
-        Some(PeriodEstimate {
-            period_frames,
-            strength,
-            ..
-        }) if strength >= params.min_strength => {
-            let (a, b) = active_span(signal, period_frames, params.rest_fraction)?;
-            let (a, b) = repeating_span(signal, period_frames, a, b, params.mismatch_fraction);
+        Some((
+            PeriodEstimate {
+                period_frames,
+                strength,
+                ..
+            },
+            ref longer,
+        )) if strength >= params.min_strength => {
+            let Reading {
+                period: period_frames,
+                strength,
+                span: (a, b),
+                mismatch,
+            } = whole_cycle(signal, (period_frames, strength), longer, params)?;
             let iv = CountedInterval::new(a, b, period_frames, strength, kind);
-            let mismatch = cycle_mismatch(signal, period_frames, a, b).unwrap_or((1.0, 1.0));
             // No nearer itself a period later than half a period later: the
             // motion does not repeat at this period, whatever its
             // autocorrelation (jitter, a drift); another signal may still
@@ -594,6 +614,82 @@ fn several_activities(segs: &[PeriodicSegment], tolerance: f64) -> bool {
 /// does not repeat at that period, and a recording of one activity whose
 /// counted span reaches it is not counted.
 const DOES_NOT_REPEAT: f64 = 1.0;
+
+/// A period, its strength, its repeating span and that span's mismatch.
+struct Reading {
+    period: usize,
+    strength: f64,
+    span: (usize, usize),
+    /// `(whole, ends)` as [`cycle_mismatch`] gives it; (1, 1) when it has none.
+    mismatch: (f64, f64),
+}
+
+impl Reading {
+    /// Where and how well the motion repeats at `period`: its repeating span
+    /// (the active frames, trimmed to those that match themselves a period
+    /// away) and that span's cycle mismatch.
+    fn at(signal: &Track, (period, strength): (usize, f64), params: &CountParams) -> Result<Self> {
+        let (a, b) = active_span(signal, period, params.rest_fraction)?;
+        let (a, b) = repeating_span(signal, period, a, b, params.mismatch_fraction);
+        Ok(Reading {
+            period,
+            strength,
+            span: (a, b),
+            mismatch: cycle_mismatch(signal, period, a, b).unwrap_or((1.0, 1.0)),
+        })
+    }
+}
+
+/// The cycle mismatch below which the motion repeats well at a period: the
+/// nearest frame a period away is nearer than half the distance between
+/// frames half a period apart. At a period where it does not, the longer
+/// peaks of the autocorrelation are tried ([`whole_cycle`]), and a longer
+/// one must be below it (a wandering body that happens to come back near
+/// itself once is no repetition).
+const LONGER_CYCLE_GATE: f64 = 0.5;
+
+/// A longer period replaces the autocorrelation's when its cycle mismatch is
+/// below this share of the chosen period's: the motion comes back to itself
+/// clearly better there.
+const LONGER_CYCLE_GAIN: f64 = 0.7;
+
+/// The period the repetitions are counted at: the autocorrelation's
+/// (`chosen`, with its strength), unless the motion comes back to itself
+/// poorly there (cycle mismatch ≥ [`LONGER_CYCLE_GATE`]) and both well and
+/// clearly better at one of the `longer` peaks of the autocorrelation (below
+/// [`LONGER_CYCLE_GATE`] and below [`LONGER_CYCLE_GAIN`] of the first; the
+/// best of them) — as when each cycle is made of several similar movements,
+/// the steps of a dance figure, and the autocorrelation of the joint
+/// velocities peaks first at one of them. A longer period needs two cycles
+/// in the recording and the strength `min_strength`.
+fn whole_cycle(
+    signal: &Track,
+    chosen: (usize, f64),
+    longer: &[(usize, f64)],
+    params: &CountParams,
+) -> Result<Reading> {
+    let first = Reading::at(signal, chosen, params)?;
+    let m0 = first.mismatch.0;
+    if m0 < LONGER_CYCLE_GATE {
+        return Ok(first);
+    }
+    let n = signal.n_frames();
+    let mut best = first;
+    for &(l, s) in longer {
+        if 2 * l > n {
+            break;
+        }
+        if s < params.min_strength {
+            continue;
+        }
+        let r = Reading::at(signal, (l, s), params)?;
+        let m = r.mismatch.0;
+        if m < LONGER_CYCLE_GATE && m < LONGER_CYCLE_GAIN * m0 && m < best.mismatch.0 {
+            best = r;
+        }
+    }
+    Ok(best)
+}
 
 /// Whether count `c` of one signal decides over count `b` of another: a
 /// count beats no count; between two counts (or two non-counts) the more

@@ -10,6 +10,7 @@
 mod period;
 mod segment;
 
+pub(crate) use period::estimate_period_and_longer;
 pub use period::{estimate_period, PeriodEstimate, PeriodParams};
 pub use segment::{segment_repetitions, IntervalParams, PeriodicSegment};
 

@@ -242,6 +242,22 @@ pub fn estimate_period(
     end: usize,
     params: &PeriodParams,
 ) -> crate::Result<Option<PeriodEstimate>> {
+    Ok(estimate_period_and_longer(track, start, end, params)?.map(|(e, _)| e))
+}
+
+/// Later peaks of the autocorrelation: each lag with its strength.
+pub(crate) type LongerPeaks = Vec<(usize, f64)>;
+
+/// [`estimate_period`], with the other peaks of the autocorrelation at
+/// longer lags (in increasing order, each with its strength as
+/// [`PeriodEstimate::strength`]): the longer periods the motion may have, of
+/// which the chosen one could be a part.
+pub(crate) fn estimate_period_and_longer(
+    track: &mp_geom::Track,
+    start: usize,
+    end: usize,
+    params: &PeriodParams,
+) -> crate::Result<Option<(PeriodEstimate, LongerPeaks)>> {
     params.validate()?;
     if start >= end || end > track.n_frames() {
         return Err(crate::AbstractError::param(
@@ -317,16 +333,27 @@ pub fn estimate_period(
     };
     // Strength as the (unbiased) correlation at the chosen lag, whichever
     // estimator chose it.
-    let strength = if params.biased {
-        r[lag] * m as f64 / (m - lag) as f64
-    } else {
-        r[lag]
+    let unbiased = |l: usize| {
+        if params.biased {
+            r[l] * m as f64 / (m - l) as f64
+        } else {
+            r[l]
+        }
     };
-    Ok(Some(PeriodEstimate {
-        period_frames: lag,
-        strength,
-        count: n as f64 / lag as f64,
-    }))
+    let strength = unbiased(lag);
+    let longer = peaks
+        .iter()
+        .filter(|&&l| l > lag)
+        .map(|&l| (l, unbiased(l)))
+        .collect();
+    Ok(Some((
+        PeriodEstimate {
+            period_frames: lag,
+            strength,
+            count: n as f64 / lag as f64,
+        },
+        longer,
+    )))
 }
 
 /// Subtracts each column's mean from a row-major `m × dims` matrix.

@@ -366,3 +366,78 @@ fn a_tremor_on_motion_that_does_not_repeat_is_not_counted() {
     }
     assert!(counted.is_empty(), "counted: {counted:?}");
 }
+
+#[test]
+fn a_cycle_of_several_similar_movements_is_counted_whole() {
+    // Each 60-frame cycle holds five quick side-to-side movements (12 frames
+    // each) on a slower, wider up-and-down sway: the joint velocities
+    // correlate first at 12 frames, yet the pose comes back to itself only
+    // after 60.
+    // Five cycles are five repetitions, not 25.
+    let (n, cycle, step) = (300, 60.0, 12.0);
+    let mut p = Array3::zeros((n, 6, 2));
+    for t in 0..n {
+        let tt = t as f64;
+        let quick = 10.0 * (std::f64::consts::TAU * tt / step).sin();
+        let sway = 60.0 * (std::f64::consts::TAU * tt / cycle).sin();
+        for j in 0..6 {
+            p[[t, j, 0]] = 100.0 + 30.0 * j as f64 + quick;
+            p[[t, j, 1]] = 200.0 + 10.0 * j as f64 + sway;
+        }
+    }
+    let t = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(6)).unwrap();
+    let params = CountParams::default();
+    let e = mp_abstract_period(&t, &params);
+    assert!(
+        (e as i64 - 12).abs() <= 1,
+        "the autocorrelation's period: {e}"
+    );
+    let c = count_repetitions(&t, CountSignal::Keypoints, &params).unwrap();
+    assert_eq!(c.method, CountMethod::Period, "{c:?}");
+    let iv = &c.intervals[0];
+    assert!((iv.period_frames as i64 - 60).abs() <= 2, "{iv:?}");
+    assert!((4..=5).contains(&c.total), "{c:?}");
+    // A motion that repeats well at its period keeps it: the quick movement alone.
+    let mut q = Array3::zeros((n, 6, 2));
+    for t in 0..n {
+        let quick = 20.0 * (std::f64::consts::TAU * t as f64 / step).sin();
+        for j in 0..6 {
+            q[[t, j, 0]] = 100.0 + 30.0 * j as f64 + quick;
+            q[[t, j, 1]] = 200.0 + 10.0 * j as f64 + 0.5 * quick;
+        }
+    }
+    let t = Track::new(q, None, 30.0, Units::Pixels, Skeleton::generic(6)).unwrap();
+    let c = count_repetitions(&t, CountSignal::Keypoints, &params).unwrap();
+    assert!(
+        (c.intervals[0].period_frames as i64 - 12).abs() <= 1,
+        "{c:?}"
+    );
+    assert!((24..=25).contains(&c.total), "{c:?}");
+}
+
+/// The period the autocorrelation of joint velocities picks.
+fn mp_abstract_period(t: &Track, params: &CountParams) -> usize {
+    crate::estimate_period(t, 0, t.n_frames(), &params.period)
+        .unwrap()
+        .unwrap()
+        .period_frames
+}
+
+#[test]
+fn repetitions_the_whole_recording_reads_too_weakly_are_counted_where_they_repeat() {
+    // The whole-recording autocorrelation is held to be too weak for a period
+    // (as when the pace changes from cycle to cycle); the segmenter's
+    // interval of eight cycles still counts them.
+    let params = CountParams {
+        min_strength: 0.99,
+        ..CountParams::default()
+    };
+    let t = exercise(20, 8, 24, 6, 1.0, 3);
+    let c = count_repetitions(&t, CountSignal::Keypoints, &params).unwrap();
+    assert_eq!(c.method, CountMethod::Intervals, "{c:?}");
+    assert!((7..=9).contains(&c.total), "{c:?}");
+    // Two cycles do not establish a period: no count.
+    let t = exercise(20, 2, 24, 6, 1.0, 3);
+    let c = count_repetitions(&t, CountSignal::Keypoints, &params).unwrap();
+    assert_eq!(c.total, 0, "{c:?}");
+}
