@@ -4,15 +4,16 @@
 //! miss a repetition that fills little of a cluttered, moving picture, and
 //! the pose model often misses the person there too. So the motion energy of
 //! the whole-frame thumbnails, with the camera's global motion discounted
-//! (`mp_pose::motion`), locates where the picture moves on its own: for
-//! each region side in [`REGION_SIDES`], the square region where that energy
+//! (`mp_pose::motion`), locates where the picture moves on its own: for each
+//! region side in [`REGION_SIDES`], the square region where that energy
 //! gathers most (for a tracked person, among the squares inside their own
-//! box: someone repeating beside them is not their repetition). Of these regions' thumbnails and the usual ones, the most
-//! periodic signal — the autocorrelation of its motion at its period
+//! box: someone repeating beside them is not their repetition). Of these
+//! regions' thumbnails and the usual ones, the most periodic signal — the
+//! autocorrelation of its motion at its period
 //! (`mp_abstract::estimate_period` with the frame settings), the periodicity
-//! by which counting also chooses between keypoints and frames — is the
-//! frame signal. The regions' cells are copied from the whole-frame
-//! thumbnails: no extra decoding, and at most a quarter of their memory.
+//! by which counting also chooses between keypoints and frames — is the frame
+//! signal. The regions' cells are copied from the whole-frame thumbnails: no
+//! extra decoding, and at most a quarter of their memory.
 
 use mp_abstract::estimate_period;
 use mp_geom::Track;
@@ -51,12 +52,12 @@ fn periodicity(track: &Track, params: &Params) -> Result<f64> {
 
 /// A person's own thumbnails and where they lie in the picture.
 #[derive(Debug, Clone)]
-pub struct OwnBox {
+pub(crate) struct OwnBox {
     /// Grey thumbnails of the person's own box.
-    pub thumbnails: Track,
+    pub(crate) thumbnails: Track,
     /// The box `[x0, y0, x1, y1]` as fractions of the picture's width and
     /// height (`crate::PoseParams::own_box_region` over the frame size).
-    pub place: [f64; 4],
+    pub(crate) place: [f64; 4],
 }
 
 /// The frame signal: the usual thumbnails (`own`, the person's own box, or
@@ -66,7 +67,7 @@ pub struct OwnBox {
 /// own box, only regions inside it are considered: a person's repetitions
 /// are read where that person is, not from someone or something beside
 /// them.
-pub fn choose_frame_signal(
+pub(crate) fn choose_frame_signal(
     whole: Track,
     own: Option<OwnBox>,
     params: &Params,

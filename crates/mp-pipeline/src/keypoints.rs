@@ -135,8 +135,9 @@ pub struct Keypoints {
     pub track: Track,
     /// The frame signal, grey thumbnails as a unitless feature track: of the
     /// tracked person's own box when people are tracked and someone was
-    /// found with a box mostly inside the picture, else of the whole frames — or, when more periodic, of the
-    /// region of the picture that moves on its own (`crate::frame_signal`).
+    /// found with a box mostly inside the picture, else of the whole frames
+    /// — or, when more periodic, of the region of the picture that moves on
+    /// its own (`crate::frame_signal`).
     pub thumbnails: Option<Track>,
     /// How the frame signal was chosen (for video).
     pub frame_choice: Option<FrameChoice>,

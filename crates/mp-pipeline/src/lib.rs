@@ -61,7 +61,7 @@ pub use error::PipelineError;
 use error::Result;
 pub use extract::{extract, ExtractParams, Extracted, ExtractedPoses};
 pub use fit_options::FitOptions;
-pub use frame_signal::{FrameChoice, OwnBox};
+pub use frame_signal::FrameChoice;
 pub use input::Input;
 use keypoints::ModelSlot;
 pub use keypoints::{keypoints, Keep, Keypoints};
