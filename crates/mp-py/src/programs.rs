@@ -257,8 +257,9 @@ impl PyAbstract {
 /// Repetition counts: `total`, `intervals` (dicts as in `loops.json`'s
 /// `repetitions.intervals`: `first_frame`, `last_frame` (inclusive),
 /// `count`, `period_frames`, `period_s`, `cycles`, `periodicity`,
-/// `repetitions` (`[first, last]` of each), `signal`), the `signal` (`keypoints` or
-/// `frames`) and `method` (`period`, `intervals`, `none`) that decided, and
+/// `repetitions` (`[first, last]` of each) and `signal`, what the interval
+/// was counted from), the `signal` (`keypoints` or `frames`) and `method`
+/// (`period`, `intervals`, `none`) that decided, and
 /// a `confidence`; for a video with several people tracked, `person` (whose
 /// counts these are) and `people` (every tracked person's entry of
 /// `loops.json`). `to_json()` gives the `loops.json` document (without
