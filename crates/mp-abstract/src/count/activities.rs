@@ -178,7 +178,7 @@ pub(crate) fn count_activity(
         stretch,
         params.mismatch_fraction,
     );
-    CountedInterval::new(a, b, p, act.score, kind)
+    CountedInterval::new(a, b, p as f64, act.score, kind)
 }
 
 /// Two readings of several activities made one: every interval of either,
@@ -222,7 +222,7 @@ pub(crate) fn merged(a: Counts, b: Counts) -> Counts {
         kept.push(if (s0, e0) == (iv.start_frame, iv.end_frame) {
             iv
         } else {
-            CountedInterval::new(s0, e0, iv.period_frames, iv.periodicity, iv.signal)
+            CountedInterval::new(s0, e0, iv.period_frames as f64, iv.periodicity, iv.signal)
         });
     }
     kept.sort_by_key(|i| i.start_frame);

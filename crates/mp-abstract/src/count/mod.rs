@@ -18,11 +18,14 @@
 //!    establish a period (the period estimate's `min_cycles`, 3).
 //! 3. Otherwise the recording holds one repetitive activity: when its period
 //!    is strong enough ([`CountParams::min_strength`]) the count is the length
-//!    of the part that repeats over the period — rest at either end trimmed,
-//!    then motion at either end that does not match itself about a period
-//!    later or earlier ([`CountParams::mismatch_fraction`]), at the period or
-//!    at a longer one where the motion comes back to itself clearly better
-//!    (a figure of several similar steps; `whole_cycle`); when not, or when
+//!    of the part that repeats over its mean period — rest at either end
+//!    trimmed, then motion at either end that does not match itself about a
+//!    period later or earlier ([`CountParams::mismatch_fraction`]) or does
+//!    not come back to itself (as near itself half a period later: slow
+//!    motion), at the period or at a longer one where the motion comes back
+//!    to itself clearly better (a figure of several similar steps;
+//!    `whole_cycle`); the mean period is the lag near it at which positions
+//!    match best, between frames (`span.rs`); when not, or when
 //!    the part counted is no nearer itself a period later than half a period
 //!    later (a cycle mismatch of 1 or more: jitter, a drift), nothing
 //!    repeats (a golf swing is one movement).
@@ -50,7 +53,7 @@ use span::cycle_mismatch;
 
 use crate::error::{AbstractError, Result};
 use crate::repetition::{
-    estimate_period_and_longer, segment_repetitions, IntervalParams, PeriodEstimate, PeriodParams,
+    estimate_period_and_peaks, segment_repetitions, IntervalParams, PeriodEstimate, PeriodParams,
     PeriodicSegment, RepetitiveInterval,
 };
 use mp_geom::Track;
@@ -208,7 +211,7 @@ pub struct CountedInterval {
     pub start_frame: usize,
     /// One past the last frame.
     pub end_frame: usize,
-    /// Period, frames.
+    /// Period, frames (rounded: `cycles` divides by it unrounded).
     pub period_frames: usize,
     /// Length over period, before rounding.
     pub cycles: f64,
@@ -230,19 +233,19 @@ fn keypoints_signal() -> CountSignal {
 }
 
 impl CountedInterval {
-    fn new(start: usize, end: usize, period: usize, periodicity: f64, signal: CountSignal) -> Self {
-        let period = period.max(1);
-        let cycles = (end - start) as f64 / period as f64;
+    fn new(start: usize, end: usize, period: f64, periodicity: f64, signal: CountSignal) -> Self {
+        let period = period.max(1.0);
+        let cycles = (end - start) as f64 / period;
         let count = cycles.round().max(0.0) as usize;
         let mut boundaries: Vec<usize> = (0..count)
-            .map(|i| start + i * period)
+            .map(|i| start + (i as f64 * period).round() as usize)
             .filter(|&b| b < end)
             .collect();
         boundaries.push(end);
         CountedInterval {
             start_frame: start,
             end_frame: end,
-            period_frames: period,
+            period_frames: period.round() as usize,
             cycles,
             count,
             boundaries,
@@ -368,7 +371,7 @@ fn count_checked(
         CountSignal::Keypoints => &params.period,
         CountSignal::Frames => &params.frame_period,
     };
-    let whole = estimate_period_and_longer(signal, 0, n, period_params)?;
+    let whole = estimate_period_and_peaks(signal, 0, n, period_params)?;
     let strength = whole.as_ref().map(|e| e.0.strength.max(0.0)).unwrap_or(0.0);
     let segs = match pooled(signal, params.max_segment_channels)? {
         Some(p) => segment_repetitions(&p, &params.segment)?,
@@ -436,15 +439,17 @@ fn count_checked(
                 strength,
                 ..
             },
-            ref longer,
+            ref others,
         )) if strength >= params.min_strength => {
             let Reading {
                 period: period_frames,
                 strength,
                 span: (a, b),
                 mismatch,
-            } = whole_cycle(signal, (period_frames, strength), longer, params)?;
-            let iv = CountedInterval::new(a, b, period_frames, strength, kind);
+            } = whole_cycle(signal, (period_frames, strength), others, params)?;
+            // Counted at the repetitions' mean period (a fraction of a frame).
+            let exact = span::mean_period(signal, period_frames, a, b);
+            let iv = CountedInterval::new(a, b, exact, strength, kind);
             // No nearer itself a period later than half a period later: the
             // motion does not repeat at this period, whatever its
             // autocorrelation (jitter, a drift); another signal may still
@@ -664,7 +669,7 @@ mod tests {
     fn reading(method: CountMethod, periodicity: f64, intervals: &[(usize, usize, f64)]) -> Counts {
         let intervals: Vec<CountedInterval> = intervals
             .iter()
-            .map(|&(s, e, p)| CountedInterval::new(s, e, 30, p, CountSignal::Keypoints))
+            .map(|&(s, e, p)| CountedInterval::new(s, e, 30.0, p, CountSignal::Keypoints))
             .collect();
         Counts {
             total: intervals.iter().map(|i| i.count).sum(),

@@ -1,7 +1,8 @@
 //! Where the repetitions of a recording lie: the frames that move
 //! ([`active_span`]), the part of those that repeats at the period
-//! ([`repeating_span`]), and how closely the motion returns to itself one
-//! period later ([`cycle_mismatch`]).
+//! ([`repeating_span`]), how closely the motion returns to itself one
+//! period later ([`cycle_mismatch`]), and the repetitions' mean period
+//! between frames ([`mean_period`]).
 
 use crate::error::Result;
 use mp_geom::Track;
@@ -39,6 +40,12 @@ const PERIOD_SLACK: f64 = 0.2;
 /// In [`repeating_span`], an end is trimmed only where its mismatch is more
 /// than this multiple of the median mismatch over the activity.
 const MISMATCH_OVER_TYPICAL: f64 = 1.5;
+
+/// Motion repeats well at a period where its distance to the nearest frame
+/// about a period away is below this share of its distance to the frames
+/// half a period away: it comes back to itself, and does not merely stay
+/// near itself (as slow or still motion does at any lag).
+pub(crate) const REPEATS_WELL: f64 = 0.5;
 
 /// Where [`nearest_a_period_away`] looks for the matching frame.
 #[derive(Clone, Copy, PartialEq)]
@@ -179,14 +186,16 @@ pub(crate) fn repeating_span(
     // of the half-period scale) and far worse than the recording's own
     // cycle-to-cycle variation (MISMATCH_OVER_TYPICAL × its median): real
     // repetitions vary in amplitude and pace, and jitter weighs more on
-    // small movements, so the scale alone would trim them.
+    // small movements, so the scale alone would trim them. Also trimmed:
+    // slow motion that stays near itself without coming back (`repeats_here`).
     let smoothed: Vec<f64> = (0..n).map(smooth).collect();
     let mut sorted = smoothed.clone();
     sorted.sort_by(f64::total_cmp);
     let typical = sorted[n / 2];
     let limit = (fraction * scale).max(MISMATCH_OVER_TYPICAL * typical);
-    let first = (0..n).find(|&i| smoothed[i] <= limit);
-    let last = (0..n).rev().find(|&i| smoothed[i] <= limit);
+    let repeats = repeats_here(track, &mismatch, p, a, b);
+    let first = (0..n).find(|&i| smoothed[i] <= limit && repeats[i]);
+    let last = (0..n).rev().find(|&i| smoothed[i] <= limit && repeats[i]);
     match (first, last) {
         (Some(i), Some(k)) if k + 1 >= i + 2 * p => (a + i, a + k + 1),
         _ => (a, b),
@@ -304,4 +313,114 @@ pub(crate) fn extend_repeating(
         .collect();
     let right = (end..hi).map(|t| towards(t, Towards::Earlier)).collect();
     (start - reach(left), end + reach(right))
+}
+
+/// For each frame of `a..b` (`mismatch` holds their distances to the
+/// nearest frame about a period away, 0 where there is none), whether it
+/// belongs with the repetitions by this test: slow motion beside them stays
+/// near itself a period later, which the recording-wide scale of
+/// [`repeating_span`] lets through, yet it is as near itself half a period
+/// later — it does not come back. Over the period centred on each frame:
+/// the motion is **slow** where the mean distance to the frames half a
+/// period away is below the median over `a..b` divided by
+/// [`MISMATCH_OVER_TYPICAL`] (beyond the recording's own variation, the
+/// other way), and it **comes back** where the summed mismatch over the
+/// summed distance to the frames half a period away is within
+/// [`REPEATS_WELL`] or within [`MISMATCH_OVER_TYPICAL`] times that ratio's
+/// median (repetitions that vary, or keypoints that jitter, come back less
+/// closely everywhere). A frame fails only where its motion is slow and
+/// does not come back: motion at the repetitions' own pace that drifts (a
+/// person moving along while skipping, a camera that follows) is left to
+/// the mismatch against the scale.
+fn repeats_here(track: &Track, mismatch: &[f64], p: usize, a: usize, b: usize) -> Vec<bool> {
+    let n = b - a;
+    let half = (p / 2).max(1);
+    let mut num = vec![0.0; n + 1];
+    let mut den = vec![0.0; n + 1];
+    for (i, t) in (a..b).enumerate() {
+        let later = if t + half < b {
+            frame_distance(track, t, t + half)
+        } else {
+            0.0
+        };
+        let earlier = if t >= a + half {
+            frame_distance(track, t - half, t)
+        } else {
+            0.0
+        };
+        num[i + 1] = num[i] + mismatch[i];
+        den[i + 1] = den[i] + later.max(earlier);
+    }
+    // Per frame, over the period centred on it: (mismatch / far, mean far).
+    let around: Vec<(f64, f64)> = (0..n)
+        .map(|i| {
+            let lo = i.saturating_sub(p / 2);
+            let hi = (i + p - p / 2).min(n);
+            let far = den[hi] - den[lo];
+            let ratio = if far > 0.0 {
+                (num[hi] - num[lo]) / far
+            } else {
+                f64::INFINITY
+            };
+            (ratio, far / (hi - lo).max(1) as f64)
+        })
+        .collect();
+    let median_of = |pick: fn(&(f64, f64)) -> f64| {
+        let mut v: Vec<f64> = around.iter().map(pick).filter(|x| x.is_finite()).collect();
+        mp_geom::median(&mut v).unwrap_or(0.0)
+    };
+    let comes_back = REPEATS_WELL.max(MISMATCH_OVER_TYPICAL * median_of(|x| x.0));
+    let slow = median_of(|x| x.1) / MISMATCH_OVER_TYPICAL;
+    around
+        .iter()
+        .map(|&(ratio, far)| ratio <= comes_back || far >= slow)
+        .collect()
+}
+
+/// The mean period of the repetitions in `a..b` counted at `period`, to a
+/// fraction of a frame: the lag within [`PERIOD_SLACK`] of it at which the
+/// frames are nearest the frames that lag later, on average over the span
+/// without its first and last period where it is four periods or longer
+/// (the ends may reach into other motion, which is nearer itself at
+/// shorter lags), refined by the parabola through the nearest lag and its
+/// neighbours. The autocorrelation of velocities weighs fast repetitions
+/// more (their velocities are larger) and so reads the period short when
+/// the pace varies; distances between positions weigh every frame alike.
+/// `period` itself where the span is too short to compare.
+pub(crate) fn mean_period(track: &Track, period: usize, a: usize, b: usize) -> f64 {
+    let p = period.max(1);
+    let (a, b) = if b >= a + 4 * p {
+        (a + p, b - p)
+    } else {
+        (a, b)
+    };
+    let slack = ((p as f64 * PERIOD_SLACK).round() as usize).max(1);
+    let lo = p.saturating_sub(slack).max(2) - 1;
+    let hi = p + slack + 1;
+    if b > track.n_frames() || b < a + hi + 2 {
+        return p as f64;
+    }
+    // Mean distance at each lag lo..=hi.
+    let d: Vec<f64> = (lo..=hi)
+        .map(|l| {
+            (a..b - l)
+                .map(|t| frame_distance(track, t, t + l))
+                .sum::<f64>()
+                / (b - a - l) as f64
+        })
+        .collect();
+    let Some(i) = (1..d.len() - 1).min_by(|&x, &y| d[x].total_cmp(&d[y])) else {
+        return p as f64;
+    };
+    if !d[i].is_finite() {
+        return p as f64;
+    }
+    let (x, y, z) = (d[i - 1], d[i], d[i + 1]);
+    let curve = x - 2.0 * y + z;
+    let shift = if curve > 0.0 {
+        (0.5 * (x - z) / curve).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    };
+    (lo + i) as f64 + shift
 }

@@ -10,7 +10,7 @@
 mod period;
 mod segment;
 
-pub(crate) use period::estimate_period_and_longer;
+pub(crate) use period::estimate_period_and_peaks;
 pub use period::{estimate_period, PeriodEstimate, PeriodParams};
 pub use segment::{segment_repetitions, IntervalParams, PeriodicSegment};
 

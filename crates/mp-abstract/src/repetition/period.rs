@@ -242,22 +242,22 @@ pub fn estimate_period(
     end: usize,
     params: &PeriodParams,
 ) -> crate::Result<Option<PeriodEstimate>> {
-    Ok(estimate_period_and_longer(track, start, end, params)?.map(|(e, _)| e))
+    Ok(estimate_period_and_peaks(track, start, end, params)?.map(|(e, _)| e))
 }
 
-/// Later peaks of the autocorrelation: each lag with its strength.
-pub(crate) type LongerPeaks = Vec<(usize, f64)>;
+/// The other peaks of the autocorrelation: each lag with its strength.
+pub(crate) type OtherPeaks = Vec<(usize, f64)>;
 
-/// [`estimate_period`], with the other peaks of the autocorrelation at
-/// longer lags (in increasing order, each with its strength as
-/// [`PeriodEstimate::strength`]): the longer periods the motion may have, of
-/// which the chosen one could be a part.
-pub(crate) fn estimate_period_and_longer(
+/// [`estimate_period`], with the other peaks of the autocorrelation (in
+/// increasing order of lag, each with its strength as
+/// [`PeriodEstimate::strength`]): the shorter periods the chosen one may be a
+/// multiple of, and the longer ones it may be a part of.
+pub(crate) fn estimate_period_and_peaks(
     track: &mp_geom::Track,
     start: usize,
     end: usize,
     params: &PeriodParams,
-) -> crate::Result<Option<(PeriodEstimate, LongerPeaks)>> {
+) -> crate::Result<Option<(PeriodEstimate, OtherPeaks)>> {
     params.validate()?;
     if start >= end || end > track.n_frames() {
         return Err(crate::AbstractError::param(
@@ -341,9 +341,9 @@ pub(crate) fn estimate_period_and_longer(
         }
     };
     let strength = unbiased(lag);
-    let longer = peaks
+    let others = peaks
         .iter()
-        .filter(|&&l| l > lag)
+        .filter(|&&l| l != lag)
         .map(|&l| (l, unbiased(l)))
         .collect();
     Ok(Some((
@@ -352,7 +352,7 @@ pub(crate) fn estimate_period_and_longer(
             strength,
             count: n as f64 / lag as f64,
         },
-        longer,
+        others,
     )))
 }
 

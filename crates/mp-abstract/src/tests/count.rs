@@ -441,3 +441,122 @@ fn repetitions_the_whole_recording_reads_too_weakly_are_counted_where_they_repea
     let c = count_repetitions(&t, CountSignal::Keypoints, &params).unwrap();
     assert_eq!(c.total, 0, "{c:?}");
 }
+
+/// `k` cycles of `period` frames (as [`exercise`], with keypoint noise),
+/// then `tail` frames of slow motion that does not repeat: every joint
+/// wanders off the last pose on two slow waves of periods unrelated to the
+/// cycle's.
+fn cycles_then_wandering(k: usize, period: usize, tail: usize, noise_px: f64) -> Track {
+    let active = exercise(0, k, period, 12, noise_px, 21);
+    let n = k * period + tail;
+    let mut rng = ChaCha8Rng::seed_from_u64(22);
+    let noise = Normal::new(0.0, noise_px).unwrap();
+    let mut p = Array3::zeros((n, 12, 2));
+    let last = k * period - 1;
+    for t in 0..n {
+        for j in 0..12 {
+            for d in 0..2 {
+                p[[t, j, d]] = if t <= last {
+                    active.positions()[[t, j, d]]
+                } else {
+                    let u = (t - last) as f64;
+                    let phase = j as f64 * 0.4 + d as f64;
+                    let tau = std::f64::consts::TAU;
+                    active.positions()[[last, j, d]]
+                        + 22.0 * ((tau * u / (2.9 * period as f64) + phase).sin() - phase.sin())
+                        + 14.0 * ((tau * u / (4.3 * period as f64) - phase).sin() + phase.sin())
+                        + noise.sample(&mut rng)
+                };
+            }
+        }
+    }
+    Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap()
+}
+
+#[test]
+fn slow_motion_after_the_repetitions_is_not_counted() {
+    // Slow wandering after the cycles stays near itself a period later (by
+    // the recording's scale it "matches"), yet it is as near itself half a
+    // period later: it does not come back, and is not counted.
+    for (k, period, tail) in [(8usize, 30usize, 90usize), (12, 20, 60), (6, 40, 120)] {
+        let t = cycles_then_wandering(k, period, tail, 2.0);
+        let c = count_repetitions(&t, CountSignal::Keypoints, &CountParams::default()).unwrap();
+        assert_eq!(
+            c.total, k,
+            "{k} cycles of {period}, {tail} frames after: {c:?}"
+        );
+        let iv = &c.intervals[0];
+        assert!(
+            iv.end_frame <= k * period + period / 2,
+            "{k} cycles of {period} end at {}: {iv:?}",
+            k * period
+        );
+    }
+}
+
+#[test]
+fn long_runs_of_repetitions_are_counted_at_their_period_to_a_fraction_of_a_frame() {
+    // Forty cycles of 30 and 31 frames in turn: counted at a whole number of
+    // frames, 30 reads 40.7 cycles and 31 reads 39.4; the mean period (30.5)
+    // is found between frames.
+    let lengths: Vec<usize> = (0..40).map(|k| 30 + k % 2).collect();
+    let n: usize = lengths.iter().sum();
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let noise = Normal::new(0.0, 1.0).unwrap();
+    let mut p = Array3::zeros((n, 12, 2));
+    let mut t = 0;
+    for (k, &len) in lengths.iter().enumerate() {
+        for i in 0..len {
+            let ph = std::f64::consts::TAU * (k as f64 + i as f64 / len as f64);
+            for j in 0..12 {
+                let a = j as f64 * 0.7;
+                p[[t, j, 0]] =
+                    200.0 + 10.0 * j as f64 + 30.0 * (ph + a).sin() + noise.sample(&mut rng);
+                p[[t, j, 1]] = 300.0 + 25.0 * (ph + 2.0 * a).cos() + noise.sample(&mut rng);
+            }
+            t += 1;
+        }
+    }
+    let track = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap();
+    let c = count_repetitions(&track, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert_eq!(c.total, lengths.len(), "{c:?}");
+    let iv = &c.intervals[0];
+    let mean = n as f64 / lengths.len() as f64;
+    assert!(
+        (iv.cycles - lengths.len() as f64).abs() < 0.25,
+        "mean period {mean}: {iv:?}"
+    );
+}
+
+#[test]
+fn repetitions_whose_pace_alternates_are_counted_one_by_one() {
+    // Twenty cycles of 30 frames, every other one paced unevenly inside
+    // (the same poses, reached earlier and later): the velocities of two
+    // neighbouring cycles differ, those of every second cycle are the same,
+    // and the autocorrelation peaks higher at two cycles than at one. The
+    // pose comes back to itself every cycle, and that is the repetition.
+    let (k, period) = (20usize, 30usize);
+    let n = k * period;
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    let noise = Normal::new(0.0, 0.5).unwrap();
+    let mut p = Array3::zeros((n, 12, 2));
+    for t in 0..n {
+        let (cycle, i) = (t / period, t % period);
+        let u = i as f64 / period as f64;
+        let tau = std::f64::consts::TAU;
+        let warped = if cycle % 2 == 1 {
+            u + 0.2 * (tau * u).sin()
+        } else {
+            u
+        };
+        let ph = tau * warped;
+        for j in 0..12 {
+            let a = j as f64 * 0.7;
+            p[[t, j, 0]] = 200.0 + 10.0 * j as f64 + 30.0 * (ph + a).sin() + noise.sample(&mut rng);
+            p[[t, j, 1]] = 300.0 + 25.0 * (ph + 2.0 * a).cos() + noise.sample(&mut rng);
+        }
+    }
+    let track = Track::new(p, None, 30.0, Units::Pixels, Skeleton::generic(12)).unwrap();
+    let c = count_repetitions(&track, CountSignal::Keypoints, &CountParams::default()).unwrap();
+    assert_eq!(c.total, k, "{c:?}");
+}
