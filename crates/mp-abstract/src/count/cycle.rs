@@ -40,10 +40,10 @@ impl Reading {
 
 /// The cycle mismatch below which the motion repeats well at a period
 /// ([`REPEATS_WELL`]): the nearest frame a period away is nearer than half
-/// the distance between frames half a period apart. At a period where it does not, the longer
-/// peaks of the autocorrelation are tried ([`whole_cycle`]), and a longer
-/// one must be below it (a wandering body that happens to come back near
-/// itself once is no repetition).
+/// the distance between frames half a period apart. At a period where it
+/// does not, the longer peaks of the autocorrelation are tried
+/// ([`whole_cycle`]), and a longer one must be below it (a wandering body
+/// that happens to come back near itself once is no repetition).
 const LONGER_CYCLE_GATE: f64 = REPEATS_WELL;
 
 /// A longer period replaces the autocorrelation's when its cycle mismatch is

@@ -22,8 +22,9 @@
 //!    trimmed, then motion at either end that does not match itself about a
 //!    period later or earlier ([`CountParams::mismatch_fraction`]) or does
 //!    not come back to itself (as near itself half a period later: slow
-//!    motion), at the period or at a longer one where the motion comes back
-//!    to itself clearly better (a figure of several similar steps;
+//!    motion), at the period, at a shorter one it is a multiple of where the
+//!    motion repeats as well, or at a longer one where it comes back to
+//!    itself clearly better (a figure of several similar steps;
 //!    `whole_cycle`); the mean period is the lag near it at which positions
 //!    match best, between frames (`span.rs`); when not, or when
 //!    the part counted is no nearer itself a period later than half a period
