@@ -380,20 +380,19 @@ fn repeats_here(track: &Track, mismatch: &[f64], p: usize, a: usize, b: usize) -
 /// The mean period of the repetitions in `a..b` counted at `period`, to a
 /// fraction of a frame: the lag within [`PERIOD_SLACK`] of it at which the
 /// frames are nearest the frames that lag later, on average over the span
-/// without its first and last period where it is four periods or longer
-/// (the ends may reach into other motion, which is nearer itself at
-/// shorter lags), refined by the parabola through the nearest lag and its
-/// neighbours. The autocorrelation of velocities weighs fast repetitions
-/// more (their velocities are larger) and so reads the period short when
-/// the pace varies; distances between positions weigh every frame alike.
-/// `period` itself where the span is too short to compare.
+/// without its first and last period (the ends may reach into other
+/// motion, which is nearer itself at shorter lags), refined by the parabola
+/// through the nearest lag and its neighbours. The autocorrelation of
+/// velocities weighs fast repetitions more (their velocities are larger) and
+/// so reads the period short when the pace varies; distances between
+/// positions weigh every frame alike. `period` itself where the span holds
+/// fewer than four periods: too few cycles between its ends to average.
 pub(crate) fn mean_period(track: &Track, period: usize, a: usize, b: usize) -> f64 {
     let p = period.max(1);
-    let (a, b) = if b >= a + 4 * p {
-        (a + p, b - p)
-    } else {
-        (a, b)
-    };
+    if b < a + 4 * p {
+        return p as f64;
+    }
+    let (a, b) = (a + p, b - p);
     let slack = ((p as f64 * PERIOD_SLACK).round() as usize).max(1);
     let lo = p.saturating_sub(slack).max(2) - 1;
     let hi = p + slack + 1;
