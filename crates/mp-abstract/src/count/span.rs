@@ -78,20 +78,36 @@ fn nearest_a_period_away(
     best
 }
 
-/// Each frame's distance to the nearest frame about a period later or
-/// earlier (within [`PERIOD_SLACK`], inside `a..b`; infinite where there is
-/// none), and the scale it is measured against: the median distance between
-/// frames half a period apart (large for a repeating motion, which is far
-/// from itself half way through its cycle). `None` when the span holds no
-/// pair half a period apart or the scale is 0 (no motion).
-fn mismatch_profile(track: &Track, p: usize, a: usize, b: usize) -> Option<(Vec<f64>, f64)> {
+/// The frames of `a..b` against a period `p` ([`mismatch_profile`]).
+struct Profile {
+    /// Each frame's distance to the nearest frame about a period later or
+    /// earlier (within [`PERIOD_SLACK`], inside `a..b`; infinite where there
+    /// is none).
+    mismatch: Vec<f64>,
+    /// The distance from frame `a + i` to frame `a + i + half` (half a
+    /// period later), for each frame with one inside `a..b`.
+    half_apart: Vec<f64>,
+    /// The scale the mismatch is measured against: the median of the finite
+    /// `half_apart` (large for a repeating motion, which is far from itself
+    /// half way through its cycle).
+    scale: f64,
+}
+
+/// Each frame's mismatch a period away, its distance half a period later,
+/// and the scale ([`Profile`]). `None` when the span holds no pair half a
+/// period apart or the scale is 0 (no motion).
+fn mismatch_profile(track: &Track, p: usize, a: usize, b: usize) -> Option<Profile> {
     let p = p.max(1);
     let mismatch: Vec<f64> = (a..b)
         .map(|t| nearest_a_period_away(track, t, p, (a, b), Towards::Either))
         .collect();
     let half = (p / 2).max(1);
-    let mut far: Vec<f64> = (a..b.saturating_sub(half))
+    let half_apart: Vec<f64> = (a..b.saturating_sub(half))
         .map(|t| frame_distance(track, t, t + half))
+        .collect();
+    let mut far: Vec<f64> = half_apart
+        .iter()
+        .copied()
         .filter(|d| d.is_finite())
         .collect();
     if far.is_empty() {
@@ -99,7 +115,17 @@ fn mismatch_profile(track: &Track, p: usize, a: usize, b: usize) -> Option<(Vec<
     }
     far.sort_by(f64::total_cmp);
     let scale = far[far.len() / 2];
-    (scale.is_finite() && scale > 0.0).then_some((mismatch, scale))
+    (scale.is_finite() && scale > 0.0).then_some(Profile {
+        mismatch,
+        half_apart,
+        scale,
+    })
+}
+
+/// The frames `lo..hi` of a window of `w` frames centred on frame `i` of
+/// `0..n` (shrinking at the edges).
+fn centred(i: usize, w: usize, n: usize) -> (usize, usize) {
+    (i.saturating_sub(w / 2), (i + w - w / 2).min(n))
 }
 
 /// How closely the motion of `a..b` returns to itself one period later, as
@@ -120,7 +146,9 @@ pub(crate) fn cycle_mismatch(
     if b <= a || 2 * (b - a) < 3 * p || b > track.n_frames() {
         return None;
     }
-    let (mismatch, scale) = mismatch_profile(track, p, a, b)?;
+    let Profile {
+        mismatch, scale, ..
+    } = mismatch_profile(track, p, a, b)?;
     let median = |v: &[f64]| {
         let mut m: Vec<f64> = v.iter().copied().filter(|v| v.is_finite()).collect();
         if m.is_empty() {
@@ -164,7 +192,12 @@ pub(crate) fn repeating_span(
         return (a, b);
     }
     let n = b - a;
-    let Some((mismatch, scale)) = mismatch_profile(track, p, a, b) else {
+    let Some(Profile {
+        mismatch,
+        half_apart,
+        scale,
+    }) = mismatch_profile(track, p, a, b)
+    else {
         return (a, b);
     };
     let half = (p / 2).max(1);
@@ -178,8 +211,7 @@ pub(crate) fn repeating_span(
     }
     let w = half;
     let smooth = |i: usize| {
-        let lo = i.saturating_sub(w / 2);
-        let hi = (i + w - w / 2).min(n);
+        let (lo, hi) = centred(i, w, n);
         (prefix[hi] - prefix[lo]) / (hi - lo).max(1) as f64
     };
     // Trimmed: motion that is both far from a repetition (above `fraction`
@@ -193,7 +225,7 @@ pub(crate) fn repeating_span(
     sorted.sort_by(f64::total_cmp);
     let typical = sorted[n / 2];
     let limit = (fraction * scale).max(MISMATCH_OVER_TYPICAL * typical);
-    let repeats = repeats_here(track, &mismatch, p, a, b);
+    let repeats = repeats_here(&mismatch, &half_apart, p);
     let first = (0..n).find(|&i| smoothed[i] <= limit && repeats[i]);
     let last = (0..n).rev().find(|&i| smoothed[i] <= limit && repeats[i]);
     match (first, last) {
@@ -231,8 +263,7 @@ pub(crate) fn active_span(track: &Track, period: usize, fraction: f64) -> Result
     }
     let local: Vec<f64> = (0..n)
         .map(|t| {
-            let lo = t.saturating_sub(w / 2);
-            let hi = (t + w - w / 2).min(n);
+            let (lo, hi) = centred(t, w, n);
             (prefix[hi] - prefix[lo]) / (hi - lo).max(1) as f64
         })
         .collect();
@@ -275,7 +306,12 @@ pub(crate) fn extend_repeating(
     if fraction <= 0.0 || end <= start || lo > start || hi < end || end - start < 2 * p {
         return (start, end);
     }
-    let Some((own, scale)) = mismatch_profile(track, p, start, end) else {
+    let Some(Profile {
+        mismatch: own,
+        scale,
+        ..
+    }) = mismatch_profile(track, p, start, end)
+    else {
         return (start, end);
     };
     let mut own: Vec<f64> = own.into_iter().filter(|m| m.is_finite()).collect();
@@ -315,14 +351,15 @@ pub(crate) fn extend_repeating(
     (start - reach(left), end + reach(right))
 }
 
-/// For each frame of `a..b` (`mismatch` holds their distances to the
-/// nearest frame about a period away, 0 where there is none), whether it
+/// For each frame of a span (`mismatch` holds their distances to the
+/// nearest frame about a period away, 0 where there is none; `half_apart`
+/// as in [`Profile`]), whether it
 /// belongs with the repetitions by this test: slow motion beside them stays
 /// near itself a period later, which the recording-wide scale of
 /// [`repeating_span`] lets through, yet it is as near itself half a period
 /// later — it does not come back. Over the period centred on each frame:
 /// the motion is **slow** where the mean distance to the frames half a
-/// period away is below the median over `a..b` divided by
+/// period away is below the median over the span divided by
 /// [`MISMATCH_OVER_TYPICAL`] (beyond the recording's own variation, the
 /// other way), and it **comes back** where the summed mismatch over the
 /// summed distance to the frames half a period away is within
@@ -332,30 +369,24 @@ pub(crate) fn extend_repeating(
 /// does not come back: motion at the repetitions' own pace that drifts (a
 /// person moving along while skipping, a camera that follows) is left to
 /// the mismatch against the scale.
-fn repeats_here(track: &Track, mismatch: &[f64], p: usize, a: usize, b: usize) -> Vec<bool> {
-    let n = b - a;
+fn repeats_here(mismatch: &[f64], half_apart: &[f64], p: usize) -> Vec<bool> {
+    let n = mismatch.len();
     let half = (p / 2).max(1);
     let mut num = vec![0.0; n + 1];
     let mut den = vec![0.0; n + 1];
-    for (i, t) in (a..b).enumerate() {
-        let later = if t + half < b {
-            frame_distance(track, t, t + half)
-        } else {
-            0.0
-        };
-        let earlier = if t >= a + half {
-            frame_distance(track, t - half, t)
-        } else {
-            0.0
-        };
+    for i in 0..n {
+        let later = half_apart.get(i).copied().unwrap_or(0.0);
+        let earlier = i
+            .checked_sub(half)
+            .and_then(|k| half_apart.get(k).copied())
+            .unwrap_or(0.0);
         num[i + 1] = num[i] + mismatch[i];
         den[i + 1] = den[i] + later.max(earlier);
     }
     // Per frame, over the period centred on it: (mismatch / far, mean far).
     let around: Vec<(f64, f64)> = (0..n)
         .map(|i| {
-            let lo = i.saturating_sub(p / 2);
-            let hi = (i + p - p / 2).min(n);
+            let (lo, hi) = centred(i, p, n);
             let far = den[hi] - den[lo];
             let ratio = if far > 0.0 {
                 (num[hi] - num[lo]) / far
