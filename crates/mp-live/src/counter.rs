@@ -20,6 +20,12 @@
 //!   rounded, so a repetition is reported when they pass the next half. Two countings of overlapping windows place their
 //!   boundaries differently (each from its own window's start): taking
 //!   whole repetitions again would count the overlap twice;
+//! - while the last confident counting's repetitions run to the window's
+//!   end, they are **followed**: the next repetition is expected a period
+//!   after the last one taken, and is reported on the frame it ends when the
+//!   poses of that period come back to those of the period before (and the
+//!   motion has not slowed), without waiting for the margin or the next
+//!   counting; a period that does not come back waits for the countings;
 //! - at the end of the stream (or when the person leaves) the window is
 //!   counted once more and every new repetition in it is reported, confirmed
 //!   or not, so that on a stream shorter than the window the total is the
@@ -57,6 +63,10 @@ pub(crate) struct Tally {
     reported_until: usize,
     cycles: f64,
     total: usize,
+    /// The period (frames, unrounded) of the last confident counting whose
+    /// repetitions run to the window's end: the next repetition is expected
+    /// one period after `reported_until`.
+    following: Option<f64>,
 }
 
 impl Tally {
@@ -72,6 +82,7 @@ impl Tally {
             reported_until: 0,
             cycles: 0.0,
             total: 0,
+            following: None,
         }
     }
 
@@ -114,8 +125,19 @@ impl Tally {
         // An unsure counting (the window holds too few cycles, or the
         // period found is a harmonic) waits for a surer one.
         if !last && counts.confidence < self.min_confidence {
+            self.following = None;
             return out;
         }
+        // Repetitions that run to the window's end (the counted span ends
+        // less than a period before its last frame) are followed.
+        self.following = counts
+            .intervals
+            .iter()
+            .filter(|iv| iv.cycles > 0.0 && iv.end_frame > iv.start_frame)
+            .map(|iv| (iv, (iv.end_frame - iv.start_frame) as f64 / iv.cycles))
+            .find(|(iv, period)| (first + iv.end_frame) as f64 + period >= (back + 1) as f64)
+            .map(|(_, period)| period)
+            .filter(|_| !last);
         for iv in &counts.intervals {
             let margin = (self.confirm_periods * iv.period_frames as f64).ceil() as usize;
             for w in iv.boundaries.windows(2) {
@@ -128,28 +150,56 @@ impl Tally {
                     break;
                 }
                 let new = (e - s.max(self.reported_until)) as f64 / iv.period_frames.max(1) as f64;
-                self.reported_until = e;
-                self.cycles += new;
-                if self.cycles < self.total as f64 + 0.5 {
-                    continue;
-                }
-                self.total += 1;
-                out.push(Repetition {
-                    count: self.total,
-                    start_frame: s,
-                    end_frame: e,
-                });
+                out.extend(self.advance(s, e, new));
             }
         }
         out
     }
+
+    /// Takes the stream up to frame `e` (exclusive) as `new` more cycles of
+    /// the repetition that began at `s`: a repetition when the cycles pass
+    /// the next half.
+    fn advance(&mut self, s: usize, e: usize, new: f64) -> Option<Repetition> {
+        self.reported_until = e;
+        self.cycles += new;
+        if self.cycles < self.total as f64 + 0.5 {
+            return None;
+        }
+        self.total += 1;
+        Some(Repetition {
+            count: self.total,
+            start_frame: s,
+            end_frame: e,
+        })
+    }
+
+    /// The repetition expected next while repetitions are followed: its
+    /// first stream frame, one past its last, and the period.
+    fn expected(&self) -> Option<(usize, usize, f64)> {
+        let period = self.following?;
+        let start = self.reported_until;
+        (start > 0).then(|| (start, start + period.round().max(2.0) as usize, period))
+    }
 }
+
+/// A period of poses comes back to the period before when the least mean
+/// distance between frames a period apart is under this share of their mean
+/// distance to the frames half a period earlier (the offline counting's
+/// value for a motion that repeats well).
+const REPEATS_WELL: f64 = 0.5;
+
+/// A followed repetition is not reported when its motion (mean distance
+/// between frames half a period apart) fell below the period before's over
+/// this (the offline counting's ratio of a mismatch to its typical value).
+const SLOWER_AT_MOST: f64 = 1.5;
 
 /// See the module docs.
 pub struct OnlineCounter {
     rows: Poses,
     tally: Tally,
     longest: usize,
+    /// The first stream frame and the end of the expected repetition last checked.
+    checked: Option<(usize, usize)>,
 }
 
 impl OnlineCounter {
@@ -160,6 +210,7 @@ impl OnlineCounter {
             rows: Poses::new(fps, skeleton, params),
             tally: Tally::new(fps, params),
             longest: 0,
+            checked: None,
         }
     }
 
@@ -204,6 +255,7 @@ impl OnlineCounter {
     /// Takes back the poses after stream frame `frame` (the tracker took them back).
     pub fn retract_after(&mut self, frame: usize) {
         self.rows.retract_after(frame);
+        self.checked = None;
     }
 
     /// Whether the window is due to be counted again.
@@ -211,12 +263,42 @@ impl OnlineCounter {
         self.tally.due(self.rows.last_frame())
     }
 
-    /// Counts the window when due and returns the repetitions newly confirmed.
+    /// Returns the repetitions newly confirmed: the one expected next while
+    /// repetitions are followed, once the poses come back to themselves a
+    /// period later (see [`Self::follow`]), and those of the window's
+    /// counting when it is due.
     pub fn update(&mut self, params: &LiveParams) -> Result<Vec<Repetition>> {
-        if !self.due() {
-            return Ok(Vec::new());
+        let mut out: Vec<Repetition> = self.follow().into_iter().collect();
+        if self.due() {
+            out.extend(self.count_window(params, false)?);
         }
-        self.count_window(params, false)
+        Ok(out)
+    }
+
+    /// While the last confident counting's repetitions run to the window's
+    /// end, the next repetition is expected a period after the last one
+    /// taken. It is reported as soon as the stream reaches its end, when the
+    /// poses of that period come back to those of the period before
+    /// ([`Poses::comes_back`]: the least mean distance between frames a
+    /// lag of 0.8–1 period apart is under [`REPEATS_WELL`] of their mean
+    /// distance to the frames half that lag earlier, as in the offline
+    /// counting's test of where repetitions end), and the motion has not
+    /// slowed (its half-period distances are at least the period before's
+    /// over [`SLOWER_AT_MOST`]). Otherwise it waits for the window's next
+    /// counting.
+    fn follow(&mut self) -> Option<Repetition> {
+        let (start, end, period) = self.tally.expected()?;
+        if self.rows.last_frame()? + 1 < end || self.checked == Some((start, end)) {
+            return None;
+        }
+        self.checked = Some((start, end));
+        let lags = (0.8 * period).round().max(2.0) as usize..=end - start;
+        let back = self.rows.comes_back(end, lags)?;
+        if back.mismatch >= REPEATS_WELL || back.half_now * SLOWER_AT_MOST < back.half_before {
+            return None;
+        }
+        self.tally
+            .advance(start, end, (end - start) as f64 / period)
     }
 
     /// Counts the window once more and reports every new repetition in it
@@ -302,6 +384,33 @@ mod tests {
                 assert!(r.end_frame > reps[k - 1].end_frame, "{reps:?}");
             }
         }
+    }
+
+    #[test]
+    fn followed_repetitions_are_reported_as_they_end_and_stop_with_the_motion() {
+        let (fps, period, frames, still_from) = (30.0, 30.0, 330, 240);
+        let params = LiveParams::default();
+        let mut c = OnlineCounter::new(fps, Skeleton::coco17(), &params);
+        let mut reported = Vec::new();
+        for f in 0..frames {
+            // Swings until `still_from`, then holds the pose of that frame.
+            let (p, v) = pose(f.min(still_from), period);
+            c.push(f, p, v);
+            for r in c.update(&params).unwrap() {
+                reported.push((f, r));
+            }
+        }
+        let first_batch = reported[0].0;
+        let later: Vec<_> = reported.iter().filter(|(f, _)| *f > first_batch).collect();
+        assert!(later.len() >= 3, "{reported:?}");
+        // Once followed, a repetition is reported on its own last frame, not
+        // half a period (15 frames) after it.
+        for (f, r) in &later {
+            assert!(*f + 1 - r.end_frame <= 2, "{f}: {r:?}");
+        }
+        // Nothing is reported for the held pose: 8 cycles swung.
+        let total = c.total() + c.finish(&params).unwrap().len();
+        assert!((7..=8).contains(&total), "{total}: {reported:?}");
     }
 
     #[test]
