@@ -35,6 +35,7 @@
 use mp_abstract::Counts;
 use mp_geom::Skeleton;
 
+use crate::follow;
 use crate::poses::Poses;
 use crate::{LiveParams, Result};
 
@@ -67,6 +68,8 @@ pub(crate) struct Tally {
     /// repetitions run to the window's end: the next repetition is expected
     /// one period after `reported_until`.
     following: Option<f64>,
+    /// The first stream frame and the end of the expected repetition last checked.
+    checked: Option<(usize, usize)>,
 }
 
 impl Tally {
@@ -83,6 +86,7 @@ impl Tally {
             cycles: 0.0,
             total: 0,
             following: None,
+            checked: None,
         }
     }
 
@@ -180,26 +184,44 @@ impl Tally {
         let start = self.reported_until;
         (start > 0).then(|| (start, start + period.round().max(2.0) as usize, period))
     }
+
+    /// While the last confident counting's repetitions run to the window's
+    /// end, the next repetition is expected a period after the last one
+    /// taken. It is reported once the stream's last frame `back` reaches its
+    /// end, when that period comes back to the period before
+    /// ([`follow::comes_back`] over lags of 0.8–1 period, [`follow::CameBack::repeats`]:
+    /// as the offline counting's test of where repetitions end) by
+    /// `distance(f, g)` between stream frames; otherwise it waits for the
+    /// window's next counting. Each expected repetition is checked once.
+    pub(crate) fn follow(
+        &mut self,
+        back: usize,
+        distance: impl Fn(usize, usize) -> Option<f64>,
+    ) -> Option<Repetition> {
+        let (start, end, period) = self.expected()?;
+        if back + 1 < end || self.checked == Some((start, end)) {
+            return None;
+        }
+        self.checked = Some((start, end));
+        let lags = (0.8 * period).round().max(2.0) as usize..=end - start;
+        if !follow::comes_back(end, lags, distance)?.repeats() {
+            return None;
+        }
+        self.advance(start, end, (end - start) as f64 / period)
+    }
+
+    /// The stream before the expected repetition changed (poses taken back):
+    /// it is checked again.
+    pub(crate) fn forget_checked(&mut self) {
+        self.checked = None;
+    }
 }
-
-/// A period of poses comes back to the period before when the least mean
-/// distance between frames a period apart is under this share of their mean
-/// distance to the frames half a period earlier (the offline counting's
-/// value for a motion that repeats well).
-const REPEATS_WELL: f64 = 0.5;
-
-/// A followed repetition is not reported when its motion (mean distance
-/// between frames half a period apart) fell below the period before's over
-/// this (the offline counting's ratio of a mismatch to its typical value).
-const SLOWER_AT_MOST: f64 = 1.5;
 
 /// See the module docs.
 pub struct OnlineCounter {
     rows: Poses,
     tally: Tally,
     longest: usize,
-    /// The first stream frame and the end of the expected repetition last checked.
-    checked: Option<(usize, usize)>,
 }
 
 impl OnlineCounter {
@@ -210,7 +232,6 @@ impl OnlineCounter {
             rows: Poses::new(fps, skeleton, params),
             tally: Tally::new(fps, params),
             longest: 0,
-            checked: None,
         }
     }
 
@@ -255,7 +276,7 @@ impl OnlineCounter {
     /// Takes back the poses after stream frame `frame` (the tracker took them back).
     pub fn retract_after(&mut self, frame: usize) {
         self.rows.retract_after(frame);
-        self.checked = None;
+        self.tally.forget_checked();
     }
 
     /// Whether the window is due to be counted again.
@@ -264,9 +285,9 @@ impl OnlineCounter {
     }
 
     /// Returns the repetitions newly confirmed: the one expected next while
-    /// repetitions are followed, once the poses come back to themselves a
-    /// period later (see [`Self::follow`]), and those of the window's
-    /// counting when it is due.
+    /// a set is followed, once its poses come back to those of the period
+    /// before (see the module docs), and those of the window's counting when
+    /// it is due.
     pub fn update(&mut self, params: &LiveParams) -> Result<Vec<Repetition>> {
         let mut out: Vec<Repetition> = self.follow().into_iter().collect();
         if self.due() {
@@ -275,30 +296,12 @@ impl OnlineCounter {
         Ok(out)
     }
 
-    /// While the last confident counting's repetitions run to the window's
-    /// end, the next repetition is expected a period after the last one
-    /// taken. It is reported as soon as the stream reaches its end, when the
-    /// poses of that period come back to those of the period before
-    /// ([`Poses::comes_back`]: the least mean distance between frames a
-    /// lag of 0.8–1 period apart is under [`REPEATS_WELL`] of their mean
-    /// distance to the frames half that lag earlier, as in the offline
-    /// counting's test of where repetitions end), and the motion has not
-    /// slowed (its half-period distances are at least the period before's
-    /// over [`SLOWER_AT_MOST`]). Otherwise it waits for the window's next
-    /// counting.
+    /// The repetition expected next while a set is followed
+    /// ([`Tally::follow`]), the poses compared by [`Poses::distance`].
     fn follow(&mut self) -> Option<Repetition> {
-        let (start, end, period) = self.tally.expected()?;
-        if self.rows.last_frame()? + 1 < end || self.checked == Some((start, end)) {
-            return None;
-        }
-        self.checked = Some((start, end));
-        let lags = (0.8 * period).round().max(2.0) as usize..=end - start;
-        let back = self.rows.comes_back(end, lags)?;
-        if back.mismatch >= REPEATS_WELL || back.half_now * SLOWER_AT_MOST < back.half_before {
-            return None;
-        }
-        self.tally
-            .advance(start, end, (end - start) as f64 / period)
+        let back = self.rows.last_frame()?;
+        let rows = &self.rows;
+        self.tally.follow(back, |f, g| rows.distance(f, g))
     }
 
     /// Counts the window once more and reports every new repetition in it

@@ -35,6 +35,7 @@
 //! ```
 
 mod counter;
+mod follow;
 mod poses;
 mod program;
 mod record;

@@ -21,19 +21,6 @@ struct Row {
     conf: Vec<f64>,
 }
 
-/// How a stretch of poses comes back to the stretch before it
-/// ([`Poses::comes_back`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct CameBack {
-    /// The least, over the lags, of the mean distance between frames a lag
-    /// apart over the mean distance between frames half that lag apart.
-    pub(crate) mismatch: f64,
-    /// The mean distance between frames half the best lag apart, over the
-    /// stretch and over the stretch before it.
-    pub(crate) half_now: f64,
-    pub(crate) half_before: f64,
-}
-
 /// See the module docs.
 pub(crate) struct Poses {
     fps: f64,
@@ -137,7 +124,7 @@ impl Poses {
     /// Root mean square distance between the poses of two stream frames
     /// (pixels), each joint weighted by the smaller of its two confidences;
     /// `None` when a frame has no row or no joint is seen in both.
-    fn distance(&self, f: usize, g: usize) -> Option<f64> {
+    pub(crate) fn distance(&self, f: usize, g: usize) -> Option<f64> {
         let (a, b) = (self.row(f)?, self.row(g)?);
         let (mut sum, mut weight) = (0.0, 0.0);
         for q in 0..a.points.len().min(b.points.len()) {
@@ -150,53 +137,6 @@ impl Poses {
             }
         }
         (weight > 0.0).then(|| (sum / weight).sqrt())
-    }
-
-    /// Mean over the stream frames `f` of `from..to` of the distance from `f`
-    /// to `f − lag`.
-    fn mean_distance(&self, from: usize, to: usize, lag: usize) -> Option<f64> {
-        let mut sum = 0.0;
-        for f in from..to {
-            sum += self.distance(f, f.checked_sub(lag)?)?;
-        }
-        (to > from).then(|| sum / (to - from) as f64)
-    }
-
-    /// How the stretch of poses ending at stream frame `end` (exclusive)
-    /// comes back to the stretch before it: for each lag, the `lag` frames
-    /// before `end` against the frames a lag earlier and half a lag earlier
-    /// (see [`CameBack`]). `None` when a frame needed is missing or a lag is
-    /// under 2.
-    pub(crate) fn comes_back(
-        &self,
-        end: usize,
-        lags: std::ops::RangeInclusive<usize>,
-    ) -> Option<CameBack> {
-        let mut best: Option<(f64, usize, f64)> = None;
-        for lag in lags {
-            if lag < 2 {
-                return None;
-            }
-            let from = end.checked_sub(lag)?;
-            let near = self.mean_distance(from, end, lag)?;
-            let half = self.mean_distance(from, end, lag / 2)?;
-            let m = if half > 0.0 {
-                near / half
-            } else {
-                f64::INFINITY
-            };
-            if best.is_none_or(|(b, _, _)| m < b) {
-                best = Some((m, lag, half));
-            }
-        }
-        let (mismatch, lag, half_now) = best?;
-        let before = end.checked_sub(lag)?;
-        let half_before = self.mean_distance(before.checked_sub(lag)?, before, lag / 2)?;
-        Some(CameBack {
-            mismatch,
-            half_now,
-            half_before,
-        })
     }
 
     /// Forgets the rows before stream frame `frame`.
@@ -255,30 +195,18 @@ impl Poses {
 mod tests {
     use super::*;
 
-    fn poses(frames: usize, at: impl Fn(usize) -> f64) -> Poses {
-        let mut p = Poses::new(30.0, Skeleton::coco17(), &LiveParams::default());
-        for f in 0..frames {
-            let a = at(f);
-            let pts = (0..17)
-                .map(|q| [q as f64 + 40.0 * a, 10.0 * q as f64 - 20.0 * a])
-                .collect();
-            p.push(f, pts, vec![0.9; 17]);
-        }
-        p
-    }
-
     #[test]
-    fn a_swing_comes_back_to_itself_a_period_later_and_a_drift_does_not() {
-        let tau = 2.0 * std::f64::consts::PI;
-        let swing = poses(100, |f| (tau * f as f64 / 20.0).sin());
-        let b = swing.comes_back(100, 16..=22).unwrap();
-        assert!(b.mismatch < 0.05, "{b:?}");
-        assert!((b.half_now / b.half_before - 1.0).abs() < 0.05, "{b:?}");
-        let drift = poses(100, |f| f as f64 / 10.0);
-        let d = drift.comes_back(100, 16..=22).unwrap();
-        assert!(d.mismatch > 1.5, "{d:?}");
-        // Frames before the window's first are missing; a lag under 2 is refused.
-        assert!(swing.comes_back(30, 16..=22).is_none());
-        assert!(swing.comes_back(100, 1..=3).is_none());
+    fn distances_weigh_each_joint_by_its_confidence() {
+        let mut p = Poses::new(30.0, Skeleton::coco17(), &LiveParams::default());
+        let mut conf = vec![0.0; 17];
+        conf[0] = 1.0;
+        conf[1] = 0.5;
+        p.push(0, vec![[0.0, 0.0]; 17], conf.clone());
+        let mut moved = vec![[0.0, 0.0]; 17];
+        moved[0] = [3.0, 4.0]; // 5 px, weight 1
+        moved[2] = [100.0, 0.0]; // unseen
+        p.push(1, moved, conf);
+        assert!((p.distance(1, 0).unwrap() - (25.0f64 / 1.5).sqrt()).abs() < 1e-12);
+        assert!(p.distance(1, 2).is_none());
     }
 }

@@ -10,7 +10,8 @@
 //! window is counted from the frames alone ([`mp_pipeline::count_frames`]:
 //! `mp run`'s choice of the frame signal, then its counting) and its
 //! repetitions become a running total exactly as a person's do (see
-//! `counter`). The run reports them as person 0.
+//! `counter`), a set followed by the thumbnails' root mean square
+//! difference. The run reports them as person 0.
 
 use std::collections::VecDeque;
 
@@ -19,6 +20,12 @@ use mp_pose::thumbnail_track;
 
 use crate::counter::{Repetition, Tally};
 use crate::{LiveParams, Result};
+
+/// Root mean square difference of two thumbnails.
+fn thumbnail_distance(a: &[f32], b: &[f32]) -> Option<f64> {
+    let sum: f64 = a.iter().zip(b).map(|(x, y)| f64::from(x - y).powi(2)).sum();
+    (!a.is_empty() && a.len() == b.len()).then(|| (sum / a.len() as f64).sqrt())
+}
 
 /// See the module docs.
 pub(crate) struct SceneCounter {
@@ -99,12 +106,27 @@ impl SceneCounter {
         (!self.thumbs.is_empty()).then(|| self.first + self.thumbs.len() - 1)
     }
 
-    /// Counts the window when due and returns the repetitions newly confirmed.
+    /// Returns the repetitions newly confirmed: the one expected next while
+    /// a set is followed (the thumbnails of its period come back to those of
+    /// the period before, as a person's poses do in `counter`), and those of
+    /// the window's counting when it is due.
     pub(crate) fn update(&mut self, params: &LiveParams) -> Result<Vec<Repetition>> {
-        if !self.tally.due(self.back()) {
-            return Ok(Vec::new());
+        let mut out = Vec::new();
+        if let Some(back) = self.back() {
+            let (first, thumbs) = (self.first, &self.thumbs);
+            let followed = self.tally.follow(back, |f, g| {
+                thumbnail_distance(
+                    thumbs.get(f.checked_sub(first)?)?,
+                    thumbs.get(g.checked_sub(first)?)?,
+                )
+            });
+            self.reported.extend(followed);
+            out.extend(followed);
         }
-        self.count_window(params, false)
+        if self.tally.due(self.back()) {
+            out.extend(self.count_window(params, false)?);
+        }
+        Ok(out)
     }
 
     /// Counts the window once more and reports every new repetition in it
