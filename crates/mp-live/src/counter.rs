@@ -124,24 +124,19 @@ impl Tally {
         first: usize,
         back: usize,
         last: bool,
+        distance: impl Fn(usize, usize) -> Option<f64>,
     ) -> Vec<Repetition> {
         let mut out = Vec::new();
+        let running = running_period(counts, first, back);
         // An unsure counting (the window holds too few cycles, or the
-        // period found is a harmonic) waits for a surer one.
-        if !last && counts.confidence < self.min_confidence {
+        // period found is a harmonic) waits for a surer one, unless the
+        // stream's last two of its periods each come back to the one before.
+        if !last && counts.confidence < self.min_confidence && !vouched(running, back, &distance) {
             self.following = None;
             return out;
         }
-        // Repetitions that run to the window's end (the counted span ends
-        // less than a period before its last frame) are followed.
-        self.following = counts
-            .intervals
-            .iter()
-            .filter(|iv| iv.cycles > 0.0 && iv.end_frame > iv.start_frame)
-            .map(|iv| (iv, (iv.end_frame - iv.start_frame) as f64 / iv.cycles))
-            .find(|(iv, period)| (first + iv.end_frame) as f64 + period >= (back + 1) as f64)
-            .map(|(_, period)| period)
-            .filter(|_| !last);
+        // Repetitions that run to the window's end are followed.
+        self.following = running.filter(|_| !last);
         for iv in &counts.intervals {
             let margin = (self.confirm_periods * iv.period_frames as f64).ceil() as usize;
             for w in iv.boundaries.windows(2) {
@@ -215,6 +210,40 @@ impl Tally {
     pub(crate) fn forget_checked(&mut self) {
         self.checked = None;
     }
+}
+
+/// The period (frames, unrounded) of the counted repetitions that run to
+/// the end of the window of stream frames `first..=back`: their span ends
+/// less than a period before its last frame.
+fn running_period(counts: &Counts, first: usize, back: usize) -> Option<f64> {
+    counts
+        .intervals
+        .iter()
+        .filter(|iv| iv.cycles > 0.0 && iv.end_frame > iv.start_frame)
+        .map(|iv| (iv, (iv.end_frame - iv.start_frame) as f64 / iv.cycles))
+        .find(|(iv, period)| (first + iv.end_frame) as f64 + period >= (back + 1) as f64)
+        .map(|(_, period)| period)
+}
+
+/// Whether the last two periods before stream frame `back` (inclusive)
+/// each come back to the period before them ([`follow::comes_back`] over
+/// lags of 0.8–1 period): a counting at that period is taken even when
+/// its confidence is low. The test refuses a period too short for the
+/// motion (frames a period apart are no nearer than frames half of it
+/// apart) and one too long (frames half of it apart are as near).
+fn vouched(
+    period: Option<f64>,
+    back: usize,
+    distance: &impl Fn(usize, usize) -> Option<f64>,
+) -> bool {
+    let Some(period) = period else {
+        return false;
+    };
+    let t = period.round().max(2.0) as usize;
+    let lags = (0.8 * period).round().max(2.0) as usize..=t;
+    [back + 1, (back + 1).saturating_sub(t)]
+        .iter()
+        .all(|&end| follow::comes_back(end, lags.clone(), distance).is_some_and(|b| b.repeats()))
 }
 
 /// See the module docs.
@@ -322,7 +351,10 @@ impl OnlineCounter {
             return Ok(Vec::new());
         };
         let counts = mp_pipeline::count(&track, None, &params.analysis)?;
-        Ok(self.tally.take(&counts, first, back, last))
+        let rows = &self.rows;
+        Ok(self
+            .tally
+            .take(&counts, first, back, last, |f, g| rows.distance(f, g)))
     }
 }
 
@@ -414,6 +446,26 @@ mod tests {
         // Nothing is reported for the held pose: 8 cycles swung.
         let total = c.total() + c.finish(&params).unwrap().len();
         assert!((7..=8).contains(&total), "{total}: {reported:?}");
+    }
+
+    #[test]
+    fn an_unsure_counting_is_vouched_for_only_at_a_period_that_comes_back() {
+        let params = LiveParams::default();
+        let mut rows = Poses::new(30.0, Skeleton::coco17(), &params);
+        for f in 0..200 {
+            let (p, v) = pose(f, 30.0);
+            rows.push(f, p, v);
+        }
+        let d = |f: usize, g: usize| rows.distance(f, g);
+        assert!(vouched(Some(30.0), 199, &d));
+        assert!(vouched(Some(31.5), 199, &d));
+        // Too short for the motion, a harmonic, about twice the period, none.
+        assert!(!vouched(Some(8.0), 199, &d));
+        assert!(!vouched(Some(15.0), 199, &d));
+        assert!(!vouched(Some(57.0), 199, &d));
+        assert!(!vouched(None, 199, &d));
+        // Two periods before the window's first frame cannot be compared.
+        assert!(!vouched(Some(30.0), 70, &d));
     }
 
     #[test]

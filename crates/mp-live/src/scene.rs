@@ -144,7 +144,13 @@ impl SceneCounter {
             return Ok(Vec::new());
         }
         let counts = mp_pipeline::count_frames(self.track()?, &params.analysis)?;
-        let reps = self.tally.take(&counts, self.first, back, last);
+        let (first, thumbs) = (self.first, &self.thumbs);
+        let reps = self.tally.take(&counts, first, back, last, |f, g| {
+            thumbnail_distance(
+                thumbs.get(f.checked_sub(first)?)?,
+                thumbs.get(g.checked_sub(first)?)?,
+            )
+        });
         self.reported.extend(reps.iter().copied());
         let keep_from = back.saturating_sub(self.tally.max_frames);
         while self
