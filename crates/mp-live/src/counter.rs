@@ -9,7 +9,10 @@
 //!
 //! - a counting whose confidence (`Counts::confidence`) is below
 //!   `min_confidence` is set aside: early on, with a cycle or two in the
-//!   window, the counting often takes a harmonic for the period;
+//!   window, the counting often takes a harmonic for the period — unless
+//!   its repetitions run to the window's end and the last two of its
+//!   periods each come back to the period before (the test of a followed
+//!   set, below), which a period too short or too long for the motion fails;
 //! - a repetition is **confirmed** once its end lies `confirm_periods` of
 //!   its period before the window's last frame (the counting of a window
 //!   often stretches or cuts the repetition still under way);
