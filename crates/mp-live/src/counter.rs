@@ -28,7 +28,8 @@
 //!   after the last one taken, and is reported on the frame it ends when the
 //!   poses of that period come back to those of the period before (and the
 //!   motion has not slowed), without waiting for the margin or the next
-//!   counting; a period that does not come back waits for the countings;
+//!   counting, or on a later frame up to 1.2 periods (a pace that slows);
+//!   a period that does not come back waits for the countings;
 //! - at the end of the stream (or when the person leaves) the window is
 //!   counted once more and every new repetition in it is reported, confirmed
 //!   or not, so that on a stream shorter than the window the total is the
@@ -189,15 +190,19 @@ impl Tally {
     /// end, when that period comes back to the period before
     /// ([`follow::comes_back`] over lags of 0.8–1 period, [`follow::CameBack::repeats`]:
     /// as the offline counting's test of where repetitions end) by
-    /// `distance(f, g)` between stream frames; otherwise it waits for the
-    /// window's next counting. Each expected repetition is checked once.
+    /// `distance(f, g)` between stream frames. If not, it is checked again
+    /// on each later frame up to [`SLOWER_PACE`] periods after the last one
+    /// (lags up to the frames since), and counted as one cycle when it comes
+    /// back; otherwise it waits for the window's next counting.
     pub(crate) fn follow(
         &mut self,
         back: usize,
         distance: impl Fn(usize, usize) -> Option<f64>,
     ) -> Option<Repetition> {
-        let (start, end, period) = self.expected()?;
-        if back + 1 < end || self.checked == Some((start, end)) {
+        let (start, due, period) = self.expected()?;
+        let end = back + 1;
+        let latest = start + (SLOWER_PACE * period).round() as usize;
+        if end < due || end > latest || self.checked == Some((start, end)) {
             return None;
         }
         self.checked = Some((start, end));
@@ -205,7 +210,15 @@ impl Tally {
         if !follow::comes_back(end, lags, distance)?.repeats() {
             return None;
         }
-        self.advance(start, end, (end - start) as f64 / period)
+        self.advance(
+            start,
+            end,
+            if end == due {
+                (end - start) as f64 / period
+            } else {
+                1.0
+            },
+        )
     }
 
     /// The stream before the expected repetition changed (poses taken back):
@@ -214,6 +227,11 @@ impl Tally {
         self.checked = None;
     }
 }
+
+/// A followed repetition that does not come back on the frame a period
+/// after the last one is checked again on each later frame up to this many
+/// periods (a pace slowing down).
+const SLOWER_PACE: f64 = 1.2;
 
 /// The period (frames, unrounded) of the counted repetitions that run to
 /// the end of the window of stream frames `first..=back`: their span ends
@@ -369,7 +387,12 @@ mod tests {
 
     /// A COCO-17 pose whose wrists and elbows swing with period `period` frames.
     fn pose(f: usize, period: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
-        let a = (2.0 * std::f64::consts::PI * f as f64 / period).sin();
+        pose_at(f as f64 / period)
+    }
+
+    /// The pose of [`pose`] at `cycles` cycles of its swing.
+    fn pose_at(cycles: f64) -> (Vec<[f64; 2]>, Vec<f64>) {
+        let a = (2.0 * std::f64::consts::PI * cycles).sin();
         let pts = (0..17)
             .map(|q| {
                 let x = 100.0 + 10.0 * (q % 4) as f64;
@@ -449,6 +472,33 @@ mod tests {
         // Nothing is reported for the held pose: 8 cycles swung.
         let total = c.total() + c.finish(&params).unwrap().len();
         assert!((7..=8).contains(&total), "{total}: {reported:?}");
+    }
+
+    #[test]
+    fn a_pace_slowing_down_is_still_followed() {
+        // 30-frame swings, then 36-frame ones (phase continuous).
+        let phase = |f: usize| {
+            if f < 180 {
+                f as f64 / 30.0
+            } else {
+                6.0 + (f - 180) as f64 / 36.0
+            }
+        };
+        let params = LiveParams::default();
+        let mut c = OnlineCounter::new(30.0, Skeleton::coco17(), &params);
+        let mut late = Vec::new();
+        for f in 0..400 {
+            let (p, v) = pose_at(phase(f));
+            c.push(f, p, v);
+            for r in c.update(&params).unwrap() {
+                // The repetitions of the slower pace, after its first.
+                if r.start_frame >= 216 {
+                    late.push(f + 1 - r.end_frame);
+                }
+            }
+        }
+        assert!(late.len() >= 4, "{late:?}");
+        assert!(late.iter().all(|&d| d <= 2), "{late:?}");
     }
 
     #[test]
