@@ -23,8 +23,8 @@
 //!   rounded, so a repetition is reported when they pass the next half. Two countings of overlapping windows place their
 //!   boundaries differently (each from its own window's start): taking
 //!   whole repetitions again would count the overlap twice;
-//! - while the last confident counting's repetitions run to the window's
-//!   end, they are **followed**: the next repetition is expected a period
+//! - while the last confident (or vouched-for) counting's repetitions run
+//!   to the window's end, they are **followed**: the next repetition is expected a period
 //!   after the last one taken, and is reported on the frame it ends when the
 //!   poses of that period come back to those of the period before (and the
 //!   motion has not slowed), without waiting for the margin or the next
@@ -68,7 +68,7 @@ pub(crate) struct Tally {
     reported_until: usize,
     cycles: f64,
     total: usize,
-    /// The period (frames, unrounded) of the last confident counting whose
+    /// The period (frames, unrounded) of the last counting taken whose
     /// repetitions run to the window's end: the next repetition is expected
     /// one period after `reported_until`.
     following: Option<f64>,
@@ -184,8 +184,8 @@ impl Tally {
         (start > 0).then(|| (start, start + period.round().max(2.0) as usize, period))
     }
 
-    /// While the last confident counting's repetitions run to the window's
-    /// end, the next repetition is expected a period after the last one
+    /// While the last counting taken has repetitions that run to the
+    /// window's end, the next repetition is expected a period after the last one
     /// taken. It is reported once the stream's last frame `back` reaches its
     /// end, when that period comes back to the period before
     /// ([`follow::comes_back`] over lags of 0.8–1 period, [`follow::CameBack::repeats`]:

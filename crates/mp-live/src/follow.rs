@@ -11,9 +11,10 @@
 pub(crate) const REPEATS_WELL: f64 = 0.5;
 
 /// A followed repetition is not reported when its motion (mean distance
-/// between frames half a period apart) fell below the period before's over
-/// this (the offline counting's ratio of a mismatch to its typical value).
-pub(crate) const SLOWER_AT_MOST: f64 = 1.5;
+/// between frames half a period apart) is weaker than the period before's by
+/// more than this factor (the offline counting's ratio of a mismatch to its
+/// typical value): the motion is dying down.
+pub(crate) const WEAKER_AT_MOST: f64 = 1.5;
 
 /// How a stretch of a stream comes back to the stretch before it
 /// ([`comes_back`]).
@@ -30,9 +31,9 @@ pub(crate) struct CameBack {
 
 impl CameBack {
     /// Whether the stretch repeats the one before well and its motion has
-    /// not slowed ([`REPEATS_WELL`], [`SLOWER_AT_MOST`]).
+    /// not slowed ([`REPEATS_WELL`], [`WEAKER_AT_MOST`]).
     pub(crate) fn repeats(&self) -> bool {
-        self.mismatch < REPEATS_WELL && self.half_now * SLOWER_AT_MOST >= self.half_before
+        self.mismatch < REPEATS_WELL && self.half_now * WEAKER_AT_MOST >= self.half_before
     }
 }
 
