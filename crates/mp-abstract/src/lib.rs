@@ -47,7 +47,7 @@ pub use analysis::{
 pub use count::json::{CountedIntervalJson, ProgramLoopJson, RepetitionsJson};
 pub use count::{
     count_repetitions, count_signals, ConfidenceModel, CountFeatures, CountMethod, CountParams,
-    CountSignal, CountedInterval, Counts,
+    CountSignal, CountedInterval, Counts, MISMATCH_OVER_TYPICAL, PERIOD_SLACK, REPEATS_WELL,
 };
 pub use error::AbstractError;
 pub(crate) use error::Result;

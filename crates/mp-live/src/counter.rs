@@ -39,7 +39,7 @@
 use mp_abstract::Counts;
 use mp_geom::Skeleton;
 
-use crate::follow;
+use crate::follow::{self, PERIOD_SLACK};
 use crate::poses::Poses;
 use crate::{LiveParams, Result};
 
@@ -191,7 +191,7 @@ impl Tally {
     /// ([`follow::comes_back`] over lags of 0.8–1 period, [`follow::CameBack::repeats`]:
     /// as the offline counting's test of where repetitions end) by
     /// `distance(f, g)` between stream frames. If not, it is checked again
-    /// on each later frame up to [`SLOWER_PACE`] periods after the last one
+    /// on each later frame up to 1 + [`PERIOD_SLACK`] periods after the last one
     /// (lags up to the frames since), and counted as one cycle when it comes
     /// back; otherwise it waits for the window's next counting.
     pub(crate) fn follow(
@@ -201,12 +201,12 @@ impl Tally {
     ) -> Option<Repetition> {
         let (start, due, period) = self.expected()?;
         let end = back + 1;
-        let latest = start + (SLOWER_PACE * period).round() as usize;
+        let latest = start + ((1.0 + PERIOD_SLACK) * period).round() as usize;
         if end < due || end > latest || self.checked == Some((start, end)) {
             return None;
         }
         self.checked = Some((start, end));
-        let lags = (0.8 * period).round().max(2.0) as usize..=end - start;
+        let lags = shortest_lag(period)..=end - start;
         if !follow::comes_back(end, lags, distance)?.repeats() {
             return None;
         }
@@ -228,10 +228,11 @@ impl Tally {
     }
 }
 
-/// A followed repetition that does not come back on the frame a period
-/// after the last one is checked again on each later frame up to this many
-/// periods (a pace slowing down).
-const SLOWER_PACE: f64 = 1.2;
+/// The shortest lag a period is compared at: human repetitions vary their
+/// pace by [`PERIOD_SLACK`] (the offline counting's) from cycle to cycle.
+fn shortest_lag(period: f64) -> usize {
+    ((1.0 - PERIOD_SLACK) * period).round().max(2.0) as usize
+}
 
 /// The period (frames, unrounded) of the counted repetitions that run to
 /// the end of the window of stream frames `first..=back`: their span ends
@@ -240,10 +241,9 @@ fn running_period(counts: &Counts, first: usize, back: usize) -> Option<f64> {
     counts
         .intervals
         .iter()
-        .filter(|iv| iv.cycles > 0.0 && iv.end_frame > iv.start_frame)
-        .map(|iv| (iv, (iv.end_frame - iv.start_frame) as f64 / iv.cycles))
-        .find(|(iv, period)| (first + iv.end_frame) as f64 + period >= (back + 1) as f64)
-        .map(|(_, period)| period)
+        .filter(|iv| iv.cycles > 0.0)
+        .find(|iv| (first + iv.end_frame) as f64 + iv.period() >= (back + 1) as f64)
+        .map(|iv| iv.period())
 }
 
 /// Whether the last two periods before stream frame `back` (inclusive)
@@ -261,7 +261,7 @@ fn vouched(
         return false;
     };
     let t = period.round().max(2.0) as usize;
-    let lags = (0.8 * period).round().max(2.0) as usize..=t;
+    let lags = shortest_lag(period)..=t;
     [back + 1, (back + 1).saturating_sub(t)]
         .iter()
         .all(|&end| follow::comes_back(end, lags.clone(), distance).is_some_and(|b| b.repeats()))

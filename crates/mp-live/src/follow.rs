@@ -4,17 +4,13 @@
 //! repetition can be reported on its last frame rather than after the
 //! confirmation margin of the next counting (see `counter`).
 
-/// A period comes back to the period before when the least mean distance
-/// between frames a period apart is under this share of their mean distance
-/// to the frames half a period earlier (the offline counting's value for a
-/// motion that repeats well).
-pub(crate) const REPEATS_WELL: f64 = 0.5;
+pub(crate) use mp_abstract::{PERIOD_SLACK, REPEATS_WELL};
 
 /// A followed repetition is not reported when its motion (mean distance
 /// between frames half a period apart) is weaker than the period before's by
 /// more than this factor (the offline counting's ratio of a mismatch to its
 /// typical value): the motion is dying down.
-pub(crate) const WEAKER_AT_MOST: f64 = 1.5;
+pub(crate) const WEAKER_AT_MOST: f64 = mp_abstract::MISMATCH_OVER_TYPICAL;
 
 /// How a stretch of a stream comes back to the stretch before it
 /// ([`comes_back`]).
@@ -30,8 +26,9 @@ pub(crate) struct CameBack {
 }
 
 impl CameBack {
-    /// Whether the stretch repeats the one before well and its motion has
-    /// not slowed ([`REPEATS_WELL`], [`WEAKER_AT_MOST`]).
+    /// Whether the stretch repeats the one before well (under
+    /// [`REPEATS_WELL`], the offline counting's value for motion that comes
+    /// back to itself) and its motion has not died down ([`WEAKER_AT_MOST`]).
     pub(crate) fn repeats(&self) -> bool {
         self.mismatch < REPEATS_WELL && self.half_now * WEAKER_AT_MOST >= self.half_before
     }

@@ -48,6 +48,8 @@ mod cycle;
 pub mod json;
 mod span;
 
+pub use span::{MISMATCH_OVER_TYPICAL, PERIOD_SLACK, REPEATS_WELL};
+
 pub use confidence::{ConfidenceModel, CountFeatures};
 use cycle::{whole_cycle, Reading};
 use span::cycle_mismatch;
@@ -252,6 +254,16 @@ impl CountedInterval {
             boundaries,
             periodicity,
             signal,
+        }
+    }
+
+    /// The period the interval was counted at, unrounded (frames): its
+    /// length over `cycles`; `period_frames` where it holds no cycle.
+    pub fn period(&self) -> f64 {
+        if self.cycles > 0.0 && self.end_frame > self.start_frame {
+            (self.end_frame - self.start_frame) as f64 / self.cycles
+        } else {
+            self.period_frames as f64
         }
     }
 

@@ -35,17 +35,17 @@ pub(crate) fn frame_distance(track: &Track, a: usize, b: usize) -> f64 {
 /// How far from the period (a fraction of it) the next cycle's matching
 /// frame may lie in [`repeating_span`]: human repetitions vary their pace
 /// by this much from cycle to cycle.
-const PERIOD_SLACK: f64 = 0.2;
+pub const PERIOD_SLACK: f64 = 0.2;
 
 /// In [`repeating_span`], an end is trimmed only where its mismatch is more
 /// than this multiple of the median mismatch over the activity.
-const MISMATCH_OVER_TYPICAL: f64 = 1.5;
+pub const MISMATCH_OVER_TYPICAL: f64 = 1.5;
 
 /// Motion repeats well at a period where its distance to the nearest frame
 /// about a period away is below this share of its distance to the frames
 /// half a period away: it comes back to itself, and does not merely stay
 /// near itself (as slow or still motion does at any lag).
-pub(crate) const REPEATS_WELL: f64 = 0.5;
+pub const REPEATS_WELL: f64 = 0.5;
 
 /// Where [`nearest_a_period_away`] looks for the matching frame.
 #[derive(Clone, Copy, PartialEq)]
