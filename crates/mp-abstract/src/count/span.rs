@@ -33,12 +33,13 @@ pub(crate) fn frame_distance(track: &Track, a: usize, b: usize) -> f64 {
 }
 
 /// How far from the period (a fraction of it) the next cycle's matching
-/// frame may lie in [`repeating_span`]: human repetitions vary their pace
-/// by this much from cycle to cycle.
+/// frame may lie when the counting trims the repetitions' ends: human
+/// repetitions vary their pace by this much from cycle to cycle.
 pub const PERIOD_SLACK: f64 = 0.2;
 
-/// In [`repeating_span`], an end is trimmed only where its mismatch is more
-/// than this multiple of the median mismatch over the activity.
+/// The counting trims an end of the repetitions only where its mismatch is
+/// more than this multiple of the median mismatch over the activity (the
+/// recording's own variation from cycle to cycle).
 pub const MISMATCH_OVER_TYPICAL: f64 = 1.5;
 
 /// Motion repeats well at a period where its distance to the nearest frame
