@@ -21,8 +21,17 @@ use mp_pose::thumbnail_track;
 use crate::counter::{Repetition, Tally};
 use crate::{LiveParams, Result};
 
-/// Root mean square difference of two thumbnails.
-fn thumbnail_distance(a: &[f32], b: &[f32]) -> Option<f64> {
+/// Root mean square difference of the thumbnails of stream frames `f` and
+/// `g`, `thumbs` holding those of the frames from `first` on; `None` where
+/// a frame has none.
+fn thumbnail_distance(
+    first: usize,
+    thumbs: &VecDeque<Vec<f32>>,
+    f: usize,
+    g: usize,
+) -> Option<f64> {
+    let a = thumbs.get(f.checked_sub(first)?)?;
+    let b = thumbs.get(g.checked_sub(first)?)?;
     let sum: f64 = a.iter().zip(b).map(|(x, y)| f64::from(x - y).powi(2)).sum();
     (!a.is_empty() && a.len() == b.len()).then(|| (sum / a.len() as f64).sqrt())
 }
@@ -114,12 +123,9 @@ impl SceneCounter {
         let mut out = Vec::new();
         if let Some(back) = self.back() {
             let (first, thumbs) = (self.first, &self.thumbs);
-            let followed = self.tally.follow(back, |f, g| {
-                thumbnail_distance(
-                    thumbs.get(f.checked_sub(first)?)?,
-                    thumbs.get(g.checked_sub(first)?)?,
-                )
-            });
+            let followed = self
+                .tally
+                .follow(back, |f, g| thumbnail_distance(first, thumbs, f, g));
             self.reported.extend(followed);
             out.extend(followed);
         }
@@ -146,10 +152,7 @@ impl SceneCounter {
         let counts = mp_pipeline::count_frames(self.track()?, &params.analysis)?;
         let (first, thumbs) = (self.first, &self.thumbs);
         let reps = self.tally.take(&counts, first, back, last, |f, g| {
-            thumbnail_distance(
-                thumbs.get(f.checked_sub(first)?)?,
-                thumbs.get(g.checked_sub(first)?)?,
-            )
+            thumbnail_distance(first, thumbs, f, g)
         });
         self.reported.extend(reps.iter().copied());
         let keep_from = back.saturating_sub(self.tally.max_frames);
