@@ -429,25 +429,15 @@ fn from_video(
                 None => coco(posed.track)?,
             };
             let found = mp_abstract::found_fraction(&track);
-            let mut analysed: Vec<PersonId> = top.into_iter().collect();
-            analysed.extend(&rest);
-            let (thumbnails, others) = if !analysed.is_empty() {
+            let (thumbnails, others) = if top.is_some() || !rest.is_empty() {
                 let t1 = Instant::now();
-                let mut boxes = box_thumbnails(path, &people, &analysed, n, params, cancel)?;
+                let mut boxes = box_thumbnails(path, &people, top, &rest, n, params, cancel)?;
                 timings.push(Stage::Boxes, t1.elapsed(), n);
                 let top_thumbs = top.and_then(|id| boxes.remove(&id));
                 let others = rest
                     .iter()
-                    .map(|id| {
-                        let th = match (boxes.remove(id).map(|o| o.thumbnails), people.get(*id)) {
-                            (Some(th), Some(p)) => {
-                                Some(th.slice_frames(p.first_frame, p.last_frame() + 1)?)
-                            }
-                            _ => None,
-                        };
-                        Ok((*id, th))
-                    })
-                    .collect::<Result<Vec<_>>>()?;
+                    .map(|id| (*id, boxes.remove(id).map(|o| o.thumbnails)))
+                    .collect();
                 (top_thumbs, others)
             } else {
                 (None, rest.iter().map(|id| (*id, None)).collect())
@@ -624,13 +614,18 @@ pub(crate) fn chosen_people(
     }
 }
 
-/// Grey thumbnails of each person's own (mean) box over the whole video, from
-/// a second decoding pass; none for a person whose box lies mostly outside
-/// the picture ([`PoseParams::own_box_region`]).
+/// Grey thumbnails of each person's own (mean) box, from a second decoding
+/// pass: the top-level person's (`top`) over the whole video, as the video's
+/// frame signal; every other person's (`rest`) over their own frames only,
+/// from their first to their last (their counts are theirs, and a long video
+/// with many people holds each person's thumbnails once, not once per
+/// frame of the video). None for a person whose box lies mostly outside the
+/// picture ([`PoseParams::own_box_region`]).
 fn box_thumbnails(
     path: &Path,
     people: &People,
-    ids: &[PersonId],
+    top: Option<PersonId>,
+    rest: &[PersonId],
     n: usize,
     params: &Params,
     cancel: &CancelToken,
@@ -638,25 +633,39 @@ fn box_thumbnails(
     let size = params.pose.thumbnail_size;
     let reader = VideoReader::open(path)?;
     let (fps, width, height) = (reader.info().fps, reader.info().width, reader.info().height);
-    let regions: Vec<(PersonId, [f64; 4])> = ids
+    // Each person's box and the frames `a..b` read for them.
+    let regions: Vec<(PersonId, [f64; 4], std::ops::Range<usize>)> = top
         .iter()
+        .chain(rest)
         .filter_map(|id| {
-            let b = people.get(*id)?.mean_box()?;
-            Some((*id, PoseParams::own_box_region(b, width, height)?))
+            let p = people.get(*id)?;
+            let r = PoseParams::own_box_region(p.mean_box()?, width, height)?;
+            let frames = if Some(*id) == top {
+                0..n
+            } else {
+                p.first_frame.min(n)..(p.last_frame() + 1).min(n)
+            };
+            Some((*id, r, frames))
         })
         .collect();
-    let mut thumbs: Vec<Vec<Vec<f32>>> = vec![Vec::with_capacity(n); regions.len()];
-    for frame in reader.take(n) {
+    let mut thumbs: Vec<Vec<Vec<f32>>> = regions
+        .iter()
+        .map(|(_, _, f)| Vec::with_capacity(f.len()))
+        .collect();
+    let last = regions.iter().map(|(_, _, f)| f.end).max().unwrap_or(0);
+    for frame in reader.take(last) {
         check(cancel)?;
         let frame = frame?;
-        for (k, (_, r)) in regions.iter().enumerate() {
-            thumbs[k].push(grey_thumbnail_region(&frame, size, *r)?);
+        for (k, (_, r, frames)) in regions.iter().enumerate() {
+            if frames.contains(&frame.index) {
+                thumbs[k].push(grey_thumbnail_region(&frame, size, *r)?);
+            }
         }
     }
     let mut out = std::collections::HashMap::new();
     let (w, h) = (width as f64, height as f64);
-    for ((id, r), th) in regions.into_iter().zip(thumbs) {
-        if th.len() == n {
+    for ((id, r, frames), th) in regions.into_iter().zip(thumbs) {
+        if th.len() == frames.len() && !th.is_empty() {
             let place = [
                 (r[0] / w).clamp(0.0, 1.0),
                 (r[1] / h).clamp(0.0, 1.0),
