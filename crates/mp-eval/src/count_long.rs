@@ -29,7 +29,7 @@ use mp_geom::Track;
 use mp_geom::{Skeleton, Units};
 use mp_pipeline::{Input, Keep, Params, PoseParams, Silent};
 use mp_pose::VideoReader;
-use mp_pose::{grey_thumbnail_region, thumbnail_track};
+use mp_pose::{grey_thumbnail_region, signal_side, thumbnail_track};
 use serde_json::{json, Value};
 
 use crate::intervals::one_to_one_pairs;
@@ -211,7 +211,9 @@ pub fn run(a: &LongArgs) -> anyhow::Result<()> {
     let clips = load_clips(a)?;
     let boxes: Vec<([f64; 4], usize)> = clips.iter().filter_map(|c| c.person_box).collect();
     let region = weighted_box(&boxes).and_then(|b| PoseParams::own_box_region(b, WIDTH, HEIGHT));
-    let size = a.params.pose.thumbnail_size;
+    // The side `mp run` reads a recording of this length at.
+    let total: usize = clips.iter().map(|c| c.track.n_frames()).sum::<usize>() * a.repeats;
+    let size = signal_side(a.params.pose.thumbnail_size, total);
     let mut thumbs = Vec::new();
     for c in &clips {
         let th = thumbnails(&c.video, region, size)?;
@@ -278,6 +280,7 @@ pub fn run(a: &LongArgs) -> anyhow::Result<()> {
         "labelled_intervals": truth.len(),
         "labelled_repetitions": labelled,
         "thumbnail_region": region,
+        "thumbnail_side": size,
         "count_param_overrides": a.overrides,
         "clips": clips.iter().map(|c| json!({"name": c.name, "frames": c.track.n_frames(),
             "found": mp_abstract::found_fraction(&c.track),

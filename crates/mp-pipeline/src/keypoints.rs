@@ -16,7 +16,10 @@
 //! of the picture moves on its own and repeats more clearly than those
 //! thumbnails, its cells are the frame signal instead
 //! ([`crate::frame_signal`]); for a person, only a region inside their own
-//! box.
+//! box. A video too long for 32 × 32 thumbnails within
+//! [`mp_pose::MAX_SIGNAL_VALUES`] has them read at 16 × 16 (or fewer cells,
+//! [`mp_pose::signal_side`]): an hour's frame signal in a quarter of the
+//! memory.
 
 use std::path::Path;
 use std::time::Instant;
@@ -27,7 +30,7 @@ use mp_pose::SessionParams;
 use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams, SharedLandmarks};
 use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
-use mp_pose::{grey_thumbnail_region, thumbnail_track};
+use mp_pose::{grey_thumbnail_region, signal_side, signal_track, thumbnail_track};
 use mp_pose::{ModelChoice, PoseEstimator};
 use mp_pose::{VideoInfo, VideoReader};
 use mp_report::{FrameStore, FrameStoreParams};
@@ -367,7 +370,10 @@ fn from_video(
         &DecodeOptions {
             limit: max_frames,
             keep_full,
-            thumbnail_size: Some(params.pose.thumbnail_size),
+            thumbnail_size: Some(signal_side(
+                params.pose.thumbnail_size,
+                expected.unwrap_or(0),
+            )),
             ..DecodeOptions::default()
         },
         cancel.clone(),
@@ -408,11 +414,8 @@ fn from_video(
     let mut thumbs = decoded.thumbnails;
     thumbs.truncate(n);
     let whole_frame = if thumbs.len() == n && n > 0 {
-        Some(thumbnail_track(
-            thumbs,
-            params.pose.thumbnail_size,
-            info.fps,
-        )?)
+        let side = signal_side(params.pose.thumbnail_size, expected.unwrap_or(0));
+        Some(signal_track(thumbs, side, info.fps)?)
     } else {
         None
     };
@@ -648,6 +651,12 @@ fn box_thumbnails(
             Some((*id, r, frames))
         })
         .collect();
+    // Each person's thumbnails at the side their number of frames allows
+    // (`mp_pose::MAX_SIGNAL_VALUES`).
+    let sides: Vec<usize> = regions
+        .iter()
+        .map(|(_, _, f)| signal_side(size, f.len()))
+        .collect();
     let mut thumbs: Vec<Vec<Vec<f32>>> = regions
         .iter()
         .map(|(_, _, f)| Vec::with_capacity(f.len()))
@@ -658,13 +667,13 @@ fn box_thumbnails(
         let frame = frame?;
         for (k, (_, r, frames)) in regions.iter().enumerate() {
             if frames.contains(&frame.index) {
-                thumbs[k].push(grey_thumbnail_region(&frame, size, *r)?);
+                thumbs[k].push(grey_thumbnail_region(&frame, sides[k], *r)?);
             }
         }
     }
     let mut out = std::collections::HashMap::new();
     let (w, h) = (width as f64, height as f64);
-    for ((id, r, frames), th) in regions.into_iter().zip(thumbs) {
+    for (((id, r, frames), th), side) in regions.into_iter().zip(thumbs).zip(sides) {
         if th.len() == frames.len() && !th.is_empty() {
             let place = [
                 (r[0] / w).clamp(0.0, 1.0),
@@ -672,7 +681,7 @@ fn box_thumbnails(
                 (r[2] / w).clamp(0.0, 1.0),
                 (r[3] / h).clamp(0.0, 1.0),
             ];
-            let thumbnails = thumbnail_track(th, size, fps)?;
+            let thumbnails = thumbnail_track(th, side, fps)?;
             out.insert(id, OwnBox { thumbnails, place });
         }
     }

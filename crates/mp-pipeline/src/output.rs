@@ -185,9 +185,14 @@ pub(crate) fn person_colour(id: mp_geom::PersonId) -> [u8; 3] {
     PERSON_COLOURS[(id as usize).saturating_sub(1) % PERSON_COLOURS.len()]
 }
 
-/// Every tracked person but the top-level one, over the whole video, with
-/// their colour.
-pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<([u8; 3], Track)> {
+/// Another tracked person as the overlay draws them: their colour, their
+/// first frame, and their track over their own frames (from the first on).
+pub(crate) type OtherPerson = ([u8; 3], usize, Track);
+
+/// Every tracked person but the top-level one, each over their own frames
+/// (a long video with many people holds each person's poses once, not a
+/// copy as long as the video per person), with their colour.
+pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<OtherPerson> {
     let Some(people) = &kp.people else {
         return Vec::new();
     };
@@ -195,7 +200,7 @@ pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<([u8; 3], Track)> {
         .people()
         .iter()
         .filter(|p| Some(p.id) != kp.person)
-        .filter_map(|p| Some((person_colour(p.id), people.full_track(p.id).ok()?)))
+        .map(|p| (person_colour(p.id), p.first_frame, p.track.clone()))
         .collect()
 }
 
@@ -209,7 +214,7 @@ pub(crate) fn write_overlay(
     src: OverlayFrames,
     track: &Track,
     executed: &Track,
-    others: &[([u8; 3], Track)],
+    others: &[OtherPerson],
     progress: &dyn Fn(usize),
 ) -> Result<()> {
     let cancel: &CancelToken = out.cancel_token();
@@ -225,12 +230,15 @@ pub(crate) fn write_overlay(
     let mut draw = |index: usize, rgb: &[u8]| -> Result<()> {
         check_cancel(cancel).map_err(PipelineError::from_report)?;
         let mut pm = rgb_to_pixmap(rgb, width, height)?;
-        for (colour, other) in others {
+        for (colour, first, other) in others {
+            let Some(own) = index.checked_sub(*first).filter(|&i| i < other.n_frames()) else {
+                continue;
+            };
             let style = SkeletonStyle {
                 color: Some(*colour),
                 ..kp_style
             };
-            draw_skeleton(&mut pm, other, index, &view, &style);
+            draw_skeleton(&mut pm, other, own, &view, &style);
         }
         if span.is_some_and(|(a, b)| (a..=b).contains(&index)) {
             draw_skeleton(&mut pm, executed, index, &view, &prog_style);

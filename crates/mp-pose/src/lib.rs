@@ -65,7 +65,10 @@ pub use imageops::{resize_rgb, RgbView};
 pub use motion::{moving_regions, region_track, CellRegion, MotionEnergy};
 pub use people::{PeopleCollector, TrackEvent, TrackedPose};
 pub use runtime::{model_path, Device};
-pub use thumbs::{grey_thumbnail_region, thumbnail_track, DEFAULT_THUMBNAIL_SIZE};
+pub use thumbs::{
+    grey_thumbnail_region, signal_side, signal_track, thumbnail_track, DEFAULT_THUMBNAIL_SIZE,
+    MAX_SIGNAL_VALUES,
+};
 pub use video::{probe_bytes, VideoReadOptions, VideoWriter, X264_PRESETS};
 
 #[cfg(test)]

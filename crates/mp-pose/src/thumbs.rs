@@ -14,6 +14,61 @@ use crate::video::Frame;
 /// Default thumbnail side in cells (32 × 32 = 1,024 values per frame).
 pub const DEFAULT_THUMBNAIL_SIZE: usize = 32;
 
+/// Most values a frame signal holds over a whole video: 2²⁵ (256 MiB as the
+/// 64-bit floats of a [`Track`]). 32 × 32 thumbnails fit for 32,768 frames
+/// (18 minutes at 30 fps); a longer video's are read at 16 × 16 (to 73
+/// minutes), 8 × 8 beyond ([`signal_side`]), so that an hour's frame signal
+/// takes 229 MB instead of 917 MB.
+pub const MAX_SIGNAL_VALUES: usize = 1 << 25;
+
+/// The side at which the thumbnails of `frames` frames are kept, asked for at
+/// `size`: `size` halved (rounding up) until `frames × side²` is at most
+/// [`MAX_SIGNAL_VALUES`] or the side is 1. A halved side's cells are the
+/// pixels of 2 × 2 cells of the asked side (`grey_thumbnail_region` gives
+/// pixel `x` the cell `⌊x · side / width⌋`).
+pub fn signal_side(size: usize, frames: usize) -> usize {
+    let mut side = size.max(1);
+    while side > 1 && frames.saturating_mul(side * side) > MAX_SIGNAL_VALUES {
+        side = side.div_ceil(2);
+    }
+    side
+}
+
+/// Thumbnails of consecutive frames as [`thumbnail_track`] makes them, first
+/// reduced to [`signal_side`] cells a side where they hold more than
+/// [`MAX_SIGNAL_VALUES`] values (each cell the mean of the cells it covers;
+/// for a video whose length was not known when it was read).
+pub fn signal_track(thumbs: Vec<Vec<f32>>, size: usize, fps: f64) -> Result<Track> {
+    let side = signal_side(size, thumbs.len());
+    if side == size {
+        return thumbnail_track(thumbs, size, fps);
+    }
+    let mut thumbs = thumbs;
+    for th in thumbs.iter_mut() {
+        if th.len() != size * size {
+            break; // thumbnail_track names the frame
+        }
+        *th = pooled(th, size, side);
+    }
+    thumbnail_track(thumbs, side, fps)
+}
+
+/// A `size × size` thumbnail as `side × side` cells, each the mean of the
+/// cells `c` with `⌊c · side / size⌋` equal to it (row and column).
+fn pooled(th: &[f32], size: usize, side: usize) -> Vec<f32> {
+    let mut sum = vec![0.0f64; side * side];
+    let mut count = vec![0u32; side * side];
+    for (k, &v) in th.iter().enumerate() {
+        let (r, c) = (k / size * side / size, k % size * side / size);
+        sum[r * side + c] += v as f64;
+        count[r * side + c] += 1;
+    }
+    sum.iter()
+        .zip(&count)
+        .map(|(&s, &n)| (s / n.max(1) as f64) as f32)
+        .collect()
+}
+
 /// The mean luma (BT.601 weights, 0–255) of each cell of a `size × size` grid
 /// laid over the frame, row-major. Every pixel falls in exactly one cell
 /// (cell `⌊x · size / width⌋`), so frames of any size work; frames smaller
@@ -102,6 +157,59 @@ pub fn thumbnail_track(thumbs: Vec<Vec<f32>>, size: usize, fps: f64) -> Result<T
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_long_video_s_signal_is_kept_within_its_budget() {
+        assert_eq!(signal_side(32, 0), 32);
+        assert_eq!(signal_side(32, 32_768), 32);
+        assert_eq!(signal_side(32, 32_769), 16);
+        assert_eq!(signal_side(32, 111_975), 16);
+        assert_eq!(signal_side(32, 131_073), 8);
+        assert_eq!(signal_side(31, 40_000), 16);
+        assert_eq!(signal_side(1, usize::MAX), 1);
+        for n in [1usize, 5_000, 40_000, 200_000, 10_000_000] {
+            let side = signal_side(32, n);
+            assert!(
+                n * side * side <= MAX_SIGNAL_VALUES || side == 1,
+                "{n}: {side}"
+            );
+        }
+    }
+
+    #[test]
+    fn pooled_cells_are_the_means_of_the_cells_they_cover() {
+        // 4 × 4 cells k = 0..16 pooled to 2 × 2: the top-left cell covers
+        // 0, 1, 4, 5.
+        let th: Vec<f32> = (0..16).map(|k| k as f32).collect();
+        assert_eq!(pooled(&th, 4, 2), vec![2.5, 4.5, 10.5, 12.5]);
+        // A frame's 16-cell thumbnail equals its 32-cell one pooled, up to
+        // the cells' unequal pixel counts (here 20 × 11.25 px).
+        let (w, h) = (640usize, 360usize);
+        let rgb: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let v = ((i % w) * 255 / w + (i / w) * 97 % 255) as u8;
+                [v, v, v]
+            })
+            .collect();
+        let frame = Frame {
+            index: 0,
+            timestamp_s: 0.0,
+            width: w,
+            height: h,
+            rgb,
+        };
+        let fine = grey_thumbnail(&frame, 32).unwrap();
+        let coarse = grey_thumbnail(&frame, 16).unwrap();
+        let p = pooled(&fine, 32, 16);
+        for (a, b) in p.iter().zip(&coarse) {
+            assert!((a - b).abs() < 1.0, "{a} vs {b}");
+        }
+        let track = signal_track(vec![fine; 40_000], 32, 30.0).unwrap();
+        assert_eq!(
+            (track.n_frames(), track.n_joints(), track.dims()),
+            (40_000, 16, 16)
+        );
+    }
 
     fn frame(w: usize, h: usize, f: impl Fn(usize, usize) -> [u8; 3]) -> Frame {
         let mut rgb = Vec::with_capacity(w * h * 3);
