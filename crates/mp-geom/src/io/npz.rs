@@ -633,8 +633,10 @@ impl NpzOut {
     }
 
     fn member(&mut self, name: &str, bytes: &[u8]) -> Result<()> {
+        // A member of 4 GiB or more needs the ZIP64 extensions.
+        let large = bytes.len() as u64 >= u64::from(u32::MAX);
         self.zip
-            .start_file(format!("{name}.npy"), self.options)
+            .start_file(format!("{name}.npy"), self.options.large_file(large))
             .map_err(|e| GeomError::format(name, format!("zip: {e}")))?;
         self.zip
             .write_all(bytes)

@@ -14,21 +14,26 @@
 //! | `people_n_frames` | `<i8 ()` | video length T in frames |
 //! | `people_ids` | `<i8 (P,)` | person ids, ascending |
 //! | `people_first_frame` | `<i8 (P,)` | video frame of each track's first frame |
-//! | `people_frames` | `<i8 (P,)` | length of each person's span (≥ 1) |
-//! | `people_positions` | `<f8 (P, T, J, D)` | positions over the whole video, 0 outside each span |
-//! | `people_confidence` | `<f8 (P, T, J)` | confidence over the whole video, 0 outside each span |
+//! | `people_frames` | `<i8 (P,)` | length F of each person's span (≥ 1) |
+//! | `people_positions` | `<f8 (ΣF, J, D)` | each person's positions over their own span, one person after the other in `people_ids` order |
+//! | `people_confidence` | `<f8 (ΣF, J)` | each person's confidence, laid out as `people_positions` |
 //! | `fps` | `<f8 ()` | frames per second (always written) |
-//! | `mp_people_version` | `<i8 ()` | format version (1) |
+//! | `mp_people_version` | `<i8 ()` | format version (2) |
 //!
-//! Readers take each person's frames `first_frame .. first_frame + frames`
-//! from `people_positions` / `people_confidence` (what lies outside the span
-//! is ignored) and the units and skeleton from the single-track arrays.
+//! Person `i`'s rows are `Σ_{k<i} F_k .. Σ_{k≤i} F_k` of `people_positions`
+//! / `people_confidence` (in numpy, `numpy.split(a, numpy.cumsum(frames)[:-1])`),
+//! and are the video's frames `first_frame .. first_frame + F_i`; the units and
+//! skeleton come from the single-track arrays. Each person's poses are held
+//! once, so the file grows with the frames where people are, not with people
+//! × video length (an hour with hundreds of passers-by). Version 1 files, whose
+//! `people_positions` / `people_confidence` were `(P, T, J, D)` / `(P, T, J)`
+//! over the whole video (0 outside each span), are still read.
 //!
 //! **Nobody in the video** (zero people): there is no main person and no
 //! skeleton, so the single-track arrays other than `fps` are left out;
 //! `people_ids`, `people_first_frame` and `people_frames` have shape `(0,)`,
-//! `people_positions` shape `(0, T, 0, 0)` and `people_confidence` shape
-//! `(0, T, 0)`. Such a file reads back as an empty [`People`];
+//! `people_positions` shape `(0, 0, 0)` and `people_confidence` shape
+//! `(0, 0)`. Such a file reads back as an empty [`People`];
 //! [`super::read_track`] refuses it ("no person in this file").
 //!
 //! **JSON**: `{"format": "mp-people", "version": 1, "n_frames", "fps",
@@ -49,7 +54,7 @@
 
 use std::path::Path;
 
-use ndarray::{arr0, s, Array1, Array3, Array4, Ix1, Ix3, Ix4};
+use ndarray::{arr0, s, Array1, Array2, Array3, Ix1, Ix2, Ix3, Ix4};
 use serde::{Deserialize, Serialize};
 
 use super::binary;
@@ -62,8 +67,11 @@ use crate::track::Track;
 
 /// Value of the `format` field of the JSON people format.
 pub(crate) const JSON_FORMAT: &str = "mp-people";
-/// Version written in the npz (`mp_people_version`) and JSON formats.
+/// Version written in the JSON format.
 pub(crate) const FORMAT_VERSION: i64 = 1;
+/// Version written in the npz format (`mp_people_version`): 2, each
+/// person's frames once; 1, every person over the whole video.
+pub(crate) const NPZ_FORMAT_VERSION: i64 = 2;
 /// The npz array whose presence marks a people file.
 pub(crate) const NPZ_VERSION_KEY: &str = "mp_people_version";
 /// Magic bytes that open the binary people format.
@@ -131,18 +139,20 @@ pub fn people_to_npz_bytes_framed(
         Some(main) => native::add_track_arrays(&mut out, &people.full_track(main.id)?)?,
         None => out.add("fps", &arr0(people.fps()))?,
     }
-    let p = list.len();
     let ids: Array1<i64> = list.iter().map(|p| i64::from(p.id)).collect();
     let first: Array1<i64> = list.iter().map(|p| p.first_frame as i64).collect();
     let frames: Array1<i64> = list.iter().map(|p| p.track.n_frames() as i64).collect();
-    let mut pos = Array4::<f64>::zeros((p, t, j, d));
-    let mut conf = Array3::<f64>::zeros((p, t, j));
-    for (i, person) in list.iter().enumerate() {
-        let span = person.first_frame..person.first_frame + person.track.n_frames();
-        pos.slice_mut(s![i, span.clone(), .., ..])
+    let total: usize = list.iter().map(|p| p.track.n_frames()).sum();
+    let mut pos = Array3::<f64>::zeros((total, j, d));
+    let mut conf = Array2::<f64>::zeros((total, j));
+    let mut at = 0;
+    for person in list {
+        let rows = at..at + person.track.n_frames();
+        pos.slice_mut(s![rows.clone(), .., ..])
             .assign(&person.track.positions());
-        conf.slice_mut(s![i, span, ..])
+        conf.slice_mut(s![rows.clone(), ..])
             .assign(&person.track.confidence());
+        at = rows.end;
     }
     out.add("people_n_frames", &arr0(t as i64))?;
     out.add("people_ids", &ids)?;
@@ -150,7 +160,7 @@ pub fn people_to_npz_bytes_framed(
     out.add("people_frames", &frames)?;
     out.add("people_positions", &pos)?;
     out.add("people_confidence", &conf)?;
-    out.add(NPZ_VERSION_KEY, &arr0(FORMAT_VERSION))?;
+    out.add(NPZ_VERSION_KEY, &arr0(NPZ_FORMAT_VERSION))?;
     native::add_frame_size(&mut out, frame_size)?;
     out.finish()
 }
@@ -192,10 +202,10 @@ pub fn people_from_npz(z: &Npz) -> Result<People> {
     let path = z.path().to_path_buf();
     let bad = |reason: String| GeomError::format(&path, reason);
     let version = scalar_i64(z, NPZ_VERSION_KEY)?;
-    if !(1..=FORMAT_VERSION).contains(&version) {
+    if !(1..=NPZ_FORMAT_VERSION).contains(&version) {
         return Err(bad(format!(
             "people format version {version} is not supported (this build reads 1 to \
-             {FORMAT_VERSION})"
+             {NPZ_FORMAT_VERSION})"
         )));
     }
     let t = scalar_i64(z, "people_n_frames")?;
@@ -221,15 +231,7 @@ pub fn people_from_npz(z: &Npz) -> Result<People> {
             main.n_frames()
         )));
     }
-    let pos = z
-        .array_f64_shaped("people_positions", &[Some(p), Some(t), Some(j), Some(d)])?
-        .into_dimensionality::<Ix4>()
-        .map_err(|e| bad(format!("people_positions: {e}")))?;
-    let conf = z
-        .array_f64_shaped("people_confidence", &[Some(p), Some(t), Some(j)])?
-        .into_dimensionality::<Ix3>()
-        .map_err(|e| bad(format!("people_confidence: {e}")))?;
-    let mut people = Vec::with_capacity(p);
+    let mut spans = Vec::with_capacity(p);
     for i in 0..p {
         let id = PersonId::try_from(ids[i])
             .map_err(|_| bad(format!("person id {} is outside 0..=4294967295", ids[i])))?;
@@ -245,9 +247,57 @@ pub fn people_from_npz(z: &Npz) -> Result<People> {
                     first[i], frames[i]
                 ))
             })?;
+        spans.push((id, span));
+    }
+    // Each person's rows of the arrays: their frames in the video (version
+    // 1), or their own run of rows (version 2).
+    let (pos, conf, rows): (Array3<f64>, Array2<f64>, Vec<(usize, usize)>) = if version == 1 {
+        let pos = z
+            .array_f64_shaped("people_positions", &[Some(p), Some(t), Some(j), Some(d)])?
+            .into_dimensionality::<Ix4>()
+            .map_err(|e| bad(format!("people_positions: {e}")))?;
+        let conf = z
+            .array_f64_shaped("people_confidence", &[Some(p), Some(t), Some(j)])?
+            .into_dimensionality::<Ix3>()
+            .map_err(|e| bad(format!("people_confidence: {e}")))?;
+        // Laid out as version 2: each person's span, one after the other.
+        let total: usize = spans.iter().map(|(_, (a, b))| b - a).sum();
+        let mut p2 = Array3::<f64>::zeros((total, j, d));
+        let mut c2 = Array2::<f64>::zeros((total, j));
+        let mut rows = Vec::with_capacity(p);
+        let mut at = 0;
+        for (i, (_, (a, b))) in spans.iter().enumerate() {
+            let r = at..at + (b - a);
+            p2.slice_mut(s![r.clone(), .., ..])
+                .assign(&pos.slice(s![i, *a..*b, .., ..]));
+            c2.slice_mut(s![r.clone(), ..])
+                .assign(&conf.slice(s![i, *a..*b, ..]));
+            rows.push((r.start, r.end));
+            at = r.end;
+        }
+        (p2, c2, rows)
+    } else {
+        let mut rows = Vec::with_capacity(p);
+        let mut at = 0usize;
+        for (_, (a, b)) in &spans {
+            rows.push((at, at + (b - a)));
+            at += b - a;
+        }
+        let pos = z
+            .array_f64_shaped("people_positions", &[Some(at), Some(j), Some(d)])?
+            .into_dimensionality::<Ix3>()
+            .map_err(|e| bad(format!("people_positions: {e}")))?;
+        let conf = z
+            .array_f64_shaped("people_confidence", &[Some(at), Some(j)])?
+            .into_dimensionality::<Ix2>()
+            .map_err(|e| bad(format!("people_confidence: {e}")))?;
+        (pos, conf, rows)
+    };
+    let mut people = Vec::with_capacity(p);
+    for ((id, span), (r0, r1)) in spans.into_iter().zip(rows) {
         let track = Track::new(
-            pos.slice(s![i, span.0..span.1, .., ..]).to_owned(),
-            Some(conf.slice(s![i, span.0..span.1, ..]).to_owned()),
+            pos.slice(s![r0..r1, .., ..]).to_owned(),
+            Some(conf.slice(s![r0..r1, ..]).to_owned()),
             fps,
             main.units(),
             main.skeleton().clone(),

@@ -402,8 +402,9 @@ fn the_npz_layout_is_as_documented() {
     let p = crowd();
     let z = Npz::from_bytes(people_to_npz_bytes(&p).unwrap(), "mem.npz").unwrap();
     let shape = |n: &str| z.array(n).unwrap().shape;
-    assert_eq!(shape("people_positions"), vec![3, 40, 17, 2]);
-    assert_eq!(shape("people_confidence"), vec![3, 40, 17]);
+    // Each person's frames once: 6 + 35 + 30 rows.
+    assert_eq!(shape("people_positions"), vec![71, 17, 2]);
+    assert_eq!(shape("people_confidence"), vec![71, 17]);
     assert_eq!(shape("positions"), vec![40, 17, 2]);
     assert_eq!(
         z.array_i64("people_ids")
@@ -429,28 +430,82 @@ fn the_npz_layout_is_as_documented() {
             .collect::<Vec<_>>(),
         vec![6, 35, 30]
     );
-    assert_eq!(z.scalar_f64("mp_people_version").unwrap(), 1.0);
+    assert_eq!(z.scalar_f64("mp_people_version").unwrap(), 2.0);
     assert_eq!(z.scalar_f64("people_n_frames").unwrap(), 40.0);
-    // Zeros outside each span.
+    // Person 2's rows are 6..41, person 3's 41..71.
     let pos = z.array_f64("people_positions").unwrap();
     let conf = z.array_f64("people_confidence").unwrap();
-    assert!(pos
-        .slice(ndarray::s![0, 6.., .., ..])
-        .iter()
-        .all(|&v| v == 0.0));
-    assert!(conf
-        .slice(ndarray::s![2, ..10, ..])
-        .iter()
-        .all(|&v| v == 0.0));
+    let two = &p.people()[1].track;
+    let three = &p.people()[2].track;
+    assert_eq!(pos.slice(ndarray::s![6..41, .., ..]), two.positions());
+    assert_eq!(conf.slice(ndarray::s![41..71, ..]), three.confidence());
 
     // Nobody in the video.
     let empty = People::new(12, 25.0, Vec::new()).unwrap();
     let z = Npz::from_bytes(people_to_npz_bytes(&empty).unwrap(), "mem.npz").unwrap();
     assert!(!z.contains("positions"));
-    assert_eq!(shape_of(&z, "people_positions"), vec![0, 12, 0, 0]);
-    assert_eq!(shape_of(&z, "people_confidence"), vec![0, 12, 0]);
+    assert_eq!(shape_of(&z, "people_positions"), vec![0, 0, 0]);
+    assert_eq!(shape_of(&z, "people_confidence"), vec![0, 0]);
     assert_eq!(shape_of(&z, "people_ids"), vec![0]);
     assert_eq!(z.scalar_f64("fps").unwrap(), 25.0);
+}
+
+#[test]
+fn a_version_1_npz_with_everyone_over_the_whole_video_still_reads() {
+    // Version 1 laid every person over the whole video, 0 outside their span.
+    let p = crowd();
+    let (t, j, d) = (40, 17, 2);
+    let mut pos = ndarray::Array4::<f64>::zeros((3, t, j, d));
+    let mut conf = ndarray::Array3::<f64>::zeros((3, t, j));
+    for (i, person) in p.people().iter().enumerate() {
+        let span = person.first_frame..person.first_frame + person.track.n_frames();
+        pos.slice_mut(ndarray::s![i, span.clone(), .., ..])
+            .assign(&person.track.positions());
+        conf.slice_mut(ndarray::s![i, span, ..])
+            .assign(&person.track.confidence());
+    }
+    let mut out = crate::io::npz::NpzOut::new(true);
+    crate::io::native::add_track_arrays(&mut out, &p.main_track().unwrap()).unwrap();
+    let ints = |v: Vec<i64>| ndarray::Array1::from(v);
+    out.add("people_n_frames", &ndarray::arr0(t as i64))
+        .unwrap();
+    out.add("people_ids", &ints(vec![1, 2, 3])).unwrap();
+    out.add("people_first_frame", &ints(vec![0, 3, 10]))
+        .unwrap();
+    out.add("people_frames", &ints(vec![6, 35, 30])).unwrap();
+    out.add("people_positions", &pos).unwrap();
+    out.add("people_confidence", &conf).unwrap();
+    out.add("mp_people_version", &ndarray::arr0(1i64)).unwrap();
+    let z = Npz::from_bytes(out.finish().unwrap(), "v1.npz").unwrap();
+    let back = crate::io::people::people_from_npz(&z).unwrap();
+    assert_eq!(back.len(), 3);
+    for (a, b) in back.people().iter().zip(p.people()) {
+        assert_eq!((a.id, a.first_frame), (b.id, b.first_frame));
+        assert_eq!(a.track.positions(), b.track.positions());
+        assert_eq!(a.track.confidence(), b.track.confidence());
+    }
+    // A version-2 file whose rows do not add up is refused, naming the array.
+    let mut out = crate::io::npz::NpzOut::new(true);
+    crate::io::native::add_track_arrays(&mut out, &p.main_track().unwrap()).unwrap();
+    out.add("people_n_frames", &ndarray::arr0(t as i64))
+        .unwrap();
+    out.add("people_ids", &ints(vec![1, 2, 3])).unwrap();
+    out.add("people_first_frame", &ints(vec![0, 3, 10]))
+        .unwrap();
+    out.add("people_frames", &ints(vec![6, 35, 30])).unwrap();
+    out.add(
+        "people_positions",
+        &ndarray::Array3::<f64>::zeros((70, j, d)),
+    )
+    .unwrap();
+    out.add("people_confidence", &ndarray::Array2::<f64>::zeros((70, j)))
+        .unwrap();
+    out.add("mp_people_version", &ndarray::arr0(2i64)).unwrap();
+    let z = Npz::from_bytes(out.finish().unwrap(), "short.npz").unwrap();
+    let e = crate::io::people::people_from_npz(&z)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("people_positions"), "{e}");
 }
 
 fn shape_of(z: &Npz, n: &str) -> Vec<usize> {
@@ -544,8 +599,11 @@ fn inconsistent_npz_arrays_are_errors() {
     assert!(e.contains("`positions` has 40 frames"), "{e}");
     let e = with("people_n_frames", s(0));
     assert!(e.contains("at least 1 frame"), "{e}");
-    let e = with("mp_people_version", s(2));
-    assert!(e.contains("version 2 is not supported"), "{e}");
+    let e = with("mp_people_version", s(3));
+    assert!(e.contains("version 3 is not supported"), "{e}");
+    // Spans that ask for more rows than the arrays hold.
+    let e = with("people_frames", v(vec![6, 35, 29]));
+    assert!(e.contains("people_positions"), "{e}");
 }
 
 #[test]
