@@ -19,7 +19,8 @@
 //! box. A video too long for 32 × 32 thumbnails within
 //! [`mp_pose::MAX_SIGNAL_VALUES`] has them read at 16 × 16 (or fewer cells,
 //! [`mp_pose::signal_side`]): an hour's frame signal in a quarter of the
-//! memory.
+//! memory; so are the other people's, when their frames together are that
+//! many.
 
 use std::path::Path;
 use std::time::Instant;
@@ -622,8 +623,9 @@ pub(crate) fn chosen_people(
 /// frame signal; every other person's (`rest`) over their own frames only,
 /// from their first to their last (their counts are theirs, and a long video
 /// with many people holds each person's thumbnails once, not once per
-/// frame of the video). None for a person whose box lies mostly outside the
-/// picture ([`PoseParams::own_box_region`]).
+/// frame of the video), all of them at the side their frames together allow.
+/// None for a person whose box lies mostly outside the picture
+/// ([`PoseParams::own_box_region`]).
 fn box_thumbnails(
     path: &Path,
     people: &People,
@@ -651,11 +653,27 @@ fn box_thumbnails(
             Some((*id, r, frames))
         })
         .collect();
-    // Each person's thumbnails at the side their number of frames allows
-    // (`mp_pose::MAX_SIGNAL_VALUES`).
+    // The top-level person's thumbnails at the side the video's length
+    // allows (`mp_pose::MAX_SIGNAL_VALUES`), the other people's at the side
+    // their frames together allow: an hour with a few people in view at a
+    // time holds about an hour of them.
+    let others_frames: usize = regions
+        .iter()
+        .filter(|(id, _, _)| Some(*id) != top)
+        .map(|(_, _, f)| f.len())
+        .sum();
     let sides: Vec<usize> = regions
         .iter()
-        .map(|(_, _, f)| signal_side(size, f.len()))
+        .map(|(id, _, f)| {
+            signal_side(
+                size,
+                if Some(*id) == top {
+                    f.len()
+                } else {
+                    others_frames
+                },
+            )
+        })
         .collect();
     let mut thumbs: Vec<Vec<Vec<f32>>> = regions
         .iter()

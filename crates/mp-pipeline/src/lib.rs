@@ -373,10 +373,13 @@ pub(crate) fn run_with(
     let frames = kp.frames.take();
     let overlay_src = kp.overlay.take();
     let mut outcome = finish_analysis(kp, params, &mut timings, cancel, start)?;
-    // The frame signal (8 bytes per thumbnail cell and frame: about 0.9 GB for
-    // an hour of 30-fps video) has been counted and is written nowhere: it is
-    // freed before the pictures, the overlay and the page.
+    // The frame signals (8 bytes per thumbnail cell and frame: up to 256 MiB
+    // each, `mp_pose::MAX_SIGNAL_VALUES`) have been counted and are written
+    // nowhere: they are freed before the pictures, the overlay and the page.
     outcome.keypoints.thumbnails = None;
+    for (_, thumbnails) in &mut outcome.keypoints.others {
+        *thumbnails = None;
+    }
     // The output folder is created once there is something to write.
     let out = OutputDir::create_with_cancel(out_dir, cancel.clone())
         .map_err(PipelineError::from_report)?;
