@@ -464,18 +464,24 @@ fn a_version_1_npz_with_everyone_over_the_whole_video_still_reads() {
         conf.slice_mut(ndarray::s![i, span, ..])
             .assign(&person.track.confidence());
     }
-    let mut out = crate::io::npz::NpzOut::new(true);
-    crate::io::native::add_track_arrays(&mut out, &p.main_track().unwrap()).unwrap();
-    let ints = |v: Vec<i64>| ndarray::Array1::from(v);
-    out.add("people_n_frames", &ndarray::arr0(t as i64))
-        .unwrap();
-    out.add("people_ids", &ints(vec![1, 2, 3])).unwrap();
-    out.add("people_first_frame", &ints(vec![0, 3, 10]))
-        .unwrap();
-    out.add("people_frames", &ints(vec![6, 35, 30])).unwrap();
+    // The arrays besides the people's positions and confidence, at `version`.
+    let archive = |version: i64| {
+        let mut out = crate::io::npz::NpzOut::new(true);
+        crate::io::native::add_track_arrays(&mut out, &p.main_track().unwrap()).unwrap();
+        let ints = |v: Vec<i64>| ndarray::Array1::from(v);
+        out.add("people_n_frames", &ndarray::arr0(t as i64))
+            .unwrap();
+        out.add("people_ids", &ints(vec![1, 2, 3])).unwrap();
+        out.add("people_first_frame", &ints(vec![0, 3, 10]))
+            .unwrap();
+        out.add("people_frames", &ints(vec![6, 35, 30])).unwrap();
+        out.add("mp_people_version", &ndarray::arr0(version))
+            .unwrap();
+        out
+    };
+    let mut out = archive(1);
     out.add("people_positions", &pos).unwrap();
     out.add("people_confidence", &conf).unwrap();
-    out.add("mp_people_version", &ndarray::arr0(1i64)).unwrap();
     let z = Npz::from_bytes(out.finish().unwrap(), "v1.npz").unwrap();
     let back = crate::io::people::people_from_npz(&z).unwrap();
     assert_eq!(back.len(), 3);
@@ -485,14 +491,7 @@ fn a_version_1_npz_with_everyone_over_the_whole_video_still_reads() {
         assert_eq!(a.track.confidence(), b.track.confidence());
     }
     // A version-2 file whose rows do not add up is refused, naming the array.
-    let mut out = crate::io::npz::NpzOut::new(true);
-    crate::io::native::add_track_arrays(&mut out, &p.main_track().unwrap()).unwrap();
-    out.add("people_n_frames", &ndarray::arr0(t as i64))
-        .unwrap();
-    out.add("people_ids", &ints(vec![1, 2, 3])).unwrap();
-    out.add("people_first_frame", &ints(vec![0, 3, 10]))
-        .unwrap();
-    out.add("people_frames", &ints(vec![6, 35, 30])).unwrap();
+    let mut out = archive(2);
     out.add(
         "people_positions",
         &ndarray::Array3::<f64>::zeros((70, j, d)),
@@ -500,7 +499,6 @@ fn a_version_1_npz_with_everyone_over_the_whole_video_still_reads() {
     .unwrap();
     out.add("people_confidence", &ndarray::Array2::<f64>::zeros((70, j)))
         .unwrap();
-    out.add("mp_people_version", &ndarray::arr0(2i64)).unwrap();
     let z = Npz::from_bytes(out.finish().unwrap(), "short.npz").unwrap();
     let e = crate::io::people::people_from_npz(&z)
         .unwrap_err()
