@@ -366,15 +366,15 @@ fn from_video(
     } else {
         None
     };
+    // Whole-frame thumbnails at the side the expected length allows
+    // (`signal_track` reduces them further if the video is longer).
+    let side = signal_side(params.pose.thumbnail_size, expected.unwrap_or(0));
     let (source, decoder) = decode_ahead(
         reader,
         &DecodeOptions {
             limit: max_frames,
             keep_full,
-            thumbnail_size: Some(signal_side(
-                params.pose.thumbnail_size,
-                expected.unwrap_or(0),
-            )),
+            thumbnail_size: Some(side),
             ..DecodeOptions::default()
         },
         cancel.clone(),
@@ -415,7 +415,6 @@ fn from_video(
     let mut thumbs = decoded.thumbnails;
     thumbs.truncate(n);
     let whole_frame = if thumbs.len() == n && n > 0 {
-        let side = signal_side(params.pose.thumbnail_size, expected.unwrap_or(0));
         Some(signal_track(thumbs, side, info.fps)?)
     } else {
         None

@@ -187,12 +187,12 @@ pub(crate) fn person_colour(id: mp_geom::PersonId) -> [u8; 3] {
 
 /// Another tracked person as the overlay draws them: their colour, their
 /// first frame, and their track over their own frames (from the first on).
-pub(crate) type OtherPerson = ([u8; 3], usize, Track);
+pub(crate) type OtherPerson<'a> = ([u8; 3], usize, &'a Track);
 
 /// Every tracked person but the top-level one, each over their own frames
 /// (a long video with many people holds each person's poses once, not a
 /// copy as long as the video per person), with their colour.
-pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<OtherPerson> {
+pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<OtherPerson<'_>> {
     let Some(people) = &kp.people else {
         return Vec::new();
     };
@@ -200,7 +200,7 @@ pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<OtherPerson> {
         .people()
         .iter()
         .filter(|p| Some(p.id) != kp.person)
-        .map(|p| (person_colour(p.id), p.first_frame, p.track.clone()))
+        .map(|p| (person_colour(p.id), p.first_frame, &p.track))
         .collect()
 }
 
@@ -214,7 +214,7 @@ pub(crate) fn write_overlay(
     src: OverlayFrames,
     track: &Track,
     executed: &Track,
-    others: &[OtherPerson],
+    others: &[OtherPerson<'_>],
     progress: &dyn Fn(usize),
 ) -> Result<()> {
     let cancel: &CancelToken = out.cancel_token();

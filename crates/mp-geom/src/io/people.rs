@@ -249,9 +249,28 @@ pub fn people_from_npz(z: &Npz) -> Result<People> {
             })?;
         spans.push((id, span));
     }
-    // Each person's rows of the arrays: their frames in the video (version
-    // 1), or their own run of rows (version 2).
-    let (pos, conf, rows): (Array3<f64>, Array2<f64>, Vec<(usize, usize)>) = if version == 1 {
+    let person = |id: PersonId,
+                  span: (usize, usize),
+                  pos: ndarray::ArrayView3<f64>,
+                  conf: ndarray::ArrayView2<f64>|
+     -> Result<Person> {
+        let track = Track::new(
+            pos.to_owned(),
+            Some(conf.to_owned()),
+            fps,
+            main.units(),
+            main.skeleton().clone(),
+        )
+        .map_err(|e| bad(format!("person {id}: {e}")))?;
+        Ok(Person {
+            id,
+            first_frame: span.0,
+            track,
+        })
+    };
+    let mut people = Vec::with_capacity(p);
+    if version == 1 {
+        // Every person over the whole video: their span of their row.
         let pos = z
             .array_f64_shaped("people_positions", &[Some(p), Some(t), Some(j), Some(d)])?
             .into_dimensionality::<Ix4>()
@@ -260,54 +279,36 @@ pub fn people_from_npz(z: &Npz) -> Result<People> {
             .array_f64_shaped("people_confidence", &[Some(p), Some(t), Some(j)])?
             .into_dimensionality::<Ix3>()
             .map_err(|e| bad(format!("people_confidence: {e}")))?;
-        // Laid out as version 2: each person's span, one after the other.
-        let total: usize = spans.iter().map(|(_, (a, b))| b - a).sum();
-        let mut p2 = Array3::<f64>::zeros((total, j, d));
-        let mut c2 = Array2::<f64>::zeros((total, j));
-        let mut rows = Vec::with_capacity(p);
-        let mut at = 0;
-        for (i, (_, (a, b))) in spans.iter().enumerate() {
-            let r = at..at + (b - a);
-            p2.slice_mut(s![r.clone(), .., ..])
-                .assign(&pos.slice(s![i, *a..*b, .., ..]));
-            c2.slice_mut(s![r.clone(), ..])
-                .assign(&conf.slice(s![i, *a..*b, ..]));
-            rows.push((r.start, r.end));
-            at = r.end;
+        for (i, (id, (a, b))) in spans.into_iter().enumerate() {
+            people.push(person(
+                id,
+                (a, b),
+                pos.slice(s![i, a..b, .., ..]),
+                conf.slice(s![i, a..b, ..]),
+            )?);
         }
-        (p2, c2, rows)
     } else {
-        let mut rows = Vec::with_capacity(p);
-        let mut at = 0usize;
-        for (_, (a, b)) in &spans {
-            rows.push((at, at + (b - a)));
-            at += b - a;
-        }
+        // Each person's frames once, one person after the other.
+        let total: usize = spans.iter().map(|(_, (a, b))| b - a).sum();
         let pos = z
-            .array_f64_shaped("people_positions", &[Some(at), Some(j), Some(d)])?
+            .array_f64_shaped("people_positions", &[Some(total), Some(j), Some(d)])?
             .into_dimensionality::<Ix3>()
             .map_err(|e| bad(format!("people_positions: {e}")))?;
         let conf = z
-            .array_f64_shaped("people_confidence", &[Some(at), Some(j)])?
+            .array_f64_shaped("people_confidence", &[Some(total), Some(j)])?
             .into_dimensionality::<Ix2>()
             .map_err(|e| bad(format!("people_confidence: {e}")))?;
-        (pos, conf, rows)
-    };
-    let mut people = Vec::with_capacity(p);
-    for ((id, span), (r0, r1)) in spans.into_iter().zip(rows) {
-        let track = Track::new(
-            pos.slice(s![r0..r1, .., ..]).to_owned(),
-            Some(conf.slice(s![r0..r1, ..]).to_owned()),
-            fps,
-            main.units(),
-            main.skeleton().clone(),
-        )
-        .map_err(|e| bad(format!("person {id}: {e}")))?;
-        people.push(Person {
-            id,
-            first_frame: span.0,
-            track,
-        });
+        let mut at = 0;
+        for (id, (a, b)) in spans {
+            let rows = at..at + (b - a);
+            people.push(person(
+                id,
+                (a, b),
+                pos.slice(s![rows.clone(), .., ..]),
+                conf.slice(s![rows.clone(), ..]),
+            )?);
+            at = rows.end;
+        }
     }
     build(t, fps, people, &path)
 }
