@@ -7,6 +7,7 @@
 //! intervals of a long recording (`segment`: local periodicity and dynamic
 //! programming). [`crate::count`] combines them into the counts a user gets.
 
+mod concordance;
 mod period;
 mod segment;
 

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::concordance::{node_frames, Concordance};
 use super::{channels, standardise, JointSelection, RepetitiveInterval};
 
 /// Parameters of the repetition segmenter (see [`segment_repetitions`]).
@@ -231,89 +232,6 @@ fn frame_speeds(x: &[f64], n: usize, c: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Lin's concordance of `x[s..e-l]` and `x[s+l..e]` (all channels pooled, each
-/// channel with its own means): 1 when the motion repeats exactly after `l`
-/// frames, ≤ 0 when unrelated; a change of mean pose lowers it (unlike a correlation).
-struct Concordance {
-    c: usize,
-    /// Per-channel prefix sums, `(T+1) × C`.
-    cs: Vec<f64>,
-    /// Prefix sums of the squared norm of each frame.
-    cs2: Vec<f64>,
-    /// For each lag `l` (index `l − 1`), prefix sums of `⟨x_t, x_{t+l}⟩`.
-    cross: Vec<Vec<f64>>,
-}
-
-impl Concordance {
-    fn new(x: &[f64], n: usize, c: usize, max_lag: usize) -> Self {
-        let mut cs = vec![0.0; (n + 1) * c];
-        let mut cs2 = vec![0.0; n + 1];
-        for t in 0..n {
-            let mut q = 0.0;
-            for k in 0..c {
-                let v = x[t * c + k];
-                cs[(t + 1) * c + k] = cs[t * c + k] + v;
-                q += v * v;
-            }
-            cs2[t + 1] = cs2[t] + q;
-        }
-        let cross = (1..=max_lag.min(n.saturating_sub(1)))
-            .map(|l| {
-                let mut p = vec![0.0; n - l + 1];
-                for t in 0..n - l {
-                    let mut s = 0.0;
-                    for k in 0..c {
-                        s += x[t * c + k] * x[(t + l) * c + k];
-                    }
-                    p[t + 1] = p[t] + s;
-                }
-                p
-            })
-            .collect();
-        Concordance { c, cs, cs2, cross }
-    }
-
-    /// Concordance of `[s, e − l)` with `[s + l, e)`; `None` when undefined.
-    fn at(&self, s: usize, e: usize, l: usize) -> Option<f64> {
-        if l == 0 || e < s + l + 1 {
-            return None;
-        }
-        let p = self.cross.get(l - 1)?;
-        let n = (e - s - l) as f64;
-        let c = self.c;
-        let (mut sab, mut ssd) = (0.0, 0.0);
-        for k in 0..c {
-            let sa = self.cs[(e - l) * c + k] - self.cs[s * c + k];
-            let sb = self.cs[e * c + k] - self.cs[(s + l) * c + k];
-            sab += sa * sb;
-            ssd += (sa - sb) * (sa - sb);
-        }
-        let saa_all: f64 = (0..c)
-            .map(|k| {
-                let sa = self.cs[(e - l) * c + k] - self.cs[s * c + k];
-                sa * sa
-            })
-            .sum();
-        let sbb_all: f64 = (0..c)
-            .map(|k| {
-                let sb = self.cs[e * c + k] - self.cs[(s + l) * c + k];
-                sb * sb
-            })
-            .sum();
-        let cross = p.get(e - l)? - p.get(s)?;
-        let cov = cross - sab / n;
-        let va = (self.cs2[e - l] - self.cs2[s]) - saa_all / n;
-        let vb = (self.cs2[e] - self.cs2[s + l]) - sbb_all / n;
-        let md = ssd / n;
-        let den = va + vb + md;
-        if den > 1e-12 {
-            Some(2.0 * cov / den)
-        } else {
-            None
-        }
-    }
-}
-
 /// Finds the repetitive intervals of a track (or a feature track, e.g. joint
 /// angles) by local periodicity, and counts the repetitions in each.
 ///
@@ -374,14 +292,11 @@ pub fn segment_repetitions(
     if n < min_len || c == 0 {
         return Ok(Vec::new());
     }
-    let conc = Concordance::new(&x, n, c, lmax);
+    let conc = Concordance::new(&x, n, c, lmax, step);
     // The concordance's prefix sums hold all that is read of the channels
     // from here on (an hour of 64 channels: 57 MB freed).
     drop(x);
-    let mut nodes: Vec<usize> = (0..n).step_by(step).collect();
-    if nodes.last() != Some(&n) {
-        nodes.push(n);
-    }
+    let nodes = node_frames(n, step);
     let penalty = params.interval_penalty_s * fps;
     // Best score and period of the interval between nodes i < j.
     let best_of = |s: usize, e: usize| -> Option<(f64, usize)> {
