@@ -251,18 +251,40 @@ pub fn print_summary(s: &RunSummary, out: &Path) {
     if let Some(r) = &s.report {
         println!("Report: {}", r.display());
     }
-    // Plots and the report's frames and data are named by their folder.
+    println!("All files in {}/: {}", out.display(), file_list(&s.files));
+}
+
+/// The files of a run as one line: plots, the report's frames and data, and
+/// the other people's programs are named by their folder (an hour with a
+/// hundred people writes four hundred files there).
+fn file_list(files: &[String]) -> String {
     let mut names: Vec<String> = Vec::new();
-    for f in &s.files {
+    let mut people: Vec<&str> = Vec::new();
+    for f in files {
         let name = match f.split_once('/') {
             Some((dir @ ("plots" | "report"), _)) => format!("{dir}/"),
+            Some(("people", rest)) => {
+                let id = rest.split('/').next().unwrap_or(rest);
+                if !people.contains(&id) {
+                    people.push(id);
+                }
+                "people/".to_string()
+            }
             _ => f.clone(),
         };
         if !names.contains(&name) {
             names.push(name);
         }
     }
-    println!("All files in {}/: {}", out.display(), names.join(", "));
+    if let Some(k) = names.iter().position(|n| n == "people/") {
+        let who = if people.len() == 1 {
+            "person"
+        } else {
+            "people"
+        };
+        names[k] = format!("people/ ({} other {who}'s programs)", people.len());
+    }
+    names.join(", ")
 }
 
 /// One line per tracked person (when people were tracked), and the warning
@@ -340,4 +362,31 @@ pub fn stage_table(s: &RunSummary) -> String {
         motion_s / total.max(1e-9)
     ));
     t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::file_list;
+
+    #[test]
+    fn folders_of_many_files_are_named_once() {
+        let files: Vec<String> = [
+            "track.npz",
+            "people/3/program.txt",
+            "people/3/abstract.json",
+            "people/12/program.txt",
+            "plots/a.svg",
+            "plots/b.svg",
+            "report/data/0.json",
+            "overlay.mp4",
+        ]
+        .map(String::from)
+        .to_vec();
+        assert_eq!(
+            file_list(&files),
+            "track.npz, people/ (2 other people's programs), plots/, report/, overlay.mp4"
+        );
+        let one = ["people/3/program.txt".to_string()];
+        assert_eq!(file_list(&one), "people/ (1 other person's programs)");
+    }
 }

@@ -9,7 +9,7 @@ use mp_pose::{VideoReader, VideoWriter};
 use mp_report::check_cancel;
 use mp_report::OutputDir;
 use mp_report::{draw_skeleton, SkeletonStyle, View};
-use mp_report::{pixmap_to_rgb, rgb_to_pixmap};
+use mp_report::{fill_from_rgb, Pixmap};
 use serde::Serialize;
 
 use crate::error::{PipelineError, Result};
@@ -221,7 +221,15 @@ pub(crate) fn write_overlay(
     let n = track.n_frames();
     let (width, height, fps) = (src.info.width, src.info.height, src.info.fps);
     let staged = out.staging_file("overlay.mp4");
-    let mut writer = VideoWriter::create_with_preset(&staged, width, height, fps, OVERLAY_PRESET)?;
+    // One picture, refilled with each frame and handed to the encoder as RGBA.
+    let mut writer =
+        VideoWriter::create_rgba_with_preset(&staged, width, height, fps, OVERLAY_PRESET)?;
+    let mut pm = Pixmap::new(width as u32, height as u32).ok_or_else(|| {
+        PipelineError::stage(
+            "overlay video",
+            format!("cannot allocate a {width}×{height} picture"),
+        )
+    })?;
     let kp_style = SkeletonStyle::for_frame(width, height);
     let prog_style = SkeletonStyle::program().scaled(SkeletonStyle::frame_scale(width, height));
     let view = View::frame(1.0);
@@ -229,7 +237,7 @@ pub(crate) fn write_overlay(
     let mut done = 0usize;
     let mut draw = |index: usize, rgb: &[u8]| -> Result<()> {
         check_cancel(cancel).map_err(PipelineError::from_report)?;
-        let mut pm = rgb_to_pixmap(rgb, width, height)?;
+        fill_from_rgb(&mut pm, rgb)?;
         for (colour, first, other) in others {
             let Some(own) = index.checked_sub(*first).filter(|&i| i < other.n_frames()) else {
                 continue;
@@ -244,7 +252,7 @@ pub(crate) fn write_overlay(
             draw_skeleton(&mut pm, executed, index, &view, &prog_style);
         }
         draw_skeleton(&mut pm, track, index, &view, &kp_style);
-        writer.write(&pixmap_to_rgb(&pm))?;
+        writer.write(pm.data())?;
         done += 1;
         progress(done);
         Ok(())

@@ -585,6 +585,8 @@ pub struct VideoWriter {
     path: PathBuf,
     width: usize,
     height: usize,
+    /// Bytes a pixel: 3 (RGB) or 4 (RGBA).
+    channels: usize,
     child: Option<Child>,
     stderr: Option<JoinHandle<String>>,
     frames: usize,
@@ -618,7 +620,31 @@ impl VideoWriter {
         fps: f64,
         preset: &str,
     ) -> Result<Self> {
-        let path = path.as_ref().to_path_buf();
+        Self::spawn(path.as_ref(), width, height, fps, preset, false)
+    }
+
+    /// [`VideoWriter::create_with_preset`] for frames of opaque RGBA bytes
+    /// (`height × width × 4`, the alpha ignored): a drawing surface such as a
+    /// `tiny_skia::Pixmap` goes to the encoder as it is, without a copy to RGB.
+    pub fn create_rgba_with_preset(
+        path: impl AsRef<Path>,
+        width: usize,
+        height: usize,
+        fps: f64,
+        preset: &str,
+    ) -> Result<Self> {
+        Self::spawn(path.as_ref(), width, height, fps, preset, true)
+    }
+
+    fn spawn(
+        path: &Path,
+        width: usize,
+        height: usize,
+        fps: f64,
+        preset: &str,
+        rgba: bool,
+    ) -> Result<Self> {
+        let path = path.to_path_buf();
         if !X264_PRESETS.contains(&preset) {
             return Err(PoseError::param(
                 "preset",
@@ -637,9 +663,10 @@ impl VideoWriter {
         if !(fps.is_finite() && fps > 0.0) {
             return Err(PoseError::param("fps", format!("must be > 0, got {fps}")));
         }
+        let input = if rgba { "rgba" } else { "rgb24" };
         let mut child = Command::new("ffmpeg")
             .args([
-                "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
+                "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", input, "-s",
             ])
             .arg(format!("{width}x{height}"))
             .arg("-r")
@@ -669,23 +696,26 @@ impl VideoWriter {
             path,
             width,
             height,
+            channels: if rgba { 4 } else { 3 },
             child: Some(child),
             stderr,
             frames: 0,
         })
     }
 
-    /// Appends one frame (`height × width × 3` bytes).
+    /// Appends one frame (`height × width × 3` bytes; × 4 for a writer made
+    /// by [`VideoWriter::create_rgba_with_preset`]).
     pub fn write(&mut self, rgb: &[u8]) -> Result<()> {
         use std::io::Write;
-        if rgb.len() != self.width * self.height * 3 {
+        if rgb.len() != self.width * self.height * self.channels {
             return Err(PoseError::BadFrame {
                 frame: self.frames,
                 reason: format!(
-                    "{} bytes, the video is {}×{} RGB",
+                    "{} bytes, the video is {}×{} {}",
                     rgb.len(),
                     self.width,
-                    self.height
+                    self.height,
+                    if self.channels == 4 { "RGBA" } else { "RGB" }
                 ),
             });
         }
@@ -787,6 +817,51 @@ mod tests {
         let j = r#"{"streams":[{"codec_type":"audio"}]}"#;
         let e = parse_probe_json(Path::new("a.mp4"), j).unwrap_err();
         assert!(e.to_string().contains("no video stream"), "{e}");
+    }
+
+    /// RGB and RGBA frames give the same video; a frame of the other kind's
+    /// size is refused with what the writer expects.
+    #[test]
+    fn rgba_frames_encode_as_their_rgb() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (64usize, 48usize);
+        // Smooth colours (H.264 keeps them within a few grey levels).
+        let rgb: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = (i % w, i / w);
+                [(x * 4) as u8, (y * 5) as u8, 128u8]
+            })
+            .collect();
+        let rgba: Vec<u8> = rgb
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        let (a, b) = (dir.path().join("rgb.mp4"), dir.path().join("rgba.mp4"));
+        let mut wa = VideoWriter::create_with_preset(&a, w, h, 10.0, "veryfast").unwrap();
+        let mut wb = VideoWriter::create_rgba_with_preset(&b, w, h, 10.0, "veryfast").unwrap();
+        let e = wb.write(&rgb).unwrap_err().to_string();
+        assert!(e.contains("RGBA"), "{e}");
+        for _ in 0..3 {
+            wa.write(&rgb).unwrap();
+            wb.write(&rgba).unwrap();
+        }
+        assert_eq!(wa.finish().unwrap(), 3);
+        assert_eq!(wb.finish().unwrap(), 3);
+        let read = |p: &Path| -> Vec<Vec<u8>> {
+            VideoReader::open(p)
+                .unwrap()
+                .map(|f| f.unwrap().rgb)
+                .collect()
+        };
+        let (fa, fb) = (read(&a), read(&b));
+        assert_eq!((fa.len(), fb.len()), (3, 3));
+        for (x, y) in fa.iter().zip(&fb) {
+            let worst = x.iter().zip(y).map(|(p, q)| p.abs_diff(*q)).max().unwrap();
+            assert!(worst <= 2, "RGB and RGBA frames differ by {worst} levels");
+        }
+        let truth = rgb.iter().zip(&fb[0]).map(|(p, q)| p.abs_diff(*q) as f64);
+        let mean = truth.sum::<f64>() / rgb.len() as f64;
+        assert!(mean < 3.0, "mean error {mean} levels");
     }
 
     #[test]
