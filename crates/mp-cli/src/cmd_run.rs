@@ -335,7 +335,7 @@ pub fn print_people(o: &mp_pipeline::Outcome) {
 /// The stage-timing table.
 pub fn stage_table(s: &RunSummary) -> String {
     let o = &s.outcome;
-    let mut t = String::from("stage        time (s)   frames/s\n");
+    let mut t = String::from("stage        time (s)   frames/s   peak MB\n");
     for st in &o.stages {
         let secs = st.time.as_secs_f64();
         let fps = if secs > 0.0 && st.frames > 0 {
@@ -343,11 +343,15 @@ pub fn stage_table(s: &RunSummary) -> String {
         } else {
             format!("{:>9}", "–")
         };
+        let peak = st
+            .peak_bytes
+            .map_or_else(|| "–".to_string(), |b| format!("{:.0}", b as f64 / 1e6));
         t.push_str(&format!(
-            "{:<12} {:>8.2}  {}   {}\n",
+            "{:<12} {:>8.2}  {}  {:>8}   {}\n",
             st.stage.name(),
             secs,
             fps,
+            peak,
             st.stage.note()
         ));
     }

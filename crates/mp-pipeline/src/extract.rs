@@ -169,13 +169,8 @@ pub fn extract(
     check(cancel)?;
     let started = std::time::Instant::now();
     observer.started(Stage::Pose, total);
-    let finished = |frames: usize| {
-        observer.finished(&StageTime {
-            stage: Stage::Pose,
-            time: started.elapsed(),
-            frames,
-        })
-    };
+    let finished =
+        |frames: usize| observer.finished(&StageTime::now(Stage::Pose, started.elapsed(), frames));
     let several = pose.people && !what.world && Input::is_video(path);
     if let (true, Some(lm)) = (several, pose.model.landmark_model()) {
         let mut est = mp_pose::MultiPose::new(mp_pose::MultiPoseParams {

@@ -31,7 +31,7 @@ use mp_pose::SessionParams;
 use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams, SharedLandmarks};
 use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
-use mp_pose::{grey_thumbnail_region, signal_side, signal_track, thumbnail_track};
+use mp_pose::{grey_thumbnail_region, signal_side, signal_track, thumbnail_track_flat};
 use mp_pose::{ModelChoice, PoseEstimator};
 use mp_pose::{VideoInfo, VideoReader};
 use mp_report::{FrameStore, FrameStoreParams};
@@ -100,15 +100,7 @@ impl ModelSlot {
                 "several people need BlazePose (full, lite or heavy)",
             )
         })?;
-        let want = MultiPoseParams {
-            pose: BlazePoseParams {
-                model: lm,
-                session: params.pose.session(),
-                shared: self.shared.clone(),
-                ..Default::default()
-            },
-            people: params.pose.tracker.clone(),
-        };
+        let want = multi_params(lm, params.pose.session(), self.shared.clone(), params);
         if self.multi.as_ref().is_none_or(|m| *m.params() != want) {
             self.multi = Some(MultiPose::new(want)?);
         }
@@ -130,6 +122,24 @@ impl ModelSlot {
             Some((_, _, _, est)) => Ok(est.as_mut()),
             None => Err(PipelineError::stage("loading the pose model", "no model")),
         }
+    }
+}
+
+/// The several-people estimator's settings: landmark model `lm` in `session`.
+fn multi_params(
+    lm: mp_pose::LandmarkModelKind,
+    session: SessionParams,
+    shared: Option<SharedLandmarks>,
+    params: &Params,
+) -> MultiPoseParams {
+    MultiPoseParams {
+        pose: BlazePoseParams {
+            model: lm,
+            session,
+            shared,
+            ..Default::default()
+        },
+        people: params.pose.tracker.clone(),
     }
 }
 
@@ -369,28 +379,45 @@ fn from_video(
     // Whole-frame thumbnails at the side the expected length allows
     // (`signal_track` reduces them further if the video is longer).
     let side = signal_side(params.pose.thumbnail_size, expected.unwrap_or(0));
-    let (source, decoder) = decode_ahead(
-        reader,
-        &DecodeOptions {
-            limit: max_frames,
-            keep_full,
-            thumbnail_size: Some(side),
-            ..DecodeOptions::default()
-        },
-        cancel.clone(),
-    )?;
     let observer = timings.observer();
-    observer.started(Stage::Pose, expected);
     let multi = params.pose.people && params.pose.model.landmark_model().is_some();
-    let ex = if multi {
-        pose_people(source, slot, params, |d| observer.progress(Stage::Pose, d))
+    // A long video is tracked in pieces side by side, each decoding its own frames.
+    let pieces = if multi && !keep_full {
+        pose_pieces(params, &info, expected, slot.shared.is_some())?
     } else {
-        pose_single(source, slot, params, |d| observer.progress(Stage::Pose, d))
+        Vec::new()
     };
-    // The frame source is gone once the pose pass returns, so the decoder stops too.
-    let decoded = decoder
-        .join()
-        .map_err(|_| PipelineError::stage("decoding", "the decoding thread panicked"))?;
+    let (ex, decoded) = if pieces.len() > 1 {
+        drop(reader);
+        observer.started(Stage::Pose, expected);
+        let progress = |d| observer.progress(Stage::Pose, d);
+        match pose_people_in_pieces(&info, &pieces, side, params, cancel, &progress) {
+            Ok((posed, decoded)) => (Ok(posed), decoded),
+            Err(e) => (Err(e), mp_pose::Decoded::default()),
+        }
+    } else {
+        let (source, decoder) = decode_ahead(
+            reader,
+            &DecodeOptions {
+                limit: max_frames,
+                keep_full,
+                thumbnail_size: Some(side),
+                ..DecodeOptions::default()
+            },
+            cancel.clone(),
+        )?;
+        observer.started(Stage::Pose, expected);
+        let ex = if multi {
+            pose_people(source, slot, params, |d| observer.progress(Stage::Pose, d))
+        } else {
+            pose_single(source, slot, params, |d| observer.progress(Stage::Pose, d))
+        };
+        // The frame source is gone once the pose pass returns, so the decoder stops too.
+        let decoded = decoder
+            .join()
+            .map_err(|_| PipelineError::stage("decoding", "the decoding thread panicked"))?;
+        (ex, decoded)
+    };
     let wall = t0.elapsed();
     let copies = jpegs
         .map(|h| {
@@ -413,8 +440,8 @@ fn from_video(
     timings.push(Stage::Pose, wall, n);
     let coco = |t: Track| coco17_unless_all(t, params);
     let mut thumbs = decoded.thumbnails;
-    thumbs.truncate(n);
-    let whole_frame = if thumbs.len() == n && n > 0 {
+    thumbs.truncate(n * side * side);
+    let whole_frame = if thumbs.len() == n * side * side && n > 0 {
         Some(signal_track(thumbs, side, info.fps)?)
     } else {
         None
@@ -559,8 +586,160 @@ fn pose_people(
     let ex = extract_people(source, est, &extract_options(params, fps), |done, _| {
         progress(done)
     })?;
+    posed_people(ex, est.name(), est.skeleton(), fps)
+}
+
+/// The pieces ([`PoseParams::pieces`]) the pose pass cuts a video of
+/// `expected` frames into: `(start, frames)` each; one piece for a short
+/// video, a video of unknown length, a GPU or a shared model.
+fn pose_pieces(
+    params: &Params,
+    info: &VideoInfo,
+    expected: Option<usize>,
+    shared: bool,
+) -> Result<Vec<(usize, usize)>> {
+    let Some(n) = expected.filter(|&n| n > 0) else {
+        return Ok(vec![(0, expected.unwrap_or(0))]);
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let on_gpu = match params.pose.device {
+        mp_pose::Device::Cpu => false,
+        mp_pose::Device::Auto => mp_pose::Device::cuda_available().unwrap_or(false),
+        _ => true,
+    };
+    let fits = (n as f64 / (info.fps * mp_pose::MIN_PIECE_S)).floor() as usize;
+    let k = match params.pose.pieces {
+        0 if shared || on_gpu => 1,
+        0 => cores.min(PoseParams::MAX_PIECES).min(fits).max(1),
+        k => k,
+    };
+    let overlap = (mp_pose::PIECE_OVERLAP_S * info.fps).round().max(1.0) as usize;
+    let stride = params.pose.rate.stride(info.fps);
+    Ok(mp_pose::piece_ranges(n, k, overlap, stride))
+}
+
+/// The pose pass over `pieces` of the video side by side, each with its own
+/// decoder (and grey thumbnails at `side`) and model, the ONNX Runtime
+/// threads shared out among them; joined into one extraction, the
+/// thumbnails of each frame from the piece whose frames it is.
+fn pose_people_in_pieces(
+    info: &VideoInfo,
+    pieces: &[(usize, usize)],
+    side: usize,
+    params: &Params,
+    cancel: &CancelToken,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<(Posed, mp_pose::Decoded)> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let lm = params.pose.model.landmark_model().ok_or_else(|| {
+        PipelineError::param(
+            "pose.model",
+            "several people need BlazePose (full, lite or heavy)",
+        )
+    })?;
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let session = SessionParams {
+        intra_threads: (cores / pieces.len()).max(1),
+        ..params.pose.session()
+    };
+    let fps = info.fps;
+    let total: usize = pieces.last().map_or(0, |&(s, l)| s + l);
+    let done: Vec<AtomicUsize> = pieces.iter().map(|_| AtomicUsize::new(0)).collect();
+    type PieceOut = Result<(
+        mp_pose::PeopleExtraction,
+        mp_pose::Decoded,
+        String,
+        mp_geom::Skeleton,
+    )>;
+    let outs: Vec<PieceOut> = std::thread::scope(|scope| {
+        let handles: Vec<_> = pieces
+            .iter()
+            .enumerate()
+            .map(|(i, &(start, len))| {
+                let (session, done) = (session.clone(), &done);
+                // The last piece reads to the end, wherever the container's
+                // frame count put it.
+                let limit = if i + 1 == pieces.len() {
+                    params.pose.max_frames.map(|m| m.saturating_sub(start))
+                } else {
+                    Some(len)
+                };
+                scope.spawn(move || -> PieceOut {
+                    let reader = VideoReader::from_frame(info.clone(), start)?;
+                    let (source, decoder) = decode_ahead(
+                        reader,
+                        &DecodeOptions {
+                            limit,
+                            keep_full: false,
+                            thumbnail_size: Some(side),
+                            ..DecodeOptions::default()
+                        },
+                        cancel.clone(),
+                    )?;
+                    let mut est = MultiPose::new(multi_params(lm, session, None, params))?;
+                    let options = ExtractOptions {
+                        max_frames: limit,
+                        ..extract_options(params, fps)
+                    };
+                    let ex = extract_people(source, &mut est, &options, |d, _| {
+                        done[i].store(d, Ordering::Relaxed);
+                        let all: usize = done.iter().map(|d| d.load(Ordering::Relaxed)).sum();
+                        progress(all.min(total));
+                    });
+                    let decoded = decoder.join().map_err(|_| {
+                        PipelineError::stage("decoding", "the decoding thread panicked")
+                    })?;
+                    Ok((ex?, decoded, est.name().to_string(), est.skeleton()))
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err(PipelineError::stage(
+                        "pose",
+                        "a piece's pose thread panicked",
+                    ))
+                })
+            })
+            .collect()
+    });
+    check(cancel)?;
+    let mut joined = Vec::with_capacity(pieces.len());
+    let cells = side * side;
+    let mut thumbnails: Vec<f32> = Vec::new();
+    let mut decode = std::time::Duration::ZERO;
+    let mut model = (String::new(), None);
+    for (&(start, _), out) in pieces.iter().zip(outs) {
+        let (ex, decoded, name, skeleton) = out?;
+        // Each frame's thumbnail from the piece whose frames it is: the
+        // earlier piece's up to its end.
+        let skip = (thumbnails.len() / cells).saturating_sub(start) * cells;
+        thumbnails.extend_from_slice(decoded.thumbnails.get(skip..).unwrap_or_default());
+        decode += decoded.decode;
+        model = (name, Some(skeleton));
+        joined.push((start, ex));
+    }
+    let ex = mp_pose::join_pieces(joined)?;
+    let (name, skeleton) = model;
+    let skeleton = skeleton.ok_or_else(|| PipelineError::stage("pose", "no piece"))?;
+    let decoded = mp_pose::Decoded {
+        kept: None,
+        thumbnails,
+        decode,
+    };
+    Ok((posed_people(ex, &name, skeleton, fps)?, decoded))
+}
+
+/// What the several-people pass gave, with every skipped frame filled.
+fn posed_people(
+    ex: mp_pose::PeopleExtraction,
+    name: &str,
+    skeleton: mp_geom::Skeleton,
+    fps: f64,
+) -> Result<Posed> {
     let n = ex.people.n_frames();
-    let skeleton = est.skeleton();
     let empty = Track::new(
         ndarray::Array3::zeros((n, skeleton.len(), 2)),
         Some(ndarray::Array2::zeros((n, skeleton.len()))),
@@ -572,7 +751,7 @@ fn pose_people(
         track: empty,
         found: ex.found_fraction(),
         n_frames: n,
-        model: est.name().to_string(),
+        model: name.to_string(),
         warning: ex.warning(),
         people: Some(crate::pose_rate::fill_people(ex.people, &ex.posed)?),
     })
@@ -674,9 +853,12 @@ fn box_thumbnails(
             )
         })
         .collect();
-    let mut thumbs: Vec<Vec<Vec<f32>>> = regions
+    // Each person's thumbnails in one buffer (one allocation, returned to
+    // the system whole once their track is built).
+    let mut thumbs: Vec<Vec<f32>> = regions
         .iter()
-        .map(|(_, _, f)| Vec::with_capacity(f.len()))
+        .zip(&sides)
+        .map(|((_, _, f), side)| Vec::with_capacity(f.len() * side * side))
         .collect();
     let last = regions.iter().map(|(_, _, f)| f.end).max().unwrap_or(0);
     for frame in reader.take(last) {
@@ -684,21 +866,21 @@ fn box_thumbnails(
         let frame = frame?;
         for (k, (_, r, frames)) in regions.iter().enumerate() {
             if frames.contains(&frame.index) {
-                thumbs[k].push(grey_thumbnail_region(&frame, sides[k], *r)?);
+                thumbs[k].extend_from_slice(&grey_thumbnail_region(&frame, sides[k], *r)?);
             }
         }
     }
     let mut out = std::collections::HashMap::new();
     let (w, h) = (width as f64, height as f64);
     for (((id, r, frames), th), side) in regions.into_iter().zip(thumbs).zip(sides) {
-        if th.len() == frames.len() && !th.is_empty() {
+        if th.len() == frames.len() * side * side && !th.is_empty() {
             let place = [
                 (r[0] / w).clamp(0.0, 1.0),
                 (r[1] / h).clamp(0.0, 1.0),
                 (r[2] / w).clamp(0.0, 1.0),
                 (r[3] / h).clamp(0.0, 1.0),
             ];
-            let thumbnails = thumbnail_track(th, side, fps)?;
+            let thumbnails = thumbnail_track_flat(th, side, fps)?;
             out.insert(id, OwnBox { thumbnails, place });
         }
     }

@@ -69,7 +69,7 @@ use mp_abstract::{Analysis, Counts};
 use mp_geom::CancelToken;
 pub use params::{OutputParams, Params, PersonChoice, PersonParams, PoseParams};
 pub use pose_rate::PoseRate;
-pub use progress::{Observer, Silent, Stage, StageTime};
+pub use progress::{peak_resident_bytes, Observer, Silent, Stage, StageTime};
 
 use mp_report::Analysed;
 use mp_report::{Card, OutputDir};

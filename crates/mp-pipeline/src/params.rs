@@ -45,9 +45,20 @@ pub struct PoseParams {
     /// (default, `auto`); `cpu`; or a CUDA device, an error where there is none.
     #[serde(with = "as_text::device")]
     pub device: mp_pose::Device,
+    /// Pieces of a long video tracked side by side, each with its own
+    /// decoder and model, joined where they overlap
+    /// (`mp_pose::join_pieces`). 0 (default): one piece per CPU core (at
+    /// most [`PoseParams::MAX_PIECES`]) where the video holds at least
+    /// `mp_pose::MIN_PIECE_S` of frames for each, on the CPU, with several
+    /// people tracked; 1: never.
+    pub pieces: usize,
 }
 
 impl PoseParams {
+    /// Most pieces [`PoseParams::pieces`] chooses by itself (each holds a
+    /// model and a decoder).
+    pub const MAX_PIECES: usize = 8;
+
     /// Share of a person's mean box added on every side for their thumbnails
     /// (arms and legs reach past the mean box during a repetition).
     pub const BOX_MARGIN: f64 = 0.25;
@@ -103,6 +114,7 @@ impl Default for PoseParams {
             tracker: mp_pose::PeopleParams::default(),
             rate: crate::pose_rate::PoseRate::default(),
             device: mp_pose::Device::default(),
+            pieces: 0,
         }
     }
 }
@@ -235,6 +247,12 @@ impl Params {
         }
         self.pose.tracker.validate()?;
         self.pose.rate.validate()?;
+        if self.pose.pieces > 256 {
+            return Err(PipelineError::param(
+                "pose.pieces",
+                format!("must be at most 256, got {}", self.pose.pieces),
+            ));
+        }
         if !(self.person.min_seen_s.is_finite() && self.person.min_seen_s >= 0.0) {
             return Err(PipelineError::param(
                 "person.min_seen_s",

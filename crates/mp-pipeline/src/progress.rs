@@ -84,6 +84,31 @@ pub struct StageTime {
     pub time: Duration,
     /// Frames processed by the stage (for frames per second).
     pub frames: usize,
+    /// The process's peak resident set when the stage ended, bytes (where
+    /// the system tells it: Linux); the stage where it rises is the one
+    /// that needed the memory (or a stage running beside it).
+    pub peak_bytes: Option<u64>,
+}
+
+impl StageTime {
+    /// A stage's time, with the process's peak resident set now.
+    pub fn now(stage: Stage, time: Duration, frames: usize) -> Self {
+        StageTime {
+            stage,
+            time,
+            frames,
+            peak_bytes: peak_resident_bytes(),
+        }
+    }
+}
+
+/// The process's peak resident set so far (`VmHWM` of `/proc/self/status`),
+/// bytes; `None` where the system does not tell it.
+pub fn peak_resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// Receives the progress of a run. Every method has an empty default; the
@@ -131,11 +156,7 @@ impl<'a> Timings<'a> {
     }
 
     pub(crate) fn push(&mut self, stage: Stage, time: Duration, frames: usize) {
-        let t = StageTime {
-            stage,
-            time,
-            frames,
-        };
+        let t = StageTime::now(stage, time, frames);
         self.observer.finished(&t);
         self.stages.push(t);
     }

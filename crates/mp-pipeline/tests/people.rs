@@ -162,3 +162,76 @@ fn the_person_choice_is_parsed_with_a_clear_error() {
     p.person.min_seen_s = f64::NAN;
     assert!(p.validate().is_err());
 }
+
+/// A video tracked in two pieces side by side gives the people of the
+/// one-piece pass: the same people, numbered alike, their keypoints where
+/// both passes follow them within a few pixels.
+#[test]
+fn a_video_in_two_pieces_gives_the_people_of_one_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(video) = two_panels(dir.path(), 10.0) else {
+        return;
+    };
+    let pass = |pieces: usize| {
+        let mut params = Params::default();
+        params.pose.pieces = pieces;
+        let keep = mp_pipeline::Keep::default();
+        let input = Input::open(&video, None).unwrap();
+        mp_pipeline::keypoints(input, &params, keep, &Silent, &CancelToken::new())
+            .unwrap()
+            .0
+    };
+    let (one, two) = (pass(1), pass(2));
+    let (a, b) = (one.people.as_ref().unwrap(), two.people.as_ref().unwrap());
+    // 027_fitness ends after 277 frames.
+    let n = a.n_frames();
+    assert!(n > 250, "{n} frames");
+    assert_eq!(b.n_frames(), n);
+    let long = |p: &mp_geom::People| -> Vec<(u32, usize)> {
+        p.people()
+            .iter()
+            .filter(|q| q.frames_found() > n / 2)
+            .map(|q| (q.id, q.frames_found()))
+            .collect()
+    };
+    let (la, lb) = (long(a), long(b));
+    assert_eq!(la.len(), 2, "{la:?}");
+    assert_eq!(
+        la.iter().map(|x| x.0).collect::<Vec<_>>(),
+        lb.iter().map(|x| x.0).collect::<Vec<_>>(),
+        "{la:?} vs {lb:?}"
+    );
+    for ((id, fa), (_, fb)) in la.iter().zip(&lb) {
+        assert!(
+            fa.abs_diff(*fb) <= 10,
+            "person {id}: found in {fa} and {fb} frames"
+        );
+        let (p, q) = (a.get(*id).unwrap(), b.get(*id).unwrap());
+        let mut d = Vec::new();
+        for f in 0..n {
+            let (Some(tp), Some(tq)) = (
+                f.checked_sub(p.first_frame)
+                    .filter(|&t| t < p.track.n_frames()),
+                f.checked_sub(q.first_frame)
+                    .filter(|&t| t < q.track.n_frames()),
+            ) else {
+                continue;
+            };
+            for j in 0..p.track.n_joints() {
+                if p.track.confidence()[[tp, j]] > 0.5 && q.track.confidence()[[tq, j]] > 0.5 {
+                    let (pp, qp) = (p.track.positions(), q.track.positions());
+                    d.push(
+                        (pp[[tp, j, 0]] - qp[[tq, j, 0]]).hypot(pp[[tp, j, 1]] - qp[[tq, j, 1]]),
+                    );
+                }
+            }
+        }
+        d.sort_by(f64::total_cmp);
+        assert!(d.len() > 2000, "person {id}: {} joints compared", d.len());
+        let median = d[d.len() / 2];
+        assert!(
+            median < 2.0,
+            "person {id}: median {median:.2} px between the passes"
+        );
+    }
+}

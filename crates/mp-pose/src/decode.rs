@@ -51,8 +51,10 @@ impl Default for DecodeOptions {
 pub struct Decoded {
     /// Full-size RGB frames, when asked for.
     pub kept: Option<Vec<Vec<u8>>>,
-    /// Grey thumbnails of every decoded frame, when asked for.
-    pub thumbnails: Vec<Vec<f32>>,
+    /// Grey thumbnails of every decoded frame, when asked for: the
+    /// `thumbnail_size²` cells of each frame one after the other (one
+    /// buffer for a whole video, not one allocation a frame).
+    pub thumbnails: Vec<f32>,
     /// Time spent decoding (waiting on FFmpeg's pipe).
     pub decode: Duration,
 }
@@ -94,7 +96,7 @@ pub fn decode_ahead(
                     }
                     if let Some(size) = opts.thumbnail_size {
                         match grey_thumbnail(frame, size) {
-                            Ok(t) => out.thumbnails.push(t),
+                            Ok(t) => out.thumbnails.extend_from_slice(&t),
                             Err(e) => {
                                 let _ = tx.send(Err(e));
                                 break;

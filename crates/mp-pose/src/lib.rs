@@ -51,7 +51,8 @@ pub use imageops::Roi;
 pub use movenet::{MoveNet, MoveNetParams};
 pub use mp_onnx::{OnnxError, SessionParams};
 pub use people::{
-    extract_people, MultiPose, MultiPoseParams, PeopleExtraction, PeopleParams, PersonId,
+    extract_people, join_pieces, piece_ranges, MultiPose, MultiPoseParams, PeopleExtraction,
+    PeopleParams, PersonId, MIN_PIECE_S, PIECE_OVERLAP_S,
 };
 pub use pose::{Pose, PoseEstimator};
 pub use runtime::ModelFile;
@@ -59,15 +60,15 @@ pub use video::{open_source, probe, read_image, Frame, FrameSource, VideoInfo, V
 
 pub use blazepose::detector::{roi_from_points, PoseDetector};
 pub use blazepose::landmarks::{project, LandmarkModel};
-pub use decode::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
+pub use decode::{decode_ahead, DecodeOptions, Decoded, MjpegOptions, MjpegStream};
 pub use extract::is_posed_frame;
 pub use imageops::{resize_rgb, RgbView};
 pub use motion::{moving_regions, region_track, CellRegion, MotionEnergy};
 pub use people::{PeopleCollector, TrackEvent, TrackedPose};
 pub use runtime::{model_path, Device};
 pub use thumbs::{
-    grey_thumbnail_region, signal_side, signal_track, thumbnail_track, DEFAULT_THUMBNAIL_SIZE,
-    MAX_SIGNAL_VALUES,
+    grey_thumbnail_region, signal_side, signal_track, thumbnail_track, thumbnail_track_flat,
+    DEFAULT_THUMBNAIL_SIZE, MAX_SIGNAL_VALUES,
 };
 pub use video::{probe_bytes, VideoReadOptions, VideoWriter, X264_PRESETS};
 

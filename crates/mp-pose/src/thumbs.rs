@@ -34,23 +34,24 @@ pub fn signal_side(size: usize, frames: usize) -> usize {
     side
 }
 
-/// Thumbnails of consecutive frames as [`thumbnail_track`] makes them, first
-/// reduced to [`signal_side`] cells a side where they hold more than
+/// Thumbnails of consecutive frames, `size × size` values each one after the
+/// other (`values`), as [`thumbnail_track_flat`] makes them, first reduced
+/// to [`signal_side`] cells a side where they hold more than
 /// [`MAX_SIGNAL_VALUES`] values (each cell the mean of the cells it covers;
 /// for a video whose length was not known when it was read).
-pub fn signal_track(thumbs: Vec<Vec<f32>>, size: usize, fps: f64) -> Result<Track> {
-    let side = signal_side(size, thumbs.len());
-    if side == size {
-        return thumbnail_track(thumbs, size, fps);
+pub fn signal_track(values: Vec<f32>, size: usize, fps: f64) -> Result<Track> {
+    let c = size * size;
+    let frames = values.len().checked_div(c).unwrap_or(0);
+    let side = signal_side(size, frames);
+    if side == size || values.len() != frames * c {
+        return thumbnail_track_flat(values, size, fps);
     }
-    let mut thumbs = thumbs;
-    for th in thumbs.iter_mut() {
-        if th.len() != size * size {
-            break; // thumbnail_track names the frame
-        }
-        *th = pooled(th, size, side);
+    let mut reduced = Vec::with_capacity(frames * side * side);
+    for th in values.chunks_exact(c) {
+        reduced.extend(pooled(th, size, side));
     }
-    thumbnail_track(thumbs, side, fps)
+    drop(values);
+    thumbnail_track_flat(reduced, side, fps)
 }
 
 /// A `size × size` thumbnail as `side × side` cells, each the mean of the
@@ -122,29 +123,45 @@ pub fn grey_thumbnail_region(frame: &Frame, size: usize, region: [f64; 4]) -> Re
 
 /// Thumbnails of consecutive frames as a unitless feature track: `T` frames ×
 /// `size` rows (the track's "joints", confidence 1) × `size` cells per row
-/// (its dimensions), so the channels run row-major as in the thumbnail. Each
-/// thumbnail is freed once copied: the track is built in the memory of one
-/// copy (8 bytes per cell and frame).
+/// (its dimensions), so the channels run row-major as in the thumbnail (8
+/// bytes per cell and frame). Where a long video's thumbnails are gathered,
+/// gather them in one buffer and use [`thumbnail_track_flat`].
 pub fn thumbnail_track(thumbs: Vec<Vec<f32>>, size: usize, fps: f64) -> Result<Track> {
     let c = size * size;
-    if thumbs.is_empty() {
+    if let Some((t, th)) = thumbs.iter().enumerate().find(|(_, th)| th.len() != c) {
+        return Err(PoseError::param(
+            "thumbnails",
+            format!(
+                "frame {t} has {} values, a {size}×{size} grid has {c}",
+                th.len()
+            ),
+        ));
+    }
+    thumbnail_track_flat(thumbs.concat(), size, fps)
+}
+
+/// [`thumbnail_track`] of thumbnails held one after the other in one buffer
+/// (`size × size` values a frame): a long video's thumbnails in one
+/// allocation, which goes back to the system whole once the track is built,
+/// instead of one small allocation a frame.
+pub fn thumbnail_track_flat(values: Vec<f32>, size: usize, fps: f64) -> Result<Track> {
+    let c = size * size;
+    if values.is_empty() || c == 0 {
         return Err(PoseError::param("thumbnails", "no frames"));
     }
-    let mut a = Array3::<f64>::zeros((thumbs.len(), size, size));
-    for (t, th) in thumbs.into_iter().enumerate() {
-        if th.len() != c {
-            return Err(PoseError::param(
-                "thumbnails",
-                format!(
-                    "frame {t} has {} values, a {size}×{size} grid has {c}",
-                    th.len()
-                ),
-            ));
-        }
-        for (k, &v) in th.iter().enumerate() {
-            a[[t, k / size, k % size]] = v as f64;
-        }
+    if !values.len().is_multiple_of(c) {
+        return Err(PoseError::param(
+            "thumbnails",
+            format!(
+                "{} values are not whole {size}×{size} grids of {c}",
+                values.len()
+            ),
+        ));
     }
+    let n = values.len() / c;
+    let a = Array3::from_shape_vec((n, size, size), values.iter().map(|&v| v as f64).collect())
+        .map_err(|e| PoseError::param("thumbnails", e.to_string()))?;
+    drop(values);
     Ok(Track::new(
         a,
         None,
@@ -204,7 +221,7 @@ mod tests {
         for (a, b) in p.iter().zip(&coarse) {
             assert!((a - b).abs() < 1.0, "{a} vs {b}");
         }
-        let track = signal_track(vec![fine; 40_000], 32, 30.0).unwrap();
+        let track = signal_track(fine.repeat(40_000), 32, 30.0).unwrap();
         assert_eq!(
             (track.n_frames(), track.n_joints(), track.dims()),
             (40_000, 16, 16)

@@ -339,16 +339,33 @@ impl VideoReader {
     /// rate) then comes from the caller, e.g. [`probe_bytes`] on the
     /// stream's first bytes.
     pub fn open_with(info: VideoInfo, options: VideoReadOptions) -> Result<Self> {
-        Self::spawn_with(info, None, options)
+        Self::spawn_with(info, None, true, options)
+    }
+
+    /// Starts decoding at frame `start`, counted as [`VideoReader::open`]
+    /// counts them (the frames before are decoded and dropped, so the
+    /// numbering is the video's own whatever its keyframes); the frames are
+    /// then indexed from 0.
+    pub fn from_frame(info: VideoInfo, start: usize) -> Result<Self> {
+        if start == 0 {
+            return Self::from_info(info);
+        }
+        let mut info = info;
+        info.frame_count = info.frame_count.map(|n| n.saturating_sub(start));
+        let select = format!("select=gte(n\\,{start})");
+        Self::spawn_with(info, Some(&select), true, VideoReadOptions::default())
     }
 
     fn spawn(info: VideoInfo, filter: Option<&str>) -> Result<Self> {
-        Self::spawn_with(info, filter, VideoReadOptions::default())
+        Self::spawn_with(info, filter, filter.is_none(), VideoReadOptions::default())
     }
 
+    /// `passthrough`: every decoded frame out as it is (no frame rate
+    /// conversion, which a filter otherwise gets).
     fn spawn_with(
         info: VideoInfo,
         filter: Option<&str>,
+        passthrough: bool,
         options: VideoReadOptions,
     ) -> Result<Self> {
         let path = info.path.clone();
@@ -371,10 +388,12 @@ impl VideoReader {
             None => cmd.arg("-i").arg(&path),
         };
         cmd.args(["-map", "0:v:0"]);
-        match filter {
-            Some(f) => cmd.arg("-vf").arg(f),
-            None => cmd.args(["-fps_mode", "passthrough"]),
-        };
+        if let Some(f) = filter {
+            cmd.arg("-vf").arg(f);
+        }
+        if passthrough {
+            cmd.args(["-fps_mode", "passthrough"]);
+        }
         let mut child = cmd
             .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
             .stdin(if options.feed.is_some() {
@@ -862,6 +881,45 @@ mod tests {
         let truth = rgb.iter().zip(&fb[0]).map(|(p, q)| p.abs_diff(*q) as f64);
         let mean = truth.sum::<f64>() / rgb.len() as f64;
         assert!(mean < 3.0, "mean error {mean} levels");
+    }
+
+    /// Decoding from a frame gives the video's own frames from there on.
+    #[test]
+    fn decoding_from_a_frame_starts_there() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("levels.mp4");
+        let (w, h) = (32usize, 32usize);
+        let mut wr = VideoWriter::create_with_preset(&path, w, h, 25.0, "veryfast").unwrap();
+        for k in 0..30u8 {
+            wr.write(&vec![k * 8; w * h * 3]).unwrap();
+        }
+        wr.finish().unwrap();
+        let mean = |f: &Frame| f.rgb.iter().map(|&v| v as f64).sum::<f64>() / f.rgb.len() as f64;
+        let info = probe(&path).unwrap();
+        for start in [0usize, 1, 13, 29] {
+            let frames: Vec<Frame> = VideoReader::from_frame(info.clone(), start)
+                .unwrap()
+                .map(|f| f.unwrap())
+                .collect();
+            assert_eq!(frames.len(), 30 - start, "from {start}");
+            for (i, f) in frames.iter().enumerate() {
+                assert_eq!(f.index, i);
+                let want = ((start + i) * 8) as f64;
+                assert!(
+                    (mean(f) - want).abs() < 3.0,
+                    "frame {}: {} vs {want}",
+                    start + i,
+                    mean(f)
+                );
+            }
+        }
+        // Past the end: no frame (a clear error where FFmpeg gave none).
+        let past: Vec<_> = VideoReader::from_frame(info, 40).unwrap().collect();
+        assert!(
+            past.iter().all(|f| f.is_err()),
+            "{} frames past the end",
+            past.len()
+        );
     }
 
     #[test]

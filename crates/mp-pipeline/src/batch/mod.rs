@@ -514,6 +514,10 @@ pub fn batch(
     let threads = params.threads_per_item(jobs);
     let mut run_params = params.params.clone();
     run_params.pose.threads = threads;
+    if jobs > 1 && run_params.pose.pieces == 0 {
+        // The jobs already share the cores out: each video in one piece.
+        run_params.pose.pieces = 1;
+    }
     let shared = open_shared(params, &run_params, jobs)?;
 
     observer.batch_started(items.len(), pending.len());

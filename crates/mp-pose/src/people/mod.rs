@@ -19,6 +19,7 @@
 //! remains for one person and is the reference of the keypoint evaluation.
 
 pub mod extract;
+pub mod pieces;
 pub mod tiles;
 pub mod tracker;
 
@@ -35,6 +36,7 @@ use crate::runtime::ModelFile;
 use crate::video::Frame;
 
 pub use extract::{extract_people, PeopleCollector, PeopleExtraction};
+pub use pieces::{join_pieces, piece_ranges, MIN_PIECE_S, PIECE_OVERLAP_S};
 pub use tracker::{
     Candidate, FrameResult, PeopleParams, PersonId, Seen, Sensors, TrackEvent, TrackedPose, Tracker,
 };
