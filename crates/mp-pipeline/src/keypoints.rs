@@ -31,7 +31,7 @@ use mp_pose::SessionParams;
 use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams, SharedLandmarks};
 use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
-use mp_pose::{grey_thumbnail_region, signal_side, signal_track, thumbnail_track_flat};
+use mp_pose::{grey_thumbnail_region, signal_side, signal_track};
 use mp_pose::{ModelChoice, PoseEstimator};
 use mp_pose::{VideoInfo, VideoReader};
 use mp_report::{FrameStore, FrameStoreParams};
@@ -853,12 +853,12 @@ fn box_thumbnails(
             )
         })
         .collect();
-    // Each person's thumbnails in one buffer (one allocation, returned to
-    // the system whole once their track is built).
-    let mut thumbs: Vec<Vec<f32>> = regions
+    // Each person's thumbnails written straight into the values of their
+    // track (frames × side × side), one frame at a time: no second copy.
+    let mut thumbs: Vec<(ndarray::Array3<f64>, usize)> = regions
         .iter()
         .zip(&sides)
-        .map(|((_, _, f), side)| Vec::with_capacity(f.len() * side * side))
+        .map(|((_, _, f), &side)| (ndarray::Array3::zeros((f.len(), side, side)), 0))
         .collect();
     let last = regions.iter().map(|(_, _, f)| f.end).max().unwrap_or(0);
     for frame in reader.take(last) {
@@ -866,21 +866,33 @@ fn box_thumbnails(
         let frame = frame?;
         for (k, (_, r, frames)) in regions.iter().enumerate() {
             if frames.contains(&frame.index) {
-                thumbs[k].extend_from_slice(&grey_thumbnail_region(&frame, sides[k], *r)?);
+                let cells = grey_thumbnail_region(&frame, sides[k], *r)?;
+                let (values, filled) = &mut thumbs[k];
+                let mut row = values.index_axis_mut(ndarray::Axis(0), *filled);
+                for (dst, src) in row.iter_mut().zip(&cells) {
+                    *dst = f64::from(*src);
+                }
+                *filled += 1;
             }
         }
     }
     let mut out = std::collections::HashMap::new();
     let (w, h) = (width as f64, height as f64);
-    for (((id, r, frames), th), side) in regions.into_iter().zip(thumbs).zip(sides) {
-        if th.len() == frames.len() * side * side && !th.is_empty() {
+    for (((id, r, frames), (values, filled)), side) in regions.into_iter().zip(thumbs).zip(sides) {
+        if filled == frames.len() && filled > 0 {
             let place = [
                 (r[0] / w).clamp(0.0, 1.0),
                 (r[1] / h).clamp(0.0, 1.0),
                 (r[2] / w).clamp(0.0, 1.0),
                 (r[3] / h).clamp(0.0, 1.0),
             ];
-            let thumbnails = thumbnail_track_flat(th, side, fps)?;
+            let thumbnails = Track::new(
+                values,
+                None,
+                fps,
+                mp_geom::Units::Unitless,
+                mp_geom::Skeleton::generic(side),
+            )?;
             out.insert(id, OwnBox { thumbnails, place });
         }
     }
