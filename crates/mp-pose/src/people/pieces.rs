@@ -17,7 +17,7 @@
 //! 36.1 s where the same two minutes one after the other at two threads took
 //! 48.9 s: a model's second thread gains far less than a second piece.
 
-use mp_geom::{People, Person, Track, Units};
+use mp_geom::{People, Person, Track};
 use ndarray::{s, Array2, Array3};
 
 use super::extract::PeopleExtraction;
@@ -265,14 +265,13 @@ fn from_frame(q: &Person, start: usize, cut: usize) -> Result<Option<Person>> {
     }))
 }
 
+/// A track of `pos` and `conf` in `like`'s units and skeleton.
 fn rebuilt(fps: f64, pos: Array3<f64>, conf: Array2<f64>, like: &Track) -> Result<Track> {
-    let units = like.units();
-    debug_assert_eq!(units, Units::Pixels);
     Ok(Track::new(
         pos,
         Some(conf),
         fps,
-        units,
+        like.units(),
         like.skeleton().clone(),
     )?)
 }
@@ -280,7 +279,7 @@ fn rebuilt(fps: f64, pos: Array3<f64>, conf: Array2<f64>, like: &Track) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mp_geom::Skeleton;
+    use mp_geom::{Skeleton, Units};
 
     #[test]
     fn pieces_cover_the_frames_with_their_overlap() {
