@@ -31,7 +31,7 @@ use mp_pose::SessionParams;
 use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams, SharedLandmarks};
 use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
-use mp_pose::{grey_thumbnail_region, signal_side, signal_track};
+use mp_pose::{grey_thumbnail_region, signal_side, signal_track, thumbnail_values_track};
 use mp_pose::{ModelChoice, PoseEstimator};
 use mp_pose::{VideoInfo, VideoReader};
 use mp_report::{FrameStore, FrameStoreParams};
@@ -589,6 +589,11 @@ fn pose_people(
     posed_people(ex, est.name(), est.skeleton(), fps)
 }
 
+/// The CPU cores this process may use (1 where the system does not say).
+fn cpu_cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |c| c.get())
+}
+
 /// The pieces ([`PoseParams::pieces`]) the pose pass cuts a video of
 /// `expected` frames into: `(start, frames)` each; one piece for a short
 /// video, a video of unknown length, a GPU or a shared model.
@@ -601,7 +606,7 @@ fn pose_pieces(
     let Some(n) = expected.filter(|&n| n > 0) else {
         return Ok(vec![(0, expected.unwrap_or(0))]);
     };
-    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let cores = cpu_cores();
     let on_gpu = match params.pose.device {
         mp_pose::Device::Cpu => false,
         mp_pose::Device::Auto => mp_pose::Device::cuda_available().unwrap_or(false),
@@ -637,9 +642,8 @@ fn pose_people_in_pieces(
             "several people need BlazePose (full, lite or heavy)",
         )
     })?;
-    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
     let session = SessionParams {
-        intra_threads: (cores / pieces.len()).max(1),
+        intra_threads: (cpu_cores() / pieces.len()).max(1),
         ..params.pose.session()
     };
     let fps = info.fps;
@@ -878,7 +882,7 @@ fn box_thumbnails(
     }
     let mut out = std::collections::HashMap::new();
     let (w, h) = (width as f64, height as f64);
-    for (((id, r, frames), (values, filled)), side) in regions.into_iter().zip(thumbs).zip(sides) {
+    for ((id, r, frames), (values, filled)) in regions.into_iter().zip(thumbs) {
         if filled == frames.len() && filled > 0 {
             let place = [
                 (r[0] / w).clamp(0.0, 1.0),
@@ -886,13 +890,7 @@ fn box_thumbnails(
                 (r[2] / w).clamp(0.0, 1.0),
                 (r[3] / h).clamp(0.0, 1.0),
             ];
-            let thumbnails = Track::new(
-                values,
-                None,
-                fps,
-                mp_geom::Units::Unitless,
-                mp_geom::Skeleton::generic(side),
-            )?;
+            let thumbnails = thumbnail_values_track(values, fps)?;
             out.insert(id, OwnBox { thumbnails, place });
         }
     }

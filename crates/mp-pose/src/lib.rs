@@ -68,7 +68,7 @@ pub use people::{PeopleCollector, TrackEvent, TrackedPose};
 pub use runtime::{model_path, Device};
 pub use thumbs::{
     grey_thumbnail_region, signal_side, signal_track, thumbnail_track, thumbnail_track_flat,
-    DEFAULT_THUMBNAIL_SIZE, MAX_SIGNAL_VALUES,
+    thumbnail_values_track, DEFAULT_THUMBNAIL_SIZE, MAX_SIGNAL_VALUES,
 };
 pub use video::{probe_bytes, VideoReadOptions, VideoWriter, X264_PRESETS};
 

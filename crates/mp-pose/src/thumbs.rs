@@ -162,12 +162,20 @@ pub fn thumbnail_track_flat(values: Vec<f32>, size: usize, fps: f64) -> Result<T
     let a = Array3::from_shape_vec((n, size, size), values.iter().map(|&v| v as f64).collect())
         .map_err(|e| PoseError::param("thumbnails", e.to_string()))?;
     drop(values);
+    thumbnail_values_track(a, fps)
+}
+
+/// Thumbnail values already laid out as `frames × side × side` (for one
+/// written frame by frame) as the unitless feature track of
+/// [`thumbnail_track`].
+pub fn thumbnail_values_track(values: Array3<f64>, fps: f64) -> Result<Track> {
+    let side = values.dim().1;
     Ok(Track::new(
-        a,
+        values,
         None,
         fps,
         Units::Unitless,
-        Skeleton::generic(size),
+        Skeleton::generic(side),
     )?)
 }
 

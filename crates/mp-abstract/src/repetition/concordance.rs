@@ -134,25 +134,16 @@ impl Concordance {
         }
         let n = (e - s - l) as f64;
         let c = self.c;
-        let (mut sab, mut ssd) = (0.0, 0.0);
+        // Each channel's sums over both windows, read once.
+        let (mut sab, mut ssd, mut saa_all, mut sbb_all) = (0.0, 0.0, 0.0, 0.0);
         for k in 0..c {
             let sa = self.cs[(e - l) * c + k] - self.cs[s * c + k];
             let sb = self.cs[e * c + k] - self.cs[(s + l) * c + k];
             sab += sa * sb;
             ssd += (sa - sb) * (sa - sb);
+            saa_all += sa * sa;
+            sbb_all += sb * sb;
         }
-        let saa_all: f64 = (0..c)
-            .map(|k| {
-                let sa = self.cs[(e - l) * c + k] - self.cs[s * c + k];
-                sa * sa
-            })
-            .sum();
-        let sbb_all: f64 = (0..c)
-            .map(|k| {
-                let sb = self.cs[e * c + k] - self.cs[(s + l) * c + k];
-                sb * sb
-            })
-            .sum();
         let cross = self.lagged(l, e - l)? - self.lagged(l, s)?;
         let cov = cross - sab / n;
         let va = (self.cs2[e - l] - self.cs2[s]) - saa_all / n;
