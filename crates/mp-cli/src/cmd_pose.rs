@@ -236,7 +236,7 @@ pub fn overlay_cmd(a: &OverlayArgs) -> Result<()> {
                     continue;
                 }
                 let pixmap = frame_tile(&f.rgb, (w, h), a.tile_width, |tile, view| {
-                    draw_skeleton(tile, &track, f.index, view, &style)
+                    draw_skeleton(tile, &track, f.index, view, &style);
                 })?;
                 let secs = f.index as f64 / track.fps();
                 tiles.push(Tile {

@@ -55,8 +55,9 @@ pub(crate) const REPORT_JPEG_QSCALE: u32 = 4;
 pub struct OverlayFrames {
     /// The video (size, frame rate, path).
     pub info: VideoInfo,
-    /// Full-size RGB frames kept during the pose pass; `None`: decode the video again.
-    pub kept: Option<Vec<Vec<u8>>>,
+    /// Full-size frames (YUV 4:2:0) kept during the pose pass; `None`:
+    /// decode the video again.
+    pub kept: Option<Vec<mp_pose::Yuv420Frame>>,
 }
 
 /// A pose model kept loaded between videos: the first video opens it, the
@@ -361,7 +362,7 @@ fn from_video(
         (None, m) => m,
     };
     // Full-size frames are kept for the overlay when their count is known and they fit.
-    let frame_bytes = info.width * info.height * 3;
+    let frame_bytes = mp_pose::Yuv420Frame::bytes(info.width, info.height);
     let keep_full = keep.overlay
         && expected.is_some_and(|n| n.saturating_mul(frame_bytes) <= KEEP_FRAMES_BUDGET_BYTES);
     let t0 = Instant::now();

@@ -5,11 +5,11 @@
 use mp_abstract::{Analysis, ProgramLoopJson, RepetitionsJson};
 use mp_geom::PersonId;
 use mp_geom::{CancelToken, Track};
-use mp_pose::{VideoReader, VideoWriter};
+use mp_pose::{PixelFormat, VideoReader, VideoWriter, Yuv420Frame};
 use mp_report::check_cancel;
 use mp_report::OutputDir;
+use mp_report::Pixmap;
 use mp_report::{draw_skeleton, SkeletonStyle, View};
-use mp_report::{fill_from_rgb, Pixmap};
 use serde::Serialize;
 
 use crate::error::{PipelineError, Result};
@@ -209,6 +209,11 @@ pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<OtherPerson<'_>> {
 /// first and last frames: before and after, it holds their first and last
 /// pose where nobody is), and the other people (`others`) each in their own
 /// colour; `progress` is called after each frame.
+///
+/// The frames stay in YUV 4:2:0 from the decoder to the encoder (the
+/// codec's own pixels, half the bytes of RGB through each pipe, no colour
+/// conversion): the skeletons are drawn on a transparent layer and blended
+/// into the frame only where they were drawn.
 pub(crate) fn write_overlay(
     out: &OutputDir,
     src: OverlayFrames,
@@ -221,10 +226,16 @@ pub(crate) fn write_overlay(
     let n = track.n_frames();
     let (width, height, fps) = (src.info.width, src.info.height, src.info.fps);
     let staged = out.staging_file("overlay.mp4");
-    // One picture, refilled with each frame and handed to the encoder as RGBA.
-    let mut writer =
-        VideoWriter::create_rgba_with_preset(&staged, width, height, fps, OVERLAY_PRESET)?;
-    let mut pm = Pixmap::new(width as u32, height as u32).ok_or_else(|| {
+    let mut writer = VideoWriter::with_format(
+        &staged,
+        width,
+        height,
+        fps,
+        OVERLAY_PRESET,
+        PixelFormat::Yuv420p,
+    )?;
+    // One transparent layer, cleared where it was drawn after each frame.
+    let mut layer = Pixmap::new(width as u32, height as u32).ok_or_else(|| {
         PipelineError::stage(
             "overlay video",
             format!("cannot allocate a {width}×{height} picture"),
@@ -235,9 +246,21 @@ pub(crate) fn write_overlay(
     let view = View::frame(1.0);
     let span = track.found_span();
     let mut done = 0usize;
-    let mut draw = |index: usize, rgb: &[u8]| -> Result<()> {
+    let mut draw = |frame: &mut Yuv420Frame| -> Result<()> {
         check_cancel(cancel).map_err(PipelineError::from_report)?;
-        fill_from_rgb(&mut pm, rgb)?;
+        let index = frame.index;
+        let mut area: Option<[f32; 4]> = None;
+        let mut drawn = |a: Option<[f32; 4]>| {
+            if let Some(a) = a {
+                let u = area.get_or_insert(a);
+                *u = [
+                    u[0].min(a[0]),
+                    u[1].min(a[1]),
+                    u[2].max(a[2]),
+                    u[3].max(a[3]),
+                ];
+            }
+        };
         for (colour, first, other) in others {
             let Some(own) = index.checked_sub(*first).filter(|&i| i < other.n_frames()) else {
                 continue;
@@ -246,28 +269,38 @@ pub(crate) fn write_overlay(
                 color: Some(*colour),
                 ..kp_style
             };
-            draw_skeleton(&mut pm, other, own, &view, &style);
+            drawn(draw_skeleton(&mut layer, other, own, &view, &style));
         }
         if span.is_some_and(|(a, b)| (a..=b).contains(&index)) {
-            draw_skeleton(&mut pm, executed, index, &view, &prog_style);
+            drawn(draw_skeleton(
+                &mut layer,
+                executed,
+                index,
+                &view,
+                &prog_style,
+            ));
         }
-        draw_skeleton(&mut pm, track, index, &view, &kp_style);
-        writer.write(pm.data())?;
+        drawn(draw_skeleton(&mut layer, track, index, &view, &kp_style));
+        if let Some(a) = area {
+            let px = |v: f32| v.floor().max(0.0) as usize;
+            let rect = [px(a[0]), px(a[1]), px(a[2]) + 1, px(a[3]) + 1];
+            frame.blend_layer(layer.data_mut(), rect)?;
+        }
+        writer.write(&frame.data)?;
         done += 1;
         progress(done);
         Ok(())
     };
     match src.kept {
         Some(frames) => {
-            for (index, rgb) in frames.iter().take(n).enumerate() {
-                draw(index, rgb)?;
+            for mut frame in frames.into_iter().take(n) {
+                draw(&mut frame)?;
             }
         }
         None => {
-            let reader = VideoReader::from_info(src.info)?;
+            let reader = VideoReader::yuv420(src.info)?;
             for frame in reader.take(n) {
-                let frame = frame?;
-                draw(frame.index, &frame.rgb)?;
+                draw(&mut frame?)?;
             }
         }
     }
@@ -276,4 +309,97 @@ pub(crate) fn write_overlay(
     out.commit(&staged, "overlay.mp4")
         .map_err(PipelineError::from_report)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mp_geom::{Skeleton, Units};
+    use ndarray::{Array2, Array3};
+
+    /// A person standing in the middle of a `w × h` picture, every frame.
+    fn standing(n: usize, w: f64, h: f64, dx: f64) -> Track {
+        let sk = Skeleton::coco17();
+        let mut pos = Array3::zeros((n, sk.len(), 2));
+        for t in 0..n {
+            for j in 0..sk.len() {
+                // Head at the top, feet at the bottom, left and right apart.
+                let side = if j % 2 == 0 { -1.0 } else { 1.0 };
+                pos[[t, j, 0]] = w / 2.0 + dx + side * 0.05 * w;
+                pos[[t, j, 1]] = h * (0.2 + 0.6 * j as f64 / sk.len() as f64);
+            }
+        }
+        let conf = Array2::from_elem((n, sk.len()), 0.9);
+        Track::new(pos, Some(conf), 10.0, Units::Pixels, sk).unwrap()
+    }
+
+    /// The overlay holds the video's frames with the skeletons drawn where
+    /// the joints are: pixels on them change, pixels far from them keep the
+    /// source's colour (within what H.264 keeps); kept and decoded frames
+    /// give the same video.
+    #[test]
+    fn the_overlay_draws_the_skeletons_on_the_frames() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h, n) = (96usize, 64usize, 4usize);
+        let grey = vec![90u8; w * h * 3];
+        let src = dir.path().join("src.mp4");
+        let mut wr = VideoWriter::create_with_preset(&src, w, h, 10.0, "veryfast").unwrap();
+        for _ in 0..n {
+            wr.write(&grey).unwrap();
+        }
+        wr.finish().unwrap();
+        let info = mp_pose::probe(&src).unwrap();
+        let track = standing(n, w as f64, h as f64, -20.0);
+        let other = standing(n - 1, w as f64, h as f64, 25.0);
+        let others: Vec<OtherPerson<'_>> = vec![([250, 40, 40], 1, &other)];
+        let kept: Vec<Yuv420Frame> = VideoReader::yuv420(info.clone())
+            .unwrap()
+            .map(|f| f.unwrap())
+            .collect();
+        for (name, kept) in [("decoded", None), ("kept", Some(kept))] {
+            let out = OutputDir::create(dir.path().join(name)).unwrap();
+            let src = OverlayFrames {
+                info: info.clone(),
+                kept,
+            };
+            write_overlay(&out, src, &track, &track, &others, &|_| {}).unwrap();
+            let frames: Vec<Vec<u8>> = VideoReader::open(dir.path().join(name).join("overlay.mp4"))
+                .unwrap()
+                .map(|f| f.unwrap().rgb)
+                .collect();
+            assert_eq!(frames.len(), n, "{name}");
+            let px = |f: &[u8], x: f64, y: f64| {
+                let i = (y as usize * w + x as usize) * 3;
+                [f[i], f[i + 1], f[i + 2]]
+            };
+            let far = |p: [u8; 3]| p.iter().all(|&v| v.abs_diff(90) <= 3);
+            for (t, f) in frames.iter().enumerate() {
+                // A corner, far from both people, keeps the source's grey.
+                assert!(
+                    far(px(f, 2.0, 2.0)),
+                    "{name} frame {t}: {:?}",
+                    px(f, 2.0, 2.0)
+                );
+                let (x, y) = {
+                    let p = track.positions();
+                    (p[[t, 6, 0]], p[[t, 6, 1]])
+                };
+                assert!(
+                    !far(px(f, x, y)),
+                    "{name} frame {t}: no joint drawn at ({x}, {y})"
+                );
+                // The other person is drawn in their colour from their first frame.
+                let (ox, oy) = {
+                    let p = other.positions();
+                    (p[[0, 10, 0]], p[[0, 10, 1]] + 4.0)
+                };
+                let o = px(f, ox, oy);
+                if t == 0 {
+                    assert!(far(o), "{name}: the other person before their first frame");
+                } else {
+                    assert!(o[0] > o[1] + 40, "{name} frame {t}: {o:?} is not their red");
+                }
+            }
+        }
+    }
 }

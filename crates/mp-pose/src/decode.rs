@@ -20,7 +20,7 @@ use mp_geom::CancelToken;
 
 use crate::error::{PoseError, Result};
 use crate::thumbs::grey_thumbnail;
-use crate::video::{Frame, FrameSource, VideoInfo, VideoReader};
+use crate::video::{Frame, FrameSource, VideoInfo, VideoReader, Yuv420Frame};
 
 /// Options of [`decode_ahead`].
 #[derive(Debug, Clone, PartialEq)]
@@ -49,8 +49,8 @@ impl Default for DecodeOptions {
 /// What the decoding thread hands back when its frames are consumed.
 #[derive(Debug, Default)]
 pub struct Decoded {
-    /// Full-size RGB frames, when asked for.
-    pub kept: Option<Vec<Vec<u8>>>,
+    /// Full-size frames in YUV 4:2:0 (half the bytes of RGB), when asked for.
+    pub kept: Option<Vec<Yuv420Frame>>,
     /// Grey thumbnails of every decoded frame, when asked for: the
     /// `thumbnail_size²` cells of each frame one after the other (one
     /// buffer for a whole video, not one allocation a frame).
@@ -92,7 +92,18 @@ pub fn decode_ahead(
                 out.decode += t0.elapsed();
                 if let Ok(frame) = &f {
                     if let Some(k) = out.kept.as_mut() {
-                        k.push(frame.rgb.clone());
+                        match Yuv420Frame::from_rgb(
+                            frame.index,
+                            frame.width,
+                            frame.height,
+                            &frame.rgb,
+                        ) {
+                            Ok(y) => k.push(y),
+                            Err(e) => {
+                                let _ = tx.send(Err(e));
+                                break;
+                            }
+                        }
                     }
                     if let Some(size) = opts.thumbnail_size {
                         match grey_thumbnail(frame, size) {

@@ -70,7 +70,10 @@ pub use thumbs::{
     grey_thumbnail_region, signal_side, signal_track, thumbnail_track, thumbnail_track_flat,
     thumbnail_values_track, DEFAULT_THUMBNAIL_SIZE, MAX_SIGNAL_VALUES,
 };
-pub use video::{probe_bytes, VideoReadOptions, VideoWriter, X264_PRESETS};
+pub use video::{
+    probe_bytes, PixelFormat, VideoReadOptions, VideoWriter, Yuv420Frame, Yuv420Frames,
+    X264_PRESETS,
+};
 
 #[cfg(test)]
 mod tests;

@@ -173,28 +173,33 @@ fn paint(rgb: [u8; 3], opacity: f32) -> Paint<'static> {
     p
 }
 
-/// Draws frame `t` of `track` onto `pixmap` through `view`.
+/// Draws frame `t` of `track` onto `pixmap` through `view`; returns the
+/// area it may have painted, as [`draw_pose`] does.
 pub fn draw_skeleton(
     pixmap: &mut Pixmap,
     track: &Track,
     t: usize,
     view: &View,
     st: &SkeletonStyle,
-) {
+) -> Option<[f32; 4]> {
     if t >= track.n_frames() || track.dims() < 2 {
-        return;
+        return None;
     }
     let (pos, conf) = (track.positions(), track.confidence());
     let points: Vec<[f64; 2]> = (0..track.n_joints())
         .map(|k| [pos[[t, k, 0]], pos[[t, k, 1]]])
         .collect();
     let confidence: Vec<f64> = conf.row(t).to_vec();
-    draw_pose(pixmap, track.skeleton(), &points, &confidence, view, st);
+    draw_pose(pixmap, track.skeleton(), &points, &confidence, view, st)
 }
 
 /// Draws one pose (`points` and `confidence` in the skeleton's joint
 /// order) onto `pixmap` through `view`: the one skeleton renderer of the
 /// workspace (reports, overlay videos, `mp overlay`, the live page).
+/// Returns the area it may have painted, `[x0, y0, x1, y1]` in picture
+/// pixels (the joints drawn, widened by the strokes, dots and their
+/// anti-aliasing; not clipped to the picture), or `None` when no joint was
+/// drawn.
 pub fn draw_pose(
     pixmap: &mut Pixmap,
     sk: &Skeleton,
@@ -202,7 +207,7 @@ pub fn draw_pose(
     confidence: &[f64],
     view: &View,
     st: &SkeletonStyle,
-) {
+) -> Option<[f32; 4]> {
     let j = points.len().min(confidence.len());
     let ok = |k: usize| {
         k < j
@@ -269,10 +274,13 @@ pub fn draw_pose(
     }
     let dot_rgb = st.color.unwrap_or(style::SKELETON_CENTER);
     let mut dots = PathBuilder::new();
+    let mut area: Option<[f32; 4]> = None;
     for k in 0..j {
         if ok(k) {
             let p = at(k);
             dots.push_circle(p.0, p.1, st.dot_radius_px);
+            let a = area.get_or_insert([p.0, p.1, p.0, p.1]);
+            *a = [a[0].min(p.0), a[1].min(p.1), a[2].max(p.0), a[3].max(p.1)];
         }
     }
     if let Some(path) = dots.finish() {
@@ -295,6 +303,10 @@ pub fn draw_pose(
             None,
         );
     }
+    // Half the outline's width (or a dot and its rim), and a pixel of
+    // anti-aliasing beyond.
+    let reach = (st.line_width_px / 2.0 + 1.0).max(st.dot_radius_px + 0.5) + 1.5;
+    area.map(|a| [a[0] - reach, a[1] - reach, a[2] + reach, a[3] + reach])
 }
 
 /// A blank dark canvas with a faint grid, for tracks without video.

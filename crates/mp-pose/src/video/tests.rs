@@ -1,0 +1,189 @@
+use super::*;
+
+#[test]
+fn rates_parse() {
+    assert!((parse_rate("2997/100").unwrap() - 29.97).abs() < 1e-12);
+    assert!((parse_rate("30000/1001").unwrap() - 29.97003).abs() < 1e-4);
+    assert_eq!(parse_rate("0/0"), None);
+    assert_eq!(parse_rate("25").unwrap(), 25.0);
+    assert_eq!(parse_rate("x"), None);
+}
+
+#[test]
+fn probe_json_rotation_swaps_size() {
+    let j = r#"{"streams":[{"codec_type":"video","codec_name":"h264","width":640,"height":360,
+        "avg_frame_rate":"30/1","nb_frames":"10",
+        "side_data_list":[{"rotation":-90}]}],"format":{"duration":"0.33"}}"#;
+    let info = parse_probe_json(Path::new("x.mp4"), j).unwrap();
+    assert_eq!((info.width, info.height), (360, 640));
+    assert_eq!(info.frame_count, Some(10));
+    assert_eq!(info.fps, 30.0);
+    assert!((info.duration_s.unwrap() - 0.33).abs() < 1e-12);
+}
+
+#[test]
+fn probe_json_without_video_is_an_error() {
+    let j = r#"{"streams":[{"codec_type":"audio"}]}"#;
+    let e = parse_probe_json(Path::new("a.mp4"), j).unwrap_err();
+    assert!(e.to_string().contains("no video stream"), "{e}");
+}
+
+/// RGB and RGBA frames give the same video; a frame of the other kind's
+/// size is refused with what the writer expects.
+#[test]
+fn rgba_frames_encode_as_their_rgb() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64usize, 48usize);
+    // Smooth colours (H.264 keeps them within a few grey levels).
+    let rgb: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            let (x, y) = (i % w, i / w);
+            [(x * 4) as u8, (y * 5) as u8, 128u8]
+        })
+        .collect();
+    let rgba: Vec<u8> = rgb
+        .chunks_exact(3)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    let (a, b) = (dir.path().join("rgb.mp4"), dir.path().join("rgba.mp4"));
+    let mut wa = VideoWriter::create_with_preset(&a, w, h, 10.0, "veryfast").unwrap();
+    let mut wb = VideoWriter::with_format(&b, w, h, 10.0, "veryfast", PixelFormat::Rgba).unwrap();
+    let e = wb.write(&rgb).unwrap_err().to_string();
+    assert!(e.contains("RGBA"), "{e}");
+    for _ in 0..3 {
+        wa.write(&rgb).unwrap();
+        wb.write(&rgba).unwrap();
+    }
+    assert_eq!(wa.finish().unwrap(), 3);
+    assert_eq!(wb.finish().unwrap(), 3);
+    let read = |p: &Path| -> Vec<Vec<u8>> {
+        VideoReader::open(p)
+            .unwrap()
+            .map(|f| f.unwrap().rgb)
+            .collect()
+    };
+    let (fa, fb) = (read(&a), read(&b));
+    assert_eq!((fa.len(), fb.len()), (3, 3));
+    for (x, y) in fa.iter().zip(&fb) {
+        let worst = x.iter().zip(y).map(|(p, q)| p.abs_diff(*q)).max().unwrap();
+        assert!(worst <= 2, "RGB and RGBA frames differ by {worst} levels");
+    }
+    let truth = rgb.iter().zip(&fb[0]).map(|(p, q)| p.abs_diff(*q) as f64);
+    let mean = truth.sum::<f64>() / rgb.len() as f64;
+    assert!(mean < 3.0, "mean error {mean} levels");
+}
+
+/// A video decoded to YUV 4:2:0 holds the pixels its RGB decoding shows
+/// (the odd-sized frames written were padded to even sides); YUV frames
+/// encoded again give back those frames, and a frame of another layout's
+/// size is refused.
+#[test]
+fn yuv_frames_decode_and_encode_as_their_rgb() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (63usize, 47usize);
+    let rgb: Vec<u8> = (0..w * h)
+        .flat_map(|i| {
+            let (x, y) = (i % w, i / w);
+            [(x * 4) as u8, (y * 5) as u8, 128u8]
+        })
+        .collect();
+    let src = dir.path().join("src.mp4");
+    let mut wr = VideoWriter::create_with_preset(&src, w, h, 10.0, "veryfast").unwrap();
+    for _ in 0..3 {
+        wr.write(&rgb).unwrap();
+    }
+    wr.finish().unwrap();
+    let info = probe(&src).unwrap();
+    assert_eq!((info.width, info.height), (w + 1, h + 1));
+    let yuv: Vec<Yuv420Frame> = VideoReader::yuv420(info.clone())
+        .unwrap()
+        .map(|f| f.unwrap())
+        .collect();
+    let shown: Vec<Vec<u8>> = VideoReader::from_info(info.clone())
+        .unwrap()
+        .map(|f| f.unwrap().rgb)
+        .collect();
+    assert_eq!((yuv.len(), shown.len()), (3, 3));
+    assert_eq!(
+        yuv.iter().map(|f| f.index).collect::<Vec<_>>(),
+        vec![0, 1, 2]
+    );
+    let mean_diff = |a: &[u8], b: &[u8]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| p.abs_diff(*q) as f64)
+            .sum::<f64>()
+            / a.len() as f64
+    };
+    let d = mean_diff(&yuv[0].to_rgb(), &shown[0]);
+    assert!(d < 2.0, "YUV and RGB decoding differ by {d} levels");
+    let out = dir.path().join("again.mp4");
+    let mut again = VideoWriter::with_format(
+        &out,
+        info.width,
+        info.height,
+        10.0,
+        "veryfast",
+        PixelFormat::Yuv420p,
+    )
+    .unwrap();
+    let e = again.write(&shown[0]).unwrap_err().to_string();
+    assert!(e.contains("YUV"), "{e}");
+    for f in &yuv {
+        again.write(&f.data).unwrap();
+    }
+    assert_eq!(again.finish().unwrap(), 3);
+    let back: Vec<Vec<u8>> = VideoReader::open(&out)
+        .unwrap()
+        .map(|f| f.unwrap().rgb)
+        .collect();
+    assert_eq!(back.len(), 3);
+    let d = mean_diff(&back[0], &shown[0]);
+    assert!(d < 2.0, "re-encoded YUV frames differ by {d} levels");
+}
+
+/// Decoding from a frame gives the video's own frames from there on.
+#[test]
+fn decoding_from_a_frame_starts_there() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("levels.mp4");
+    let (w, h) = (32usize, 32usize);
+    let mut wr = VideoWriter::create_with_preset(&path, w, h, 25.0, "veryfast").unwrap();
+    for k in 0..30u8 {
+        wr.write(&vec![k * 8; w * h * 3]).unwrap();
+    }
+    wr.finish().unwrap();
+    let mean = |f: &Frame| f.rgb.iter().map(|&v| v as f64).sum::<f64>() / f.rgb.len() as f64;
+    let info = probe(&path).unwrap();
+    for start in [0usize, 1, 13, 29] {
+        let frames: Vec<Frame> = VideoReader::from_frame(info.clone(), start)
+            .unwrap()
+            .map(|f| f.unwrap())
+            .collect();
+        assert_eq!(frames.len(), 30 - start, "from {start}");
+        for (i, f) in frames.iter().enumerate() {
+            assert_eq!(f.index, i);
+            let want = ((start + i) * 8) as f64;
+            assert!(
+                (mean(f) - want).abs() < 3.0,
+                "frame {}: {} vs {want}",
+                start + i,
+                mean(f)
+            );
+        }
+    }
+    // Past the end: no frame (a clear error where FFmpeg gave none).
+    let past: Vec<_> = VideoReader::from_frame(info, 40).unwrap().collect();
+    assert!(
+        past.iter().all(|f| f.is_err()),
+        "{} frames past the end",
+        past.len()
+    );
+}
+
+#[test]
+fn frame_checks_buffer_size() {
+    assert!(Frame::new(3, 0.0, 2, 2, vec![0; 11]).is_err());
+    assert!(Frame::new(3, 0.0, 0, 2, vec![]).is_err());
+    assert!(Frame::new(3, 0.0, 2, 2, vec![0; 12]).is_ok());
+}
