@@ -15,8 +15,7 @@
 
 use std::collections::VecDeque;
 
-use mp_geom::Track;
-use mp_pose::thumbnail_track;
+use mp_pose::Thumbnails;
 
 use crate::counter::{Repetition, Tally};
 use crate::{LiveParams, Result};
@@ -149,7 +148,7 @@ impl SceneCounter {
         if self.thumbs.len() < 4 {
             return Ok(Vec::new());
         }
-        let counts = mp_pipeline::count_frames(self.track()?, &params.analysis)?;
+        let counts = mp_pipeline::count_frames(self.thumbnails()?, &params.analysis)?;
         let (first, thumbs) = (self.first, &self.thumbs);
         let reps = self.tally.take(&counts, first, back, last, |f, g| {
             thumbnail_distance(first, thumbs, f, g)
@@ -188,10 +187,10 @@ impl SceneCounter {
             .collect()
     }
 
-    /// The window as the unitless track of thumbnails `mp run` counts.
-    fn track(&self) -> Result<Track> {
-        let thumbs: Vec<Vec<f32>> = self.thumbs.iter().cloned().collect();
-        Ok(thumbnail_track(thumbs, self.size, self.fps)?)
+    /// The window's thumbnails, as `mp run` holds them.
+    fn thumbnails(&self) -> Result<Thumbnails> {
+        let values: Vec<f32> = self.thumbs.iter().flatten().copied().collect();
+        Ok(Thumbnails::from_flat(values, self.size, self.fps)?)
     }
 }
 
@@ -229,8 +228,8 @@ mod tests {
             assert!(s.window_len() <= s.max_window());
         }
         reps.extend(s.finish(&params).unwrap());
-        let all: Vec<Vec<f32>> = (0..frames).map(|f| thumb(f, period)).collect();
-        let whole = thumbnail_track(all, DEFAULT_THUMBNAIL_SIZE, fps).unwrap();
+        let all: Vec<f32> = (0..frames).flat_map(|f| thumb(f, period)).collect();
+        let whole = Thumbnails::from_flat(all, DEFAULT_THUMBNAIL_SIZE, fps).unwrap();
         let offline = mp_pipeline::count_frames(whole, &params.analysis)
             .unwrap()
             .total;

@@ -72,7 +72,7 @@ pub fn count(track: &Track, thumbnails: Option<&Track>, params: &Params) -> Resu
 /// it): the frame signal chosen from the whole-frame thumbnails `whole` as
 /// `mp run` chooses it (`choose_frame_signal`), counted as `mp run` counts
 /// frames. `mp live` counts the scene with it until a person's repetitions are.
-pub fn count_frames(whole: Track, params: &Params) -> Result<Counts> {
+pub fn count_frames(whole: mp_pose::Thumbnails, params: &Params) -> Result<Counts> {
     params.validate()?;
     let (signal, _) = crate::frame_signal::choose_frame_signal(whole, None, params)?;
     Ok(count_signals(None, Some(&signal), &params.count)?)

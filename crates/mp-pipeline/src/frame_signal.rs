@@ -17,7 +17,7 @@
 
 use mp_abstract::estimate_period;
 use mp_geom::Track;
-use mp_pose::{moving_regions, region_track, CellRegion, MotionEnergy};
+use mp_pose::{moving_regions, region_track, CellRegion, MotionEnergy, Thumbnails};
 
 use crate::error::Result;
 use crate::params::Params;
@@ -54,7 +54,7 @@ fn periodicity(track: &Track, params: &Params) -> Result<f64> {
 #[derive(Debug, Clone)]
 pub(crate) struct OwnBox {
     /// Grey thumbnails of the person's own box.
-    pub(crate) thumbnails: Track,
+    pub(crate) thumbnails: Thumbnails,
     /// The box `[x0, y0, x1, y1]` as fractions of the picture's width and
     /// height (`crate::PoseParams::own_box_region` over the frame size).
     pub(crate) place: [f64; 4],
@@ -67,24 +67,30 @@ pub(crate) struct OwnBox {
 /// own box, only regions inside it are considered: a person's repetitions
 /// are read where that person is, not from someone or something beside
 /// them.
+///
+/// The thumbnails are held as 4-byte floats; only the usual signal and the
+/// regions are made tracks (8 bytes a cell), one at a time.
 pub(crate) fn choose_frame_signal(
-    whole: Track,
+    whole: Thumbnails,
     own: Option<OwnBox>,
     params: &Params,
 ) -> Result<(Track, FrameChoice)> {
-    let size = whole.n_joints();
+    let size = whole.side();
     let place = own.as_ref().map(|o| o.place);
-    let own = own.map(|o| o.thumbnails);
-    let base_periodicity = periodicity(own.as_ref().unwrap_or(&whole), params)?;
+    let usual = match own {
+        Some(o) => o.thumbnails.track()?,
+        None => whole.track()?,
+    };
+    let base_periodicity = periodicity(&usual, params)?;
     let mut choice = FrameChoice {
         region: None,
         base_periodicity,
         regions: Vec::new(),
     };
-    if whole.n_frames() < 4 || whole.dims() != size {
-        return Ok((own.unwrap_or(whole), choice));
+    if whole.n_frames() < 4 {
+        return Ok((usual, choice));
     }
-    let energy = MotionEnergy::of_track(&whole)?.energy();
+    let energy = MotionEnergy::of_thumbnails(&whole)?.energy();
     let sides: Vec<usize> = REGION_SIDES
         .iter()
         .map(|f| ((f * size as f64).round() as usize).clamp(1, size))
@@ -111,22 +117,23 @@ pub(crate) fn choose_frame_signal(
     Ok(match best {
         Some((reg, _)) => {
             choice.region = Some(reg);
+            drop(usual);
             (region_track(&whole, reg)?, choice)
         }
-        None => (own.unwrap_or(whole), choice),
+        None => (usual, choice),
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mp_pose::thumbnail_track;
+    use ndarray::s;
 
     /// 32 × 32 thumbnails of a picture whose every cell flickers at random
     /// (clutter, ±10 grey levels), with, when `rep`, a 6 × 6 patch at rows
     /// 3..9, columns 20..26 that brightens and darkens every 20 frames (more
     /// motion per frame than the flicker, much less over the picture).
-    fn scene(n: usize, rep: bool) -> Track {
+    fn scene(n: usize, rep: bool) -> Thumbnails {
         let mut state = 12345u64;
         let mut rnd = move || {
             state = state
@@ -134,8 +141,8 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (state >> 33) as f64 / (1u64 << 31) as f64
         };
-        let thumbs: Vec<Vec<f32>> = (0..n)
-            .map(|t| {
+        let thumbs: Vec<f32> = (0..n)
+            .flat_map(|t| {
                 (0..1024)
                     .map(|k| {
                         let (r, c) = (k / 32, k % 32);
@@ -147,10 +154,10 @@ mod tests {
                         };
                         v as f32
                     })
-                    .collect()
+                    .collect::<Vec<f32>>()
             })
             .collect();
-        thumbnail_track(thumbs, 32, 30.0).unwrap()
+        Thumbnails::from_flat(thumbs, 32, 30.0).unwrap()
     }
 
     #[test]
@@ -181,18 +188,11 @@ mod tests {
     #[test]
     fn a_person_s_signal_is_not_read_from_a_repetition_beside_them() {
         // The repeating patch is at the top right (columns 20..26); a person
-        // on the left half of the picture keeps their own thumbnails.
+        // on the left half of the picture keeps their own thumbnails (here
+        // the cells of the top left quarter, as a 16 × 16 grid).
         let whole = scene(200, true);
-        let left = region_track(
-            &whole,
-            CellRegion {
-                r0: 0,
-                c0: 0,
-                r1: 32,
-                c1: 16,
-            },
-        )
-        .unwrap();
+        let left =
+            Thumbnails::new(whole.values().slice(s![.., 0..16, 0..16]).to_owned(), 30.0).unwrap();
         let own = |place| OwnBox {
             thumbnails: left.clone(),
             place,
@@ -201,8 +201,9 @@ mod tests {
         let (tr, choice) =
             choose_frame_signal(whole.clone(), Some(own([0.0, 0.0, 0.5, 1.0])), &params).unwrap();
         assert_eq!(choice.region, None, "{choice:?}");
-        assert_eq!(tr.n_joints(), 32);
+        assert_eq!(tr.n_joints(), 16);
         assert_eq!(tr.dims(), 16);
+        assert_eq!(tr, left.track().unwrap());
         for (reg, _, _) in &choice.regions {
             assert!(reg.c1 <= 16, "{reg:?} reaches out of the left half");
         }
@@ -222,7 +223,8 @@ mod tests {
             assert!(*p < 0.3, "{choice:?}");
         }
         // Too short to say anything: the usual signal, untouched.
-        let short = whole.slice_frames(0, 3).unwrap();
+        let short =
+            Thumbnails::new(whole.values().slice(s![0..3, .., ..]).to_owned(), 30.0).unwrap();
         let (tr, c) = choose_frame_signal(short, None, &Params::default()).unwrap();
         assert_eq!(c.region, None);
         assert_eq!(tr.n_frames(), 3);

@@ -31,7 +31,7 @@ use mp_pose::SessionParams;
 use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams, SharedLandmarks};
 use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
-use mp_pose::{grey_thumbnail_region, signal_side, signal_track, thumbnail_values_track};
+use mp_pose::{grey_thumbnail_region, signal_side, Thumbnails};
 use mp_pose::{ModelChoice, PoseEstimator};
 use mp_pose::{VideoInfo, VideoReader};
 use mp_report::{FrameStore, FrameStoreParams};
@@ -175,7 +175,7 @@ pub struct Keypoints {
     pub person: Option<PersonId>,
     /// The people analysed besides `person`, each with grey thumbnails of
     /// their own box over their own frames.
-    pub others: Vec<(PersonId, Option<Track>)>,
+    pub others: Vec<(PersonId, Option<Thumbnails>)>,
     /// A sentence for the user about the people in view (more than
     /// `max_people`), when there is one.
     pub warning: Option<String>,
@@ -443,7 +443,7 @@ fn from_video(
     let mut thumbs = decoded.thumbnails;
     thumbs.truncate(n * side * side);
     let whole_frame = if thumbs.len() == n * side * side && n > 0 {
-        Some(signal_track(thumbs, side, info.fps)?)
+        Some(Thumbnails::signal(thumbs, side, info.fps)?)
     } else {
         None
     };
@@ -485,7 +485,7 @@ fn from_video(
             timings.push(Stage::Motion, t1.elapsed(), n);
             (Some(signal), Some(choice))
         }
-        None => (thumbnails.map(|o| o.thumbnails), None),
+        None => (thumbnails.map(|o| o.thumbnails.track()).transpose()?, None),
     };
     let overlay = keep.overlay.then(|| OverlayFrames {
         info: info.clone(),
@@ -858,9 +858,9 @@ fn box_thumbnails(
             )
         })
         .collect();
-    // Each person's thumbnails written straight into the values of their
-    // track (frames × side × side), one frame at a time: no second copy.
-    let mut thumbs: Vec<(ndarray::Array3<f64>, usize)> = regions
+    // Each person's thumbnails written straight into their place (frames ×
+    // side × side), one frame at a time: no second copy.
+    let mut thumbs: Vec<(ndarray::Array3<f32>, usize)> = regions
         .iter()
         .zip(&sides)
         .map(|((_, _, f), &side)| (ndarray::Array3::zeros((f.len(), side, side)), 0))
@@ -874,9 +874,7 @@ fn box_thumbnails(
                 let cells = grey_thumbnail_region(&frame, sides[k], *r)?;
                 let (values, filled) = &mut thumbs[k];
                 let mut row = values.index_axis_mut(ndarray::Axis(0), *filled);
-                for (dst, src) in row.iter_mut().zip(&cells) {
-                    *dst = f64::from(*src);
-                }
+                row.iter_mut().zip(&cells).for_each(|(d, s)| *d = *s);
                 *filled += 1;
             }
         }
@@ -891,7 +889,7 @@ fn box_thumbnails(
                 (r[2] / w).clamp(0.0, 1.0),
                 (r[3] / h).clamp(0.0, 1.0),
             ];
-            let thumbnails = thumbnail_values_track(values, fps)?;
+            let thumbnails = Thumbnails::new(values, fps)?;
             out.insert(id, OwnBox { thumbnails, place });
         }
     }

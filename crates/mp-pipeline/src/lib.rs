@@ -289,6 +289,9 @@ fn people_outcomes(
             } else {
                 None
             };
+            // Their thumbnails become a track (8 bytes a cell) only now,
+            // one person per thread at a time.
+            let thumbs = thumbs.as_ref().map(|t| t.track()).transpose()?;
             let c = analysis::count(track, thumbs.as_ref(), params)?;
             Ok(Some((*id, an, c.shifted(p.first_frame, n))))
         })

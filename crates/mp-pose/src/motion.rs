@@ -13,6 +13,8 @@
 //! length of the video.
 
 use mp_geom::{Skeleton, Track, Units};
+
+use crate::thumbs::Thumbnails;
 use nalgebra::{Matrix3, Vector3};
 use ndarray::Array3;
 
@@ -147,21 +149,14 @@ impl MotionEnergy {
         self.energy.iter().map(|e| e / n).collect()
     }
 
-    /// The energy of every frame of a thumbnail track ([`crate::thumbs::thumbnail_track`]).
-    pub fn of_track(track: &Track) -> Result<Self> {
-        let (n, rows, cols) = track.positions().dim();
-        if rows != cols {
-            return Err(PoseError::param(
-                "motion energy",
-                format!("needs a square thumbnail track, got {rows}×{cols}"),
-            ));
-        }
-        let mut acc = MotionEnergy::new(rows);
-        let pos = track.positions();
-        let mut buf = vec![0.0; rows * cols];
-        for t in 0..n {
-            for (k, v) in buf.iter_mut().enumerate() {
-                *v = pos[[t, k / cols, k % cols]];
+    /// The energy of every frame of the thumbnails.
+    pub fn of_thumbnails(thumbs: &Thumbnails) -> Result<Self> {
+        let side = thumbs.side();
+        let mut acc = MotionEnergy::new(side);
+        let mut buf = vec![0.0; side * side];
+        for frame in thumbs.values().outer_iter() {
+            for (v, c) in buf.iter_mut().zip(frame.iter()) {
+                *v = f64::from(*c);
             }
             acc.push(&buf)?;
         }
@@ -238,10 +233,11 @@ pub fn moving_regions(
     out
 }
 
-/// The cells of `region` of a thumbnail track as a track of their own
-/// (rows as joints, columns as dimensions; unitless).
-pub fn region_track(track: &Track, region: CellRegion) -> Result<Track> {
-    let (n, rows, cols) = track.positions().dim();
+/// The cells of `region` of the thumbnails as a track of their own (rows
+/// as joints, columns as dimensions; unitless), as [`Thumbnails::track`]
+/// gives the whole grid.
+pub fn region_track(thumbs: &Thumbnails, region: CellRegion) -> Result<Track> {
+    let (n, rows, cols) = thumbs.values().dim();
     if region.r1 > rows || region.c1 > cols || region.r0 >= region.r1 || region.c0 >= region.c1 {
         return Err(PoseError::param(
             "region",
@@ -249,19 +245,19 @@ pub fn region_track(track: &Track, region: CellRegion) -> Result<Track> {
         ));
     }
     let (h, w) = (region.r1 - region.r0, region.c1 - region.c0);
-    let pos = track.positions();
+    let cells = thumbs.values();
     let mut a = Array3::<f64>::zeros((n, h, w));
     for t in 0..n {
         for r in 0..h {
             for c in 0..w {
-                a[[t, r, c]] = pos[[t, region.r0 + r, region.c0 + c]];
+                a[[t, r, c]] = f64::from(cells[[t, region.r0 + r, region.c0 + c]]);
             }
         }
     }
     Ok(Track::new(
         a,
         None,
-        track.fps(),
+        thumbs.fps(),
         Units::Unitless,
         Skeleton::generic(h),
     )?)
@@ -335,7 +331,7 @@ mod tests {
         let thumbs: Vec<Vec<f32>> = (0..3)
             .map(|t| (0..16).map(|k| (t * 100 + k) as f32).collect())
             .collect();
-        let tr = crate::thumbs::thumbnail_track(thumbs, size, 25.0).unwrap();
+        let tr = Thumbnails::from_flat(thumbs.concat(), size, 25.0).unwrap();
         let reg = CellRegion {
             r0: 1,
             c0: 2,
@@ -353,7 +349,7 @@ mod tests {
             c1: 1,
         };
         assert!(region_track(&tr, bad).is_err());
-        let e = MotionEnergy::of_track(&tr).unwrap().energy();
+        let e = MotionEnergy::of_thumbnails(&tr).unwrap().energy();
         // Every cell brightens by 100 a frame: all offset, no energy left.
         assert!(e.iter().all(|v| v.abs() < 1e-9), "{e:?}");
     }
