@@ -183,6 +183,8 @@ pub struct Keypoints {
     pub frames: Option<FrameStore>,
     /// Frames for the overlay video.
     pub overlay: Option<OverlayFrames>,
+    /// A video's frame signal, not yet read ([`frame_signal`]).
+    pub(crate) pending: Option<PendingSignal>,
 }
 
 impl Keypoints {
@@ -211,6 +213,7 @@ impl Keypoints {
             warning: None,
             frames: None,
             overlay: None,
+            pending: None,
         }
     }
 }
@@ -245,7 +248,25 @@ pub fn keypoints(
     Ok((kp, timings.stages))
 }
 
+/// [`keypoints`] with its frame signal read ([`frame_signal`]).
 pub(crate) fn keypoints_timed(
+    input: Input,
+    params: &Params,
+    keep: Keep,
+    timings: &mut Timings<'_>,
+    cancel: &CancelToken,
+    slot: &mut ModelSlot,
+) -> Result<Keypoints> {
+    let mut kp = keypoints_pending(input, params, keep, timings, cancel, slot)?;
+    if let Some(pending) = kp.pending.take() {
+        frame_signal(&kp, pending, params, timings, cancel)?.apply(&mut kp);
+    }
+    Ok(kp)
+}
+
+/// The keypoints, a video's frame signal left to be read
+/// ([`Keypoints::pending`], [`frame_signal`]).
+pub(crate) fn keypoints_pending(
     input: Input,
     params: &Params,
     keep: Keep,
@@ -447,10 +468,10 @@ fn from_video(
     } else {
         None
     };
-    let (track, found, people, person, others, thumbnails) = match posed.people {
+    let (track, found, people, person, others) = match posed.people {
         None => {
             let track = coco(posed.track)?;
-            (track, posed.found, None, None, Vec::new(), None)
+            (track, posed.found, None, None, Vec::new())
         }
         Some(people) => {
             let people = people.map_tracks(coco)?;
@@ -460,32 +481,9 @@ fn from_video(
                 None => coco(posed.track)?,
             };
             let found = mp_abstract::found_fraction(&track);
-            let (thumbnails, others) = if top.is_some() || !rest.is_empty() {
-                let t1 = Instant::now();
-                let mut boxes = box_thumbnails(path, &people, top, &rest, n, params, cancel)?;
-                timings.push(Stage::Boxes, t1.elapsed(), n);
-                let top_thumbs = top.and_then(|id| boxes.remove(&id));
-                let others = rest
-                    .iter()
-                    .map(|id| (*id, boxes.remove(id).map(|o| o.thumbnails)))
-                    .collect();
-                (top_thumbs, others)
-            } else {
-                (None, rest.iter().map(|id| (*id, None)).collect())
-            };
-            (track, found, Some(people), top, others, thumbnails)
+            let others = rest.iter().map(|id| (*id, None)).collect();
+            (track, found, Some(people), top, others)
         }
-    };
-    // The frame signal: the own box's (or the whole frame's) thumbnails, or
-    // those of the region that moves on its own, the more periodic.
-    let (thumbnails, frame_choice) = match whole_frame {
-        Some(whole) => {
-            let t1 = Instant::now();
-            let (signal, choice) = choose_frame_signal(whole, thumbnails, params)?;
-            timings.push(Stage::Motion, t1.elapsed(), n);
-            (Some(signal), Some(choice))
-        }
-        None => (thumbnails.map(|o| o.thumbnails.track()).transpose()?, None),
     };
     let overlay = keep.overlay.then(|| OverlayFrames {
         info: info.clone(),
@@ -518,8 +516,8 @@ fn from_video(
         ),
         title: name,
         track,
-        thumbnails,
-        frame_choice,
+        thumbnails: None,
+        frame_choice: None,
         found_fraction: found,
         frame_size: Some((info.width, info.height)),
         frame_px: Some(info.width.max(info.height) as f64),
@@ -530,6 +528,81 @@ fn from_video(
         warning: posed.warning,
         frames,
         overlay,
+        pending: Some(PendingSignal {
+            path: path.to_path_buf(),
+            whole: whole_frame,
+        }),
+    })
+}
+
+/// What the frame signal of a video is read from once its people are
+/// known ([`frame_signal`]): the video (for the boxes' own pass) and the
+/// whole frame's thumbnails gathered while decoding.
+pub(crate) struct PendingSignal {
+    path: std::path::PathBuf,
+    whole: Option<Thumbnails>,
+}
+
+/// The frame signal and the other people's thumbnails ([`frame_signal`]).
+pub(crate) struct FrameSignal {
+    pub(crate) thumbnails: Option<Track>,
+    pub(crate) frame_choice: Option<FrameChoice>,
+    pub(crate) others: Vec<(PersonId, Option<Thumbnails>)>,
+}
+
+impl FrameSignal {
+    /// Into the keypoints they belong to.
+    pub(crate) fn apply(self, kp: &mut Keypoints) {
+        kp.thumbnails = self.thumbnails;
+        kp.frame_choice = self.frame_choice;
+        kp.others = self.others;
+    }
+}
+
+/// Step 1b for a video: grey thumbnails of each person's own box (a second
+/// decoding pass), then the frame signal — the main person's box's (or the
+/// whole frame's) thumbnails, or those of the region that moves on its own,
+/// the more periodic. It reads only the keypoints' people and track, so it
+/// may run beside anything else that reads them (the overlay video).
+pub(crate) fn frame_signal(
+    kp: &Keypoints,
+    pending: PendingSignal,
+    params: &Params,
+    timings: &mut Timings<'_>,
+    cancel: &CancelToken,
+) -> Result<FrameSignal> {
+    let n = kp.track.n_frames();
+    let rest: Vec<PersonId> = kp.others.iter().map(|(id, _)| *id).collect();
+    let (own, others) = match &kp.people {
+        Some(people) if kp.person.is_some() || !rest.is_empty() => {
+            let t1 = Instant::now();
+            let mut boxes =
+                box_thumbnails(&pending.path, people, kp.person, &rest, n, params, cancel)?;
+            timings.push(Stage::Boxes, t1.elapsed(), n);
+            let own = kp.person.and_then(|id| boxes.remove(&id));
+            let others = rest
+                .iter()
+                .map(|id| (*id, boxes.remove(id).map(|o| o.thumbnails)))
+                .collect();
+            (own, others)
+        }
+        _ => (None, rest.iter().map(|id| (*id, None)).collect()),
+    };
+    // The frame signal: the own box's (or the whole frame's) thumbnails, or
+    // those of the region that moves on its own, the more periodic.
+    let (thumbnails, frame_choice) = match pending.whole {
+        Some(whole) => {
+            let t1 = Instant::now();
+            let (signal, choice) = choose_frame_signal(whole, own, params)?;
+            timings.push(Stage::Motion, t1.elapsed(), n);
+            (Some(signal), Some(choice))
+        }
+        None => (own.map(|o| o.thumbnails.track()).transpose()?, None),
+    };
+    Ok(FrameSignal {
+        thumbnails,
+        frame_choice,
+        others,
     })
 }
 

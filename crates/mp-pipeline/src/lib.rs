@@ -222,6 +222,35 @@ fn finish_analysis(
     cancel: &CancelToken,
     start: Instant,
 ) -> Result<Outcome> {
+    Ok(finish_with_overlay(kp, params, timings, cancel, start, None)?.0)
+}
+
+/// The overlay video of a run into a folder, encoded beside the frame
+/// signal, the counts and the people: it reads only the keypoints and the
+/// main person's program.
+struct OverlayJob<'a> {
+    out: &'a OutputDir,
+    src: keypoints::OverlayFrames,
+    observer: &'a dyn Observer,
+}
+
+/// The overlay's staged file and its encoding time.
+type Encoded = (PathBuf, Duration);
+
+/// The analysis after the keypoints: the programs, then (a video's frame
+/// signal still to read) the boxes' thumbnails and the frame signal, the
+/// counts and the other people — with the overlay video (`overlay`, when
+/// there is a program to draw) encoded on its own thread beside them, since
+/// it needs only the main person's program. Also gives the main program
+/// executed when the overlay drew it.
+fn finish_with_overlay(
+    mut kp: Keypoints,
+    params: &Params,
+    timings: &mut Timings<'_>,
+    cancel: &CancelToken,
+    start: Instant,
+    overlay: Option<OverlayJob<'_>>,
+) -> Result<(Outcome, Option<mp_geom::Track>, Option<Encoded>)> {
     let n = kp.track.n_frames();
     if n < 2 {
         return Err(PipelineError::TooShort(n));
@@ -237,23 +266,86 @@ fn finish_analysis(
     } else {
         None
     };
-    let counts = analysis::count_timed(&kp.track, kp.thumbnails.as_ref(), params, timings)?;
-    check(cancel)?;
-    let people = people_outcomes(&kp, analysis.as_ref(), &counts, params, timings, cancel)?;
-    Ok(Outcome {
+    let executed = match (&analysis, &overlay) {
+        (Some(an), Some(_)) => Some(
+            an.concrete
+                .execute()
+                .map_err(|e| PipelineError::stage("executing the program", e))?,
+        ),
+        _ => None,
+    };
+    let pending = kp.pending.take();
+    let kp_ref = &kp;
+    let (rest, encoded) = std::thread::scope(|s| {
+        let handle = match (overlay, executed.as_ref()) {
+            (Some(job), Some(executed)) => {
+                job.observer.started(Stage::Overlay, Some(n));
+                let others = output::other_people(kp_ref);
+                Some(s.spawn(move || {
+                    let t0 = Instant::now();
+                    output::encode_overlay(
+                        job.out,
+                        job.src,
+                        &kp_ref.track,
+                        executed,
+                        &others,
+                        &|d| job.observer.progress(Stage::Overlay, d),
+                    )
+                    .map(|staged| (staged, t0.elapsed()))
+                }))
+            }
+            _ => None,
+        };
+        let rest = (|| -> Result<_> {
+            let signal = pending
+                .map(|p| keypoints::frame_signal(kp_ref, p, params, timings, cancel))
+                .transpose()?;
+            let thumbnails = match &signal {
+                Some(s) => s.thumbnails.as_ref(),
+                None => kp_ref.thumbnails.as_ref(),
+            };
+            let counts = analysis::count_timed(&kp_ref.track, thumbnails, params, timings)?;
+            check(cancel)?;
+            let others = signal.as_ref().map_or(&kp_ref.others, |s| &s.others);
+            let people = people_outcomes(
+                kp_ref,
+                others,
+                analysis.as_ref(),
+                &counts,
+                params,
+                timings,
+                cancel,
+            )?;
+            Ok((signal, counts, people))
+        })();
+        let encoded = handle.map(|h| {
+            h.join()
+                .map_err(|_| PipelineError::stage("overlay video", "the overlay thread panicked"))
+                .and_then(|r| r)
+        });
+        (rest, encoded)
+    });
+    let (signal, counts, people) = rest?;
+    let encoded = encoded.transpose()?;
+    if let Some(s) = signal {
+        s.apply(&mut kp);
+    }
+    let outcome = Outcome {
         keypoints: kp,
         analysis,
         counts,
         people,
         stages: std::mem::take(&mut timings.stages),
         total: start.elapsed(),
-    })
+    };
+    Ok((outcome, executed, encoded))
 }
 
 /// Every tracked person's entry: the main person's from the top-level
 /// results, the other analysed people's from their own frames (in parallel).
 fn people_outcomes(
     kp: &Keypoints,
+    others: &[(mp_geom::PersonId, Option<mp_pose::Thumbnails>)],
     analysis: Option<&Analysis>,
     counts: &Counts,
     params: &Params,
@@ -267,8 +359,7 @@ fn people_outcomes(
     let n = people.n_frames();
     let frame_px = kp.frame_px;
     let t0 = Instant::now();
-    let analysed: Vec<(mp_geom::PersonId, Option<Analysis>, Counts)> = kp
-        .others
+    let analysed: Vec<(mp_geom::PersonId, Option<Analysis>, Counts)> = others
         .par_iter()
         .map(|(id, thumbs)| {
             let p = people.get(*id).ok_or_else(|| {
@@ -300,7 +391,7 @@ fn people_outcomes(
         .flatten()
         .collect();
     check(cancel)?;
-    if !kp.others.is_empty() {
+    if !others.is_empty() {
         timings.push(Stage::People, t0.elapsed(), n);
     }
     let out = people
@@ -372,20 +463,39 @@ pub(crate) fn run_with(
         report_frames: params.output.report,
         overlay: params.output.overlay_video,
     };
-    let mut kp = keypoints::keypoints_timed(input, params, keep, &mut timings, cancel, slot)?;
+    let mut kp = keypoints::keypoints_pending(input, params, keep, &mut timings, cancel, slot)?;
     let frames = kp.frames.take();
-    let overlay_src = kp.overlay.take();
-    let mut outcome = finish_analysis(kp, params, &mut timings, cancel, start)?;
+    // The overlay video goes with the report, when there is a program to draw.
+    let overlay_src = kp
+        .overlay
+        .take()
+        .filter(|_| params.output.overlay_video && params.output.report);
+    // The output folder is created once there is something to write: with
+    // an overlay video, before the counting it is encoded beside.
+    let early = overlay_src
+        .as_ref()
+        .filter(|_| kp.track.n_frames() >= 2 && kp.track.valid_count() > 0)
+        .map(|_| OutputDir::create_with_cancel(out_dir, cancel.clone()))
+        .transpose()
+        .map_err(PipelineError::from_report)?;
+    let job = early
+        .as_ref()
+        .zip(overlay_src)
+        .map(|(out, src)| OverlayJob { out, src, observer });
+    let (mut outcome, executed, encoded) =
+        finish_with_overlay(kp, params, &mut timings, cancel, start, job)?;
     // The frame signals (8 bytes per thumbnail cell and frame: up to 256 MiB
     // each, `mp_pose::MAX_SIGNAL_VALUES`) have been counted and are written
-    // nowhere: they are freed before the pictures, the overlay and the page.
+    // nowhere: they are freed before the pictures and the page.
     outcome.keypoints.thumbnails = None;
     for (_, thumbnails) in &mut outcome.keypoints.others {
         *thumbnails = None;
     }
-    // The output folder is created once there is something to write.
-    let out = OutputDir::create_with_cancel(out_dir, cancel.clone())
-        .map_err(PipelineError::from_report)?;
+    let out = match early {
+        Some(out) => out,
+        None => OutputDir::create_with_cancel(out_dir, cancel.clone())
+            .map_err(PipelineError::from_report)?,
+    };
     let track = &outcome.keypoints.track;
     let mut files = output::write_analysis(&out, &outcome)?;
     let mut report = None;
@@ -394,10 +504,13 @@ pub(crate) fn run_with(
     match (outcome.analysis.as_ref(), params.output.report) {
         (_, false) => {}
         (Some(an), true) => {
-            let executed = an
-                .concrete
-                .execute()
-                .map_err(|e| PipelineError::stage("executing the program", e))?;
+            let executed = match executed {
+                Some(e) => e,
+                None => an
+                    .concrete
+                    .execute()
+                    .map_err(|e| PipelineError::stage("executing the program", e))?,
+            };
             let intervals = outcome.counts.repetitive_intervals();
             let analysed = Analysed {
                 track,
@@ -410,43 +523,20 @@ pub(crate) fn run_with(
                 frame_size: kp.frame_size,
                 title: &kp.title,
             };
-            let overlay_src = overlay_src.filter(|_| params.output.overlay_video);
-            let with_overlay = overlay_src.is_some();
-            let (pictures, overlay) = std::thread::scope(|s| {
-                let overlay = overlay_src.map(|src| {
-                    observer.started(Stage::Overlay, Some(n));
-                    let (out, executed) = (&out, &executed);
-                    let others = output::other_people(kp);
-                    s.spawn(move || {
-                        let t0 = Instant::now();
-                        output::write_overlay(out, src, track, executed, &others, &|d| {
-                            observer.progress(Stage::Overlay, d)
-                        })
-                        .map(|()| t0.elapsed())
-                    })
-                });
-                let pictures = pictures_and_page(
-                    &out,
-                    Some(&analysed),
-                    &outcome,
-                    frames.as_ref(),
-                    with_overlay,
-                    observer,
-                );
-                let overlay = overlay.map(|h| {
-                    h.join()
-                        .map_err(|_| {
-                            PipelineError::stage("overlay video", "the overlay thread panicked")
-                        })
-                        .and_then(|r| r)
-                });
-                (pictures, overlay)
-            });
+            let pictures = pictures_and_page(
+                &out,
+                Some(&analysed),
+                &outcome,
+                frames.as_ref(),
+                encoded.is_some(),
+                observer,
+            );
             let (pic_files, pic_time, page, page_time) = pictures?;
             files.extend(pic_files);
             timings.push(Stage::Pictures, pic_time, n);
-            if let Some(ov) = overlay {
-                let t = ov?;
+            if let Some((staged, t)) = encoded {
+                out.commit(&staged, "overlay.mp4")
+                    .map_err(PipelineError::from_report)?;
                 files.push("overlay.mp4".into());
                 timings.push(Stage::Overlay, t, n);
             }

@@ -208,20 +208,22 @@ pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<OtherPerson<'_>> {
 /// drawn on it into `overlay.mp4` (the program only between the person's
 /// first and last frames: before and after, it holds their first and last
 /// pose where nobody is), and the other people (`others`) each in their own
-/// colour; `progress` is called after each frame.
+/// colour; `progress` is called after each frame. The video is left in the
+/// folder's staging area (the path returned): the caller commits it as
+/// `overlay.mp4` once the rest of the run has succeeded.
 ///
 /// The frames stay in YUV 4:2:0 from the decoder to the encoder (the
 /// codec's own pixels, half the bytes of RGB through each pipe, no colour
 /// conversion): the skeletons are drawn on a transparent layer and blended
 /// into the frame only where they were drawn.
-pub(crate) fn write_overlay(
+pub(crate) fn encode_overlay(
     out: &OutputDir,
     src: OverlayFrames,
     track: &Track,
     executed: &Track,
     others: &[OtherPerson<'_>],
     progress: &dyn Fn(usize),
-) -> Result<()> {
+) -> Result<std::path::PathBuf> {
     let cancel: &CancelToken = out.cancel_token();
     let n = track.n_frames();
     let (width, height, fps) = (src.info.width, src.info.height, src.info.fps);
@@ -306,9 +308,7 @@ pub(crate) fn write_overlay(
     }
     check_cancel(cancel).map_err(PipelineError::from_report)?;
     writer.finish()?;
-    out.commit(&staged, "overlay.mp4")
-        .map_err(PipelineError::from_report)?;
-    Ok(())
+    Ok(staged)
 }
 
 #[cfg(test)]
@@ -362,7 +362,8 @@ mod tests {
                 info: info.clone(),
                 kept,
             };
-            write_overlay(&out, src, &track, &track, &others, &|_| {}).unwrap();
+            let staged = encode_overlay(&out, src, &track, &track, &others, &|_| {}).unwrap();
+            out.commit(&staged, "overlay.mp4").unwrap();
             let frames: Vec<Vec<u8>> = VideoReader::open(dir.path().join(name).join("overlay.mp4"))
                 .unwrap()
                 .map(|f| f.unwrap().rgb)

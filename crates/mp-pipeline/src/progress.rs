@@ -69,7 +69,7 @@ impl Stage {
             Stage::Boxes => "second FFmpeg pass: grey thumbnails of each person's own box",
             Stage::Motion => "motion energy of the thumbnails (camera motion discounted) and the periodicity of the regions where it gathers",
             Stage::Pictures => "plots (SVG + PNG), timeline, contact sheet",
-            Stage::Overlay => "own thread, alongside pictures + report; draw + H.264",
+            Stage::Overlay => "own thread, alongside boxes, counting and people; drawn into YUV frames + H.264",
             Stage::Report => "the page, its frames as JPEG files and its data in chunks (report/)",
         }
     }
