@@ -186,15 +186,27 @@ pub(crate) fn channels(
             format!("{start}..{end} outside 0..{}", track.n_frames()),
         ));
     }
-    let mut t = track.slice_frames(start, end)?;
-    if t.valid_count() == 0 {
-        return Ok(None);
-    }
-    t.fill_missing();
-    let joints = selected_joints(t.skeleton(), sel);
-    let (n, _, d) = t.positions().dim();
+    // Every joint valid on every frame of the range (a thumbnail track
+    // always): read in place. Otherwise a copy of the range, filled.
+    let conf = track.confidence();
+    let conf = conf.slice(ndarray::s![start..end, ..]);
+    let filled;
+    let pos = if !conf.is_empty() && conf.iter().all(|&c| c > 0.0) {
+        track
+            .positions()
+            .slice_move(ndarray::s![start..end, .., ..])
+    } else {
+        let mut t = track.slice_frames(start, end)?;
+        if t.valid_count() == 0 {
+            return Ok(None);
+        }
+        t.fill_missing();
+        filled = t;
+        filled.positions()
+    };
+    let joints = selected_joints(track.skeleton(), sel);
+    let (n, _, d) = pos.dim();
     let c = joints.len() * d;
-    let pos = t.positions();
     let mut y = vec![0.0; n * c];
     for ti in 0..n {
         for (a, &ji) in joints.iter().enumerate() {
