@@ -1,5 +1,9 @@
 //! Step 1b: the frame signal that counting reads.
 //!
+//! Once a video's people are known, a second decoding pass reads grey
+//! thumbnails of each analysed person's own box ([`frame_signal`]); the
+//! main person's (or the whole frame's) are the usual signal.
+//!
 //! The thumbnails of the whole frame (or of the tracked person's own box)
 //! miss a repetition that fills little of a cluttered, moving picture, and
 //! the pose model often misses the person there too. So the motion energy of
@@ -15,12 +19,18 @@
 //! signal. The regions' cells are copied from the whole-frame thumbnails: no
 //! extra decoding, and at most a quarter of their memory.
 
+use std::path::Path;
+use std::time::Instant;
+
 use mp_abstract::estimate_period;
-use mp_geom::Track;
+use mp_geom::{CancelToken, People, PersonId, Track};
+use mp_pose::{grey_thumbnail_region, signal_side, VideoReader};
 use mp_pose::{moving_regions, region_track, CellRegion, MotionEnergy, Thumbnails};
 
 use crate::error::Result;
-use crate::params::Params;
+use crate::keypoints::Keypoints;
+use crate::params::{Params, PoseParams};
+use crate::progress::{check, Stage, Timings};
 
 /// Sides of the candidate regions, as fractions of the thumbnail side: a
 /// quarter, a third and half of the picture's side (a sixteenth to a
@@ -122,6 +132,172 @@ pub(crate) fn choose_frame_signal(
         }
         None => (usual, choice),
     })
+}
+
+/// What the frame signal of a video is read from once its people are
+/// known ([`frame_signal`]): the video (for the boxes' own pass) and the
+/// whole frame's thumbnails gathered while decoding.
+pub(crate) struct PendingSignal {
+    pub(crate) path: std::path::PathBuf,
+    pub(crate) whole: Option<Thumbnails>,
+}
+
+/// The frame signal and the other people's thumbnails ([`frame_signal`]).
+pub(crate) struct FrameSignal {
+    pub(crate) thumbnails: Option<Track>,
+    pub(crate) frame_choice: Option<FrameChoice>,
+    pub(crate) others: Vec<(PersonId, Option<Thumbnails>)>,
+}
+
+impl FrameSignal {
+    /// Into the keypoints they belong to.
+    pub(crate) fn apply(self, kp: &mut Keypoints) {
+        kp.thumbnails = self.thumbnails;
+        kp.frame_choice = self.frame_choice;
+        kp.others = self.others;
+    }
+}
+
+/// Step 1b for a video: grey thumbnails of each person's own box (a second
+/// decoding pass), then the frame signal — the main person's box's (or the
+/// whole frame's) thumbnails, or those of the region that moves on its own,
+/// the more periodic. It reads only the keypoints' people and track, so it
+/// may run beside anything else that reads them (the overlay video).
+pub(crate) fn frame_signal(
+    kp: &Keypoints,
+    pending: PendingSignal,
+    params: &Params,
+    timings: &mut Timings<'_>,
+    cancel: &CancelToken,
+) -> Result<FrameSignal> {
+    let n = kp.track.n_frames();
+    let rest: Vec<PersonId> = kp.others.iter().map(|(id, _)| *id).collect();
+    let (own, others) = match &kp.people {
+        Some(people) if kp.person.is_some() || !rest.is_empty() => {
+            let t1 = Instant::now();
+            let mut boxes =
+                box_thumbnails(&pending.path, people, kp.person, &rest, n, params, cancel)?;
+            timings.push(Stage::Boxes, t1.elapsed(), n);
+            let own = kp.person.and_then(|id| boxes.remove(&id));
+            let others = rest
+                .iter()
+                .map(|id| (*id, boxes.remove(id).map(|o| o.thumbnails)))
+                .collect();
+            (own, others)
+        }
+        _ => (None, rest.iter().map(|id| (*id, None)).collect()),
+    };
+    // The frame signal: the own box's (or the whole frame's) thumbnails, or
+    // those of the region that moves on its own, the more periodic.
+    let (thumbnails, frame_choice) = match pending.whole {
+        Some(whole) => {
+            let t1 = Instant::now();
+            let (signal, choice) = choose_frame_signal(whole, own, params)?;
+            timings.push(Stage::Motion, t1.elapsed(), n);
+            (Some(signal), Some(choice))
+        }
+        None => (own.map(|o| o.thumbnails.track()).transpose()?, None),
+    };
+    Ok(FrameSignal {
+        thumbnails,
+        frame_choice,
+        others,
+    })
+}
+
+/// Grey thumbnails of each person's own (mean) box, from a second decoding
+/// pass: the top-level person's (`top`) over the whole video, as the video's
+/// frame signal; every other person's (`rest`) over their own frames only,
+/// from their first to their last (their counts are theirs, and a long video
+/// with many people holds each person's thumbnails once, not once per
+/// frame of the video), all of them at the side their frames together allow.
+/// None for a person whose box lies mostly outside the picture
+/// ([`PoseParams::own_box_region`]).
+fn box_thumbnails(
+    path: &Path,
+    people: &People,
+    top: Option<PersonId>,
+    rest: &[PersonId],
+    n: usize,
+    params: &Params,
+    cancel: &CancelToken,
+) -> Result<std::collections::HashMap<PersonId, OwnBox>> {
+    let size = params.pose.thumbnail_size;
+    let reader = VideoReader::open(path)?;
+    let (fps, width, height) = (reader.info().fps, reader.info().width, reader.info().height);
+    // Each person's box and the frames `a..b` read for them.
+    let regions: Vec<(PersonId, [f64; 4], std::ops::Range<usize>)> = top
+        .iter()
+        .chain(rest)
+        .filter_map(|id| {
+            let p = people.get(*id)?;
+            let r = PoseParams::own_box_region(p.mean_box()?, width, height)?;
+            let frames = if Some(*id) == top {
+                0..n
+            } else {
+                p.first_frame.min(n)..(p.last_frame() + 1).min(n)
+            };
+            Some((*id, r, frames))
+        })
+        .collect();
+    // The top-level person's thumbnails at the side the video's length
+    // allows (`mp_pose::MAX_SIGNAL_VALUES`), the other people's at the side
+    // their frames together allow: an hour with a few people in view at a
+    // time holds about an hour of them.
+    let others_frames: usize = regions
+        .iter()
+        .filter(|(id, _, _)| Some(*id) != top)
+        .map(|(_, _, f)| f.len())
+        .sum();
+    let sides: Vec<usize> = regions
+        .iter()
+        .map(|(id, _, f)| {
+            signal_side(
+                size,
+                if Some(*id) == top {
+                    f.len()
+                } else {
+                    others_frames
+                },
+            )
+        })
+        .collect();
+    // Each person's thumbnails written straight into their place (frames ×
+    // side × side), one frame at a time: no second copy.
+    let mut thumbs: Vec<(ndarray::Array3<f32>, usize)> = regions
+        .iter()
+        .zip(&sides)
+        .map(|((_, _, f), &side)| (ndarray::Array3::zeros((f.len(), side, side)), 0))
+        .collect();
+    let last = regions.iter().map(|(_, _, f)| f.end).max().unwrap_or(0);
+    for frame in reader.take(last) {
+        check(cancel)?;
+        let frame = frame?;
+        for (k, (_, r, frames)) in regions.iter().enumerate() {
+            if frames.contains(&frame.index) {
+                let cells = grey_thumbnail_region(&frame, sides[k], *r)?;
+                let (values, filled) = &mut thumbs[k];
+                let mut row = values.index_axis_mut(ndarray::Axis(0), *filled);
+                row.iter_mut().zip(&cells).for_each(|(d, s)| *d = *s);
+                *filled += 1;
+            }
+        }
+    }
+    let mut out = std::collections::HashMap::new();
+    let (w, h) = (width as f64, height as f64);
+    for ((id, r, frames), (values, filled)) in regions.into_iter().zip(thumbs) {
+        if filled == frames.len() && filled > 0 {
+            let place = [
+                (r[0] / w).clamp(0.0, 1.0),
+                (r[1] / h).clamp(0.0, 1.0),
+                (r[2] / w).clamp(0.0, 1.0),
+                (r[3] / h).clamp(0.0, 1.0),
+            ];
+            let thumbnails = Thumbnails::new(values, fps)?;
+            out.insert(id, OwnBox { thumbnails, place });
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

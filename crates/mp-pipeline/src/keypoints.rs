@@ -31,15 +31,16 @@ use mp_pose::SessionParams;
 use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams, SharedLandmarks};
 use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
-use mp_pose::{grey_thumbnail_region, signal_side, Thumbnails};
+use mp_pose::{signal_side, Thumbnails};
 use mp_pose::{ModelChoice, PoseEstimator};
 use mp_pose::{VideoInfo, VideoReader};
 use mp_report::{FrameStore, FrameStoreParams};
 
 use crate::error::{PipelineError, Result};
-use crate::frame_signal::{choose_frame_signal, FrameChoice, OwnBox};
+use crate::frame_signal::{frame_signal, FrameChoice, PendingSignal};
 use crate::input::Input;
-use crate::params::{Params, PersonChoice, PoseParams};
+use crate::params::{Params, PersonChoice};
+use crate::pieces::{pose_people_in_pieces, pose_pieces};
 use crate::progress::{check, Observer, Stage, StageTime, Timings};
 
 /// Full-size frames kept in memory during the pose pass for the overlay
@@ -127,7 +128,7 @@ impl ModelSlot {
 }
 
 /// The several-people estimator's settings: landmark model `lm` in `session`.
-fn multi_params(
+pub(crate) fn multi_params(
     lm: mp_pose::LandmarkModelKind,
     session: SessionParams,
     shared: Option<SharedLandmarks>,
@@ -535,79 +536,8 @@ fn from_video(
     })
 }
 
-/// What the frame signal of a video is read from once its people are
-/// known ([`frame_signal`]): the video (for the boxes' own pass) and the
-/// whole frame's thumbnails gathered while decoding.
-pub(crate) struct PendingSignal {
-    path: std::path::PathBuf,
-    whole: Option<Thumbnails>,
-}
-
-/// The frame signal and the other people's thumbnails ([`frame_signal`]).
-pub(crate) struct FrameSignal {
-    pub(crate) thumbnails: Option<Track>,
-    pub(crate) frame_choice: Option<FrameChoice>,
-    pub(crate) others: Vec<(PersonId, Option<Thumbnails>)>,
-}
-
-impl FrameSignal {
-    /// Into the keypoints they belong to.
-    pub(crate) fn apply(self, kp: &mut Keypoints) {
-        kp.thumbnails = self.thumbnails;
-        kp.frame_choice = self.frame_choice;
-        kp.others = self.others;
-    }
-}
-
-/// Step 1b for a video: grey thumbnails of each person's own box (a second
-/// decoding pass), then the frame signal — the main person's box's (or the
-/// whole frame's) thumbnails, or those of the region that moves on its own,
-/// the more periodic. It reads only the keypoints' people and track, so it
-/// may run beside anything else that reads them (the overlay video).
-pub(crate) fn frame_signal(
-    kp: &Keypoints,
-    pending: PendingSignal,
-    params: &Params,
-    timings: &mut Timings<'_>,
-    cancel: &CancelToken,
-) -> Result<FrameSignal> {
-    let n = kp.track.n_frames();
-    let rest: Vec<PersonId> = kp.others.iter().map(|(id, _)| *id).collect();
-    let (own, others) = match &kp.people {
-        Some(people) if kp.person.is_some() || !rest.is_empty() => {
-            let t1 = Instant::now();
-            let mut boxes =
-                box_thumbnails(&pending.path, people, kp.person, &rest, n, params, cancel)?;
-            timings.push(Stage::Boxes, t1.elapsed(), n);
-            let own = kp.person.and_then(|id| boxes.remove(&id));
-            let others = rest
-                .iter()
-                .map(|id| (*id, boxes.remove(id).map(|o| o.thumbnails)))
-                .collect();
-            (own, others)
-        }
-        _ => (None, rest.iter().map(|id| (*id, None)).collect()),
-    };
-    // The frame signal: the own box's (or the whole frame's) thumbnails, or
-    // those of the region that moves on its own, the more periodic.
-    let (thumbnails, frame_choice) = match pending.whole {
-        Some(whole) => {
-            let t1 = Instant::now();
-            let (signal, choice) = choose_frame_signal(whole, own, params)?;
-            timings.push(Stage::Motion, t1.elapsed(), n);
-            (Some(signal), Some(choice))
-        }
-        None => (own.map(|o| o.thumbnails.track()).transpose()?, None),
-    };
-    Ok(FrameSignal {
-        thumbnails,
-        frame_choice,
-        others,
-    })
-}
-
 /// What the pose pass gave.
-struct Posed {
+pub(crate) struct Posed {
     /// The single-person track, or an empty track of the people's skeleton.
     track: Track,
     found: f64,
@@ -620,7 +550,7 @@ struct Posed {
 /// The extraction options of the pose pass: all frames or the first
 /// `max_frames`, the model on the frames of `params.pose.rate` at the
 /// video's `fps`, no smoothing.
-fn extract_options(params: &Params, fps: f64) -> ExtractOptions {
+pub(crate) fn extract_options(params: &Params, fps: f64) -> ExtractOptions {
     ExtractOptions {
         max_frames: params.pose.max_frames,
         pose_every: params.pose.rate.stride(fps),
@@ -663,155 +593,8 @@ fn pose_people(
     posed_people(ex, est.name(), est.skeleton(), fps)
 }
 
-/// The CPU cores this process may use (1 where the system does not say).
-fn cpu_cores() -> usize {
-    std::thread::available_parallelism().map_or(1, |c| c.get())
-}
-
-/// The pieces ([`PoseParams::pieces`]) the pose pass cuts a video of
-/// `expected` frames into: `(start, frames)` each; one piece for a short
-/// video, a video of unknown length, a GPU or a shared model.
-fn pose_pieces(
-    params: &Params,
-    info: &VideoInfo,
-    expected: Option<usize>,
-    shared: bool,
-) -> Result<Vec<(usize, usize)>> {
-    let Some(n) = expected.filter(|&n| n > 0) else {
-        return Ok(vec![(0, expected.unwrap_or(0))]);
-    };
-    let cores = cpu_cores();
-    let on_gpu = match params.pose.device {
-        mp_pose::Device::Cpu => false,
-        mp_pose::Device::Auto => mp_pose::Device::cuda_available().unwrap_or(false),
-        _ => true,
-    };
-    let fits = (n as f64 / (info.fps * mp_pose::MIN_PIECE_S)).floor() as usize;
-    let k = match params.pose.pieces {
-        0 if shared || on_gpu => 1,
-        0 => cores.min(PoseParams::MAX_PIECES).min(fits).max(1),
-        k => k,
-    };
-    let overlap = (mp_pose::PIECE_OVERLAP_S * info.fps).round().max(1.0) as usize;
-    let stride = params.pose.rate.stride(info.fps);
-    Ok(mp_pose::piece_ranges(n, k, overlap, stride))
-}
-
-/// The pose pass over `pieces` of the video side by side, each with its own
-/// decoder (and grey thumbnails at `side`) and model, the ONNX Runtime
-/// threads shared out among them; joined into one extraction, the
-/// thumbnails of each frame from the piece whose frames it is.
-fn pose_people_in_pieces(
-    info: &VideoInfo,
-    pieces: &[(usize, usize)],
-    side: usize,
-    params: &Params,
-    cancel: &CancelToken,
-    progress: &(dyn Fn(usize) + Sync),
-) -> Result<(Posed, mp_pose::Decoded)> {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    let lm = params.pose.model.landmark_model().ok_or_else(|| {
-        PipelineError::param(
-            "pose.model",
-            "several people need BlazePose (full, lite or heavy)",
-        )
-    })?;
-    let session = SessionParams {
-        intra_threads: (cpu_cores() / pieces.len()).max(1),
-        ..params.pose.session()
-    };
-    let fps = info.fps;
-    let total: usize = pieces.last().map_or(0, |&(s, l)| s + l);
-    let done: Vec<AtomicUsize> = pieces.iter().map(|_| AtomicUsize::new(0)).collect();
-    type PieceOut = Result<(
-        mp_pose::PeopleExtraction,
-        mp_pose::Decoded,
-        String,
-        mp_geom::Skeleton,
-    )>;
-    let outs: Vec<PieceOut> = std::thread::scope(|scope| {
-        let handles: Vec<_> = pieces
-            .iter()
-            .enumerate()
-            .map(|(i, &(start, len))| {
-                let (session, done) = (session.clone(), &done);
-                // The last piece reads to the end, wherever the container's
-                // frame count put it.
-                let limit = if i + 1 == pieces.len() {
-                    params.pose.max_frames.map(|m| m.saturating_sub(start))
-                } else {
-                    Some(len)
-                };
-                scope.spawn(move || -> PieceOut {
-                    let reader = VideoReader::from_frame(info.clone(), start)?;
-                    let (source, decoder) = decode_ahead(
-                        reader,
-                        &DecodeOptions {
-                            limit,
-                            keep_full: false,
-                            thumbnail_size: Some(side),
-                            ..DecodeOptions::default()
-                        },
-                        cancel.clone(),
-                    )?;
-                    let mut est = MultiPose::new(multi_params(lm, session, None, params))?;
-                    let options = ExtractOptions {
-                        max_frames: limit,
-                        ..extract_options(params, fps)
-                    };
-                    let ex = extract_people(source, &mut est, &options, |d, _| {
-                        done[i].store(d, Ordering::Relaxed);
-                        let all: usize = done.iter().map(|d| d.load(Ordering::Relaxed)).sum();
-                        progress(all.min(total));
-                    });
-                    let decoded = decoder.join().map_err(|_| {
-                        PipelineError::stage("decoding", "the decoding thread panicked")
-                    })?;
-                    Ok((ex?, decoded, est.name().to_string(), est.skeleton()))
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| {
-                h.join().unwrap_or_else(|_| {
-                    Err(PipelineError::stage(
-                        "pose",
-                        "a piece's pose thread panicked",
-                    ))
-                })
-            })
-            .collect()
-    });
-    check(cancel)?;
-    let mut joined = Vec::with_capacity(pieces.len());
-    let cells = side * side;
-    let mut thumbnails: Vec<f32> = Vec::new();
-    let mut decode = std::time::Duration::ZERO;
-    let mut model = (String::new(), None);
-    for (&(start, _), out) in pieces.iter().zip(outs) {
-        let (ex, decoded, name, skeleton) = out?;
-        // Each frame's thumbnail from the piece whose frames it is: the
-        // earlier piece's up to its end.
-        let skip = (thumbnails.len() / cells).saturating_sub(start) * cells;
-        thumbnails.extend_from_slice(decoded.thumbnails.get(skip..).unwrap_or_default());
-        decode += decoded.decode;
-        model = (name, Some(skeleton));
-        joined.push((start, ex));
-    }
-    let ex = mp_pose::join_pieces(joined)?;
-    let (name, skeleton) = model;
-    let skeleton = skeleton.ok_or_else(|| PipelineError::stage("pose", "no piece"))?;
-    let decoded = mp_pose::Decoded {
-        kept: None,
-        thumbnails,
-        decode,
-    };
-    Ok((posed_people(ex, &name, skeleton, fps)?, decoded))
-}
-
 /// What the several-people pass gave, with every skipped frame filled.
-fn posed_people(
+pub(crate) fn posed_people(
     ex: mp_pose::PeopleExtraction,
     name: &str,
     skeleton: mp_geom::Skeleton,
@@ -872,101 +655,6 @@ pub(crate) fn chosen_people(
             Ok((main, rest))
         }
     }
-}
-
-/// Grey thumbnails of each person's own (mean) box, from a second decoding
-/// pass: the top-level person's (`top`) over the whole video, as the video's
-/// frame signal; every other person's (`rest`) over their own frames only,
-/// from their first to their last (their counts are theirs, and a long video
-/// with many people holds each person's thumbnails once, not once per
-/// frame of the video), all of them at the side their frames together allow.
-/// None for a person whose box lies mostly outside the picture
-/// ([`PoseParams::own_box_region`]).
-fn box_thumbnails(
-    path: &Path,
-    people: &People,
-    top: Option<PersonId>,
-    rest: &[PersonId],
-    n: usize,
-    params: &Params,
-    cancel: &CancelToken,
-) -> Result<std::collections::HashMap<PersonId, OwnBox>> {
-    let size = params.pose.thumbnail_size;
-    let reader = VideoReader::open(path)?;
-    let (fps, width, height) = (reader.info().fps, reader.info().width, reader.info().height);
-    // Each person's box and the frames `a..b` read for them.
-    let regions: Vec<(PersonId, [f64; 4], std::ops::Range<usize>)> = top
-        .iter()
-        .chain(rest)
-        .filter_map(|id| {
-            let p = people.get(*id)?;
-            let r = PoseParams::own_box_region(p.mean_box()?, width, height)?;
-            let frames = if Some(*id) == top {
-                0..n
-            } else {
-                p.first_frame.min(n)..(p.last_frame() + 1).min(n)
-            };
-            Some((*id, r, frames))
-        })
-        .collect();
-    // The top-level person's thumbnails at the side the video's length
-    // allows (`mp_pose::MAX_SIGNAL_VALUES`), the other people's at the side
-    // their frames together allow: an hour with a few people in view at a
-    // time holds about an hour of them.
-    let others_frames: usize = regions
-        .iter()
-        .filter(|(id, _, _)| Some(*id) != top)
-        .map(|(_, _, f)| f.len())
-        .sum();
-    let sides: Vec<usize> = regions
-        .iter()
-        .map(|(id, _, f)| {
-            signal_side(
-                size,
-                if Some(*id) == top {
-                    f.len()
-                } else {
-                    others_frames
-                },
-            )
-        })
-        .collect();
-    // Each person's thumbnails written straight into their place (frames ×
-    // side × side), one frame at a time: no second copy.
-    let mut thumbs: Vec<(ndarray::Array3<f32>, usize)> = regions
-        .iter()
-        .zip(&sides)
-        .map(|((_, _, f), &side)| (ndarray::Array3::zeros((f.len(), side, side)), 0))
-        .collect();
-    let last = regions.iter().map(|(_, _, f)| f.end).max().unwrap_or(0);
-    for frame in reader.take(last) {
-        check(cancel)?;
-        let frame = frame?;
-        for (k, (_, r, frames)) in regions.iter().enumerate() {
-            if frames.contains(&frame.index) {
-                let cells = grey_thumbnail_region(&frame, sides[k], *r)?;
-                let (values, filled) = &mut thumbs[k];
-                let mut row = values.index_axis_mut(ndarray::Axis(0), *filled);
-                row.iter_mut().zip(&cells).for_each(|(d, s)| *d = *s);
-                *filled += 1;
-            }
-        }
-    }
-    let mut out = std::collections::HashMap::new();
-    let (w, h) = (width as f64, height as f64);
-    for ((id, r, frames), (values, filled)) in regions.into_iter().zip(thumbs) {
-        if filled == frames.len() && filled > 0 {
-            let place = [
-                (r[0] / w).clamp(0.0, 1.0),
-                (r[1] / h).clamp(0.0, 1.0),
-                (r[2] / w).clamp(0.0, 1.0),
-                (r[3] / h).clamp(0.0, 1.0),
-            ];
-            let thumbnails = Thumbnails::new(values, fps)?;
-            out.insert(id, OwnBox { thumbnails, place });
-        }
-    }
-    Ok(out)
 }
 
 /// What the JPEG thread hands back.

@@ -45,6 +45,7 @@ mod input;
 mod keypoints;
 mod output;
 mod params;
+mod pieces;
 mod pose_rate;
 mod progress;
 mod report_people;
@@ -298,7 +299,7 @@ fn finish_with_overlay(
         };
         let rest = (|| -> Result<_> {
             let signal = pending
-                .map(|p| keypoints::frame_signal(kp_ref, p, params, timings, cancel))
+                .map(|p| frame_signal::frame_signal(kp_ref, p, params, timings, cancel))
                 .transpose()?;
             let thumbnails = match &signal {
                 Some(s) => s.thumbnails.as_ref(),
@@ -429,7 +430,8 @@ fn people_outcomes(
 /// report's folder `report/` and `report.html`, written last. Where nobody
 /// was found there are no programs and no pictures, and the page shows the
 /// frames, the repetitions counted from them and a notice. The overlay video
-/// is encoded on its own thread alongside the pictures and the report.
+/// is encoded on its own thread as soon as the main person's program is
+/// fitted, beside the boxes' pass, the counting and the other people.
 pub fn run(
     input: Input,
     out_dir: &Path,
