@@ -277,11 +277,14 @@ fn finish_with_overlay(
     };
     let pending = kp.pending.take();
     let kp_ref = &kp;
+    // Set when the rest of the run fails: the overlay stops at its next frame.
+    let stop = std::sync::atomic::AtomicBool::new(false);
     let (rest, encoded) = std::thread::scope(|s| {
         let handle = match (overlay, executed.as_ref()) {
             (Some(job), Some(executed)) => {
                 job.observer.started(Stage::Overlay, Some(n));
                 let others = output::other_people(kp_ref);
+                let stop = &stop;
                 Some(s.spawn(move || {
                     let t0 = Instant::now();
                     output::encode_overlay(
@@ -291,6 +294,7 @@ fn finish_with_overlay(
                         executed,
                         &others,
                         &|d| job.observer.progress(Stage::Overlay, d),
+                        stop,
                     )
                     .map(|staged| (staged, t0.elapsed()))
                 }))
@@ -319,6 +323,9 @@ fn finish_with_overlay(
             )?;
             Ok((signal, counts, people))
         })();
+        if rest.is_err() {
+            stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
         let encoded = handle.map(|h| {
             h.join()
                 .map_err(|_| PipelineError::stage("overlay video", "the overlay thread panicked"))

@@ -210,7 +210,8 @@ pub(crate) fn other_people(kp: &crate::Keypoints) -> Vec<OtherPerson<'_>> {
 /// pose where nobody is), and the other people (`others`) each in their own
 /// colour; `progress` is called after each frame. The video is left in the
 /// folder's staging area (the path returned): the caller commits it as
-/// `overlay.mp4` once the rest of the run has succeeded.
+/// `overlay.mp4` once the rest of the run has succeeded, and sets `stop`
+/// when it has failed (the encoding then ends at the next frame).
 ///
 /// The frames stay in YUV 4:2:0 from the decoder to the encoder (the
 /// codec's own pixels, half the bytes of RGB through each pipe, no colour
@@ -223,6 +224,7 @@ pub(crate) fn encode_overlay(
     executed: &Track,
     others: &[OtherPerson<'_>],
     progress: &dyn Fn(usize),
+    stop: &std::sync::atomic::AtomicBool,
 ) -> Result<std::path::PathBuf> {
     let cancel: &CancelToken = out.cancel_token();
     let n = track.n_frames();
@@ -250,6 +252,9 @@ pub(crate) fn encode_overlay(
     let mut done = 0usize;
     let mut draw = |frame: &mut Yuv420Frame| -> Result<()> {
         check_cancel(cancel).map_err(PipelineError::from_report)?;
+        if stop.load(std::sync::atomic::Ordering::Relaxed) {
+            return Err(PipelineError::stage("overlay video", "the run failed"));
+        }
         let index = frame.index;
         let mut area: Option<[f32; 4]> = None;
         let mut drawn = |a: Option<[f32; 4]>| {
@@ -336,7 +341,7 @@ mod tests {
     /// The overlay holds the video's frames with the skeletons drawn where
     /// the joints are: pixels on them change, pixels far from them keep the
     /// source's colour (within what H.264 keeps); kept and decoded frames
-    /// give the same video.
+    /// give the same video; a run that failed beside it stops it.
     #[test]
     fn the_overlay_draws_the_skeletons_on_the_frames() {
         let dir = tempfile::tempdir().unwrap();
@@ -356,13 +361,24 @@ mod tests {
             .unwrap()
             .map(|f| f.unwrap())
             .collect();
+        let stopped = std::sync::atomic::AtomicBool::new(true);
+        let out = OutputDir::create(dir.path().join("stopped")).unwrap();
+        let src_frames = OverlayFrames {
+            info: info.clone(),
+            kept: None,
+        };
+        let e = encode_overlay(&out, src_frames, &track, &track, &others, &|_| {}, &stopped)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the run failed"), "{e}");
         for (name, kept) in [("decoded", None), ("kept", Some(kept))] {
             let out = OutputDir::create(dir.path().join(name)).unwrap();
             let src = OverlayFrames {
                 info: info.clone(),
                 kept,
             };
-            let staged = encode_overlay(&out, src, &track, &track, &others, &|_| {}).unwrap();
+            let go = std::sync::atomic::AtomicBool::new(false);
+            let staged = encode_overlay(&out, src, &track, &track, &others, &|_| {}, &go).unwrap();
             out.commit(&staged, "overlay.mp4").unwrap();
             let frames: Vec<Vec<u8>> = VideoReader::open(dir.path().join(name).join("overlay.mp4"))
                 .unwrap()
