@@ -67,8 +67,8 @@ pub use motion::{moving_regions, region_track, CellRegion, MotionEnergy};
 pub use people::{PeopleCollector, TrackEvent, TrackedPose};
 pub use runtime::{model_path, Device};
 pub use thumbs::{
-    grey_thumbnail_region, signal_side, thumbnail_track, thumbnail_track_flat, Thumbnails,
-    DEFAULT_THUMBNAIL_SIZE, MAX_SIGNAL_VALUES,
+    grey_thumbnail_region, signal_side, thumbnail_track, Thumbnails, DEFAULT_THUMBNAIL_SIZE,
+    MAX_SIGNAL_VALUES,
 };
 pub use video::{
     probe_bytes, PixelFormat, VideoReadOptions, VideoWriter, Yuv420Frame, Yuv420Frames,

@@ -105,7 +105,7 @@ pub fn grey_thumbnail_region(frame: &Frame, size: usize, region: [f64; 4]) -> Re
 /// `size` rows (the track's "joints", confidence 1) × `size` cells per row
 /// (its dimensions), so the channels run row-major as in the thumbnail (8
 /// bytes per cell and frame). Where a long video's thumbnails are gathered,
-/// gather them in one buffer and use [`thumbnail_track_flat`].
+/// gather them in one buffer and use [`Thumbnails::from_flat`].
 pub fn thumbnail_track(thumbs: Vec<Vec<f32>>, size: usize, fps: f64) -> Result<Track> {
     let c = size * size;
     if let Some((t, th)) = thumbs.iter().enumerate().find(|(_, th)| th.len() != c) {
@@ -117,14 +117,7 @@ pub fn thumbnail_track(thumbs: Vec<Vec<f32>>, size: usize, fps: f64) -> Result<T
             ),
         ));
     }
-    thumbnail_track_flat(thumbs.concat(), size, fps)
-}
-
-/// [`thumbnail_track`] of thumbnails held one after the other in one buffer
-/// (`size × size` values a frame): a long video's thumbnails in one
-/// allocation instead of one small allocation a frame.
-pub fn thumbnail_track_flat(values: Vec<f32>, size: usize, fps: f64) -> Result<Track> {
-    Thumbnails::from_flat(values, size, fps)?.track()
+    Thumbnails::from_flat(thumbs.concat(), size, fps)?.track()
 }
 
 /// Grey thumbnails of consecutive frames, `frames × side × side` cells, as

@@ -68,6 +68,6 @@ pub use page::data::{CHUNK_FRAMES, FOLDER_BUDGET_BYTES, FRAMES_BUDGET_BYTES};
 pub use page::PAGE;
 pub use people::found_runs;
 pub use raster::encode_jpeg;
-pub use raster::{fill_from_rgb, pixmap_to_png, pixmap_to_rgb, rgb_to_pixmap, svg_to_pixmap};
+pub use raster::{pixmap_to_png, pixmap_to_rgb, rgb_to_pixmap, svg_to_pixmap};
 /// The drawing surface of every picture (premultiplied RGBA).
 pub use resvg::tiny_skia::Pixmap;

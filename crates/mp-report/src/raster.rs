@@ -187,24 +187,10 @@ pub fn rgb_to_pixmap(rgb: &[u8], width: usize, height: usize) -> Result<Pixmap> 
     let mut p = Pixmap::new(width as u32, height as u32).ok_or_else(|| {
         ReportError::Mismatch(format!("cannot allocate a {width}×{height} picture"))
     })?;
-    fill_from_rgb(&mut p, rgb)?;
-    Ok(p)
-}
-
-/// Overwrites a pixmap with RGB bytes of its size, opaque: one picture
-/// reused frame after frame instead of a new one each.
-pub fn fill_from_rgb(p: &mut Pixmap, rgb: &[u8]) -> Result<()> {
-    let (w, h) = (p.width() as usize, p.height() as usize);
-    if rgb.len() != w * h * 3 {
-        return Err(ReportError::Mismatch(format!(
-            "RGB buffer of {} bytes for a {w}×{h} image",
-            rgb.len()
-        )));
-    }
     for (dst, src) in p.data_mut().chunks_exact_mut(4).zip(rgb.chunks_exact(3)) {
         dst.copy_from_slice(&[src[0], src[1], src[2], 255]);
     }
-    Ok(())
+    Ok(p)
 }
 
 /// Encodes RGB bytes as PNG.

@@ -267,13 +267,6 @@ pub struct Yuv420Frames {
     reader: VideoReader,
 }
 
-impl Yuv420Frames {
-    /// The probed properties.
-    pub fn info(&self) -> &VideoInfo {
-        self.reader.info()
-    }
-}
-
 impl Iterator for Yuv420Frames {
     type Item = Result<Yuv420Frame>;
     fn next(&mut self) -> Option<Self::Item> {

@@ -28,51 +28,6 @@ fn probe_json_without_video_is_an_error() {
     assert!(e.to_string().contains("no video stream"), "{e}");
 }
 
-/// RGB and RGBA frames give the same video; a frame of the other kind's
-/// size is refused with what the writer expects.
-#[test]
-fn rgba_frames_encode_as_their_rgb() {
-    let dir = tempfile::tempdir().unwrap();
-    let (w, h) = (64usize, 48usize);
-    // Smooth colours (H.264 keeps them within a few grey levels).
-    let rgb: Vec<u8> = (0..w * h)
-        .flat_map(|i| {
-            let (x, y) = (i % w, i / w);
-            [(x * 4) as u8, (y * 5) as u8, 128u8]
-        })
-        .collect();
-    let rgba: Vec<u8> = rgb
-        .chunks_exact(3)
-        .flat_map(|p| [p[0], p[1], p[2], 255])
-        .collect();
-    let (a, b) = (dir.path().join("rgb.mp4"), dir.path().join("rgba.mp4"));
-    let mut wa = VideoWriter::create_with_preset(&a, w, h, 10.0, "veryfast").unwrap();
-    let mut wb = VideoWriter::with_format(&b, w, h, 10.0, "veryfast", PixelFormat::Rgba).unwrap();
-    let e = wb.write(&rgb).unwrap_err().to_string();
-    assert!(e.contains("RGBA"), "{e}");
-    for _ in 0..3 {
-        wa.write(&rgb).unwrap();
-        wb.write(&rgba).unwrap();
-    }
-    assert_eq!(wa.finish().unwrap(), 3);
-    assert_eq!(wb.finish().unwrap(), 3);
-    let read = |p: &Path| -> Vec<Vec<u8>> {
-        VideoReader::open(p)
-            .unwrap()
-            .map(|f| f.unwrap().rgb)
-            .collect()
-    };
-    let (fa, fb) = (read(&a), read(&b));
-    assert_eq!((fa.len(), fb.len()), (3, 3));
-    for (x, y) in fa.iter().zip(&fb) {
-        let worst = x.iter().zip(y).map(|(p, q)| p.abs_diff(*q)).max().unwrap();
-        assert!(worst <= 2, "RGB and RGBA frames differ by {worst} levels");
-    }
-    let truth = rgb.iter().zip(&fb[0]).map(|(p, q)| p.abs_diff(*q) as f64);
-    let mean = truth.sum::<f64>() / rgb.len() as f64;
-    assert!(mean < 3.0, "mean error {mean} levels");
-}
-
 /// A video decoded to YUV 4:2:0 holds the pixels its RGB decoding shows
 /// (the odd-sized frames written were padded to even sides); YUV frames
 /// encoded again give back those frames, and a frame of another layout's

@@ -51,10 +51,9 @@ impl VideoWriter {
         Self::with_format(path, width, height, fps, preset, PixelFormat::Rgb24)
     }
 
-    /// [`VideoWriter::create_with_preset`] for frames in another layout:
-    /// opaque RGBA bytes (the alpha ignored: a drawing surface such as a
-    /// `tiny_skia::Pixmap` goes to the encoder as it is), or planar YUV 4:2:0
-    /// ([`super::Yuv420Frame`]), which x264 encodes without a conversion.
+    /// [`VideoWriter::create_with_preset`] for frames in a given layout,
+    /// e.g. planar YUV 4:2:0 ([`super::Yuv420Frame`]), which x264 encodes
+    /// without a conversion.
     pub fn with_format(
         path: impl AsRef<Path>,
         width: usize,

@@ -14,8 +14,6 @@ use crate::error::{PoseError, Result};
 pub enum PixelFormat {
     /// 3 bytes a pixel: R, G, B.
     Rgb24,
-    /// 4 bytes a pixel: R, G, B, A (an encoder ignores the alpha).
-    Rgba,
     /// Planar: the luma plane, then the two chroma planes (U, V) at half the
     /// width and height, rounded up ([`Yuv420Frame`]).
     Yuv420p,
@@ -26,7 +24,6 @@ impl PixelFormat {
     pub fn frame_bytes(self, width: usize, height: usize) -> usize {
         match self {
             PixelFormat::Rgb24 => width * height * 3,
-            PixelFormat::Rgba => width * height * 4,
             PixelFormat::Yuv420p => Yuv420Frame::bytes(width, height),
         }
     }
@@ -35,7 +32,6 @@ impl PixelFormat {
     pub fn ffmpeg_name(self) -> &'static str {
         match self {
             PixelFormat::Rgb24 => "rgb24",
-            PixelFormat::Rgba => "rgba",
             PixelFormat::Yuv420p => "yuv420p",
         }
     }
@@ -44,7 +40,6 @@ impl PixelFormat {
     pub(crate) fn label(self) -> &'static str {
         match self {
             PixelFormat::Rgb24 => "RGB",
-            PixelFormat::Rgba => "RGBA",
             PixelFormat::Yuv420p => "YUV 4:2:0",
         }
     }
