@@ -3,7 +3,9 @@
 //! For a video, a decoding thread feeds the pose model and keeps grey
 //! thumbnails of every frame (and, when an overlay video is wanted and they
 //! fit in memory, full-size copies); a second FFmpeg process writes reduced
-//! JPEG copies for the report alongside.
+//! JPEG copies for the report alongside, or, for a long video of which few
+//! frames are kept, the decoding thread makes them
+//! ([`COPY_ON_DECODER_MIN_STEP`]).
 //!
 //! With several people ([`crate::PoseParams::people`], the default for
 //! BlazePose) every person is tracked; the track of the analysis is the
@@ -23,12 +25,13 @@
 //! many.
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 use mp_geom::{CancelToken, People, PersonId, Track};
 use mp_pose::FrameSource;
 use mp_pose::SessionParams;
-use mp_pose::{decode_ahead, DecodeOptions, MjpegOptions, MjpegStream};
+use mp_pose::{decode_ahead, DecodeOptions, Frame, FrameCopies, MjpegOptions, MjpegStream};
 use mp_pose::{extract_people, BlazePoseParams, MultiPose, MultiPoseParams, SharedLandmarks};
 use mp_pose::{extract_track, open_estimator_with, ExtractOptions};
 use mp_pose::{signal_side, Thumbnails};
@@ -51,6 +54,14 @@ pub(crate) const KEEP_FRAMES_BUDGET_BYTES: usize = 512 << 20;
 /// 31 worst). 4 gives about the PSNR of libjpeg quality 72 at full chroma
 /// resolution (≈ 40 dB on the golf swing) in files about 25 % smaller.
 pub(crate) const REPORT_JPEG_QSCALE: u32 = 4;
+
+/// The report's reduced frames are made on the decoding thread, not by a
+/// second FFmpeg process, when at most one frame in this many is kept
+/// (videos over `16 × 1,200` frames, about 11 minutes at 30 fps): a copy
+/// made here (reduced and encoded, about 8 ms for 640 × 360) costs as much
+/// as FFmpeg decoding 8–16 frames, and the second process decodes every
+/// frame of the video.
+pub(crate) const COPY_ON_DECODER_MIN_STEP: usize = 16;
 
 /// The frames of the overlay video.
 pub struct OverlayFrames {
@@ -388,17 +399,39 @@ fn from_video(
     let keep_full = keep.overlay
         && expected.is_some_and(|n| n.saturating_mul(frame_bytes) <= KEEP_FRAMES_BUDGET_BYTES);
     let t0 = Instant::now();
-    let jpegs = if keep.report_frames {
-        let store = FrameStore::new(
-            info.width,
-            info.height,
-            expected,
-            &FrameStoreParams::default(),
-        )?;
-        Some(start_jpeg_copies(&info, max_frames, store, cancel.clone())?)
-    } else {
-        None
+    // The report's reduced frames: a long video's few on the decoding
+    // thread, a short video's many by FFmpeg on its own thread.
+    let store = keep
+        .report_frames
+        .then(|| {
+            FrameStore::new(
+                info.width,
+                info.height,
+                expected,
+                &FrameStoreParams {
+                    max_frames: params.output.report_frames,
+                    ..FrameStoreParams::default()
+                },
+            )
+        })
+        .transpose()?;
+    let (copies, jpegs) = match store {
+        Some(store) if store.step >= COPY_ON_DECODER_MIN_STEP => {
+            let encode = store.encoder();
+            let copies = FrameCopies {
+                step: store.step,
+                first: 0,
+                copy: Arc::new(move |at, f: &Frame| encode(at, &f.rgb).map_err(|e| e.to_string())),
+            };
+            (Some((copies, store)), None)
+        }
+        Some(store) => (
+            None,
+            Some(start_jpeg_copies(&info, max_frames, store, cancel.clone())?),
+        ),
+        None => (None, None),
     };
+    let copy_options = copies.as_ref().map(|(c, _)| c.clone());
     // Whole-frame thumbnails at the side the expected length allows
     // (`signal_track` reduces them further if the video is longer).
     let side = signal_side(params.pose.thumbnail_size, expected.unwrap_or(0));
@@ -414,7 +447,15 @@ fn from_video(
         drop(reader);
         observer.started(Stage::Pose, expected);
         let progress = |d| observer.progress(Stage::Pose, d);
-        match pose_people_in_pieces(&info, &pieces, side, params, cancel, &progress) {
+        match pose_people_in_pieces(
+            &info,
+            &pieces,
+            side,
+            copy_options,
+            params,
+            cancel,
+            &progress,
+        ) {
             Ok((posed, decoded)) => (Ok(posed), decoded),
             Err(e) => (Err(e), mp_pose::Decoded::default()),
         }
@@ -425,6 +466,7 @@ fn from_video(
                 limit: max_frames,
                 keep_full,
                 thumbnail_size: Some(side),
+                copies: copy_options,
                 ..DecodeOptions::default()
             },
             cancel.clone(),
@@ -442,7 +484,7 @@ fn from_video(
         (ex, decoded)
     };
     let wall = t0.elapsed();
-    let copies = jpegs
+    let jpegs = jpegs
         .map(|h| {
             h.join()
                 .map_err(|_| PipelineError::stage("frame copies", "the JPEG thread panicked"))
@@ -452,13 +494,20 @@ fn from_video(
     let posed = ex?;
     let n = posed.n_frames;
     timings.push(Stage::Decode, decoded.decode, n);
-    let frames = match copies {
-        Some(c) => {
+    let frames = match (jpegs, copies) {
+        (Some(c), _) => {
             c.result?;
             timings.push(Stage::Jpeg, c.time, c.store.frames.len());
             Some(c.store)
         }
-        None => None,
+        (None, Some((_, mut store))) => {
+            for (index, jpeg) in decoded.copies {
+                store.push_jpeg(index, jpeg)?;
+            }
+            timings.push(Stage::Jpeg, decoded.copying, store.frames.len());
+            Some(store)
+        }
+        (None, None) => None,
     };
     timings.push(Stage::Pose, wall, n);
     let coco = |t: Track| coco17_unless_all(t, params);

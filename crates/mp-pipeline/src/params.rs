@@ -184,6 +184,9 @@ pub struct OutputParams {
     pub report: bool,
     /// `overlay.mp4` for video input. Default true.
     pub overlay_video: bool,
+    /// Most frames of a video the report shows (a longer video's every
+    /// k-th frame, reduced to 480 pixels on the longer side). Default 1200.
+    pub report_frames: usize,
 }
 
 impl Default for OutputParams {
@@ -191,6 +194,7 @@ impl Default for OutputParams {
         OutputParams {
             report: true,
             overlay_video: true,
+            report_frames: mp_report::FrameStoreParams::default().max_frames,
         }
     }
 }
@@ -229,6 +233,12 @@ impl Params {
         self.count.validate()?;
         if self.pose.threads == 0 {
             return Err(PipelineError::param("pose.threads", "must be at least 1"));
+        }
+        if self.output.report_frames == 0 {
+            return Err(PipelineError::param(
+                "output.report_frames",
+                "must be at least 1",
+            ));
         }
         if self.pose.max_frames == Some(0) {
             return Err(PipelineError::param(

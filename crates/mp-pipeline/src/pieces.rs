@@ -7,7 +7,9 @@
 //! pieces' people are joined where they overlap (`mp_pose::join_pieces`).
 
 use mp_geom::CancelToken;
-use mp_pose::{decode_ahead, extract_people, DecodeOptions, ExtractOptions, MultiPose};
+use mp_pose::{
+    decode_ahead, extract_people, DecodeOptions, ExtractOptions, FrameCopies, MultiPose,
+};
 use mp_pose::{SessionParams, VideoInfo, VideoReader};
 
 use crate::error::{PipelineError, Result};
@@ -57,6 +59,7 @@ pub(crate) fn pose_people_in_pieces(
     info: &VideoInfo,
     pieces: &[(usize, usize)],
     side: usize,
+    copies: Option<FrameCopies>,
     params: &Params,
     cancel: &CancelToken,
     progress: &(dyn Fn(usize) + Sync),
@@ -87,6 +90,7 @@ pub(crate) fn pose_people_in_pieces(
             .enumerate()
             .map(|(i, &(start, len))| {
                 let (session, done) = (session.clone(), &done);
+                let copies = copies.clone().map(|c| FrameCopies { first: start, ..c });
                 // The last piece reads to the end, wherever the container's
                 // frame count put it.
                 let limit = if i + 1 == pieces.len() {
@@ -102,6 +106,7 @@ pub(crate) fn pose_people_in_pieces(
                             limit,
                             keep_full: false,
                             thumbnail_size: Some(side),
+                            copies,
                             ..DecodeOptions::default()
                         },
                         cancel.clone(),
@@ -139,7 +144,8 @@ pub(crate) fn pose_people_in_pieces(
     let mut joined = Vec::with_capacity(pieces.len());
     let cells = side * side;
     let mut thumbnails: Vec<f32> = Vec::new();
-    let mut decode = std::time::Duration::ZERO;
+    let mut copies: Vec<(usize, Vec<u8>)> = Vec::new();
+    let (mut decode, mut copying) = (std::time::Duration::ZERO, std::time::Duration::ZERO);
     let mut model = (String::new(), None);
     for (&(start, _), out) in pieces.iter().zip(outs) {
         let (ex, decoded, name, skeleton) = out?;
@@ -147,7 +153,10 @@ pub(crate) fn pose_people_in_pieces(
         // earlier piece's up to its end.
         let skip = (thumbnails.len() / cells).saturating_sub(start) * cells;
         thumbnails.extend_from_slice(decoded.thumbnails.get(skip..).unwrap_or_default());
+        let next = copies.last().map_or(0, |(i, _)| i + 1);
+        copies.extend(decoded.copies.into_iter().filter(|(i, _)| *i >= next));
         decode += decoded.decode;
+        copying += decoded.copying;
         model = (name, Some(skeleton));
         joined.push((start, ex));
     }
@@ -157,7 +166,9 @@ pub(crate) fn pose_people_in_pieces(
     let decoded = mp_pose::Decoded {
         kept: None,
         thumbnails,
+        copies,
         decode,
+        copying,
     };
     Ok((posed_people(ex, &name, skeleton, fps)?, decoded))
 }

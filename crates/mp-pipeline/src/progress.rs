@@ -60,7 +60,7 @@ impl Stage {
     pub fn note(self) -> &'static str {
         match self {
             Stage::Decode => "FFmpeg rgb24 pipe and frame thumbnails, own thread alongside pose",
-            Stage::Jpeg => "reduced JPEG copies (FFmpeg mjpeg), own thread alongside pose",
+            Stage::Jpeg => "reduced JPEG copies for the report: FFmpeg mjpeg alongside pose (long videos: on the decoding thread)",
             Stage::Pose => "model loading + inference (waits on decoding included)",
             Stage::Concrete => "segmentation and primitive fits",
             Stage::Abstract => "abstract program and loops",

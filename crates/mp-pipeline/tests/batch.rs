@@ -33,6 +33,7 @@ fn quick_params() -> BatchParams {
             output: OutputParams {
                 report: false,
                 overlay_video: false,
+                ..OutputParams::default()
             },
             ..Params::default()
         },

@@ -165,7 +165,8 @@ fn the_person_choice_is_parsed_with_a_clear_error() {
 
 /// A video tracked in two pieces side by side gives the people of the
 /// one-piece pass: the same people, numbered alike, their keypoints where
-/// both passes follow them within a few pixels.
+/// both passes follow them within a few pixels; and the same frames for the
+/// report, each copied by the decoder of the piece it falls in.
 #[test]
 fn a_video_in_two_pieces_gives_the_people_of_one_pass() {
     let dir = tempfile::tempdir().unwrap();
@@ -175,7 +176,12 @@ fn a_video_in_two_pieces_gives_the_people_of_one_pass() {
     let pass = |pieces: usize| {
         let mut params = Params::default();
         params.pose.pieces = pieces;
-        let keep = mp_pipeline::Keep::default();
+        // Every 28th frame shown: few enough to be copied while decoding.
+        params.output.report_frames = 10;
+        let keep = mp_pipeline::Keep {
+            report_frames: true,
+            ..mp_pipeline::Keep::default()
+        };
         let input = Input::open(&video, None).unwrap();
         mp_pipeline::keypoints(input, &params, keep, &Silent, &CancelToken::new())
             .unwrap()
@@ -187,6 +193,14 @@ fn a_video_in_two_pieces_gives_the_people_of_one_pass() {
     let n = a.n_frames();
     assert!(n > 250, "{n} frames");
     assert_eq!(b.n_frames(), n);
+    let shown = |k: &mp_pipeline::Keypoints| -> Vec<usize> {
+        let store = k.frames.as_ref().unwrap();
+        assert!(store.frames.iter().all(|(_, j)| j.len() > 1000));
+        store.frames.iter().map(|(i, _)| *i).collect()
+    };
+    let step = n.div_ceil(10);
+    assert_eq!(shown(&one), (0..n).step_by(step).collect::<Vec<_>>());
+    assert_eq!(shown(&two), shown(&one));
     let long = |p: &mp_geom::People| -> Vec<(u32, usize)> {
         p.people()
             .iter()

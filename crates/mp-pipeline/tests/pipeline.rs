@@ -100,9 +100,12 @@ fn run_writes_the_folder_and_a_cancelled_run_leaves_nothing() {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
-    // A whole run (no overlay video, to keep it short).
+    // A whole run (no overlay video, to keep it short), the report showing
+    // every 21st of the 124 frames: as in a long video, few enough for the
+    // decoding thread to make their copies.
     let mut params = Params::default();
     params.output.overlay_video = false;
+    params.output.report_frames = 6;
     let dir = tmp.path().join("run");
     let s = run(
         Input::open(&video, None).unwrap(),
@@ -129,9 +132,19 @@ fn run_writes_the_folder_and_a_cancelled_run_leaves_nothing() {
     );
     assert_eq!(loops["repetitions"]["total"], s.outcome.counts.total);
     assert_eq!(loops["repetitions"]["signal"], "keypoints");
+    let mut shown: Vec<String> = std::fs::read_dir(dir.join("report/frames"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    shown.sort();
+    let want: Vec<String> = (0..124)
+        .step_by(21)
+        .map(|i| format!("{i:06}.jpg"))
+        .collect();
+    assert_eq!(shown, want);
     let stages: Vec<&str> = s.outcome.stages.iter().map(|t| t.stage.name()).collect();
     for st in [
-        "decode", "pose", "concrete", "abstract", "count", "pictures", "report",
+        "decode", "jpeg", "pose", "concrete", "abstract", "count", "pictures", "report",
     ] {
         assert!(stages.contains(&st), "stage {st} missing from {stages:?}");
     }

@@ -2,10 +2,13 @@
 //!
 //! * [`decode_ahead`]: a thread decodes frames ahead of the pose model
 //!   through a bounded channel, keeping full-size copies (for an overlay
-//!   video) and grey thumbnails ([`crate::thumbs`]) on the way.
+//!   video), grey thumbnails ([`crate::thumbs`]) and copies of every
+//!   `step`-th frame made by the caller's function ([`FrameCopies`]) on the
+//!   way.
 //! * [`MjpegStream`]: a second FFmpeg process writing reduced (scaled,
 //!   subsampled) frames as JPEG files back to back, much faster than
-//!   encoding them here.
+//!   encoding them here when most frames are kept; when few are, copies on
+//!   the decoding thread spare the second decoding of the whole video.
 //!
 //! Both stop when their [`CancelToken`] is cancelled.
 
@@ -13,6 +16,7 @@ use std::io::{BufReader, Read};
 use std::path::PathBuf;
 use std::process::{Child, ChildStdout, Command, Stdio};
 use std::sync::mpsc::sync_channel;
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -33,6 +37,39 @@ pub struct DecodeOptions {
     pub thumbnail_size: Option<usize>,
     /// Frames decoded ahead of the consumer. Default 8.
     pub ahead: usize,
+    /// Copies of every `step`-th frame (e.g. reduced JPEG files); `None`: none.
+    pub copies: Option<FrameCopies>,
+}
+
+/// What makes a copy of a frame (its bytes, e.g. a reduced JPEG file) from
+/// its index in the video and its pixels, or says why it could not.
+pub type CopyFn = dyn Fn(usize, &Frame) -> std::result::Result<Vec<u8>, String> + Send + Sync;
+
+/// Copies of every `step`-th frame made on the decoding thread by `copy`.
+#[derive(Clone)]
+pub struct FrameCopies {
+    /// Frames whose index in the video is a multiple of `step` (≥ 1) are copied.
+    pub step: usize,
+    /// Index in the video of the reader's first frame (a reader started at
+    /// a frame, [`VideoReader::from_frame`], counts its frames from 0).
+    pub first: usize,
+    /// Makes one copy.
+    pub copy: Arc<CopyFn>,
+}
+
+impl std::fmt::Debug for FrameCopies {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FrameCopies")
+            .field("step", &self.step)
+            .field("first", &self.first)
+            .finish_non_exhaustive()
+    }
+}
+
+impl PartialEq for FrameCopies {
+    fn eq(&self, other: &Self) -> bool {
+        self.step == other.step && self.first == other.first && Arc::ptr_eq(&self.copy, &other.copy)
+    }
 }
 
 impl Default for DecodeOptions {
@@ -42,6 +79,7 @@ impl Default for DecodeOptions {
             keep_full: false,
             thumbnail_size: Some(crate::thumbs::DEFAULT_THUMBNAIL_SIZE),
             ahead: 8,
+            copies: None,
         }
     }
 }
@@ -55,8 +93,13 @@ pub struct Decoded {
     /// `thumbnail_size²` cells of each frame one after the other (one
     /// buffer for a whole video, not one allocation a frame).
     pub thumbnails: Vec<f32>,
+    /// The copies asked for ([`DecodeOptions::copies`]): (frame index,
+    /// bytes), in frame order.
+    pub copies: Vec<(usize, Vec<u8>)>,
     /// Time spent decoding (waiting on FFmpeg's pipe).
     pub decode: Duration,
+    /// Time spent making the copies.
+    pub copying: Duration,
 }
 
 /// Starts decoding `reader` on its own thread. Returns the frames as a
@@ -71,6 +114,9 @@ pub fn decode_ahead(
 ) -> Result<(FrameSource, JoinHandle<Decoded>)> {
     if let Some(0) = options.thumbnail_size {
         return Err(PoseError::param("thumbnail_size", "must be at least 1"));
+    }
+    if options.copies.as_ref().is_some_and(|c| c.step == 0) {
+        return Err(PoseError::param("copies.step", "must be at least 1"));
     }
     let info = reader.info().clone();
     let (tx, rx) = sync_channel::<Result<Frame>>(options.ahead.max(1));
@@ -112,6 +158,23 @@ pub fn decode_ahead(
                                 let _ = tx.send(Err(e));
                                 break;
                             }
+                        }
+                    }
+                    if let Some(c) = opts.copies.as_ref() {
+                        let at = c.first + frame.index;
+                        if at.is_multiple_of(c.step) {
+                            let t1 = Instant::now();
+                            match (c.copy)(at, frame) {
+                                Ok(bytes) => out.copies.push((at, bytes)),
+                                Err(reason) => {
+                                    let _ = tx.send(Err(PoseError::BadFrame {
+                                        frame: at,
+                                        reason: format!("copying the frame: {reason}"),
+                                    }));
+                                    break;
+                                }
+                            }
+                            out.copying += t1.elapsed();
                         }
                     }
                 }
@@ -246,5 +309,98 @@ impl MjpegStream {
     /// The video.
     pub fn path(&self) -> &std::path::Path {
         &self.path
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::video::{probe, VideoWriter};
+
+    /// A 30-frame video whose frame `k` is grey level `8 k`.
+    fn levels(dir: &std::path::Path) -> VideoInfo {
+        let path = dir.join("levels.mp4");
+        let (w, h) = (32usize, 32usize);
+        let mut wr = VideoWriter::create_with_preset(&path, w, h, 25.0, "veryfast").unwrap();
+        for k in 0..30u8 {
+            wr.write(&vec![k * 8; w * h * 3]).unwrap();
+        }
+        wr.finish().unwrap();
+        probe(&path).unwrap()
+    }
+
+    fn copies_from(info: &VideoInfo, start: usize, copies: FrameCopies) -> Result<Decoded> {
+        let reader = VideoReader::from_frame(info.clone(), start)?;
+        let options = DecodeOptions {
+            copies: Some(copies),
+            ..DecodeOptions::default()
+        };
+        let (source, decoder) = decode_ahead(reader, &options, CancelToken::new())?;
+        let consumed: Vec<Result<Frame>> = source.frames.collect();
+        let decoded = decoder.join().unwrap();
+        consumed.into_iter().collect::<Result<Vec<_>>>()?;
+        Ok(decoded)
+    }
+
+    /// Every `step`-th frame of the video is copied once, under its index in
+    /// the video, also by a reader started part-way (a piece of the video).
+    #[test]
+    fn copies_are_of_every_step_th_frame_of_the_video() {
+        let dir = tempfile::tempdir().unwrap();
+        let info = levels(dir.path());
+        // The copy: the frame's mean level, as text.
+        let copy: Arc<CopyFn> = Arc::new(|_, f: &Frame| {
+            let mean = f.rgb.iter().map(|&v| v as f64).sum::<f64>() / f.rgb.len() as f64;
+            Ok(format!("{mean:.0}").into_bytes())
+        });
+        for (start, step) in [(0usize, 1usize), (0, 7), (13, 4), (29, 5)] {
+            let copies = FrameCopies {
+                step,
+                first: start,
+                copy: copy.clone(),
+            };
+            let decoded = copies_from(&info, start, copies).unwrap();
+            let at: Vec<usize> = decoded.copies.iter().map(|(i, _)| *i).collect();
+            let want: Vec<usize> = (start..30).filter(|i| i % step == 0).collect();
+            assert_eq!(at, want, "from {start}, every {step}");
+            for (i, bytes) in &decoded.copies {
+                let level: f64 = String::from_utf8_lossy(bytes).parse().unwrap();
+                assert!((level - (i * 8) as f64).abs() < 3.0, "frame {i}: {level}");
+            }
+        }
+    }
+
+    /// A copy that fails stops the decoding with an error naming the frame;
+    /// a step of 0 is refused.
+    #[test]
+    fn a_failed_copy_is_an_error_naming_the_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        let info = levels(dir.path());
+        let copy: Arc<CopyFn> = Arc::new(|at, _: &Frame| {
+            if at == 12 {
+                Err("no room".into())
+            } else {
+                Ok(Vec::new())
+            }
+        });
+        let copies = FrameCopies {
+            step: 3,
+            first: 0,
+            copy,
+        };
+        let e = copies_from(&info, 0, copies.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("frame 12") && e.contains("no room"), "{e}");
+        let reader = VideoReader::from_frame(info, 0).unwrap();
+        let options = DecodeOptions {
+            copies: Some(FrameCopies { step: 0, ..copies }),
+            ..DecodeOptions::default()
+        };
+        let e = decode_ahead(reader, &options, CancelToken::new())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("copies.step"), "{e}");
     }
 }

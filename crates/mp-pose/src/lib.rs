@@ -60,7 +60,9 @@ pub use video::{open_source, probe, read_image, Frame, FrameSource, VideoInfo, V
 
 pub use blazepose::detector::{roi_from_points, PoseDetector};
 pub use blazepose::landmarks::{project, LandmarkModel};
-pub use decode::{decode_ahead, DecodeOptions, Decoded, MjpegOptions, MjpegStream};
+pub use decode::{
+    decode_ahead, CopyFn, DecodeOptions, Decoded, FrameCopies, MjpegOptions, MjpegStream,
+};
 pub use extract::is_posed_frame;
 pub use imageops::{resize_rgb, RgbView};
 pub use motion::{moving_regions, region_track, CellRegion, MotionEnergy};

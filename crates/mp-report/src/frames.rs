@@ -105,26 +105,32 @@ impl FrameStore {
         if !index.is_multiple_of(self.step) {
             return Ok(());
         }
-        let (w, h) = self.source_size;
-        let img = image::RgbImage::from_raw(w as u32, h as u32, rgb.to_vec()).ok_or_else(|| {
-            ReportError::Image {
-                what: format!("frame {index}"),
-                reason: format!("{} bytes for a {w}×{h} RGB frame", rgb.len()),
-            }
-        })?;
-        let small = if self.size == self.source_size {
-            img
-        } else {
-            image::imageops::resize(
-                &img,
-                self.size.0 as u32,
-                self.size.1 as u32,
-                FilterType::Triangle,
-            )
-        };
-        let jpg = encode_jpeg(small.as_raw(), self.size.0, self.size.1, self.quality)?;
+        let jpg = self.encoder()(index, rgb)?;
         self.frames.push((index, jpg));
         Ok(())
+    }
+
+    /// What [`FrameStore::push`] keeps of a frame — frame `index` (RGB,
+    /// original size) reduced to the store's size and encoded as JPEG — as
+    /// a function that may run on another thread (e.g. the one decoding
+    /// the video); [`FrameStore::push_jpeg`] then keeps its result.
+    pub fn encoder(&self) -> impl Fn(usize, &[u8]) -> Result<Vec<u8>> + Send + Sync + 'static {
+        let ((w, h), size, quality) = (self.source_size, self.size, self.quality);
+        move |index, rgb| {
+            let img =
+                image::RgbImage::from_raw(w as u32, h as u32, rgb.to_vec()).ok_or_else(|| {
+                    ReportError::Image {
+                        what: format!("frame {index}"),
+                        reason: format!("{} bytes for a {w}×{h} RGB frame", rgb.len()),
+                    }
+                })?;
+            let small = if size == (w, h) {
+                img
+            } else {
+                image::imageops::resize(&img, size.0 as u32, size.1 as u32, FilterType::Triangle)
+            };
+            encode_jpeg(small.as_raw(), size.0, size.1, quality)
+        }
     }
 
     /// Whether frame `index` is one the store keeps (it falls on the step).
