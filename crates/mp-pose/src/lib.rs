@@ -73,7 +73,7 @@ pub use thumbs::{
     MAX_SIGNAL_VALUES,
 };
 pub use video::{
-    probe_bytes, PixelFormat, VideoReadOptions, VideoWriter, Yuv420Frame, Yuv420Frames,
+    probe_bytes, PixelFormat, VideoReadOptions, VideoWriter, Yuv420Frame, Yuv420Frames, X264,
     X264_PRESETS,
 };
 

@@ -11,7 +11,7 @@ mod writer;
 mod yuv;
 
 pub use reader::{VideoReadOptions, VideoReader, Yuv420Frames};
-pub use writer::{VideoWriter, X264_PRESETS};
+pub use writer::{VideoWriter, X264, X264_PRESETS};
 pub use yuv::{PixelFormat, Yuv420Frame};
 
 use std::io::Read;

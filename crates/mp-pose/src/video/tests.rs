@@ -78,7 +78,10 @@ fn yuv_frames_decode_and_encode_as_their_rgb() {
         info.width,
         info.height,
         10.0,
-        "veryfast",
+        X264 {
+            preset: "veryfast",
+            params: "subme=1:me=dia",
+        },
         PixelFormat::Yuv420p,
     )
     .unwrap();
@@ -141,4 +144,51 @@ fn frame_checks_buffer_size() {
     assert!(Frame::new(3, 0.0, 2, 2, vec![0; 11]).is_err());
     assert!(Frame::new(3, 0.0, 0, 2, vec![]).is_err());
     assert!(Frame::new(3, 0.0, 2, 2, vec![0; 12]).is_ok());
+}
+
+/// x264's options are checked before FFmpeg starts: a known preset, and
+/// `key=value` pairs joined by `:`.
+#[test]
+fn x264_options_are_checked() {
+    assert!(X264::preset("veryfast").validate().is_ok());
+    let ok = X264 {
+        preset: "veryfast",
+        params: "subme=1:me=dia:partitions=none",
+    };
+    assert!(ok.validate().is_ok());
+    for (preset, params) in [
+        ("quick", ""),
+        ("veryfast", "subme"),
+        ("veryfast", "subme=1:"),
+        ("veryfast", "=1"),
+        ("veryfast", "subme=1 me=dia"),
+        ("veryfast", "a=b=c"),
+    ] {
+        let e = X264 { preset, params }.validate().unwrap_err().to_string();
+        assert!(
+            e.contains(if preset == "quick" {
+                "preset"
+            } else {
+                "x264 params"
+            }),
+            "{e}"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let bad = X264 {
+        preset: "veryfast",
+        params: "subme",
+    };
+    let e = VideoWriter::with_format(
+        dir.path().join("x.mp4"),
+        8,
+        8,
+        10.0,
+        bad,
+        PixelFormat::Rgb24,
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(e.contains("subme"), "{e}");
 }

@@ -33,6 +33,54 @@ pub const X264_PRESETS: [&str; 9] = [
     "veryslow",
 ];
 
+/// How x264 encodes: a speed preset (one of [`X264_PRESETS`]) and, over it,
+/// x264's own options (FFmpeg's `-x264-params`: `key=value` pairs joined by
+/// `:`, e.g. `subme=1:me=dia`; empty for none).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct X264<'a> {
+    /// The speed preset.
+    pub preset: &'a str,
+    /// Options over the preset.
+    pub params: &'a str,
+}
+
+impl<'a> X264<'a> {
+    /// A preset alone.
+    pub fn preset(preset: &'a str) -> Self {
+        X264 { preset, params: "" }
+    }
+
+    /// Checks the preset's name and the options' form.
+    pub fn validate(&self) -> Result<()> {
+        if !X264_PRESETS.contains(&self.preset) {
+            return Err(PoseError::param(
+                "preset",
+                format!(
+                    "unknown x264 preset `{}` (expected one of {})",
+                    self.preset,
+                    X264_PRESETS.join(", ")
+                ),
+            ));
+        }
+        let option = |o: &str| {
+            o.split_once('=').is_some_and(|(k, v)| {
+                !k.is_empty()
+                    && k.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+                    && !v.is_empty()
+                    && v.chars().all(|c| c.is_ascii_graphic() && c != '=')
+            })
+        };
+        if !self.params.is_empty() && !self.params.split(':').all(option) {
+            return Err(PoseError::param(
+                "x264 params",
+                format!("`{}` is not key=value pairs joined by `:`", self.params),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl VideoWriter {
     /// Starts `ffmpeg` writing `path` at `fps` (x264's default preset, `medium`).
     pub fn create(path: impl AsRef<Path>, width: usize, height: usize, fps: f64) -> Result<Self> {
@@ -48,21 +96,28 @@ impl VideoWriter {
         fps: f64,
         preset: &str,
     ) -> Result<Self> {
-        Self::with_format(path, width, height, fps, preset, PixelFormat::Rgb24)
+        Self::with_format(
+            path,
+            width,
+            height,
+            fps,
+            X264::preset(preset),
+            PixelFormat::Rgb24,
+        )
     }
 
-    /// [`VideoWriter::create_with_preset`] for frames in a given layout,
-    /// e.g. planar YUV 4:2:0 ([`super::Yuv420Frame`]), which x264 encodes
-    /// without a conversion.
+    /// [`VideoWriter::create_with_preset`] with x264's own options over the
+    /// preset, for frames in a given layout, e.g. planar YUV 4:2:0
+    /// ([`super::Yuv420Frame`]), which x264 encodes without a conversion.
     pub fn with_format(
         path: impl AsRef<Path>,
         width: usize,
         height: usize,
         fps: f64,
-        preset: &str,
+        x264: X264<'_>,
         format: PixelFormat,
     ) -> Result<Self> {
-        Self::spawn(path.as_ref(), width, height, fps, preset, format)
+        Self::spawn(path.as_ref(), width, height, fps, x264, format)
     }
 
     fn spawn(
@@ -70,19 +125,11 @@ impl VideoWriter {
         width: usize,
         height: usize,
         fps: f64,
-        preset: &str,
+        x264: X264<'_>,
         format: PixelFormat,
     ) -> Result<Self> {
         let path = path.to_path_buf();
-        if !X264_PRESETS.contains(&preset) {
-            return Err(PoseError::param(
-                "preset",
-                format!(
-                    "unknown x264 preset `{preset}` (expected one of {})",
-                    X264_PRESETS.join(", ")
-                ),
-            ));
-        }
+        x264.validate()?;
         if width == 0 || height == 0 {
             return Err(PoseError::param(
                 "size",
@@ -108,12 +155,17 @@ impl VideoWriter {
                 "-c:v",
                 "libx264",
                 "-preset",
-                preset,
+                x264.preset,
                 "-pix_fmt",
                 "yuv420p",
                 "-movflags",
                 "+faststart",
             ])
+            .args(if x264.params.is_empty() {
+                vec![]
+            } else {
+                vec!["-x264-params", x264.params]
+            })
             .arg(&path)
             .stdin(Stdio::piped())
             .stdout(Stdio::null())
