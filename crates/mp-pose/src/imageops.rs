@@ -117,7 +117,11 @@ pub(crate) fn crop_u8(
 ) {
     out.clear();
     out.resize(out_w * out_h * 3, 0);
-    if src.width == 0 || src.height == 0 || src.data.len() < src.width * src.height * 3 {
+    if src.width == 0
+        || src.height == 0
+        || src.data.len() < src.width * src.height * 3
+        || out.is_empty()
+    {
         return;
     }
     // Affine map output pixel (j, i) -> source point.
@@ -592,5 +596,13 @@ mod tests {
             3,
         );
         assert!(out.iter().all(|&v| v == 77));
+        // An empty output size gives an empty image.
+        let view = RgbView {
+            width: 10,
+            height: 6,
+            data: &img,
+        };
+        assert!(resize_rgb(view, 0, 3).is_empty());
+        assert!(resize_rgb(view, 4, 0).is_empty());
     }
 }
