@@ -315,19 +315,7 @@ impl MjpegStream {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::video::{probe, VideoWriter};
-
-    /// A 30-frame video whose frame `k` is grey level `8 k`.
-    fn levels(dir: &std::path::Path) -> VideoInfo {
-        let path = dir.join("levels.mp4");
-        let (w, h) = (32usize, 32usize);
-        let mut wr = VideoWriter::create_with_preset(&path, w, h, 25.0, "veryfast").unwrap();
-        for k in 0..30u8 {
-            wr.write(&vec![k * 8; w * h * 3]).unwrap();
-        }
-        wr.finish().unwrap();
-        probe(&path).unwrap()
-    }
+    use crate::video::tests::levels_video as levels;
 
     fn copies_from(info: &VideoInfo, start: usize, copies: FrameCopies) -> Result<Decoded> {
         let reader = VideoReader::from_frame(info.clone(), start)?;

@@ -117,18 +117,18 @@ impl FrameStore {
     pub fn encoder(&self) -> impl Fn(usize, &[u8]) -> Result<Vec<u8>> + Send + Sync + 'static {
         let ((w, h), size, quality) = (self.source_size, self.size, self.quality);
         move |index, rgb| {
+            // The frame read in place (no copy of its pixels).
             let img =
-                image::RgbImage::from_raw(w as u32, h as u32, rgb.to_vec()).ok_or_else(|| {
-                    ReportError::Image {
+                image::ImageBuffer::<image::Rgb<u8>, &[u8]>::from_raw(w as u32, h as u32, rgb)
+                    .ok_or_else(|| ReportError::Image {
                         what: format!("frame {index}"),
                         reason: format!("{} bytes for a {w}×{h} RGB frame", rgb.len()),
-                    }
-                })?;
-            let small = if size == (w, h) {
-                img
-            } else {
-                image::imageops::resize(&img, size.0 as u32, size.1 as u32, FilterType::Triangle)
-            };
+                    })?;
+            if size == (w, h) {
+                return encode_jpeg(rgb, w, h, quality);
+            }
+            let small =
+                image::imageops::resize(&img, size.0 as u32, size.1 as u32, FilterType::Triangle);
             encode_jpeg(small.as_raw(), size.0, size.1, quality)
         }
     }

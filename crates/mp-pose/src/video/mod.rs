@@ -406,4 +406,4 @@ fn collect_stderr(mut s: std::process::ChildStderr) -> std::thread::JoinHandle<S
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -100,19 +100,24 @@ fn yuv_frames_decode_and_encode_as_their_rgb() {
     assert!(d < 2.0, "re-encoded YUV frames differ by {d} levels");
 }
 
-/// Decoding from a frame gives the video's own frames from there on.
-#[test]
-fn decoding_from_a_frame_starts_there() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("levels.mp4");
+/// A 30-frame 32 × 32 video in `dir` whose frame `k` is grey level `8 k`.
+pub(crate) fn levels_video(dir: &Path) -> VideoInfo {
+    let path = dir.join("levels.mp4");
     let (w, h) = (32usize, 32usize);
     let mut wr = VideoWriter::create_with_preset(&path, w, h, 25.0, "veryfast").unwrap();
     for k in 0..30u8 {
         wr.write(&vec![k * 8; w * h * 3]).unwrap();
     }
     wr.finish().unwrap();
+    probe(&path).unwrap()
+}
+
+/// Decoding from a frame gives the video's own frames from there on.
+#[test]
+fn decoding_from_a_frame_starts_there() {
+    let dir = tempfile::tempdir().unwrap();
+    let info = levels_video(dir.path());
     let mean = |f: &Frame| f.rgb.iter().map(|&v| v as f64).sum::<f64>() / f.rgb.len() as f64;
-    let info = probe(&path).unwrap();
     for start in [0usize, 1, 13, 29] {
         let frames: Vec<Frame> = VideoReader::from_frame(info.clone(), start)
             .unwrap()
